@@ -1,0 +1,30 @@
+"""plm_pin: analysis of parallel link mechanisms (closed kinematic chains) on Pinocchio."""
+
+from .exceptions import (
+    AllocationInfeasible,
+    ClosureNotSatisfied,
+    DescriptionError,
+    FrameNotFound,
+    InvalidInput,
+    PlmError,
+    PoseUnreachable,
+    SingularConfiguration,
+)
+from .loading import load
+from .mechanism import Mechanism
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "AllocationInfeasible",
+    "ClosureNotSatisfied",
+    "DescriptionError",
+    "FrameNotFound",
+    "InvalidInput",
+    "Mechanism",
+    "PlmError",
+    "PoseUnreachable",
+    "SingularConfiguration",
+    "__version__",
+    "load",
+]

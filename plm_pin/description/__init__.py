@@ -1,0 +1,26 @@
+"""Closed-chain descriptions: URDF spanning tree plus closure sidecar, read and written."""
+
+from .interop import parse_epr_sidecar
+from .loader import Description, build_model, build_visual_model, description_from_text, read_description
+from .sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec, parse_sidecar
+from .urdf import UrdfSource, read_urdf, read_urdf_text
+from .writer import urdf_text, write_description
+
+__all__ = [
+    "ActuatorSpec",
+    "ClosureSpec",
+    "Description",
+    "Sidecar",
+    "TaskSpec",
+    "UrdfSource",
+    "build_model",
+    "build_visual_model",
+    "description_from_text",
+    "parse_epr_sidecar",
+    "parse_sidecar",
+    "read_description",
+    "read_urdf",
+    "read_urdf_text",
+    "urdf_text",
+    "write_description",
+]

@@ -1,0 +1,173 @@
+"""Reading a closed-chain description from disk: plm-pin sidecars and example-parallel-robots."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import DescriptionError, FrameNotFound
+from .interop import parse_epr_sidecar
+from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar, parse_sidecar, read_yaml
+from .urdf import UrdfSource, read_urdf, read_urdf_text
+
+SIDECAR_SUFFIX = SIDECAR_SUFFIX_DEFAULT
+EPR_SIDECAR = "robot.yaml"
+
+
+@dataclass(frozen=True)
+class Description:
+    """A URDF spanning tree with its closure sidecar.
+
+    Attributes:
+        urdf: the checked URDF source.
+        sidecar: closures, actuation, task and reference.
+        urdf_path: the URDF file, or None when built from text.
+        sidecar_path: the sidecar file, or None.
+        convention: ``"plm-pin/1"`` or ``"example-parallel-robots"``.
+    """
+
+    urdf: UrdfSource
+    sidecar: Sidecar
+    urdf_path: Path | None = None
+    sidecar_path: Path | None = None
+    convention: str = "plm-pin/1"
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DescriptionError(f"cannot read file: {exc}", str(path)) from None
+
+
+def read_description(path: str | Path) -> Description:
+    """Read a description from a URDF, a sidecar, or an example-parallel-robots folder.
+
+    Args:
+        path: ``<name>.urdf`` (sidecar ``<name>.plm.yaml`` beside it), ``<name>.plm.yaml``
+            (URDF beside it), or a folder holding ``robot.urdf`` and ``robot.yaml``.
+
+    Returns:
+        The description.
+
+    Raises:
+        DescriptionError: when files are missing, unreadable, malformed or unsafe.
+    """
+    p = Path(path)
+    if p.is_dir():
+        if (p / EPR_SIDECAR).is_file() and (p / "robot.urdf").is_file():
+            return read_epr_folder(p)
+        urdfs = sorted(p.glob("*.urdf"))
+        if len(urdfs) == 1:
+            return read_description(urdfs[0])
+        raise DescriptionError(
+            "folder holds neither robot.urdf + robot.yaml (example-parallel-robots) nor "
+            f"exactly one .urdf file (found {[u.name for u in urdfs]})",
+            str(p),
+        )
+    if not p.exists():
+        raise DescriptionError("no such file or folder", str(p))
+    if p.name.endswith(SIDECAR_SUFFIX):
+        urdf_path = p.with_name(p.name[: -len(SIDECAR_SUFFIX)] + ".urdf")
+        if not urdf_path.is_file():
+            raise DescriptionError(f"sidecar has no URDF beside it: expected {urdf_path.name}", str(p))
+        return _read_pair(urdf_path, p)
+    if p.suffix == ".urdf":
+        sidecar_path = p.with_name(p.stem + SIDECAR_SUFFIX)
+        if sidecar_path.is_file():
+            return _read_pair(p, sidecar_path)
+        if p.name == "robot.urdf" and (p.parent / EPR_SIDECAR).is_file():
+            return read_epr_folder(p.parent)
+        raise DescriptionError(
+            f"no closure sidecar found beside the URDF: expected {sidecar_path.name} "
+            f"(format plm-pin/1) or {EPR_SIDECAR} (example-parallel-robots)",
+            str(p),
+        )
+    raise DescriptionError(
+        f"unsupported file {p.name!r}; give a .urdf, a {SIDECAR_SUFFIX} or a description folder",
+        str(p),
+    )
+
+
+def _read_pair(urdf_path: Path, sidecar_path: Path) -> Description:
+    sidecar = parse_sidecar(read_yaml(_read_text(sidecar_path), str(sidecar_path)), str(sidecar_path))
+    return Description(read_urdf(urdf_path), sidecar, urdf_path, sidecar_path)
+
+
+def read_epr_folder(folder: Path) -> Description:
+    """Read an example-parallel-robots folder (``robot.urdf`` + ``robot.yaml``)."""
+    sidecar_path = folder / EPR_SIDECAR
+    raw = read_yaml(_read_text(sidecar_path), str(sidecar_path))
+    sidecar = parse_epr_sidecar(raw, str(sidecar_path), name=folder.name)
+    urdf_path = folder / "robot.urdf"
+    return Description(read_urdf(urdf_path), sidecar, urdf_path, sidecar_path, "example-parallel-robots")
+
+
+def description_from_text(urdf_text: str, sidecar_text: str, folder: Path | None = None) -> Description:
+    """Build a description from in-memory URDF and sidecar texts."""
+    sidecar = parse_sidecar(read_yaml(sidecar_text, "<sidecar>"), "<sidecar>")
+    return Description(read_urdf_text(urdf_text, folder, "<urdf>"), sidecar)
+
+
+def build_model(description: Description) -> pin.Model:
+    """Build the Pinocchio model and check every name the sidecar uses.
+
+    Gravity comes from the sidecar; the reflected inertia of each drive is added to its
+    joint's armature.
+
+    Raises:
+        DescriptionError: when Pinocchio rejects the URDF.
+        FrameNotFound: when the sidecar names a frame or joint the model lacks.
+    """
+    label = str(description.urdf_path) if description.urdf_path else "<urdf>"
+    side = str(description.sidecar_path) if description.sidecar_path else "<sidecar>"
+    try:
+        model = pin.buildModelFromXML(description.urdf.xml)
+    except (RuntimeError, ValueError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise DescriptionError(f"Pinocchio cannot build a model from this URDF: {first}", label) from None
+    sidecar = description.sidecar
+    frames = [f.name for f in model.frames]
+    for closure in sidecar.closures:
+        for name in closure.frames:
+            if not model.existFrame(name):
+                raise FrameNotFound(name, frames, "frame", f"{side}: closure {closure.name!r}")
+    if sidecar.task is not None and not model.existFrame(sidecar.task.frame):
+        raise FrameNotFound(sidecar.task.frame, frames, "frame", f"{side}: end_effector")
+    joints = list(model.names)[1:]
+    for actuator in sidecar.actuation:
+        if not model.existJointName(actuator.joint):
+            raise FrameNotFound(actuator.joint, joints, "joint", f"{side}: actuation")
+        jid = model.getJointId(actuator.joint)
+        if model.joints[jid].nv != 1:
+            raise DescriptionError(
+                f"actuated joint {actuator.joint!r} has {model.joints[jid].nv} DOF; only "
+                "one-DOF (prismatic or revolute) joints can be actuated",
+                side,
+            )
+        model.armature[model.joints[jid].idx_v] += actuator.reflected_inertia()
+    for joint in sidecar.reference:
+        if not model.existJointName(joint):
+            raise FrameNotFound(joint, joints, "joint", f"{side}: reference")
+        jid = model.getJointId(joint)
+        j = model.joints[jid]
+        n_values = len(sidecar.reference[joint])
+        if n_values != j.nq and not (j.nq == 2 and j.nv == 1 and n_values == 1):
+            raise DescriptionError(
+                f"reference.{joint} has {len(sidecar.reference[joint])} value(s); the joint "
+                f"takes {j.nq}" + (" (or one angle [rad])" if j.nq == 2 and j.nv == 1 else ""),
+                side,
+            )
+    model.gravity.linear = np.array(sidecar.gravity, dtype=float)
+    return model
+
+
+def build_visual_model(model: pin.Model, description: Description) -> pin.GeometryModel:
+    """Build the visual geometry (meshes already resolved and checked)."""
+    try:
+        return pin.buildGeomFromUrdfString(model, description.urdf.xml, pin.GeometryType.VISUAL)
+    except (RuntimeError, ValueError) as exc:
+        raise DescriptionError(f"cannot build the visual geometry: {exc}") from None

@@ -1,0 +1,367 @@
+"""The closure sidecar ``<name>.plm.yaml``: its data model, parser and serialiser.
+
+A URDF holds a spanning tree only; the sidecar says which joints were cut to open the
+loops (the closures), which joints are driven (the actuation) and which frame and
+directions form the task. Format ``plm-pin/1``::
+
+    format: plm-pin/1
+    gravity: [0.0, -9.8, 0.0]          # optional [m/s^2], default [0, 0, -9.81]
+    closures:
+      - name: rod2_plate
+        frames: [rod2_tip, plate_left]
+        type: point                    # point (3 rows) | weld (6) | revolute (5, axis given)
+        axis: [0, 0, 1]                # revolute only: axis in the second frame's coordinates
+    actuation:
+      - joint: slider1
+        limits: [-50.0, 50.0]          # force [N] or torque [N m]
+        lead: 0.05                     # optional ball-screw lead [m/rev]
+        rotor_inertia: 0.0248          # optional [kg m^2], reflected through the lead
+        screw_inertia: 0.001           # optional [kg m^2], reflected through the lead
+    end_effector:
+      frame: plate_center
+      task: [x, y, rz]
+    reference:                         # optional guess of an assembled configuration
+      slider1: -0.1                    # [m] or [rad]; multi-DOF joints take a list (Pinocchio order)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import yaml
+
+from ..exceptions import DescriptionError
+
+FORMAT = "plm-pin/1"
+SIDECAR_SUFFIX_DEFAULT = ".plm.yaml"
+CLOSURE_TYPES: tuple[str, ...] = ("point", "revolute", "weld")
+TASK_DOFS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
+CLOSURE_ROWS: dict[str, int] = {"point": 3, "revolute": 5, "weld": 6}
+DEFAULT_GRAVITY: tuple[float, float, float] = (0.0, 0.0, -9.81)
+
+ClosureType = Literal["point", "revolute", "weld"]
+
+
+@dataclass(frozen=True)
+class ClosureSpec:
+    """One cut joint: two frames made to coincide.
+
+    Attributes:
+        name: closure name, unique in the description.
+        frames: the two frame names (links, joints or URDF frames).
+        type: ``point`` (positions coincide), ``revolute`` (positions coincide and
+            the frames may only turn about ``axis``) or ``weld`` (frames coincide).
+        axis: unit axis of a revolute closure, in the second frame's coordinates.
+    """
+
+    name: str
+    frames: tuple[str, str]
+    type: ClosureType
+    axis: tuple[float, float, float] | None = None
+
+    @property
+    def rows(self) -> int:
+        """Number of scalar constraint equations of this closure."""
+        return CLOSURE_ROWS[self.type]
+
+
+@dataclass(frozen=True)
+class ActuatorSpec:
+    """One driven joint.
+
+    Attributes:
+        joint: name of a one-DOF (prismatic or revolute) joint.
+        limits: lower and upper actuator effort [N] or [N m], or None when unbounded.
+        lead: ball-screw lead [m/rev], or None for a direct drive.
+        rotor_inertia: motor rotor (and coupler) inertia [kg m^2] reflected through the lead.
+        screw_inertia: lead-screw inertia [kg m^2] reflected through the lead.
+    """
+
+    joint: str
+    limits: tuple[float, float] | None = None
+    lead: float | None = None
+    rotor_inertia: float = 0.0
+    screw_inertia: float = 0.0
+
+    def reflected_inertia(self) -> float:
+        r"""Armature this drive adds on its joint [kg] or [kg m^2].
+
+        .. math:: m_r = (J_{rotor} + J_{screw}) (2\pi / \text{lead})^2
+        """
+        inertia = self.rotor_inertia + self.screw_inertia
+        if self.lead is None:
+            return inertia
+        return inertia * (2.0 * math.pi / self.lead) ** 2
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    """The end-effector frame and the task directions (world-aligned).
+
+    Attributes:
+        frame: end-effector frame name.
+        dofs: task directions among ``x y z rx ry rz``.
+    """
+
+    frame: str
+    dofs: tuple[str, ...]
+
+    def rows(self) -> tuple[int, ...]:
+        """Rows of a 6-D spatial velocity (linear, angular) that the task keeps."""
+        return tuple(TASK_DOFS.index(d) for d in self.dofs)
+
+
+@dataclass(frozen=True)
+class Sidecar:
+    """Everything a URDF spanning tree lacks to describe a closed chain.
+
+    Attributes:
+        closures: the cut joints.
+        actuation: the driven joints.
+        task: the end-effector task, or None.
+        gravity: gravity vector in the world frame [m/s^2].
+        reference: a guess of an assembled configuration, per joint name.
+        name: optional mechanism name.
+        source: optional provenance (paper, table).
+    """
+
+    closures: tuple[ClosureSpec, ...] = ()
+    actuation: tuple[ActuatorSpec, ...] = ()
+    task: TaskSpec | None = None
+    gravity: tuple[float, float, float] = DEFAULT_GRAVITY
+    reference: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+    name: str | None = None
+    source: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The sidecar as plain data, ready for YAML."""
+        out: dict[str, Any] = {"format": FORMAT}
+        if self.name:
+            out["name"] = self.name
+        if self.source:
+            out["source"] = self.source
+        out["gravity"] = [float(g) for g in self.gravity]
+        closures = []
+        for c in self.closures:
+            item: dict[str, Any] = {"name": c.name, "frames": list(c.frames), "type": c.type}
+            if c.axis is not None:
+                item["axis"] = [float(a) for a in c.axis]
+            closures.append(item)
+        out["closures"] = closures
+        actuation = []
+        for a in self.actuation:
+            act: dict[str, Any] = {"joint": a.joint}
+            if a.limits is not None:
+                act["limits"] = [float(v) for v in a.limits]
+            if a.lead is not None:
+                act["lead"] = float(a.lead)
+            if a.rotor_inertia:
+                act["rotor_inertia"] = float(a.rotor_inertia)
+            if a.screw_inertia:
+                act["screw_inertia"] = float(a.screw_inertia)
+            actuation.append(act)
+        out["actuation"] = actuation
+        if self.task is not None:
+            out["end_effector"] = {"frame": self.task.frame, "task": list(self.task.dofs)}
+        if self.reference:
+            out["reference"] = {
+                k: (float(v[0]) if len(v) == 1 else [float(x) for x in v]) for k, v in self.reference.items()
+            }
+        return out
+
+    def to_yaml(self) -> str:
+        """The sidecar as YAML text (format ``plm-pin/1``)."""
+        return yaml.safe_dump(self.to_dict(), sort_keys=False, default_flow_style=None)
+
+
+def _number(value: Any, where: str, path: str | None) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise DescriptionError(f"{where} must be a number, got {value!r}", path)
+    x = float(value)
+    if not math.isfinite(x):
+        raise DescriptionError(f"{where} must be finite, got {value!r}", path)
+    return x
+
+
+def _numbers(value: Any, n: int | None, where: str, path: str | None) -> tuple[float, ...]:
+    if not isinstance(value, (list, tuple)):
+        raise DescriptionError(f"{where} must be a list of numbers, got {value!r}", path)
+    if n is not None and len(value) != n:
+        raise DescriptionError(f"{where} must have {n} numbers, got {len(value)}", path)
+    return tuple(_number(v, f"{where}[{i}]", path) for i, v in enumerate(value))
+
+
+def _keys(item: Mapping[str, Any], allowed: Sequence[str], where: str, path: str | None) -> None:
+    unknown = sorted(set(item) - set(allowed))
+    if unknown:
+        raise DescriptionError(f"{where}: unknown key(s) {unknown}; valid keys are {sorted(allowed)}", path)
+
+
+def _string(value: Any, where: str, path: str | None) -> str:
+    if not isinstance(value, str) or not value:
+        raise DescriptionError(f"{where} must be a non-empty string, got {value!r}", path)
+    return value
+
+
+def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
+    where = f"closures[{i}]"
+    if not isinstance(item, Mapping):
+        raise DescriptionError(f"{where} must be a mapping, got {item!r}", path)
+    _keys(item, ("name", "frames", "type", "axis"), where, path)
+    frames = item.get("frames")
+    if not isinstance(frames, (list, tuple)) or len(frames) != 2:
+        raise DescriptionError(f"{where}.frames must be a list of two frame names", path)
+    f0 = _string(frames[0], f"{where}.frames[0]", path)
+    f1 = _string(frames[1], f"{where}.frames[1]", path)
+    name = _string(item.get("name", f"{f0}__{f1}"), f"{where}.name", path)
+    ctype = item.get("type")
+    if ctype not in CLOSURE_TYPES:
+        raise DescriptionError(
+            f"{where} ({name}): invalid closure type {ctype!r}; valid types are {list(CLOSURE_TYPES)}",
+            path,
+        )
+    axis = None
+    if ctype == "revolute":
+        if "axis" not in item:
+            raise DescriptionError(f"{where} ({name}): a revolute closure needs an 'axis'", path)
+        raw = _numbers(item["axis"], 3, f"{where}.axis", path)
+        norm = math.sqrt(sum(a * a for a in raw))
+        if norm < 1e-9:
+            raise DescriptionError(f"{where}.axis must be non-zero, got {list(raw)}", path)
+        axis = (raw[0] / norm, raw[1] / norm, raw[2] / norm)
+    elif "axis" in item:
+        raise DescriptionError(f"{where} ({name}): 'axis' is only valid for revolute", path)
+    return ClosureSpec(name=name, frames=(f0, f1), type=ctype, axis=axis)
+
+
+def _actuator(item: Any, i: int, path: str | None) -> ActuatorSpec:
+    where = f"actuation[{i}]"
+    if not isinstance(item, Mapping):
+        raise DescriptionError(f"{where} must be a mapping, got {item!r}", path)
+    _keys(item, ("joint", "limits", "lead", "rotor_inertia", "screw_inertia"), where, path)
+    joint = _string(item.get("joint"), f"{where}.joint", path)
+    limits = None
+    if item.get("limits") is not None:
+        lo, hi = _numbers(item["limits"], 2, f"{where}.limits", path)
+        if not lo < hi:
+            raise DescriptionError(f"{where}.limits must have lower < upper, got {[lo, hi]}", path)
+        limits = (lo, hi)
+    lead = None
+    if item.get("lead") is not None:
+        lead = _number(item["lead"], f"{where}.lead", path)
+        if lead <= 0.0:
+            raise DescriptionError(f"{where}.lead must be positive [m/rev], got {lead}", path)
+    inertias = []
+    for key in ("rotor_inertia", "screw_inertia"):
+        value = _number(item.get(key, 0.0), f"{where}.{key}", path)
+        if value < 0.0:
+            raise DescriptionError(f"{where}.{key} must be >= 0 [kg m^2], got {value}", path)
+        inertias.append(value)
+    return ActuatorSpec(joint, limits, lead, inertias[0], inertias[1])
+
+
+def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
+    """Validate plain data (as loaded from YAML) and build a :class:`Sidecar`.
+
+    Args:
+        data: the loaded YAML document.
+        path: file name used in error messages.
+
+    Returns:
+        The validated sidecar.
+
+    Raises:
+        DescriptionError: naming the bad key or value and the valid choices.
+    """
+    if not isinstance(data, Mapping):
+        raise DescriptionError("the sidecar must be a YAML mapping", path)
+    allowed = (
+        "format",
+        "name",
+        "source",
+        "gravity",
+        "closures",
+        "actuation",
+        "end_effector",
+        "reference",
+    )
+    _keys(data, allowed, "sidecar", path)
+    if data.get("format") != FORMAT:
+        raise DescriptionError(f"unknown sidecar format {data.get('format')!r}; expected {FORMAT!r}", path)
+    closures_raw = data.get("closures") or []
+    actuation_raw = data.get("actuation") or []
+    if not isinstance(closures_raw, list):
+        raise DescriptionError("'closures' must be a list", path)
+    if not isinstance(actuation_raw, list):
+        raise DescriptionError("'actuation' must be a list", path)
+    closures = tuple(_closure(c, i, path) for i, c in enumerate(closures_raw))
+    names = [c.name for c in closures]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise DescriptionError(f"duplicate closure name(s) {dup}", path)
+    actuation = tuple(_actuator(a, i, path) for i, a in enumerate(actuation_raw))
+    joints = [a.joint for a in actuation]
+    dup = sorted({n for n in joints if joints.count(n) > 1})
+    if dup:
+        raise DescriptionError(f"joint(s) {dup} actuated twice", path)
+    task = None
+    if data.get("end_effector") is not None:
+        ee = data["end_effector"]
+        if not isinstance(ee, Mapping):
+            raise DescriptionError("'end_effector' must be a mapping", path)
+        _keys(ee, ("frame", "task"), "end_effector", path)
+        frame = _string(ee.get("frame"), "end_effector.frame", path)
+        dofs = ee.get("task")
+        if not isinstance(dofs, list) or not dofs:
+            raise DescriptionError(f"end_effector.task must be a non-empty list of {list(TASK_DOFS)}", path)
+        for d in dofs:
+            if d not in TASK_DOFS:
+                raise DescriptionError(
+                    f"end_effector.task: unknown direction {d!r}; valid are {list(TASK_DOFS)}", path
+                )
+        if len(set(dofs)) != len(dofs):
+            raise DescriptionError(f"end_effector.task repeats a direction: {dofs}", path)
+        task = TaskSpec(frame, tuple(sorted(dofs, key=TASK_DOFS.index)))
+    gravity = DEFAULT_GRAVITY
+    if data.get("gravity") is not None:
+        g = _numbers(data["gravity"], 3, "gravity", path)
+        gravity = (g[0], g[1], g[2])
+    reference: dict[str, tuple[float, ...]] = {}
+    raw_ref = data.get("reference") or {}
+    if not isinstance(raw_ref, Mapping):
+        raise DescriptionError("'reference' must be a mapping of joint name to value(s)", path)
+    for joint, value in raw_ref.items():
+        where = f"reference.{joint}"
+        if isinstance(value, (list, tuple)):
+            reference[str(joint)] = _numbers(value, None, where, path)
+        else:
+            reference[str(joint)] = (_number(value, where, path),)
+    name = data.get("name")
+    source = data.get("source")
+    return Sidecar(
+        closures=closures,
+        actuation=actuation,
+        task=task,
+        gravity=gravity,
+        reference=reference,
+        name=str(name) if name is not None else None,
+        source=str(source) if source is not None else None,
+    )
+
+
+def read_yaml(text: str, path: str | None = None) -> Any:
+    """Parse YAML text safely (no Python objects), wrapping YAML errors.
+
+    Raises:
+        DescriptionError: when the text is not valid YAML.
+    """
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise DescriptionError(f"malformed YAML{where}: {problem}", path) from None

@@ -1,0 +1,54 @@
+"""Writing a description: the URDF spanning tree (through yourdfpy) and its sidecar."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import yourdfpy
+
+from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar
+
+
+def urdf_text(robot: yourdfpy.Robot) -> str:
+    """Serialise a yourdfpy robot to URDF text."""
+    urdf = yourdfpy.URDF(robot=robot, build_scene_graph=False, load_meshes=False)
+    text = urdf.write_xml_string()
+    return text if isinstance(text, str) else text.decode()
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_description(
+    robot: yourdfpy.Robot, sidecar: Sidecar, folder: str | Path, name: str
+) -> tuple[Path, Path]:
+    """Write ``<name>.urdf`` and ``<name>.plm.yaml`` into ``folder`` (atomically).
+
+    Args:
+        robot: the spanning tree.
+        sidecar: closures, actuation, task and reference.
+        folder: destination folder (created if needed).
+        name: file stem; letters, digits, ``_`` and ``-`` only.
+
+    Returns:
+        The URDF and sidecar paths.
+    """
+    if not name or not all(ch.isalnum() or ch in "_-" for ch in name):
+        raise ValueError(f"invalid description name {name!r}: use letters, digits, '_' and '-'")
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    urdf_path = out / f"{name}.urdf"
+    sidecar_path = out / f"{name}{SIDECAR_SUFFIX_DEFAULT}"
+    _atomic_write(urdf_path, urdf_text(robot))
+    _atomic_write(sidecar_path, sidecar.to_yaml())
+    return urdf_path, sidecar_path

@@ -1,0 +1,79 @@
+"""Typed errors of plm_pin: one base class and one subclass per condition."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+
+class PlmError(Exception):
+    """Base class of every error plm_pin raises on purpose."""
+
+
+class DescriptionError(PlmError):
+    """A mechanism description (URDF, sidecar, preset name) is malformed or unsafe.
+
+    Attributes:
+        path: file or item the problem was found in, when known.
+        problem: what is wrong, in words.
+    """
+
+    def __init__(self, problem: str, path: str | None = None) -> None:
+        self.path = path
+        self.problem = problem
+        super().__init__(f"{path}: {problem}" if path else problem)
+
+
+class FrameNotFound(DescriptionError):
+    """A frame or joint named in a description does not exist in the model.
+
+    Attributes:
+        name: the missing name.
+        kind: ``"frame"`` or ``"joint"``.
+        choices: the names that do exist.
+    """
+
+    def __init__(
+        self, name: str, choices: Sequence[str], kind: str = "frame", path: str | None = None
+    ) -> None:
+        self.name = name
+        self.kind = kind
+        self.choices = tuple(choices)
+        shown = ", ".join(repr(c) for c in self.choices[:40])
+        more = f", ... ({len(self.choices)} in all)" if len(self.choices) > 40 else ""
+        super().__init__(f"{kind} {name!r} not found; {kind}s are [{shown}{more}]", path)
+
+
+class ClosureNotSatisfied(PlmError):
+    """The loops could not be closed from the given configuration.
+
+    Attributes:
+        residual_norm: closure residual norm reached [m, rad].
+        tolerance: the tolerance that was asked for [m, rad].
+        q: the best configuration found.
+        worst_closure: name of the closure with the largest residual.
+    """
+
+    def __init__(
+        self, message: str, residual_norm: float, tolerance: float, q: object, worst_closure: str
+    ) -> None:
+        self.residual_norm = residual_norm
+        self.tolerance = tolerance
+        self.q = q
+        self.worst_closure = worst_closure
+        super().__init__(message)
+
+
+class InvalidInput(PlmError, ValueError):
+    """An argument has the wrong shape, is not finite, or is not one of the valid choices."""
+
+
+class PoseUnreachable(PlmError):
+    """A task pose cannot be reached by the mechanism."""
+
+
+class SingularConfiguration(PlmError):
+    """A configuration is singular for the requested operation."""
+
+
+class AllocationInfeasible(PlmError):
+    """No actuator-force allocation meets the limits."""

@@ -1,0 +1,382 @@
+"""The Mechanism: a Pinocchio model of a spanning tree plus its closures, actuation and task."""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from .description.sidecar import Sidecar, TaskSpec
+from .exceptions import ClosureNotSatisfied, InvalidInput
+from .kinematics import closures as _closures
+from .kinematics.assembly import Assembly, assemble
+
+RANK_RTOL = 1e-9
+"""Relative tolerance of every rank decision: singular values below ``RANK_RTOL * s_max`` count as zero."""
+
+ASSEMBLY_TOL = 1e-12
+"""Default closure tolerance of :meth:`Mechanism.assemble` [m, rad]."""
+
+
+@dataclass(frozen=True)
+class Actuator:
+    """A driven joint, resolved against the model.
+
+    Attributes:
+        joint: joint name.
+        joint_id: Pinocchio joint index.
+        idx_q: index in the configuration vector.
+        idx_v: index in the velocity vector.
+        kind: ``"prismatic"`` (force [N]) or ``"revolute"`` (torque [N m]).
+        limits: effort bounds [N] or [N m], or None.
+        lead: ball-screw lead [m/rev], or None.
+        reflected_inertia: armature added to the joint [kg] or [kg m^2].
+    """
+
+    joint: str
+    joint_id: int
+    idx_q: int
+    idx_v: int
+    kind: str
+    limits: tuple[float, float] | None
+    lead: float | None
+    reflected_inertia: float
+
+
+def _joint_kind(model: pin.Model, joint_id: int) -> str:
+    short = model.joints[joint_id].shortname()
+    if short.startswith("JointModelP"):
+        return "prismatic"
+    return "revolute"
+
+
+class Mechanism:
+    r"""A closed (or open) kinematic chain ready for analysis.
+
+    Build one with :func:`plm_pin.load`. The configuration ``q`` (size :attr:`nq`) and
+    velocity ``v`` (size :attr:`nv`) are those of the Pinocchio spanning tree; the closures
+    constrain them to :math:`\phi(q) = 0`.
+
+    Attributes:
+        name: mechanism name.
+        model: the Pinocchio model of the spanning tree (gravity and armature set).
+        sidecar: the description's closures, actuation and task.
+        closures: the compiled closures, in sidecar order.
+        actuators: the driven joints, in sidecar order.
+        source: provenance (paper, file).
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        sidecar: Sidecar,
+        *,
+        name: str,
+        source: str = "",
+        visual_factory: Callable[[], pin.GeometryModel] | None = None,
+    ) -> None:
+        """Wrap a Pinocchio model and a validated sidecar (use :func:`plm_pin.load`)."""
+        self.name = name
+        self.model = model
+        self.sidecar = sidecar
+        self.source = source
+        self._data = model.createData()
+        self._visual_factory = visual_factory
+        self.closures = _closures.compile_closures(model, sidecar.closures)
+        actuators = []
+        for spec in sidecar.actuation:
+            jid = model.getJointId(spec.joint)
+            joint = model.joints[jid]
+            actuators.append(
+                Actuator(
+                    joint=spec.joint,
+                    joint_id=jid,
+                    idx_q=joint.idx_q,
+                    idx_v=joint.idx_v,
+                    kind=_joint_kind(model, jid),
+                    limits=spec.limits,
+                    lead=spec.lead,
+                    reflected_inertia=spec.reflected_inertia(),
+                )
+            )
+        self.actuators = tuple(actuators)
+        self._task_frame = model.getFrameId(sidecar.task.frame) if sidecar.task else None
+
+    # ----------------------------------------------------------------- sizes
+    @property
+    def nq(self) -> int:
+        """Size of the configuration vector."""
+        return int(self.model.nq)
+
+    @property
+    def nv(self) -> int:
+        """Size of the velocity vector (tree DOF)."""
+        return int(self.model.nv)
+
+    @property
+    def n_closure_rows(self) -> int:
+        r"""Number of scalar closure equations (rows of :math:`J_\phi`, redundant ones included)."""
+        return _closures.closure_rows(self.closures)
+
+    @property
+    def n_actuators(self) -> int:
+        """Number of driven joints."""
+        return len(self.actuators)
+
+    @property
+    def task(self) -> TaskSpec | None:
+        """The end-effector task, or None."""
+        return self.sidecar.task
+
+    @property
+    def task_frame_id(self) -> int | None:
+        """Pinocchio index of the end-effector frame, or None."""
+        return self._task_frame
+
+    @property
+    def actuated_v_indices(self) -> np.ndarray:
+        """Velocity indices of the actuated joints, shape (n_act,)."""
+        return np.array([a.idx_v for a in self.actuators], dtype=int)
+
+    @property
+    def actuated_q_indices(self) -> np.ndarray:
+        """Configuration indices of the actuated joints, shape (n_act,)."""
+        return np.array([a.idx_q for a in self.actuators], dtype=int)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Names of the tree joints (universe excluded)."""
+        return tuple(self.model.names)[1:]
+
+    @property
+    def frame_names(self) -> tuple[str, ...]:
+        """Names of every frame of the model."""
+        return tuple(f.name for f in self.model.frames)
+
+    # ------------------------------------------------------------ checking
+    def check_q(self, q: Any, name: str = "q") -> np.ndarray:
+        """Return ``q`` as a float array after checking its shape and finiteness.
+
+        Raises:
+            InvalidInput: on a wrong shape or a non-finite entry.
+        """
+        arr = np.asarray(q, dtype=float)
+        if arr.shape != (self.nq,):
+            raise InvalidInput(f"{name} must have shape ({self.nq},), got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            bad = np.flatnonzero(~np.isfinite(arr)).tolist()
+            raise InvalidInput(f"{name} has non-finite entries at indices {bad}")
+        return arr
+
+    # ---------------------------------------------------------- closures
+    def closure_residual(self, q: Any) -> np.ndarray:
+        r"""Closure residual :math:`\phi(q)` [m, rad] (see :mod:`plm_pin.kinematics.closures`), shape (m,)."""
+        return _closures.residual(self.model, self._data, self.closures, self.check_q(q))
+
+    def closure_jacobian(self, q: Any) -> np.ndarray:
+        r"""Closure Jacobian :math:`J_\phi(q)` on the tangent space, shape (m, nv)."""
+        return _closures.jacobian(self.model, self._data, self.closures, self.check_q(q))
+
+    def closure_rank(self, q: Any, rtol: float = RANK_RTOL) -> int:
+        r"""Rank of :math:`J_\phi(q)` by SVD: singular values above ``rtol * s_max``."""
+        J = self.closure_jacobian(q)
+        if J.size == 0:
+            return 0
+        s = np.linalg.svd(J, compute_uv=False)
+        return int(np.sum(s > rtol * max(s[0], 1.0)))
+
+    def closure_errors(self, q: Any) -> dict[str, float]:
+        """Largest absolute residual of each closure [m, rad]."""
+        phi = self.closure_residual(q)
+        return {c.name: float(np.max(np.abs(phi[c.rows]))) for c in self.closures}
+
+    # ---------------------------------------------------------- assembly
+    def neutral(self) -> np.ndarray:
+        """Pinocchio's neutral configuration of the tree (loops generally open), shape (nq,)."""
+        return np.asarray(pin.neutral(self.model), dtype=float)
+
+    def _free_columns(self, fixed: Iterable[str]) -> np.ndarray:
+        frozen: set[int] = set()
+        for joint in fixed:
+            if not self.model.existJointName(joint):
+                raise InvalidInput(
+                    f"cannot fix joint {joint!r}: no such joint; joints are {list(self.joint_names)}"
+                )
+            j = self.model.joints[self.model.getJointId(joint)]
+            frozen.update(range(j.idx_v, j.idx_v + j.nv))
+        return np.array([i for i in range(self.nv) if i not in frozen], dtype=int)
+
+    def assemble(
+        self,
+        q_guess: Any = None,
+        fixed: Mapping[str, float] | Iterable[str] | None = None,
+        *,
+        tol: float = ASSEMBLY_TOL,
+        max_iterations: int = 100,
+    ) -> Assembly:
+        r"""Project a configuration onto the closure manifold :math:`\phi(q) = 0`.
+
+        Damped Gauss-Newton (Levenberg-Marquardt) on the closure residual with the exact
+        closure Jacobian; the minimum-norm step keeps the result close to ``q_guess``.
+
+        Args:
+            q_guess: starting configuration (default: the reference configuration). # (nq,)
+            fixed: joints that must not move: names (kept at their ``q_guess`` values) or a
+                mapping from one-DOF joint name to the value to impose [m] or [rad].
+            tol: largest absolute residual accepted [m, rad].
+            max_iterations: iteration cap.
+
+        Returns:
+            The assembled configuration with its residual.
+
+        Raises:
+            ClosureNotSatisfied: when the loops cannot be closed to ``tol``; the error
+                carries the best configuration and the worst closure.
+            InvalidInput: on a malformed ``q_guess`` or an unknown joint in ``fixed``.
+        """
+        q0 = self.q_ref.copy() if q_guess is None else self.check_q(q_guess, "q_guess").copy()
+        names: list[str] = []
+        if fixed is not None:
+            if isinstance(fixed, Mapping):
+                for joint, value in fixed.items():
+                    names.append(joint)
+                    self._set_joint(q0, joint, value)
+            else:
+                names = [fixed] if isinstance(fixed, str) else list(fixed)
+        free = self._free_columns(names)
+
+        def failure(q: np.ndarray, phi: np.ndarray) -> ClosureNotSatisfied:
+            errors = {c.name: float(np.max(np.abs(phi[c.rows]))) for c in self.closures}
+            worst = max(errors, key=lambda k: errors[k])
+            norm = float(np.max(np.abs(phi)))
+            return ClosureNotSatisfied(
+                f"{self.name}: cannot close the loops: residual {norm:.3g} (worst closure "
+                f"{worst!r}: {errors[worst]:.3g}) above tolerance {tol:.3g}; the closure frames "
+                "cannot be brought together from this guess (fixed joints: "
+                f"{names or 'none'})",
+                norm,
+                tol,
+                q,
+                worst,
+            )
+
+        return assemble(
+            self.model,
+            self._data,
+            self.closures,
+            q0,
+            free,
+            tol=tol,
+            max_iterations=max_iterations,
+            on_failure=failure,
+        )
+
+    def _set_joint(self, q: np.ndarray, joint: str, value: Any) -> None:
+        if not self.model.existJointName(joint):
+            raise InvalidInput(f"no joint {joint!r}; joints are {list(self.joint_names)}")
+        j = self.model.joints[self.model.getJointId(joint)]
+        vals = np.atleast_1d(np.asarray(value, dtype=float))
+        if j.nq == 2 and j.nv == 1 and vals.shape == (1,):  # unbounded revolute: angle -> (cos, sin)
+            vals = np.array([np.cos(vals[0]), np.sin(vals[0])])
+        if vals.shape != (j.nq,) or not np.all(np.isfinite(vals)):
+            raise InvalidInput(f"value for joint {joint!r} must be {j.nq} finite number(s), got {value!r}")
+        q[j.idx_q : j.idx_q + j.nq] = vals
+
+    def reference_guess(self) -> np.ndarray:
+        """The sidecar's reference values over the neutral configuration (loops may be open), shape (nq,)."""
+        q = self.neutral()
+        for joint, values in self.sidecar.reference.items():
+            self._set_joint(q, joint, values)
+        return q
+
+    @functools.cached_property
+    def q_ref(self) -> np.ndarray:
+        """Reference assembled configuration, closed to 1e-12, shape (nq,).
+
+        Assembled from the sidecar's reference values (or the neutral configuration).
+        """
+        q = self.assemble(self.reference_guess()).q.copy()
+        q.setflags(write=False)
+        return q
+
+    # --------------------------------------------------- mobility, redundancy
+    @functools.cached_property
+    def mobility(self) -> int:
+        """Degrees of freedom of the closed chain: ``nv - rank J_phi`` at a generic assembly.
+
+        The rank is the largest found at the reference configuration and at two
+        assembled random perturbations of it (a special configuration can only lose rank,
+        so the maximum is the generic rank); tolerance :data:`RANK_RTOL`.
+        """
+        ranks = [self.closure_rank(q) for q in self._generic_configurations()]
+        return self.nv - max(ranks)
+
+    @property
+    def redundancy(self) -> int:
+        """Degree of actuation redundancy: ``n_actuators - mobility``."""
+        return self.n_actuators - self.mobility
+
+    def _generic_configurations(self) -> list[np.ndarray]:
+        configs = [self.q_ref]
+        rng = np.random.default_rng(20111009)
+        for _ in range(2):
+            step = rng.normal(scale=0.02, size=self.nv)
+            try:
+                configs.append(self.assemble(pin.integrate(self.model, self.q_ref, step)).q)
+            except ClosureNotSatisfied:
+                continue
+        return configs
+
+    # ---------------------------------------------------------- reading
+    def actuator_positions(self, q: Any) -> np.ndarray:
+        """Actuated joint positions [m] or [rad] (angles of unbounded revolutes too), shape (n_act,)."""
+        arr = self.check_q(q)
+        out = np.empty(self.n_actuators)
+        for k, a in enumerate(self.actuators):
+            if self.model.joints[a.joint_id].nq == 2:  # unbounded revolute stored as (cos, sin)
+                out[k] = np.arctan2(arr[a.idx_q + 1], arr[a.idx_q])
+            else:
+                out[k] = arr[a.idx_q]
+        return out
+
+    @functools.cached_property
+    def visual_model(self) -> pin.GeometryModel:
+        """Visual geometry (built on first use; missing meshes were dropped with a warning)."""
+        if self._visual_factory is None:
+            return pin.GeometryModel()
+        return self._visual_factory()
+
+    def summary(self) -> dict[str, Any]:
+        """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""
+        return {
+            "name": self.name,
+            "source": self.source,
+            "nq": self.nq,
+            "nv": self.nv,
+            "closures": [
+                {"name": c.name, "type": c.spec.type, "frames": list(c.spec.frames), "rows": c.spec.rows}
+                for c in self.closures
+            ],
+            "closure_rows": self.n_closure_rows,
+            "actuators": [
+                {"joint": a.joint, "kind": a.kind, "limits": list(a.limits) if a.limits else None}
+                for a in self.actuators
+            ],
+            "task": {"frame": self.task.frame, "dofs": list(self.task.dofs)} if self.task else None,
+            "mobility": self.mobility,
+            "redundancy": self.redundancy,
+            "reference_residual": float(np.max(np.abs(self.closure_residual(self.q_ref))))
+            if self.closures
+            else 0.0,
+            "gravity": list(self.sidecar.gravity),
+        }
+
+    def __repr__(self) -> str:
+        return (
+            f"Mechanism({self.name!r}, nv={self.nv}, closures={len(self.closures)}, "
+            f"actuators={self.n_actuators})"
+        )

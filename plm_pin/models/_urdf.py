@@ -1,0 +1,146 @@
+"""Small helpers that build yourdfpy links and joints with inertias and simple visuals."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import yourdfpy
+
+Vec3 = Sequence[float]
+
+COLORS: dict[str, tuple[float, float, float, float]] = {
+    "base": (0.55, 0.57, 0.60, 1.0),
+    "slider": (0.20, 0.45, 0.80, 1.0),
+    "rod": (0.85, 0.55, 0.15, 1.0),
+    "plate": (0.30, 0.70, 0.35, 1.0),
+    "joint": (0.35, 0.35, 0.35, 1.0),
+}
+
+
+def transform(xyz: Vec3 = (0.0, 0.0, 0.0), rpy: Vec3 = (0.0, 0.0, 0.0)) -> np.ndarray:
+    """Homogeneous transform from a translation [m] and roll-pitch-yaw angles [rad], shape (4, 4)."""
+    roll, pitch, yaw = rpy
+    cr, sr = np.cos(roll), np.sin(roll)
+    cp, sp = np.cos(pitch), np.sin(pitch)
+    cy, sy = np.cos(yaw), np.sin(yaw)
+    T = np.eye(4)
+    T[:3, :3] = np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
+    T[:3, 3] = xyz
+    return T
+
+
+def material(kind: str) -> yourdfpy.Material:
+    """A named colour material (one of :data:`COLORS`)."""
+    return yourdfpy.Material(name=kind, color=yourdfpy.Color(rgba=np.array(COLORS[kind])))
+
+
+def box_inertia(mass: float, size: Vec3) -> np.ndarray:
+    """Inertia tensor of a solid box about its centre [kg m^2], shape (3, 3)."""
+    a, b, c = size
+    return mass / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+
+
+def link(
+    name: str,
+    mass: float = 0.0,
+    inertia: np.ndarray | Sequence[float] | None = None,
+    com: Vec3 = (0.0, 0.0, 0.0),
+    visuals: Sequence[yourdfpy.Visual] = (),
+) -> yourdfpy.Link:
+    """A link with an inertial (omitted when ``mass`` is 0) and visuals.
+
+    Args:
+        name: link name.
+        mass: mass [kg].
+        inertia: inertia tensor about the centre of mass [kg m^2], (3, 3) or diagonal (3,).
+        com: centre of mass in the link frame [m].
+        visuals: visual elements.
+    """
+    inertial = None
+    if mass > 0.0:
+        I = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float)
+        if I.shape == (3,):
+            I = np.diag(I)
+        inertial = yourdfpy.Inertial(origin=transform(com), mass=float(mass), inertia=I)
+    return yourdfpy.Link(name=name, inertial=inertial, visuals=list(visuals))
+
+
+def box_visual(
+    size: Vec3, kind: str, xyz: Vec3 = (0.0, 0.0, 0.0), rpy: Vec3 = (0.0, 0.0, 0.0)
+) -> yourdfpy.Visual:
+    """A box visual [m]."""
+    return yourdfpy.Visual(
+        origin=transform(xyz, rpy),
+        geometry=yourdfpy.Geometry(box=yourdfpy.Box(size=np.asarray(size, dtype=float))),
+        material=material(kind),
+    )
+
+
+def cylinder_visual(
+    radius: float, length: float, kind: str, xyz: Vec3 = (0.0, 0.0, 0.0), rpy: Vec3 = (0.0, 0.0, 0.0)
+) -> yourdfpy.Visual:
+    """A cylinder visual (axis along the visual frame's z) [m]."""
+    return yourdfpy.Visual(
+        origin=transform(xyz, rpy),
+        geometry=yourdfpy.Geometry(cylinder=yourdfpy.Cylinder(radius=radius, length=length)),
+        material=material(kind),
+    )
+
+
+def sphere_visual(radius: float, kind: str, xyz: Vec3 = (0.0, 0.0, 0.0)) -> yourdfpy.Visual:
+    """A sphere visual [m]."""
+    return yourdfpy.Visual(
+        origin=transform(xyz),
+        geometry=yourdfpy.Geometry(sphere=yourdfpy.Sphere(radius=radius)),
+        material=material(kind),
+    )
+
+
+def joint(
+    name: str,
+    kind: str,
+    parent: str,
+    child: str,
+    xyz: Vec3 = (0.0, 0.0, 0.0),
+    rpy: Vec3 = (0.0, 0.0, 0.0),
+    axis: Vec3 = (0.0, 0.0, 1.0),
+    limits: tuple[float, float] | None = None,
+    effort: float = 1000.0,
+    velocity: float = 100.0,
+) -> yourdfpy.Joint:
+    """A joint: ``kind`` is revolute, continuous, prismatic, fixed or floating.
+
+    Args:
+        name: joint name.
+        kind: URDF joint type.
+        parent: parent link name.
+        child: child link name.
+        xyz: joint origin in the parent link frame [m].
+        rpy: joint origin roll-pitch-yaw [rad].
+        axis: joint axis in the joint frame.
+        limits: position limits [m] or [rad] (revolute and prismatic).
+        effort: URDF effort limit [N] or [N m] (informative; actuator limits live in the sidecar).
+        velocity: URDF velocity limit [m/s] or [rad/s].
+    """
+    limit = None
+    if kind in ("revolute", "prismatic"):
+        lo, hi = limits if limits is not None else (-2 * np.pi, 2 * np.pi)
+        limit = yourdfpy.Limit(effort=effort, velocity=velocity, lower=lo, upper=hi)
+    elif kind == "continuous":
+        limit = yourdfpy.Limit(effort=effort, velocity=velocity)
+    return yourdfpy.Joint(
+        name=name,
+        type=kind,
+        parent=parent,
+        child=child,
+        origin=transform(xyz, rpy),
+        axis=None if kind in ("fixed", "floating") else np.asarray(axis, dtype=float),
+        limit=limit,
+    )

@@ -1,0 +1,184 @@
+r"""Parametric 2-PRRRP planar tables on one linear stator (Harada 2011, 2015).
+
+Geometry (Harada 2011, eq. (1) and Fig. 5): every slider ``i`` moves along the world x
+axis (the stator, :math:`a = [1, 0]^T`) at :math:`c_i`; rod ``i`` of length :math:`l_i`
+joins slider ``i`` to a pair of the end plate, :math:`p + R(\theta) s_i = c_i a + l_i z_i`,
+with :math:`s_1 = s_2 = [-r_t, 0]^T` (left pair) and :math:`s_3 = s_4 = [r_t, 0]^T` (right
+pair). The plane is the world x-y plane, every revolute axis is z, gravity acts along -y.
+
+Spanning tree: ``base -> slider1 -> rod1_pivot -> plate_pivot`` carries the plate; the
+other legs end at ``rod<i>_tip`` frames closed on ``plate_left`` / ``plate_right`` by
+``point`` closures (3 rows each, one of them redundant in the plane).
+
+Working modes: the sign :math:`\sigma_i` in front of the square root of eq. (2). The
+paper's text gives (+, -, +, -) for links 1-4, but its code (M.5) and its skeleton plots
+(M.42) use (-, +, -, +): slider 1 left of the left pair, slider 2 right of it, and so on.
+We follow the code, which produced the paper's figures.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import yourdfpy
+
+from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
+from . import _urdf as u
+
+LEFT_LEGS = (1, 2)
+RIGHT_LEGS = (3, 4)
+
+
+def leg_inverse_kinematics(
+    pose: Sequence[float],
+    rod_lengths: Sequence[float],
+    half_plate: float,
+    modes: Sequence[int],
+    legs: Sequence[int],
+) -> dict[int, tuple[float, float]]:
+    r"""Slider position :math:`c_i` [m] and rod angle :math:`\varphi_i` [rad] of each leg.
+
+    Closed form of Harada 2011 eqs. (2)-(3) with sign :math:`\sigma_i` = ``modes[i-1]``.
+
+    Raises:
+        ValueError: when a leg cannot reach its plate pair.
+    """
+    x, y, theta = pose
+    out = {}
+    for i in legs:
+        s = -half_plate if i in LEFT_LEGS else half_plate
+        Lx = x + s * math.cos(theta)
+        Ly = y + s * math.sin(theta)
+        l = rod_lengths[i - 1]
+        disc = l * l - Ly * Ly
+        if disc < 0.0:
+            raise ValueError(f"leg {i} cannot reach its pair: |L_y| = {abs(Ly):.4g} m > l = {l:.4g} m")
+        c = Lx + modes[i - 1] * math.sqrt(disc)
+        out[i] = (c, math.atan2(Ly / l, (Lx - c) / l))
+    return out
+
+
+def build_2prrrp(
+    *,
+    name: str,
+    rod_lengths: Sequence[float],
+    half_plate: float,
+    slider_mass: float,
+    rod_masses: Sequence[float],
+    rod_inertias: Sequence[float],
+    plate_mass: float,
+    plate_inertia: float,
+    legs: Sequence[int] = (1, 2, 3, 4),
+    reference_pose: Sequence[float] = (0.0, 0.08, 0.0),
+    working_modes: Sequence[int] = (-1, 1, -1, 1),
+    gravity: float = 9.81,
+    source: str = "",
+) -> tuple[yourdfpy.Robot, Sidecar]:
+    """Build a 2-PRRRP table (or a subset of its legs) as a URDF tree plus sidecar.
+
+    Args:
+        name: robot name.
+        rod_lengths: :math:`l_1 .. l_4` [m].
+        half_plate: :math:`r_t`, half the distance between the plate's pairs [m].
+        slider_mass: mass of each moving part of the linear motor [kg].
+        rod_masses: rod masses [kg].
+        rod_inertias: rod moments of inertia about their centre, normal to the plane [kg m^2].
+        plate_mass: end-plate mass [kg].
+        plate_inertia: end-plate moment of inertia about its centre, normal to the plane [kg m^2].
+        legs: legs present; leg 1 must be present (it carries the plate).
+        reference_pose: plate pose ``(x [m], y [m], theta [rad])`` of the reference configuration.
+        working_modes: sign of the square root of eq. (2) per leg.
+        gravity: magnitude of gravity along -y [m/s^2].
+        source: provenance written into the sidecar.
+
+    Returns:
+        The URDF tree and its sidecar.
+    """
+    legs = tuple(sorted(legs))
+    if 1 not in legs or not any(i in legs for i in RIGHT_LEGS) or 2 not in legs:
+        raise ValueError(f"legs {legs}: legs 1 and 2 and at least one right leg are needed")
+    rt = half_plate
+    links: list[yourdfpy.Link] = []
+    joints: list[yourdfpy.Joint] = []
+    stator = 1.0
+    links.append(u.link("base", visuals=[u.box_visual((stator, 0.01, 0.004), "base", (0.0, -0.01, -0.01))]))
+    slider_size = (0.03, 0.02, 0.01)
+    ik = leg_inverse_kinematics(reference_pose, rod_lengths, rt, working_modes, legs)
+    reference: dict[str, tuple[float, ...]] = {}
+    closures: list[ClosureSpec] = []
+    for i in legs:
+        l, m, inertia = rod_lengths[i - 1], rod_masses[i - 1], rod_inertias[i - 1]
+        links.append(
+            u.link(
+                f"carriage{i}",
+                slider_mass,
+                u.box_inertia(slider_mass, slider_size),
+                visuals=[u.box_visual(slider_size, "slider")],
+            )
+        )
+        joints.append(
+            u.joint(
+                f"slider{i}",
+                "prismatic",
+                "base",
+                f"carriage{i}",
+                axis=(1, 0, 0),
+                limits=(-stator / 2, stator / 2),
+            )
+        )
+        # rod along its local x; axial inertia of a 5 mm radius bar, transverse ones as given
+        axial = 0.5 * m * 0.005**2
+        links.append(
+            u.link(
+                f"rod{i}",
+                m,
+                (axial, inertia, inertia),
+                com=(l / 2, 0.0, 0.0),
+                visuals=[u.box_visual((l, 0.008, 0.004), "rod", (l / 2, 0.0, 0.0))],
+            )
+        )
+        joints.append(u.joint(f"rod{i}_pivot", "revolute", f"carriage{i}", f"rod{i}"))
+        c, phi = ik[i]
+        reference[f"slider{i}"] = (c,)
+        reference[f"rod{i}_pivot"] = (phi,)
+        if i != 1:
+            links.append(u.link(f"rod{i}_tip"))
+            joints.append(u.joint(f"rod{i}_tip_fixed", "fixed", f"rod{i}", f"rod{i}_tip", xyz=(l, 0.0, 0.0)))
+            pair = "plate_left" if i in LEFT_LEGS else "plate_right"
+            closures.append(ClosureSpec(f"rod{i}_{pair}", (f"rod{i}_tip", pair), "point"))
+    axial = plate_mass * 0.01**2 / 6.0
+    links.append(
+        u.link(
+            "plate",
+            plate_mass,
+            (axial, plate_inertia, plate_inertia),
+            com=(rt, 0.0, 0.0),
+            visuals=[u.box_visual((2 * rt + 0.02, 0.012, 0.006), "plate", (rt, 0.0, 0.0))],
+        )
+    )
+    joints.append(u.joint("plate_pivot", "revolute", "rod1", "plate", xyz=(rod_lengths[0], 0.0, 0.0)))
+    for frame, x in (("plate_left", 0.0), ("plate_center", rt), ("plate_right", 2 * rt)):
+        links.append(u.link(frame))
+        joints.append(u.joint(f"{frame}_fixed", "fixed", "plate", frame, xyz=(x, 0.0, 0.0)))
+    reference["plate_pivot"] = (reference_pose[2] - ik[1][1],)
+    robot = yourdfpy.Robot(name=name, links=links, joints=joints)
+    sidecar = Sidecar(
+        closures=tuple(closures),
+        actuation=tuple(ActuatorSpec(f"slider{i}") for i in legs),
+        task=TaskSpec("plate_center", ("x", "y", "rz")),
+        gravity=(0.0, -gravity, 0.0),
+        reference={k: tuple(float(x) for x in v) for k, v in reference.items()},
+        name=name,
+        source=source,
+    )
+    return robot, sidecar
+
+
+def rod_scaled(length: float, ref_length: float, ref_mass: float, ref_inertia: float) -> tuple[float, float]:
+    """Mass [kg] and centroidal inertia [kg m^2] of a rod of the same section and material.
+
+    Mass scales with length and the centroidal inertia with mass times length squared.
+    """
+    k = length / ref_length
+    return ref_mass * k, ref_inertia * k**3

@@ -1,0 +1,15 @@
+"""Warnings of plm_pin, all subclasses of :class:`PlmWarning`."""
+
+from __future__ import annotations
+
+
+class PlmWarning(UserWarning):
+    """Base class of every warning plm_pin emits."""
+
+
+class MissingMeshWarning(PlmWarning):
+    """A visual mesh file named in a URDF is absent; the model loads without that visual."""
+
+
+class IllConditionedWarning(PlmWarning):
+    """A computation is close to singular; its result may be inaccurate."""
