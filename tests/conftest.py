@@ -1,0 +1,130 @@
+"""Shared fixtures: cached presets and small inline mechanisms."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import plm_pin
+from plm_pin.description import Sidecar, write_description
+from plm_pin.mechanism import Mechanism
+from plm_pin.models import _urdf as u
+
+REPO = Path(__file__).resolve().parents[1]
+INTEROP = REPO.parent / "shared" / "interop" / "example-parallel-robots"
+
+
+@functools.cache
+def preset(name: str) -> Mechanism:
+    """Load a preset once per test session (Mechanism objects are not mutated by tests)."""
+    return plm_pin.load(name)
+
+
+def fd_jacobian(f, model: pin.Model, q: np.ndarray, eps: float = 1e-6) -> np.ndarray:
+    """Central finite differences of ``f`` along the tangent space of ``model`` at ``q``."""
+    cols = []
+    for k in range(model.nv):
+        dv = np.zeros(model.nv)
+        dv[k] = eps
+        cols.append((f(pin.integrate(model, q, dv)) - f(pin.integrate(model, q, -dv))) / (2 * eps))
+    return np.column_stack(cols)
+
+
+def ball_joint_body(tmp_path: Path, closure: dict) -> Mechanism:
+    """A body on a ball joint (three revolutes x, y, z) whose frame is closed on the world.
+
+    The body frame ``body_tip`` sits at the ball centre, so a point closure leaves the three
+    rotations free, a revolute closure leaves one and a weld none.
+    """
+    links = [
+        u.link("base"),
+        u.link("gimbal1", 1e-3, (1e-6, 1e-6, 1e-6)),
+        u.link("gimbal2", 1e-3, (1e-6, 1e-6, 1e-6)),
+        u.link("body", 1.0, (0.01, 0.02, 0.03), com=(0.1, 0.0, 0.0)),
+        u.link("body_tip"),
+        u.link("anchor"),
+    ]
+    joints = [
+        u.joint("rx", "revolute", "base", "gimbal1", xyz=(0.0, 0.0, 0.5), axis=(1, 0, 0)),
+        u.joint("ry", "revolute", "gimbal1", "gimbal2", axis=(0, 1, 0)),
+        u.joint("rz", "revolute", "gimbal2", "body", axis=(0, 0, 1)),
+        u.joint("tip_fixed", "fixed", "body", "body_tip"),
+        u.joint("anchor_fixed", "fixed", "base", "anchor", xyz=(0.0, 0.0, 0.5)),
+    ]
+    import yourdfpy
+
+    from plm_pin.description.sidecar import parse_sidecar
+
+    sidecar = parse_sidecar(
+        {
+            "format": "plm-pin/1",
+            "closures": [{"name": "c", "frames": ["anchor", "body_tip"], **closure}],
+            "actuation": [{"joint": "rz"}],
+            "reference": {"rx": 0.0, "ry": 0.0, "rz": 0.0},
+        }
+    )
+    assert isinstance(sidecar, Sidecar)
+    write_description(yourdfpy.Robot(name="ball", links=links, joints=joints), sidecar, tmp_path, "ball")
+    return plm_pin.load(tmp_path / "ball.urdf")
+
+
+def spatial_6r(tmp_path: Path, closure: dict) -> Mechanism:
+    """A spatial 6R chain with skew axes whose tip frame is closed on a world anchor.
+
+    The anchor is placed where the tip is at a generic configuration ``q0``, so the loop
+    is assembled at ``q0``; generically a point closure leaves 3 DOF, a revolute 1, a weld 0.
+    """
+    import yourdfpy
+
+    from plm_pin.description.sidecar import parse_sidecar
+
+    axes = [(0, 0, 1), (0, 1, 0), (1, 0, 1), (0, 1, 1), (1, 1, 0), (1, 0, 0)]
+    offsets = [(0, 0, 0.1), (0.2, 0, 0), (0, 0.15, 0.05), (0.1, 0.1, 0), (0, 0, 0.2), (0.12, -0.05, 0)]
+    links = [u.link("base")]
+    joints = []
+    parent = "base"
+    for k, (axis, xyz) in enumerate(zip(axes, offsets, strict=True)):
+        name = f"l{k + 1}"
+        links.append(u.link(name, 0.5, (0.01, 0.012, 0.014), com=(0.05, 0.0, 0.0)))
+        norm = np.linalg.norm(axis)
+        joints.append(
+            u.joint(f"j{k + 1}", "revolute", parent, name, xyz=xyz, axis=tuple(a / norm for a in axis))
+        )
+        parent = name
+    links.append(u.link("tip"))
+    joints.append(u.joint("tip_fixed", "fixed", parent, "tip", xyz=(0.1, 0.02, 0.03)))
+    q0 = np.array([0.3, -0.4, 0.5, 0.2, -0.6, 0.7])
+    tree = yourdfpy.Robot(name="chain6r", links=links, joints=joints)
+    from plm_pin.description.writer import urdf_text
+
+    model = pin.buildModelFromXML(urdf_text(tree))
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, q0)
+    oMt = data.oMf[model.getFrameId("tip")]
+    rpy = pin.rpy.matrixToRpy(oMt.rotation)
+    links.append(u.link("anchor"))
+    joints.append(
+        u.joint("anchor_fixed", "fixed", "base", "anchor", xyz=tuple(oMt.translation), rpy=tuple(rpy))
+    )
+    sidecar = parse_sidecar(
+        {
+            "format": "plm-pin/1",
+            "closures": [{"name": "c", "frames": ["anchor", "tip"], **closure}],
+            "actuation": [{"joint": "j1"}],
+            "reference": {f"j{k + 1}": float(v) for k, v in enumerate(q0)},
+        }
+    )
+    write_description(
+        yourdfpy.Robot(name="chain6r", links=links, joints=joints), sidecar, tmp_path, "chain6r"
+    )
+    return plm_pin.load(tmp_path / "chain6r.urdf")
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    """A seeded random generator."""
+    return np.random.default_rng(1234)

@@ -1,0 +1,108 @@
+"""Closure residuals and Jacobians (plm_pin/kinematics/closures.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from plm_pin.models import preset_names
+from tests.conftest import INTEROP, ball_joint_body, fd_jacobian, preset, spatial_6r
+
+
+def _random_q(mech, rng, scale=0.3):
+    return pin.integrate(mech.model, mech.q_ref, rng.normal(scale=scale, size=mech.nv))
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_jacobian_matches_finite_differences_on_presets(name, rng):
+    """J_phi equals central finite differences of phi at open-loop random configurations."""
+    mech = preset(name)
+    for _ in range(3):
+        q = _random_q(mech, rng)
+        J = mech.closure_jacobian(q)
+        J_fd = fd_jacobian(mech.closure_residual, mech.model, q)
+        np.testing.assert_allclose(J, J_fd, atol=1e-8)
+
+
+@pytest.mark.parametrize(
+    "kind", [{"type": "point"}, {"type": "weld"}, {"type": "revolute", "axis": [0, 0.6, 0.8]}]
+)
+def test_jacobian_matches_finite_differences_for_every_closure_type(tmp_path, rng, kind):
+    """Point, weld and revolute residuals have exact Jacobians, away from closure too."""
+    mech = ball_joint_body(tmp_path, kind)
+    for _ in range(5):
+        q = _random_q(mech, rng, scale=1.0)
+        np.testing.assert_allclose(
+            mech.closure_jacobian(q), fd_jacobian(mech.closure_residual, mech.model, q), atol=1e-8
+        )
+
+
+@pytest.mark.parametrize(
+    ("kind", "rows", "mobility"),
+    [
+        ({"type": "point"}, 3, 3),
+        ({"type": "revolute", "axis": [0, 0.6, 0.8]}, 5, 1),
+        ({"type": "weld"}, 6, 0),
+    ],
+)
+def test_closure_types_remove_the_right_number_of_freedoms(tmp_path, kind, rows, mobility):
+    """A ball-jointed body closed on the world keeps 3, 1 or 0 rotations for point, revolute, weld."""
+    mech = ball_joint_body(tmp_path, kind)
+    assert mech.n_closure_rows == rows
+    assert mech.mobility == mobility
+
+
+def test_revolute_closure_frees_exactly_the_rotation_about_its_axis(tmp_path):
+    """The null space of a spatial revolute closure is the rotation about the given axis."""
+    axis = np.array([0.0, 0.6, 0.8])
+    mech = ball_joint_body(tmp_path, {"type": "revolute", "axis": axis.tolist()})
+    q = mech.q_ref
+    J = mech.closure_jacobian(q)
+    _, s, Vt = np.linalg.svd(J)
+    assert np.sum(s > 1e-9 * s[0]) == 2  # the point rows vanish at the ball centre
+    v = Vt[-1]
+    data = mech.model.createData()
+    pin.computeJointJacobians(mech.model, data, q)
+    pin.updateFramePlacements(mech.model, data)
+    fid = mech.model.getFrameId("body_tip")
+    omega = pin.getFrameJacobian(mech.model, data, fid, pin.ReferenceFrame.LOCAL) @ v
+    np.testing.assert_allclose(np.abs(omega[3:] / np.linalg.norm(omega[3:])), axis, atol=1e-12)
+    np.testing.assert_allclose(omega[:3], 0.0, atol=1e-12)
+
+
+def test_revolute_closure_residual_vanishes_after_a_full_half_turn(tmp_path):
+    """The revolute residual is zero for any rotation about the axis, 180 deg included."""
+    mech = ball_joint_body(tmp_path, {"type": "revolute", "axis": [0, 0, 1]})
+    for angle in (0.3, np.pi / 2, np.pi, -2.5):
+        q = mech.q_ref.copy()
+        q[2] = angle  # the rz joint turns about the closure axis
+        assert np.max(np.abs(mech.closure_residual(q))) < 1e-15
+
+
+def test_interop_fivebar_jacobian_matches_finite_differences(rng):
+    """The example-parallel-robots five-bar (6d closure) has an exact closure Jacobian."""
+    if not INTEROP.is_dir():
+        pytest.skip("interop corpus absent")
+    import plm_pin
+
+    mech = plm_pin.load(INTEROP / "5bar_linkage")
+    q = _random_q(mech, rng)
+    np.testing.assert_allclose(
+        mech.closure_jacobian(q), fd_jacobian(mech.closure_residual, mech.model, q), atol=1e-8
+    )
+
+
+@pytest.mark.parametrize(
+    ("kind", "rank"),
+    [({"type": "point"}, 3), ({"type": "revolute", "axis": [0.0, 0.0, 1.0]}, 5), ({"type": "weld"}, 6)],
+)
+def test_spatial_closures_constrain_3_5_6_rows(tmp_path, rng, kind, rank):
+    """On a generic spatial 6R loop, point, revolute and weld closures have rank 3, 5 and 6."""
+    mech = spatial_6r(tmp_path, kind)
+    assert mech.closure_rank(mech.q_ref) == rank
+    assert mech.mobility == 6 - rank
+    q = _random_q(mech, rng)
+    np.testing.assert_allclose(
+        mech.closure_jacobian(q), fd_jacobian(mech.closure_residual, mech.model, q), atol=1e-8
+    )

@@ -1,0 +1,146 @@
+"""The Mechanism model (plm_pin/mechanism.py): sizes, mobility, assembly, bad input."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import plm_pin
+from plm_pin.models import PRESETS, preset_names
+from tests.conftest import preset
+
+# Mobility and redundancy of the seed mechanisms, from the papers' statements (and the
+# Chebychev-Grubler count for the classic chains), not from plm_pin.
+EXPECTED = {
+    "harada2011_3d4m": (3, 1),
+    "harada2011_3d3m": (3, 0),
+    "harada2015_asymmetric": (3, 1),
+    "fourbar": (1, 0),
+    "fivebar": (2, 0),
+    "enferadi2017_star_triangle": (3, 0),
+    "zhao2011_8pss": (6, 2),
+    "zhao2011_6pss": (6, 0),
+}
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_mobility_and_redundancy_match_the_papers(name):
+    """Mobility and redundancy of each preset are those the papers state."""
+    mech = preset(name)
+    assert (mech.mobility, mech.redundancy) == EXPECTED[name]
+    assert (PRESETS[name].dof, PRESETS[name].redundancy) == EXPECTED[name]
+    assert mech.n_actuators == PRESETS[name].actuators
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_reference_configuration_closes_the_loops(name):
+    """Every preset's reference configuration closes its loops to 1e-12."""
+    mech = preset(name)
+    assert np.max(np.abs(mech.closure_residual(mech.q_ref)), initial=0.0) <= 1e-12
+    assert not mech.q_ref.flags.writeable
+
+
+def _plate_pose(mech, q):
+    data = mech.model.createData()
+    pin.framesForwardKinematics(mech.model, data, q)
+    M = data.oMf[mech.model.getFrameId("plate_center")]
+    return np.array([M.translation[0], M.translation[1], math.atan2(M.rotation[1, 0], M.rotation[0, 0])])
+
+
+def _paper_ik(pose, l, rt, signs):
+    """Harada 2011 eq. (2) with the signs of (M.5): c_i = L_i.a + s_i sqrt((L_i.a)^2 - L_i.L_i + l_i^2)."""
+    x, y, th = pose
+    R = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
+    out = []
+    for i, s in enumerate(signs):
+        s_i = np.array([-rt, 0.0]) if i < 2 else np.array([rt, 0.0])
+        L = np.array([x, y]) + R @ s_i
+        out.append(L[0] + s * math.sqrt(L[0] ** 2 - L @ L + l**2))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("pose", [(0.0, 0.08, -0.35), (0.03, 0.1, 0.2), (-0.05, 0.06, 0.5)])
+def test_assembly_with_fixed_sliders_reaches_the_paper_pose(pose):
+    """Fixing the 3D4M sliders at eq. (2)'s values and assembling yields the commanded plate pose."""
+    mech = preset("harada2011_3d4m")
+    c = _paper_ik(pose, 0.140, 0.05, (-1, 1, -1, 1))
+    fixed = {f"slider{i + 1}": c[i] for i in range(4)}
+    start = pin.integrate(mech.model, mech.q_ref, np.full(mech.nv, 0.01))
+    asm = mech.assemble(start, fixed=fixed)
+    assert asm.residual_norm <= 1e-12
+    np.testing.assert_allclose(mech.actuator_positions(asm.q), c, atol=0.0)
+    np.testing.assert_allclose(_plate_pose(mech, asm.q), pose, atol=1e-10)
+
+
+def test_assembly_keeps_named_joints_where_they_are(rng):
+    """Joints named in ``fixed`` keep their guessed values while the loops close."""
+    mech = preset("fourbar")
+    q = mech.q_ref.copy()
+    q[0] += 0.2
+    asm = mech.assemble(q, fixed=["crank_pivot"])
+    assert asm.q[0] == q[0]
+    assert asm.residual_norm <= 1e-12
+
+
+def test_assembly_failure_is_typed_and_names_the_closure():
+    """Actuators that pull the loop apart raise ClosureNotSatisfied naming the worst closure."""
+    mech = preset("harada2011_3d4m")
+    fixed = {"slider1": -0.5, "slider2": 0.5}
+    with pytest.raises(plm_pin.ClosureNotSatisfied, match=r"cannot close the loops.*rod2_plate_left") as info:
+        mech.assemble(fixed=fixed)
+    assert info.value.worst_closure == "rod2_plate_left"
+    assert info.value.residual_norm > 0.1
+
+
+@pytest.mark.parametrize(
+    ("bad", "message"),
+    [
+        (np.zeros(3), r"q_guess must have shape \(9,\), got \(3,\)"),
+        (np.full(9, np.nan), r"q_guess has non-finite entries at indices \[0, 1"),
+        (np.zeros((9, 1)), r"must have shape \(9,\)"),
+    ],
+)
+def test_bad_configurations_are_refused(bad, message):
+    """Wrong-shaped or non-finite configurations raise InvalidInput with a clear message."""
+    mech = preset("harada2011_3d4m")
+    with pytest.raises(plm_pin.InvalidInput, match=message):
+        mech.assemble(bad)
+    with pytest.raises(plm_pin.InvalidInput, match=message.replace("q_guess", "q")):
+        mech.closure_residual(bad)
+
+
+def test_fixing_an_unknown_joint_lists_the_joints():
+    """Fixing a joint that does not exist names it and lists the valid joints."""
+    mech = preset("fourbar")
+    with pytest.raises(plm_pin.InvalidInput, match=r"no joint 'elbow'; joints are \['crank_pivot'"):
+        mech.assemble(fixed={"elbow": 0.1})
+    with pytest.raises(plm_pin.InvalidInput, match=r"cannot fix joint 'elbow'"):
+        mech.assemble(fixed=["elbow"])
+
+
+def test_summary_reports_sizes_and_closures():
+    """The summary lists sizes, closures with their rows, actuators and the task."""
+    s = preset("harada2011_3d3m").summary()
+    assert (s["nq"], s["nv"], s["closure_rows"]) == (7, 7, 6)
+    assert [c["type"] for c in s["closures"]] == ["point", "point"]
+    assert [a["joint"] for a in s["actuators"]] == ["slider1", "slider2", "slider4"]
+    assert s["task"] == {"frame": "plate_center", "dofs": ["x", "y", "rz"]}
+
+
+def test_erd_arm_loads_as_an_open_chain():
+    """example-robot-data's UR5 loads with no closures, 6 DOF, 6 actuators and no redundancy."""
+    mech = plm_pin.load("erd:ur5")
+    assert mech.closures == ()
+    assert (mech.mobility, mech.redundancy, mech.n_actuators) == (6, 0, 6)
+    assert mech.task is not None and len(mech.task.dofs) == 6
+
+
+def test_unknown_erd_robot_lists_the_choices():
+    """An unknown example-robot-data name lists the available robots."""
+    with pytest.raises(
+        plm_pin.DescriptionError, match=r"unknown example-robot-data robot 'ur55'; available are \[.*'ur5'"
+    ):
+        plm_pin.load("erd:ur55")

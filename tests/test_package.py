@@ -1,0 +1,59 @@
+"""Packaging: public names resolve, and the wheel carries every preset description."""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import plm_pin
+from plm_pin.models import preset_names
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def test_every_name_in_every_all_resolves():
+    """Each name listed in any package's __all__ is importable from that package."""
+    for info in pkgutil.walk_packages(plm_pin.__path__, "plm_pin."):
+        module = importlib.import_module(info.name)
+        for name in getattr(module, "__all__", []):
+            assert hasattr(module, name), f"{info.name}.__all__ lists missing {name!r}"
+    for name in plm_pin.__all__:
+        assert hasattr(plm_pin, name)
+
+
+def test_core_import_does_not_pull_optional_dependencies():
+    """`import plm_pin` loads neither meshcat, matplotlib, jinja2 nor dask."""
+    code = "import sys, plm_pin; print(sorted(m for m in ('meshcat','matplotlib','jinja2','dask') if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+@pytest.mark.slow
+def test_wheel_installed_outside_the_checkout_loads_every_preset(tmp_path):
+    """`pip wheel .` installed into a fresh venv, run outside the checkout, loads all presets."""
+    wheels = tmp_path / "wheels"
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(wheels), str(REPO)],
+        check=True,
+        capture_output=True,
+    )
+    (wheel,) = wheels.glob("plm_pin-*.whl")
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    python = venv / "bin" / "python"
+    subprocess.run([str(python), "-m", "pip", "install", "-q", str(wheel)], check=True, capture_output=True)
+    names = preset_names()
+    code = (
+        "import plm_pin, sys; from pathlib import Path\n"
+        f"assert not Path(plm_pin.__file__).is_relative_to({str(REPO)!r}), plm_pin.__file__\n"
+        f"for n in {names!r}:\n"
+        "    m = plm_pin.load(n); print(n, m.mobility, m.redundancy)\n"
+    )
+    out = subprocess.run([str(python), "-c", code], cwd=tmp_path, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert [line.split()[0] for line in out.stdout.splitlines()] == names
