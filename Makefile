@@ -36,7 +36,7 @@ format: $(STAMP)
 	$(VENV)/bin/ruff check --fix .
 
 bench: $(STAMP)
-	$(PY) -m bench
+	$(PY) -m plm_pin.benchmarks --out $(REPORTS)/bench
 
 urdf: $(STAMP)
 	$(PY) -m plm_pin.models.generate

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+import yaml
 
 import plm_pin
+import plm_pin.models
 from plm_pin.models import PRESETS, preset_names
 from tests.conftest import preset
 
@@ -144,3 +147,21 @@ def test_unknown_erd_robot_lists_the_choices():
         plm_pin.DescriptionError, match=r"unknown example-robot-data robot 'ur55'; available are \[.*'ur5'"
     ):
         plm_pin.load("erd:ur55")
+
+
+def test_drive_inertia_is_reflected_into_the_armature(tmp_path):
+    """A ball-screw drive adds (J_rotor + J_screw) (2 pi / lead)^2 to its joint's armature."""
+    import shutil
+
+    for suffix in (".urdf", ".plm.yaml"):
+        shutil.copy(Path(plm_pin.models.urdf_folder()) / f"fourbar{suffix}", tmp_path / f"fourbar{suffix}")
+    sidecar = tmp_path / "fourbar.plm.yaml"
+    data = yaml.safe_load(sidecar.read_text())
+    data["actuation"][0].update(lead=0.05, rotor_inertia=2.0e-5, screw_inertia=1.0e-5)
+    sidecar.write_text(yaml.safe_dump(data))
+    mech = plm_pin.load(tmp_path / "fourbar.urdf")
+    # hand value: 3e-5 kg m^2 * (2 pi / 0.05 m)^2 = 3e-5 * 15791.367... = 0.473741...
+    expected = 3.0e-5 * (2 * math.pi / 0.05) ** 2
+    assert expected == pytest.approx(0.4737410112522892, rel=1e-15)
+    assert mech.model.armature[mech.actuators[0].idx_v] == pytest.approx(expected, rel=1e-15)
+    assert mech.actuators[0].reflected_inertia == pytest.approx(expected, rel=1e-15)
