@@ -12,6 +12,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from .exceptions import PlmError
@@ -31,7 +32,7 @@ errors = Console(stderr=True)
 
 
 def _fail(exc: Exception) -> typer.Exit:
-    errors.print(f"[bold red]error:[/] {exc}", markup=True, highlight=False, soft_wrap=True)
+    errors.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True, highlight=False, soft_wrap=True)
     return typer.Exit(code=1)
 
 
@@ -52,11 +53,12 @@ def _preset_rows() -> list[dict[str, Any]]:
 def list_presets() -> None:
     """List the presets: name, paper, DOF, actuators, redundancy."""
     table = Table(title="plm_pin presets")
-    for col in ("name", "paper", "DOF", "actuators", "redundancy"):
+    table.add_column("name", no_wrap=True)  # names are typed back: never folded
+    for col in ("paper", "DOF", "actuators", "redundancy"):
         table.add_column(col, overflow="fold")
     for row in _preset_rows():
         table.add_row(
-            row["name"], row["paper"], str(row["dof"]), str(row["actuators"]), str(row["redundancy"])
+            row["name"], escape(row["paper"]), str(row["dof"]), str(row["actuators"]), str(row["redundancy"])
         )
     console.print(table)
 
@@ -75,24 +77,25 @@ def info(
     except PlmError as exc:
         raise _fail(exc) from None
     for w in caught:
-        errors.print(f"[yellow]warning:[/] {w.message}", highlight=False, soft_wrap=True)
+        errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
     if as_json:
         console.print_json(json.dumps(summary))
         return
-    table = Table(title=f"{summary['name']}", show_header=False)
+    table = Table(title=escape(summary["name"]), show_header=False)
     table.add_column("item")
     table.add_column("value", overflow="fold")
-    table.add_row("source", summary["source"])
+    table.add_row("source", escape(summary["source"]))
     table.add_row("nq / nv", f"{summary['nq']} / {summary['nv']}")
     for c in summary["closures"]:
         table.add_row(
-            f"closure {c['name']}", f"{c['type']} ({c['rows']} rows): {c['frames'][0]} = {c['frames'][1]}"
+            escape(f"closure {c['name']}"),
+            escape(f"{c['type']} ({c['rows']} rows): {c['frames'][0]} = {c['frames'][1]}"),
         )
     for a in summary["actuators"]:
         limits = "unbounded" if a["limits"] is None else f"[{a['limits'][0]:g}, {a['limits'][1]:g}]"
-        table.add_row(f"actuator {a['joint']}", f"{a['kind']}, limits {limits}")
+        table.add_row(escape(f"actuator {a['joint']}"), escape(f"{a['kind']}, limits {limits}"))
     task = summary["task"]
-    table.add_row("task", "none" if task is None else f"{task['frame']}: {' '.join(task['dofs'])}")
+    table.add_row("task", "none" if task is None else escape(f"{task['frame']}: {' '.join(task['dofs'])}"))
     table.add_row("mobility", str(summary["mobility"]))
     red = summary["redundancy"]
     table.add_row("redundancy", f"{red}" + (" (under-actuated)" if red < 0 else ""))
@@ -112,12 +115,13 @@ def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or descr
     except PlmError as exc:
         raise _fail(exc) from None
     for w in caught:
-        errors.print(f"[yellow]warning:[/] {w.message}", highlight=False, soft_wrap=True)
+        errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
     console.print(
-        f"[green]ok[/]: {summary['name']}: {len(summary['closures'])} closures, "
+        f"[green]ok[/]: {escape(summary['name'])}: {len(summary['closures'])} closures, "
         f"{len(summary['actuators'])} actuators, mobility {summary['mobility']}, redundancy "
         f"{summary['redundancy']}, reference residual {summary['reference_residual']:.2g}",
         highlight=False,
+        soft_wrap=True,
     )
 
 
@@ -155,8 +159,8 @@ def report(
         table.add_column(col, overflow="fold")
     for s in rows:
         table.add_row(
-            s["name"],
-            s["source"],
+            escape(s["name"]),
+            escape(s["source"]),
             str(s["nv"]),
             str(len(s["closures"])),
             str(len(s["actuators"])),
@@ -165,7 +169,7 @@ def report(
             f"{s['reference_residual']:.1e}",
         )
     console.print(table)
-    console.print(f"wrote {out / 'summary.json'}", highlight=False)
+    console.print(f"wrote {out / 'summary.json'}", markup=False, highlight=False, soft_wrap=True)
 
 
 if __name__ == "__main__":  # pragma: no cover

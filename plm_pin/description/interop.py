@@ -47,6 +47,9 @@ def parse_epr_sidecar(data: Any, path: str | None = None, name: str | None = Non
         if not isinstance(motor, str):
             raise DescriptionError(f"name_mot[{i}] must be a joint name, got {motor!r}", path)
         actuation.append(ActuatorSpec(joint=motor))
+    dup = sorted({m for m in motors if motors.count(m) > 1})
+    if dup:
+        raise DescriptionError(f"name_mot: joint(s) {dup} actuated twice", path)
     return Sidecar(
         closures=tuple(closures),
         actuation=tuple(actuation),

@@ -195,7 +195,7 @@ def _numbers(value: Any, n: int | None, where: str, path: str | None) -> tuple[f
 
 
 def _keys(item: Mapping[str, Any], allowed: Sequence[str], where: str, path: str | None) -> None:
-    unknown = sorted(set(item) - set(allowed))
+    unknown = sorted(set(item) - set(allowed), key=str)
     if unknown:
         raise DescriptionError(f"{where}: unknown key(s) {unknown}; valid keys are {sorted(allowed)}", path)
 

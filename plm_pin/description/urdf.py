@@ -92,16 +92,22 @@ def read_urdf_text(text: str | bytes, folder: Path | None, label: str = "<urdf>"
     data = text.encode() if isinstance(text, str) else text
     if len(data) > _MAX_BYTES:
         raise DescriptionError(f"URDF is larger than {_MAX_BYTES // 2**20} MiB", label)
+    doctype_refused = DescriptionError(
+        "DOCTYPE and ENTITY declarations are not allowed in a URDF (entity expansion "
+        "and external entities are refused)",
+        label,
+    )
     if b"<!DOCTYPE" in data or b"<!ENTITY" in data:
-        raise DescriptionError(
-            "DOCTYPE and ENTITY declarations are not allowed in a URDF (entity expansion "
-            "and external entities are refused)",
-            label,
-        )
+        raise doctype_refused
     try:
         root = etree.fromstring(data, _parser())
     except etree.XMLSyntaxError as exc:
         raise DescriptionError(f"malformed URDF XML: {exc}", label) from None
+    # The byte check above misses encodings that are not ASCII-compatible (UTF-16, UTF-7):
+    # refuse a document type declaration however it was encoded.
+    docinfo = root.getroottree().docinfo
+    if docinfo.doctype or docinfo.internalDTD is not None:
+        raise doctype_refused
     if root.tag != "robot":
         raise DescriptionError(f"URDF root element must be <robot>, got <{root.tag}>", label)
     missing: list[str] = []
@@ -114,7 +120,8 @@ def read_urdf_text(text: str | bytes, folder: Path | None, label: str = "<urdf>"
             link = element.getparent()
             where = f"link {link.get('name') if link is not None else '?'} {kind}"
             if folder is None:
-                missing.append(filename)
+                if kind == "visual":
+                    missing.append(filename)
                 element.getparent().remove(element)
                 continue
             path = _resolve_mesh(filename, folder, f"{label}: {where}")
