@@ -17,6 +17,7 @@ from rich.table import Table
 
 from .exceptions import PlmError
 from .loading import load
+from .mechanism import Mechanism
 from .models.registry import PRESETS
 from .warnings import PlmWarning
 
@@ -34,6 +35,20 @@ errors = Console(stderr=True)
 def _fail(exc: Exception) -> typer.Exit:
     errors.print(f"[bold red]error:[/] {escape(str(exc))}", markup=True, highlight=False, soft_wrap=True)
     return typer.Exit(code=1)
+
+
+def _load(target: str | Path) -> Mechanism:
+    """Load a mechanism, printing its warnings on stderr and turning errors into exit 1."""
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PlmWarning)
+            mech = load(target)
+            mech.summary()  # computes mobility now, inside the error handling
+    except PlmError as exc:
+        raise _fail(exc) from None
+    for w in caught:
+        errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
+    return mech
 
 
 def _preset_rows() -> list[dict[str, Any]]:
@@ -69,15 +84,7 @@ def info(
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
 ) -> None:
     """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", PlmWarning)
-            mech = load(target)
-            summary = mech.summary()
-    except PlmError as exc:
-        raise _fail(exc) from None
-    for w in caught:
-        errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
+    summary = _load(target).summary()
     if as_json:
         console.print_json(json.dumps(summary))
         return
@@ -107,15 +114,7 @@ def info(
 @app.command()
 def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or description folder")]) -> None:
     """Validate a description and say exactly what is wrong and where."""
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", PlmWarning)
-            mech = load(path)
-            summary = mech.summary()
-    except PlmError as exc:
-        raise _fail(exc) from None
-    for w in caught:
-        errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
+    summary = _load(path).summary()
     console.print(
         f"[green]ok[/]: {escape(summary['name'])}: {len(summary['closures'])} closures, "
         f"{len(summary['actuators'])} actuators, mobility {summary['mobility']}, redundancy "
@@ -144,14 +143,11 @@ def report(
     """Write the mechanism summaries (the full study reports are planned work)."""
     targets = list(PRESETS) if study == "all" else [study]
     rows = []
-    try:
-        for target in targets:
-            mech = load(target)
-            summary = mech.summary()
-            summary["q_ref"] = np.asarray(mech.q_ref).tolist()
-            rows.append(summary)
-    except PlmError as exc:
-        raise _fail(exc) from None
+    for target in targets:
+        mech = _load(target)
+        summary = mech.summary()
+        summary["q_ref"] = np.asarray(mech.q_ref).tolist()
+        rows.append(summary)
     out.mkdir(parents=True, exist_ok=True)
     _atomic_write(out / "summary.json", json.dumps(rows, indent=2))
     table = Table(title="plm_pin mechanisms")

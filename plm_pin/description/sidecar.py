@@ -178,6 +178,11 @@ class Sidecar:
 
 
 def _number(value: Any, where: str, path: str | None) -> float:
+    if isinstance(value, str):  # YAML 1.1 reads 1e3 (no dot) as a string
+        try:
+            value = float(value)
+        except ValueError:
+            raise DescriptionError(f"{where} must be a number, got {value!r}", path) from None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise DescriptionError(f"{where} must be a number, got {value!r}", path)
     x = float(value)

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
 from lxml import etree
 
-from ..exceptions import DescriptionError
+from ..exceptions import DescriptionError, FrameNotFound
 from ..warnings import MissingMeshWarning
 
 _MAX_BYTES = 64 * 1024 * 1024
@@ -73,6 +74,123 @@ def _resolve_mesh(filename: str, folder: Path, where: str) -> Path:
     return candidates[0]
 
 
+JOINT_TYPES: tuple[str, ...] = ("continuous", "fixed", "floating", "planar", "prismatic", "revolute")
+
+_MOVING = ("continuous", "prismatic", "revolute")
+
+# numeric attributes of URDF elements and how many numbers each holds
+_NUMERIC: dict[str, dict[str, int]] = {
+    "origin": {"xyz": 3, "rpy": 3},
+    "axis": {"xyz": 3},
+    "mass": {"value": 1},
+    "inertia": {k: 1 for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")},
+    "limit": {"lower": 1, "upper": 1, "effort": 1, "velocity": 1},
+    "box": {"size": 3},
+    "cylinder": {"radius": 1, "length": 1},
+    "sphere": {"radius": 1},
+    "mesh": {"scale": 3},
+}
+
+
+def _owner(element: etree._Element) -> str:
+    node: etree._Element | None = element
+    while node is not None and node.tag not in ("link", "joint"):
+        node = node.getparent()
+    return f"{node.tag} {node.get('name')!r}" if node is not None else "robot"
+
+
+def check_numbers(root: etree._Element, label: str) -> None:
+    """Check every numeric attribute: Pinocchio's parser would skip a bad one silently.
+
+    Raises:
+        DescriptionError: naming the element, the attribute and the bad text.
+    """
+    for tag, attributes in _NUMERIC.items():
+        for element in root.iter(tag):
+            for attribute, count in attributes.items():
+                text = element.get(attribute)
+                if text is None:
+                    continue
+                parts = text.split()
+                try:
+                    values = [float(v) for v in parts]
+                except ValueError:
+                    values = []
+                if len(values) != count or not all(math.isfinite(v) for v in values):
+                    raise DescriptionError(
+                        f"{_owner(element)}: <{tag} {attribute}={text!r}> must hold {count} finite number(s)",
+                        label,
+                    )
+                if tag == "mass" and values[0] < 0.0:
+                    raise DescriptionError(f"{_owner(element)}: negative mass {values[0]}", label)
+                moving = element.getparent() is not None and element.getparent().get("type") in _MOVING
+                if tag == "axis" and moving and not any(values):
+                    raise DescriptionError(f"{_owner(element)}: <axis xyz={text!r}> must be non-zero", label)
+    for inertial in root.iter("inertial"):
+        mass = inertial.find("mass")
+        inertia = inertial.find("inertia")
+        if mass is None or mass.get("value") is None:
+            raise DescriptionError(f"{_owner(inertial)}: <inertial> needs <mass value=...>", label)
+        absent = [k for k in _NUMERIC["inertia"] if inertia is None or inertia.get(k) is None]
+        if absent:
+            raise DescriptionError(f"{_owner(inertial)}: <inertia> lacks {absent}", label)
+    for joint in root.iter("joint"):
+        if joint.get("type") in ("revolute", "prismatic"):
+            limit = joint.find("limit")
+            if limit is None or limit.get("effort") is None or limit.get("velocity") is None:
+                raise DescriptionError(
+                    f"{_owner(joint)}: a {joint.get('type')} joint needs <limit effort=... velocity=...>",
+                    label,
+                )
+
+
+def check_tree(root: etree._Element, label: str) -> None:
+    """Check that links and joints form one tree, with messages that say what is wrong.
+
+    Raises:
+        DescriptionError: duplicate names, unknown joint types, a joint whose parent or
+            child link does not exist (:class:`FrameNotFound`), a link with two parents,
+            or not exactly one root link.
+    """
+    links = [link.get("name", "") for link in root.findall("link")]
+    if not links:
+        raise DescriptionError("URDF has no <link>", label)
+    for kind, names in (("link", links), ("joint", [j.get("name", "") for j in root.findall("joint")])):
+        if "" in names:
+            raise DescriptionError(f"a <{kind}> has no name", label)
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise DescriptionError(f"duplicate {kind} name(s) {dup}", label)
+    known = set(links)
+    parent_of: dict[str, str] = {}
+    for joint in root.findall("joint"):
+        name = joint.get("name", "")
+        kind = joint.get("type")
+        if kind not in JOINT_TYPES:
+            raise DescriptionError(
+                f"joint {name!r}: unknown type {kind!r}; valid types are {list(JOINT_TYPES)}", label
+            )
+        ends = {}
+        for end in ("parent", "child"):
+            element = joint.find(end)
+            link = element.get("link") if element is not None else None
+            if not link:
+                raise DescriptionError(f"joint {name!r} has no <{end} link=...>", label)
+            if link not in known:
+                raise FrameNotFound(link, links, "link", f"{label}: joint {name!r} {end}")
+            ends[end] = link
+        if ends["child"] in parent_of:
+            raise DescriptionError(
+                f"link {ends['child']!r} is the child of two joints ({parent_of[ends['child']]!r} and "
+                f"{name!r}); a URDF is a tree: cut one of them and declare it as a closure in the sidecar",
+                label,
+            )
+        parent_of[ends["child"]] = name
+    roots = [link for link in links if link not in parent_of]
+    if len(roots) != 1:
+        raise DescriptionError(f"the links must form one tree with one root; roots are {roots}", label)
+
+
 def read_urdf_text(text: str | bytes, folder: Path | None, label: str = "<urdf>") -> UrdfSource:
     """Check URDF text and resolve its mesh references against ``folder``.
 
@@ -110,6 +228,8 @@ def read_urdf_text(text: str | bytes, folder: Path | None, label: str = "<urdf>"
         raise doctype_refused
     if root.tag != "robot":
         raise DescriptionError(f"URDF root element must be <robot>, got <{root.tag}>", label)
+    check_tree(root, label)
+    check_numbers(root, label)
     missing: list[str] = []
     for kind in ("visual", "collision"):
         for element in list(root.iter(kind)):

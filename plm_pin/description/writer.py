@@ -7,15 +7,17 @@ import tempfile
 from pathlib import Path
 
 import yourdfpy
+from lxml import etree
 
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar
 
 
 def urdf_text(robot: yourdfpy.Robot) -> str:
-    """Serialise a yourdfpy robot to URDF text."""
+    """Serialise a yourdfpy robot to indented URDF text (one element per line, diff-friendly)."""
     urdf = yourdfpy.URDF(robot=robot, build_scene_graph=False, load_meshes=False)
-    text = urdf.write_xml_string()
-    return text if isinstance(text, str) else text.decode()
+    tree = urdf.write_xml()
+    etree.indent(tree, space="  ")
+    return etree.tostring(tree, xml_declaration=True, encoding="utf-8", pretty_print=True).decode()
 
 
 def _atomic_write(path: Path, text: str) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import shutil
 from pathlib import Path
 from typing import Any
@@ -250,10 +251,65 @@ def test_continuous_joint_reference_takes_an_angle_or_cos_sin(tmp_path):
     assert str(info.value) == f"{sidecar}: reference.j has 3 value(s); the joint takes 2 (or one angle [rad])"
 
 
-def test_pinocchio_unparsable_urdf_is_a_description_error(fourbar):
-    """A joint whose child link does not exist gives a plain DescriptionError, no Pinocchio error type."""
+def test_joint_with_a_missing_child_link_names_it_and_lists_the_links(fourbar):
+    """A joint whose child link does not exist is refused before Pinocchio, naming the link."""
     text = fourbar.read_text().replace('<child link="rocker_tip"/>', '<child link="ghost"/>')
     fourbar.write_text(text)
+    with pytest.raises(FrameNotFound) as info:
+        plm_pin.load(fourbar)
+    assert info.value.name == "ghost"
+    assert info.value.kind == "link"
+    assert str(info.value).startswith(
+        f"{fourbar}: joint 'rocker_tip_fixed' child: link 'ghost' not found; links are ['base', 'crank'"
+    )
+
+
+def test_link_with_two_parents_suggests_a_closure(fourbar):
+    """A link that closes a loop inside the URDF is refused with a pointer to the sidecar."""
+    text = fourbar.read_text().replace('<child link="rocker_tip"/>', '<child link="coupler_tip"/>')
+    fourbar.write_text(text)
+    with pytest.raises(
+        DescriptionError, match=r"link 'coupler_tip' is the child of two joints .*declare it as a closure"
+    ):
+        plm_pin.load(fourbar)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            '<mass value="',
+            '<mass value="heavy',
+            r"link 'crank': <mass value='heavy0.2'> must hold 1 finite number",
+        ),
+        ('<mass value="', '<mass value="-', r"link 'crank': negative mass -0.2"),
+        (
+            '<origin xyz="0.1 0.0 0.0"',
+            '<origin xyz="0.1 0.0"',
+            r"link 'rocker': <origin xyz='0.1 0.0'> must hold 3",
+        ),
+        (
+            '<axis xyz="0.0 0.0 1.0"/>',
+            '<axis xyz="0.0 nan 1.0"/>',
+            r"joint 'crank_pivot': <axis xyz='0.0 nan 1.0'>",
+        ),
+    ],
+)
+def test_bad_numbers_are_refused_not_skipped(fourbar, old, new, message):
+    """Non-numeric, non-finite or miscounted numbers are refused (Pinocchio's parser would skip them)."""
+    fourbar.write_text(fourbar.read_text().replace(old, new, 1))
+    with pytest.raises(DescriptionError, match=message):
+        plm_pin.load(fourbar)
+
+
+def test_pinocchio_rejection_is_a_description_error(fourbar, monkeypatch):
+    """Should Pinocchio still reject a checked URDF, its error is wrapped in a plain DescriptionError."""
+    import pinocchio
+
+    def refuse(_xml):
+        raise RuntimeError("The XML stream does not contain a valid URDF model.")
+
+    monkeypatch.setattr(pinocchio, "buildModelFromXML", refuse)
     with pytest.raises(DescriptionError) as info:
         plm_pin.load(fourbar)
     assert type(info.value) is DescriptionError
@@ -261,8 +317,27 @@ def test_pinocchio_unparsable_urdf_is_a_description_error(fourbar):
         f"{fourbar}: Pinocchio cannot build a model from this URDF: "
         "The XML stream does not contain a valid URDF model."
     )
-    assert info.value.__cause__ is None
-    assert info.value.__suppress_context__
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            lambda t: t.replace('<inertia ixx="2.5e-06"', "<inertia", 1),
+            r"link 'crank': <inertia> lacks \['ixx'\]",
+        ),
+        (
+            lambda t: re.sub(r"<limit [^>]*/>", "", t, count=1),
+            r"joint 'crank_pivot': a revolute joint needs <limit",
+        ),
+        (lambda t: t.replace('<axis xyz="0.0 0.0 1.0"/>', '<axis xyz="0 0 0"/>', 1), r"must be non-zero"),
+    ],
+)
+def test_incomplete_elements_are_refused(fourbar, edit, message):
+    """Elements Pinocchio would half-read (missing inertia terms, limits, zero axis) are refused."""
+    fourbar.write_text(edit(fourbar.read_text()))
+    with pytest.raises(DescriptionError, match=message):
+        plm_pin.load(fourbar)
 
 
 def test_unreachable_closure_names_it_and_suggests_the_reference(fourbar):
@@ -270,9 +345,9 @@ def test_unreachable_closure_names_it_and_suggests_the_reference(fourbar):
     # crank 0.10 + coupler 0.25 reach 0.35 m; the rocker tip stays within 0.20 m of a pivot
     # moved to x = 1.0 m: the tips are always at least 0.45 m apart.
     text = fourbar.read_text()
-    pivot = '<child link="rocker"/><origin xyz="0.3 0.0 0.0"'
-    assert text.count(pivot) == 1
-    fourbar.write_text(text.replace(pivot, '<child link="rocker"/><origin xyz="1.0 0.0 0.0"'))
+    pivot = re.compile(r'(<child link="rocker"/>\s*<origin xyz=")0\.3 0\.0 0\.0"')
+    assert len(pivot.findall(text)) == 1
+    fourbar.write_text(pivot.sub(r'\g<1>1.0 0.0 0.0"', text))
     with pytest.raises(ClosureNotSatisfied) as info:
         plm_pin.load(fourbar)
     exc = info.value
@@ -290,10 +365,8 @@ def test_unreachable_closure_names_it_and_suggests_the_reference(fourbar):
 
 def test_unreachable_closure_can_be_loaded_without_validation(fourbar):
     """validate=False defers assembly: loading works and q_ref then raises ClosureNotSatisfied."""
-    text = fourbar.read_text().replace(
-        '<child link="rocker"/><origin xyz="0.3 0.0 0.0"', '<child link="rocker"/><origin xyz="1.0 0.0 0.0"'
-    )
-    fourbar.write_text(text)
+    pivot = re.compile(r'(<child link="rocker"/>\s*<origin xyz=")0\.3 0\.0 0\.0"')
+    fourbar.write_text(pivot.sub(r'\g<1>1.0 0.0 0.0"', fourbar.read_text()))
     mech = plm_pin.load(fourbar, validate=False)
     with pytest.raises(ClosureNotSatisfied, match="cannot close the loops"):
         mech.q_ref  # noqa: B018
