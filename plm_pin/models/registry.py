@@ -12,8 +12,11 @@ from typing import Any
 import yourdfpy
 
 from ..description.sidecar import Sidecar
+from . import pss
 from .classic import build_fivebar, build_fourbar
 from .prrrp import build_2prrrp, rod_scaled
+from .pss import build_pss
+from .star_triangle import build_star_triangle
 
 Builder = Callable[..., tuple[yourdfpy.Robot, Sidecar]]
 
@@ -98,10 +101,84 @@ def _harada2015() -> Mapping[str, Any]:
     )
 
 
+# Zhao 2011, Tables 1-4 and section "Simulation" (m_p, inertias, I_L, I_C + I_M), eq. (19) (lead).
+_ZHAO2011 = dict(
+    legs=(1, 2, 3, 4, 5, 6, 7, 8),
+    guide_points=pss.ZHAO2011_GUIDE_POINTS,
+    guide_directions=pss.ZHAO2011_GUIDE_DIRECTIONS,
+    platform_points=pss.ZHAO2011_PLATFORM_POINTS,
+    strut_lengths=pss.ZHAO2011_STRUT_LENGTHS,
+    strut_mass=pss.ZHAO2011_STRUT_MASS,
+    strut_inertia=pss.ZHAO2011_STRUT_INERTIA,
+    platform_mass=pss.ZHAO2011_PLATFORM_MASS,
+    platform_inertia=pss.ZHAO2011_PLATFORM_INERTIA,
+    slider_mass=pss.ZHAO2011_SLIDER_MASS,
+    lead=pss.ZHAO2011_LEAD,
+    screw_inertia=pss.ZHAO2011_SCREW_INERTIA,
+    rotor_inertia=pss.ZHAO2011_ROTOR_INERTIA,
+    home_pose=pss.ZHAO2011_HOME_POSE,
+    gravity=pss.ZHAO2011_GRAVITY,
+    stroke=(0.0, 1.5),
+)
+_ZHAO2011_NOTES = (
+    "Guides: sliders 1-4 along +z, 5-6 along +y, 7-8 along +x, q_i measured from B_i (Table 1); "
+    "the text says 1-4 vertical, 5-8 horizontal and mutually orthogonal, Tables 1-2 fix which "
+    "horizontal axis (the other cannot reach); root with the slider below / outside its platform joint.",
+    "Reference pose x = y = 0, z = 1.744 m, angles 0: the midpoint of the eq. (35) trajectory "
+    "(the paper names no home pose); R = Rz(phi_z) Ry(phi_y) Rx(phi_x), fixed axes.",
+    "Slider ball joint replaced by a universal joint (massless cross, frame z along the guide): the "
+    "strut's spin is idle and the paper drops it too (eqs. (6b), (9)); the strut is axisymmetric.",
+    "Lead printed '0.05 m^-1' (eq. (19)), read 0.05 m/rev; armature per slider "
+    "(2 pi / 0.05)^2 (10.5e-4 + 248e-4) = 408.21 kg.",
+    "Gravity 9.8 m/s^2 along -z: direction from the vertical screws 1-4 below the platform, "
+    "magnitude not printed (the paper's a_max = 9.8 m/s^2).",
+    "Strut inertia diag(1.279, 1.279, 0.005) kg m^2 about its centre kept as printed (a uniform "
+    "1 m, 20 kg rod gives 1.667); slider inertia that of a 0.12 x 0.12 x 0.08 m box (it never "
+    "rotates); stroke 0-1.5 m ours; no force limits given; d_i = 0.244 m enters no equation, unused.",
+    "Table 5 (work per motor, sum 15242.219 J) is not reproduced by the paper's printed model "
+    "(a literal re-implementation gives about 8479 J); quoted in plm_pin.models.pss only.",
+)
+
+
 PRESETS: dict[str, Preset] = {
     p.name: p
     for p in sorted(
         [
+            Preset(
+                "enferadi2017_star_triangle",
+                build_star_triangle,
+                _frozen(
+                    side=0.5,
+                    slider_mass=2.0,
+                    link_mass=3.0,
+                    link_inertia=37.5,
+                    star_mass=2.0,
+                    star_inertia=25.0,
+                    reference_pose=(0.25, 0.35, math.pi / 2),
+                    gravity=9.81,
+                ),
+                "Enferadi & Tavakolian 2017, section 6: 3-PRP star-triangle, a = 0.5 m, m_a = 2 kg, "
+                "m_il = 3 kg, m_p = 2 kg, I_il = 37.5 kg m^2, I_p = 25 kg m^2",
+                3,
+                3,
+                "planar xy-theta machine tool, 3 sliders on an equilateral triangle, star end effector",
+                (
+                    "Figures missing: geometry rebuilt from Lambda_1-6 and eqs. (3)-(5); world origin at "
+                    "vertex V1, x along side V1-V3 (rail 3), rails V1->V2, V2->V3, V3->V1.",
+                    "Gamma_2 prints q1 cos/sin theta_1 for a1 cos/sin theta_1 (Lambda_3-4 and b_32 have "
+                    "a1); Lambda_4 prints +q2 sin theta_2 where rail 2 descends (-q2 sin theta_2, "
+                    "theta_2 = 60 deg is a magnitude).",
+                    "alpha_2 in (24) is alpha_3 and theta_3 in (30) is theta_2 (same values); (24) I-III "
+                    "masses are m_a + m_il; (31) swaps M and N; (7) orders the twist [phi, x, y], (24)-(34) "
+                    "[x, y, phi].",
+                    "I_il = 37.5 and I_p = 25 kg m^2 are kept as printed although implausible for 3 kg and "
+                    "2 kg bodies on a 0.5 m base (perhaps kg cm^2); in-plane inertias are half of them.",
+                    "Intermediate link mass centre on its revolute at A_i (zero leg length, eq. (20)); "
+                    "slider inertia that of a 40 x 30 x 10 mm box (it never rotates).",
+                    "Horizontal plane: gravity 9.81 m/s^2 along -z, no work. No actuator force limits given.",
+                    "Reference pose: start of the vertical-line path, C = (0.25, 0.35) m, phi = pi/2.",
+                ),
+            ),
             Preset(
                 "fivebar",
                 build_fivebar,
@@ -156,6 +233,32 @@ PRESETS: dict[str, Preset] = {
                     "Gravity 9.81 m/s^2 along -y; reference pose x = 0, y = 0.10 m, theta = 0, "
                     "assembly mode [+ +], working modes (- + - +).",
                 ),
+            ),
+            Preset(
+                "zhao2011_6pss",
+                build_pss,
+                _frozen(**{**_ZHAO2011, "legs": pss.ZHAO2011_6PSS_LEGS}),
+                "Zhao 2011, Tables 1-4, section 'Simulation', eq. (19): 8-PSS without legs 1 and 8",
+                6,
+                6,
+                "spatial 6-PSS counterpart: legs 2-7 of the 8-PSS, 6 ball-screw sliders (non-redundant)",
+                (
+                    "Legs {2, 3, 4, 5, 6, 7} kept (ours: the paper only names a 6-PSS counterpart): three "
+                    "vertical legs, both y-sliders and one x-slider; of the 28 six-leg subsets, the smallest "
+                    "worst condition number of J (eq. (6a)) along the eq. (35) trajectory (4.85; 4.24 at "
+                    "home); every subset keeping all four vertical legs (legs 1-6 among them) is singular.",
+                    *_ZHAO2011_NOTES,
+                ),
+            ),
+            Preset(
+                "zhao2011_8pss",
+                build_pss,
+                _frozen(**_ZHAO2011),
+                "Zhao 2011, Tables 1-4, section 'Simulation', eq. (19): redundant 8-PSS",
+                6,
+                8,
+                "spatial 8-PSS motion platform, 8 ball-screw sliders on three orthogonal axes (2 redundant)",
+                _ZHAO2011_NOTES,
             ),
         ],
         key=lambda p: p.name,

@@ -1,0 +1,433 @@
+r"""Parametric n-PSS spatial parallel manipulators; the Zhao 2011 8-PSS and its 6-PSS counterpart.
+
+Geometry (Zhao 2011, Fig. 2 and eq. (6a)): slider ``i`` runs on a fixed guide through
+:math:`B_i` (Table 1) along the unit direction :math:`e_i`; its ball-joint centre is
+:math:`C_i = B_i + q_i e_i`, the slider coordinate :math:`q_i` [m] being measured from
+:math:`B_i`. A strut of length :math:`l_i` (Table 3) joins :math:`C_i` to the platform
+ball joint :math:`A_i = p + R a_i`, with :math:`a_i` given in the platform frame
+:math:`O'\text{-}uvw` at the platform's centre of mass (Table 2). The platform pose is
+:math:`X = [x, y, z, \phi_x, \phi_y, \phi_z]`, the angles being rotations about the fixed
+x, y and z axes: :math:`R = R_z(\phi_z) R_y(\phi_y) R_x(\phi_x)` (``pin.rpy.rpyToMatrix``).
+Inverse kinematics is the strut-length equation :math:`|A_i - B_i - q_i e_i| = l_i`:
+
+.. math:: q_i = e_i^T d_i - \sqrt{l_i^2 - |d_i|^2 + (e_i^T d_i)^2}, \qquad d_i = A_i - B_i,
+
+the root that keeps the slider on the guide-origin side of its platform joint (the
+struts rise from the sliders to the platform, :math:`w_i^T e_i > 0`).
+
+Which slider moves along which axis (Zhao 2011, section "Description"): "The lead screws
+of B1, B2, B3 and B4 are vertical to the ground. The lead screws of B5, B6 and the lead
+screws of B7, B8 are parallel with the ground. They are orthogonal to each other." The
+horizontal axes follow from Tables 1-2: :math:`B_{5,6}` lie at y = -2.0 m with the same x
+(+-0.4 m) as :math:`a_{5,6}`, whose platform points sit near y = -0.68 m, 1.32 m away in y;
+a guide along x would leave :math:`|y_A - y_B| > l = 1` m (no assembly), so
+:math:`e_{5,6} = +y`. Likewise :math:`B_{7,8}` at x = -2.0 m share y with
+:math:`a_{7,8}`, so :math:`e_{7,8} = +x`. Sliders 1-4 sit on z = 0 below their platform
+points (same x, y), so :math:`e_{1..4} = +z`, z pointing up. Each sign makes :math:`q_i`
+grow towards the platform; :math:`w_i^T e_i \ge 0.909` along the paper's trajectory (no
+actuator singularity).
+
+Spanning tree (URDF has no ball joint): the platform hangs from the base on a
+``floating`` joint (a Pinocchio free-flyer, q = xyz then quaternion x y z w); each leg is
+``slider<i>`` (prismatic, actuated) -> ``u<i>a``, ``u<i>b`` (a universal joint, two
+revolutes through a massless cross) -> ``strut<i>`` (local z along the strut, centre of
+mass at mid-length) -> frame ``strut<i>_tip``, closed on the platform frame
+``platform_p<i>`` by a ``point`` closure (3 rows). The universal joint replaces the
+slider-side ball: the third rotation, the strut's spin about its own axis, is an idle
+freedom the paper drops too (its strut angular velocity is normal to the strut, eqs.
+(6b), (9)), and the strut is axisymmetric, so nothing changes. The universal joint's
+frame is turned so that its z axis is the guide direction :math:`e_i`; its first axis is
+then normal to the guide and it locks only when the strut lies along that axis, at 90 deg
+from the guide, far outside the workspace (the angles stay below 0.43 rad on the paper's
+trajectory). An 8-PSS tree has nv = 6 + 8 x 3 = 30 and 24 closure rows: mobility 6,
+redundancy 2.
+
+Drive (eqs. (5), (18)-(19)): each slider is driven through a ball screw of lead
+:math:`p_i` [m/rev] by a base-mounted DC motor without reducer; the lead-screw inertia
+:math:`I_{Li}` and the coupler-plus-rotor inertia :math:`I_{Ci} + I_{Mi}` are reflected on
+the slider as the armature :math:`(2\pi / p_i)^2 (I_{Li} + I_{Ci} + I_{Mi})`
+(= 408.2068 kg here).
+
+Typos of Zhao 2011 that matter here:
+
+- eq. (19) prints the lead as "p_i = 0.05 m^-1"; a lead is 0.05 m/rev (2 pi / p in rad/m).
+- after eq. (5), "A is the actuating torques": A = diag(2 pi / p_i) of eq. (19).
+- eq. (5) gives :math:`J^+ = J^T (J J^T)^{-1}` "when J is m x n", but J is 8 x 6 (eq. (6a))
+  and the projection used is :math:`(J^T)^+ = J (J^T J)^{-1}`.
+- eq. (1) sets :math:`\omega = [\dot\phi_x, \dot\phi_y, \dot\phi_z]^T`; for fixed-axis
+  angles this is exact only to first order.
+- Table 1 is titled "base platform" but lists the guide points :math:`B_i` (q = 0).
+- the strut's transverse inertia 1.279 kg m^2 is not that of a uniform 20 kg, 1 m rod
+  (1.667); it is kept as printed.
+- "d_i = 0.244 m" (section "Simulation") enters no equation or table; unused. It equals the
+  height of the trajectory midpoint above the horizontal guides, 1.744 - 1.5 m.
+- Table 5 (work per motor) is not reproduced by the paper's own printed model (a literal
+  re-implementation gives a sum near 8479 J, not 15242.219 J); it is quoted here as
+  :data:`ZHAO2011_TABLE5_WORK`, not used as a reference.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+import yourdfpy
+
+from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
+from . import _urdf as u
+
+Vec3 = tuple[float, float, float]
+
+# ---------------------------------------------------------------- Zhao 2011 data
+ZHAO2011_GUIDE_POINTS: tuple[Vec3, ...] = (
+    (0.4, -0.4, 0.0),
+    (0.4, 0.4, 0.0),
+    (-0.4, 0.4, 0.0),
+    (-0.4, -0.4, 0.0),
+    (0.4, -2.0, 1.5),
+    (-0.4, -2.0, 1.5),
+    (-2.0, -0.4, 1.5),
+    (-2.0, 0.4, 1.5),
+)
+"""Table 1: guide points :math:`B_1 .. B_8` (slider ball centre at q = 0), world frame [m]."""
+
+ZHAO2011_GUIDE_DIRECTIONS: tuple[Vec3, ...] = (
+    (0.0, 0.0, 1.0),
+    (0.0, 0.0, 1.0),
+    (0.0, 0.0, 1.0),
+    (0.0, 0.0, 1.0),
+    (0.0, 1.0, 0.0),
+    (0.0, 1.0, 0.0),
+    (1.0, 0.0, 0.0),
+    (1.0, 0.0, 0.0),
+)
+"""Guide directions :math:`e_1 .. e_8`: text of section "Description" and Tables 1-2 (module docstring)."""
+
+ZHAO2011_PLATFORM_POINTS: tuple[Vec3, ...] = (
+    (0.4, -0.4, -0.166),
+    (0.4, 0.4, -0.166),
+    (-0.4, 0.4, -0.166),
+    (-0.4, -0.4, -0.166),
+    (0.4, -0.681, -0.0375),
+    (-0.4, -0.681, -0.0375),
+    (-0.681, -0.4, -0.0375),
+    (-0.681, 0.4, -0.0375),
+)
+"""Table 2: platform ball joints :math:`a_1 .. a_8` in the platform frame O'-uvw (centre of mass) [m]."""
+
+ZHAO2011_STRUT_LENGTHS: tuple[float, ...] = (1.0,) * 8
+"""Table 3: strut lengths :math:`l_i = |C_i A_i|` [m]."""
+
+ZHAO2011_STRUT_MASS = 20.0
+"""Table 4: strut mass :math:`m_i` [kg] (all eight struts)."""
+
+ZHAO2011_SLIDER_MASS = 50.0
+"""Table 4: slider mass :math:`m_{qi}` [kg] (all eight sliders)."""
+
+ZHAO2011_STRUT_INERTIA: Vec3 = (1.279, 1.279, 0.005)
+"""Section "Simulation": strut inertia :math:`{}^iI_i` about its centre, strut frame (z along it) [kg m^2]."""
+
+ZHAO2011_PLATFORM_MASS = 200.0
+"""Section "Simulation": platform mass :math:`m_p` [kg]."""
+
+ZHAO2011_PLATFORM_INERTIA: Vec3 = (17.333, 17.333, 33.333)
+"""Section "Simulation": platform inertia :math:`{}^{o'}I_p` about its mass centre, frame O'-uvw [kg m^2]."""
+
+ZHAO2011_LEAD = 0.05
+"""Eq. (19): ball-screw lead :math:`p_i` [m/rev] (printed "0.05 m^-1")."""
+
+ZHAO2011_SCREW_INERTIA = 10.5e-4
+"""Section "Simulation": lead-screw inertia :math:`I_{Li}` [kg m^2]."""
+
+ZHAO2011_ROTOR_INERTIA = 248e-4
+"""Section "Simulation": coupler plus motor-rotor inertia :math:`I_{Ci} + I_{Mi}` [kg m^2]."""
+
+ZHAO2011_GRAVITY: Vec3 = (0.0, 0.0, -9.8)
+"""Gravity [m/s^2]: along -z (sliders 1-4 are "vertical to the ground" along z, the
+platform above them); magnitude not printed, 9.8 m/s^2 as the paper's :math:`a_{max}`."""
+
+ZHAO2011_TRAJECTORY_START: tuple[float, ...] = (-0.1, -0.1, 1.644, -0.1, -0.1, -0.1)
+"""Eq. (35): pose at t = 0, :math:`[x, y, z]` [m] and :math:`[\\phi_x, \\phi_y, \\phi_z]` [rad]."""
+
+ZHAO2011_TRAJECTORY_STROKE = 0.2
+"""Eq. (35): travel S of every pose coordinate [m] or [rad]."""
+
+ZHAO2011_TRAJECTORY_A_MAX = 9.8
+"""Eq. (35): peak acceleration :math:`a_{max}` [m/s^2] or [rad/s^2]."""
+
+ZHAO2011_TRAJECTORY_DURATION = math.sqrt(
+    2.0 * math.pi * ZHAO2011_TRAJECTORY_STROKE / ZHAO2011_TRAJECTORY_A_MAX
+)
+"""Eq. (35): duration :math:`T = \\sqrt{2 \\pi S / a_{max}}` [s] (0.358090 s)."""
+
+ZHAO2011_HOME_POSE: tuple[float, ...] = (0.0, 0.0, 1.744, 0.0, 0.0, 0.0)
+"""Reference pose (ours): the midpoint of the eq. (35) trajectory; the paper names no home pose."""
+
+ZHAO2011_6PSS_LEGS: tuple[int, ...] = (2, 3, 4, 5, 6, 7)
+"""Legs kept by the 6-PSS counterpart (ours; the paper does not say): three vertical,
+both y-sliders and one x-slider. Of the 28 six-leg subsets it has the smallest worst
+condition number of J (eq. (6a)) along the eq. (35) trajectory, 4.85 (4.24 at home). Any
+set keeping all four vertical legs is singular (their rows of J span only z, rx, ry)."""
+
+ZHAO2011_TABLE5_WORK: tuple[float, ...] = (
+    99.697,
+    1544.119,
+    2819.088,
+    401.408,
+    166.805,
+    753.256,
+    6495.371,
+    2962.475,
+)
+"""Table 5: output work of motors 1-8 on the eq. (35) trajectory [J] (sum 15242.219 J).
+Quoted only: the paper's printed model does not reproduce it (see the module docstring)."""
+
+
+def zhao2011_trajectory(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""Pose, pose rate and pose acceleration of Zhao 2011, eq. (35), at time ``t`` [s].
+
+    Every coordinate :math:`c` of :math:`X = [x, y, z, \phi_x, \phi_y, \phi_z]` follows
+    :math:`c(t) = c_0 + S (u - \sin(2 \pi u) / 2 \pi)`, :math:`u = t / T`, rest to rest.
+    The rate of the angles is :math:`\dot\phi`, not the angular velocity.
+
+    Returns:
+        ``X`` [m, rad], ``dX/dt`` [m/s, rad/s], ``d2X/dt2`` [m/s^2, rad/s^2], each shape (6,).
+    """
+    S, T, a_max = ZHAO2011_TRAJECTORY_STROKE, ZHAO2011_TRAJECTORY_DURATION, ZHAO2011_TRAJECTORY_A_MAX
+    s = t / T
+    ones = np.ones(6)
+    pose = np.asarray(ZHAO2011_TRAJECTORY_START, dtype=float) + S * (
+        s - math.sin(2 * math.pi * s) / (2 * math.pi)
+    )
+    rate = (S / T) * (1.0 - math.cos(2 * math.pi * s)) * ones
+    acceleration = a_max * math.sin(2 * math.pi * s) * ones
+    return pose, rate, acceleration
+
+
+# ---------------------------------------------------------------- kinematics
+def pose_rotation(pose: Sequence[float]) -> np.ndarray:
+    r"""Platform rotation :math:`R = R_z(\phi_z) R_y(\phi_y) R_x(\phi_x)` of a pose, shape (3, 3)."""
+    return u.transform(rpy=(pose[3], pose[4], pose[5]))[:3, :3]
+
+
+def pose_quaternion(pose: Sequence[float]) -> tuple[float, float, float, float]:
+    r"""Unit quaternion ``(x, y, z, w)`` (Pinocchio order) of :math:`R_z(\phi_z) R_y(\phi_y) R_x(\phi_x)`."""
+    x, y, z, w = (float(c) for c in pin.Quaternion(pose_rotation(pose)).coeffs())
+    return (x, y, z, w)
+
+
+def pss_inverse_kinematics(
+    pose: Sequence[float],
+    guide_points: Sequence[Sequence[float]],
+    guide_directions: Sequence[Sequence[float]],
+    platform_points: Sequence[Sequence[float]],
+    strut_lengths: Sequence[float],
+    legs: Sequence[int],
+) -> dict[int, tuple[float, np.ndarray]]:
+    r"""Slider position :math:`q_i` [m] and strut unit vector :math:`w_i` of each leg.
+
+    Closed form of the strut-length equation :math:`|p + R a_i - B_i - q_i e_i| = l_i`, the
+    root with the slider on the guide-origin side of its platform joint (module docstring).
+
+    Args:
+        pose: platform pose ``(x, y, z [m], phi_x, phi_y, phi_z [rad])``.
+        guide_points: :math:`B_i` per leg number ``i`` (index ``i - 1``) [m].
+        guide_directions: unit :math:`e_i` per leg.
+        platform_points: :math:`a_i` in the platform frame per leg [m].
+        strut_lengths: :math:`l_i` per leg [m].
+        legs: leg numbers (1-based).
+
+    Returns:
+        ``{i: (q_i, w_i)}`` with ``w_i`` (3,) pointing from the slider to the platform.
+
+    Raises:
+        ValueError: when a strut cannot reach its platform joint from its guide.
+    """
+    p = np.asarray(pose[:3], dtype=float)
+    R = pose_rotation(pose)
+    out = {}
+    for i in legs:
+        B = np.asarray(guide_points[i - 1], dtype=float)
+        e = np.asarray(guide_directions[i - 1], dtype=float)
+        l = float(strut_lengths[i - 1])
+        d = p + R @ np.asarray(platform_points[i - 1], dtype=float) - B
+        s = float(e @ d)
+        disc = l * l - float(d @ d) + s * s
+        if disc < 0.0:
+            raise ValueError(
+                f"leg {i}: the strut (l = {l:.4g} m) cannot reach its platform joint; "
+                f"distance to the guide {math.sqrt(float(d @ d) - s * s):.4g} m"
+            )
+        q = s - math.sqrt(disc)
+        out[i] = (q, (d - q * e) / l)
+    return out
+
+
+def universal_frame_rpy(direction: Sequence[float]) -> Vec3:
+    r"""Roll-pitch-yaw [rad] of a frame whose z axis is ``direction`` (unit), yaw 0.
+
+    :math:`R_y(\beta) R_x(\alpha) \hat z = (s_\beta c_\alpha, -s_\alpha, c_\beta c_\alpha)`.
+    """
+    ex, ey, ez = (float(c) for c in direction)
+    return (math.atan2(-ey, math.hypot(ex, ez)) + 0.0, math.atan2(ex, ez) + 0.0, 0.0)
+
+
+def universal_angles(strut: np.ndarray, frame_rpy: Sequence[float]) -> tuple[float, float]:
+    r"""Universal-joint angles :math:`(\alpha, \beta)` [rad] that point the strut along ``strut``.
+
+    The strut's z axis is :math:`R_\rho R_x(\alpha) R_y(\beta) \hat z` with :math:`R_\rho`
+    the universal joint's frame; with :math:`d = R_\rho^T w = (s_\beta, -s_\alpha c_\beta,
+    c_\alpha c_\beta)`: :math:`\beta = \arcsin d_x`, :math:`\alpha = \operatorname{atan2}(-d_y, d_z)`.
+    """
+    d = u.transform(rpy=frame_rpy)[:3, :3].T @ np.asarray(strut, dtype=float)
+    return math.atan2(-d[1], d[2]) + 0.0, math.asin(max(-1.0, min(1.0, float(d[0])))) + 0.0
+
+
+# ---------------------------------------------------------------- builder
+def build_pss(
+    *,
+    name: str,
+    legs: Sequence[int],
+    guide_points: Sequence[Sequence[float]],
+    guide_directions: Sequence[Sequence[float]],
+    platform_points: Sequence[Sequence[float]],
+    strut_lengths: Sequence[float],
+    strut_mass: float,
+    strut_inertia: Sequence[float],
+    platform_mass: float,
+    platform_inertia: Sequence[float],
+    slider_mass: float,
+    lead: float,
+    screw_inertia: float,
+    rotor_inertia: float,
+    home_pose: Sequence[float],
+    gravity: Sequence[float],
+    stroke: tuple[float, float] = (0.0, 1.5),
+    source: str = "",
+) -> tuple[yourdfpy.Robot, Sidecar]:
+    """Build an n-PSS manipulator (a subset of its legs) as a URDF tree plus sidecar.
+
+    Args:
+        name: robot name.
+        legs: leg numbers kept (1-based); per-leg data are indexed by ``leg - 1``.
+        guide_points: guide point :math:`B_i` of each slider, world frame [m].
+        guide_directions: unit guide direction :math:`e_i` of each slider.
+        platform_points: platform ball joint :math:`a_i`, platform frame [m].
+        strut_lengths: strut length :math:`l_i` [m].
+        strut_mass: mass of each strut [kg], centre of mass at mid-length.
+        strut_inertia: strut inertia about its centre, diagonal (transverse, transverse,
+            axial) in the strut frame [kg m^2].
+        platform_mass: platform mass [kg], centre of mass at the platform frame's origin.
+        platform_inertia: platform inertia about its centre of mass, diagonal in the
+            platform frame [kg m^2].
+        slider_mass: mass of each slider [kg].
+        lead: ball-screw lead [m/rev].
+        screw_inertia: lead-screw inertia [kg m^2].
+        rotor_inertia: motor rotor plus coupler inertia [kg m^2].
+        home_pose: platform pose ``(x, y, z [m], phi_x, phi_y, phi_z [rad])`` of the
+            reference configuration.
+        gravity: gravity vector in the world frame [m/s^2].
+        stroke: slider position limits [m] written into the URDF.
+        source: provenance written into the sidecar.
+
+    Returns:
+        The URDF tree and its sidecar.
+
+    Raises:
+        ValueError: on an invalid leg list or direction, or an unreachable home pose.
+    """
+    n = len(guide_points)
+    legs = tuple(sorted(legs))
+    if not legs or len(set(legs)) != len(legs) or not all(1 <= i <= n for i in legs):
+        raise ValueError(f"legs {legs}: give distinct leg numbers among 1..{n}")
+    for i in legs:
+        norm = float(np.linalg.norm(guide_directions[i - 1]))
+        if abs(norm - 1.0) > 1e-12:
+            raise ValueError(f"guide direction of leg {i} must be a unit vector, |e| = {norm}")
+    ik = pss_inverse_kinematics(
+        home_pose, guide_points, guide_directions, platform_points, strut_lengths, legs
+    )
+    strut_radius = math.sqrt(2.0 * strut_inertia[2] / strut_mass) if strut_mass > 0 else 0.02
+    slider_size = (0.12, 0.12, 0.08)
+    base_visuals = [u.box_visual((1.2, 1.2, 0.02), "base", (0.0, 0.0, -0.05))]
+    links: list[yourdfpy.Link] = []
+    joints: list[yourdfpy.Joint] = []
+    reference: dict[str, tuple[float, ...]] = {}
+    closures: list[ClosureSpec] = []
+    for i in legs:
+        B = tuple(float(c) for c in guide_points[i - 1])
+        e = tuple(float(c) for c in guide_directions[i - 1])
+        l = float(strut_lengths[i - 1])
+        rho = universal_frame_rpy(e)
+        rail_mid = tuple(b + 0.5 * (stroke[0] + stroke[1]) * c for b, c in zip(B, e, strict=True))
+        base_visuals.append(u.cylinder_visual(0.015, stroke[1] - stroke[0], "base", rail_mid, rho))
+        links.append(
+            u.link(
+                f"carriage{i}",
+                slider_mass,
+                u.box_inertia(slider_mass, slider_size),
+                visuals=[u.box_visual(slider_size, "slider", rpy=rho), u.sphere_visual(0.04, "joint")],
+            )
+        )
+        joints.append(
+            u.joint(f"slider{i}", "prismatic", "base", f"carriage{i}", xyz=B, axis=e, limits=stroke)
+        )
+        links.append(u.link(f"cross{i}"))
+        joints.append(u.joint(f"u{i}a", "revolute", f"carriage{i}", f"cross{i}", rpy=rho, axis=(1, 0, 0)))
+        links.append(
+            u.link(
+                f"strut{i}",
+                strut_mass,
+                tuple(strut_inertia),
+                com=(0.0, 0.0, l / 2),
+                visuals=[u.cylinder_visual(strut_radius, l, "rod", (0.0, 0.0, l / 2))],
+            )
+        )
+        joints.append(u.joint(f"u{i}b", "revolute", f"cross{i}", f"strut{i}", axis=(0, 1, 0)))
+        links.append(u.link(f"strut{i}_tip"))
+        joints.append(
+            u.joint(f"strut{i}_tip_fixed", "fixed", f"strut{i}", f"strut{i}_tip", xyz=(0.0, 0.0, l))
+        )
+        closures.append(ClosureSpec(f"strut{i}_platform", (f"strut{i}_tip", f"platform_p{i}"), "point"))
+        q, w = ik[i]
+        alpha, beta = universal_angles(w, rho)
+        reference[f"slider{i}"] = (q,)
+        reference[f"u{i}a"] = (alpha,)
+        reference[f"u{i}b"] = (beta,)
+    links.insert(0, u.link("base", visuals=base_visuals))
+    # a box with the platform's inertia: 1.0 x 1.0 x 0.2 m for Zhao 2011's 200 kg
+    mx, my, mz = (float(c) for c in platform_inertia)
+    scale = 6.0 / platform_mass if platform_mass > 0 else 0.0
+    box = tuple(math.sqrt(max(scale * v, 1e-6)) for v in (my + mz - mx, mx + mz - my, mx + my - mz))
+    links.append(
+        u.link(
+            "platform",
+            platform_mass,
+            (mx, my, mz),
+            visuals=[u.box_visual(box, "plate")],
+        )
+    )
+    joints.append(u.joint("platform_floating", "floating", "base", "platform"))
+    for i in legs:
+        a = tuple(float(c) for c in platform_points[i - 1])
+        links.append(u.link(f"platform_p{i}", visuals=[u.sphere_visual(0.04, "joint")]))
+        joints.append(u.joint(f"platform_p{i}_fixed", "fixed", "platform", f"platform_p{i}", xyz=a))
+    links.append(u.link("platform_center"))
+    joints.append(u.joint("platform_center_fixed", "fixed", "platform", "platform_center"))
+    reference["platform_floating"] = (*(float(c) for c in home_pose[:3]), *pose_quaternion(home_pose))
+    robot = yourdfpy.Robot(name=name, links=links, joints=joints)
+    sidecar = Sidecar(
+        closures=tuple(closures),
+        actuation=tuple(
+            ActuatorSpec(f"slider{i}", lead=lead, rotor_inertia=rotor_inertia, screw_inertia=screw_inertia)
+            for i in legs
+        ),
+        task=TaskSpec("platform_center", ("x", "y", "z", "rx", "ry", "rz")),
+        gravity=(float(gravity[0]), float(gravity[1]), float(gravity[2])),
+        reference={k: tuple(float(x) for x in v) for k, v in reference.items()},
+        name=name,
+        source=source,
+    )
+    return robot, sidecar
