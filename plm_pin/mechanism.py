@@ -14,6 +14,8 @@ from .description.sidecar import Sidecar, TaskSpec
 from .exceptions import ClosureNotSatisfied, InvalidInput
 from .kinematics import closures as _closures
 from .kinematics.assembly import Assembly, assemble
+from .kinematics.legs import Leg, find_legs
+from .kinematics.task import Task, compile_task
 
 RANK_RTOL = 1e-9
 """Relative tolerance of every rank decision: singular values below ``RANK_RTOL * s_max`` count as zero."""
@@ -105,6 +107,9 @@ class Mechanism:
             )
         self.actuators = tuple(actuators)
         self._task_frame = model.getFrameId(sidecar.task.frame) if sidecar.task else None
+        self.task_compiled: Task | None = (
+            compile_task(model, sidecar.task.frame, sidecar.task.dofs) if sidecar.task else None
+        )
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -131,6 +136,11 @@ class Mechanism:
     def task(self) -> TaskSpec | None:
         """The end-effector task, or None."""
         return self.sidecar.task
+
+    @property
+    def data(self) -> pin.Data:
+        """Scratch Pinocchio data of this mechanism (not thread-safe: one mechanism per thread)."""
+        return self._data
 
     @property
     def task_frame_id(self) -> int | None:
@@ -330,6 +340,11 @@ class Mechanism:
             except ClosureNotSatisfied:
                 continue
         return configs
+
+    @functools.cached_property
+    def legs(self) -> tuple[Leg, ...]:
+        """Legs: diagonal blocks of the inverse-kinematics Jacobian (see :mod:`plm_pin.kinematics.legs`)."""
+        return find_legs(self, self._generic_configurations()[-1])
 
     # ---------------------------------------------------------- reading
     def actuator_positions(self, q: Any) -> np.ndarray:

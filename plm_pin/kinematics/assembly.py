@@ -4,12 +4,30 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ClosureNotSatisfied
 from .closures import Closure, jacobian_from_data, residual_from_placements
+
+
+class ExtraRows(Protocol):
+    """Residual rows solved together with the closures (for instance a task target)."""
+
+    @property
+    def size(self) -> int:
+        """Number of rows."""
+        ...
+
+    def residual(self, data: pin.Data) -> np.ndarray:
+        """Rows from frame placements in ``data``."""
+        ...
+
+    def jacobian(self, model: pin.Model, data: pin.Data) -> np.ndarray:
+        """Their Jacobian from joint Jacobians and placements in ``data``."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -50,7 +68,8 @@ def assemble(
     tol: float = 1e-12,
     max_iterations: int = 100,
     rcond: float = 1e-10,
-    on_failure: Callable[[np.ndarray, np.ndarray], ClosureNotSatisfied] | None = None,
+    on_failure: Callable[[np.ndarray, np.ndarray], Exception] | None = None,
+    extra: ExtraRows | None = None,
 ) -> Assembly:
     r"""Close the loops from ``q_guess`` by damped Gauss-Newton (Levenberg-Marquardt).
 
@@ -74,24 +93,39 @@ def assemble(
         max_iterations: iteration cap.
         rcond: relative singular-value cut-off of the step.
         on_failure: builds the error raised when ``tol`` is not reached.
+        extra: further residual rows (after the closure rows) to drive to zero.
 
     Returns:
-        The assembled configuration and its residual.
+        The assembled configuration and its residual (closure rows, then ``extra`` rows).
 
     Raises:
         ClosureNotSatisfied: when ``tol`` is not reached.
     """
+
+    def residual_at(q: np.ndarray) -> np.ndarray:
+        pin.framesForwardKinematics(model, data, q)
+        phi = residual_from_placements(data, closures)
+        return phi if extra is None else np.concatenate([phi, extra.residual(data)])
+
+    def jacobian_at(q: np.ndarray) -> np.ndarray:
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        J = jacobian_from_data(model, data, closures)
+        return J if extra is None else np.vstack([J, extra.jacobian(model, data)])
+
     q = np.array(q_guess, dtype=float)
-    pin.framesForwardKinematics(model, data, q)
-    phi = residual_from_placements(data, closures)
+    phi = residual_at(q)
     cost = float(phi @ phi)
     mu0 = 1.0
     iterations = 0
-    while iterations < max_iterations and (phi.size and np.max(np.abs(phi)) > tol):
+    polish = 1  # one more step once within tolerance: quadratic convergence takes it to round-off
+    while iterations < max_iterations and phi.size:
+        if np.max(np.abs(phi)) <= tol:
+            if polish == 0 or np.max(np.abs(phi)) < 1e-15:
+                break
+            polish -= 1
         iterations += 1
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        J = jacobian_from_data(model, data, closures)[:, free_columns]
+        J = jacobian_at(q)[:, free_columns]
         U, s, Vt = np.linalg.svd(J, full_matrices=False)
         keep = s > rcond * (s[0] if s.size else 0.0)
         if not np.any(keep):
@@ -104,8 +138,7 @@ def assemble(
             step = np.zeros(model.nv)
             step[free_columns] = step_free
             q_new = pin.integrate(model, q, step)
-            pin.framesForwardKinematics(model, data, q_new)
-            phi_new = residual_from_placements(data, closures)
+            phi_new = residual_at(q_new)
             cost_new = float(phi_new @ phi_new)
             if cost_new < cost:
                 q, phi, cost = q_new, phi_new, cost_new

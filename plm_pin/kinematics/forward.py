@@ -1,0 +1,143 @@
+"""Forward kinematics: actuator positions -> every assembly mode."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
+from .assembly import assemble
+from .jacobians import require_task
+from .starts import random_starts
+from .task import check_task_vector
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+FK_TOL = 1e-12
+"""Default closure tolerance of the forward kinematics [m, rad]."""
+
+
+@dataclass(frozen=True)
+class FKSolution:
+    """One forward-kinematics solution (assembly mode).
+
+    Attributes:
+        q: assembled configuration, shape (nq,).
+        x: task coordinates of the end-effector frame [m, rad], shape (n_task,).
+        residual_norm: largest absolute closure residual [m, rad].
+    """
+
+    q: np.ndarray
+    x: np.ndarray
+    residual_norm: float
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON."""
+        return {"q": self.q.tolist(), "x": self.x.tolist(), "residual_norm": self.residual_norm}
+
+
+def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
+    out = q.copy()
+    for a, value in zip(mech.actuators, c, strict=True):
+        j = mech.model.joints[a.joint_id]
+        if j.nq == 2:  # unbounded revolute stored as (cos, sin)
+            out[a.idx_q : a.idx_q + 2] = (np.cos(value), np.sin(value))
+        else:
+            out[a.idx_q] = value
+    return out
+
+
+def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = 1e-7) -> bool:
+    """Whether two configurations put every frame origin at the same place [m].
+
+    Angles equal modulo 2 pi, and the two joint-angle sets of a universal joint that point
+    an axisymmetric strut the same way, count as the same assembly.
+    """
+    data = mech.data
+    pin.framesForwardKinematics(mech.model, data, q1)
+    first = np.array([M.translation for M in data.oMf])
+    pin.framesForwardKinematics(mech.model, data, q2)
+    second = np.array([M.translation for M in data.oMf])
+    return bool(np.max(np.abs(first - second)) < tol)
+
+
+def task_pose(mech: Mechanism, q: Any) -> np.ndarray:
+    """Task coordinates of the end-effector frame at ``q`` [m, rad], shape (n_task,)."""
+    task = require_task(mech)
+    pin.framesForwardKinematics(mech.model, mech.data, mech.check_q(q))
+    return task.pose_from_data(mech.data)
+
+
+def forward_kinematics(
+    mech: Mechanism,
+    actuators: Any,
+    guess: Any = None,
+    *,
+    all_modes: bool = True,
+    starts: int = 48,
+    seed: int = 0,
+    tol: float = FK_TOL,
+) -> list[FKSolution]:
+    """Assemble the mechanism with its actuators at ``actuators``: every assembly mode found.
+
+    Multi-start Newton on the closures with the actuated joints fixed: from ``guess`` (or
+    the reference configuration) and, with ``all_modes``, from ``starts`` random
+    configurations; solutions are de-duplicated by configuration. Deterministic for a
+    given ``seed``.
+
+    Args:
+        mech: the mechanism.
+        actuators: actuator positions [m, rad], shape (n_act,).
+        guess: first starting configuration.
+        all_modes: look for every assembly mode (otherwise only the guess's).
+        starts: random starts when ``all_modes``.
+        seed: random seed.
+        tol: closure tolerance [m, rad].
+
+    Returns:
+        The solutions, sorted by task coordinates (the guess's first when not ``all_modes``).
+
+    Raises:
+        PoseUnreachable: when no start closes the loops (no real assembly), with the
+            smallest residual reached.
+        InvalidInput: malformed inputs.
+    """
+    c = check_task_vector(actuators, mech.n_actuators, "actuators")
+    if mech.mobility > mech.n_actuators:
+        raise InvalidInput(
+            f"{mech.name} has {mech.mobility} DOF but {mech.n_actuators} actuators: fixing them does not "
+            "determine the configuration"
+        )
+    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
+    fixed = {a.idx_v for a in mech.actuators}
+    free = np.array([k for k in range(mech.nv) if k not in fixed])
+    starts_q = [_with_actuators(mech, q0, c)]
+    if all_modes:
+        rng = np.random.default_rng(seed)
+        starts_q += [_with_actuators(mech, q, c) for q in random_starts(mech, rng, q0, free, starts)]
+    found: list[FKSolution] = []
+    best = np.inf
+    for start in starts_q:
+        try:
+            asm = assemble(mech.model, mech.data, mech.closures, start, free, tol=tol, max_iterations=60)
+        except ClosureNotSatisfied as exc:
+            best = min(best, exc.residual_norm)
+            continue
+        if any(same_assembly(mech, s.q, asm.q) for s in found):
+            continue
+        x = task_pose(mech, asm.q) if mech.task_compiled is not None else np.zeros(0)
+        found.append(FKSolution(asm.q, x, asm.residual_norm))
+        if not all_modes:
+            break
+    if not found:
+        raise PoseUnreachable(
+            f"{mech.name}: no assembly with actuators at {c.tolist()}: the loops cannot be closed "
+            f"(smallest residual {best:.3g} m/rad over {len(starts_q)} starts)"
+        )
+    if all_modes:
+        found.sort(key=lambda s: tuple(np.round(s.x, 9)))
+    return found

@@ -1,0 +1,118 @@
+r"""Singularity classification of closed chains at a configuration.
+
+With the feasible motions :math:`v = N s` (:mod:`plm_pin.kinematics.jacobians`):
+
+- **constraint** (complex) singularity: :math:`J_\phi` loses rank below its generic rank,
+  so the chain gains a motion (e.g. two equal rods on one motor position);
+- **inverse** (type 1, actuator) singularity: :math:`T = J_x N` loses rank: a motion
+  leaves the task frame still while the legs move (Harada 2011 eq. (9), :math:`z_i^T a = 0`);
+- **direct** (type 2) singularity: :math:`C = S_a N` loses rank: a motion moves the task
+  frame with every actuator locked (Harada 2011 eq. (10), :math:`\det J_e = 0`).
+
+Margins are normalised smallest singular values (:math:`\sigma_{min} / \sigma_{max}`, and
+:math:`\sigma_r / \sigma_1` for the closure at its generic rank ``r``); they do not depend on
+the choice of :math:`N`. A configuration is singular of a kind when its margin is at most
+the tolerance.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..exceptions import SingularConfiguration
+from .jacobians import ClosedChainJacobians, closed_chain_jacobians
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+SINGULARITY_TOL = 1e-6
+"""Default margin at or below which a configuration counts as singular."""
+
+KINDS: tuple[str, ...] = ("constraint", "inverse", "direct")
+
+
+def _margin(M: np.ndarray) -> float:
+    if M.size == 0:
+        return 1.0
+    s = np.linalg.svd(M, compute_uv=False)
+    if s[0] == 0.0:
+        return 0.0
+    return float(s[min(M.shape) - 1] / s[0]) if min(M.shape) else 1.0
+
+
+@dataclass(frozen=True)
+class SingularityReport:
+    """Singularity margins of one configuration.
+
+    Attributes:
+        constraint_margin: :math:`\\sigma_r / \\sigma_1` of the closure Jacobian at its generic rank.
+        inverse_margin: :math:`\\sigma_{min} / \\sigma_{max}` of :math:`T = J_x N` (type 1).
+        direct_margin: :math:`\\sigma_{min} / \\sigma_{max}` of :math:`C = S_a N` (type 2); for a
+            redundantly actuated chain, of its rank-``mobility`` part.
+        tol: the tolerance used.
+    """
+
+    constraint_margin: float
+    inverse_margin: float
+    direct_margin: float
+    tol: float
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        """The kinds of singularity present, among ``constraint``, ``inverse``, ``direct``."""
+        margins = (self.constraint_margin, self.inverse_margin, self.direct_margin)
+        return tuple(k for k, m in zip(KINDS, margins, strict=True) if m <= self.tol)
+
+    @property
+    def singular(self) -> bool:
+        """Whether any kind of singularity is present."""
+        return bool(self.kinds)
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON."""
+        return {
+            "constraint_margin": self.constraint_margin,
+            "inverse_margin": self.inverse_margin,
+            "direct_margin": self.direct_margin,
+            "tol": self.tol,
+            "kinds": list(self.kinds),
+        }
+
+
+def report_from_jacobians(mech: Mechanism, jac: ClosedChainJacobians, tol: float) -> SingularityReport:
+    """Build the report from Jacobians already computed."""
+    rank = mech.nv - mech.mobility
+    s = jac.closure_singular_values
+    constraint = float(s[rank - 1] / s[0]) if rank > 0 and s.size and s[0] > 0 else 1.0
+    return SingularityReport(constraint, _margin(jac.T), _margin(jac.C), tol)
+
+
+def classify(
+    mech: Mechanism, q: Any, tol: float = SINGULARITY_TOL, *, raise_if_singular: bool = False
+) -> SingularityReport:
+    """Classify the configuration ``q`` (assembled) as regular or singular, with margins.
+
+    Args:
+        mech: the mechanism (needs a task with as many coordinates as DOF).
+        q: assembled configuration, shape (nq,).
+        tol: margin at or below which a kind counts as singular.
+        raise_if_singular: raise instead of returning a singular report.
+
+    Returns:
+        The report (check :attr:`SingularityReport.singular` and ``kinds``).
+
+    Raises:
+        SingularConfiguration: when ``raise_if_singular`` and the configuration is singular;
+            the message names the kinds and margins.
+    """
+    report = report_from_jacobians(mech, closed_chain_jacobians(mech, q), tol)
+    if raise_if_singular and report.singular:
+        raise SingularConfiguration(
+            f"{mech.name}: configuration is singular ({', '.join(report.kinds)}): margins constraint "
+            f"{report.constraint_margin:.3g}, inverse {report.inverse_margin:.3g}, direct "
+            f"{report.direct_margin:.3g} (tolerance {tol:.3g})"
+        )
+    return report

@@ -1,0 +1,145 @@
+r"""Task coordinates of the end-effector frame, their Jacobian, and task targets for solvers.
+
+Task coordinates ``x`` are the selected entries of ``(p, rpy)``: the frame origin in the
+world [m] and its roll-pitch-yaw angles [rad] with :math:`R = R_z(r_z) R_y(r_y) R_x(r_x)`
+(``pin.rpy``; for a planar task ``rz`` is the plate angle). Task *velocities* are the
+selected entries of the frame's world-aligned twist :math:`(v, \omega)`; for a planar task
+:math:`\omega_z = \dot r_z`, for spatial rotations :math:`\omega` differs from
+:math:`\dot{rpy}` (use :func:`rpy_rates`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..description.sidecar import TASK_DOFS
+from ..exceptions import InvalidInput
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+def wrap_angle(a: np.ndarray | float) -> np.ndarray:
+    """Angle(s) wrapped to (-pi, pi] [rad]."""
+    return np.asarray(np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2.0 * np.pi))
+
+
+@dataclass(frozen=True)
+class Task:
+    """A compiled task: frame index and selected rows of ``(p, rpy)`` / ``(v, omega)``.
+
+    Attributes:
+        frame_id: Pinocchio frame index.
+        rows: selected rows among ``x y z rx ry rz`` (0..5).
+        dofs: their names.
+    """
+
+    frame_id: int
+    rows: tuple[int, ...]
+    dofs: tuple[str, ...]
+
+    @property
+    def size(self) -> int:
+        """Number of task coordinates."""
+        return len(self.rows)
+
+    @property
+    def linear(self) -> tuple[int, ...]:
+        """Selected translation rows (0..2)."""
+        return tuple(r for r in self.rows if r < 3)
+
+    @property
+    def angular(self) -> tuple[int, ...]:
+        """Selected rotation rows (0..2, i.e. rx ry rz)."""
+        return tuple(r - 3 for r in self.rows if r >= 3)
+
+    def pose_from_data(self, data: pin.Data) -> np.ndarray:
+        """Task coordinates from frame placements already in ``data``, shape (n_task,)."""
+        M = data.oMf[self.frame_id]
+        full = np.concatenate([M.translation, pin.rpy.matrixToRpy(M.rotation)])
+        return full[list(self.rows)]
+
+    def jacobian_from_data(self, model: pin.Model, data: pin.Data) -> np.ndarray:
+        """Task Jacobian (world-aligned twist rows) from joint Jacobians in ``data``, shape (n_task, nv)."""
+        return pin.getFrameJacobian(model, data, self.frame_id, _LWA)[list(self.rows)]
+
+
+def compile_task(model: pin.Model, frame: str, dofs: tuple[str, ...]) -> Task:
+    """Compile a task spec against a model."""
+    return Task(model.getFrameId(frame), tuple(TASK_DOFS.index(d) for d in dofs), dofs)
+
+
+class TaskTarget:
+    r"""Residual rows that pin the task frame at given task coordinates.
+
+    Translation rows: :math:`p - p^*`. Rotation rows: with all three angles selected,
+    :math:`\log_3(R R^{*T})` (no representation singularity); otherwise the wrapped
+    difference of the selected roll-pitch-yaw angles. Jacobians are exact.
+    """
+
+    def __init__(self, task: Task, x: np.ndarray) -> None:
+        """Target ``x`` (task coordinates, shape (n_task,)) for ``task``."""
+        self.task = task
+        self.x = np.asarray(x, dtype=float)
+        lin = task.linear
+        ang = task.angular
+        self._p = np.zeros(3)
+        self._p[list(lin)] = self.x[: len(lin)]
+        self._rpy = np.zeros(3)
+        self._rpy[list(ang)] = self.x[len(lin) :]
+        self._R = pin.rpy.rpyToMatrix(self._rpy)
+        self._full_rotation = len(ang) == 3
+
+    @property
+    def size(self) -> int:
+        """Number of residual rows."""
+        return self.task.size
+
+    def residual(self, data: pin.Data) -> np.ndarray:
+        """Residual from placements in ``data``, shape (n_task,)."""
+        M = data.oMf[self.task.frame_id]
+        lin = list(self.task.linear)
+        ang = list(self.task.angular)
+        dp = (M.translation - self._p)[lin]
+        if self._full_rotation:
+            dr = pin.log3(M.rotation @ self._R.T)
+        else:
+            dr = wrap_angle(pin.rpy.matrixToRpy(M.rotation)[ang] - self._rpy[ang])
+        return np.concatenate([dp, dr])
+
+    def jacobian(self, model: pin.Model, data: pin.Data) -> np.ndarray:
+        """Exact Jacobian of :meth:`residual` from joint Jacobians in ``data``, shape (n_task, nv)."""
+        J = pin.getFrameJacobian(model, data, self.task.frame_id, _LWA)
+        lin = list(self.task.linear)
+        ang = list(self.task.angular)
+        rows = [J[lin]]
+        if ang:
+            R = data.oMf[self.task.frame_id].rotation
+            if self._full_rotation:
+                E = R @ self._R.T
+                rows.append(pin.Jlog3(E) @ E.T @ J[3:])
+            else:
+                rpy = pin.rpy.matrixToRpy(R)
+                rows.append((pin.rpy.computeRpyJacobianInverse(rpy, pin.ReferenceFrame.WORLD) @ J[3:])[ang])
+        return np.vstack(rows)
+
+
+def rpy_rates(rpy: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """Roll-pitch-yaw rates [rad/s] from a world angular velocity [rad/s], shape (3,)."""
+    return np.asarray(
+        pin.rpy.computeRpyJacobianInverse(np.asarray(rpy, float), pin.ReferenceFrame.WORLD) @ omega
+    )
+
+
+def check_task_vector(x: object, size: int, name: str = "x") -> np.ndarray:
+    """Return ``x`` as a float array of shape (size,), refusing wrong shapes and non-finite values."""
+    arr = np.asarray(x, dtype=float)
+    if arr.shape != (size,):
+        raise InvalidInput(f"{name} must have shape ({size},), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidInput(
+            f"{name} has non-finite entries at indices {np.flatnonzero(~np.isfinite(arr)).tolist()}"
+        )
+    return arr
