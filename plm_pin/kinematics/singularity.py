@@ -45,12 +45,12 @@ def _margin(M: np.ndarray) -> float:
 
 @dataclass(frozen=True)
 class SingularityReport:
-    """Singularity margins of one configuration.
+    r"""Singularity margins of one configuration.
 
     Attributes:
-        constraint_margin: :math:`\\sigma_r / \\sigma_1` of the closure Jacobian at its generic rank.
-        inverse_margin: :math:`\\sigma_{min} / \\sigma_{max}` of :math:`T = J_x N` (type 1).
-        direct_margin: :math:`\\sigma_{min} / \\sigma_{max}` of :math:`C = S_a N` (type 2); for a
+        constraint_margin: :math:`\sigma_r / \sigma_1` of the closure Jacobian at its generic rank.
+        inverse_margin: :math:`\sigma_{min} / \sigma_{max}` of :math:`T = J_x N` (type 1).
+        direct_margin: :math:`\sigma_{min} / \sigma_{max}` of :math:`C = S_a N` (type 2); for a
             redundantly actuated chain, of its rank-``mobility`` part.
         tol: the tolerance used.
     """
