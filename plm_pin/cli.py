@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import warnings
 from pathlib import Path
 from typing import Annotated, Any
@@ -15,6 +13,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from ._io import atomic_write_text
 from .exceptions import PlmError
 from .loading import load
 from .mechanism import Mechanism
@@ -124,17 +123,6 @@ def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or descr
     )
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 @app.command()
 def report(
     study: Annotated[str, typer.Argument(help="'all' (every preset) or a preset name / description path")],
@@ -149,7 +137,7 @@ def report(
         summary["q_ref"] = np.asarray(mech.q_ref).tolist()
         rows.append(summary)
     out.mkdir(parents=True, exist_ok=True)
-    _atomic_write(out / "summary.json", json.dumps(rows, indent=2))
+    atomic_write_text(out / "summary.json", json.dumps(rows, indent=2))
     table = Table(title="plm_pin mechanisms")
     for col in ("name", "source", "nv", "closures", "actuators", "mobility", "redundancy", "residual"):
         table.add_column(col, overflow="fold")

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import yourdfpy
 from lxml import etree
 
+from .._io import atomic_write_text
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar
 
 
@@ -18,17 +17,6 @@ def urdf_text(robot: yourdfpy.Robot) -> str:
     tree = urdf.write_xml()
     etree.indent(tree, space="  ")
     return etree.tostring(tree, xml_declaration=True, encoding="utf-8", pretty_print=True).decode()
-
-
-def _atomic_write(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def write_description(
@@ -51,6 +39,6 @@ def write_description(
     out.mkdir(parents=True, exist_ok=True)
     urdf_path = out / f"{name}.urdf"
     sidecar_path = out / f"{name}{SIDECAR_SUFFIX_DEFAULT}"
-    _atomic_write(urdf_path, urdf_text(robot))
-    _atomic_write(sidecar_path, sidecar.to_yaml())
+    atomic_write_text(urdf_path, urdf_text(robot))
+    atomic_write_text(sidecar_path, sidecar.to_yaml())
     return urdf_path, sidecar_path
