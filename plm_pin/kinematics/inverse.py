@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from .assembly import assemble
+from .closures import Closure, compile_closures
 from .forward import same_assembly
 from .jacobians import require_task
 from .legs import working_mode
@@ -54,10 +55,22 @@ class IKSolution:
 
 
 def _solve(
-    mech: Mechanism, target: TaskTarget, guess: np.ndarray, free: np.ndarray, tol: float
+    mech: Mechanism,
+    target: TaskTarget,
+    guess: np.ndarray,
+    free: np.ndarray,
+    tol: float,
+    closures: tuple[Closure, ...] | None = None,
 ) -> np.ndarray:
     return assemble(
-        mech.model, mech.data, mech.closures, guess, free, tol=tol, max_iterations=60, extra=target
+        mech.model,
+        mech.data,
+        mech.closures if closures is None else closures,
+        guess,
+        free,
+        tol=tol,
+        max_iterations=60,
+        extra=target,
     ).q
 
 
@@ -127,14 +140,19 @@ def _solve_leg(
     rng: np.random.Generator,
     tol: float,
     n: int,
+    closures: tuple[Closure, ...] | None = None,
 ) -> tuple[list[np.ndarray], float]:
-    """Solutions of one leg block (other joints fixed) from ``n`` random starts, and the best miss."""
+    """Solutions of one leg block (other joints fixed) from ``n`` random starts, and the best miss.
+
+    ``closures`` (default: all) are the closures solved with the task rows; the miss is the
+    largest residual among them.
+    """
     found: list[np.ndarray] = []
     best = np.inf
     cols = np.array(columns)
     for start in [q, *random_starts(mech, rng, q, columns, n)]:
         try:
-            sol = _solve(mech, target, start, cols, tol)
+            sol = _solve(mech, target, start, cols, tol, closures)
         except ClosureNotSatisfied as exc:
             best = min(best, exc.residual_norm)
             continue
@@ -207,9 +225,14 @@ def _q_indices(mech: Mechanism, columns: tuple[int, ...]) -> list[int]:
 
 
 def _unreachable(mech: Mechanism, target: TaskTarget, q0: np.ndarray, tol: float) -> PoseUnreachable:
-    """Find which leg misses: place the end-effector chain, then try each leg alone."""
+    """Find which leg misses: place the end-effector chain, then try each leg alone.
+
+    The end-effector chain is the leg holding the task rows; each other leg is solved against
+    its own closures only, so the gaps of the legs not yet closed do not count as its miss.
+    """
     rng = np.random.default_rng(0)
-    chain = mech.legs[0]
+    n_closure = mech.n_closure_rows
+    chain = next(leg for leg in mech.legs if any(r >= n_closure for r in leg.rows))
     misses = {}
     # place the end-effector chain on the task alone (closures ignored)
     q = q0.copy()
@@ -220,8 +243,14 @@ def _unreachable(mech: Mechanism, target: TaskTarget, q0: np.ndarray, tol: float
             f"{mech.name}: pose {target.x.tolist()} is out of reach of the end-effector chain "
             f"({chain.label}): it misses by {exc.residual_norm:.3g} m/rad"
         )
-    for leg in mech.legs[1:]:
-        _, miss = _solve_leg(mech, target, q, leg.columns, rng, tol, 12)
+    for leg in mech.legs:
+        if leg is chain:
+            continue
+        rows = set(leg.rows)
+        own = compile_closures(
+            mech.model, [c.spec for c in mech.closures if rows.intersection(range(c.rows.start, c.rows.stop))]
+        )
+        _, miss = _solve_leg(mech, target, q, leg.columns, rng, tol, 12, own)
         if miss > 0.0:
             misses[leg.label] = miss
     if not misses:

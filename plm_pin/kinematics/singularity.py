@@ -3,7 +3,10 @@ r"""Singularity classification of closed chains at a configuration.
 With the feasible motions :math:`v = N s` (:mod:`plm_pin.kinematics.jacobians`):
 
 - **constraint** (complex) singularity: :math:`J_\phi` loses rank below its generic rank,
-  so the chain gains a motion (e.g. two equal rods on one motor position);
+  so the chain gains a motion (e.g. two equal 2-PRRRP rods on one slider position, both
+  normal to the stator; inclined, such coinciding rods keep the rank of :math:`J_\phi`, and
+  Harada 2015's complex singularity only makes their two rows of :math:`J_{ce}` equal: a
+  redundant table loses its redundancy, a 3-motor one is direct-singular);
 - **inverse** (type 1, actuator) singularity: :math:`T = J_x N` loses rank: a motion
   leaves the task frame still while the legs move (Harada 2011 eq. (9), :math:`z_i^T a = 0`);
 - **direct** (type 2) singularity: :math:`C = S_a N` loses rank: a motion moves the task

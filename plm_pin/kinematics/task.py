@@ -134,8 +134,11 @@ def rpy_rates(rpy: np.ndarray, omega: np.ndarray) -> np.ndarray:
 
 
 def check_task_vector(x: object, size: int, name: str = "x") -> np.ndarray:
-    """Return ``x`` as a float array of shape (size,), refusing wrong shapes and non-finite values."""
-    arr = np.asarray(x, dtype=float)
+    """Return ``x`` as a float array of shape (size,); refuse non-numbers, wrong shapes, non-finite values."""
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInput(f"{name} must be {size} numbers: {exc}") from None
     if arr.shape != (size,):
         raise InvalidInput(f"{name} must have shape ({size},), got {arr.shape}")
     if not np.all(np.isfinite(arr)):

@@ -1,0 +1,234 @@
+"""Kinematics of the example-parallel-robots five-bars and delta with a plm-pin task.
+
+Their ``robot.yaml`` names closures and motors but no task, so each folder is copied and given
+a plm-pin sidecar ``robot.plm.yaml`` with the same closures (3d -> point, 6d -> weld), the same
+motors and an end-effector frame of the URDF with a planar task in the plane the robot moves in
+(all its revolute axes are normal to that plane):
+
+- ``5bar_linkage_iso3d``: axes along world y, task [x, z] of frame ``effector``; mobility 2.
+- ``5bar_linkage``: axes along world x, task [y, z] of frame ``effector``; mobility 3.
+- ``robot_delta``: axes along world x, task [y, z] of frame ``eff``; mobility 5.
+
+Idle freedoms. A ``6d`` (weld) closure joins two bodies that each hang on a revolute coaxial
+with the cut joint (``closedloop<k>_A`` and ``closedloop<k>_B``), so those two revolutes turn
+together, in series, about one axis: the two small closure bodies (the ``sphere`` links) spin
+about the cut joint's axis while every other body stays still. That motion keeps the loops
+closed and moves neither the motors nor any link that matters: one idle DOF per weld. Hence
+``5bar_linkage`` has 2 + 1 DOF (one weld) and ``robot_delta`` 2 + 3 (three welds); the
+``point`` closure of ``5bar_linkage_iso3d`` leaves no idle DOF (its out-of-plane ``freeortho``
+revolute is held by the closure's normal row). With more DOF than motors the configuration is
+not determined by the motors, so ``forward_kinematics`` refuses those two robots; what is
+well defined, and tested here, is: IK; FK once each weld's idle half-joint is also fixed
+(declared as an extra driven joint in a second sidecar); and the actuator and velocity maps
+restricted to the non-idle motions, J_ce = C T^+ and S = N T^+, whose idle part is null.
+"""
+
+from __future__ import annotations
+
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+
+import plm_pin
+from plm_pin import InvalidInput
+from plm_pin.kinematics import (
+    closed_chain_jacobians,
+    forward_kinematics,
+    inverse_kinematics,
+    same_assembly,
+    task_pose,
+)
+from plm_pin.mechanism import Mechanism
+from plm_pin.warnings import MissingMeshWarning
+from tests.conftest import INTEROP, fd_jacobian
+
+if not INTEROP.is_dir():
+    pytest.skip(f"example-parallel-robots corpus absent ({INTEROP})", allow_module_level=True)
+
+# folder -> (end-effector frame, planar task, normal of the plane of motion, idle half-joints by weld)
+ROBOTS = {
+    "5bar_linkage_iso3d": ("effector", ["x", "z"], 1, []),
+    "5bar_linkage": ("effector", ["y", "z"], 0, [("closedloop1_A", "closedloop1_B")]),
+    "robot_delta": (
+        "eff",
+        ["y", "z"],
+        0,
+        [
+            ("closedloop1_A", "closedloop1_B"),
+            ("closedloop2_A", "closedloop2_B"),
+            ("closedloop3_A", "closedloop3_B"),
+        ],
+    ),
+}
+EPS = 1e-6
+
+
+def _sidecar(folder: str, extra_driven: list[str]) -> dict:
+    robot = yaml.safe_load((INTEROP / folder / "robot.yaml").read_text())
+    frame, task, _, _ = ROBOTS[folder]
+    closures = [
+        {"name": f"loop{k + 1}", "frames": list(pair), "type": {"3d": "point", "6d": "weld"}[kind]}
+        for k, (pair, kind) in enumerate(zip(robot["closed_loop"], robot["type"], strict=True))
+    ]
+    return {
+        "format": "plm-pin/1",
+        "closures": closures,
+        "actuation": [{"joint": j} for j in [*robot["name_mot"], *extra_driven]],
+        "end_effector": {"frame": frame, "task": task},
+    }
+
+
+def _load(path: Path) -> Mechanism:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MissingMeshWarning)
+        return plm_pin.load(path)
+
+
+@pytest.fixture(scope="module")
+def robots(tmp_path_factory) -> dict[str, tuple[Mechanism, Mechanism]]:
+    """Each robot with its motors, and the same robot with one half-joint per weld also driven."""
+    out = {}
+    for folder, (_, _, _, welds) in ROBOTS.items():
+        dest = tmp_path_factory.mktemp(folder) / folder
+        shutil.copytree(INTEROP / folder, dest)
+        (dest / "robot.plm.yaml").write_text(yaml.safe_dump(_sidecar(folder, [])))
+        shutil.copy(dest / "robot.urdf", dest / "locked.urdf")
+        (dest / "locked.plm.yaml").write_text(yaml.safe_dump(_sidecar(folder, [a for a, _ in welds])))
+        out[folder] = (_load(dest / "robot.urdf"), _load(dest / "locked.urdf"))
+    return out
+
+
+def _poses(mech: Mechanism) -> list[np.ndarray]:
+    x0 = task_pose(mech, mech.q_ref)
+    return [x0 + d for d in ([0.0, 0.0], [0.004, -0.003], [-0.003, -0.004], [0.002, 0.004])]
+
+
+@pytest.mark.parametrize("folder", list(ROBOTS))
+def test_mobility_is_motors_plus_one_idle_spin_per_weld(robots, folder):
+    """Mobility = 2 motors + one idle DOF per weld: the weld's two coaxial half-joints turning together."""
+    mech, _ = robots[folder]
+    _, _, _, welds = ROBOTS[folder]
+    assert mech.n_actuators == 2
+    assert mech.mobility == 2 + len(welds)
+    jac = closed_chain_jacobians(mech, mech.q_ref)
+    S_a = np.eye(mech.nv)[mech.actuated_v_indices]
+    locked = np.vstack([jac.J_phi, S_a])
+    s = np.linalg.svd(locked, compute_uv=False)
+    assert mech.nv - int(np.sum(s > 1e-9 * s[0])) == len(welds)  # motions with the motors locked
+    for a, b in welds:
+        cols = [mech.model.joints[mech.model.getJointId(j)].idx_v for j in (a, b)]
+        sub = np.vstack([jac.J_phi, jac.J_x, S_a])[:, cols]  # the pair alone: loops, task, motors
+        s = np.linalg.svd(sub, compute_uv=False)
+        assert s[1] <= 1e-12 * s[0]  # a combination of the two moves nothing else
+
+
+@pytest.mark.parametrize("folder", list(ROBOTS))
+def test_closure_and_task_jacobians_match_finite_differences(robots, folder, rng):
+    """J_phi and the task Jacobian of the three robots equal finite differences."""
+    mech, _ = robots[folder]
+    q = pin.integrate(mech.model, mech.q_ref, rng.normal(scale=0.2, size=mech.nv))
+    np.testing.assert_allclose(
+        mech.closure_jacobian(q), fd_jacobian(mech.closure_residual, mech.model, q), atol=1e-8
+    )
+    jac = closed_chain_jacobians(mech, q)
+    np.testing.assert_allclose(jac.J_x, fd_jacobian(lambda qq: task_pose(mech, qq), mech.model, q), atol=1e-8)
+
+
+@pytest.mark.parametrize("folder", list(ROBOTS))
+def test_ik_closes_and_keeps_the_plane(robots, folder):
+    """IK reaches poses around the reference to 1e-12, and the task frame stays in its plane of motion."""
+    mech, _ = robots[folder]
+    normal = ROBOTS[folder][2]
+    data = mech.model.createData()
+    pin.framesForwardKinematics(mech.model, data, mech.q_ref)
+    height = data.oMf[mech.task_frame_id].translation[normal]
+    for x in _poses(mech):
+        sol = inverse_kinematics(mech, x)
+        assert sol.residual_norm <= 1e-12
+        np.testing.assert_allclose(task_pose(mech, sol.q), x, atol=1e-12)
+        pin.framesForwardKinematics(mech.model, data, sol.q)
+        assert data.oMf[mech.task_frame_id].translation[normal] == pytest.approx(height, abs=1e-12)
+
+
+def test_delta_keeps_its_effector_orientation(robots):
+    """The delta's parallelogram keeps the effector's orientation: the same rotation at every IK pose."""
+    mech, _ = robots["robot_delta"]
+    data = mech.model.createData()
+    pin.framesForwardKinematics(mech.model, data, mech.q_ref)
+    R0 = data.oMf[mech.task_frame_id].rotation.copy()
+    for x in _poses(mech):
+        pin.framesForwardKinematics(mech.model, data, inverse_kinematics(mech, x).q)
+        np.testing.assert_allclose(data.oMf[mech.task_frame_id].rotation, R0, atol=1e-12)
+
+
+def test_iso3d_fivebar_ik_fk_round_trip(robots):
+    """5bar_linkage_iso3d (no idle DOF): one FK assembly of the IK's motor angles is the IK pose and q."""
+    mech, _ = robots["5bar_linkage_iso3d"]
+    for x in _poses(mech):
+        ik = inverse_kinematics(mech, x)
+        found = forward_kinematics(mech, ik.actuators)
+        errors = [float(np.max(np.abs(s.x - x))) for s in found]
+        assert min(errors) <= 1e-12
+        assert same_assembly(mech, found[int(np.argmin(errors))].q, ik.q)
+
+
+@pytest.mark.parametrize("folder", ["5bar_linkage", "robot_delta"])
+def test_fk_refuses_idle_freedoms_with_a_clear_message(robots, folder):
+    """With more DOF than motors, forward_kinematics raises InvalidInput: the motors do not fix q."""
+    mech, _ = robots[folder]
+    with pytest.raises(
+        InvalidInput,
+        match=rf"^robot has {mech.mobility} DOF but 2 actuators: fixing them does not determine the "
+        r"configuration$",
+    ):
+        forward_kinematics(mech, mech.actuator_positions(mech.q_ref))
+
+
+@pytest.mark.parametrize("folder", ["5bar_linkage", "robot_delta"])
+def test_ik_fk_round_trip_with_idle_joints_fixed(robots, folder):
+    """IK, then FK with the motors and one half-joint per weld fixed: one assembly is the IK pose and q."""
+    mech, locked = robots[folder]
+    assert locked.mobility == locked.n_actuators
+    for x in _poses(mech):
+        ik = inverse_kinematics(mech, x)
+        found = forward_kinematics(locked, locked.actuator_positions(ik.q))
+        errors = [float(np.max(np.abs(s.x - x))) for s in found]
+        assert min(errors) <= 1e-12
+        assert same_assembly(locked, found[int(np.argmin(errors))].q, ik.q)
+
+
+@pytest.mark.parametrize("folder", list(ROBOTS))
+def test_actuator_and_velocity_maps_match_finite_differences(robots, folder):
+    """C T^+ and N T^+ (J_ce and S; the plain ones when no DOF is idle) equal finite differences of the IK.
+
+    Idle motions neither move the task (T) nor the motors (C), so C T^+ is the actuator map;
+    N T^+ is the minimum-norm velocity map, which is what re-solving the IK by minimum-norm
+    Newton steps from the same solution follows.
+    """
+    mech, _ = robots[folder]
+    for x in _poses(mech)[:2]:
+        q = inverse_kinematics(mech, x).q
+        jac = closed_chain_jacobians(mech, q)
+        J_ce = jac.C @ np.linalg.pinv(jac.T)
+        S = jac.N @ np.linalg.pinv(jac.T)
+        if mech.mobility == len(x):
+            np.testing.assert_allclose(J_ce, jac.J_ce, atol=1e-12)
+            np.testing.assert_allclose(S, jac.S, atol=1e-12)
+        else:
+            with pytest.raises(
+                InvalidInput, match=r"^the task has 2 coordinates but the mechanism has \d DOF"
+            ):
+                _ = jac.J_ce
+        for k in range(len(x)):
+            dx = np.zeros(len(x))
+            dx[k] = EPS
+            plus, minus = inverse_kinematics(mech, x + dx, q), inverse_kinematics(mech, x - dx, q)
+            np.testing.assert_allclose(J_ce[:, k], (plus.actuators - minus.actuators) / (2 * EPS), atol=1e-7)
+            np.testing.assert_allclose(
+                S[:, k], pin.difference(mech.model, minus.q, plus.q) / (2 * EPS), atol=1e-7
+            )

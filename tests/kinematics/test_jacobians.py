@@ -1,0 +1,247 @@
+"""Closed-chain Jacobians S and J_ce (plm_pin/kinematics/jacobians.py).
+
+Oracles: finite differences of the inverse kinematics (re-solved from the same solution), and
+the papers' velocity equations written inline: Harada 2011 eq. (4) / (M.9), Enferadi 2017 eqs.
+(14)-(17) (corrected, see plm_pin/models/star_triangle.py), Zhao 2011 eq. (6a).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from plm_pin import InvalidInput, SingularConfiguration
+from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, task_pose, working_modes
+from plm_pin.models import (
+    ZHAO2011_GUIDE_DIRECTIONS,
+    ZHAO2011_GUIDE_POINTS,
+    ZHAO2011_PLATFORM_POINTS,
+    ZHAO2011_STRUT_LENGTHS,
+    preset_names,
+)
+from tests.conftest import ball_joint_body, preset
+
+EPS = 1e-6
+
+# a pose offset from the reference per preset [m, rad], inside the workspace and regular
+OFFSET = {
+    "enferadi2017_star_triangle": [0.03, -0.04, 0.2],
+    "fivebar": [0.02, -0.01],
+    "fourbar": [0.2],
+    "harada2011_3d3m": [0.01, 0.01, 0.1],
+    "harada2011_3d4m": [0.01, -0.02, 0.15],
+    "harada2015_asymmetric": [-0.01, 0.02, -0.15],
+    "zhao2011_6pss": [0.03, -0.02, -0.04, 0.03, -0.02, 0.04],
+    "zhao2011_8pss": [-0.02, 0.03, 0.04, -0.03, 0.02, 0.05],
+}
+
+
+def task_twist_fd(mech, x: np.ndarray, k: int) -> np.ndarray:
+    """Task velocity (selected world-aligned twist rows) of d x / d x_k, by central differences of (p, R)."""
+    task = mech.task_compiled
+    n_lin = len(task.linear)
+
+    def placement(xx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        p = np.zeros(3)
+        p[list(task.linear)] = xx[:n_lin]
+        rpy = np.zeros(3)
+        rpy[list(task.angular)] = xx[n_lin:]
+        return p, pin.rpy.rpyToMatrix(rpy)
+
+    dx = np.zeros(len(x))
+    dx[k] = EPS
+    (p1, R1), (p0, R0) = placement(x + dx), placement(x - dx)
+    twist = np.concatenate([(p1 - p0) / (2 * EPS), pin.log3(R1 @ R0.T) / (2 * EPS)])
+    return twist[list(task.rows)]
+
+
+def ik_differences(mech, q: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Columns k: task twist, tree velocity and actuator rates of IK re-solved at x +- eps e_k from q."""
+    twists, dqs, dcs = [], [], []
+    for k in range(len(x)):
+        dx = np.zeros(len(x))
+        dx[k] = EPS
+        plus = inverse_kinematics(mech, x + dx, q)
+        minus = inverse_kinematics(mech, x - dx, q)
+        twists.append(task_twist_fd(mech, x, k))
+        dqs.append(pin.difference(mech.model, minus.q, plus.q) / (2 * EPS))
+        dcs.append((plus.actuators - minus.actuators) / (2 * EPS))
+    return np.column_stack(twists), np.column_stack(dqs), np.column_stack(dcs)
+
+
+@pytest.mark.parametrize("name", preset_names())
+@pytest.mark.parametrize("offset", [False, True])
+def test_velocity_map_and_actuator_jacobian_match_finite_differences(name, offset):
+    """S and J_ce times the task twist equal finite differences of the IK configuration and actuators."""
+    mech = preset(name)
+    x = task_pose(mech, mech.q_ref) + (np.array(OFFSET[name]) if offset else 0.0)
+    q = inverse_kinematics(mech, x).q
+    jac = closed_chain_jacobians(mech, q)
+    twist, dq, dc = ik_differences(mech, q, x)
+    np.testing.assert_allclose(jac.S @ twist, dq, atol=1e-7)
+    np.testing.assert_allclose(jac.J_ce @ twist, dc, atol=1e-7)
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_velocity_map_is_feasible_and_reproduces_the_task_rates(name):
+    """J_phi S = 0 (S keeps the loops closed), J_x S = I, and J_ce is S's actuated rows."""
+    mech = preset(name)
+    jac = closed_chain_jacobians(mech, mech.q_ref)
+    scale = np.max(np.abs(jac.J_phi)) * np.max(np.abs(jac.S))
+    np.testing.assert_allclose(jac.J_phi @ jac.S, 0.0, atol=1e-13 * scale)
+    np.testing.assert_allclose(jac.J_x @ jac.S, np.eye(jac.J_x.shape[0]), atol=1e-12)
+    np.testing.assert_allclose(jac.J_ce, jac.S[mech.actuated_v_indices], atol=1e-14)
+    np.testing.assert_allclose(jac.N.T @ jac.N, np.eye(mech.mobility), atol=1e-14)
+
+
+RT = 0.05
+
+
+def harada_jce(pose, legs, lengths, signs) -> np.ndarray:
+    """J_c^{-1} J_e of Harada 2011 eq. (4) / (M.9): rows [z_i^T, z_i^T R_theta R s_i] / (z_i^T a).
+
+    z_i = (L_i - c_i a) / l_i with c_i from eq. (2) and sign ``signs[i]``; the task rates are
+    (xdot, ydot, thetadot), the paper's Delta p_3 order.
+    """
+    x, y, theta = pose
+    a = np.array([1.0, 0.0])
+    R = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+    R_theta = np.array([[0.0, -1.0], [1.0, 0.0]])
+    J_e, J_c = [], []
+    for i, sign in zip(legs, signs, strict=True):
+        s = np.array([-RT if i in (1, 2) else RT, 0.0])
+        L = np.array([x, y]) + R @ s
+        l = lengths[i - 1]
+        c = L @ a + sign * math.sqrt((L @ a) ** 2 - L @ L + l**2)
+        z = (L - c * a) / l
+        J_e.append([z[0], z[1], z @ R_theta @ R @ s])
+        J_c.append(z @ a)
+    return np.linalg.solve(np.diag(J_c), np.array(J_e))
+
+
+@pytest.mark.parametrize(
+    ("name", "legs", "lengths"),
+    [
+        ("harada2011_3d4m", (1, 2, 3, 4), (0.14,) * 4),
+        ("harada2011_3d3m", (1, 2, 4), (0.14,) * 4),
+        ("harada2015_asymmetric", (1, 2, 3, 4), (0.24, 0.17, 0.17, 0.24)),
+    ],
+)
+@pytest.mark.parametrize("pose", [(0.0, 0.08, -0.35), (0.02, 0.1, 0.3), (-0.03, 0.05, 0.0)])
+def test_prrrp_actuator_jacobian_is_harada_eq4(name, legs, lengths, pose):
+    """In every working mode, J_ce equals J_c^{-1} J_e of eq. (4) with z_i of eqs. (2)-(3)."""
+    mech = preset(name)
+    for sol in working_modes(mech, pose):
+        signs = tuple(-m for m in sol.mode)  # mode = sign(z_i^T a) = minus the square-root sign
+        expected = harada_jce(pose, legs, lengths, signs)
+        np.testing.assert_allclose(closed_chain_jacobians(mech, sol.q).J_ce, expected, atol=1e-11)
+
+
+@pytest.mark.parametrize("pose", [(0.25, 0.35, math.pi / 2), (0.2, 0.2, 1.2), (0.3, 0.25, 2.0)])
+def test_star_triangle_jacobian_is_enferadi_eqs_15_16(pose):
+    """Eq. (17) q_dot = -J^{-1} K X_dot, K of (15), J of (16), X = [phi, x, y], is J_ce up to column order."""
+    mech = preset("enferadi2017_star_triangle")
+    x, y, phi = pose
+    side = 0.5
+    E = np.array([[0.0, -1.0], [1.0, 0.0]])
+    P = [np.zeros(2), np.array([side / 2, side * math.sqrt(3) / 2]), np.array([side, 0.0])]
+    a = [np.array([0.5, math.sqrt(3) / 2]), np.array([0.5, -math.sqrt(3) / 2]), np.array([-1.0, 0.0])]
+    psi = [phi - 2 * math.pi / 3, phi + 2 * math.pi / 3, phi]
+    c = np.array([x, y])
+    K = np.empty((3, 3))
+    J = np.zeros((3, 3))
+    for k in range(3):
+        s = -np.array([math.cos(psi[k]), math.sin(psi[k])])  # s_i = -u_i
+        rho = -(a[k] @ E @ (c - P[k])) / (a[k] @ E @ s)  # eq. (4)
+        K[k] = [rho, *(-(s @ E))]  # eq. (15), columns (phi, x, y)
+        J[k, k] = s @ E @ a[k]  # eq. (16)
+    H = -np.linalg.solve(J, K)  # eq. (17), columns (phi, x, y)
+    assert np.allclose(np.diag(J), math.sin(phi))  # J_ii = sin(phi): the spec's closed form
+    sol = inverse_kinematics(mech, pose)
+    np.testing.assert_allclose(closed_chain_jacobians(mech, sol.q).J_ce, H[:, [1, 2, 0]], atol=1e-12)
+
+
+def test_star_triangle_jacobian_at_half_pi_is_the_spec_matrix():
+    """At phi = pi/2 J_ce is [[1/2, r3/2, -rho_1], [1/2, -r3/2, -rho_2], [-1, 0, -rho_3]], det 3a/4."""
+    mech = preset("enferadi2017_star_triangle")
+    x, y = 0.27, 0.21
+    rho = [(math.sqrt(3) * x - y) / 2, (math.sqrt(3) * (0.5 - x) - y) / 2, y]  # distances to the sides
+    expected = np.array(
+        [[0.5, math.sqrt(3) / 2, -rho[0]], [0.5, -math.sqrt(3) / 2, -rho[1]], [-1.0, 0.0, -rho[2]]]
+    )
+    J_ce = closed_chain_jacobians(mech, inverse_kinematics(mech, [x, y, math.pi / 2]).q).J_ce
+    np.testing.assert_allclose(J_ce, expected, atol=1e-12)
+    assert (
+        abs(abs(np.linalg.det(J_ce)) - 3 * 0.5 / 4) < 1e-12
+    )  # Viviani: rho_1 + rho_2 + rho_3 = a sqrt(3) / 2
+
+
+@pytest.mark.parametrize("name", ["zhao2011_8pss", "zhao2011_6pss"])
+@pytest.mark.parametrize(
+    "pose",
+    [
+        (0.0, 0.0, 1.744, 0.0, 0.0, 0.0),
+        (-0.1, -0.1, 1.644, -0.1, -0.1, -0.1),
+        (0.04, -0.03, 1.78, 0.05, 0.02, -0.06),
+    ],
+)
+def test_pss_actuator_jacobian_is_zhao_eq6a(name, pose):
+    """J_ce row i is eq. (6a): [w_i^T, (a_i x w_i)^T] / (w_i^T e_i), a_i = R a_i', w_i = (A_i - C_i) / l_i."""
+    mech = preset(name)
+    legs = [int(a.joint.removeprefix("slider")) for a in mech.actuators]
+    p = np.array(pose[:3])
+    R = pin.rpy.rpyToMatrix(*pose[3:])
+    rows = []
+    for i in legs:
+        e = np.array(ZHAO2011_GUIDE_DIRECTIONS[i - 1])
+        B = np.array(ZHAO2011_GUIDE_POINTS[i - 1])
+        a_i = R @ np.array(ZHAO2011_PLATFORM_POINTS[i - 1])
+        l = ZHAO2011_STRUT_LENGTHS[i - 1]
+        d = p + a_i - B
+        q_i = e @ d - math.sqrt(l**2 - d @ d + (e @ d) ** 2)
+        w = (p + a_i - (B + q_i * e)) / l
+        rows.append(np.concatenate([w, np.cross(a_i, w)]) / (w @ e))
+    sol = inverse_kinematics(mech, pose)
+    np.testing.assert_allclose(closed_chain_jacobians(mech, sol.q).J_ce, np.array(rows), atol=1e-12)
+
+
+def test_jacobians_at_an_inverse_singularity_raise():
+    """With rod 2 vertical (z_2^T a = 0, eq. (9)), S and J_ce raise SingularConfiguration naming the type."""
+    mech = preset("harada2015_asymmetric")
+    lengths = (0.24, 0.17, 0.17, 0.24)
+    q = mech.q_ref.copy()
+    x, theta = 0.0, -0.3
+    y = 0.17 + RT * math.sin(theta)  # L_2y = y - r_t sin(theta) = l_2: rod 2 vertical, the others reach
+    for i, sign in zip((1, 2, 3, 4), (-1, 1, -1, 1), strict=True):
+        s = -RT if i in (1, 2) else RT
+        Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
+        c = Lx + sign * math.sqrt(max(lengths[i - 1] ** 2 - Ly**2, 0.0))
+        phi = math.atan2(Ly, Lx - c)
+        q[mech.model.joints[mech.model.getJointId(f"slider{i}")].idx_q] = c
+        q[mech.model.joints[mech.model.getJointId(f"rod{i}_pivot")].idx_q] = phi
+        if i == 1:
+            q[mech.model.joints[mech.model.getJointId("plate_pivot")].idx_q] = theta - phi
+    assert np.max(np.abs(mech.closure_residual(q))) < 1e-15
+    jac = closed_chain_jacobians(mech, q)
+    with pytest.raises(SingularConfiguration, match=r"^inverse-kinematics \(type 1\) singular"):
+        _ = jac.S
+    with pytest.raises(SingularConfiguration, match=r"^inverse-kinematics \(type 1\) singular"):
+        _ = jac.J_ce
+
+
+def test_jacobians_need_a_task(tmp_path):
+    """A mechanism without an end-effector task cannot give S or J_ce, and says how to add one."""
+    mech = ball_joint_body(tmp_path, {"type": "point"})
+    with pytest.raises(
+        InvalidInput, match=r"^ball has no end-effector task; add 'end_effector' to its sidecar$"
+    ):
+        closed_chain_jacobians(mech, mech.q_ref)
+
+
+def test_jacobians_refuse_a_malformed_configuration():
+    """A configuration of the wrong size raises InvalidInput."""
+    with pytest.raises(InvalidInput, match=r"^q must have shape \(9,\), got \(3,\)$"):
+        closed_chain_jacobians(preset("harada2011_3d4m"), [0.0, 0.0, 0.0])

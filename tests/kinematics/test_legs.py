@@ -1,0 +1,153 @@
+"""Legs as diagonal blocks of the IK Jacobian, and working modes (plm_pin/kinematics/legs.py).
+
+Oracles: the mechanisms' structure (which joints form which leg, known from the papers'
+figures), the product rule for determinants of block-triangular matrices, and the sign of
+z_i^T a = cos(phi_i) of Harada 2011 eq. (3) for the 2-PRRRP rods.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from plm_pin.kinematics import inverse_kinematics, working_mode, working_modes
+from plm_pin.kinematics.legs import ik_jacobian
+from plm_pin.models import preset_names
+from tests.conftest import preset
+
+# name -> (joints of the end-effector chain, joints of every other leg)
+STRUCTURE: dict[str, tuple[set[str], list[set[str]]]] = {
+    "enferadi2017_star_triangle": ({"slider1", "pivot1", "arm1"}, [{"slider2", "arm2"}, {"slider3", "arm3"}]),
+    "fivebar": ({"left_motor", "left_elbow"}, [{"right_motor", "right_elbow"}]),
+    "fourbar": ({"rocker_pivot"}, [{"crank_pivot", "coupler_pivot"}]),
+    "harada2011_3d3m": (
+        {"slider1", "rod1_pivot", "plate_pivot"},
+        [{f"slider{i}", f"rod{i}_pivot"} for i in (2, 4)],
+    ),
+    "harada2011_3d4m": (
+        {"slider1", "rod1_pivot", "plate_pivot"},
+        [{f"slider{i}", f"rod{i}_pivot"} for i in (2, 3, 4)],
+    ),
+    "harada2015_asymmetric": (
+        {"slider1", "rod1_pivot", "plate_pivot"},
+        [{f"slider{i}", f"rod{i}_pivot"} for i in (2, 3, 4)],
+    ),
+    "zhao2011_6pss": (
+        {"platform_floating"},
+        [{f"slider{i}", f"u{i}a", f"u{i}b"} for i in (2, 3, 4, 5, 6, 7)],
+    ),
+    "zhao2011_8pss": ({"platform_floating"}, [{f"slider{i}", f"u{i}a", f"u{i}b"} for i in range(1, 9)]),
+}
+
+
+def test_every_preset_has_a_structure():
+    """The leg structure below covers every preset."""
+    assert set(STRUCTURE) == set(preset_names())
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_legs_are_the_expected_square_blocks(name):
+    """Legs: the end-effector chain (task rows) and one leg per loop, all square, partitioning joints."""
+    mech = preset(name)
+    chain_joints, other_joints = STRUCTURE[name]
+    legs = mech.legs
+    assert len(legs) == 1 + len(other_joints)
+    assert all(leg.square for leg in legs)
+    n_closure = mech.n_closure_rows
+    chains = [leg for leg in legs if any(r >= n_closure for r in leg.rows)]
+    assert len(chains) == 1
+    assert set(chains[0].joints) == chain_joints
+    assert set(range(n_closure, n_closure + mech.task_compiled.size)) <= set(chains[0].rows)
+    others = sorted((set(leg.joints) for leg in legs if leg is not chains[0]), key=sorted)
+    assert others == sorted(other_joints, key=sorted)
+    columns = sorted(c for leg in legs for c in leg.columns)
+    assert columns == list(range(mech.nv))
+    rows = [r for leg in legs for r in leg.rows]
+    assert len(rows) == len(set(rows)) == mech.nv
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_each_cut_leg_carries_one_actuator(name):
+    """Every leg closing on the end effector holds one actuator; the actuators are all accounted for."""
+    mech = preset(name)
+    n_closure = mech.n_closure_rows
+    actuated = []
+    for leg in mech.legs:
+        if not any(r >= n_closure for r in leg.rows):
+            assert len(leg.actuators) == 1
+            assert leg.label == leg.actuators[0]
+        actuated.extend(leg.actuators)
+    assert sorted(actuated) == sorted(a.joint for a in mech.actuators)
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_ik_jacobian_determinant_is_the_product_of_the_leg_blocks(name):
+    """Block-triangular: |det| of the IK Jacobian on the legs' rows is the product of the blocks' |det|."""
+    mech = preset(name)
+    q = mech.q_ref
+    A = ik_jacobian(mech, q)
+    rows = sorted(r for leg in mech.legs for r in leg.rows)
+    full = abs(np.linalg.det(A[rows]))
+    blocks = math.prod(abs(np.linalg.det(A[np.ix_(leg.rows, leg.columns)])) for leg in mech.legs)
+    assert full == pytest.approx(blocks, rel=1e-9)
+    assert full > 0.0
+
+
+def _rod_signs(mech, q) -> tuple[int, ...]:
+    """sign(z_i^T a) = sign(cos phi_i) per leg, phi_i the rod angle (eq. (3)), in the legs' order."""
+    out = []
+    for leg in mech.legs:
+        i = leg.actuators[0].removeprefix("slider")
+        phi = q[mech.model.joints[mech.model.getJointId(f"rod{i}_pivot")].idx_q]
+        out.append(int(np.sign(math.cos(phi))))
+    return tuple(out)
+
+
+@pytest.mark.parametrize("name", ["harada2011_3d4m", "harada2011_3d3m", "harada2015_asymmetric"])
+def test_prrrp_working_mode_is_the_sign_of_z_dot_a(name):
+    """A 2-PRRRP leg's working mode is sign(z_i^T a): minus the (M.5) signs (- + - +) at the reference."""
+    mech = preset(name)
+    expected = {"harada2011_3d3m": (1, -1, -1)}.get(name, (1, -1, 1, -1))
+    assert working_mode(mech, mech.q_ref) == expected
+    assert _rod_signs(mech, mech.q_ref) == expected
+    for sol in working_modes(mech, (0.01, 0.09, 0.2)):
+        assert working_mode(mech, sol.q) == _rod_signs(mech, sol.q) == sol.mode
+
+
+def test_vertical_rod_gives_a_zero_mode():
+    """A rod normal to the stator (condition (9)) zeroes its leg's block determinant: mode 0 for that leg."""
+    mech = preset("harada2015_asymmetric")
+    theta = -0.3
+    x, y = 0.0, 0.17 + 0.05 * math.sin(theta)  # left pair at l2 = 0.17 m: rod 2 vertical
+    q = mech.q_ref.copy()
+    for i, sign in zip((1, 2, 3, 4), (-1, 1, -1, 1), strict=True):
+        s = -0.05 if i in (1, 2) else 0.05
+        Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
+        l = (0.24, 0.17, 0.17, 0.24)[i - 1]
+        c = Lx + sign * math.sqrt(max(l**2 - Ly**2, 0.0))
+        phi = math.atan2(Ly, Lx - c)
+        q[mech.model.joints[mech.model.getJointId(f"slider{i}")].idx_q] = c
+        q[mech.model.joints[mech.model.getJointId(f"rod{i}_pivot")].idx_q] = phi
+        if i == 1:
+            q[mech.model.joints[mech.model.getJointId("plate_pivot")].idx_q] = theta - phi
+    assert np.max(np.abs(mech.closure_residual(q))) < 1e-15
+    assert working_mode(mech, q) == (1, 0, 1, -1)
+
+
+@pytest.mark.parametrize("pose", [(0.25, 0.35, math.pi / 2), (0.2, 0.2, 0.6), (0.3, 0.25, 2.5)])
+def test_star_triangle_keeps_one_working_mode(pose):
+    """The star-triangle's legs have J_ii = sin(phi) > 0 for phi in (0, pi): one working mode everywhere."""
+    mech = preset("enferadi2017_star_triangle")
+    assert working_mode(mech, inverse_kinematics(mech, pose).q) == working_mode(mech, mech.q_ref)
+
+
+def test_fivebar_has_four_working_modes_with_every_sign():
+    """Each RR leg of the five-bar reaches the tip elbow-up or elbow-down: 4 working modes, all sign pairs."""
+    mech = preset("fivebar")
+    solutions = working_modes(mech, [0.02, 0.25])
+    assert sorted(s.mode for s in solutions) == sorted(itertools.product((-1, 1), repeat=2))
+    for s in solutions:
+        assert s.residual_norm <= 1e-12

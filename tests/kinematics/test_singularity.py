@@ -1,0 +1,254 @@
+"""Singularity classification (plm_pin/kinematics/singularity.py).
+
+Oracles: Harada 2011 condition (9) (z_i^T a = 0, a rod normal to the stator), the 3D3M type-4
+locus of eq. (11.4) and det J_e33 of eq. (10) / (M.10), Harada 2015's complex singularity
+(equal rods on one slider position), all with configurations built inline from eqs. (2)-(3).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import plm_pin
+from plm_pin import PoseUnreachable, SingularConfiguration
+from plm_pin.description import write_description
+from plm_pin.kinematics import classify, closed_chain_jacobians, forward_kinematics, inverse_kinematics
+from plm_pin.mechanism import Mechanism
+from plm_pin.models import build_2prrrp, preset_names
+from tests.conftest import preset
+
+RT = 0.05  # r_t [m]
+
+
+def prrrp_configuration(mech: Mechanism, pose, lengths, signs: dict[int, int]) -> np.ndarray:
+    """Configuration of a 2-PRRRP at ``pose`` from eqs. (2)-(3), square-root sign ``signs[i]`` per leg.
+
+    A negative discriminant is clipped to zero (the rod then points straight at its pair's
+    height, which must then equal l_i: the caller checks the closure).
+    """
+    x, y, theta = pose
+    q = mech.q_ref.copy()
+
+    def put(joint: str, value: float) -> None:
+        q[mech.model.joints[mech.model.getJointId(joint)].idx_q] = value
+
+    for i, sign in signs.items():
+        s = -RT if i in (1, 2) else RT
+        Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
+        l = lengths[i - 1]
+        c = Lx + sign * math.sqrt(max(Lx**2 - (Lx**2 + Ly**2) + l**2, 0.0))
+        phi = math.atan2((Ly - 0.0) / l, (Lx - c) / l)  # eq. (3)
+        put(f"slider{i}", c)
+        put(f"rod{i}_pivot", phi)
+        if i == 1:
+            put("plate_pivot", theta - phi)
+    assert np.max(np.abs(mech.closure_residual(q))) < 1e-15
+    return q
+
+
+def vertical_pose(length: float, left: bool, theta: float, x: float = 0.0) -> tuple[float, float, float]:
+    """Plate pose putting the left (or right) pair at height ``length``: its rods that long are vertical."""
+    s = -RT if left else RT
+    return (x, length - s * math.sin(theta), theta)
+
+
+ASYMMETRIC = (0.24, 0.17, 0.17, 0.24)
+MODES_2015 = {1: -1, 2: 1, 3: -1, 4: 1}
+
+
+@pytest.mark.parametrize(
+    ("leg", "pose"), [(2, vertical_pose(0.17, True, -0.3)), (3, vertical_pose(0.17, False, 0.3))]
+)
+def test_vertical_rod_is_an_inverse_singularity(leg, pose):
+    """Condition (9): rod i normal to the stator (z_i^T a = 0) makes an inverse singularity, and only that."""
+    mech = preset("harada2015_asymmetric")
+    q = prrrp_configuration(mech, pose, ASYMMETRIC, MODES_2015)
+    z = np.array([math.cos(q[mech.model.joints[mech.model.getJointId(f"rod{leg}_pivot")].idx_q]), 0.0])
+    assert abs(z @ np.array([1.0, 0.0])) < 1e-15  # z_i^T a = 0
+    report = classify(mech, q)
+    assert report.kinds == ("inverse",)
+    assert report.inverse_margin < 1e-15
+    assert report.constraint_margin > 1e-3 and report.direct_margin > 1e-3
+
+
+def test_vertical_rod_of_the_3d3m_is_an_inverse_singularity():
+    """Condition (9) for the 3D3M: rod 4 vertical is inverse-singular."""
+    mech = preset("harada2011_3d3m")
+    q = prrrp_configuration(mech, vertical_pose(0.14, False, 0.3), (0.14,) * 4, {1: -1, 2: 1, 4: 1})
+    assert classify(mech, q).kinds == ("inverse",)
+
+
+def type4_angle(y: float, l: float = 0.14) -> float:
+    """Eq. (11.4), reference working mode branch: theta = -acos(sqrt((l + r_t)^2 - y^2) / (l + r_t))."""
+    return -math.acos(math.sqrt((l + RT) ** 2 - y**2) / (l + RT))
+
+
+def det_je33(pose, signs, l: float = 0.14) -> float:
+    """Determinant of J_e33 of eq. (5) / (M.10), rows [z_i^T, z_i^T R_theta R s_i], legs 1, 2, 4."""
+    x, y, theta = pose
+    R = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+    R_theta = np.array([[0.0, -1.0], [1.0, 0.0]])
+    rows = []
+    for i, sign in zip((1, 2, 4), signs, strict=True):
+        s = np.array([-RT if i in (1, 2) else RT, 0.0])
+        L = np.array([x, y]) + R @ s
+        c = L[0] + sign * math.sqrt(L[0] ** 2 - L @ L + l**2)
+        z = (L - np.array([c, 0.0])) / l
+        rows.append([z[0], z[1], z @ R_theta @ R @ s])
+    return float(np.linalg.det(np.array(rows)))
+
+
+@pytest.mark.parametrize(("x", "y"), [(0.0, 0.08), (0.02, 0.08), (0.0, 0.05), (-0.01, 0.1)])
+def test_3d3m_type4_locus_is_a_direct_singularity(x, y):
+    """On the type-4 locus of eq. (11.4) det J_e33 = 0 and the 3D3M is direct-singular; 0.01 rad off not."""
+    mech = preset("harada2011_3d3m")
+    theta = type4_angle(y)
+    sol = inverse_kinematics(mech, [x, y, theta])
+    assert sol.mode == (1, -1, -1)  # the reference working mode: square-root signs (-, +, +)
+    assert abs(det_je33((x, y, theta), (-1, 1, 1))) < 1e-15
+    report = classify(mech, sol.q)
+    assert report.kinds == ("direct",)
+    assert report.direct_margin < 1e-14
+    for d in (-0.01, 0.01):
+        near = classify(mech, inverse_kinematics(mech, [x, y, theta + d]).q)
+        assert near.kinds == ()
+        assert near.direct_margin > 1e-4
+
+
+def test_type4_angle_at_y_008_is_minus_24_9_deg():
+    """Eq. (11.4) at y = 0.08 m puts type 4 at -24.90 deg, where a scan's direct margin is least."""
+    mech = preset("harada2011_3d3m")
+    assert math.degrees(type4_angle(0.08)) == pytest.approx(-24.901062, abs=1e-6)
+    angles = np.radians(np.arange(-26.0, -23.0, 0.1))
+    margins = [classify(mech, inverse_kinematics(mech, [0.0, 0.08, a]).q).direct_margin for a in angles]
+    assert abs(math.degrees(angles[int(np.argmin(margins))]) - (-24.9)) < 0.051
+
+
+def test_redundant_table_is_regular_on_the_3d3m_type4_locus():
+    """The 3D4M at the 3D3M's type-4 pose is not direct-singular: the fourth motor removes it."""
+    mech = preset("harada2011_3d4m")
+    report = classify(mech, inverse_kinematics(mech, [0.0, 0.08, type4_angle(0.08)]).q)
+    assert report.kinds == ()
+    assert report.direct_margin > 0.01
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_reference_configurations_are_regular(name):
+    """Every preset's reference configuration is regular, its margins well above the tolerance."""
+    report = classify(preset(name), preset(name).q_ref)
+    assert report.kinds == ()
+    assert not report.singular
+    assert min(report.constraint_margin, report.inverse_margin, report.direct_margin) > 1e-3
+
+
+def test_raise_if_singular_names_the_kind():
+    """raise_if_singular raises SingularConfiguration whose message names the kind and the margins."""
+    mech = preset("harada2011_3d3m")
+    q = inverse_kinematics(mech, [0.0, 0.08, type4_angle(0.08)]).q
+    with pytest.raises(
+        SingularConfiguration,
+        match=r"^harada2011_3d3m: configuration is singular \(direct\): margins constraint [0-9.e-]+, "
+        r"inverse "
+        r"[0-9.e-]+, direct [0-9.e-]+ \(tolerance 1e-06\)$",
+    ):
+        classify(mech, q, raise_if_singular=True)
+    assert classify(mech, mech.q_ref, raise_if_singular=True).kinds == ()
+
+
+def test_tolerance_is_the_users():
+    """A pose 1e-4 rad off the locus is regular at the default tolerance and direct-singular at tol = 1e-3."""
+    mech = preset("harada2011_3d3m")
+    q = inverse_kinematics(mech, [0.0, 0.08, type4_angle(0.08) + 1e-4]).q
+    assert classify(mech, q).kinds == ()
+    report = classify(mech, q, tol=1e-3)
+    assert report.kinds == ("direct",)
+    assert report.to_dict()["kinds"] == ["direct"]
+
+
+# ----------------------------------------------------- complex (constraint) singularity
+
+
+def build_table(tmp_path: Path, lengths, legs) -> Mechanism:
+    """A 2-PRRRP with the given rods (Harada 2011 masses), written to disk and loaded."""
+    robot, sidecar = build_2prrrp(
+        name="table",
+        rod_lengths=lengths,
+        half_plate=RT,
+        slider_mass=0.375,
+        rod_masses=(0.026,) * 4,
+        rod_inertias=(9.84e-5,) * 4,
+        plate_mass=0.132,
+        plate_inertia=8.54e-4,
+        legs=legs,
+        reference_pose=(0.0, 0.1, 0.0),
+    )
+    write_description(robot, sidecar, tmp_path, "table")
+    return plm_pin.load(tmp_path / "table.urdf")
+
+
+EQUAL_12 = (0.24, 0.24, 0.17, 0.24)  # Harada 2015's table with l2 raised to l1
+
+
+def test_equal_rods_on_one_slider_position_lose_redundancy_not_rank(tmp_path):
+    """Equal rods on coincident sliders (Harada 2015's complex singularity), rods not vertical.
+
+    The two circles of eq. (4) coincide, so with sliders 1 and 2 locked the left pair may turn
+    on that circle. The whole 4-motor table is still rigid (sliders 3, 4 hold the right pair
+    and the plate's length fixes the left one), and J_phi keeps its rank: each cut rod's own
+    columns (c_i, phi_i) give an invertible 2 x 2 block of J_phi whenever the rod is not
+    normal to the stator. So classify reports no singularity (no "constraint" kind); what is
+    lost is the redundancy: rows 1 and 2 of J_ce coincide (same z and s), and the 3-motor
+    subset {1, 2, 4} is direct-singular, which the 3-leg table reports as "direct".
+    """
+    pose = (0.0, 0.1, 0.1)
+    table = build_table(tmp_path / "four", EQUAL_12, (1, 2, 3, 4))
+    q = prrrp_configuration(table, pose, EQUAL_12, {1: -1, 2: -1, 3: -1, 4: 1})
+    c = table.actuator_positions(q)
+    assert c[0] == pytest.approx(c[1], abs=1e-15)
+    report = classify(table, q)
+    assert report.kinds == ()
+    assert report.constraint_margin > 1e-2
+    J_ce = closed_chain_jacobians(table, q).J_ce
+    np.testing.assert_allclose(J_ce[0], J_ce[1], atol=1e-14)
+    assert np.linalg.matrix_rank(J_ce) == 3
+    assert abs(np.linalg.det(J_ce[[0, 1, 3]])) < 1e-14
+    three = build_table(tmp_path / "three", EQUAL_12, (1, 2, 4))
+    q3 = prrrp_configuration(three, pose, EQUAL_12, {1: -1, 2: -1, 4: 1})
+    assert classify(three, q3).kinds == ("direct",)
+
+
+def test_equal_vertical_rods_on_one_slider_position_are_constraint_singular(tmp_path):
+    """Equal rods coinciding normal to the stator: J_phi loses rank ("constraint"), together with "inverse".
+
+    There the left pair's vertical closure row has no entry left: rod 2's own columns move its
+    tip along the stator only, and rod 1, vertical too, moves the pair along the stator only.
+    """
+    table = build_table(tmp_path, EQUAL_12, (1, 2, 3, 4))
+    pose = vertical_pose(0.24, True, -0.8, 0.01)  # right pair at 0.168 m, below l3 = 0.17 m
+    q = prrrp_configuration(table, pose, EQUAL_12, {1: -1, 2: 1, 3: -1, 4: 1})
+    report = classify(table, q)
+    assert "constraint" in report.kinds
+    assert report.kinds == ("constraint", "inverse")
+    assert report.constraint_margin < 1e-15
+
+
+def test_asymmetric_rods_cannot_share_a_slider_position():
+    """With l1 = 0.24 m and l2 = 0.17 m, |c1 - c2| >= l1 - l2: coincident sliders have no assembly.
+
+    The two circles of eq. (4) are concentric with different radii, hence disjoint; the
+    complex singularity cannot occur, which is why Harada 2015 chose asymmetric rods. Likewise
+    rods 1 and 2 cannot both be vertical (the pair cannot be at 0.24 m and 0.17 m at once).
+    """
+    mech = preset("harada2015_asymmetric")
+    c = inverse_kinematics(mech, (0.0, 0.1, 0.0)).actuators
+    with pytest.raises(PoseUnreachable, match=r"^harada2015_asymmetric: no assembly with actuators at"):
+        forward_kinematics(mech, [c[0], c[0], c[2], c[3]])
+    rng = np.random.default_rng(7)
+    for _ in range(12):
+        pose = (rng.uniform(-0.05, 0.05), rng.uniform(0.0, 0.15), rng.uniform(-0.6, 0.6))
+        sol = inverse_kinematics(mech, pose, mode=(1, 1, 1, 1))  # sliders 1, 2 on one side: closest
+        assert abs(sol.actuators[0] - sol.actuators[1]) >= 0.24 - 0.17 - 1e-12
