@@ -15,10 +15,8 @@ from .exceptions import ClosureNotSatisfied, InvalidInput
 from .kinematics import closures as _closures
 from .kinematics.assembly import Assembly, assemble
 from .kinematics.legs import Leg, find_legs
+from .kinematics.singularity import RANK_RTOL, numerical_rank
 from .kinematics.task import Task, compile_task
-
-RANK_RTOL = 1e-9
-"""Relative tolerance of every rank decision: singular values below ``RANK_RTOL * s_max`` count as zero."""
 
 ASSEMBLY_TOL = 1e-12
 """Default closure tolerance of :meth:`Mechanism.assemble` [m, rad]."""
@@ -192,12 +190,8 @@ class Mechanism:
         return _closures.jacobian(self.model, self._data, self.closures, self.check_q(q))
 
     def closure_rank(self, q: Any, rtol: float = RANK_RTOL) -> int:
-        r"""Rank of :math:`J_\phi(q)` by SVD: singular values above ``rtol * s_max``."""
-        J = self.closure_jacobian(q)
-        if J.size == 0:
-            return 0
-        s = np.linalg.svd(J, compute_uv=False)
-        return int(np.sum(s > rtol * max(s[0], 1.0)))
+        r"""Rank of :math:`J_\phi(q)` by SVD: singular values above ``rtol * max(s_max, 1)``."""
+        return numerical_rank(self.closure_jacobian(q), rtol, floor=1.0)
 
     def closure_errors(self, q: Any) -> dict[str, float]:
         """Largest absolute residual of each closure [m, rad]."""
@@ -209,7 +203,12 @@ class Mechanism:
         """Pinocchio's neutral configuration of the tree (loops generally open), shape (nq,)."""
         return np.asarray(pin.neutral(self.model), dtype=float)
 
-    def _free_columns(self, fixed: Iterable[str]) -> np.ndarray:
+    def free_columns(self, fixed: Iterable[str]) -> np.ndarray:
+        """Velocity indices not held by the joints ``fixed`` (every DOF of each), ascending.
+
+        Raises:
+            InvalidInput: when a joint does not exist; the message lists the joints.
+        """
         frozen: set[int] = set()
         for joint in fixed:
             if not self.model.existJointName(joint):
@@ -254,10 +253,10 @@ class Mechanism:
             if isinstance(fixed, Mapping):
                 for joint, value in fixed.items():
                     names.append(joint)
-                    self._set_joint(q0, joint, value)
+                    self.set_joint(q0, joint, value)
             else:
                 names = [fixed] if isinstance(fixed, str) else list(fixed)
-        free = self._free_columns(names)
+        free = self.free_columns(names)
 
         def failure(q: np.ndarray, phi: np.ndarray) -> ClosureNotSatisfied:
             errors = {c.name: float(np.max(np.abs(phi[c.rows]))) for c in self.closures}
@@ -285,7 +284,18 @@ class Mechanism:
             on_failure=failure,
         )
 
-    def _set_joint(self, q: np.ndarray, joint: str, value: Any) -> None:
+    def set_joint(self, q: np.ndarray, joint: str, value: Any) -> None:
+        """Write the value of one joint into ``q`` in place.
+
+        Args:
+            q: configuration to modify, shape (nq,).
+            joint: joint name.
+            value: its ``nq`` configuration entries, or for a one-DOF joint its position
+                [m] or [rad] (an unbounded revolute's angle is stored as (cos, sin)).
+
+        Raises:
+            InvalidInput: unknown joint, or a value of the wrong size or not finite.
+        """
         if not self.model.existJointName(joint):
             raise InvalidInput(f"no joint {joint!r}; joints are {list(self.joint_names)}")
         j = self.model.joints[self.model.getJointId(joint)]
@@ -300,7 +310,7 @@ class Mechanism:
         """The sidecar's reference values over the neutral configuration (loops may be open), shape (nq,)."""
         q = self.neutral()
         for joint, values in self.sidecar.reference.items():
-            self._set_joint(q, joint, values)
+            self.set_joint(q, joint, values)
         return q
 
     @functools.cached_property

@@ -1,4 +1,4 @@
-"""Closed-chain kinematics: closures, assembly, task, Jacobians, legs, IK, FK, singularities."""
+"""Closed-chain kinematics: closures, assembly, task, Jacobians, legs, IK, FK, singularities, paths, modes."""
 
 from .assembly import Assembly, assemble
 from .closures import Closure, compile_closures
@@ -6,29 +6,87 @@ from .forward import FKSolution, forward_kinematics, same_assembly, task_pose
 from .inverse import IKSolution, inverse_kinematics, working_modes
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
 from .legs import Leg, find_legs, working_mode
+from .mode_graph import ModeEdge, ModeGraph, ModeNode, compress_modes
+from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
+from .prrrp_modes import (
+    AssemblyModeChange,
+    CoincidentCircleSample,
+    ComplexSingularityCase,
+    ModeCrossing,
+    PairSolutions,
+    PrrrpLayout,
+    PrrrpLeg,
+    PrrrpState,
+    PrrrpSubMechanism,
+    WorkingModeChange,
+    assembly_mode,
+    assembly_mode_graph,
+    complex_singularity_check,
+    mode_label,
+    pair_solutions,
+    paper_working_modes,
+    plan_assembly_mode_change,
+    plan_working_mode_change,
+    prrrp_configuration,
+    prrrp_layout,
+    prrrp_state,
+    symmetric_variant,
+    working_mode_label,
+)
 from .singularity import SingularityReport, classify
 from .task import Task, TaskTarget, compile_task
 
 __all__ = [
     "Assembly",
+    "AssemblyModeChange",
     "ClosedChainJacobians",
     "Closure",
+    "CoincidentCircleSample",
+    "ComplexSingularityCase",
     "FKSolution",
     "IKSolution",
     "Leg",
+    "ModeCrossing",
+    "ModeEdge",
+    "ModeGraph",
+    "ModeNode",
+    "PairSolutions",
+    "PrrrpLayout",
+    "PrrrpLeg",
+    "PrrrpState",
+    "PrrrpSubMechanism",
     "SingularityReport",
     "Task",
     "TaskTarget",
+    "TrackedPath",
+    "WorkingModeChange",
     "assemble",
+    "assembly_mode",
+    "assembly_mode_graph",
     "classify",
     "closed_chain_jacobians",
     "compile_closures",
     "compile_task",
+    "complex_singularity_check",
+    "compress_modes",
     "find_legs",
+    "follow_targets",
     "forward_kinematics",
     "inverse_kinematics",
+    "mode_label",
+    "pair_solutions",
+    "paper_working_modes",
+    "plan_assembly_mode_change",
+    "plan_working_mode_change",
+    "prrrp_configuration",
+    "prrrp_layout",
+    "prrrp_state",
+    "redundancy_margin",
     "same_assembly",
+    "symmetric_variant",
     "task_pose",
+    "track_actuator_path",
     "working_mode",
+    "working_mode_label",
     "working_modes",
 ]

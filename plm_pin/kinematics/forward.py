@@ -43,12 +43,18 @@ class FKSolution:
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
     out = q.copy()
     for a, value in zip(mech.actuators, c, strict=True):
-        j = mech.model.joints[a.joint_id]
-        if j.nq == 2:  # unbounded revolute stored as (cos, sin)
-            out[a.idx_q : a.idx_q + 2] = (np.cos(value), np.sin(value))
-        else:
-            out[a.idx_q] = value
+        mech.set_joint(out, a.joint, value)
     return out
+
+
+def frame_distance(mech: Mechanism, q1: np.ndarray, q2: np.ndarray) -> float:
+    """Largest coordinate difference between the frame origins of two configurations [m]."""
+    data = mech.data
+    pin.framesForwardKinematics(mech.model, data, q1)
+    first = np.array([M.translation for M in data.oMf])
+    pin.framesForwardKinematics(mech.model, data, q2)
+    second = np.array([M.translation for M in data.oMf])
+    return float(np.max(np.abs(first - second)))
 
 
 def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = 1e-7) -> bool:
@@ -57,12 +63,7 @@ def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = 
     Angles equal modulo 2 pi, and the two joint-angle sets of a universal joint that point
     an axisymmetric strut the same way, count as the same assembly.
     """
-    data = mech.data
-    pin.framesForwardKinematics(mech.model, data, q1)
-    first = np.array([M.translation for M in data.oMf])
-    pin.framesForwardKinematics(mech.model, data, q2)
-    second = np.array([M.translation for M in data.oMf])
-    return bool(np.max(np.abs(first - second)) < tol)
+    return frame_distance(mech, q1, q2) < tol
 
 
 def task_pose(mech: Mechanism, q: Any) -> np.ndarray:
@@ -113,8 +114,7 @@ def forward_kinematics(
             "determine the configuration"
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    fixed = {a.idx_v for a in mech.actuators}
-    free = np.array([k for k in range(mech.nv) if k not in fixed])
+    free = mech.free_columns(a.joint for a in mech.actuators)
     starts_q = [_with_actuators(mech, q0, c)]
     if all_modes:
         rng = np.random.default_rng(seed)

@@ -37,13 +37,36 @@ SINGULARITY_TOL = 1e-6
 KINDS: tuple[str, ...] = ("constraint", "inverse", "direct")
 
 
-def _margin(M: np.ndarray) -> float:
+RANK_RTOL = 1e-9
+"""Relative tolerance of every rank decision: singular values below ``RANK_RTOL * s_max`` count as zero."""
+
+
+def normalised_margin(M: np.ndarray) -> float:
+    r"""Normalised smallest singular value :math:`\sigma_{min} / \sigma_{max}` of ``M`` [-].
+
+    1 for an empty matrix, 0 for a zero matrix.
+    """
     if M.size == 0:
         return 1.0
     s = np.linalg.svd(M, compute_uv=False)
     if s[0] == 0.0:
         return 0.0
     return float(s[min(M.shape) - 1] / s[0]) if min(M.shape) else 1.0
+
+
+def numerical_rank(M: np.ndarray, rtol: float = RANK_RTOL, *, floor: float = 0.0) -> int:
+    """Rank of ``M`` by SVD: the singular values above ``rtol * max(s_max, floor)``.
+
+    Args:
+        M: the matrix.
+        rtol: relative tolerance.
+        floor: smallest reference scale, so that a matrix of tiny entries has rank 0
+            (1 for closure Jacobians, whose entries are lever arms [m] and unit axes).
+    """
+    if M.size == 0:
+        return 0
+    s = np.linalg.svd(M, compute_uv=False)
+    return int(np.sum(s > rtol * max(s[0], floor)))
 
 
 @dataclass(frozen=True)
@@ -90,7 +113,7 @@ def report_from_jacobians(mech: Mechanism, jac: ClosedChainJacobians, tol: float
     rank = mech.nv - mech.mobility
     s = jac.closure_singular_values
     constraint = float(s[rank - 1] / s[0]) if rank > 0 and s.size and s[0] > 0 else 1.0
-    return SingularityReport(constraint, _margin(jac.T), _margin(jac.C), tol)
+    return SingularityReport(constraint, normalised_margin(jac.T), normalised_margin(jac.C), tol)
 
 
 def classify(

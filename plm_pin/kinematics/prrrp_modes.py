@@ -1,23 +1,11 @@
-r"""Assembly and working modes, mode-transition graphs and mode-change planning.
+r"""Assembly and working modes of the 2-PRRRP, and the planning of their changes.
 
-**Generic part** (any mechanism with a task, :class:`plm_pin.Mechanism`):
-
-- :func:`follow_targets`: continuation along a sampled path of prescribed task coordinates
-  and fixed joints (warm-started Newton with a secant predictor); with every task
-  coordinate prescribed it is inverse-kinematics continuation.
-- :func:`track_actuator_path`: forward-kinematics continuation along a sampled actuator
-  path (:meth:`Mechanism.assemble` with the actuators fixed, warm-started), with the
-  singularity margins of :func:`plm_pin.kinematics.classify` and the
-  :func:`redundancy_margin` at every sample, returned as a :class:`TrackedPath`.
-- :func:`redundancy_margin`: the smallest direct margin left when any one actuator is
-  removed; zero where a redundantly actuated chain *loses its redundancy* while staying
-  non-singular.
-- :class:`ModeGraph`: modes, the rank of the closed-chain direct Jacobian :math:`C` at a
-  representative of each, adjacency, and the shortest routes that avoid the singular modes.
-
-**PRRRP part** (the 2-PRRRP family of :func:`plm_pin.models.build_2prrrp`: the presets
+For the 2-PRRRP family of :func:`plm_pin.models.build_2prrrp` (the presets
 ``harada2015_asymmetric``, ``harada2011_3d4m``, ``harada2011_3d3m`` and variants), after
-Harada 2015, "Mode changes of a planar 3 DOF redundantly actuated parallel robot":
+Harada 2015, "Mode changes of a planar 3 DOF redundantly actuated parallel robot". The
+generic machinery it builds on is in :mod:`plm_pin.kinematics.paths` (continuation along
+task and actuator paths, redundancy margin) and :mod:`plm_pin.kinematics.mode_graph`
+(mode-transition graphs and routes).
 
 - A *sub-mechanism* is a plate pair with the legs (slider + rod) that reach it: legs 1-2
   on ``plate_left``, legs 3-4 on ``plate_right``. With its two sliders at :math:`c_{j1},
@@ -57,30 +45,31 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable, SingularConfiguration
-from .assembly import assemble
-from .jacobians import ClosedChainJacobians, closed_chain_jacobians, require_task
-from .singularity import SINGULARITY_TOL, SingularityReport, report_from_jacobians
-from .task import TaskTarget, compile_task
+from .forward import frame_distance
+from .jacobians import closed_chain_jacobians, require_task
+from .mode_graph import Mode, ModeEdge, ModeGraph, ModeNode, compress_modes
+from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
+from .singularity import (
+    SINGULARITY_TOL,
+    SingularityReport,
+    normalised_margin,
+    numerical_rank,
+    report_from_jacobians,
+)
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
 
-Mode = tuple[int, ...]
-"""A mode: one sign (+1, -1, or 0 at the boundary) per sub-mechanism or per leg."""
-
 MODE_TOL = 1e-9
 """Pair heights [m] and rod cosines :math:`|z_i^T a|` [-] at or below which a mode sign is 0."""
-
-TRACK_TOL = 1e-11
-"""Closure tolerance of the continuations [m, rad]."""
 
 MODE_CHANGE_TOL = 1e-3
 """Direct and constraint margin the mode-change planners require at every sample [-].
@@ -91,551 +80,6 @@ A thousandth of the largest singular value: far above round-off, so that the ran
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
-
-# =====================================================================================
-# Generic part: margins, continuation, tracking, graphs
-# =====================================================================================
-
-
-def _normalised_margin(M: np.ndarray) -> float:
-    r"""Normalised smallest singular value :math:`\sigma_{min} / \sigma_{max}` of ``M``; 1 when empty."""
-    if M.size == 0 or min(M.shape) == 0:
-        return 1.0
-    s = np.linalg.svd(M, compute_uv=False)
-    return 0.0 if s[0] == 0.0 else float(s[min(M.shape) - 1] / s[0])
-
-
-def _rank(M: np.ndarray, rtol: float) -> int:
-    if M.size == 0:
-        return 0
-    s = np.linalg.svd(M, compute_uv=False)
-    return int(np.sum(s > rtol * s[0])) if s[0] > 0.0 else 0
-
-
-def redundancy_margin(mech: Mechanism, q: Any, jac: ClosedChainJacobians | None = None) -> float:
-    r"""Smallest direct margin left when any one actuator is removed [-].
-
-    For each actuator :math:`k`, the normalised smallest singular value of :math:`C`
-    (:mod:`plm_pin.kinematics.jacobians`) without row :math:`k`; the minimum over
-    :math:`k`. It is zero where some single actuator has become indispensable: a
-    redundantly actuated chain that *loses its redundancy* (Harada 2015: a sub-mechanism
-    at ``[0]``) while :math:`C` keeps full rank. Zero for a non-redundant chain.
-
-    Args:
-        mech: the mechanism.
-        q: assembled configuration, shape (nq,).
-        jac: Jacobians already computed at ``q`` (optional).
-    """
-    j = closed_chain_jacobians(mech, q) if jac is None else jac
-    C = j.C  # (n_act, mobility)
-    if C.shape[0] <= C.shape[1]:
-        return 0.0
-    return min(_normalised_margin(np.delete(C, k, axis=0)) for k in range(C.shape[0]))
-
-
-def _set_joint_value(mech: Mechanism, q: np.ndarray, joint: str, value: float) -> None:
-    if not mech.model.existJointName(joint):
-        raise InvalidInput(f"no joint {joint!r}; joints are {list(mech.joint_names)}")
-    j = mech.model.joints[mech.model.getJointId(joint)]
-    if j.nv != 1:
-        raise InvalidInput(f"joint {joint!r} has {j.nv} DOF; only one-DOF joints can be prescribed")
-    if j.nq == 2:  # unbounded revolute stored as (cos, sin)
-        q[j.idx_q : j.idx_q + 2] = (math.cos(value), math.sin(value))
-    else:
-        q[j.idx_q] = value
-
-
-def _predict(mech: Mechanism, qs: Sequence[np.ndarray], s: np.ndarray, k: int) -> np.ndarray:
-    """Secant predictor for sample ``k`` from the two previous solutions."""
-    if k < 2:
-        return np.array(qs[-1])
-    ds_prev = s[k - 1] - s[k - 2]
-    if ds_prev == 0.0:
-        return np.array(qs[-1])
-    dq = pin.difference(mech.model, qs[-2], qs[-1]) * ((s[k] - s[k - 1]) / ds_prev)
-    return np.asarray(pin.integrate(mech.model, qs[-1], dq))
-
-
-def _check_path_parameter(s: Any, n: int) -> np.ndarray:
-    arr = np.arange(n, dtype=float) / max(n - 1, 1) if s is None else np.asarray(s, dtype=float)
-    if arr.shape != (n,) or not np.all(np.isfinite(arr)):
-        raise InvalidInput(f"s must be {n} finite numbers, got shape {arr.shape}")
-    if n > 1 and np.any(np.diff(arr) < 0.0):
-        raise InvalidInput("s must be non-decreasing")
-    return arr
-
-
-def follow_targets(
-    mech: Mechanism,
-    q_start: Any,
-    *,
-    task_dofs: Sequence[str] = (),
-    task_values: Any = None,
-    fixed: Mapping[str, Any] | None = None,
-    s: Any = None,
-    tol: float = TRACK_TOL,
-) -> np.ndarray:
-    r"""Configurations along a sampled path of prescribed task coordinates and joint values.
-
-    At each sample, Newton (Levenberg-Marquardt) solves the closures together with the
-    prescribed task coordinates of the mechanism's task frame, the ``fixed`` joints held
-    at their values, from a secant prediction of the two previous solutions; so the
-    branch of ``q_start`` is followed as long as the sampled system stays regular and the
-    samples are dense. With every task coordinate prescribed this is inverse-kinematics
-    continuation; with the actuators fixed, forward-kinematics continuation.
-
-    Args:
-        mech: the mechanism.
-        q_start: configuration near the first sample, shape (nq,).
-        task_dofs: prescribed task coordinates among the task's (e.g. ``("x", "rz")``).
-        task_values: their values [m, rad], shape (N, len(task_dofs)).
-        fixed: one-DOF joint name -> values along the path [m, rad], shape (N,).
-        s: path parameter of the samples, shape (N,), non-decreasing (for the predictor);
-            default uniform.
-        tol: closure and target tolerance [m, rad].
-
-    Returns:
-        The configurations, shape (N, nq).
-
-    Raises:
-        PoseUnreachable: when a sample cannot be solved; the message names the sample.
-        InvalidInput: malformed inputs.
-    """
-    task = require_task(mech)
-    dofs = tuple(task_dofs)
-    unknown = [d for d in dofs if d not in task.dofs]
-    if unknown:
-        raise InvalidInput(f"task coordinates {unknown} are not in the task {list(task.dofs)}")
-    fixed = dict(fixed or {})
-    sizes = []
-    values = None
-    if dofs:
-        values = np.asarray(task_values, dtype=float)
-        if values.ndim != 2 or values.shape[1] != len(dofs) or not np.all(np.isfinite(values)):
-            raise InvalidInput(
-                f"task_values must be finite with shape (N, {len(dofs)}), got {np.shape(task_values)}"
-            )
-        sizes.append(values.shape[0])
-    fixed_values = {}
-    for joint, vals in fixed.items():
-        arr = np.asarray(vals, dtype=float)
-        if arr.ndim != 1 or not np.all(np.isfinite(arr)):
-            raise InvalidInput(f"fixed[{joint!r}] must be a finite 1-D array, got shape {arr.shape}")
-        fixed_values[joint] = arr
-        sizes.append(arr.shape[0])
-    if not sizes or len(set(sizes)) != 1:
-        raise InvalidInput(f"prescribe at least one quantity, all with the same sample count; got {sizes}")
-    n = sizes[0]
-    sp = _check_path_parameter(s, n)
-    sub_task = compile_task(mech.model, mech.model.frames[task.frame_id].name, dofs) if dofs else None
-    frozen: set[int] = set()
-    for joint in fixed_values:
-        if not mech.model.existJointName(joint):
-            raise InvalidInput(
-                f"cannot fix joint {joint!r}: no such joint; joints are {list(mech.joint_names)}"
-            )
-        j = mech.model.joints[mech.model.getJointId(joint)]
-        frozen.update(range(j.idx_v, j.idx_v + j.nv))
-    free = np.array([k for k in range(mech.nv) if k not in frozen], dtype=int)
-    qs: list[np.ndarray] = [mech.check_q(q_start, "q_start")]
-    out: list[np.ndarray] = []
-    for k in range(n):
-        guess = _predict(mech, qs, sp, k) if out else np.array(qs[0])
-        for joint, arr in fixed_values.items():
-            _set_joint_value(mech, guess, joint, float(arr[k]))
-        target = TaskTarget(sub_task, values[k]) if sub_task is not None and values is not None else None
-        try:
-            q = assemble(
-                mech.model, mech.data, mech.closures, guess, free, tol=tol, max_iterations=60, extra=target
-            ).q
-        except ClosureNotSatisfied as exc:
-            raise PoseUnreachable(
-                f"{mech.name}: path sample {k} of {n} (s = {sp[k]:.6g}) cannot be reached from the "
-                f"previous one: residual {exc.residual_norm:.3g} above {tol:.3g}; refine the sampling "
-                "or check that the path stays in the workspace"
-            ) from None
-        qs = [qs[-1], q] if out else [q]
-        out.append(q)
-    return np.array(out)
-
-
-_TRACKED_ARRAYS = (
-    "s",
-    "actuators",
-    "q",
-    "x",
-    "residual",
-    "constraint_margin",
-    "inverse_margin",
-    "direct_margin",
-    "redundancy_margin",
-)
-
-
-@dataclass(frozen=True)
-class TrackedPath:
-    """A sampled actuator path with the configuration followed along it (forward continuation).
-
-    Attributes:
-        s: path parameter of the samples [-], shape (N,).
-        actuators: actuator positions [m] or [rad], shape (N, n_act).
-        q: tracked configurations, shape (N, nq).
-        x: task coordinates of the end-effector frame [m, rad], shape (N, n_task).
-        residual: largest absolute closure residual per sample [m, rad], shape (N,).
-        constraint_margin: constraint-singularity margin per sample [-], shape (N,).
-        inverse_margin: inverse (type 1, actuator) singularity margin per sample [-], shape (N,).
-        direct_margin: direct (type 2) singularity margin per sample [-], shape (N,); the
-            normalised smallest singular value of :math:`C`, zero when its rank drops
-            (Harada 2015: rank :math:`J_x` < 3).
-        redundancy_margin: :func:`redundancy_margin` per sample [-], shape (N,).
-        tol: the singularity tolerance the margins are judged against [-].
-    """
-
-    s: np.ndarray
-    actuators: np.ndarray
-    q: np.ndarray
-    x: np.ndarray
-    residual: np.ndarray
-    constraint_margin: np.ndarray
-    inverse_margin: np.ndarray
-    direct_margin: np.ndarray
-    redundancy_margin: np.ndarray
-    tol: float
-
-    def __post_init__(self) -> None:
-        n = self.s.shape[0]
-        for name in _TRACKED_ARRAYS:
-            arr = getattr(self, name)
-            if arr.shape[0] != n:
-                raise InvalidInput(f"{name} has {arr.shape[0]} samples, s has {n}")
-            arr.setflags(write=False)
-
-    @property
-    def n_samples(self) -> int:
-        """Number of samples."""
-        return int(self.s.shape[0])
-
-    @property
-    def max_residual(self) -> float:
-        """Largest closure residual over the path [m, rad]."""
-        return float(np.max(self.residual)) if self.residual.size else 0.0
-
-    @property
-    def min_direct_margin(self) -> float:
-        """Smallest direct margin over the path [-]."""
-        return float(np.min(self.direct_margin))
-
-    @property
-    def min_constraint_margin(self) -> float:
-        """Smallest constraint margin over the path [-]."""
-        return float(np.min(self.constraint_margin))
-
-    @property
-    def nonsingular(self) -> bool:
-        """Whether the direct and constraint margins stay above ``tol`` at every sample.
-
-        Inverse (actuator) singularities are allowed: a leg may fold while the mechanism
-        keeps control of its end effector.
-        """
-        return bool(self.min_direct_margin > self.tol and self.min_constraint_margin > self.tol)
-
-    def report(self, k: int) -> SingularityReport:
-        """The singularity report of sample ``k``."""
-        return SingularityReport(
-            float(self.constraint_margin[k]),
-            float(self.inverse_margin[k]),
-            float(self.direct_margin[k]),
-            self.tol,
-        )
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "s": self.s.tolist(),
-            "actuators": self.actuators.tolist(),
-            "q": self.q.tolist(),
-            "x": self.x.tolist(),
-            "residual": self.residual.tolist(),
-            "constraint_margin": self.constraint_margin.tolist(),
-            "inverse_margin": self.inverse_margin.tolist(),
-            "direct_margin": self.direct_margin.tolist(),
-            "redundancy_margin": self.redundancy_margin.tolist(),
-            "tol": self.tol,
-            "n_samples": self.n_samples,
-            "max_residual": self.max_residual,
-            "min_direct_margin": self.min_direct_margin,
-            "nonsingular": self.nonsingular,
-        }
-
-
-def track_actuator_path(
-    mech: Mechanism,
-    actuators: Any,
-    q_start: Any,
-    *,
-    s: Any = None,
-    tol: float = SINGULARITY_TOL,
-    closure_tol: float = TRACK_TOL,
-) -> TrackedPath:
-    """Follow the configuration along a sampled actuator path (forward-kinematics continuation).
-
-    At each sample :meth:`Mechanism.assemble` closes the loops with every actuator fixed
-    at its sampled value, warm-started from a secant prediction of the two previous
-    configurations, so the assembly mode of ``q_start`` is followed; then the singularity
-    margins and the redundancy margin are evaluated. For a redundantly actuated chain the
-    actuator values must be consistent (e.g. from :func:`follow_targets`).
-
-    Args:
-        mech: the mechanism.
-        actuators: actuator positions [m, rad], shape (N, n_act).
-        q_start: configuration near the first sample (it picks the assembly mode), shape (nq,).
-        s: path parameter, shape (N,), non-decreasing (default uniform).
-        tol: singularity tolerance the margins are judged against.
-        closure_tol: closure tolerance of each assembly [m, rad].
-
-    Returns:
-        The tracked path.
-
-    Raises:
-        ClosureNotSatisfied: when a sample cannot be assembled; the message names it.
-        InvalidInput: malformed inputs.
-    """
-    c = np.asarray(actuators, dtype=float)
-    if c.ndim != 2 or c.shape[1] != mech.n_actuators or not np.all(np.isfinite(c)):
-        raise InvalidInput(
-            f"actuators must be finite with shape (N, {mech.n_actuators}), got {np.shape(actuators)}"
-        )
-    n = c.shape[0]
-    sp = _check_path_parameter(s, n)
-    task = require_task(mech)
-    names = [a.joint for a in mech.actuators]
-    qs: list[np.ndarray] = [mech.check_q(q_start, "q_start")]
-    out_q: list[np.ndarray] = []
-    out_x: list[np.ndarray] = []
-    res: list[float] = []
-    cm: list[float] = []
-    im: list[float] = []
-    dm: list[float] = []
-    rm: list[float] = []
-    for k in range(n):
-        guess = _predict(mech, qs, sp, k) if out_q else np.array(qs[0])
-        try:
-            asm = mech.assemble(
-                guess, fixed=dict(zip(names, c[k].tolist(), strict=True)), tol=closure_tol, max_iterations=60
-            )
-        except ClosureNotSatisfied as exc:
-            raise ClosureNotSatisfied(
-                f"{mech.name}: actuator path sample {k} of {n} (s = {sp[k]:.6g}) cannot be assembled "
-                f"from the previous configuration: {exc}",
-                exc.residual_norm,
-                exc.tolerance,
-                exc.q,
-                exc.worst_closure,
-            ) from None
-        q = asm.q
-        qs = [qs[-1], q] if out_q else [q]
-        out_q.append(q)
-        jac = closed_chain_jacobians(mech, q)
-        rep = report_from_jacobians(mech, jac, tol)
-        pin.framesForwardKinematics(mech.model, mech.data, q)
-        out_x.append(task.pose_from_data(mech.data))
-        res.append(asm.residual_norm)
-        cm.append(rep.constraint_margin)
-        im.append(rep.inverse_margin)
-        dm.append(rep.direct_margin)
-        rm.append(redundancy_margin(mech, q, jac))
-    return TrackedPath(
-        sp.copy(),
-        c.copy(),
-        np.array(out_q),
-        np.array(out_x),
-        np.array(res),
-        np.array(cm),
-        np.array(im),
-        np.array(dm),
-        np.array(rm),
-        tol,
-    )
-
-
-def compress_modes(modes: Sequence[Mode]) -> tuple[Mode, ...]:
-    """The sequence of distinct modes visited (consecutive repeats dropped)."""
-    out: list[Mode] = []
-    for m in modes:
-        if not out or out[-1] != tuple(m):
-            out.append(tuple(m))
-    return tuple(out)
-
-
-@dataclass(frozen=True)
-class ModeNode:
-    """One mode of a :class:`ModeGraph`, evaluated at a representative configuration.
-
-    Attributes:
-        mode: the mode signs.
-        label: the mode written as in the paper, e.g. ``[+ 0]``.
-        q: representative configuration (read-only), shape (nq,).
-        rank: rank of the closed-chain direct Jacobian :math:`C` there (relative tolerance
-            :data:`plm_pin.mechanism.RANK_RTOL`).
-        full_rank: the mechanism's mobility (rank of a non-singular :math:`C`).
-        direct_margin: direct margin there [-].
-        redundancy_margin: :func:`redundancy_margin` there [-].
-    """
-
-    mode: Mode
-    label: str
-    q: np.ndarray
-    rank: int
-    full_rank: int
-    direct_margin: float
-    redundancy_margin: float
-
-    def __post_init__(self) -> None:
-        self.q.setflags(write=False)
-
-    @property
-    def singular(self) -> bool:
-        """Whether :math:`C` loses rank in this mode (direct singularity)."""
-        return self.rank < self.full_rank
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "mode": list(self.mode),
-            "label": self.label,
-            "q": self.q.tolist(),
-            "rank": self.rank,
-            "full_rank": self.full_rank,
-            "direct_margin": self.direct_margin,
-            "redundancy_margin": self.redundancy_margin,
-            "singular": self.singular,
-        }
-
-
-@dataclass(frozen=True)
-class ModeEdge:
-    """A direct transition between two modes, found by a walk between their representatives.
-
-    Attributes:
-        a: first mode.
-        b: second mode.
-        min_direct_margin: smallest direct margin along the walk, ends included [-].
-        samples: number of assembled samples of the walk.
-    """
-
-    a: Mode
-    b: Mode
-    min_direct_margin: float
-    samples: int
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "a": list(self.a),
-            "b": list(self.b),
-            "min_direct_margin": self.min_direct_margin,
-            "samples": self.samples,
-        }
-
-
-@dataclass(frozen=True)
-class ModeGraph:
-    """State-transition graph of modes (Harada 2015, Fig. 5, for the 2-PRRRP).
-
-    Attributes:
-        nodes: the modes with their representatives and ranks.
-        edges: the direct transitions (undirected).
-        label_of: writes a mode as text.
-    """
-
-    nodes: tuple[ModeNode, ...]
-    edges: tuple[ModeEdge, ...]
-    label_of: Callable[[Mode], str] = field(default=lambda m: str(m), repr=False, compare=False)
-
-    def node(self, mode: Sequence[int]) -> ModeNode:
-        """The node of ``mode``.
-
-        Raises:
-            InvalidInput: when the graph has no such mode.
-        """
-        for n in self.nodes:
-            if n.mode == tuple(mode):
-                return n
-        raise InvalidInput(f"no mode {tuple(mode)}; modes are {[n.label for n in self.nodes]}")
-
-    def adjacent(self, a: Sequence[int], b: Sequence[int]) -> bool:
-        """Whether the two modes are joined by an edge."""
-        pair = {tuple(a), tuple(b)}
-        return any({e.a, e.b} == pair for e in self.edges)
-
-    def neighbours(self, mode: Sequence[int]) -> tuple[Mode, ...]:
-        """Modes joined to ``mode`` by an edge, in node order."""
-        return tuple(n.mode for n in self.nodes if self.adjacent(mode, n.mode))
-
-    @property
-    def singular_modes(self) -> tuple[Mode, ...]:
-        """Modes where :math:`C` loses rank."""
-        return tuple(n.mode for n in self.nodes if n.singular)
-
-    def routes(
-        self, start: Sequence[int], goal: Sequence[int], *, avoid_singular: bool = True
-    ) -> list[tuple[Mode, ...]]:
-        """Every shortest route from ``start`` to ``goal`` (breadth-first), in node order.
-
-        Args:
-            start: first mode.
-            goal: last mode.
-            avoid_singular: never pass through a singular mode.
-
-        Returns:
-            The routes, each a tuple of modes from ``start`` to ``goal``; empty when none
-            exists.
-
-        Raises:
-            InvalidInput: unknown modes, or a singular start or goal with ``avoid_singular``.
-        """
-        s, g = self.node(start).mode, self.node(goal).mode
-        banned = set(self.singular_modes) if avoid_singular else set()
-        if s in banned or g in banned:
-            raise InvalidInput(f"start {self.label_of(s)} or goal {self.label_of(g)} is a singular mode")
-        order = [n.mode for n in self.nodes if n.mode not in banned]
-        dist = {s: 0}
-        frontier = [s]
-        while frontier and g not in dist:
-            nxt = []
-            for m in frontier:
-                for nb in self.neighbours(m):
-                    if nb in dist or nb in banned:
-                        continue
-                    dist[nb] = dist[m] + 1
-                    nxt.append(nb)
-            frontier = sorted(nxt, key=order.index)
-        if g not in dist:
-            return []
-
-        def back(m: Mode) -> list[tuple[Mode, ...]]:
-            if m == s:
-                return [(s,)]
-            out: list[tuple[Mode, ...]] = []
-            for nb in self.neighbours(m):
-                if dist.get(nb) == dist[m] - 1:
-                    out.extend((*r, m) for r in back(nb))
-            return out
-
-        return sorted(back(g), key=lambda r: [order.index(m) for m in r])
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "nodes": [n.to_dict() for n in self.nodes],
-            "edges": [e.to_dict() for e in self.edges],
-            "singular_modes": [list(m) for m in self.singular_modes],
-        }
-
-
-# =====================================================================================
-# PRRRP part: the 2-PRRRP family of plm_pin.models.build_2prrrp (Harada 2011, 2015)
-# =====================================================================================
 
 ASSEMBLY_MODES: tuple[Mode, ...] = (
     (1, 1),
@@ -925,7 +369,7 @@ def prrrp_state(
             continue
         rows = np.array([rod_arr[[g.index for g in lay.legs].index(i)] for i in sub.legs])
         plane = np.column_stack([lay.direction, lay.normal])
-        margins.append(_normalised_margin(rows @ plane))
+        margins.append(normalised_margin(rows @ plane))
     return PrrrpState(
         heights,
         pairs,
@@ -1104,8 +548,6 @@ def assembly_mode_graph(
     if not (0.0 < m < lay.half_plate):
         raise InvalidInput(f"height must lie in (0, {lay.half_plate:.4g}) m, got {m!r}")
     mobility = mech.mobility
-    from ..mechanism import RANK_RTOL
-
     nodes = []
     for mode in ASSEMBLY_MODES:
         target = np.array(mode, dtype=float) * m
@@ -1124,7 +566,7 @@ def assembly_mode_graph(
                 mode,
                 mode_label(mode),
                 q.copy(),
-                _rank(jac.C, RANK_RTOL),
+                numerical_rank(jac.C),
                 mobility,
                 rep.direct_margin,
                 redundancy_margin(mech, q, jac),
@@ -1143,6 +585,13 @@ def assembly_mode_graph(
                 )
                 edges.append(ModeEdge(a.mode, b.mode, margin, len(qs)))
     return ModeGraph(tuple(nodes), tuple(edges), mode_label)
+
+
+def _change_ok(
+    route: tuple[Mode, ...], visited: tuple[Mode, ...], path: TrackedPath, deviation: float
+) -> bool:
+    """Whether a tracked mode change followed its route cleanly (the planners' ``ok``)."""
+    return bool(visited == route and path.nonsingular and path.max_residual <= 1e-10 and deviation <= 1e-7)
 
 
 @dataclass(frozen=True)
@@ -1219,12 +668,7 @@ class AssemblyModeChange:
     @property
     def ok(self) -> bool:
         """Route followed, never direct- or constraint-singular, loops closed to 1e-10, no branch jump."""
-        return bool(
-            self.visited == self.route
-            and self.path.nonsingular
-            and self.path.max_residual <= 1e-10
-            and self.max_deviation <= 1e-7
-        )
+        return _change_ok(self.route, self.visited, self.path, self.max_deviation)
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for JSON."""
@@ -1246,15 +690,8 @@ class AssemblyModeChange:
 
 
 def _max_deviation(mech: Mechanism, qa: np.ndarray, qb: np.ndarray) -> float:
-    worst = 0.0
-    data = mech.data
-    for q1, q2 in zip(qa, qb, strict=True):
-        pin.framesForwardKinematics(mech.model, data, q1)
-        first = np.array([M.translation for M in data.oMf])
-        pin.framesForwardKinematics(mech.model, data, q2)
-        second = np.array([M.translation for M in data.oMf])
-        worst = max(worst, float(np.max(np.abs(first - second))))
-    return worst
+    """Largest frame distance between planned and tracked configurations, sample by sample [m]."""
+    return max([0.0, *(frame_distance(mech, q1, q2) for q1, q2 in zip(qa, qb, strict=True))])
 
 
 def plan_assembly_mode_change(
@@ -1425,12 +862,7 @@ class WorkingModeChange:
     @property
     def ok(self) -> bool:
         """Route followed, never direct- or constraint-singular, loops closed to 1e-10, no branch jump."""
-        return bool(
-            self.visited == self.route
-            and self.path.nonsingular
-            and self.path.max_residual <= 1e-10
-            and self.max_deviation <= 1e-7
-        )
+        return _change_ok(self.route, self.visited, self.path, self.max_deviation)
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for JSON."""
@@ -1609,11 +1041,11 @@ def prrrp_configuration(
             )
         c = Lx + float(np.sign(sigma)) * math.sqrt(max(disc, 0.0))
         phi = math.atan2(Ly, Lx - c)
-        _set_joint_value(mech, q, leg.slider, c)
-        _set_joint_value(mech, q, leg.rod, phi)
+        mech.set_joint(q, leg.slider, c)
+        mech.set_joint(q, leg.rod, phi)
         if leg.index == 1:
             phi1 = phi
-    _set_joint_value(mech, q, "plate_pivot", theta - phi1)
+    mech.set_joint(q, "plate_pivot", theta - phi1)
     return np.array(mech.assemble(q).q)
 
 
@@ -1729,8 +1161,6 @@ def complex_singularity_check(
     Raises:
         PoseUnreachable: when the partner leg is shorter than ``leg``.
     """
-    from ..mechanism import RANK_RTOL
-
     lay = prrrp_layout(mech)
     q0 = mech.q_ref if q_start is None else mech.check_q(q_start, "q_start")
     g, sub, j, x_pair, side, pose, tilt_sign = _fold_plan(mech, lay, leg, q0, tilt)
@@ -1779,7 +1209,7 @@ def complex_singularity_check(
                 CoincidentCircleSample(
                     angle,
                     float(abs(cc[g.actuator] - cc[partner.actuator])),
-                    _rank(jc.C[[g.actuator, partner.actuator]], RANK_RTOL),
+                    numerical_rank(jc.C[[g.actuator, partner.actuator]]),
                     float(st.sub_direct_margin[j]),
                     report_from_jacobians(mech, jc, tol),
                 )
@@ -1792,7 +1222,7 @@ def complex_singularity_check(
         report,
         float(abs(c[g.actuator] - c[partner.actuator])),
         circles,
-        _rank(jac.J_phi, RANK_RTOL),
+        numerical_rank(jac.J_phi),
         mech.nv - mech.mobility,
         abs(g.length - partner.length),
         tuple(coincident),
@@ -1807,6 +1237,7 @@ def symmetric_variant(
     Rod masses and inertias scale from the 2011 rod (Table 1) as in the 2015 preset; the
     other parameters are the preset's. Built in memory, not registered.
     """
+    # imported here: these modules import plm_pin.mechanism, which imports this package
     from ..description.loader import description_from_text
     from ..description.writer import urdf_text
     from ..loading import mechanism_from_description

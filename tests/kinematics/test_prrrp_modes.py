@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import itertools
 import json
 import math
 
@@ -12,8 +11,9 @@ import pytest
 
 from plm_pin.exceptions import InvalidInput, PoseUnreachable, SingularConfiguration
 from plm_pin.kinematics import classify, closed_chain_jacobians, working_mode
-from plm_pin.kinematics import modes as M
-from plm_pin.mechanism import RANK_RTOL
+from plm_pin.kinematics import prrrp_modes as pm
+from plm_pin.kinematics.paths import track_actuator_path
+from plm_pin.kinematics.singularity import RANK_RTOL
 from tests.conftest import preset
 
 ASYM = "harada2015_asymmetric"
@@ -23,6 +23,8 @@ LEFT = (1, 2)
 
 
 # ------------------------------------------------------------------ independent oracles
+
+
 def _eq6_config(mech, pose, sigmas, lengths):
     """Configuration from Harada 2015 eqs. (1), (6) by hand: slider, rod angle, plate pivot."""
     x, y, th = pose
@@ -75,6 +77,8 @@ def _rank(A):
 
 
 # ------------------------------------------------------------------ fixtures
+
+
 @pytest.fixture(scope="module")
 def asym():
     return preset(ASYM)
@@ -82,28 +86,30 @@ def asym():
 
 @pytest.fixture(scope="module")
 def graph(asym):
-    return M.assembly_mode_graph(asym)
+    return pm.assembly_mode_graph(asym)
 
 
 @pytest.fixture(scope="module")
 def route(asym, graph):
-    return M.plan_assembly_mode_change(asym, graph=graph)
+    return pm.plan_assembly_mode_change(asym, graph=graph)
 
 
 @pytest.fixture(scope="module")
 def flip(asym):
-    return M.plan_working_mode_change(asym, leg=3)
+    return pm.plan_working_mode_change(asym, leg=3)
 
 
 @pytest.fixture(scope="module")
 def symmetric():
-    return M.symmetric_variant(0.240)
+    return pm.symmetric_variant(0.240)
 
 
 # ------------------------------------------------------------------ labels
+
+
 def test_layout_reads_the_2015_rods_and_stator(asym):
     """The layout finds legs 1-2 on the left pair, 3-4 on the right, rods 0.240/0.170 m, stator along x."""
-    lay = M.prrrp_layout(asym)
+    lay = pm.prrrp_layout(asym)
     assert [g.index for g in lay.legs] == [1, 2, 3, 4]
     np.testing.assert_allclose([g.length for g in lay.legs], LENGTHS_2015, atol=1e-12)
     assert [s.legs for s in lay.subs] == [(1, 2), (3, 4)]
@@ -118,26 +124,26 @@ def test_mode_labels_on_hand_built_configurations(asym):
     up = _eq6_config(asym, (0.0, 0.10, 0.0), sig, LENGTHS_2015)
     down = _eq6_config(asym, (0.0, -0.10, 0.0), sig, LENGTHS_2015)
     np.testing.assert_allclose(asym.actuator_positions(up), asym.actuator_positions(down), atol=1e-15)
-    assert M.assembly_mode(asym, up) == (1, 1)
-    assert M.assembly_mode(asym, down) == (-1, -1)
-    assert M.paper_working_modes(asym, up) == M.paper_working_modes(asym, down) == sig
+    assert pm.assembly_mode(asym, up) == (1, 1)
+    assert pm.assembly_mode(asym, down) == (-1, -1)
+    assert pm.paper_working_modes(asym, up) == pm.paper_working_modes(asym, down) == sig
     th = math.radians(-30.0)
     right_on_stator = _eq6_config(asym, (0.0, -RT * math.sin(th), th), sig, LENGTHS_2015)
-    assert M.assembly_mode(asym, right_on_stator) == (1, 0)
+    assert pm.assembly_mode(asym, right_on_stator) == (1, 0)
     th = math.radians(30.0)
     fold = _eq6_config(
         asym, (RT - RT * math.cos(th), 0.170 - RT * math.sin(th), th), (-1, 1, 0, 1), LENGTHS_2015
     )
-    assert M.paper_working_modes(asym, fold) == (-1, 1, 0, 1)
-    assert M.mode_label((1, 0)) == "[+ 0]"
-    assert M.working_mode_label((-1, 1, 0, 1)) == "(- + 0 +)"
+    assert pm.paper_working_modes(asym, fold) == (-1, 1, 0, 1)
+    assert pm.mode_label((1, 0)) == "[+ 0]"
+    assert pm.working_mode_label((-1, 1, 0, 1)) == "(- + 0 +)"
 
 
 def test_paper_working_modes_are_minus_the_leg_block_signs(asym, flip):
     """The eq. (6) sign is -sign(z_i^T a), the opposite of legs.working_mode, and 0 at the same fold."""
     for k in (0, flip.fold_index - 7, flip.fold_index, flip.fold_index + 7, flip.path.n_samples - 1):
         q = flip.path.q[k]
-        assert M.paper_working_modes(asym, q) == tuple(-v for v in working_mode(asym, q))
+        assert pm.paper_working_modes(asym, q) == tuple(-v for v in working_mode(asym, q))
 
 
 def test_pair_solutions_are_eq4_and_match_the_assembled_pairs(asym, route):
@@ -146,7 +152,7 @@ def test_pair_solutions_are_eq4_and_match_the_assembled_pairs(asym, route):
         q, c = route.path.q[k], route.path.actuators[k]
         pairs = _frames(asym, q, ["plate_left", "plate_right"])
         for j, (a, b) in enumerate(((0, 1), (2, 3))):
-            sol = M.pair_solutions(c[a], c[b], LENGTHS_2015[a], LENGTHS_2015[b])
+            sol = pm.pair_solutions(c[a], c[b], LENGTHS_2015[a], LENGTHS_2015[b])
             side = route.assembly_modes[k][j]
             expected = _eq4_pair(c[a], c[b], LENGTHS_2015[a], LENGTHS_2015[b], side)
             np.testing.assert_allclose(pairs[j][:2], expected, atol=1e-9)
@@ -156,21 +162,23 @@ def test_pair_solutions_are_eq4_and_match_the_assembled_pairs(asym, route):
 
 def test_pair_solutions_edge_cases():
     """Eq. (4): touching circles give one point on the axis, equal coincident circles are indefinite."""
-    assert M.pair_solutions(0.0, 0.41, 0.24, 0.17).kind == "touching"
-    np.testing.assert_allclose(M.pair_solutions(0.0, 0.41, 0.24, 0.17).points, [[0.24, 0.0]], atol=1e-12)
-    assert M.pair_solutions(0.0, 0.07, 0.24, 0.17).kind == "touching"  # internal tangency
-    assert M.pair_solutions(0.0, 0.5, 0.24, 0.17).kind == "none"
-    assert M.pair_solutions(0.1, 0.1, 0.24, 0.24).kind == "coincident"
-    assert M.pair_solutions(0.1, 0.1, 0.24, 0.17).kind == "none"  # concentric, unequal: no assembly
+    assert pm.pair_solutions(0.0, 0.41, 0.24, 0.17).kind == "touching"
+    np.testing.assert_allclose(pm.pair_solutions(0.0, 0.41, 0.24, 0.17).points, [[0.24, 0.0]], atol=1e-12)
+    assert pm.pair_solutions(0.0, 0.07, 0.24, 0.17).kind == "touching"  # internal tangency
+    assert pm.pair_solutions(0.0, 0.5, 0.24, 0.17).kind == "none"
+    assert pm.pair_solutions(0.1, 0.1, 0.24, 0.24).kind == "coincident"
+    assert pm.pair_solutions(0.1, 0.1, 0.24, 0.17).kind == "none"  # concentric, unequal: no assembly
 
 
 # ------------------------------------------------------------------ the graph
+
+
 def test_nine_modes_with_rank_three_except_00(asym, graph):
     """Section III: rank J_x = 3 in 8 modes and < 3 in [0 0], by C and by the paper's J_x alike."""
-    assert [n.mode for n in graph.nodes] == list(M.ASSEMBLY_MODES)
-    assert len(set(M.ASSEMBLY_MODES)) == 9
+    assert [n.mode for n in graph.nodes] == list(pm.ASSEMBLY_MODES)
+    assert len(set(pm.ASSEMBLY_MODES)) == 9
     for node in graph.nodes:
-        assert M.assembly_mode(asym, node.q) == node.mode
+        assert pm.assembly_mode(asym, node.q) == node.mode
         paper_rank = _rank(_paper_jx(asym, node.q))
         assert node.rank == paper_rank == (1 if node.mode == (0, 0) else 3)
         assert node.singular == (node.mode == (0, 0))
@@ -189,38 +197,16 @@ def test_modes_on_the_stator_lose_redundancy_not_rank(asym, graph):
             assert node.redundancy_margin > 1e-3 and drops == [3, 3, 3, 3]
 
 
-def test_graph_edges_are_the_frontier_relation_of_fig5(graph):
-    """Two modes are adjacent iff one is the other with some pair moved onto the stator (16 edges)."""
-
-    def below(a, b):  # a lies on the boundary of b
-        return a != b and all(x == y or x == 0 for x, y in zip(a, b, strict=True))
-
-    expected = {
-        frozenset((a, b))
-        for a, b in itertools.combinations(M.ASSEMBLY_MODES, 2)
-        if below(a, b) or below(b, a)
-    }
-    found = {frozenset((e.a, e.b)) for e in graph.edges}
-    assert found == expected and len(found) == 16
-    assert set(graph.neighbours((1, 0))) == {(1, 1), (1, -1), (0, 0)}
-    assert len(graph.neighbours((0, 0))) == 8
-
-
-def test_shortest_singularity_free_routes_are_the_paper_route_and_its_mirror(graph):
-    """Avoiding [0 0], [+ +] -> [- -] takes 4 steps, via [+ 0] [+ -] [0 -] (Fig. 6) or its mirror."""
-    routes = graph.routes((1, 1), (-1, -1))
-    assert routes == [M.PAPER_ASSEMBLY_ROUTE, ((1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1))]
-    assert graph.routes((1, 1), (-1, -1), avoid_singular=False) == [((1, 1), (0, 0), (-1, -1))]
-
-
 # ------------------------------------------------------------------ assembly-mode change
+
+
 def test_assembly_mode_change_follows_the_paper_route(asym, route):
     """[+ +] -> [+ 0] -> [+ -] -> [0 -] -> [- -], never [0 0], ending in the mirror with the same sliders."""
-    assert route.route == M.PAPER_ASSEMBLY_ROUTE
-    assert route.visited == M.PAPER_ASSEMBLY_ROUTE
+    assert route.route == pm.PAPER_ASSEMBLY_ROUTE
+    assert route.visited == pm.PAPER_ASSEMBLY_ROUTE
     assert (0, 0) not in {tuple(m) for m in route.assembly_modes}
-    assert M.assembly_mode(asym, route.path.q[0]) == (1, 1)
-    assert M.assembly_mode(asym, route.path.q[-1]) == (-1, -1)
+    assert pm.assembly_mode(asym, route.path.q[0]) == (1, 1)
+    assert pm.assembly_mode(asym, route.path.q[-1]) == (-1, -1)
     np.testing.assert_allclose(route.path.actuators[0], route.path.actuators[-1], atol=1e-10)
     first = np.array(_frames(asym, route.path.q[0], ["plate_left", "plate_right"]))
     last = np.array(_frames(asym, route.path.q[-1], ["plate_left", "plate_right"]))
@@ -232,14 +218,14 @@ def test_assembly_mode_change_follows_the_paper_route(asym, route):
 
 def test_assembly_mode_change_closes_loops_and_stays_nonsingular(asym, route):
     """At every sample: loops closed to 1e-10, classify's direct margin above the stated tolerance."""
-    assert route.path.tol == M.MODE_CHANGE_TOL
+    assert route.path.tol == pm.MODE_CHANGE_TOL
     for k in range(route.path.n_samples):
         q = route.path.q[k]
         assert np.max(np.abs(asym.closure_residual(q))) <= 1e-10
         np.testing.assert_allclose(asym.actuator_positions(q), route.path.actuators[k], atol=1e-12)
         report = classify(asym, q)
-        assert report.direct_margin > M.MODE_CHANGE_TOL
-        assert report.constraint_margin > M.MODE_CHANGE_TOL
+        assert report.direct_margin > pm.MODE_CHANGE_TOL
+        assert report.constraint_margin > pm.MODE_CHANGE_TOL
         assert report.direct_margin == pytest.approx(route.path.direct_margin[k], rel=1e-9)
         assert _rank(_paper_jx(asym, q)) == 3
     assert route.path.min_direct_margin > 0.02
@@ -263,15 +249,15 @@ def test_each_sub_mechanism_passes_its_own_zero(asym, route):
         assert gap == pytest.approx(LENGTHS_2015[a] + LENGTHS_2015[b], abs=1e-9)
         assert c.sub_direct_margin < 1e-12
         assert c.redundancy_margin < 1e-12
-        assert c.direct_margin > M.MODE_CHANGE_TOL
+        assert c.direct_margin > pm.MODE_CHANGE_TOL
         assert abs(c.x[2]) > math.radians(20.0)  # the plate is tilted, so the other pair holds it
 
 
 def test_3d4m_can_change_assembly_mode():
     """The 2011 3D4M (equal rods, redundant) has the same graph and also crosses without singularity."""
     mech = preset("harada2011_3d4m")
-    plan = M.plan_assembly_mode_change(mech)
-    assert plan.ok and plan.visited == M.PAPER_ASSEMBLY_ROUTE
+    plan = pm.plan_assembly_mode_change(mech)
+    assert plan.ok and plan.visited == pm.PAPER_ASSEMBLY_ROUTE
     assert plan.graph.singular_modes == ((0, 0),)
     assert plan.path.min_direct_margin > 0.01
 
@@ -279,20 +265,22 @@ def test_3d4m_can_change_assembly_mode():
 def test_3d3m_cannot_change_assembly_mode():
     """The non-redundant 3D3M is direct-singular at [0 +] and [0 -]: no route avoids singular modes."""
     mech = preset("harada2011_3d3m")
-    graph = M.assembly_mode_graph(mech)
+    graph = pm.assembly_mode_graph(mech)
     assert set(graph.singular_modes) == {(0, 1), (0, -1), (0, 0)}
     for mode in ((0, 1), (0, -1)):
         assert _rank(_paper_jx(mech, graph.node(mode).q, legs=(1, 2, 4))) == 2
     assert graph.routes((1, 1), (-1, -1)) == []
     with pytest.raises(SingularConfiguration, match=r"no route from \[\+ \+\] to \[- -\] avoids"):
-        M.plan_assembly_mode_change(mech, graph=graph)
+        pm.plan_assembly_mode_change(mech, graph=graph)
 
 
 # ------------------------------------------------------------------ working-mode change
+
+
 def test_working_mode_change_visits_the_paper_modes(asym, flip):
     """(- + - +) -> (- + 0 +) -> (- + + +), plate back at its start pose, never direct-singular."""
-    assert flip.route == M.PAPER_WORKING_ROUTE
-    assert flip.visited == M.PAPER_WORKING_ROUTE
+    assert flip.route == pm.PAPER_WORKING_ROUTE
+    assert flip.visited == pm.PAPER_WORKING_ROUTE
     assert flip.ok
     np.testing.assert_allclose(flip.path.x[-1], flip.path.x[0], atol=1e-10)
     assert {tuple(m) for m in flip.assembly_modes} == {(1, 1)}
@@ -300,8 +288,8 @@ def test_working_mode_change_visits_the_paper_modes(asym, flip):
         q = flip.path.q[k]
         assert np.max(np.abs(asym.closure_residual(q))) <= 1e-10
         report = classify(asym, q)
-        assert report.direct_margin > M.MODE_CHANGE_TOL
-        assert report.constraint_margin > M.MODE_CHANGE_TOL
+        assert report.direct_margin > pm.MODE_CHANGE_TOL
+        assert report.constraint_margin > pm.MODE_CHANGE_TOL
 
 
 def test_working_mode_change_crosses_the_actuator_singularity_of_leg_3(asym, flip):
@@ -322,24 +310,26 @@ def test_working_mode_change_crosses_the_actuator_singularity_of_leg_3(asym, fli
 def test_only_the_shorter_rod_can_fold():
     """Leg 4 (0.240 m) cannot fold: leg 3 (0.170 m) cannot reach 0.240 m; the message says so."""
     with pytest.raises(PoseUnreachable, match=r"leg 3 \(l = 0.17 m\) cannot reach the height 0.24 m"):
-        M.plan_working_mode_change(preset(ASYM), leg=4)
+        pm.plan_working_mode_change(preset(ASYM), leg=4)
 
 
 # ------------------------------------------------------------------ complex singularity
+
+
 def test_complex_singularity_with_equal_rods_not_with_the_asymmetric_design(asym, symmetric):
     """Rod 3 perpendicular: equal rods force rod 4 too, c3 = c4, circles coincide, J_phi loses rank."""
     for mech in (symmetric, preset("harada2011_3d4m")):
-        case = M.complex_singularity_check(mech, leg=3)
+        case = pm.complex_singularity_check(mech, leg=3)
         assert case.admits_complex_singularity
         assert "constraint" in classify(mech, case.q_fold).kinds
         c = mech.actuator_positions(case.q_fold)
         assert c[2] == pytest.approx(c[3], abs=1e-15)
         assert case.circles == "coincident"
         assert _rank(mech.closure_jacobian(case.q_fold)) == case.closure_rank == mech.nv - mech.mobility - 1
-    case = M.complex_singularity_check(asym, leg=3)
+    case = pm.complex_singularity_check(asym, leg=3)
     assert not case.admits_complex_singularity
     report = classify(asym, case.q_fold)
-    assert report.kinds == ("inverse",) and report.constraint_margin > M.MODE_CHANGE_TOL
+    assert report.kinds == ("inverse",) and report.constraint_margin > pm.MODE_CHANGE_TOL
     assert _rank(asym.closure_jacobian(case.q_fold)) == asym.nv - asym.mobility
     assert case.slider_gap >= case.min_slider_gap == pytest.approx(0.070, abs=1e-12)
     assert case.circles == "two" and case.coincident == ()
@@ -347,16 +337,16 @@ def test_complex_singularity_with_equal_rods_not_with_the_asymmetric_design(asym
 
 def test_coincident_circles_leave_the_pair_free_with_both_sliders_locked(symmetric):
     """Equal rods, c3 = c4: locking both sliders removes one DOF only; the pair moves on the circle."""
-    case = M.complex_singularity_check(symmetric, leg=3)
+    case = pm.complex_singularity_check(symmetric, leg=3)
     off_fold = [s for s in case.coincident if s.rod_angle < math.pi / 2 - 1e-9]
     assert len(off_fold) == 2
     for sample in off_fold:
         assert sample.slider_gap < 1e-12 and sample.sub_rank == 1
         assert sample.sub_direct_margin < 1e-12
-        assert sample.report.direct_margin > M.MODE_CHANGE_TOL  # the whole mechanism still holds the plate
+        assert sample.report.direct_margin > pm.MODE_CHANGE_TOL  # the whole mechanism still holds the plate
     # rebuild the 70 deg configuration by hand and move it with sliders 3 and 4 locked
     th = math.radians(30.0)
-    x_pair = M.prrrp_state(symmetric, symmetric.q_ref).pairs[1][0]
+    x_pair = pm.prrrp_state(symmetric, symmetric.q_ref).pairs[1][0]
     h = 0.240 * math.sin(math.radians(70.0))
     q = _eq6_config(
         symmetric, (x_pair - RT * math.cos(th), h - RT * math.sin(th), th), (-1, 1, -1, -1), (0.240,) * 4
@@ -370,49 +360,20 @@ def test_coincident_circles_leave_the_pair_free_with_both_sliders_locked(symmetr
     pin.updateFramePlacements(symmetric.model, data)
     fid = symmetric.model.getFrameId("plate_right")
     v_pair = pin.getFrameJacobian(symmetric.model, data, fid, pin.LOCAL_WORLD_ALIGNED)[:2] @ motion
-    rod = M.prrrp_state(symmetric, q).rods[2][:2]
+    rod = pm.prrrp_state(symmetric, q).rods[2][:2]
     assert np.linalg.norm(v_pair) > 1e-3 and abs(v_pair @ rod) < 1e-12  # tangent to the circle
 
 
 def test_symmetric_working_mode_change_runs_into_the_complex_singularity(symmetric):
     """With equal rods the flip of leg 3 drags leg 4 through the fold too: constraint margin collapses."""
-    plan = M.plan_working_mode_change(symmetric, leg=3)
+    plan = pm.plan_working_mode_change(symmetric, leg=3)
     assert not plan.ok
     assert plan.path.min_constraint_margin < 1e-6
-    assert plan.visited[-1] != M.PAPER_WORKING_ROUTE[-1]
+    assert plan.visited[-1] != pm.PAPER_WORKING_ROUTE[-1]
     assert plan.visited[-1][3] == -1  # leg 4 flipped as well
 
 
-# ------------------------------------------------------------------ generic part
-def test_track_actuator_path_on_the_fivebar_round_trip():
-    """Generic continuation: task path -> actuators (IK), actuators -> configurations (FK) agree."""
-    mech = preset("fivebar")
-    data = mech.model.createData()
-    pin.framesForwardKinematics(mech.model, data, mech.q_ref)
-    task = mech.task_compiled
-    start = task.pose_from_data(data)
-    assert task.dofs == ("x", "y")
-    targets = start + np.outer(np.linspace(0.0, 1.0, 21), [0.02, -0.01])
-    qs = M.follow_targets(mech, mech.q_ref, task_dofs=task.dofs, task_values=targets)
-    c = np.array([mech.actuator_positions(q) for q in qs])
-    path = M.track_actuator_path(mech, c, mech.q_ref)
-    for q_ik, q_fk in zip(qs, path.q, strict=True):
-        np.testing.assert_allclose(q_fk, q_ik, atol=1e-9)
-    np.testing.assert_allclose(path.x, targets, atol=1e-10)
-    assert path.max_residual <= 1e-10
-    assert np.all(path.redundancy_margin == 0.0)  # non-redundant
-
-
-def test_redundancy_margin_is_the_worst_single_slider_removal(asym):
-    """redundancy_margin = min over k of sigma_min/sigma_max of C without row k (2015 reference)."""
-    C = closed_chain_jacobians(asym, asym.q_ref).C
-    expected = min(
-        np.linalg.svd(np.delete(C, k, 0), compute_uv=False)[-1]
-        / np.linalg.svd(np.delete(C, k, 0), compute_uv=False)[0]
-        for k in range(4)
-    )
-    assert M.redundancy_margin(asym, asym.q_ref) == pytest.approx(expected, rel=1e-12)
-    assert expected > 1e-3
+# ------------------------------------------------------------------ results and input checks
 
 
 def test_results_serialise_to_strict_json(asym, graph, route, flip, symmetric):
@@ -421,10 +382,10 @@ def test_results_serialise_to_strict_json(asym, graph, route, flip, symmetric):
         graph,
         route,
         flip,
-        M.complex_singularity_check(symmetric),
-        M.prrrp_layout(asym),
-        M.prrrp_state(preset("harada2011_3d3m"), preset("harada2011_3d3m").q_ref),
-        M.pair_solutions(0.0, 0.3, 0.24, 0.17),
+        pm.complex_singularity_check(symmetric),
+        pm.prrrp_layout(asym),
+        pm.prrrp_state(preset("harada2011_3d3m"), preset("harada2011_3d3m").q_ref),
+        pm.pair_solutions(0.0, 0.3, 0.24, 0.17),
     ):
         json.dumps(obj.to_dict(), allow_nan=False)
 
@@ -432,16 +393,16 @@ def test_results_serialise_to_strict_json(asym, graph, route, flip, symmetric):
 def test_bad_input_is_refused_with_clear_messages(asym, graph):
     """Wrong mechanism, route, start or shapes raise InvalidInput naming the problem."""
     with pytest.raises(InvalidInput, match=r"fourbar is not a 2-PRRRP"):
-        M.prrrp_layout(preset("fourbar"))
+        pm.prrrp_layout(preset("fourbar"))
     bad_route = [(1, 1), (0, 0), (-1, -1)]
     with pytest.raises(InvalidInput, match=r"route passes the singular modes \['\[0 0\]'\]"):
-        M.plan_assembly_mode_change(asym, route=bad_route, graph=graph)
+        pm.plan_assembly_mode_change(asym, route=bad_route, graph=graph)
     with pytest.raises(InvalidInput, match=r"route step \[\+ \+\] -> \[- -\] is not an edge"):
-        M.plan_assembly_mode_change(asym, route=[(1, 1), (-1, -1)], graph=graph)
+        pm.plan_assembly_mode_change(asym, route=[(1, 1), (-1, -1)], graph=graph)
     on_stator = graph.node((1, 0)).q
     with pytest.raises(InvalidInput, match=r"start configuration is in \[\+ 0\]"):
-        M.plan_assembly_mode_change(asym, on_stator, graph=graph)
+        pm.plan_assembly_mode_change(asym, on_stator, graph=graph)
     with pytest.raises(InvalidInput, match=r"actuators must be finite with shape \(N, 4\)"):
-        M.track_actuator_path(asym, np.zeros((3, 2)), asym.q_ref)
+        track_actuator_path(asym, np.zeros((3, 2)), asym.q_ref)
     with pytest.raises(InvalidInput, match=r"actuators must be finite"):
-        M.track_actuator_path(asym, np.full((3, 4), np.nan), asym.q_ref)
+        track_actuator_path(asym, np.full((3, 4), np.nan), asym.q_ref)
