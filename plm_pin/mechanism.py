@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from ._checks import as_vector
 from .description.sidecar import Sidecar, TaskSpec
 from .exceptions import ClosureNotSatisfied, InvalidInput
 from .kinematics import closures as _closures
@@ -172,13 +173,7 @@ class Mechanism:
         Raises:
             InvalidInput: on a wrong shape or a non-finite entry.
         """
-        arr = np.asarray(q, dtype=float)
-        if arr.shape != (self.nq,):
-            raise InvalidInput(f"{name} must have shape ({self.nq},), got {arr.shape}")
-        if not np.all(np.isfinite(arr)):
-            bad = np.flatnonzero(~np.isfinite(arr)).tolist()
-            raise InvalidInput(f"{name} has non-finite entries at indices {bad}")
-        return arr
+        return as_vector(q, self.nq, name)
 
     # ---------------------------------------------------------- closures
     def closure_residual(self, q: Any) -> np.ndarray:

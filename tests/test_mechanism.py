@@ -165,3 +165,10 @@ def test_drive_inertia_is_reflected_into_the_armature(tmp_path):
     assert expected == pytest.approx(0.4737410112522892, rel=1e-15)
     assert mech.model.armature[mech.actuators[0].idx_v] == pytest.approx(expected, rel=1e-15)
     assert mech.actuators[0].reflected_inertia == pytest.approx(expected, rel=1e-15)
+
+
+def test_non_numeric_configuration_is_refused():
+    """A configuration holding text is refused with InvalidInput, not numpy's ValueError."""
+    mech = preset("fourbar")
+    with pytest.raises(plm_pin.InvalidInput, match=r"q must be 3 numbers"):
+        mech.closure_residual(["a", "b", "c"])

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from .._checks import as_vector
 from ..description.sidecar import TASK_DOFS
-from ..exceptions import InvalidInput
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -135,14 +135,4 @@ def rpy_rates(rpy: np.ndarray, omega: np.ndarray) -> np.ndarray:
 
 def check_task_vector(x: object, size: int, name: str = "x") -> np.ndarray:
     """Return ``x`` as a float array of shape (size,); refuse non-numbers, wrong shapes, non-finite values."""
-    try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInput(f"{name} must be {size} numbers: {exc}") from None
-    if arr.shape != (size,):
-        raise InvalidInput(f"{name} must have shape ({size},), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise InvalidInput(
-            f"{name} has non-finite entries at indices {np.flatnonzero(~np.isfinite(arr)).tolist()}"
-        )
-    return arr
+    return as_vector(x, size, name)
