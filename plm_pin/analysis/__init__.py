@@ -1,0 +1,33 @@
+"""Analyses over the workspace: manipulability, workspace maps and singular loci."""
+
+from .manipulability import (
+    METRICS,
+    Manipulability,
+    manipulability,
+    manipulability_at,
+    manipulability_from_jacobians,
+)
+from .singular_loci import (
+    SingularPoint,
+    signed_singularity_function,
+    singular_loci,
+    singular_points,
+    singular_points_along,
+)
+from .workspace import WorkspaceSlice, workspace_map, workspace_sweep
+
+__all__ = [
+    "METRICS",
+    "Manipulability",
+    "SingularPoint",
+    "WorkspaceSlice",
+    "manipulability",
+    "manipulability_at",
+    "manipulability_from_jacobians",
+    "signed_singularity_function",
+    "singular_loci",
+    "singular_points",
+    "singular_points_along",
+    "workspace_map",
+    "workspace_sweep",
+]

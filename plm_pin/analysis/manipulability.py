@@ -1,0 +1,216 @@
+r"""Yoshikawa manipulability and condition number of the actuator Jacobian :math:`J_{ce}`.
+
+Harada 2011 eqs. (12)-(13): with :math:`\dot c = J_{ce} \dot x`
+(:attr:`plm_pin.kinematics.ClosedChainJacobians.J_ce`, the paper's
+:math:`J_c^{-1} J_e`),
+
+.. math:: w = \sqrt{\det(J_{ce}^T J_{ce})} = \prod_i \sigma_i(J_{ce}),
+          \qquad \kappa = \sigma_{max}(J_{ce}) / \sigma_{min}(J_{ce}).
+
+For any mechanism, :math:`J_{ce} = C T^{-1}` with :math:`T = J_x N` and :math:`C = S_a N`,
+so :math:`w = \sqrt{\det(C^T C)} / |\det T|`: it vanishes at a direct (type 2)
+singularity (:math:`C` loses rank) and is infinite at an inverse (type 1) one (:math:`T`
+loses rank), and neither it nor :math:`\kappa` depends on the basis :math:`N`.
+
+Units: the column ``j`` of :math:`J_{ce}` is in actuator units per unit of task coordinate
+``j`` (m/m, m/rad for linear actuators and an x-y-theta task), so :math:`w` carries the
+product of the column units (m/rad for Harada's tables) and :math:`\kappa` depends on the
+unit of length whenever the task mixes translations and rotations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..exceptions import InvalidInput, SingularConfiguration
+from ..kinematics.inverse import inverse_kinematics
+from ..kinematics.jacobians import ClosedChainJacobians, closed_chain_jacobians
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+INVERSE_RTOL = 1e-12
+r""":math:`T` is singular (J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL times its largest.
+
+The threshold of :attr:`plm_pin.kinematics.ClosedChainJacobians.J_ce`.
+"""
+
+METRICS: tuple[str, ...] = (
+    "manipulability",
+    "condition_number",
+    "constraint_margin",
+    "inverse_margin",
+    "direct_margin",
+)
+"""Names of the per-pose metrics of workspace maps, in this order."""
+
+
+@dataclass(frozen=True)
+class Manipulability:
+    r"""Manipulability of a mechanism at one configuration (Harada 2011 eq. (13)).
+
+    Attributes:
+        w: :math:`\sqrt{\det(J_{ce}^T J_{ce})}` [product of the column units of J_ce: m/rad
+            for linear actuators and an x-y-theta task]; 0 at a direct singularity, inf at
+            an inverse one.
+        condition_number: :math:`\sigma_{max} / \sigma_{min}` of J_ce [-] (depends on the unit
+            of length when the task mixes translations and rotations); inf at a singularity.
+        singular_values: singular values of J_ce, descending [actuator units per task unit],
+            shape (n_task,); NaN at an inverse singularity, where J_ce is undefined.
+        J_ce: actuator Jacobian, shape (n_act, n_task); None at an inverse singularity.
+        inverse_singular: whether :math:`T = J_x N` is singular (J_ce undefined).
+    """
+
+    w: float
+    condition_number: float
+    singular_values: np.ndarray
+    J_ce: np.ndarray | None
+    inverse_singular: bool
+
+    @property
+    def inverse_condition(self) -> float:
+        r""":math:`1 / \kappa` in [0, 1]: 0 at a singularity, 1 when isotropic [-]."""
+        return 0.0 if not np.isfinite(self.condition_number) else 1.0 / self.condition_number
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON (inf written as the string 'inf')."""
+
+        def num(v: float) -> float | str:
+            return v if np.isfinite(v) else str(v)
+
+        return {
+            "w": num(self.w),
+            "condition_number": num(self.condition_number),
+            "singular_values": [num(float(s)) for s in self.singular_values],
+            "J_ce": None if self.J_ce is None else self.J_ce.tolist(),
+            "inverse_singular": self.inverse_singular,
+        }
+
+
+def manipulability_from_jacobians(jac: ClosedChainJacobians) -> Manipulability:
+    """Manipulability from Jacobians already computed (see :func:`manipulability`)."""
+    T, C = jac.T, jac.C
+    if T.shape[0] != T.shape[1]:
+        raise InvalidInput(
+            f"the task has {T.shape[0]} coordinates but the mechanism has {T.shape[1]} DOF; "
+            "manipulability needs as many task coordinates as DOF"
+        )
+    sT = np.linalg.svd(T, compute_uv=False)
+    k = T.shape[0]
+    if sT[-1] <= INVERSE_RTOL * sT[0]:
+        return Manipulability(np.inf, np.inf, np.full(k, np.nan), None, True)
+    J_ce = np.linalg.solve(T.T, C.T).T  # C T^-1, (n_act, n_task)
+    s = np.linalg.svd(J_ce, compute_uv=False)
+    cond = float(s[0] / s[-1]) if s[-1] > 0.0 else np.inf
+    return Manipulability(float(np.prod(s)), cond, s, J_ce, False)
+
+
+def manipulability(mech: Mechanism, q: Any, *, raise_if_singular: bool = False) -> Manipulability:
+    """Yoshikawa manipulability and condition number of :math:`J_{ce}` at configuration ``q``.
+
+    Args:
+        mech: the mechanism (its task must have as many coordinates as it has DOF).
+        q: assembled configuration, shape (nq,).
+        raise_if_singular: raise at an inverse (type 1) singularity instead of returning
+            ``w = inf`` flagged ``inverse_singular``.
+
+    Returns:
+        The manipulability.
+
+    Raises:
+        SingularConfiguration: when ``raise_if_singular`` and :math:`T` is singular.
+        InvalidInput: malformed ``q``, no task, or a task size different from the DOF.
+    """
+    result = manipulability_from_jacobians(closed_chain_jacobians(mech, q))
+    if raise_if_singular and result.inverse_singular:
+        raise SingularConfiguration(
+            f"{mech.name}: inverse-kinematics (type 1) singular configuration: J_ce is undefined"
+        )
+    return result
+
+
+def manipulability_at(
+    mech: Mechanism,
+    x: Any,
+    guess: Any = None,
+    *,
+    mode: tuple[int, ...] | None = None,
+    raise_if_singular: bool = False,
+) -> Manipulability:
+    """Manipulability at task pose ``x`` [m, rad]: inverse kinematics, then :func:`manipulability`.
+
+    Args:
+        mech: the mechanism.
+        x: task coordinates [m, rad], shape (n_task,).
+        guess: starting configuration of the inverse kinematics (default: reference).
+        mode: working mode to use (default: the guess's).
+        raise_if_singular: see :func:`manipulability`.
+
+    Raises:
+        PoseUnreachable: when ``x`` cannot be reached.
+    """
+    sol = inverse_kinematics(mech, x, guess, mode=mode)
+    return manipulability(mech, sol.q, raise_if_singular=raise_if_singular)
+
+
+def _margins(M: np.ndarray) -> np.ndarray:
+    r"""Batched :math:`\sigma_{min} / \sigma_{max}` of matrices ``M`` (b, r, c), shape (b,)."""
+    if min(M.shape[1:]) == 0:
+        return np.ones(M.shape[0])
+    s = np.linalg.svd(M, compute_uv=False)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(s[:, 0] > 0.0, s[:, -1] / s[:, 0], 0.0)
+
+
+def batch_metrics(J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mobility: int) -> dict:
+    """Manipulability, condition number and singularity margins of a batch of configurations.
+
+    The batched counterpart of :func:`manipulability` and
+    :func:`plm_pin.kinematics.classify`, from the closure and task Jacobians.
+
+    Args:
+        J_phi: closure Jacobians, shape (b, m, nv).
+        J_x: task Jacobians, shape (b, n_task, nv).
+        actuated_v: velocity indices of the actuators, shape (n_act,).
+        mobility: DOF of the mechanism (= n_task).
+
+    Returns:
+        ``{name: (b,) array}`` for every name of :data:`METRICS`.
+    """
+    b, m, nv = J_phi.shape
+    rank = nv - mobility
+    if m:
+        _, s_phi, Vt = np.linalg.svd(J_phi)
+        N = np.swapaxes(Vt[:, rank:, :], 1, 2)  # (b, nv, mobility)
+        if rank > 0:
+            with np.errstate(invalid="ignore", divide="ignore"):
+                constraint = np.where(s_phi[:, 0] > 0.0, s_phi[:, rank - 1] / s_phi[:, 0], 1.0)
+        else:
+            constraint = np.ones(b)
+    else:
+        N = np.broadcast_to(np.eye(nv), (b, nv, nv))
+        constraint = np.ones(b)
+    T = J_x @ N  # (b, k, mobility)
+    C = N[:, actuated_v, :]  # (b, n_act, mobility)
+    sT = np.linalg.svd(T, compute_uv=False)
+    inverse = np.where(sT[:, 0] > 0.0, sT[:, -1] / np.where(sT[:, 0] > 0.0, sT[:, 0], 1.0), 0.0)
+    direct = _margins(C)
+    w = np.full(b, np.inf)
+    cond = np.full(b, np.inf)
+    ok = sT[:, -1] > INVERSE_RTOL * sT[:, 0]
+    if np.any(ok):
+        J_ce = np.swapaxes(np.linalg.solve(np.swapaxes(T[ok], 1, 2), np.swapaxes(C[ok], 1, 2)), 1, 2)
+        s = np.linalg.svd(J_ce, compute_uv=False)
+        w[ok] = np.prod(s, axis=1)
+        with np.errstate(divide="ignore"):
+            cond[ok] = np.where(s[:, -1] > 0.0, s[:, 0] / np.where(s[:, -1] > 0.0, s[:, -1], 1.0), np.inf)
+    return {
+        "manipulability": w,
+        "condition_number": cond,
+        "constraint_margin": constraint,
+        "inverse_margin": inverse,
+        "direct_margin": direct,
+    }

@@ -1,0 +1,497 @@
+r"""Singular configurations located along paths and over slices of the workspace, by root finding.
+
+Along a path :math:`x(t)` of task poses, the inverse kinematics is solved at samples by
+continuation (the working mode of the first solved sample is kept, as in
+:mod:`plm_pin.analysis.workspace`), then each singularity is refined to ``xtol`` in
+:math:`t`:
+
+- **non-redundant** mechanisms (as many actuators as DOF): sign changes of
+
+  .. math:: g = \det T \, \det C, \qquad T = J_x N, \quad C = S_a N,
+
+  which vanishes at inverse (type 1) and direct (type 2) singularities, and does not
+  depend on the null-space basis :math:`N` (a change of basis :math:`N Q`,
+  :math:`Q` orthogonal, multiplies it by :math:`\det(Q)^2 = 1`); :math:`g` has the sign of
+  :math:`\det J_{ce}`. Roots are refined by :func:`scipy.optimize.brentq`. A double root
+  (tangency without a sign change) is not detected.
+- **redundant** mechanisms: :math:`C` is tall, its rank drop is not a sign change, so
+  the local minima of the direct, inverse and constraint margins below ``near`` are
+  refined by bounded minimisation (:func:`scipy.optimize.minimize_scalar`); each result
+  says whether its margin reaches zero (at most ``tol``).
+- **boundaries**: where the samples leave the reachable set of the working mode, the
+  boundary is located by bisection; a leg folds there (its two branches meet), which is
+  an inverse singularity of that leg (Harada 2011 eq. (9), :math:`z_i^T a = 0`).
+
+A 2-D slice is handled line by line (:func:`singular_loci`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+from scipy.optimize import brentq, minimize_scalar
+
+from ..exceptions import InvalidInput, PoseUnreachable
+from ..kinematics.forward import task_pose
+from ..kinematics.inverse import IK_TOL, inverse_kinematics
+from ..kinematics.jacobians import closed_chain_jacobians, require_task
+from ..kinematics.singularity import SINGULARITY_TOL, SingularityReport, classify
+from ._continuation import IKEvaluator, compatible, solve_poses
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+XTOL = 1e-12
+"""Default tolerance on the path parameter of a located singularity [unit of t]."""
+
+NEAR = 1e-2
+"""Default margin below which a local minimum is refined (redundant mechanisms)."""
+
+METHODS: tuple[str, ...] = ("sign_change", "minimum", "boundary")
+
+
+@dataclass(frozen=True)
+class SingularPoint:
+    """A singular (or nearly singular) configuration found on a path.
+
+    Attributes:
+        parameter: path parameter of the point [unit of t: m or rad along a task coordinate].
+        x: task pose [m, rad], shape (n_task,).
+        q: configuration, shape (nq,).
+        kind: ``"inverse"``, ``"direct"`` or ``"constraint"``: the kind whose margin is
+            smallest at the point.
+        method: ``"sign_change"`` (root of det T det C), ``"minimum"`` (minimised margin) or
+            ``"boundary"`` (end of the reachable set of the working mode).
+        reaches_zero: whether the margin of ``kind`` is at most ``report.tol`` (always
+            True for sign changes).
+        report: the singularity margins at ``q``.
+        bracket: final bracket ``(t_lo, t_hi)`` holding the point [unit of t].
+    """
+
+    parameter: float
+    x: np.ndarray
+    q: np.ndarray
+    kind: str
+    method: str
+    reaches_zero: bool
+    report: SingularityReport
+    bracket: tuple[float, float]
+
+    @property
+    def margin(self) -> float:
+        """Margin of ``kind`` at the point [-]."""
+        return float(getattr(self.report, f"{self.kind}_margin"))
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON."""
+        return {
+            "parameter": self.parameter,
+            "x": self.x.tolist(),
+            "q": self.q.tolist(),
+            "kind": self.kind,
+            "method": self.method,
+            "reaches_zero": self.reaches_zero,
+            "report": self.report.to_dict(),
+            "bracket": list(self.bracket),
+        }
+
+
+def signed_singularity_function(mech: Mechanism, q: Any) -> float:
+    r""":math:`\det(J_x N) \det(S_a N)`: zero at inverse and direct singularities, basis-independent.
+
+    Needs as many actuators and task coordinates as DOF.
+
+    Raises:
+        InvalidInput: for a redundant mechanism or a task of another size.
+    """
+    jac = closed_chain_jacobians(mech, q)
+    if jac.T.shape[0] != jac.T.shape[1] or jac.C.shape[0] != jac.C.shape[1]:
+        raise InvalidInput(
+            f"{mech.name}: det(T) det(C) needs as many task coordinates and actuators as DOF "
+            f"({mech.mobility}); T is {jac.T.shape}, C is {jac.C.shape}"
+        )
+    return float(np.linalg.det(jac.T) * np.linalg.det(jac.C))
+
+
+class _PathSolver:
+    """Inverse kinematics on a path, from the solved samples around the asked parameter."""
+
+    def __init__(
+        self,
+        mech: Mechanism,
+        path: Callable[[float], np.ndarray],
+        target_mode: tuple[int, ...],
+        tol: float,
+    ) -> None:
+        self.mech = mech
+        self.ev = IKEvaluator.from_mechanism(mech)
+        self.path = path
+        self.target = target_mode
+        self.tol = tol
+
+    def solve(
+        self,
+        t: float,
+        t_a: float,
+        q_a: np.ndarray,
+        t_b: float,
+        q_b: np.ndarray | None,
+        fallback: bool = True,
+    ) -> np.ndarray | None:
+        """Configuration at ``path(t)`` in the working mode, started between two solved samples.
+
+        Newton from the interpolated configuration, then (``fallback``) the general solver.
+        """
+        model = self.mech.model
+        x = self.path(t)
+        if q_b is None or t_b == t_a:
+            start = q_a
+        else:
+            s = (t - t_a) / (t_b - t_a)
+            start = pin.integrate(model, q_a, s * pin.difference(model, q_a, q_b))
+        q = self.ev.solve(x, start, self.tol)
+        if q is None and not fallback:
+            return None
+        if q is None:
+            try:
+                general = inverse_kinematics(self.mech, x, start, tol=self.tol).q
+            except PoseUnreachable:
+                return None
+            q = self.ev.solve(x, np.asarray(general), self.tol)  # leaves the Jacobians in the data
+            if q is None:
+                return None
+        if not compatible(self.ev.mode(*self.ev.jacobians()), self.target):
+            return None
+        return np.asarray(q)
+
+
+def _point(
+    mech: Mechanism,
+    path: Callable[[float], np.ndarray],
+    t: float,
+    q: np.ndarray,
+    method: str,
+    bracket: tuple[float, float],
+    tol: float,
+    kind: str | None = None,
+) -> SingularPoint:
+    report = classify(mech, q, tol)
+    margins = {
+        "constraint": report.constraint_margin,
+        "inverse": report.inverse_margin,
+        "direct": report.direct_margin,
+    }
+    if kind is None:
+        kind = min(margins, key=lambda k: margins[k])
+    reaches = True if method == "sign_change" else margins[kind] <= tol
+    return SingularPoint(
+        float(t), np.asarray(path(t), dtype=float), np.asarray(q), kind, method, reaches, report, bracket
+    )
+
+
+def singular_points(
+    mech: Mechanism,
+    path: Callable[[float], Any],
+    t: Any,
+    *,
+    guess: Any = None,
+    mode: tuple[int, ...] | None = None,
+    xtol: float = XTOL,
+    tol: float = SINGULARITY_TOL,
+    near: float = NEAR,
+    boundaries: bool = True,
+    ik_tol: float = IK_TOL,
+) -> list[SingularPoint]:
+    """Singularities on the path ``x = path(t)``, located between the samples ``t``.
+
+    Args:
+        mech: the mechanism (its task must have as many coordinates as it has DOF).
+        path: task pose [m, rad] as a function of the parameter.
+        t: increasing samples of the parameter, shape (n,); a singularity between two
+            samples is found, two in one interval may be missed.
+        guess: configuration the first sample is solved from (default: reference).
+        mode: working mode to keep (default: the first solved sample's).
+        xtol: tolerance on the located parameter [unit of t].
+        tol: margin at or below which a point counts as singular (``reaches_zero``).
+        near: redundant mechanisms: local minima of a margin below ``near`` are refined.
+        boundaries: also locate where the path leaves the reachable set of the working mode.
+        ik_tol: inverse-kinematics residual tolerance [m, rad].
+
+    Returns:
+        The points, sorted by parameter.
+
+    Raises:
+        InvalidInput: malformed samples or a task whose size differs from the DOF.
+    """
+    task = require_task(mech)
+    if task.size != mech.mobility:
+        raise InvalidInput(
+            f"{mech.name}: the task has {task.size} coordinates but the mechanism has {mech.mobility} DOF; "
+            "singularity location needs as many task coordinates as DOF"
+        )
+    ts = np.asarray(t, dtype=float)
+    if ts.ndim != 1 or ts.size < 2 or not np.all(np.isfinite(ts)) or np.any(np.diff(ts) <= 0.0):
+        raise InvalidInput(f"t must be an increasing 1-D array of at least 2 finite samples, got {t!r}")
+
+    def pose(s: float) -> np.ndarray:
+        x = np.asarray(path(s), dtype=float)
+        if x.shape != (task.size,):
+            raise InvalidInput(f"path({s}) must return {task.size} task coordinates, got shape {x.shape}")
+        return x
+
+    poses = np.stack([pose(float(s)) for s in ts])
+    q_guess = mech.q_ref if guess is None else mech.check_q(guess, "guess")
+    state, target = solve_poses(mech, poses, q_guess, mode=mode, tol=ik_tol, workers=1)
+    if target is None:
+        return []
+    solver = _PathSolver(mech, pose, target, ik_tol)
+    reached = state.reached
+    Q = state.q
+    out: list[SingularPoint] = []
+    redundant = mech.n_actuators != mech.mobility
+    if not redundant:
+        g = np.full(ts.size, np.nan)
+        for j in np.flatnonzero(reached).tolist():
+            g[j] = signed_singularity_function(mech, Q[j])
+        for i in range(ts.size - 1):
+            if not (reached[i] and reached[i + 1]):
+                continue
+            if g[i] == 0.0:
+                out.append(_point(mech, pose, ts[i], Q[i], "sign_change", (ts[i], ts[i]), tol))
+                continue
+            if np.sign(g[i]) * np.sign(g[i + 1]) >= 0.0:
+                continue
+            point = _refine_root(mech, solver, pose, ts[i], Q[i], ts[i + 1], Q[i + 1], xtol, tol)
+            if point is not None:
+                out.append(point)
+        if reached[-1] and g[-1] == 0.0:
+            out.append(_point(mech, pose, ts[-1], Q[-1], "sign_change", (ts[-1], ts[-1]), tol))
+    else:
+        margins = {
+            "direct": state.metrics["direct_margin"],
+            "inverse": state.metrics["inverse_margin"],
+            "constraint": state.metrics["constraint_margin"],
+        }
+        for kind, values in margins.items():
+            for i in range(1, ts.size - 1):
+                if not (reached[i - 1] and reached[i] and reached[i + 1]):
+                    continue
+                if not (values[i] <= values[i - 1] and values[i] <= values[i + 1] and values[i] < near):
+                    continue
+                point = _refine_minimum(mech, solver, pose, kind, ts, Q, i, xtol, tol)
+                if point is not None:
+                    out.append(point)
+    if boundaries:
+        for i in range(ts.size - 1):
+            if reached[i] != reached[i + 1]:
+                inside = i if reached[i] else i + 1
+                outside = i + 1 if reached[i] else i
+                point = _refine_boundary(mech, solver, pose, ts[inside], Q[inside], ts[outside], xtol, tol)
+                if point is not None:
+                    out.append(point)
+    out.sort(key=lambda p: p.parameter)
+    return out
+
+
+def _refine_root(
+    mech: Mechanism,
+    solver: _PathSolver,
+    pose: Callable[[float], np.ndarray],
+    t_a: float,
+    q_a: np.ndarray,
+    t_b: float,
+    q_b: np.ndarray,
+    xtol: float,
+    tol: float,
+) -> SingularPoint | None:
+    """Root of det T det C between two solved samples of opposite signs, by Brent's method."""
+    cache: dict[float, np.ndarray] = {}
+
+    def g(s: float) -> float:
+        q = solver.solve(s, t_a, q_a, t_b, q_b)
+        if q is None:
+            raise _Unreached(s)
+        cache[s] = q
+        return signed_singularity_function(mech, q)
+
+    try:
+        root, result = brentq(g, t_a, t_b, xtol=xtol, full_output=True, disp=False)
+    except _Unreached:
+        return None
+    if not result.converged:
+        return None
+    q = cache.get(root)
+    if q is None:
+        q = solver.solve(root, t_a, q_a, t_b, q_b)
+        if q is None:
+            return None
+    return _point(mech, pose, root, q, "sign_change", (t_a, t_b), tol)
+
+
+class _Unreached(Exception):
+    """The inverse kinematics failed inside a bracket."""
+
+
+def _margin_of(mech: Mechanism, q: np.ndarray, kind: str) -> float:
+    report = classify(mech, q)
+    return float(getattr(report, f"{kind}_margin"))
+
+
+def _refine_minimum(
+    mech: Mechanism,
+    solver: _PathSolver,
+    pose: Callable[[float], np.ndarray],
+    kind: str,
+    ts: np.ndarray,
+    Q: np.ndarray,
+    i: int,
+    xtol: float,
+    tol: float,
+) -> SingularPoint | None:
+    """Minimum of one margin between the samples around sample ``i``, by bounded Brent minimisation."""
+    cache: dict[float, np.ndarray] = {}
+
+    def f(s: float) -> float:
+        j = i - 1 if s < ts[i] else i
+        q = solver.solve(s, ts[j], Q[j], ts[j + 1], Q[j + 1])
+        if q is None:
+            return np.inf
+        cache[s] = q
+        return _margin_of(mech, q, kind)
+
+    result = minimize_scalar(
+        f, bounds=(ts[i - 1], ts[i + 1]), method="bounded", options={"xatol": xtol, "maxiter": 500}
+    )
+    s = float(result.x)
+    q = cache.get(s)
+    if q is None or not np.isfinite(result.fun):
+        return None
+    return _point(mech, pose, s, q, "minimum", (float(ts[i - 1]), float(ts[i + 1])), tol, kind)
+
+
+def _refine_boundary(
+    mech: Mechanism,
+    solver: _PathSolver,
+    pose: Callable[[float], np.ndarray],
+    t_in: float,
+    q_in: np.ndarray,
+    t_out: float,
+    xtol: float,
+    tol: float,
+) -> SingularPoint | None:
+    """Last reachable parameter between a reachable and an unreachable sample, by bisection."""
+    lo, hi = t_in, t_out
+    q_lo = q_in
+    while abs(hi - lo) > xtol:
+        mid = 0.5 * (lo + hi)
+        if mid in (lo, hi):
+            break
+        q = solver.solve(mid, lo, q_lo, lo, None, fallback=False)
+        if q is None:
+            hi = mid
+        else:
+            lo, q_lo = mid, q
+    bracket = (min(lo, hi), max(lo, hi))
+    return _point(mech, pose, lo, q_lo, "boundary", bracket, tol)
+
+
+def _base_pose(mech: Mechanism, pose: Any, guess: Any) -> np.ndarray:
+    """The pose giving the fixed coordinates: ``pose``, else the guess's (or reference) pose."""
+    task = require_task(mech)
+    if pose is None:
+        return task_pose(mech, mech.q_ref if guess is None else guess)
+    base = np.asarray(pose, dtype=float)
+    if base.shape != (task.size,) or not np.all(np.isfinite(base)):
+        raise InvalidInput(
+            f"pose must hold {task.size} finite task coordinates {list(task.dofs)}, got {pose!r}"
+        )
+    return base
+
+
+def singular_points_along(
+    mech: Mechanism,
+    axis: str,
+    values: Any,
+    pose: Any = None,
+    **options: Any,
+) -> list[SingularPoint]:
+    """Singularities along one task coordinate, the others fixed (a 1-D slice).
+
+    Args:
+        mech: the mechanism.
+        axis: the varied task coordinate, e.g. ``"rz"``.
+        values: increasing samples of it [m or rad].
+        pose: task pose giving the fixed coordinates (default: the guess's or reference pose).
+        **options: passed to :func:`singular_points` (``guess``, ``mode``, ``xtol``, ``tol``, ...).
+
+    Returns:
+        The points; ``parameter`` is the value of ``axis`` [m or rad].
+    """
+    task = require_task(mech)
+    if axis not in task.dofs:
+        raise InvalidInput(f"unknown task coordinate {axis!r}; the task's coordinates are {list(task.dofs)}")
+    guess = options.get("guess")
+    base = (
+        task_pose(mech, mech.q_ref if guess is None else guess) if pose is None else np.asarray(pose, float)
+    )
+    if base.shape != (task.size,) or not np.all(np.isfinite(base)):
+        raise InvalidInput(
+            f"pose must hold {task.size} finite task coordinates {list(task.dofs)}, got {pose!r}"
+        )
+    k = task.dofs.index(axis)
+
+    def path(s: float) -> np.ndarray:
+        x = base.copy()
+        x[k] = s
+        return x
+
+    return singular_points(mech, path, values, **options)
+
+
+def singular_loci(
+    mech: Mechanism,
+    axis: str,
+    values: Any,
+    across: str,
+    across_values: Sequence[float],
+    pose: Any = None,
+    **options: Any,
+) -> list[SingularPoint]:
+    r"""Singular curves over a 2-D slice, found line by line along ``axis``.
+
+    For each value of the task coordinate ``across``, the singularities along ``axis``
+    (:func:`singular_points_along`); together they sample the singular curves, e.g. the
+    loci :math:`\theta(y)` of Harada 2011 eq. (11) with ``axis="rz"``, ``across="y"``.
+
+    Args:
+        mech: the mechanism.
+        axis: the coordinate searched along [m or rad].
+        values: increasing samples of ``axis``.
+        across: the coordinate stepped between lines.
+        across_values: its values [m or rad].
+        pose: task pose giving the other coordinates (default: the reference pose).
+        **options: passed to :func:`singular_points`.
+
+    Returns:
+        Every point found, ordered by line then parameter; ``x`` holds both coordinates.
+    """
+    task = require_task(mech)
+    if across not in task.dofs or across == axis:
+        raise InvalidInput(
+            f"across must be another task coordinate than {axis!r} among {list(task.dofs)}, got {across!r}"
+        )
+    guess = options.get("guess")
+    base = (
+        task_pose(mech, mech.q_ref if guess is None else guess) if pose is None else np.asarray(pose, float)
+    )
+    k = task.dofs.index(across)
+    out: list[SingularPoint] = []
+    for v in across_values:
+        line = np.array(base, dtype=float)
+        line[k] = float(v)
+        out.extend(singular_points_along(mech, axis, values, line, **options))
+    return out

@@ -1,0 +1,281 @@
+r"""Manipulability and singularity maps over slices of the workspace.
+
+A *slice* fixes every task coordinate but one (a sweep, e.g. :math:`w(\theta)` at fixed
+x, y as in Harada 2011 Fig. 6) or two (a map, e.g. an x-y grid at fixed :math:`\theta`).
+At every grid pose the inverse kinematics is solved by continuation: each point starts
+from its solved neighbours (extrapolated along the grid line), so the working mode of
+the first solved point (the *seed*) is kept throughout; a point the continuation cannot
+solve in that working mode is marked unreachable (``reachable`` False, metrics NaN)
+instead of raising. "Reachable" therefore means reachable in the seed's working mode
+through the grid, which is what a mechanism moving continuously can do.
+
+The metrics are those of :func:`plm_pin.analysis.manipulability` and
+:func:`plm_pin.kinematics.classify` (the singularity margins), computed in batches.
+
+Cost (``make bench``): about 0.15 ms per pose on one core for the planar 2-PRRRP (one
+Newton step per pose, exact Jacobians, metrics in batches); grids of 20,000 poses or
+more are split in bands of rows solved in parallel processes (``workers``, default all
+CPUs), then joined across the band borders: a 10^5-pose map of ``harada2011_3d4m`` takes
+about 8 s on two cores.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..kinematics.forward import task_pose
+from ..kinematics.inverse import IK_TOL
+from ..kinematics.jacobians import require_task
+from ._continuation import solve_poses
+from .manipulability import METRICS
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+
+@dataclass(frozen=True)
+class WorkspaceSlice:
+    r"""Metrics over a 1-D sweep or a 2-D map of task poses (``ij`` indexing).
+
+    ``a[i, j]`` belongs to the pose whose coordinate ``axes[0]`` is ``values[0][i]`` and
+    ``axes[1]`` is ``values[1][j]``, the others being those of ``pose``. Unreachable
+    points hold NaN (and 0 in ``mode``).
+
+    Attributes:
+        axes: the varied task coordinates, among the task's (``x y z rx ry rz``).
+        values: their grid values [m or rad], one array per axis.
+        pose: the task pose supplying the fixed coordinates [m, rad], shape (n_task,).
+        dofs: names of the task coordinates.
+        reachable: solved in the working mode, shape ``shape``.
+        manipulability: :math:`w = \sqrt{\det(J_{ce}^T J_{ce})}` (Harada 2011 eq. (13)) [product of
+            the column units of J_ce, m/rad for linear actuators and an x-y-theta task]; 0 at a
+            direct singularity, inf at an inverse one.
+        condition_number: :math:`\sigma_{max}/\sigma_{min}` of J_ce [-].
+        constraint_margin: normalised smallest closure singular value at the generic rank [-].
+        inverse_margin: :math:`\sigma_{min}/\sigma_{max}` of :math:`T = J_x N` (type 1) [-].
+        direct_margin: :math:`\sigma_{min}/\sigma_{max}` of :math:`C = S_a N` (type 2) [-].
+        actuators: actuator positions [m or rad], shape ``shape + (n_act,)``.
+        q: configurations, shape ``shape + (nq,)``.
+        mode: working mode of each point (one sign per square leg), shape ``shape + (n_legs,)``.
+        working_mode: the seed's working mode, kept over the slice (None when nothing was reached).
+    """
+
+    axes: tuple[str, ...]
+    values: tuple[np.ndarray, ...]
+    pose: np.ndarray
+    dofs: tuple[str, ...]
+    reachable: np.ndarray
+    manipulability: np.ndarray
+    condition_number: np.ndarray
+    constraint_margin: np.ndarray
+    inverse_margin: np.ndarray
+    direct_margin: np.ndarray
+    actuators: np.ndarray
+    q: np.ndarray
+    mode: np.ndarray
+    working_mode: tuple[int, ...] | None
+
+    def __post_init__(self) -> None:
+        shape = tuple(len(v) for v in self.values)
+        if len(self.axes) != len(self.values) or self.reachable.shape != shape:
+            raise InvalidInput(f"slice arrays of shape {self.reachable.shape} do not match the axes {shape}")
+        for name in (*METRICS, "reachable", "actuators", "q", "mode"):
+            arr = getattr(self, name)
+            if arr.shape[: len(shape)] != shape:
+                raise InvalidInput(f"{name} has shape {arr.shape}, expected {shape} first")
+            arr.setflags(write=False)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Grid shape, one entry per varied coordinate."""
+        return self.reachable.shape
+
+    @property
+    def reachable_fraction(self) -> float:
+        """Fraction of the grid reached [-]."""
+        return float(np.mean(self.reachable))
+
+    def poses(self) -> np.ndarray:
+        """Task pose of every grid point [m, rad], shape ``shape + (n_task,)``."""
+        return _grid_poses(self.pose, self.dofs, self.axes, self.values)
+
+    def metric(self, name: str) -> np.ndarray:
+        """One of :data:`plm_pin.analysis.manipulability.METRICS` by name, shape ``shape``."""
+        if name not in METRICS:
+            raise InvalidInput(f"unknown metric {name!r}; metrics are {list(METRICS)}")
+        return np.asarray(getattr(self, name))
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON (NaN and inf written as strings)."""
+
+        def text(a: np.ndarray) -> object:
+            out = np.asarray(a, dtype=object)
+            bad = ~np.isfinite(np.asarray(a, dtype=float))
+            out[bad] = np.asarray(a, dtype=float)[bad].astype(str)
+            return out.tolist()
+
+        return {
+            "axes": list(self.axes),
+            "values": [v.tolist() for v in self.values],
+            "pose": self.pose.tolist(),
+            "dofs": list(self.dofs),
+            "reachable": self.reachable.tolist(),
+            **{name: text(getattr(self, name)) for name in METRICS},
+            "actuators": text(self.actuators),
+            "mode": self.mode.tolist(),
+            "working_mode": None if self.working_mode is None else list(self.working_mode),
+        }
+
+
+def _grid_poses(
+    pose: np.ndarray, dofs: tuple[str, ...], axes: tuple[str, ...], values: tuple[np.ndarray, ...]
+) -> np.ndarray:
+    shape = tuple(len(v) for v in values)
+    out = np.broadcast_to(pose, (*shape, len(dofs))).copy()
+    grids = np.meshgrid(*values, indexing="ij")
+    for axis, g in zip(axes, grids, strict=True):
+        out[..., dofs.index(axis)] = g
+    return out
+
+
+def _check_axes(mech: Mechanism, axes: Sequence[str], values: Sequence[Any]) -> tuple:
+    task = require_task(mech)
+    dofs = tuple(task.dofs)
+    if task.size != mech.mobility:
+        raise InvalidInput(
+            f"{mech.name}: the task has {task.size} coordinates but the mechanism has {mech.mobility} DOF; "
+            "manipulability maps need as many task coordinates as DOF"
+        )
+    for a in axes:
+        if a not in dofs:
+            raise InvalidInput(f"unknown task coordinate {a!r}; the task's coordinates are {list(dofs)}")
+    if len(set(axes)) != len(axes):
+        raise InvalidInput(f"the varied coordinates must differ, got {list(axes)}")
+    arrays = []
+    for a, v in zip(axes, values, strict=True):
+        arr = np.asarray(v, dtype=float)
+        if arr.ndim != 1 or arr.size == 0:
+            raise InvalidInput(f"values of {a!r} must be a non-empty 1-D array, got shape {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise InvalidInput(f"values of {a!r} hold non-finite entries")
+        arrays.append(arr)
+    return dofs, tuple(arrays)
+
+
+def _slice(
+    mech: Mechanism,
+    axes: tuple[str, ...],
+    values: Sequence[Any],
+    pose: Any,
+    guess: Any,
+    mode: tuple[int, ...] | None,
+    tol: float,
+    workers: int | None,
+) -> WorkspaceSlice:
+    dofs, arrays = _check_axes(mech, axes, values)
+    q_guess = mech.q_ref if guess is None else mech.check_q(guess, "guess")
+    x_guess = task_pose(mech, q_guess)
+    base = x_guess.copy() if pose is None else np.asarray(pose, dtype=float)
+    if base.shape != (len(dofs),) or not np.all(np.isfinite(base)):
+        raise InvalidInput(f"pose must hold {len(dofs)} finite task coordinates {list(dofs)}, got {pose!r}")
+    shape = tuple(len(a) for a in arrays)
+    poses = _grid_poses(base, dofs, axes, arrays)
+    state, target = solve_poses(mech, poses, q_guess, mode=mode, tol=tol, workers=workers)
+    reached = state.reached.reshape(shape)
+    metrics = {
+        name: state.metrics.get(name, np.full(state.reached.size, np.nan)).reshape(shape) for name in METRICS
+    }
+    q = state.q.reshape(*shape, -1)
+    return WorkspaceSlice(
+        axes=axes,
+        values=arrays,
+        pose=base,
+        dofs=dofs,
+        reachable=reached,
+        manipulability=metrics["manipulability"],
+        condition_number=metrics["condition_number"],
+        constraint_margin=metrics["constraint_margin"],
+        inverse_margin=metrics["inverse_margin"],
+        direct_margin=metrics["direct_margin"],
+        actuators=_actuators(mech, q),
+        q=q,
+        mode=np.where(reached[..., None], state.mode.reshape(*shape, -1), 0).astype(np.int8),
+        working_mode=target,
+    )
+
+
+def _actuators(mech: Mechanism, q: np.ndarray) -> np.ndarray:
+    out = np.full((*q.shape[:-1], mech.n_actuators), np.nan)
+    for k, a in enumerate(mech.actuators):
+        if mech.model.joints[a.joint_id].nq == 2:  # unbounded revolute stored as (cos, sin)
+            out[..., k] = np.arctan2(q[..., a.idx_q + 1], q[..., a.idx_q])
+        else:
+            out[..., k] = q[..., a.idx_q]
+    return out
+
+
+def workspace_map(
+    mech: Mechanism,
+    axes: tuple[str, str],
+    values: tuple[Any, Any],
+    pose: Any = None,
+    *,
+    guess: Any = None,
+    mode: tuple[int, ...] | None = None,
+    tol: float = IK_TOL,
+    workers: int | None = None,
+) -> WorkspaceSlice:
+    """Manipulability, condition number, singularity margins and reachability over a 2-D grid.
+
+    Args:
+        mech: the mechanism (its task must have as many coordinates as it has DOF).
+        axes: the two varied task coordinates, e.g. ``("x", "y")``.
+        values: their grid values [m or rad], two 1-D arrays.
+        pose: task pose giving the fixed coordinates (default: the guess's pose) [m, rad].
+        guess: configuration the seed is solved from (default: the reference configuration).
+        mode: working mode to keep (default: the one the seed is solved in from ``guess``).
+        tol: inverse-kinematics residual tolerance [m, rad].
+        workers: processes to use (default: all CPUs for grids of 20,000 poses or more, else 1).
+
+    Returns:
+        The map, arrays of shape ``(len(values[0]), len(values[1]))``.
+
+    Raises:
+        InvalidInput: unknown or repeated axes, malformed values or pose, or a task whose
+            size differs from the mechanism's DOF.
+    """
+    if len(axes) != 2 or len(values) != 2:
+        raise InvalidInput(f"a map varies two task coordinates; got axes {list(axes)}")
+    return _slice(mech, tuple(axes), values, pose, guess, mode, tol, workers)
+
+
+def workspace_sweep(
+    mech: Mechanism,
+    axis: str,
+    values: Any,
+    pose: Any = None,
+    *,
+    guess: Any = None,
+    mode: tuple[int, ...] | None = None,
+    tol: float = IK_TOL,
+) -> WorkspaceSlice:
+    """The metrics of :func:`workspace_map` along one task coordinate, the others fixed.
+
+    Args:
+        mech: the mechanism.
+        axis: the varied task coordinate, e.g. ``"rz"`` for Harada 2011 Fig. 6.
+        values: its values [m or rad], 1-D.
+        pose: task pose giving the fixed coordinates (default: the guess's pose) [m, rad].
+        guess: configuration the seed is solved from (default: the reference configuration).
+        mode: working mode to keep (default: the seed's).
+        tol: inverse-kinematics residual tolerance [m, rad].
+
+    Returns:
+        The sweep, arrays of shape ``(len(values),)``.
+    """
+    return _slice(mech, (axis,), (values,), pose, guess, mode, tol, 1)

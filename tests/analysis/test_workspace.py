@@ -1,0 +1,217 @@
+"""Workspace maps and sweeps: reachability, working mode, metrics against Harada 2011 eqs. (2)-(4)."""
+
+from __future__ import annotations
+
+import json
+import math
+import pickle
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from plm_pin.analysis import manipulability, workspace_map, workspace_sweep
+from plm_pin.analysis._continuation import IKEvaluator
+from plm_pin.exceptions import InvalidInput
+from plm_pin.kinematics import classify, task_pose, working_mode
+from plm_pin.kinematics import closures as kclosures
+from plm_pin.kinematics.task import TaskTarget
+from tests.analysis import paper
+from tests.conftest import preset
+
+L, RT = 0.140, 0.05  # Harada 2011 Table 1
+THETA = math.radians(-20.0)
+
+
+def test_map_matches_paper_inverse_kinematics_and_J_ce():
+    """Over an x-y grid, actuators follow eq. (2) with the (M.5) signs and w follows eqs. (4), (13)."""
+    mech = preset("harada2011_3d4m")
+    xs, ys = np.linspace(-0.06, 0.06, 9), np.linspace(0.03, 0.11, 7)
+    result = workspace_map(mech, ("x", "y"), (xs, ys), (0.0, 0.08, THETA))
+    assert result.reachable.all()
+    for i, x in enumerate(xs):
+        for j, y in enumerate(ys):
+            pose = (x, y, THETA)
+            c = paper.slider_positions(pose, L, RT, (1, 2, 3, 4))
+            np.testing.assert_allclose(result.actuators[i, j], c, atol=1e-10)
+            J = paper.J_ce(pose, c, L, RT, (1, 2, 3, 4))
+            assert result.manipulability[i, j] == pytest.approx(math.sqrt(np.linalg.det(J.T @ J)), rel=1e-9)
+            assert result.condition_number[i, j] == pytest.approx(np.linalg.cond(J), rel=1e-8)
+
+
+def _reachable_eq2(y: float, theta: float) -> bool:
+    """Both plate pairs within reach of their rods: |y -/+ rt sin(theta)| <= l (eq. (2) real)."""
+    return abs(y - RT * math.sin(theta)) <= L and abs(y + RT * math.sin(theta)) <= L
+
+
+def test_reachable_mask_matches_eq2_and_unreachable_points_are_nan():
+    """A y-theta grid crossing the top of the workspace: mask = eq. (2) real; NaN where unreachable."""
+    mech = preset("harada2011_3d4m")
+    ys = 0.052 + 0.01 * np.arange(15)  # 0.052 to 0.192 m
+    thetas = np.radians(np.linspace(-42.5, 42.5, 18))  # 5 deg steps
+    expected = np.array([[_reachable_eq2(y, t) for t in thetas] for y in ys])
+    # no grid point within 1 mm of the boundary, where "reachable" would hinge on the tolerance
+    margin = np.array(
+        [[L - max(abs(y - RT * math.sin(t)), abs(y + RT * math.sin(t))) for t in thetas] for y in ys]
+    )
+    assert np.min(np.abs(margin)) > 1e-3
+    result = workspace_map(mech, ("y", "rz"), (ys, thetas), (0.0, 0.08, 0.0))
+    assert 0 < expected.sum() < expected.size
+    np.testing.assert_array_equal(result.reachable, expected)
+    for name in (
+        "manipulability",
+        "condition_number",
+        "direct_margin",
+        "inverse_margin",
+        "constraint_margin",
+    ):
+        values = result.metric(name)
+        assert np.all(np.isnan(values[~expected])) and np.all(np.isfinite(values[expected]))
+    assert np.all(np.isnan(result.q[~expected])) and np.all(np.isnan(result.actuators[~expected]))
+    assert result.reachable_fraction == pytest.approx(expected.mean())
+
+
+def test_working_mode_is_kept_and_recorded():
+    """Every reached point keeps the seed's working mode, the reference's (kinematics.working_mode)."""
+    mech = preset("harada2011_3d4m")
+    result = workspace_map(
+        mech, ("x", "rz"), (np.linspace(-0.05, 0.05, 8), np.radians(np.linspace(-35, 35, 9)))
+    )
+    assert result.working_mode == working_mode(mech, mech.q_ref)
+    assert np.all(result.mode[result.reachable] == np.array(result.working_mode))
+    for i, j in [(0, 0), (3, 4), (7, 8)]:
+        assert working_mode(mech, result.q[i, j]) == result.working_mode
+    # the same branch as eq. (2) with the (M.5) signs everywhere
+    poses = result.poses()
+    for i, j in np.ndindex(result.shape):
+        c = paper.slider_positions(poses[i, j], L, RT, (1, 2, 3, 4))
+        np.testing.assert_allclose(result.actuators[i, j], c, atol=1e-10)
+
+
+def test_mode_argument_selects_another_branch():
+    """mode= with leg 4 flipped gives slider 4 on the other side of its pair (eq. (2) other sign)."""
+    mech = preset("harada2011_3d3m")
+    base = working_mode(mech, mech.q_ref)
+    flipped = (*base[:-1], -base[-1])
+    thetas = np.radians(np.linspace(-30, 30, 7))
+    result = workspace_sweep(mech, "rz", thetas, (0.0, 0.07, 0.0), mode=flipped)
+    assert result.working_mode == flipped and result.reachable.all()
+    signs = {**paper.PAPER_SIGNS, 4: -paper.PAPER_SIGNS[4]}
+    for k, t in enumerate(thetas):
+        c = paper.slider_positions((0.0, 0.07, t), L, RT, (1, 2, 4), signs)
+        np.testing.assert_allclose(result.actuators[k], c, atol=1e-10)
+
+
+def test_margins_match_classify_and_w_matches_manipulability():
+    """The batched metrics equal kinematics.classify and analysis.manipulability at the map's points."""
+    mech = preset("harada2011_3d4m")
+    result = workspace_map(mech, ("x", "y"), (np.linspace(-0.04, 0.04, 5), np.linspace(0.04, 0.1, 4)))
+    for i, j in [(0, 0), (2, 1), (4, 3)]:
+        report = classify(mech, result.q[i, j])
+        assert result.constraint_margin[i, j] == pytest.approx(report.constraint_margin, rel=1e-9)
+        assert result.inverse_margin[i, j] == pytest.approx(report.inverse_margin, rel=1e-9)
+        assert result.direct_margin[i, j] == pytest.approx(report.direct_margin, rel=1e-9)
+        assert result.manipulability[i, j] == pytest.approx(manipulability(mech, result.q[i, j]).w, rel=1e-9)
+
+
+@pytest.mark.parametrize("name", ["fivebar", "zhao2011_8pss", "enferadi2017_star_triangle"])
+def test_other_mechanisms_map_consistently(name):
+    """Maps of a five-bar, the spatial 8-PSS and the star-triangle agree with the single-pose functions."""
+    mech = preset(name)
+    x0 = task_pose(mech, mech.q_ref)
+    dofs = mech.task.dofs
+    axes = ("x", "y")
+    values = tuple(x0[dofs.index(a)] + np.linspace(-0.02, 0.02, 4) for a in axes)
+    result = workspace_map(mech, axes, values)
+    assert result.reachable.all()
+    for i, j in [(0, 0), (3, 3)]:
+        q = result.q[i, j]
+        np.testing.assert_allclose(task_pose(mech, q), result.poses()[i, j], atol=1e-11)
+        assert np.max(np.abs(mech.closure_residual(q))) <= 1e-12
+        assert result.manipulability[i, j] == pytest.approx(manipulability(mech, q).w, rel=1e-9)
+
+
+def test_parallel_workers_give_the_same_map():
+    """Bands solved in two processes and joined give the map of one process."""
+    mech = preset("harada2011_3d4m")
+    values = (np.linspace(-0.08, 0.08, 24), np.linspace(0.02, 0.17, 20))
+    one = workspace_map(mech, ("x", "y"), values, workers=1)
+    two = workspace_map(mech, ("x", "y"), values, workers=2)
+    assert 0 < one.reachable.sum() < one.reachable.size
+    np.testing.assert_array_equal(one.reachable, two.reachable)
+    np.testing.assert_allclose(one.manipulability, two.manipulability, rtol=1e-9, equal_nan=True)
+    np.testing.assert_allclose(one.actuators, two.actuators, atol=1e-11, equal_nan=True)
+
+
+def test_nothing_reachable_gives_an_empty_map():
+    """A slice entirely out of reach is returned unreachable everywhere instead of raising."""
+    mech = preset("harada2011_3d4m")
+    result = workspace_map(mech, ("x", "y"), (np.linspace(-0.05, 0.05, 3), np.linspace(0.25, 0.3, 3)))
+    assert not result.reachable.any() and result.working_mode is None
+    assert np.all(np.isnan(result.manipulability))
+
+
+def test_sweep_shapes_and_json():
+    """A sweep has 1-D arrays along its axis and serialises to JSON."""
+    mech = preset("harada2011_3d3m")
+    thetas = np.radians(np.linspace(-60, 60, 13))
+    result = workspace_sweep(mech, "rz", thetas)
+    assert result.shape == (13,) and result.actuators.shape == (13, 3) and result.q.shape == (13, mech.nq)
+    data = json.loads(json.dumps(result.to_dict()))
+    assert data["axes"] == ["rz"] and len(data["manipulability"]) == 13
+    with pytest.raises(ValueError):
+        result.manipulability[0] = 1.0  # read-only
+
+
+def test_bad_input_messages():
+    """Unknown or repeated axes, a wrong pose and a wrong metric name are refused by name."""
+    mech = preset("harada2011_3d4m")
+    v = np.linspace(0, 0.01, 2)
+    with pytest.raises(
+        InvalidInput, match=r"unknown task coordinate 'z'; the task's coordinates are \['x', 'y', 'rz'\]"
+    ):
+        workspace_map(mech, ("x", "z"), (v, v))
+    with pytest.raises(InvalidInput, match="the varied coordinates must differ"):
+        workspace_map(mech, ("x", "x"), (v, v))
+    with pytest.raises(InvalidInput, match="pose must hold 3 finite task coordinates"):
+        workspace_sweep(mech, "x", v, pose=(0.0, 0.1))
+    with pytest.raises(InvalidInput, match="must be a non-empty 1-D array"):
+        workspace_sweep(mech, "x", [])
+    with pytest.raises(InvalidInput, match="unknown metric 'w'"):
+        workspace_sweep(mech, "x", v).metric("w")
+
+
+@pytest.mark.parametrize("name", ["harada2011_3d4m", "zhao2011_8pss", "enferadi2017_star_triangle"])
+def test_continuation_rows_equal_the_library_closures_and_task_target(name, rng):
+    """The continuation's inline residual and Jacobian equal closures + TaskTarget (planar and spatial)."""
+    mech = preset(name)
+    ev = IKEvaluator.from_mechanism(mech)
+    q = pin.integrate(mech.model, mech.q_ref, rng.normal(scale=0.05, size=mech.nv))
+    x = task_pose(mech, mech.q_ref) + rng.normal(scale=0.05, size=mech.task_compiled.size)
+    r, A = ev.residual_and_jacobian(q, x)
+    target = TaskTarget(mech.task_compiled, x)
+    pin.computeJointJacobians(mech.model, mech.data, q)
+    pin.updateFramePlacements(mech.model, mech.data)
+    r_lib = np.concatenate(
+        [kclosures.residual_from_placements(mech.data, mech.closures), target.residual(mech.data)]
+    )
+    A_lib = np.vstack(
+        [
+            kclosures.jacobian_from_data(mech.model, mech.data, mech.closures),
+            target.jacobian(mech.model, mech.data),
+        ]
+    )
+    np.testing.assert_allclose(r, r_lib, atol=1e-15)
+    np.testing.assert_allclose(A, A_lib, atol=1e-14)
+
+
+def test_continuation_evaluator_pickles_for_worker_processes():
+    """The evaluator survives pickling (spawned workers) and solves a pose to the same configuration."""
+    mech = preset("harada2011_3d4m")
+    ev = IKEvaluator.from_mechanism(mech)
+    copy = pickle.loads(pickle.dumps(ev))
+    x = task_pose(mech, mech.q_ref) + np.array([1e-3, -1e-3, 1e-2])
+    a, b = ev.solve(x, mech.q_ref, 1e-12), copy.solve(x, mech.q_ref, 1e-12)
+    assert a is not None and b is not None
+    np.testing.assert_array_equal(a, b)
+    assert copy.mode(*copy.jacobians()) == working_mode(mech, b)
