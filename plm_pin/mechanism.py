@@ -353,14 +353,23 @@ class Mechanism:
 
     # ---------------------------------------------------------- reading
     def actuator_positions(self, q: Any) -> np.ndarray:
-        """Actuated joint positions [m] or [rad] (angles of unbounded revolutes too), shape (n_act,)."""
-        arr = self.check_q(q)
-        out = np.empty(self.n_actuators)
+        """Actuated joint positions [m] or [rad] (angles of unbounded revolutes too), shape (n_act,).
+
+        ``q`` may also stack configurations, shape (..., nq), for positions of shape
+        (..., n_act); NaN configurations (points of a map left unsolved) give NaN.
+        """
+        if np.ndim(q) > 1:
+            arr = np.asarray(q, dtype=float)
+            if arr.shape[-1] != self.nq:
+                raise InvalidInput(f"q must stack configurations of size {self.nq}, got shape {arr.shape}")
+        else:
+            arr = self.check_q(q)
+        out = np.empty((*arr.shape[:-1], self.n_actuators))
         for k, a in enumerate(self.actuators):
             if self.model.joints[a.joint_id].nq == 2:  # unbounded revolute stored as (cos, sin)
-                out[k] = np.arctan2(arr[a.idx_q + 1], arr[a.idx_q])
+                out[..., k] = np.arctan2(arr[..., a.idx_q + 1], arr[..., a.idx_q])
             else:
-                out[k] = arr[a.idx_q]
+                out[..., k] = arr[..., a.idx_q]
         return out
 
     @functools.cached_property

@@ -172,3 +172,21 @@ def test_non_numeric_configuration_is_refused():
     mech = preset("fourbar")
     with pytest.raises(plm_pin.InvalidInput, match=r"q must be 3 numbers"):
         mech.closure_residual(["a", "b", "c"])
+
+
+def test_actuator_positions_of_stacked_configurations(rng):
+    """A (2, 2, nq) stack gives each configuration's actuators; a NaN configuration gives NaN."""
+    mech = preset("fivebar")
+    qs = np.stack(
+        [pin.integrate(mech.model, mech.q_ref, rng.normal(scale=0.1, size=mech.nv)) for _ in range(4)]
+    )
+    qs[3] = np.nan
+    out = mech.actuator_positions(qs.reshape(2, 2, mech.nq))
+    assert out.shape == (2, 2, mech.n_actuators)
+    for k in range(3):
+        np.testing.assert_array_equal(out.reshape(4, -1)[k], qs[k, mech.actuated_q_indices])
+    assert np.all(np.isnan(out[1, 1]))
+    with pytest.raises(
+        plm_pin.InvalidInput, match=r"^q must stack configurations of size \d+, got shape \(2, 1\)$"
+    ):
+        mech.actuator_positions(np.zeros((2, 1)))

@@ -1,24 +1,24 @@
 r"""Inverse-kinematics continuation over grids of task poses (private helpers of the analysis).
 
 :class:`IKEvaluator` solves the inverse kinematics at one pose by Newton's method on the
-closure and task rows, from a predicted configuration, with the exact Jacobians of
-:mod:`plm_pin.kinematics.closures` and :class:`plm_pin.kinematics.task.TaskTarget`, and
-leaves the exact Jacobians at the solution for the metrics. It skips what the general
-solver :func:`plm_pin.kinematics.assemble` does for robustness from far away (SVD of every
-step, step rejection with damping): continuation starts within a grid step of the
-solution, where the Gauss-Newton step through the normal equations converges
+closure rows (:mod:`plm_pin.kinematics.closures`) and the task rows
+(:class:`plm_pin.kinematics.task.TaskTarget`), from a predicted configuration, and leaves
+the exact Jacobians at the solution for the working mode and the metrics. It skips what
+the general solver :func:`plm_pin.kinematics.assemble` does for robustness from far away
+(SVD of every step, step rejection with damping): continuation starts within a grid step
+of the solution, where the Gauss-Newton step through the normal equations converges
 quadratically. Every accepted point still satisfies the closures and the task to ``tol``.
 
 :func:`flood` walks a grid from solved points to their neighbours (breadth first),
 predicting each configuration by polynomial extrapolation along the line it is reached
 on, so that one Newton step usually suffices, and keeping the working mode: a point whose
-solution changes the sign of a leg block (:func:`plm_pin.kinematics.working_mode`) is not
-taken from that neighbour. Points never reached are left unreachable.
+solution changes the sign of a leg block
+(:func:`plm_pin.kinematics.legs.working_mode_from_jacobian`) is not taken from that
+neighbour. Points never reached are left unreachable.
 """
 
 from __future__ import annotations
 
-import math
 import multiprocessing
 import os
 from collections import deque
@@ -33,19 +33,15 @@ from scipy.linalg.lapack import dposv as _posv
 
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics import closures as _closures
+from ..kinematics.forward import task_pose
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import require_task
-from ..kinematics.legs import ik_jacobian
-from ..kinematics.task import Task
+from ..kinematics.legs import Leg, ik_jacobian_from_data, working_mode_from_jacobian
+from ..kinematics.task import Task, TaskTarget
 from .manipulability import batch_metrics
-
-_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
-
-MODE_RTOL = 1e-9
-"""Zero threshold of a leg block determinant, relative to Hadamard's bound (as in ``working_mode``)."""
 
 NEWTON_MAX_ITERATIONS = 12
 """Newton iterations allowed per continuation step."""
@@ -54,101 +50,46 @@ STALL_RATIO = 0.9
 """A Newton iteration that does not divide the residual by at least 1 / STALL_RATIO ends the attempt."""
 
 
-def _block_index(rows: tuple[int, ...], cols: tuple[int, ...], n_cols: int) -> np.ndarray:
-    """Flat indices of the block ``rows x cols`` in a row-major matrix with ``n_cols`` columns."""
-    r = np.asarray(rows)[:, None]
-    c = np.asarray(cols)[None, :]
-    return np.asarray(r * n_cols + c)
-
-
-def _small_det_sign(M: list[list[float]]) -> int:
-    """Sign of the determinant of a 1 x 1 to 3 x 3 matrix, 0 at or below ``MODE_RTOL`` x Hadamard's bound."""
-    n = len(M)
-    if n == 1:
-        det = M[0][0]
-        bound = abs(det)
-    elif n == 2:
-        (a, b), (c, d) = M
-        det = a * d - b * c
-        bound = math.sqrt((a * a + c * c) * (b * b + d * d))
-    else:
-        (a, b, c), (d, e, f), (g, h, i) = M
-        det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
-        bound = math.sqrt((a * a + d * d + g * g) * (b * b + e * e + h * h) * (c * c + f * f + i * i))
-    if abs(det) <= MODE_RTOL * bound:
-        return 0
-    return 1 if det > 0 else -1
-
-
 @dataclass
 class IKEvaluator:
-    """Newton corrector and exact Jacobians of one mechanism, picklable for worker processes.
+    """Newton corrector, Jacobians and working mode of one mechanism, picklable for worker processes.
 
     Build with :meth:`from_mechanism`. The Pinocchio data is created on first use in each
-    process. Point closures and the task rows are evaluated inline (the formulas of
-    :mod:`plm_pin.kinematics.closures` and :class:`plm_pin.kinematics.task.TaskTarget`,
-    checked equal by the tests); other closure types go through
-    :mod:`plm_pin.kinematics.closures`.
+    process.
     """
 
     model: pin.Model
     closures: tuple[_closures.Closure, ...]
     task: Task
+    legs: tuple[Leg, ...]
     mobility: int
     actuated_v: np.ndarray
-    n_legs: int
-    mode_groups: list[tuple[np.ndarray, np.ndarray]]
     linear_q: bool
     _data: pin.Data | None = field(default=None, repr=False)
 
     @classmethod
     def from_mechanism(cls, mech: Mechanism) -> IKEvaluator:
         """Collect what the continuation needs from ``mech``."""
-        task = require_task(mech)
-        square = [leg for leg in mech.legs if leg.square]
-        by_size: dict[int, list[tuple[int, np.ndarray]]] = {}
-        for k, leg in enumerate(square):
-            by_size.setdefault(len(leg.rows), []).append((k, _block_index(leg.rows, leg.columns, mech.nv)))
-        groups = [
-            (np.array([k for k, _ in items]), np.stack([idx for _, idx in items]))
-            for _, items in sorted(by_size.items())
-        ]
         model = mech.model
-        linear = all(model.joints[j].nq == model.joints[j].nv for j in range(1, model.njoints))
         return cls(
             model=model,
             closures=tuple(mech.closures),
-            task=task,
+            task=require_task(mech),
+            legs=tuple(mech.legs),
             mobility=mech.mobility,
             actuated_v=np.asarray(mech.actuated_v_indices),
-            n_legs=len(square),
-            mode_groups=groups,
-            linear_q=linear,
+            linear_q=all(model.joints[j].nq == model.joints[j].nv for j in range(1, model.njoints)),
         )
 
     def __post_init__(self) -> None:
         self.m = _closures.closure_rows(self.closures)
-        self.k = self.task.size
-        self._points = all(c.spec.type == "point" for c in self.closures)
-        self._pairs = [(c.frame_ids[0], c.frame_ids[1], c.rows.start) for c in self.closures]
-        self._lin = list(self.task.linear)
-        self._ang = list(self.task.angular)
-        nl = len(self._lin)
-        self._lin_index: list[int] | slice = slice(0, nl) if self._lin == list(range(nl)) else self._lin
-        self._full_rotation = len(self._ang) == 3
-        self._nl = len(self._lin)
-        self._small_blocks = [
-            (leg, idx)
-            for legs, index in self.mode_groups
-            if index.shape[-1] <= 3
-            for leg, idx in zip(legs.tolist(), index.tolist(), strict=True)
-        ]
-        self._large_groups = [(legs, index) for legs, index in self.mode_groups if index.shape[-1] > 3]
-        self._r = np.empty(self.m + self.k)
-        self._A = np.empty((self.m + self.k, int(self.model.nv)))
+        self.n_legs = sum(leg.square for leg in self.legs)
+        self._r = np.empty(self.m + self.task.size)  # residual [closures; task]
+        self._A = np.empty((self.m + self.task.size, self.nv))  # its Jacobian
+        self._rows = (self._r[: self.m], self._r[self.m :], self._A[: self.m], self._A[self.m :])
 
     def __getstate__(self) -> dict[str, Any]:
-        keep = ("model", "closures", "task", "mobility", "actuated_v", "n_legs", "mode_groups", "linear_q")
+        keep = ("model", "closures", "task", "legs", "mobility", "actuated_v", "linear_q")
         return {k: self.__dict__[k] for k in keep}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -168,146 +109,49 @@ class IKEvaluator:
         """Tree velocity size."""
         return int(self.model.nv)
 
-    # ------------------------------------------------------------ rows
-    def _residual(self, data: pin.Data, x: np.ndarray, R_star: np.ndarray | None) -> float:
-        """Fill the residual ``[phi; task - x]`` from placements in ``data``; return its max-norm."""
-        r = self._r
-        oMf = data.oMf
-        if self._points:
-            for fa, fb, start in self._pairs:
-                r[start : start + 3] = oMf[fb].translation - oMf[fa].translation
-        elif self.m:
-            r[: self.m] = _closures.residual_from_placements(data, self.closures)
-        M = oMf[self.task.frame_id]
-        m, nl = self.m, self._nl
-        if nl:
-            r[m : m + nl] = M.translation[self._lin_index] - x[:nl]
-        if self._ang:
-            if R_star is not None:
-                r[m + nl :] = pin.log3(M.rotation @ R_star.T)
-            elif len(self._ang) == 1:  # wrap_angle of one angle, in Python floats
-                d = float(pin.rpy.matrixToRpy(M.rotation)[self._ang[0]]) - float(x[nl])
-                r[m + nl] = math.pi - (math.pi - d) % (2.0 * math.pi)
-            else:
-                d = pin.rpy.matrixToRpy(M.rotation)[self._ang] - x[nl:]
-                r[m + nl :] = np.pi - np.mod(np.pi - d, 2.0 * np.pi)
-        return float(np.abs(r).max())
-
-    def _jacobian(self, data: pin.Data, R_star: np.ndarray | None) -> np.ndarray:
-        """Fill the Jacobian of :meth:`_residual` from joint Jacobians in ``data``."""
-        model = self.model
-        A = self._A
-        if self._points:
-            for fa, fb, start in self._pairs:
-                A[start : start + 3] = (
-                    pin.getFrameJacobian(model, data, fb, _LWA)[:3]
-                    - pin.getFrameJacobian(model, data, fa, _LWA)[:3]
-                )
-        elif self.m:
-            A[: self.m] = _closures.jacobian_from_data(model, data, self.closures)
-        J = pin.getFrameJacobian(model, data, self.task.frame_id, _LWA)
-        m, nl = self.m, self._nl
-        if nl:
-            A[m : m + nl] = J[self._lin_index]
-        if self._ang:
-            R = data.oMf[self.task.frame_id].rotation
-            if R_star is not None:
-                E = R @ R_star.T
-                A[m + nl :] = pin.Jlog3(E) @ E.T @ J[3:]
-            else:
-                rpy = pin.rpy.matrixToRpy(R)
-                A[m + nl :] = (pin.rpy.computeRpyJacobianInverse(rpy, pin.ReferenceFrame.WORLD) @ J[3:])[
-                    self._ang
-                ]
-        return A
-
-    def residual_and_jacobian(self, q: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Residual ``[phi; task - x]`` and its exact Jacobian at ``q`` (copies; for the tests)."""
-        R_star = self._rotation(x)
-        pin.computeJointJacobians(self.model, self.data, q)
-        pin.updateFramePlacements(self.model, self.data)
-        self._residual(self.data, x, R_star)
-        return self._r.copy(), self._jacobian(self.data, R_star).copy()
-
-    def _rotation(self, x: np.ndarray) -> np.ndarray | None:
-        if not self._full_rotation:
-            return None
-        return np.asarray(pin.rpy.rpyToMatrix(np.asarray(x[self._nl :], dtype=float)))
-
-    # ------------------------------------------------------------ solving
     def solve(self, x: np.ndarray, q0: np.ndarray, tol: float) -> np.ndarray | None:
         """Configuration at task coordinates ``x`` by Newton from ``q0``, or None.
 
         Gauss-Newton steps through the normal equations (Cholesky); the attempt ends when
         an iteration does not reduce the residual by the factor :data:`STALL_RATIO`, or
         after :data:`NEWTON_MAX_ITERATIONS`. On success the data holds the joint Jacobians
-        and frame placements at the returned configuration (read them with :meth:`jacobians`).
+        and frame placements at the returned configuration (read them with :meth:`jacobian`).
         """
-        model, data = self.model, self.data
-        R_star = self._rotation(x)
+        model, data, closures = self.model, self.data, self.closures
+        target = TaskTarget(self.task, x)
+        r, A = self._r, self._A
+        r_phi, r_task, A_phi, A_task = self._rows
         q = q0
         err_prev = np.inf
         for iteration in range(NEWTON_MAX_ITERATIONS + 1):
             pin.computeJointJacobians(model, data, q)
             pin.updateFramePlacements(model, data)
-            err = self._residual(data, x, R_star)
+            _closures.residual_from_placements(data, closures, r_phi)
+            target.residual(data, r_task)
+            err = float(np.abs(r).max())
             if err <= tol:
                 return q
             if iteration == NEWTON_MAX_ITERATIONS or not err < STALL_RATIO * err_prev:
                 return None
-            A = self._jacobian(data, R_star)
-            _, step, info = _posv(A.T @ A, A.T @ self._r)
+            _closures.jacobian_from_data(model, data, closures, A_phi)
+            target.jacobian(model, data, A_task)
+            _, step, info = _posv(A.T @ A, A.T @ r)
             if info != 0:
                 return None
             q = pin.integrate(model, q, -step)
             err_prev = err
         return None  # pragma: no cover - the loop always returns
 
-    def jacobians(self) -> tuple[np.ndarray, np.ndarray]:
-        """Closure and task Jacobians from the data left by :meth:`solve`, shapes (m, nv) and (k, nv)."""
-        model, data = self.model, self.data
-        if self._points:
-            J_phi = np.empty((self.m, self.nv))
-            for fa, fb, start in self._pairs:
-                J_phi[start : start + 3] = (
-                    pin.getFrameJacobian(model, data, fb, _LWA)[:3]
-                    - pin.getFrameJacobian(model, data, fa, _LWA)[:3]
-                )
-        else:
-            J_phi = _closures.jacobian_from_data(model, data, self.closures)
-        J_x = pin.getFrameJacobian(model, data, self.task.frame_id, _LWA)[list(self.task.rows)]
-        return J_phi, J_x
+    def jacobian(self, out: np.ndarray | None = None) -> np.ndarray:
+        """Stacked ``[J_phi; J_x]`` (:func:`plm_pin.kinematics.legs.ik_jacobian`) left by :meth:`solve`.
 
-    def mode(self, J_phi: np.ndarray, J_x: np.ndarray) -> tuple[int, ...]:
-        """Working mode: the sign of each square leg block (0 when singular), one per leg.
-
-        Same rule as :func:`plm_pin.kinematics.working_mode` (zero below ``MODE_RTOL``
-        times Hadamard's bound), from Jacobians already computed; blocks up to 3 x 3 in
-        Python floats (cheaper than NumPy calls at this size).
+        Shape (m + n_task, nv); written into ``out`` when given.
         """
-        flat = np.concatenate([J_phi.ravel(), J_x.ravel()])
-        v = flat.tolist()
-        out = [0] * self.n_legs
-        for leg, idx in self._small_blocks:
-            out[leg] = _small_det_sign([[v[k] for k in row] for row in idx])
-        for legs, index in self._large_groups:
-            blocks = flat[index]  # (n_blocks, s, s)
-            det = np.linalg.det(blocks)
-            bound = np.sqrt(np.square(blocks).sum(axis=1)).prod(axis=1)
-            signs = np.sign(det) * (np.abs(det) > MODE_RTOL * bound)
-            for leg, sign in zip(legs.tolist(), signs.tolist(), strict=True):
-                out[leg] = int(sign)
-        return tuple(out)
+        return ik_jacobian_from_data(self.model, self.data, self.closures, self.task, out)
 
-    def mode_of(self, mech: Mechanism, q: np.ndarray) -> tuple[int, ...]:
-        """Working mode at ``q`` (computes the Jacobians)."""
-        A = ik_jacobian(mech, q)
-        return self.mode(A[: self.m], A[self.m :])
-
-    def task_pose(self, q: np.ndarray) -> np.ndarray:
-        """Task coordinates at ``q`` [m, rad], shape (n_task,)."""
-        pin.framesForwardKinematics(self.model, self.data, q)
-        return np.asarray(self.task.pose_from_data(self.data))
+    def mode(self, A: np.ndarray) -> tuple[int, ...]:
+        """Working mode from the stacked Jacobian of :meth:`jacobian`: one sign per square leg."""
+        return working_mode_from_jacobian(A, self.legs)
 
     def extrapolate(self, previous: list[np.ndarray]) -> np.ndarray:
         """Next configuration on a line of equally spaced solutions ``previous`` (nearest first)."""
@@ -333,8 +177,8 @@ def compatible(mode: Sequence[int], target: Sequence[int]) -> bool:
 BATCH = 1024
 """Points whose Jacobians are buffered before their metrics are computed together."""
 
-Metrics = Callable[[np.ndarray, np.ndarray], dict[str, np.ndarray]]
-"""Batch metrics: ``(J_phi (b, m, nv), J_x (b, k, nv)) -> {name: (b,) array}``."""
+Metrics = Callable[[np.ndarray], dict[str, np.ndarray]]
+"""Batch metrics: stacked ``[J_phi; J_x]`` (b, m + k, nv) -> ``{name: (b,) array}``."""
 
 
 @dataclass
@@ -359,8 +203,7 @@ class GridState:
     metrics: dict[str, np.ndarray]
     tried: np.ndarray
     _pending: list[int] = field(default_factory=list, repr=False)
-    _J_phi: np.ndarray | None = field(default=None, repr=False)
-    _J_x: np.ndarray | None = field(default=None, repr=False)
+    _A: np.ndarray | None = field(default=None, repr=False)
 
     @classmethod
     def empty(cls, ev: IKEvaluator, shape: tuple[int, ...], poses: np.ndarray) -> GridState:
@@ -378,20 +221,15 @@ class GridState:
 
     def accept(self, ev: IKEvaluator, index: int, q: np.ndarray, target_mode: tuple[int, ...] | None) -> bool:
         """Record the solution at ``index`` (the data of ``ev`` is at ``q``) if its mode fits."""
-        J_phi, J_x = ev.jacobians()
-        mode = ev.mode(J_phi, J_x)
+        if self._A is None:
+            self._A = np.empty((BATCH, ev.m + ev.task.size, ev.nv))
+        A = ev.jacobian(self._A[len(self._pending)])  # buffered for the metrics
+        mode = ev.mode(A)
         if target_mode is not None and not compatible(mode, target_mode):
             return False
         self.q[index] = q
         self.mode[index] = mode
         self.reached[index] = True
-        if self._J_phi is None:
-            self._J_phi = np.empty((BATCH, *J_phi.shape))
-            self._J_x = np.empty((BATCH, *J_x.shape))
-        assert self._J_x is not None
-        k = len(self._pending)
-        self._J_phi[k] = J_phi
-        self._J_x[k] = J_x
         self._pending.append(index)
         return True
 
@@ -399,9 +237,8 @@ class GridState:
         """Compute the metrics of the buffered points."""
         if not self._pending:
             return
-        assert self._J_phi is not None and self._J_x is not None
-        b = len(self._pending)
-        values = metrics(self._J_phi[:b], self._J_x[:b])
+        assert self._A is not None
+        values = metrics(self._A[: len(self._pending)])
         n = self.reached.size
         for name, v in values.items():
             if name not in self.metrics:
@@ -521,8 +358,8 @@ def _init_worker(
 
 
 def _metrics_for(ev: IKEvaluator) -> Metrics:
-    def metrics(J_phi: np.ndarray, J_x: np.ndarray) -> dict[str, np.ndarray]:
-        return batch_metrics(J_phi, J_x, ev.actuated_v, ev.mobility)
+    def metrics(A: np.ndarray) -> dict[str, np.ndarray]:
+        return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility)
 
     return metrics
 
@@ -601,10 +438,28 @@ def _seed(
     return None
 
 
+def start_configuration(mech: Mechanism, guess: Any) -> np.ndarray:
+    """The configuration an analysis starts from: ``guess`` (checked), or the reference one."""
+    return mech.q_ref if guess is None else mech.check_q(guess, "guess")
+
+
+def base_pose(mech: Mechanism, pose: Any, guess: Any) -> np.ndarray:
+    """The task pose giving a slice's fixed coordinates [m, rad]: ``pose`` (checked), else the guess's."""
+    task = require_task(mech)
+    if pose is None:
+        return task_pose(mech, start_configuration(mech, guess))
+    base = np.asarray(pose, dtype=float)
+    if base.shape != (task.size,) or not np.all(np.isfinite(base)):
+        raise InvalidInput(
+            f"pose must hold {task.size} finite task coordinates {list(task.dofs)}, got {pose!r}"
+        )
+    return base
+
+
 def solve_poses(
     mech: Mechanism,
     poses: np.ndarray,
-    guess: np.ndarray,
+    guess: Any,
     *,
     mode: tuple[int, ...] | None,
     tol: float,
@@ -615,7 +470,7 @@ def solve_poses(
     Args:
         mech: the mechanism.
         poses: task poses [m, rad], shape ``shape + (n_task,)`` (one or two grid axes).
-        guess: configuration the seed is solved from, shape (nq,).
+        guess: configuration the seed is solved from, shape (nq,) (None: the reference).
         mode: working mode to keep (default: the seed's, from ``guess``).
         tol: residual tolerance [m, rad].
         workers: processes (None: all CPUs for large 2-D grids).
@@ -629,7 +484,8 @@ def solve_poses(
     flat = np.ascontiguousarray(poses.reshape(-1, k))
     state = GridState.empty(ev, shape, flat)
     scale = np.ptp(flat, axis=0)
-    x_guess = ev.task_pose(guess)
+    guess = start_configuration(mech, guess)
+    x_guess = task_pose(mech, guess)
     seeded = _seed(mech, flat, x_guess, scale, guess, mode)
     if seeded is None:
         return state, None

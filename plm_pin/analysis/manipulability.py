@@ -25,18 +25,19 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..exceptions import InvalidInput, SingularConfiguration
+from ..exceptions import SingularConfiguration
 from ..kinematics.inverse import inverse_kinematics
-from ..kinematics.jacobians import ClosedChainJacobians, closed_chain_jacobians
+from ..kinematics.jacobians import (
+    ClosedChainJacobians,
+    check_square_task,
+    closed_chain_jacobians,
+    feasible_motions,
+    times_T_inverse,
+)
+from ..kinematics.singularity import constraint_margins, normalised_margins
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
-
-INVERSE_RTOL = 1e-12
-r""":math:`T` is singular (J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL times its largest.
-
-The threshold of :attr:`plm_pin.kinematics.ClosedChainJacobians.J_ce`.
-"""
 
 METRICS: tuple[str, ...] = (
     "manipulability",
@@ -92,20 +93,34 @@ class Manipulability:
 
 def manipulability_from_jacobians(jac: ClosedChainJacobians) -> Manipulability:
     """Manipulability from Jacobians already computed (see :func:`manipulability`)."""
-    T, C = jac.T, jac.C
-    if T.shape[0] != T.shape[1]:
-        raise InvalidInput(
-            f"the task has {T.shape[0]} coordinates but the mechanism has {T.shape[1]} DOF; "
-            "manipulability needs as many task coordinates as DOF"
-        )
-    sT = np.linalg.svd(T, compute_uv=False)
-    k = T.shape[0]
-    if sT[-1] <= INVERSE_RTOL * sT[0]:
-        return Manipulability(np.inf, np.inf, np.full(k, np.nan), None, True)
-    J_ce = np.linalg.solve(T.T, C.T).T  # C T^-1, (n_act, n_task)
-    s = np.linalg.svd(J_ce, compute_uv=False)
-    cond = float(s[0] / s[-1]) if s[-1] > 0.0 else np.inf
-    return Manipulability(float(np.prod(s)), cond, s, J_ce, False)
+    check_square_task(jac.T.shape[0], jac.T.shape[1], "manipulability needs")
+    J_ce, s, w, cond, singular = _manipulability_values(jac.T, jac.C)
+    return Manipulability(float(w), float(cond), s, None if singular else J_ce, bool(singular))
+
+
+def _manipulability_values(
+    T: np.ndarray, C: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    r""":math:`J_{ce} = C T^{-1}`, its singular values, :math:`w` and :math:`\kappa`, batched.
+
+    Args:
+        T: shape (..., k, k).
+        C: shape (..., n_act, k).
+
+    Returns:
+        ``J_ce`` (..., n_act, k) and its singular values (..., k) (NaN where :math:`T` is
+        singular), ``w`` and ``condition_number`` (...) (inf there), and the singular mask (...).
+    """
+    J_ce, singular = times_T_inverse(C, T)
+    if singular.any():  # NaN blocks: SVD of zeros there, then NaN
+        s = np.linalg.svd(np.where(singular[..., None, None], 0.0, J_ce), compute_uv=False)
+        s[singular] = np.nan
+    else:
+        s = np.linalg.svd(J_ce, compute_uv=False)
+    w = np.where(singular, np.inf, s.prod(axis=-1))
+    s_min = s[..., -1]
+    cond = np.divide(s[..., 0], s_min, out=np.full(np.shape(s_min), np.inf), where=s_min > 0.0)
+    return J_ce, s, w, cond, singular
 
 
 def manipulability(mech: Mechanism, q: Any, *, raise_if_singular: bool = False) -> Manipulability:
@@ -156,15 +171,6 @@ def manipulability_at(
     return manipulability(mech, sol.q, raise_if_singular=raise_if_singular)
 
 
-def _margins(M: np.ndarray) -> np.ndarray:
-    r"""Batched :math:`\sigma_{min} / \sigma_{max}` of matrices ``M`` (b, r, c), shape (b,)."""
-    if min(M.shape[1:]) == 0:
-        return np.ones(M.shape[0])
-    s = np.linalg.svd(M, compute_uv=False)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(s[:, 0] > 0.0, s[:, -1] / s[:, 0], 0.0)
-
-
 def batch_metrics(J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mobility: int) -> dict:
     """Manipulability, condition number and singularity margins of a batch of configurations.
 
@@ -180,37 +186,12 @@ def batch_metrics(J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mo
     Returns:
         ``{name: (b,) array}`` for every name of :data:`METRICS`.
     """
-    b, m, nv = J_phi.shape
-    rank = nv - mobility
-    if m:
-        _, s_phi, Vt = np.linalg.svd(J_phi)
-        N = np.swapaxes(Vt[:, rank:, :], 1, 2)  # (b, nv, mobility)
-        if rank > 0:
-            with np.errstate(invalid="ignore", divide="ignore"):
-                constraint = np.where(s_phi[:, 0] > 0.0, s_phi[:, rank - 1] / s_phi[:, 0], 1.0)
-        else:
-            constraint = np.ones(b)
-    else:
-        N = np.broadcast_to(np.eye(nv), (b, nv, nv))
-        constraint = np.ones(b)
-    T = J_x @ N  # (b, k, mobility)
-    C = N[:, actuated_v, :]  # (b, n_act, mobility)
-    sT = np.linalg.svd(T, compute_uv=False)
-    inverse = np.where(sT[:, 0] > 0.0, sT[:, -1] / np.where(sT[:, 0] > 0.0, sT[:, 0], 1.0), 0.0)
-    direct = _margins(C)
-    w = np.full(b, np.inf)
-    cond = np.full(b, np.inf)
-    ok = sT[:, -1] > INVERSE_RTOL * sT[:, 0]
-    if np.any(ok):
-        J_ce = np.swapaxes(np.linalg.solve(np.swapaxes(T[ok], 1, 2), np.swapaxes(C[ok], 1, 2)), 1, 2)
-        s = np.linalg.svd(J_ce, compute_uv=False)
-        w[ok] = np.prod(s, axis=1)
-        with np.errstate(divide="ignore"):
-            cond[ok] = np.where(s[:, -1] > 0.0, s[:, 0] / np.where(s[:, -1] > 0.0, s[:, -1], 1.0), np.inf)
+    _, s_phi, T, C = feasible_motions(J_phi, J_x, actuated_v, mobility)
+    _, _, w, cond, _ = _manipulability_values(T, C)
     return {
         "manipulability": w,
         "condition_number": cond,
-        "constraint_margin": constraint,
-        "inverse_margin": inverse,
-        "direct_margin": direct,
+        "constraint_margin": constraint_margins(s_phi, J_phi.shape[-1] - mobility),
+        "inverse_margin": normalised_margins(T),
+        "direct_margin": normalised_margins(C),
     }

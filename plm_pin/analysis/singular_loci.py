@@ -36,11 +36,10 @@ import pinocchio as pin
 from scipy.optimize import brentq, minimize_scalar
 
 from ..exceptions import InvalidInput, PoseUnreachable
-from ..kinematics.forward import task_pose
 from ..kinematics.inverse import IK_TOL, inverse_kinematics
-from ..kinematics.jacobians import closed_chain_jacobians, require_task
+from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
 from ..kinematics.singularity import SINGULARITY_TOL, SingularityReport, classify
-from ._continuation import IKEvaluator, compatible, solve_poses
+from ._continuation import IKEvaluator, base_pose, compatible, solve_poses
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
@@ -164,7 +163,7 @@ class _PathSolver:
             q = self.ev.solve(x, np.asarray(general), self.tol)  # leaves the Jacobians in the data
             if q is None:
                 return None
-        if not compatible(self.ev.mode(*self.ev.jacobians()), self.target):
+        if not compatible(self.ev.mode(self.ev.jacobian()), self.target):
             return None
         return np.asarray(q)
 
@@ -228,11 +227,7 @@ def singular_points(
         InvalidInput: malformed samples or a task whose size differs from the DOF.
     """
     task = require_task(mech)
-    if task.size != mech.mobility:
-        raise InvalidInput(
-            f"{mech.name}: the task has {task.size} coordinates but the mechanism has {mech.mobility} DOF; "
-            "singularity location needs as many task coordinates as DOF"
-        )
+    check_square_task(task.size, mech.mobility, "singularity location needs", mech.name)
     ts = np.asarray(t, dtype=float)
     if ts.ndim != 1 or ts.size < 2 or not np.all(np.isfinite(ts)) or np.any(np.diff(ts) <= 0.0):
         raise InvalidInput(f"t must be an increasing 1-D array of at least 2 finite samples, got {t!r}")
@@ -244,8 +239,7 @@ def singular_points(
         return x
 
     poses = np.stack([pose(float(s)) for s in ts])
-    q_guess = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    state, target = solve_poses(mech, poses, q_guess, mode=mode, tol=ik_tol, workers=1)
+    state, target = solve_poses(mech, poses, guess, mode=mode, tol=ik_tol, workers=1)
     if target is None:
         return []
     solver = _PathSolver(mech, pose, target, ik_tol)
@@ -399,19 +393,6 @@ def _refine_boundary(
     return _point(mech, pose, lo, q_lo, "boundary", bracket, tol)
 
 
-def _base_pose(mech: Mechanism, pose: Any, guess: Any) -> np.ndarray:
-    """The pose giving the fixed coordinates: ``pose``, else the guess's (or reference) pose."""
-    task = require_task(mech)
-    if pose is None:
-        return task_pose(mech, mech.q_ref if guess is None else guess)
-    base = np.asarray(pose, dtype=float)
-    if base.shape != (task.size,) or not np.all(np.isfinite(base)):
-        raise InvalidInput(
-            f"pose must hold {task.size} finite task coordinates {list(task.dofs)}, got {pose!r}"
-        )
-    return base
-
-
 def singular_points_along(
     mech: Mechanism,
     axis: str,
@@ -434,14 +415,7 @@ def singular_points_along(
     task = require_task(mech)
     if axis not in task.dofs:
         raise InvalidInput(f"unknown task coordinate {axis!r}; the task's coordinates are {list(task.dofs)}")
-    guess = options.get("guess")
-    base = (
-        task_pose(mech, mech.q_ref if guess is None else guess) if pose is None else np.asarray(pose, float)
-    )
-    if base.shape != (task.size,) or not np.all(np.isfinite(base)):
-        raise InvalidInput(
-            f"pose must hold {task.size} finite task coordinates {list(task.dofs)}, got {pose!r}"
-        )
+    base = base_pose(mech, pose, options.get("guess"))
     k = task.dofs.index(axis)
 
     def path(s: float) -> np.ndarray:
@@ -484,10 +458,7 @@ def singular_loci(
         raise InvalidInput(
             f"across must be another task coordinate than {axis!r} among {list(task.dofs)}, got {across!r}"
         )
-    guess = options.get("guess")
-    base = (
-        task_pose(mech, mech.q_ref if guess is None else guess) if pose is None else np.asarray(pose, float)
-    )
+    base = base_pose(mech, pose, options.get("guess"))
     k = task.dofs.index(across)
     out: list[SingularPoint] = []
     for v in across_values:

@@ -12,11 +12,11 @@ through the grid, which is what a mechanism moving continuously can do.
 The metrics are those of :func:`plm_pin.analysis.manipulability` and
 :func:`plm_pin.kinematics.classify` (the singularity margins), computed in batches.
 
-Cost (``make bench``): about 0.15 ms per pose on one core for the planar 2-PRRRP (one
+Cost (``make bench``): about 0.18 ms per pose on one core for the planar 2-PRRRP (one
 Newton step per pose, exact Jacobians, metrics in batches); grids of 20,000 poses or
 more are split in bands of rows solved in parallel processes (``workers``, default all
 CPUs), then joined across the band borders: a 10^5-pose map of ``harada2011_3d4m`` takes
-about 8 s on two cores.
+about 9 s on two cores.
 """
 
 from __future__ import annotations
@@ -28,10 +28,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..exceptions import InvalidInput
-from ..kinematics.forward import task_pose
 from ..kinematics.inverse import IK_TOL
-from ..kinematics.jacobians import require_task
-from ._continuation import solve_poses
+from ..kinematics.jacobians import check_square_task, require_task
+from ._continuation import base_pose, solve_poses
 from .manipulability import METRICS
 
 if TYPE_CHECKING:
@@ -146,11 +145,7 @@ def _grid_poses(
 def _check_axes(mech: Mechanism, axes: Sequence[str], values: Sequence[Any]) -> tuple:
     task = require_task(mech)
     dofs = tuple(task.dofs)
-    if task.size != mech.mobility:
-        raise InvalidInput(
-            f"{mech.name}: the task has {task.size} coordinates but the mechanism has {mech.mobility} DOF; "
-            "manipulability maps need as many task coordinates as DOF"
-        )
+    check_square_task(task.size, mech.mobility, "manipulability maps need", mech.name)
     for a in axes:
         if a not in dofs:
             raise InvalidInput(f"unknown task coordinate {a!r}; the task's coordinates are {list(dofs)}")
@@ -178,14 +173,10 @@ def _slice(
     workers: int | None,
 ) -> WorkspaceSlice:
     dofs, arrays = _check_axes(mech, axes, values)
-    q_guess = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    x_guess = task_pose(mech, q_guess)
-    base = x_guess.copy() if pose is None else np.asarray(pose, dtype=float)
-    if base.shape != (len(dofs),) or not np.all(np.isfinite(base)):
-        raise InvalidInput(f"pose must hold {len(dofs)} finite task coordinates {list(dofs)}, got {pose!r}")
+    base = base_pose(mech, pose, guess)
     shape = tuple(len(a) for a in arrays)
     poses = _grid_poses(base, dofs, axes, arrays)
-    state, target = solve_poses(mech, poses, q_guess, mode=mode, tol=tol, workers=workers)
+    state, target = solve_poses(mech, poses, guess, mode=mode, tol=tol, workers=workers)
     reached = state.reached.reshape(shape)
     metrics = {
         name: state.metrics.get(name, np.full(state.reached.size, np.nan)).reshape(shape) for name in METRICS
@@ -202,21 +193,11 @@ def _slice(
         constraint_margin=metrics["constraint_margin"],
         inverse_margin=metrics["inverse_margin"],
         direct_margin=metrics["direct_margin"],
-        actuators=_actuators(mech, q),
+        actuators=mech.actuator_positions(q),
         q=q,
         mode=np.where(reached[..., None], state.mode.reshape(*shape, -1), 0).astype(np.int8),
         working_mode=target,
     )
-
-
-def _actuators(mech: Mechanism, q: np.ndarray) -> np.ndarray:
-    out = np.full((*q.shape[:-1], mech.n_actuators), np.nan)
-    for k, a in enumerate(mech.actuators):
-        if mech.model.joints[a.joint_id].nq == 2:  # unbounded revolute stored as (cos, sin)
-            out[..., k] = np.arctan2(q[..., a.idx_q + 1], q[..., a.idx_q])
-        else:
-            out[..., k] = q[..., a.idx_q]
-    return out
 
 
 def workspace_map(

@@ -85,21 +85,27 @@ def closure_rows(closures: Sequence[Closure]) -> int:
     return closures[-1].rows.stop if closures else 0
 
 
-def residual_from_placements(data: pin.Data, closures: Sequence[Closure]) -> np.ndarray:
-    """Stacked residual from frame placements already updated in ``data``, shape (m,)."""
-    phi = np.empty(closure_rows(closures))
+def residual_from_placements(
+    data: pin.Data, closures: Sequence[Closure], out: np.ndarray | None = None
+) -> np.ndarray:
+    """Stacked residual from frame placements already updated in ``data``, shape (m,).
+
+    Written into ``out`` (shape (m,)) when given, for solvers that reuse their buffers.
+    """
+    phi = np.empty(closure_rows(closures)) if out is None else out
+    oMf = data.oMf
     for c in closures:
-        oMa = data.oMf[c.frame_ids[0]]
-        oMb = data.oMf[c.frame_ids[1]]
-        r = c.rows
-        phi[r.start : r.start + 3] = oMb.translation - oMa.translation
+        oMa = oMf[c.frame_ids[0]]
+        oMb = oMf[c.frame_ids[1]]
+        start, stop = c.rows.start, c.rows.stop
+        phi[start : start + 3] = oMb.translation - oMa.translation
         kind = c.spec.type
         if kind == "weld":
-            phi[r.start + 3 : r.stop] = pin.log3(oMa.rotation.T @ oMb.rotation)
+            phi[start + 3 : stop] = pin.log3(oMa.rotation.T @ oMb.rotation)
         elif kind == "revolute":
             assert c.axis is not None and c.normal_basis is not None
             seen = oMa.rotation.T @ (oMb.rotation @ c.axis)
-            phi[r.start + 3 : r.stop] = c.normal_basis.T @ seen
+            phi[start + 3 : stop] = c.normal_basis.T @ seen
     return phi
 
 
@@ -116,15 +122,20 @@ def jacobian(model: pin.Model, data: pin.Data, closures: Sequence[Closure], q: n
     return jacobian_from_data(model, data, closures)
 
 
-def jacobian_from_data(model: pin.Model, data: pin.Data, closures: Sequence[Closure]) -> np.ndarray:
-    """Closure Jacobian from joint Jacobians and frame placements already in ``data``, shape (m, nv)."""
-    J = np.empty((closure_rows(closures), model.nv))
+def jacobian_from_data(
+    model: pin.Model, data: pin.Data, closures: Sequence[Closure], out: np.ndarray | None = None
+) -> np.ndarray:
+    """Closure Jacobian from joint Jacobians and frame placements already in ``data``, shape (m, nv).
+
+    Written into ``out`` (shape (m, nv)) when given, for solvers that reuse their buffers.
+    """
+    J = np.empty((closure_rows(closures), model.nv)) if out is None else out
     for c in closures:
         fa, fb = c.frame_ids
         Ja = pin.getFrameJacobian(model, data, fa, _LWA)  # (6, nv)
         Jb = pin.getFrameJacobian(model, data, fb, _LWA)
-        r = c.rows
-        J[r.start : r.start + 3] = Jb[:3] - Ja[:3]
+        start, stop = c.rows.start, c.rows.stop
+        J[start : start + 3] = Jb[:3] - Ja[:3]
         kind = c.spec.type
         if kind == "point":
             continue
@@ -132,9 +143,9 @@ def jacobian_from_data(model: pin.Model, data: pin.Data, closures: Sequence[Clos
         Ra = data.oMf[fa].rotation
         dw = Jb[3:] - Ja[3:]  # (3, nv) world angular velocity of B relative to A
         if kind == "weld":
-            J[r.start + 3 : r.stop] = pin.Jlog3(Ra.T @ Rb) @ Rb.T @ dw
+            J[start + 3 : stop] = pin.Jlog3(Ra.T @ Rb) @ Rb.T @ dw
         else:
             assert c.axis is not None and c.normal_basis is not None
             w = Rb @ c.axis
-            J[r.start + 3 : r.stop] = -c.normal_basis.T @ Ra.T @ pin.skew(w) @ dw
+            J[start + 3 : stop] = -c.normal_basis.T @ Ra.T @ pin.skew(w) @ dw
     return J

@@ -27,6 +27,9 @@ from .task import Task
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
 
+INVERSE_RTOL = 1e-12
+r""":math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x its largest."""
+
 
 @dataclass(frozen=True)
 class ClosedChainJacobians:
@@ -55,7 +58,7 @@ class ClosedChainJacobians:
         Raises:
             SingularConfiguration: when :math:`T` is singular (inverse-kinematics singularity).
         """
-        return self.N @ self._T_inverse()
+        return self._times_T_inverse(self.N)
 
     @property
     def J_ce(self) -> np.ndarray:
@@ -64,21 +67,67 @@ class ClosedChainJacobians:
         Raises:
             SingularConfiguration: when :math:`T` is singular (inverse-kinematics singularity).
         """
-        return self.C @ self._T_inverse()
+        return self._times_T_inverse(self.C)
 
-    def _T_inverse(self) -> np.ndarray:
-        if self.T.shape[0] != self.T.shape[1]:
-            raise InvalidInput(
-                f"the task has {self.T.shape[0]} coordinates but the mechanism has {self.T.shape[1]} DOF; "
-                "S and J_ce need as many task coordinates as DOF"
-            )
-        s = np.linalg.svd(self.T, compute_uv=False)
-        if s[-1] <= 1e-12 * s[0]:
+    def _times_T_inverse(self, M: np.ndarray) -> np.ndarray:
+        check_square_task(self.T.shape[0], self.T.shape[1], "S and J_ce need")
+        out, singular = times_T_inverse(M, self.T)
+        if singular:
+            s = np.linalg.svd(self.T, compute_uv=False)
             raise SingularConfiguration(
                 f"inverse-kinematics (type 1) singular: the task Jacobian on the feasible motions has "
                 f"singular values {s.tolist()}"
             )
-        return np.linalg.inv(self.T)
+        return out
+
+
+def feasible_motions(
+    J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mobility: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    r"""Feasible-motion basis :math:`N`, closure singular values, :math:`T = J_x N` and :math:`C = S_a N`.
+
+    Batched over leading axes (``J_phi`` of shape (..., m, nv), ``J_x`` of shape (..., n_task, nv)),
+    so that maps of many configurations are computed at once. :math:`N` spans the right
+    singular vectors of the ``mobility`` smallest singular values of :math:`J_\phi` (the
+    identity without closures).
+
+    Returns:
+        ``N`` (..., nv, mobility), the singular values of ``J_phi`` descending (..., min(m, nv)),
+        ``T`` (..., n_task, mobility) and ``C`` (..., n_act, mobility).
+    """
+    nv = J_phi.shape[-1]
+    batch = J_phi.shape[:-2]
+    if J_phi.shape[-2]:
+        _, s, Vt = np.linalg.svd(J_phi)
+        N = np.swapaxes(Vt[..., nv - mobility :, :], -1, -2)
+    else:
+        s = np.zeros((*batch, 0))
+        N = np.broadcast_to(np.eye(nv), (*batch, nv, nv))
+    return N, s, J_x @ N, N[..., actuated_v, :]
+
+
+def times_T_inverse(M: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r""":math:`M T^{-1}` for square :math:`T`, batched over leading axes, and where :math:`T` is singular.
+
+    :math:`T` counts as singular (an inverse-kinematics, type 1, singularity) when
+    :math:`\sigma_{min}(T) \le` :data:`INVERSE_RTOL` :math:`\sigma_{max}(T)`; the product is NaN there.
+
+    Args:
+        M: shape (..., r, k).
+        T: shape (..., k, k).
+
+    Returns:
+        :math:`M T^{-1}` (..., r, k), and the singular mask (...).
+    """
+    sT = np.linalg.svd(T, compute_uv=False)
+    singular = sT[..., -1] <= INVERSE_RTOL * sT[..., 0]
+    any_singular = bool(singular.any())
+    if any_singular:  # solve with the identity in their place, then blank them
+        T = np.where(singular[..., None, None], np.eye(T.shape[-1]), T)
+    out = np.swapaxes(np.linalg.solve(np.swapaxes(T, -1, -2), np.swapaxes(M, -1, -2)), -1, -2)
+    if any_singular:
+        out[singular] = np.nan
+    return out, singular
 
 
 def closed_chain_jacobians(mech: Mechanism, q: Any) -> ClosedChainJacobians:
@@ -98,14 +147,8 @@ def closed_chain_jacobians(mech: Mechanism, q: Any) -> ClosedChainJacobians:
     pin.updateFramePlacements(model, data)
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
     J_x = task.jacobian_from_data(model, data)
-    mobility = mech.mobility
-    if J_phi.shape[0]:
-        _, s, Vt = np.linalg.svd(J_phi)
-        N = Vt[mech.nv - mobility :].T
-    else:
-        s = np.zeros(0)
-        N = np.eye(mech.nv)
-    return ClosedChainJacobians(J_phi, J_x, N, s, J_x @ N, N[mech.actuated_v_indices])
+    N, s, T, C = feasible_motions(J_phi, J_x, mech.actuated_v_indices, mech.mobility)
+    return ClosedChainJacobians(J_phi, J_x, N, s, T, C)
 
 
 def require_task(mech: Mechanism) -> Task:
@@ -113,3 +156,23 @@ def require_task(mech: Mechanism) -> Task:
     if mech.task_compiled is None:
         raise InvalidInput(f"{mech.name} has no end-effector task; add 'end_effector' to its sidecar")
     return mech.task_compiled
+
+
+def check_square_task(n_task: int, dof: int, needed_by: str, name: str = "") -> None:
+    """Refuse a task whose size differs from the DOF.
+
+    Args:
+        n_task: number of task coordinates.
+        dof: the mechanism's DOF.
+        needed_by: what needs them, completing the message (``"manipulability needs"``).
+        name: the mechanism's name, to start the message with.
+
+    Raises:
+        InvalidInput: when ``n_task != dof``.
+    """
+    if n_task != dof:
+        prefix = f"{name}: " if name else ""
+        raise InvalidInput(
+            f"{prefix}the task has {n_task} coordinates but the mechanism has {dof} DOF; "
+            f"{needed_by} as many task coordinates as DOF"
+        )

@@ -17,6 +17,9 @@ there (the out-of-plane rows of planar closures) are dropped.
 
 from __future__ import annotations
 
+import functools
+import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -27,12 +30,16 @@ from scipy.sparse.csgraph import connected_components, maximum_bipartite_matchin
 
 from . import closures as _closures
 from .jacobians import require_task
+from .task import Task
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
 
 PATTERN_RTOL = 1e-9
 """Entries below ``PATTERN_RTOL`` times the largest entry of their row count as structural zeros."""
+
+MODE_RTOL = 1e-9
+"""A leg block is singular when its determinant is at most ``MODE_RTOL`` times Hadamard's bound."""
 
 
 @dataclass(frozen=True)
@@ -61,18 +68,33 @@ class Leg:
         """A readable name: its actuators, or its joints when it has none."""
         return "+".join(self.actuators or self.joints)
 
+    @functools.cached_property
+    def block(self) -> tuple[np.ndarray, ...]:
+        """Index of the block in the stacked Jacobian: ``A[leg.block]`` has shape (rows, columns)."""
+        return np.ix_(self.rows, self.columns)
+
 
 def ik_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
     """Stacked Jacobian ``[J_phi; J_x]`` of the inverse-kinematics equations, shape (m + n_task, nv)."""
     task = require_task(mech)
     pin.computeJointJacobians(mech.model, mech.data, q)
     pin.updateFramePlacements(mech.model, mech.data)
-    return np.vstack(
-        [
-            _closures.jacobian_from_data(mech.model, mech.data, mech.closures),
-            task.jacobian_from_data(mech.model, mech.data),
-        ]
-    )
+    return ik_jacobian_from_data(mech.model, mech.data, mech.closures, task)
+
+
+def ik_jacobian_from_data(
+    model: pin.Model,
+    data: pin.Data,
+    closures: Sequence[_closures.Closure],
+    task: Task,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """:func:`ik_jacobian` from joint Jacobians and placements already in ``data`` (into ``out`` if given)."""
+    m = _closures.closure_rows(closures)
+    A = np.empty((m + task.size, model.nv)) if out is None else out
+    _closures.jacobian_from_data(model, data, closures, A[:m])
+    task.jacobian_from_data(model, data, A[m:])
+    return A
 
 
 def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
@@ -133,19 +155,46 @@ def _joint_names_by_velocity(mech: Mechanism) -> list[str]:
     return names
 
 
-def working_mode(mech: Mechanism, q: Any, rtol: float = 1e-9) -> tuple[int, ...]:
+def working_mode(mech: Mechanism, q: Any, rtol: float = MODE_RTOL) -> tuple[int, ...]:
     """Sign (+1, -1, or 0 when singular) of each square leg block's determinant at ``q``.
 
-    The zero threshold is ``rtol`` times the product of the block's column norms
-    (Hadamard's bound), so it is scale-free.
+    See :func:`working_mode_from_jacobian`.
     """
-    A = ik_jacobian(mech, mech.check_q(q))
-    out = []
-    for leg in mech.legs:
-        if not leg.square:
-            continue
-        block = A[np.ix_(leg.rows, leg.columns)]
-        det = float(np.linalg.det(block))
-        bound = float(np.prod(np.linalg.norm(block, axis=0)))
-        out.append(0 if abs(det) <= rtol * bound else (1 if det > 0 else -1))
-    return tuple(out)
+    return working_mode_from_jacobian(ik_jacobian(mech, mech.check_q(q)), mech.legs, rtol)
+
+
+def working_mode_from_jacobian(
+    A: np.ndarray, legs: Sequence[Leg], rtol: float = MODE_RTOL
+) -> tuple[int, ...]:
+    """Working mode from the stacked Jacobian ``A`` of :func:`ik_jacobian`: one sign per square leg.
+
+    The sign of each square leg block's determinant, 0 when it is at most ``rtol`` times the
+    product of the block's column norms (Hadamard's bound), so the test is scale-free.
+    """
+    return tuple(_determinant_sign(A[leg.block], rtol) for leg in legs if leg.square)
+
+
+def _determinant_sign(M: np.ndarray, rtol: float) -> int:
+    """Sign of ``det(M)`` for a square ``M``: +1, -1, or 0 at or below ``rtol`` times Hadamard's bound.
+
+    Blocks up to 3 x 3 (every leg of the presets but the 6-DOF end-effector chains) are
+    expanded in Python floats, cheaper than LAPACK at this size.
+    """
+    n = M.shape[0]
+    if n == 1:
+        det = float(M[0, 0])
+        bound = abs(det)
+    elif n == 2:
+        (a, b), (c, d) = M.tolist()
+        det = a * d - b * c
+        bound = math.sqrt((a * a + c * c) * (b * b + d * d))
+    elif n == 3:
+        (a, b, c), (d, e, f), (g, h, i) = M.tolist()
+        det = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+        bound = math.sqrt((a * a + d * d + g * g) * (b * b + e * e + h * h) * (c * c + f * f + i * i))
+    else:
+        det = float(np.linalg.det(M))
+        bound = float(np.prod(np.linalg.norm(M, axis=0)))
+    if abs(det) <= rtol * bound:
+        return 0
+    return 1 if det > 0 else -1

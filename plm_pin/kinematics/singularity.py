@@ -46,12 +46,31 @@ def normalised_margin(M: np.ndarray) -> float:
 
     1 for an empty matrix, 0 for a zero matrix.
     """
-    if M.size == 0:
-        return 1.0
+    return float(normalised_margins(M))
+
+
+def normalised_margins(M: np.ndarray) -> np.ndarray:
+    r""":func:`normalised_margin` of matrices stacked over leading axes, ``M`` (..., r, c) -> (...)."""
+    if min(M.shape[-2:]) == 0:
+        return np.ones(M.shape[:-2])
     s = np.linalg.svd(M, compute_uv=False)
-    if s[0] == 0.0:
-        return 0.0
-    return float(s[min(M.shape) - 1] / s[0]) if min(M.shape) else 1.0
+    return _ratio(s[..., -1], s[..., 0], 0.0)
+
+
+def constraint_margins(s: np.ndarray, rank: int) -> np.ndarray:
+    r"""Constraint margin :math:`\sigma_r / \sigma_1` from closure singular values ``s`` (..., k) -> (...).
+
+    ``rank`` is the generic rank of the closure Jacobian; the margin is 1 without closure
+    rows or for a zero Jacobian.
+    """
+    if rank <= 0 or s.shape[-1] == 0:
+        return np.ones(s.shape[:-1])
+    return _ratio(s[..., rank - 1], s[..., 0], 1.0)
+
+
+def _ratio(s_k: np.ndarray, s_1: np.ndarray, at_zero: float) -> np.ndarray:
+    """``s_k / s_1`` where ``s_1 > 0``, else ``at_zero``."""
+    return np.divide(s_k, s_1, out=np.full(np.shape(s_k), at_zero), where=s_1 > 0.0)
 
 
 def numerical_rank(M: np.ndarray, rtol: float = RANK_RTOL, *, floor: float = 0.0) -> int:
@@ -110,9 +129,7 @@ class SingularityReport:
 
 def report_from_jacobians(mech: Mechanism, jac: ClosedChainJacobians, tol: float) -> SingularityReport:
     """Build the report from Jacobians already computed."""
-    rank = mech.nv - mech.mobility
-    s = jac.closure_singular_values
-    constraint = float(s[rank - 1] / s[0]) if rank > 0 and s.size and s[0] > 0 else 1.0
+    constraint = float(constraint_margins(jac.closure_singular_values, mech.nv - mech.mobility))
     return SingularityReport(constraint, normalised_margin(jac.T), normalised_margin(jac.C), tol)
 
 

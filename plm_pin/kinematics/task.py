@@ -10,6 +10,7 @@ selected entries of the frame's world-aligned twist :math:`(v, \omega)`; for a p
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,25 +46,48 @@ class Task:
         """Number of task coordinates."""
         return len(self.rows)
 
-    @property
+    @functools.cached_property
     def linear(self) -> tuple[int, ...]:
         """Selected translation rows (0..2)."""
         return tuple(r for r in self.rows if r < 3)
 
-    @property
+    @functools.cached_property
     def angular(self) -> tuple[int, ...]:
         """Selected rotation rows (0..2, i.e. rx ry rz)."""
         return tuple(r - 3 for r in self.rows if r >= 3)
+
+    @functools.cached_property
+    def selectors(self) -> tuple[slice | list[int], slice | list[int], slice | list[int]]:
+        """Indices of :attr:`rows` in a 6-vector, of :attr:`linear` and of :attr:`angular` in 3-vectors.
+
+        Slices where the rows are consecutive (the usual case): they index faster than lists.
+        """
+        return _selector(self.rows), _selector(self.linear), _selector(self.angular)
 
     def pose_from_data(self, data: pin.Data) -> np.ndarray:
         """Task coordinates from frame placements already in ``data``, shape (n_task,)."""
         M = data.oMf[self.frame_id]
         full = np.concatenate([M.translation, pin.rpy.matrixToRpy(M.rotation)])
-        return full[list(self.rows)]
+        return full[self.selectors[0]]
 
-    def jacobian_from_data(self, model: pin.Model, data: pin.Data) -> np.ndarray:
-        """Task Jacobian (world-aligned twist rows) from joint Jacobians in ``data``, shape (n_task, nv)."""
-        return pin.getFrameJacobian(model, data, self.frame_id, _LWA)[list(self.rows)]
+    def jacobian_from_data(
+        self, model: pin.Model, data: pin.Data, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Task Jacobian (world-aligned twist rows) from joint Jacobians in ``data``, shape (n_task, nv).
+
+        Written into ``out`` (shape (n_task, nv)) when given.
+        """
+        J = pin.getFrameJacobian(model, data, self.frame_id, _LWA)[self.selectors[0]]
+        if out is None:
+            return J
+        out[:] = J
+        return out
+
+
+def _selector(rows: tuple[int, ...]) -> slice | list[int]:
+    if rows and rows == tuple(range(rows[0], rows[-1] + 1)):
+        return slice(rows[0], rows[-1] + 1)
+    return list(rows)
 
 
 def compile_task(model: pin.Model, frame: str, dofs: tuple[str, ...]) -> Task:
@@ -83,47 +107,50 @@ class TaskTarget:
         """Target ``x`` (task coordinates, shape (n_task,)) for ``task``."""
         self.task = task
         self.x = np.asarray(x, dtype=float)
-        lin = task.linear
-        ang = task.angular
-        self._p = np.zeros(3)
-        self._p[list(lin)] = self.x[: len(lin)]
-        self._rpy = np.zeros(3)
-        self._rpy[list(ang)] = self.x[len(lin) :]
-        self._R = pin.rpy.rpyToMatrix(self._rpy)
-        self._full_rotation = len(ang) == 3
+        _, self._lin, self._ang = task.selectors
+        self._n_lin = nl = len(task.linear)
+        self._x_lin, self._x_ang = self.x[:nl], self.x[nl:]
+        self._R: np.ndarray | None = None  # target rotation, when all three angles are selected
+        if len(task.angular) == 3:
+            rpy = np.empty(3)
+            rpy[self._ang] = self._x_ang
+            self._R = pin.rpy.rpyToMatrix(rpy)
 
     @property
     def size(self) -> int:
         """Number of residual rows."""
         return self.task.size
 
-    def residual(self, data: pin.Data) -> np.ndarray:
-        """Residual from placements in ``data``, shape (n_task,)."""
+    def residual(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
+        """Residual from placements in ``data``, shape (n_task,); written into ``out`` when given."""
         M = data.oMf[self.task.frame_id]
-        lin = list(self.task.linear)
-        ang = list(self.task.angular)
-        dp = (M.translation - self._p)[lin]
-        if self._full_rotation:
-            dr = pin.log3(M.rotation @ self._R.T)
-        else:
-            dr = wrap_angle(pin.rpy.matrixToRpy(M.rotation)[ang] - self._rpy[ang])
-        return np.concatenate([dp, dr])
+        r = np.empty(self.size) if out is None else out
+        nl = self._n_lin
+        r[:nl] = M.translation[self._lin] - self._x_lin
+        if self._R is not None:
+            r[nl:] = pin.log3(M.rotation @ self._R.T)
+        elif nl < r.size:
+            r[nl:] = wrap_angle(pin.rpy.matrixToRpy(M.rotation)[self._ang] - self._x_ang)
+        return r
 
-    def jacobian(self, model: pin.Model, data: pin.Data) -> np.ndarray:
-        """Exact Jacobian of :meth:`residual` from joint Jacobians in ``data``, shape (n_task, nv)."""
+    def jacobian(self, model: pin.Model, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
+        """Exact Jacobian of :meth:`residual` from joint Jacobians in ``data``, shape (n_task, nv).
+
+        Written into ``out`` (shape (n_task, nv)) when given.
+        """
         J = pin.getFrameJacobian(model, data, self.task.frame_id, _LWA)
-        lin = list(self.task.linear)
-        ang = list(self.task.angular)
-        rows = [J[lin]]
-        if ang:
+        A = np.empty((self.size, model.nv)) if out is None else out
+        nl = self._n_lin
+        A[:nl] = J[self._lin]
+        if nl < A.shape[0]:
             R = data.oMf[self.task.frame_id].rotation
-            if self._full_rotation:
+            if self._R is not None:
                 E = R @ self._R.T
-                rows.append(pin.Jlog3(E) @ E.T @ J[3:])
+                A[nl:] = pin.Jlog3(E) @ E.T @ J[3:]
             else:
                 rpy = pin.rpy.matrixToRpy(R)
-                rows.append((pin.rpy.computeRpyJacobianInverse(rpy, pin.ReferenceFrame.WORLD) @ J[3:])[ang])
-        return np.vstack(rows)
+                A[nl:] = (pin.rpy.computeRpyJacobianInverse(rpy, pin.ReferenceFrame.WORLD) @ J[3:])[self._ang]
+        return A
 
 
 def rpy_rates(rpy: np.ndarray, omega: np.ndarray) -> np.ndarray:

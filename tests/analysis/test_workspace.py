@@ -13,9 +13,7 @@ import pytest
 from plm_pin.analysis import manipulability, workspace_map, workspace_sweep
 from plm_pin.analysis._continuation import IKEvaluator
 from plm_pin.exceptions import InvalidInput
-from plm_pin.kinematics import classify, task_pose, working_mode
-from plm_pin.kinematics import closures as kclosures
-from plm_pin.kinematics.task import TaskTarget
+from plm_pin.kinematics import classify, inverse_kinematics, task_pose, working_mode
 from tests.analysis import paper
 from tests.conftest import preset
 
@@ -181,28 +179,28 @@ def test_bad_input_messages():
         workspace_sweep(mech, "x", v).metric("w")
 
 
-@pytest.mark.parametrize("name", ["harada2011_3d4m", "zhao2011_8pss", "enferadi2017_star_triangle"])
-def test_continuation_rows_equal_the_library_closures_and_task_target(name, rng):
-    """The continuation's inline residual and Jacobian equal closures + TaskTarget (planar and spatial)."""
+@pytest.mark.parametrize(
+    ("name", "axes", "steps"),
+    [
+        ("harada2011_3d4m", ("x", "rz"), (0.01, 0.05)),
+        ("zhao2011_8pss", ("x", "ry"), (0.01, 0.02)),
+        ("enferadi2017_star_triangle", ("y", "rz"), (0.005, 0.02)),
+    ],
+)
+def test_continuation_solutions_equal_inverse_kinematics(name, axes, steps):
+    """On 3 x 3 maps (planar, spatial), each configuration is inverse_kinematics's (SVD Newton from q_ref)."""
     mech = preset(name)
-    ev = IKEvaluator.from_mechanism(mech)
-    q = pin.integrate(mech.model, mech.q_ref, rng.normal(scale=0.05, size=mech.nv))
-    x = task_pose(mech, mech.q_ref) + rng.normal(scale=0.05, size=mech.task_compiled.size)
-    r, A = ev.residual_and_jacobian(q, x)
-    target = TaskTarget(mech.task_compiled, x)
-    pin.computeJointJacobians(mech.model, mech.data, q)
-    pin.updateFramePlacements(mech.model, mech.data)
-    r_lib = np.concatenate(
-        [kclosures.residual_from_placements(mech.data, mech.closures), target.residual(mech.data)]
-    )
-    A_lib = np.vstack(
-        [
-            kclosures.jacobian_from_data(mech.model, mech.data, mech.closures),
-            target.jacobian(mech.model, mech.data),
-        ]
-    )
-    np.testing.assert_allclose(r, r_lib, atol=1e-15)
-    np.testing.assert_allclose(A, A_lib, atol=1e-14)
+    x_ref = task_pose(mech, mech.q_ref)
+    dofs = mech.task_compiled.dofs
+    values = tuple(x_ref[dofs.index(a)] + h * np.arange(-1.0, 2.0) for a, h in zip(axes, steps, strict=True))
+    result = workspace_map(mech, axes, values)
+    assert result.reachable.all()
+    poses = result.poses()
+    for i, j in np.ndindex(result.shape):
+        sol = inverse_kinematics(mech, poses[i, j], mech.q_ref)
+        assert sol.mode == result.working_mode
+        gap = pin.difference(mech.model, sol.q, result.q[i, j])
+        assert np.max(np.abs(gap)) <= 1e-12
 
 
 def test_continuation_evaluator_pickles_for_worker_processes():
@@ -214,4 +212,4 @@ def test_continuation_evaluator_pickles_for_worker_processes():
     a, b = ev.solve(x, mech.q_ref, 1e-12), copy.solve(x, mech.q_ref, 1e-12)
     assert a is not None and b is not None
     np.testing.assert_array_equal(a, b)
-    assert copy.mode(*copy.jacobians()) == working_mode(mech, b)
+    assert copy.mode(copy.jacobian()) == working_mode(mech, b)

@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from plm_pin.kinematics import closures
 from plm_pin.models import preset_names
 from tests.conftest import INTEROP, ball_joint_body, fd_jacobian, preset, spatial_6r
 
@@ -106,3 +107,18 @@ def test_spatial_closures_constrain_3_5_6_rows(tmp_path, rng, kind, rank):
     np.testing.assert_allclose(
         mech.closure_jacobian(q), fd_jacobian(mech.closure_residual, mech.model, q), atol=1e-8
     )
+
+
+def test_residual_and_jacobian_fill_a_given_buffer(rng):
+    """With ``out``, the residual and Jacobian are written into the caller's buffers, values unchanged."""
+    mech = preset("zhao2011_8pss")
+    q = pin.integrate(mech.model, mech.q_ref, rng.normal(scale=0.05, size=mech.nv))
+    pin.computeJointJacobians(mech.model, mech.data, q)
+    pin.updateFramePlacements(mech.model, mech.data)
+    m = mech.n_closure_rows
+    r, A = np.full(m + 2, np.nan), np.full((m + 2, mech.nv), np.nan)
+    assert closures.residual_from_placements(mech.data, mech.closures, r[1:-1]).base is r
+    assert closures.jacobian_from_data(mech.model, mech.data, mech.closures, A[1:-1]).base is A
+    np.testing.assert_array_equal(r[1:-1], closures.residual_from_placements(mech.data, mech.closures))
+    np.testing.assert_array_equal(A[1:-1], closures.jacobian_from_data(mech.model, mech.data, mech.closures))
+    assert np.isnan(r[[0, -1]]).all() and np.isnan(A[[0, -1]]).all()

@@ -12,9 +12,11 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from scipy.linalg import null_space
 
 from plm_pin import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, task_pose, working_modes
+from plm_pin.kinematics.jacobians import feasible_motions, times_T_inverse
 from plm_pin.models import (
     ZHAO2011_GUIDE_DIRECTIONS,
     ZHAO2011_GUIDE_POINTS,
@@ -245,3 +247,37 @@ def test_jacobians_refuse_a_malformed_configuration():
     """A configuration of the wrong size raises InvalidInput."""
     with pytest.raises(InvalidInput, match=r"^q must have shape \(9,\), got \(3,\)$"):
         closed_chain_jacobians(preset("harada2011_3d4m"), [0.0, 0.0, 0.0])
+
+
+def test_times_T_inverse_is_the_inverse_product_and_blanks_singular_T(rng):
+    """Batched M T^-1 equals M @ inv(T) per matrix; a rank-deficient T gives NaN and is flagged."""
+    T = rng.normal(size=(4, 3, 3))
+    T[2, :, 2] = T[2, :, 0] + T[2, :, 1]  # rank 2
+    M = rng.normal(size=(4, 5, 3))
+    out, singular = times_T_inverse(M, T)
+    assert singular.tolist() == [False, False, True, False]
+    for k in (0, 1, 3):
+        np.testing.assert_allclose(out[k], M[k] @ np.linalg.inv(T[k]), rtol=1e-12, atol=1e-12)
+    assert np.all(np.isnan(out[2]))
+
+
+def test_feasible_motions_of_a_batch_span_each_null_space(rng):
+    """On a stack, N spans scipy's null space of J_phi; T and C have its singular values."""
+    mech = preset("zhao2011_8pss")
+    jacs = [closed_chain_jacobians(mech, q) for q in _sampled_assemblies(mech, rng, 3)]
+    J_phi, J_x = np.stack([j.J_phi for j in jacs]), np.stack([j.J_x for j in jacs])
+    N, s, T, C = feasible_motions(J_phi, J_x, mech.actuated_v_indices, mech.mobility)
+    for k in range(len(jacs)):  # N is defined up to a rotation: compare basis-free quantities
+        Z = null_space(J_phi[k], rcond=1e-9)  # (nv, mobility)
+        assert Z.shape[1] == mech.mobility
+        np.testing.assert_allclose(N[k] @ N[k].T, Z @ Z.T, atol=1e-12)
+        np.testing.assert_allclose(s[k], np.linalg.svd(J_phi[k], compute_uv=False), rtol=1e-12, atol=1e-13)
+        for a, b in ((T[k], J_x[k] @ Z), (C[k], Z[mech.actuated_v_indices])):
+            sv = np.linalg.svd(a, compute_uv=False)
+            np.testing.assert_allclose(sv, np.linalg.svd(b, compute_uv=False), rtol=1e-12)
+
+
+def _sampled_assemblies(mech, rng, n):
+    """``n`` assembled configurations near the reference (the inverse kinematics of perturbed poses)."""
+    x = task_pose(mech, mech.q_ref)
+    return [inverse_kinematics(mech, x + rng.normal(scale=0.01, size=x.size), mech.q_ref).q for _ in range(n)]

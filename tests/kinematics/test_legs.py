@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from plm_pin.kinematics import inverse_kinematics, working_mode, working_modes
-from plm_pin.kinematics.legs import ik_jacobian
+from plm_pin.kinematics.legs import Leg, ik_jacobian, working_mode_from_jacobian
 from plm_pin.models import preset_names
 from tests.conftest import preset
 
@@ -151,3 +151,19 @@ def test_fivebar_has_four_working_modes_with_every_sign():
     assert sorted(s.mode for s in solutions) == sorted(itertools.product((-1, 1), repeat=2))
     for s in solutions:
         assert s.residual_norm <= 1e-12
+
+
+def test_working_mode_from_jacobian_signs_are_lapack_determinant_signs(rng):
+    """Block signs (1 x 1 to 4 x 4) are numpy's determinant signs; a rank-deficient block gives 0."""
+    A = rng.normal(size=(11, 11))
+    sizes = (1, 2, 3, 4)
+    starts = np.cumsum((0, *sizes))
+    legs = [Leg(tuple(range(a, b)), tuple(range(a, b))[::-1], (), ()) for a, b in itertools.pairwise(starts)]
+    legs.append(Leg((10,), (9, 10), (), ()))  # not square: no sign
+    expected = tuple(int(np.sign(np.linalg.det(A[np.ix_(leg.rows, leg.columns)]))) for leg in legs[:-1])
+    assert working_mode_from_jacobian(A, legs) == expected
+    for leg in legs[1:4]:  # repeat a column of each block of size 2 to 4: singular
+        B = A.copy()
+        B[list(leg.rows), leg.columns[0]] = B[list(leg.rows), leg.columns[1]]
+        signs = working_mode_from_jacobian(B, legs)
+        assert signs[legs.index(leg)] == 0

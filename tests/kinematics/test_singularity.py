@@ -17,6 +17,7 @@ import plm_pin
 from plm_pin import PoseUnreachable, SingularConfiguration
 from plm_pin.description import write_description
 from plm_pin.kinematics import classify, closed_chain_jacobians, forward_kinematics, inverse_kinematics
+from plm_pin.kinematics.singularity import normalised_margin, normalised_margins
 from plm_pin.mechanism import Mechanism
 from plm_pin.models import build_2prrrp, preset_names
 from tests.conftest import preset
@@ -252,3 +253,15 @@ def test_asymmetric_rods_cannot_share_a_slider_position():
         pose = (rng.uniform(-0.05, 0.05), rng.uniform(0.0, 0.15), rng.uniform(-0.6, 0.6))
         sol = inverse_kinematics(mech, pose, mode=(1, 1, 1, 1))  # sliders 1, 2 on one side: closest
         assert abs(sol.actuators[0] - sol.actuators[1]) >= 0.24 - 0.17 - 1e-12
+
+
+def test_normalised_margins_of_a_stack_are_inverse_condition_numbers(rng):
+    """Batched sigma_min / sigma_max is numpy's 1 / cond per matrix, 0 for a zero matrix, 1 if empty."""
+    M = rng.normal(size=(5, 4, 3))
+    M[3] = 0.0
+    margins = normalised_margins(M)
+    for k in (0, 1, 2, 4):
+        assert margins[k] == pytest.approx(1.0 / np.linalg.cond(M[k]), rel=1e-12)
+        assert normalised_margin(M[k]) == margins[k]
+    assert margins[3] == 0.0
+    np.testing.assert_array_equal(normalised_margins(np.zeros((2, 0, 3))), [1.0, 1.0])

@@ -179,3 +179,32 @@ def test_check_task_vector_refuses_bad_input(x, message):
     """Non-numbers, NaN and wrongly shaped task vectors raise InvalidInput saying why."""
     with pytest.raises(InvalidInput, match=message):
         check_task_vector(x, 2)
+
+
+def test_task_target_on_unordered_rows_fills_a_given_buffer(rng):
+    """Rows (z, x, rz, rx): residual = wrapped pose error, Jacobian = finite differences, into ``out``."""
+    mech = preset("zhao2011_8pss")
+    task = compile_task(
+        mech.model, mech.model.frames[mech.task_compiled.frame_id].name, ("z", "x", "rz", "rx")
+    )
+    data = mech.model.createData()
+    q = _random_q(mech, rng, 0.05)
+    pin.framesForwardKinematics(mech.model, data, q)
+    M = data.oMf[task.frame_id]
+    rpy = pin.rpy.matrixToRpy(M.rotation)
+    x = np.array([M.translation[2] - 0.01, M.translation[0] + 0.02, rpy[2] - 2 * math.pi + 0.03, rpy[0]])
+    target = TaskTarget(task, x)
+    r = np.full(6, np.nan)
+    assert target.residual(data, r[1:5]).base is r
+    np.testing.assert_allclose(r[1:5], [0.01, -0.02, -0.03, 0.0], atol=1e-12)
+
+    def residual(qq):
+        pin.framesForwardKinematics(mech.model, data, qq)
+        return target.residual(data)
+
+    pin.computeJointJacobians(mech.model, data, q)
+    pin.updateFramePlacements(mech.model, data)
+    A = np.full((6, mech.nv), np.nan)
+    assert target.jacobian(mech.model, data, A[1:5]).base is A
+    np.testing.assert_allclose(A[1:5], fd_jacobian(residual, mech.model, q), atol=1e-8)
+    assert np.isnan(A[[0, 5]]).all()
