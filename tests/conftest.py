@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import math
 from pathlib import Path
 
 import numpy as np
@@ -128,3 +129,42 @@ def spatial_6r(tmp_path: Path, closure: dict) -> Mechanism:
 def rng() -> np.random.Generator:
     """A seeded random generator."""
     return np.random.default_rng(1234)
+
+
+def prrrp_paper_configuration(
+    mech: Mechanism,
+    pose: tuple[float, float, float],
+    lengths: tuple[float, ...],
+    rt: float,
+    signs: tuple[int, ...],
+) -> np.ndarray:
+    """Configuration of a 2-PRRRP preset from Harada 2011 eqs. (2)-(3), written independently of plm_pin.
+
+    c_i = L_ix + s_i sqrt(l_i^2 - L_iy^2) (clipped at 0 under the root, so a rod can be put
+    exactly vertical), phi_i = atan2(L_iy, L_ix - c_i), plate pivot theta - phi_1.
+    """
+    x, y, theta = pose
+    q = mech.q_ref.copy()
+    for i, sign in zip((1, 2, 3, 4), signs, strict=True):
+        s = -rt if i in (1, 2) else rt
+        Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
+        c = Lx + sign * math.sqrt(max(lengths[i - 1] ** 2 - Ly**2, 0.0))
+        phi = math.atan2(Ly, Lx - c)
+        q[mech.model.joints[mech.model.getJointId(f"slider{i}")].idx_q] = c
+        q[mech.model.joints[mech.model.getJointId(f"rod{i}_pivot")].idx_q] = phi
+        if i == 1:
+            q[mech.model.joints[mech.model.getJointId("plate_pivot")].idx_q] = theta - phi
+    return q
+
+
+def with_rotated_null_basis(mech: Mechanism, jac, rng: np.random.Generator):
+    """The same Jacobians with N replaced by N Q, Q a random orthogonal matrix of determinant -1."""
+    from plm_pin.kinematics import ClosedChainJacobians
+
+    Q, _ = np.linalg.qr(rng.normal(size=(jac.N.shape[1], jac.N.shape[1])))
+    if np.linalg.det(Q) > 0:
+        Q[:, 0] *= -1.0
+    NQ = jac.N @ Q
+    return ClosedChainJacobians(
+        jac.J_phi, jac.J_x, NQ, jac.closure_singular_values, jac.J_x @ NQ, NQ[mech.actuated_v_indices]
+    )

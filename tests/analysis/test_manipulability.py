@@ -12,7 +12,7 @@ from plm_pin.analysis import manipulability, manipulability_at, manipulability_f
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import ClosedChainJacobians, closed_chain_jacobians, inverse_kinematics
 from tests.analysis import paper
-from tests.conftest import preset
+from tests.conftest import preset, with_rotated_null_basis
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1
 LEGS = {"harada2011_3d4m": (1, 2, 3, 4), "harada2011_3d3m": (1, 2, 4)}
@@ -100,13 +100,7 @@ def test_w_and_condition_do_not_depend_on_the_null_space_basis(rng):
     """Replacing N by N Q (Q orthogonal, det -1) leaves w and the condition number unchanged."""
     mech = preset("harada2011_3d4m")
     jac = closed_chain_jacobians(mech, mech.q_ref)
-    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
-    if np.linalg.det(Q) > 0:
-        Q[:, 0] *= -1.0
-    NQ = jac.N @ Q
-    other = ClosedChainJacobians(
-        jac.J_phi, jac.J_x, NQ, jac.closure_singular_values, jac.J_x @ NQ, NQ[mech.actuated_v_indices]
-    )
+    other = with_rotated_null_basis(mech, jac, rng)
     a, b = manipulability_from_jacobians(jac), manipulability_from_jacobians(other)
     assert b.w == pytest.approx(a.w, rel=1e-12)
     assert b.condition_number == pytest.approx(a.condition_number, rel=1e-10)

@@ -16,10 +16,10 @@ from plm_pin.analysis import (
     workspace_sweep,
 )
 from plm_pin.exceptions import InvalidInput
-from plm_pin.kinematics import ClosedChainJacobians, closed_chain_jacobians, inverse_kinematics, working_mode
+from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, working_mode
 from tests.analysis import paper
 from tests.analysis.conftest import FIG6_L, FIG6_RT
-from tests.conftest import preset
+from tests.conftest import preset, with_rotated_null_basis
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1
 THETAS = np.radians(np.linspace(-85.0, 85.0, 69))  # 2.5 deg samples
@@ -150,13 +150,7 @@ def test_signed_function_is_basis_independent_with_the_sign_of_det_J_ce(rng):
     pose = (0.01, 0.07, 0.2)
     q = inverse_kinematics(mech, pose, mech.q_ref).q
     jac = closed_chain_jacobians(mech, q)
-    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
-    if np.linalg.det(Q) > 0:
-        Q[:, 0] *= -1.0
-    NQ = jac.N @ Q
-    other = ClosedChainJacobians(
-        jac.J_phi, jac.J_x, NQ, jac.closure_singular_values, jac.J_x @ NQ, NQ[mech.actuated_v_indices]
-    )
+    other = with_rotated_null_basis(mech, jac, rng)
     g = signed_singularity_function(mech, q)
     assert np.linalg.det(other.T) * np.linalg.det(other.C) == pytest.approx(g, rel=1e-12)
     J = paper.J_ce(pose, paper.slider_positions(pose, L, RT, (1, 2, 4)), L, RT, (1, 2, 4))

@@ -24,7 +24,7 @@ from plm_pin.models import (
     ZHAO2011_STRUT_LENGTHS,
     preset_names,
 )
-from tests.conftest import ball_joint_body, preset
+from tests.conftest import ball_joint_body, preset, prrrp_paper_configuration
 
 EPS = 1e-6
 
@@ -214,18 +214,9 @@ def test_jacobians_at_an_inverse_singularity_raise():
     """With rod 2 vertical (z_2^T a = 0, eq. (9)), S and J_ce raise SingularConfiguration naming the type."""
     mech = preset("harada2015_asymmetric")
     lengths = (0.24, 0.17, 0.17, 0.24)
-    q = mech.q_ref.copy()
     x, theta = 0.0, -0.3
     y = 0.17 + RT * math.sin(theta)  # L_2y = y - r_t sin(theta) = l_2: rod 2 vertical, the others reach
-    for i, sign in zip((1, 2, 3, 4), (-1, 1, -1, 1), strict=True):
-        s = -RT if i in (1, 2) else RT
-        Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
-        c = Lx + sign * math.sqrt(max(lengths[i - 1] ** 2 - Ly**2, 0.0))
-        phi = math.atan2(Ly, Lx - c)
-        q[mech.model.joints[mech.model.getJointId(f"slider{i}")].idx_q] = c
-        q[mech.model.joints[mech.model.getJointId(f"rod{i}_pivot")].idx_q] = phi
-        if i == 1:
-            q[mech.model.joints[mech.model.getJointId("plate_pivot")].idx_q] = theta - phi
+    q = prrrp_paper_configuration(mech, (x, y, theta), lengths, RT, (-1, 1, -1, 1))
     assert np.max(np.abs(mech.closure_residual(q))) < 1e-15
     jac = closed_chain_jacobians(mech, q)
     with pytest.raises(SingularConfiguration, match=r"^inverse-kinematics \(type 1\) singular"):

@@ -16,7 +16,7 @@ import pytest
 from plm_pin.kinematics import inverse_kinematics, working_mode, working_modes
 from plm_pin.kinematics.legs import Leg, ik_jacobian, working_mode_from_jacobian
 from plm_pin.models import preset_names
-from tests.conftest import preset
+from tests.conftest import preset, prrrp_paper_configuration
 
 # name -> (joints of the end-effector chain, joints of every other leg)
 STRUCTURE: dict[str, tuple[set[str], list[set[str]]]] = {
@@ -122,17 +122,7 @@ def test_vertical_rod_gives_a_zero_mode():
     mech = preset("harada2015_asymmetric")
     theta = -0.3
     x, y = 0.0, 0.17 + 0.05 * math.sin(theta)  # left pair at l2 = 0.17 m: rod 2 vertical
-    q = mech.q_ref.copy()
-    for i, sign in zip((1, 2, 3, 4), (-1, 1, -1, 1), strict=True):
-        s = -0.05 if i in (1, 2) else 0.05
-        Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
-        l = (0.24, 0.17, 0.17, 0.24)[i - 1]
-        c = Lx + sign * math.sqrt(max(l**2 - Ly**2, 0.0))
-        phi = math.atan2(Ly, Lx - c)
-        q[mech.model.joints[mech.model.getJointId(f"slider{i}")].idx_q] = c
-        q[mech.model.joints[mech.model.getJointId(f"rod{i}_pivot")].idx_q] = phi
-        if i == 1:
-            q[mech.model.joints[mech.model.getJointId("plate_pivot")].idx_q] = theta - phi
+    q = prrrp_paper_configuration(mech, (x, y, theta), (0.24, 0.17, 0.17, 0.24), 0.05, (-1, 1, -1, 1))
     assert np.max(np.abs(mech.closure_residual(q))) < 1e-15
     assert working_mode(mech, q) == (1, 0, 1, -1)
 
