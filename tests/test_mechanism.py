@@ -190,3 +190,23 @@ def test_actuator_positions_of_stacked_configurations(rng):
         plm_pin.InvalidInput, match=r"^q must stack configurations of size \d+, got shape \(2, 1\)$"
     ):
         mech.actuator_positions(np.zeros((2, 1)))
+
+
+def test_closure_errors_are_the_gap_between_the_closure_frames():
+    """closure_errors gives each closure's largest coordinate gap, here from planar four-bar geometry."""
+    mech = preset("fourbar")
+    q = np.array([0.3, -0.2, 1.9])  # crank, coupler (relative), rocker angles [rad]: loop open
+    crank, coupler, rocker, ground = 0.10, 0.25, 0.20, 0.30
+    tip_coupler = crank * np.array([math.cos(q[0]), math.sin(q[0])]) + coupler * np.array(
+        [math.cos(q[0] + q[1]), math.sin(q[0] + q[1])]
+    )
+    tip_rocker = np.array([ground, 0.0]) + rocker * np.array([math.cos(q[2]), math.sin(q[2])])
+    expected = float(np.max(np.abs(tip_rocker - tip_coupler)))
+    assert mech.closure_errors(q) == {"coupler_rocker": pytest.approx(expected, abs=1e-15)}
+
+
+def test_frame_names_hold_the_urdf_links_and_joints():
+    """frame_names lists the URDF's links and joints, the sidecar's closure frames among them."""
+    names = preset("harada2011_3d4m").frame_names
+    for name in ("base", "plate", "plate_center", "rod2_tip", "slider1", "rod1_pivot", "plate_pivot"):
+        assert name in names
