@@ -11,7 +11,10 @@ rotations :math:`R` and world angular velocities :math:`\omega` of the two frame
 - ``weld`` (6 rows): the point rows, then :math:`\log_3(R_A^T R_B)` [rad].
 
 The Jacobians are exact derivatives of these residuals along the tangent space
-(``pin.integrate`` convention), so they can be checked by finite differences.
+(``pin.integrate`` convention), so they can be checked by finite differences. The
+acceleration drift :math:`\dot J_\phi v` (what :math:`\ddot\phi` is when the joint
+accelerations vanish) completes the second-order closure condition
+:math:`J_\phi a + \dot J_\phi v = 0` of closed-chain dynamics.
 """
 
 from __future__ import annotations
@@ -149,3 +152,52 @@ def jacobian_from_data(
             w = Rb @ c.axis
             J[start + 3 : stop] = -c.normal_basis.T @ Ra.T @ pin.skew(w) @ dw
     return J
+
+
+def drift_from_data(
+    model: pin.Model, data: pin.Data, closures: Sequence[Closure], out: np.ndarray | None = None
+) -> np.ndarray:
+    r"""Closure acceleration drift :math:`\dot J_\phi(q, v)\, v`, shape (m,).
+
+    ``data`` must hold the kinematics of ``(q, v, 0)``: call
+    ``pin.forwardKinematics(model, data, q, v, 0 * v)`` then ``pin.updateFramePlacements``.
+    The result is :math:`\ddot\phi` at zero joint acceleration, exact everywhere (off the
+    closure manifold too), so that :math:`J_\phi a + \dot J_\phi v = \ddot\phi`.
+    Written into ``out`` (shape (m,)) when given.
+    """
+    gamma = np.empty(closure_rows(closures)) if out is None else out
+    for c in closures:
+        fa, fb = c.frame_ids
+        acc_a = pin.getFrameClassicalAcceleration(model, data, fa, _LWA)
+        acc_b = pin.getFrameClassicalAcceleration(model, data, fb, _LWA)
+        start, stop = c.rows.start, c.rows.stop
+        gamma[start : start + 3] = acc_b.linear - acc_a.linear
+        kind = c.spec.type
+        if kind == "point":
+            continue
+        w_a = pin.getFrameVelocity(model, data, fa, _LWA).angular
+        w_b = pin.getFrameVelocity(model, data, fb, _LWA).angular
+        dw, dalpha = w_b - w_a, acc_b.angular - acc_a.angular
+        Ra, Rb = data.oMf[fa].rotation, data.oMf[fb].rotation
+        if kind == "weld":
+            # r = log3(R_A^T R_B), r' = Jlog3 w_rel with w_rel = R_B^T dw (B's coordinates)
+            R = Ra.T @ Rb
+            w_rel = Rb.T @ dw
+            dw_rel = Rb.T @ (dalpha - np.cross(w_b, dw))
+            gamma[start + 3 : stop] = pin.Jlog3(R) @ dw_rel + pin.Hlog3(R, w_rel) @ w_rel
+        else:
+            # r = E^T R_A^T w with w = R_B u: r'' = E^T R_A^T (-w_a x (dw x w) + dalpha x w + dw x (w_b x w))
+            assert c.axis is not None and c.normal_basis is not None
+            w = Rb @ c.axis
+            acc = -np.cross(w_a, np.cross(dw, w)) + np.cross(dalpha, w) + np.cross(dw, np.cross(w_b, w))
+            gamma[start + 3 : stop] = c.normal_basis.T @ (Ra.T @ acc)
+    return gamma
+
+
+def drift(
+    model: pin.Model, data: pin.Data, closures: Sequence[Closure], q: np.ndarray, v: np.ndarray
+) -> np.ndarray:
+    r"""Closure acceleration drift :math:`\dot J_\phi(q, v)\, v`, shape (m,); see :func:`drift_from_data`."""
+    pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
+    pin.updateFramePlacements(model, data)
+    return drift_from_data(model, data, closures)

@@ -83,6 +83,16 @@ class Task:
         out[:] = J
         return out
 
+    def drift_from_data(self, model: pin.Model, data: pin.Data) -> np.ndarray:
+        r"""Task acceleration drift :math:`\dot J_x v`, shape (n_task,).
+
+        ``data`` must hold the kinematics of ``(q, v, 0)`` (``pin.forwardKinematics`` with zero
+        acceleration, then ``pin.updateFramePlacements``): the classical acceleration of the
+        frame origin and the angular acceleration, world-aligned, of the selected rows.
+        """
+        acc = pin.getFrameClassicalAcceleration(model, data, self.frame_id, _LWA)
+        return acc.vector[self.selectors[0]]
+
 
 def _selector(rows: tuple[int, ...]) -> slice | list[int]:
     if rows and rows == tuple(range(rows[0], rows[-1] + 1)):

@@ -122,3 +122,51 @@ def test_residual_and_jacobian_fill_a_given_buffer(rng):
     np.testing.assert_array_equal(r[1:-1], closures.residual_from_placements(mech.data, mech.closures))
     np.testing.assert_array_equal(A[1:-1], closures.jacobian_from_data(mech.model, mech.data, mech.closures))
     assert np.isnan(r[[0, -1]]).all() and np.isnan(A[[0, -1]]).all()
+
+
+def _drift_fd(mech, jac, q, v, eps=1e-6):
+    """d/dt (J(q(t)) v) along q(t) = q (+) t v, by central differences."""
+    plus = jac(pin.integrate(mech.model, q, eps * v))
+    minus = jac(pin.integrate(mech.model, q, -eps * v))
+    return (plus - minus) @ v / (2 * eps)
+
+
+@pytest.mark.parametrize(
+    "kind", [{"type": "point"}, {"type": "weld"}, {"type": "revolute", "axis": [0, 0.6, 0.8]}]
+)
+def test_drift_matches_finite_differences_of_the_jacobian(tmp_path, rng, kind):
+    """The acceleration drift equals d/dt(J_phi) v for every closure type, off closure too."""
+    mech = ball_joint_body(tmp_path, kind)
+    for _ in range(5):
+        q = _random_q(mech, rng, scale=1.0)
+        v = rng.normal(size=mech.nv)
+        gamma = closures.drift(mech.model, mech.data, mech.closures, q, v)
+        np.testing.assert_allclose(gamma, _drift_fd(mech, mech.closure_jacobian, q, v), atol=1e-7)
+
+
+@pytest.mark.parametrize("name", ["harada2011_3d4m", "zhao2011_8pss", "enferadi2017_star_triangle"])
+def test_drift_matches_finite_differences_on_presets(name, rng):
+    """On the presets (point and weld closures), drift == d/dt(J_phi) v at assembled configurations."""
+    mech = preset(name)
+    q = mech.q_ref
+    v = rng.normal(size=mech.nv)
+    gamma = closures.drift(mech.model, mech.data, mech.closures, q, v)
+    np.testing.assert_allclose(gamma, _drift_fd(mech, mech.closure_jacobian, q, v), atol=1e-7)
+
+
+def test_task_drift_matches_finite_differences(rng):
+    """The task drift equals d/dt(J_x) v (world-aligned twist rows of the task frame)."""
+    mech = preset("zhao2011_8pss")
+    task = mech.task_compiled
+
+    def jac(q):
+        pin.computeJointJacobians(mech.model, mech.data, q)
+        pin.updateFramePlacements(mech.model, mech.data)
+        return task.jacobian_from_data(mech.model, mech.data).copy()
+
+    q = _random_q(mech, rng, scale=0.3)
+    v = rng.normal(size=mech.nv)
+    pin.forwardKinematics(mech.model, mech.data, q, v, np.zeros(mech.nv))
+    pin.updateFramePlacements(mech.model, mech.data)
+    gamma = task.drift_from_data(mech.model, mech.data)
+    np.testing.assert_allclose(gamma, _drift_fd(mech, jac, q, v), atol=1e-7)
