@@ -76,4 +76,19 @@ class SingularConfiguration(PlmError):
 
 
 class AllocationInfeasible(PlmError):
-    """No actuator-force allocation meets the limits."""
+    """No actuator-force allocation meets the limits and conditions.
+
+    Attributes:
+        least_violating: the balancing actuator forces that violate the limits least (in the
+            sum of squared violations) [N, N m], shape (n_act,).
+        saturated: names of the actuators at or beyond a limit in that solution.
+        violation: by how much each limit or condition is exceeded there, keyed by its name [N, N m].
+    """
+
+    def __init__(
+        self, message: str, least_violating: object, saturated: Sequence[str], violation: dict[str, float]
+    ) -> None:
+        self.least_violating = least_violating
+        self.saturated = tuple(saturated)
+        self.violation = dict(violation)
+        super().__init__(message)

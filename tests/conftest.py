@@ -146,6 +146,8 @@ def prrrp_paper_configuration(
     x, y, theta = pose
     q = mech.q_ref.copy()
     for i, sign in zip((1, 2, 3, 4), signs, strict=True):
+        if not mech.model.existJointName(f"slider{i}"):
+            continue  # the 3D3M has no leg 3
         s = -rt if i in (1, 2) else rt
         Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
         c = Lx + sign * math.sqrt(max(lengths[i - 1] ** 2 - Ly**2, 0.0))

@@ -139,19 +139,26 @@ def jacobian_from_data(
         Jb = pin.getFrameJacobian(model, data, fb, _LWA)
         start, stop = c.rows.start, c.rows.stop
         J[start : start + 3] = Jb[:3] - Ja[:3]
-        kind = c.spec.type
-        if kind == "point":
-            continue
-        Rb = data.oMf[fb].rotation
-        Ra = data.oMf[fa].rotation
-        dw = Jb[3:] - Ja[3:]  # (3, nv) world angular velocity of B relative to A
-        if kind == "weld":
-            J[start + 3 : stop] = pin.Jlog3(Ra.T @ Rb) @ Rb.T @ dw
-        else:
-            assert c.axis is not None and c.normal_basis is not None
-            w = Rb @ c.axis
-            J[start + 3 : stop] = -c.normal_basis.T @ Ra.T @ pin.skew(w) @ dw
+        if c.spec.type != "point":
+            # rows times the world angular velocity of B relative to A
+            J[start + 3 : stop] = angular_rows(c, data) @ (Jb[3:] - Ja[3:])
     return J
+
+
+def angular_rows(c: Closure, data: pin.Data) -> np.ndarray:
+    r"""Map :math:`G` from relative angular velocity to rotation rows of a closure.
+
+    :math:`\dot\phi_{rot} = G (\omega_B - \omega_A)`, world angular velocities, frame placements
+    already in ``data``; shape (3, 3) for a weld, (2, 3) for a revolute closure. By duality,
+    rotation-row forces :math:`\lambda_{rot}` are the moment :math:`G^T \lambda_{rot}` [N m] on B
+    (its opposite on A).
+    """
+    Ra = data.oMf[c.frame_ids[0]].rotation
+    Rb = data.oMf[c.frame_ids[1]].rotation
+    if c.spec.type == "weld":
+        return pin.Jlog3(Ra.T @ Rb) @ Rb.T
+    assert c.axis is not None and c.normal_basis is not None
+    return -c.normal_basis.T @ Ra.T @ pin.skew(Rb @ c.axis)
 
 
 def drift_from_data(

@@ -1,0 +1,22 @@
+"""Statics of closed chains: balance, redundant actuator-force allocation, reactions, force capability."""
+
+from .allocation import OBJECTIVES
+from .balance import SINGULAR_RTOL, Load, StaticBalance, load_on_frame, static_balance
+from .forces import InternalMode, StaticForces, actuator_limits, internal_modes, static_forces
+from .reactions import JointReaction, LinkForce
+
+__all__ = [
+    "OBJECTIVES",
+    "SINGULAR_RTOL",
+    "InternalMode",
+    "JointReaction",
+    "LinkForce",
+    "Load",
+    "StaticBalance",
+    "StaticForces",
+    "actuator_limits",
+    "internal_modes",
+    "load_on_frame",
+    "static_balance",
+    "static_forces",
+]

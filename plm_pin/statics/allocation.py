@@ -1,0 +1,308 @@
+r"""Redundant actuator-force allocation: which balancing forces to apply, as a small QP.
+
+Every balancing allocation is :math:`f_c = f_p + G y` (:mod:`plm_pin.statics.balance`), so the
+problem is posed in the internal-force coordinates :math:`y` (as many as the redundancy):
+
+- ``"norm"``: minimise :math:`\tfrac12 f_c^T W f_c` (weighted minimum norm; :math:`W = I` by
+  default), i.e. :math:`\min \tfrac12 y^T G^T W G y + y^T G^T W f_p`;
+- ``"max"``: minimise the largest weighted force :math:`\max_i w_i |f_{c,i}|` (then, among
+  the minimisers, the weighted minimum norm, so the answer is unique);
+
+subject to actuator box limits and any linear conditions on other forces (a link's axial
+force, for preloads such as "every rod in compression by at least F"). The internal
+coordinates can also be prescribed outright (Harada 2011's :math:`f_i`, eqs. (20)-(22)).
+
+Without inequalities the norm problem is solved in closed form (its KKT system); with them,
+ProxSuite's dense QP solves it and an active-set polish (the KKT system of the constraints
+ProxSuite found active) brings the answer to round-off. When no allocation meets the
+inequalities, a second QP finds the least-violating one (minimum sum of squared
+violations) and :class:`~plm_pin.exceptions.AllocationInfeasible` carries it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import proxsuite
+
+from ..exceptions import AllocationInfeasible, InvalidInput
+
+OBJECTIVES = ("norm", "max")
+"""Allocation objectives: weighted minimum norm, or minimum largest force."""
+
+FEASIBILITY_RTOL = 1e-9
+"""A limit or condition is met when exceeded by at most FEASIBILITY_RTOL x the force scale."""
+
+_QP_EPS = 1e-11
+
+
+@dataclass(frozen=True)
+class Inequalities:
+    r"""Linear inequalities :math:`lo \le a + D y \le hi` on the internal coordinates.
+
+    Attributes:
+        names: one name per row (an actuator limit or a condition), for messages.
+        offset: :math:`a`, the constrained quantities at :math:`y = 0`, shape (p,).
+        D: their change per internal coordinate, shape (p, k).
+        lower: lower bounds, ``-inf`` where none, shape (p,).
+        upper: upper bounds, ``+inf`` where none, shape (p,).
+    """
+
+    names: tuple[str, ...]
+    offset: np.ndarray
+    D: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+
+    def violation(self, y: np.ndarray) -> np.ndarray:
+        """By how much each row is exceeded at ``y`` (zero when met), shape (p,)."""
+        v = self.offset + self.D @ y
+        return np.maximum(np.maximum(self.lower - v, v - self.upper), 0.0)
+
+
+@dataclass(frozen=True)
+class Allocation:
+    """Result of an allocation.
+
+    Attributes:
+        f_c: actuator forces [N] or torques [N m], shape (n_act,).
+        y: internal-force coordinates in the balance's internal basis, shape (k,).
+        active: names of the inequality rows at their bounds.
+    """
+
+    f_c: np.ndarray
+    y: np.ndarray
+    active: tuple[str, ...]
+
+
+def check_weights(weights: object, n: int) -> np.ndarray:
+    """Weights as an SPD matrix (n, n): None -> identity, a vector -> its diagonal.
+
+    Raises:
+        InvalidInput: wrong shape, non-finite, not symmetric positive definite.
+    """
+    if weights is None:
+        return np.eye(n)
+    W = np.asarray(weights, dtype=float)
+    if W.shape == (n,):
+        W = np.diag(W)
+    if W.shape != (n, n) or not np.all(np.isfinite(W)):
+        raise InvalidInput(
+            f"weights must be {n} positive numbers or an ({n}, {n}) SPD matrix, got shape {W.shape}"
+        )
+    if not np.allclose(W, W.T) or np.linalg.eigvalsh(W)[0] <= 0.0:
+        raise InvalidInput("weights must be symmetric positive definite")
+    return W
+
+
+def allocate(
+    f_p: np.ndarray,
+    G: np.ndarray,
+    ineq: Inequalities,
+    *,
+    weights: np.ndarray,
+    objective: str = "norm",
+    internal: np.ndarray | None = None,
+    actuator_names: Sequence[str] = (),
+) -> Allocation:
+    r"""Choose :math:`f_c = f_p + G y` by ``objective`` under ``ineq``.
+
+    Args:
+        f_p: minimum-norm balancing forces, shape (n_act,).
+        G: orthonormal internal-force basis, shape (n_act, k).
+        ineq: inequalities on :math:`y` (actuator limits and conditions).
+        weights: SPD weight matrix (n_act, n_act) (see :func:`check_weights`).
+        objective: one of :data:`OBJECTIVES`.
+        internal: prescribed :math:`y` (shape (k,)), or None to optimise it.
+        actuator_names: names for messages (``f_c[i]`` when empty).
+
+    Raises:
+        InvalidInput: unknown objective, wrong-sized ``internal``.
+        AllocationInfeasible: no allocation meets ``ineq``; carries the least-violating one.
+    """
+    if objective not in OBJECTIVES:
+        raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
+    k = G.shape[1]
+    names = tuple(actuator_names) or tuple(f"f_c[{i}]" for i in range(f_p.shape[0]))
+    scale = max(float(np.max(np.abs(f_p), initial=0.0)), float(np.max(np.abs(ineq.offset), initial=0.0)), 1.0)
+    tol = FEASIBILITY_RTOL * scale
+    fixed = internal is not None or k == 0
+    y: np.ndarray | None
+    if internal is not None:
+        y = np.asarray(internal, dtype=float)
+        if y.shape != (k,) or not np.all(np.isfinite(y)):
+            raise InvalidInput(
+                f"internal must be {k} finite numbers (one per internal force), got shape {y.shape}"
+            )
+    elif k == 0:
+        y = np.zeros(0)
+    elif objective == "norm":
+        y = _min_norm(f_p, G, weights, ineq, tol)
+    else:
+        y = _min_max(f_p, G, weights, ineq, tol)
+    if y is None or np.max(ineq.violation(y), initial=0.0) > tol:
+        _raise_infeasible(f_p, G, ineq, names, tol, y if fixed else None)
+    assert y is not None
+    f_c = f_p + G @ y
+    v = ineq.offset + ineq.D @ y
+    active = tuple(
+        n
+        for n, vi, lo, hi in zip(ineq.names, v, ineq.lower, ineq.upper, strict=True)
+        if abs(vi - lo) <= tol or abs(vi - hi) <= tol
+    )
+    return Allocation(f_c, y, active)
+
+
+def _min_norm(
+    f_p: np.ndarray, G: np.ndarray, W: np.ndarray, ineq: Inequalities, tol: float
+) -> np.ndarray | None:
+    H = G.T @ W @ G
+    g = G.T @ W @ f_p
+    y0 = np.linalg.solve(H, -g)
+    if np.max(ineq.violation(y0), initial=0.0) <= tol:
+        return y0  # the unconstrained minimiser already meets every inequality
+    return _qp(H, g, ineq, tol)
+
+
+def _min_max(
+    f_p: np.ndarray, G: np.ndarray, W: np.ndarray, ineq: Inequalities, tol: float
+) -> np.ndarray | None:
+    """Minimise t subject to |w_i f_i| <= t, then the weighted norm at that t."""
+    n, k = G.shape
+    w = np.sqrt(np.diag(W))
+    # z = (y, t): rows  w_i (f_p + G y)_i - t <= 0  and  w_i (f_p + G y)_i + t >= 0
+    D = np.vstack(
+        [np.hstack([w[:, None] * G, -np.ones((n, 1))]), np.hstack([w[:, None] * G, np.ones((n, 1))])]
+    )
+    rows = Inequalities(
+        ("max",) * 2 * n,
+        np.concatenate([w * f_p, w * f_p]),
+        D,
+        np.concatenate([np.full(n, -np.inf), np.zeros(n)]),
+        np.concatenate([np.zeros(n), np.full(n, np.inf)]),
+    )
+    both = _stack(rows, _extend(ineq, 1))
+    H = np.zeros((k + 1, k + 1))
+    g = np.zeros(k + 1)
+    g[-1] = 1.0
+    z = _qp(H, g, both, tol)
+    if z is None:
+        return None
+    t = float(np.max(np.abs(w * (f_p + G @ z[:k]))))  # the polished optimum
+    capped = Inequalities(("max",) * n, w * f_p, w[:, None] * G, np.full(n, -t), np.full(n, t))
+    return _min_norm(f_p, G, W, _stack(capped, ineq), tol)
+
+
+def _extend(ineq: Inequalities, extra: int) -> Inequalities:
+    """The same inequalities on ``(y, extra variables)``."""
+    D = np.hstack([ineq.D, np.zeros((ineq.D.shape[0], extra))])
+    return Inequalities(ineq.names, ineq.offset, D, ineq.lower, ineq.upper)
+
+
+def _stack(a: Inequalities, b: Inequalities) -> Inequalities:
+    return Inequalities(
+        a.names + b.names,
+        np.concatenate([a.offset, b.offset]),
+        np.vstack([a.D, b.D]),
+        np.concatenate([a.lower, b.lower]),
+        np.concatenate([a.upper, b.upper]),
+    )
+
+
+def _qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np.ndarray | None:
+    """ProxSuite on ``min 1/2 y^T H y + g^T y, lower <= offset + D y <= upper``, polished.
+
+    Returns None when ProxSuite does not report the problem solved.
+    """
+    n = g.shape[0]
+    p = ineq.D.shape[0]
+    qp = proxsuite.proxqp.dense.QP(n, 0, p)
+    qp.settings.eps_abs = _QP_EPS
+    qp.settings.eps_rel = 0.0
+    qp.settings.verbose = False
+    qp.settings.max_iter = 10_000
+    # ProxSuite's default infeasibility thresholds (1e-4) misjudge small LPs (H = 0) as infeasible;
+    # infeasibility is decided here by the violation of the answer instead.
+    qp.settings.eps_primal_inf = 1e-12
+    qp.settings.eps_dual_inf = 1e-12
+    lower = np.where(np.isfinite(ineq.lower), ineq.lower - ineq.offset, -1e20)
+    upper = np.where(np.isfinite(ineq.upper), ineq.upper - ineq.offset, 1e20)
+    qp.init(H, g, None, None, ineq.D, lower, upper)
+    qp.solve()
+    if qp.results.info.status != proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED:
+        return None
+    y = np.array(qp.results.x)
+    return _polish(H, g, ineq, y, np.array(qp.results.z), tol)
+
+
+def _polish(
+    H: np.ndarray, g: np.ndarray, ineq: Inequalities, y: np.ndarray, z: np.ndarray, tol: float
+) -> np.ndarray:
+    """Re-solve the KKT system of the active rows exactly; keep it when feasible and no worse."""
+    v = ineq.offset + ineq.D @ y
+    at_lower = np.abs(v - ineq.lower) <= 1e3 * tol
+    at_upper = np.abs(v - ineq.upper) <= 1e3 * tol
+    active = np.flatnonzero((at_lower | at_upper) & (np.abs(z) > 0.0))
+    n = y.shape[0]
+    Da = ineq.D[active]
+    rhs = np.where(at_lower[active], ineq.lower[active], ineq.upper[active]) - ineq.offset[active]
+    K = np.block([[H, Da.T], [Da, np.zeros((active.size, active.size))]])
+    sol, *_ = np.linalg.lstsq(K, np.concatenate([-g, rhs]), rcond=None)
+    y_pol = sol[:n]
+    objective = 0.5 * y @ H @ y + g @ y
+    polished = 0.5 * y_pol @ H @ y_pol + g @ y_pol
+    ok = np.max(ineq.violation(y_pol), initial=0.0) <= tol and polished <= objective + tol * (
+        1.0 + abs(objective)
+    )
+    return y_pol if ok else y
+
+
+def _raise_infeasible(
+    f_p: np.ndarray,
+    G: np.ndarray,
+    ineq: Inequalities,
+    names: tuple[str, ...],
+    tol: float,
+    y_fixed: np.ndarray | None,
+) -> None:
+    """Find the least-violating allocation (unless ``y`` is fixed) and raise with it."""
+    k = G.shape[1]
+    if y_fixed is not None:
+        y = y_fixed
+    else:
+        # variables (y, s): min 1/2 |s|^2 with lower - s <= offset + D y <= upper + s, s >= 0
+        p = ineq.D.shape[0]
+        lo_rows = Inequalities(
+            ineq.names, ineq.offset, np.hstack([ineq.D, np.eye(p)]), ineq.lower, np.full(p, np.inf)
+        )
+        hi_rows = Inequalities(
+            ineq.names, ineq.offset, np.hstack([ineq.D, -np.eye(p)]), np.full(p, -np.inf), ineq.upper
+        )
+        pos = Inequalities(
+            ("s",) * p, np.zeros(p), np.hstack([np.zeros((p, k)), np.eye(p)]), np.zeros(p), np.full(p, np.inf)
+        )
+        H = np.zeros((k + p, k + p))
+        H[k:, k:] = np.eye(p)
+        H[:k, :k] = 1e-12 * np.eye(k)  # a unique y among equally violating ones
+        z = _qp(H, np.zeros(k + p), _stack(_stack(lo_rows, hi_rows), pos), tol)
+        y = np.zeros(k) if z is None else z[:k]
+    f_c = f_p + G @ y
+    over = ineq.violation(y)
+    violated = {n: float(o) for n, o in zip(ineq.names, over, strict=True) if o > tol}
+    v = ineq.offset + ineq.D @ y
+    at_limit = [
+        n
+        for n, vi, lo, hi in zip(ineq.names, v, ineq.lower, ineq.upper, strict=True)
+        if vi <= lo + tol or vi >= hi - tol
+    ]
+    saturated = [n for n in names if n in at_limit]
+    shown = ", ".join(f"{n} by {o:.6g}" for n, o in violated.items())
+    raise AllocationInfeasible(
+        f"no actuator forces balance the load within the limits and conditions; the least-violating "
+        f"allocation {np.round(f_c, 9).tolist()} exceeds {shown}; saturated actuators: {saturated}",
+        f_c,
+        saturated,
+        violated,
+    )

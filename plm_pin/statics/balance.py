@@ -1,0 +1,245 @@
+r"""Static balance of a closed chain: the one equation behind every static force.
+
+At rest the tree's generalized forces balance:
+
+.. math:: B f_c + J_\phi^T \lambda = \tau, \qquad \tau = g(q) - J_w^T w
+
+with :math:`f_c` the actuator forces [N] or torques [N m], :math:`B` the selection of the
+actuated velocities, :math:`\lambda` the forces of the cut joints (closure rows, in the
+convention of :mod:`plm_pin.kinematics.closures`: force on frame B, its opposite on frame A),
+:math:`g` the generalized gravity and :math:`w` an external wrench applied to a frame.
+
+Projecting on the feasible motions :math:`N` (:math:`J_\phi N = 0`) removes :math:`\lambda`:
+
+.. math:: C^T f_c = N^T \tau, \qquad C = B^T N,
+
+``mobility`` equations in ``n_act`` unknowns (virtual work: what the actuators do on every
+feasible motion balances the load). With redundancy the solutions form an affine set
+:math:`f_c = f_p + G y`: :math:`f_p` the minimum-norm solution and :math:`G` an orthonormal
+basis of the **internal forces** (the null space of :math:`C^T`): forces the actuators
+exert against each other without moving anything. :math:`\lambda` then follows from
+:math:`J_\phi^T \lambda = \tau - B f_c`, unique when the closure rows are independent.
+With a task, :math:`C^T = T^T J_{ce}^T`, so this is Harada 2011's
+:math:`J_{ce}^T f_c = f_e` (eqs. (15), (20)) with :math:`f_e = -w` at zero gravity.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from .._checks import as_vector
+from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
+from ..kinematics import closures as _closures
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+SINGULAR_RTOL = 1e-8
+r"""A direction counts as unresisted when its singular value is below SINGULAR_RTOL x the largest.
+
+Applies to :math:`C` (the actuators do not hold a feasible motion: direct singularity) and
+to :math:`J_\phi` (the closures do not hold a motion they should: constraint singularity).
+Forces then grow like the inverse of the singular value, so below this ratio a load with a
+component along that direction is refused instead of answered with huge numbers.
+"""
+
+EQUILIBRIUM_RTOL = 1e-9
+"""Equilibrium residual allowed, relative to the largest generalized force in the balance."""
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+@dataclass(frozen=True)
+class Load:
+    """An external wrench applied to one frame of the mechanism.
+
+    Attributes:
+        frame: frame name.
+        frame_id: Pinocchio frame index.
+        wrench: ``(force [N], moment [N m])`` about the frame origin, world-aligned, shape (6,).
+    """
+
+    frame: str
+    frame_id: int
+    wrench: np.ndarray
+
+
+def load_on_frame(mech: Mechanism, wrench: Any, frame: str | None = None) -> Load:
+    """Check an external wrench and the frame it acts on.
+
+    Args:
+        mech: the mechanism.
+        wrench: ``(fx, fy, fz, mx, my, mz)`` [N, N m] about the frame origin, world-aligned;
+            or, on the task frame, one value per task coordinate (``x y rz`` of a planar
+            task: ``fx fy mz``).
+        frame: frame the wrench acts on; default the end-effector (task) frame.
+
+    Raises:
+        InvalidInput: wrong size, non-finite values, or no frame given and no task.
+        FrameNotFound: unknown frame (the message lists the frames).
+    """
+    task = mech.task_compiled
+    if frame is None:
+        if task is None:
+            raise InvalidInput(f"{mech.name} has no end-effector task; name the frame the wrench acts on")
+        frame_id = task.frame_id
+        frame = mech.model.frames[frame_id].name
+    else:
+        if not mech.model.existFrame(frame):
+            raise FrameNotFound(frame, mech.frame_names)
+        frame_id = mech.model.getFrameId(frame)
+    arr = np.asarray(wrench, dtype=float) if np.ndim(wrench) == 1 else np.asarray(wrench)
+    on_task = task is not None and frame_id == task.frame_id and arr.shape == (task.size,)
+    if on_task:
+        assert task is not None
+        w = np.zeros(6)
+        w[list(task.rows)] = as_vector(arr, task.size, "wrench")
+    else:
+        sizes = f"6 or {task.size} (one per task coordinate {' '.join(task.dofs)})" if task else "6"
+        if arr.shape != (6,):
+            raise InvalidInput(f"wrench on frame {frame!r} must have {sizes} entries, got shape {arr.shape}")
+        w = as_vector(arr, 6, "wrench")
+    w.setflags(write=False)
+    return Load(frame, frame_id, w)
+
+
+@dataclass(frozen=True)
+class StaticBalance:
+    r"""The balance :math:`B f_c + J_\phi^T \lambda = \tau` at one configuration, ready to solve.
+
+    Attributes:
+        q: configuration, shape (nq,).
+        tau: generalized force the actuators and closures must supply, :math:`g(q) - J_w^T w`,
+            shape (nv,) [N, N m].
+        load: the external wrench, or None.
+        gravity: whether gravity is included in ``tau``.
+        J_phi: closure Jacobian, shape (m, nv).
+        N: orthonormal basis of the feasible motions, shape (nv, mobility).
+        C: actuator rates per feasible motion :math:`B^T N`, shape (n_act, mobility).
+        f_particular: minimum-norm actuator forces, shape (n_act,) [N, N m].
+        internal_basis: orthonormal basis :math:`G` of the internal forces, shape (n_act, k).
+        actuated_v: velocity index of each actuator, shape (n_act,).
+        lambda_map: truncated pseudo-inverse of :math:`J_\phi^T`, shape (m, nv): the cut-joint
+            forces that balance a generalized force (least squares where the closure rows are
+            dependent).
+    """
+
+    q: np.ndarray
+    tau: np.ndarray
+    load: Load | None
+    gravity: bool
+    J_phi: np.ndarray
+    N: np.ndarray
+    C: np.ndarray
+    f_particular: np.ndarray
+    internal_basis: np.ndarray
+    actuated_v: np.ndarray
+    lambda_map: np.ndarray
+
+    @property
+    def n_internal(self) -> int:
+        """Number of independent internal forces (the degree of redundancy here)."""
+        return int(self.internal_basis.shape[1])
+
+    def generalized(self, f_c: np.ndarray) -> np.ndarray:
+        r""":math:`B f_c`, shape (nv,)."""
+        out = np.zeros(self.tau.shape[0])
+        out[self.actuated_v] = f_c
+        return out
+
+    def closure_forces(self, f_c: np.ndarray) -> np.ndarray:
+        r"""Cut-joint forces :math:`\lambda` balancing ``f_c``, shape (m,) [N, N m].
+
+        The least-squares (minimum-norm) solution of :math:`J_\phi^T \lambda = \tau - B f_c`.
+        """
+        return self.lambda_map @ (self.tau - self.generalized(f_c))
+
+    def residual(self, f_c: np.ndarray, lam: np.ndarray) -> float:
+        r"""Equilibrium residual :math:`\|B f_c + J_\phi^T \lambda - \tau\|_\infty` [N, N m]."""
+        return float(np.max(np.abs(self.generalized(f_c) + self.J_phi.T @ lam - self.tau), initial=0.0))
+
+    def scale(self, f_c: np.ndarray) -> float:
+        """Largest generalized force in the balance, for relative tolerances [N, N m]."""
+        return float(max(np.max(np.abs(self.tau), initial=0.0), np.max(np.abs(f_c), initial=0.0), 1e-300))
+
+
+def static_balance(
+    mech: Mechanism,
+    q: Any,
+    wrench: Any = None,
+    frame: str | None = None,
+    *,
+    gravity: bool = True,
+    singular_rtol: float = SINGULAR_RTOL,
+) -> StaticBalance:
+    r"""Set up the static balance at ``q``: load, feasible motions, minimum-norm forces, internal basis.
+
+    Args:
+        mech: the mechanism.
+        q: an assembled configuration, shape (nq,).
+        wrench: external wrench applied to ``frame`` (see :func:`load_on_frame`), or None.
+        frame: frame the wrench acts on; default the task frame.
+        gravity: include the weight of the bodies (the model's gravity).
+        singular_rtol: relative singular-value threshold, see :data:`SINGULAR_RTOL`.
+
+    Raises:
+        InvalidInput: malformed ``q`` or wrench.
+        SingularConfiguration: the actuators (direct singularity) or the closures
+            (constraint singularity) cannot resist the load at ``q``; the message names
+            the unresisted generalized-force component.
+    """
+    qa = mech.check_q(q)
+    load = None if wrench is None else load_on_frame(mech, wrench, frame)
+    model, data = mech.model, mech.data
+    pin.computeJointJacobians(model, data, qa)
+    pin.updateFramePlacements(model, data)
+    tau = pin.computeGeneralizedGravity(model, data, qa).copy() if gravity else np.zeros(model.nv)
+    if load is not None:
+        tau -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
+    J_phi = _closures.jacobian_from_data(model, data, mech.closures)
+    act_v = mech.actuated_v_indices
+    return _balance(mech, qa, tau, load, gravity, J_phi, act_v, singular_rtol)
+
+
+def _balance(
+    mech: Mechanism,
+    q: np.ndarray,
+    tau: np.ndarray,
+    load: Load | None,
+    gravity: bool,
+    J_phi: np.ndarray,
+    act_v: np.ndarray,
+    singular_rtol: float,
+) -> StaticBalance:
+    nv = J_phi.shape[1]
+    # Feasible motions from the local rank of J_phi: at a constraint singularity the motion the
+    # closures no longer forbid joins N, so the actuators must hold it too (or the load is refused).
+    if J_phi.shape[0]:
+        U_phi, s_phi, Vt_phi = np.linalg.svd(J_phi)
+        rank_phi = int(np.count_nonzero(s_phi > singular_rtol * s_phi[0]))
+    else:
+        U_phi, s_phi, Vt_phi, rank_phi = np.zeros((0, 0)), np.zeros(0), np.eye(nv), 0
+    N = Vt_phi[rank_phi:].T  # (nv, nullity)
+    lambda_map = (U_phi[:, :rank_phi] / s_phi[:rank_phi]) @ Vt_phi[:rank_phi]  # (m, nv)
+    C = N[act_v]  # (n_act, nullity)
+    b = N.T @ tau  # (nullity,)
+    U, s, Vt = np.linalg.svd(C)  # C = U[:, :k] diag(s) Vt
+    r = int(np.count_nonzero(s > singular_rtol * (s[0] if s.size else 1.0)))
+    unresisted = Vt[r:] @ b  # load on feasible motions the actuators do not hold
+    if np.max(np.abs(unresisted), initial=0.0) > EQUILIBRIUM_RTOL * max(np.max(np.abs(tau)), 1e-300):
+        kind = "constraint" if N.shape[1] > mech.mobility else "direct"
+        raise SingularConfiguration(
+            f"{mech.name}: {kind} singularity, the actuators cannot resist the load: "
+            f"{N.shape[1] - r} feasible motion(s) not held (actuator singular values {s.tolist()}, "
+            f"closure singular values {s_phi.tolist()}); the load's component along them is "
+            f"{unresisted.tolist()} [N, N m]"
+        )
+    f_p = U[:, :r] @ ((Vt[:r] @ b) / s[:r])
+    G = U[:, r:].copy()
+    for a in (f_p, G, q, tau, J_phi, N, C, lambda_map):
+        a.setflags(write=False)
+    return StaticBalance(q, tau, load, gravity, J_phi, N, C, f_p, G, act_v, lambda_map)

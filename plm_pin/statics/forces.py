@@ -1,0 +1,300 @@
+r"""Static forces of a closed chain in one call: balance, allocation, and every force it implies.
+
+:func:`static_forces` sets up the balance (:mod:`~plm_pin.statics.balance`), allocates the
+actuator forces (:mod:`~plm_pin.statics.allocation`) and returns a :class:`StaticForces`
+from which cut-joint forces, joint reactions, slider normal forces, link axial forces
+(:mod:`~plm_pin.statics.reactions`) and the internal-force modes are read.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from . import reactions as _reactions
+from .allocation import OBJECTIVES, Inequalities, allocate, check_weights
+from .balance import SINGULAR_RTOL, StaticBalance, static_balance
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+
+@dataclass(frozen=True)
+class InternalMode:
+    """One internal-force mode: actuator forces that balance nothing but each other, and what they load.
+
+    Attributes:
+        f_c: actuator forces of the mode (a unit vector of the internal basis) [N, N m], shape (n_act,).
+        lam: cut-joint forces it causes [N, N m], shape (m,).
+        link_forces: axial forces it causes in the hinged links (tension positive) [N].
+        slider_normal_forces: normal forces it causes on the prismatic guides [N].
+    """
+
+    f_c: np.ndarray
+    lam: np.ndarray
+    link_forces: dict[str, _reactions.LinkForce]
+    slider_normal_forces: dict[str, np.ndarray]
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary."""
+        return {
+            "f_c": self.f_c.tolist(),
+            "lambda": self.lam.tolist(),
+            "link_forces": {k: v.to_dict() for k, v in self.link_forces.items()},
+            "slider_normal_forces": {k: v.tolist() for k, v in self.slider_normal_forces.items()},
+        }
+
+
+@dataclass(frozen=True)
+class StaticForces:
+    r"""A static equilibrium: actuator forces, cut-joint forces and the balance they satisfy.
+
+    Attributes:
+        mechanism: the mechanism.
+        balance: the balance that was solved (load, feasible motions, internal basis).
+        f_c: actuator forces [N] or torques [N m], in actuator order, shape (n_act,).
+        lam: cut-joint forces :math:`\lambda` [N, N m], in closure-row order, shape (m,).
+        internal: internal-force coordinates in ``balance.internal_basis``, shape (k,).
+        residual: equilibrium residual :math:`\|B f_c + J_\phi^T \lambda - \tau\|_\infty` [N, N m].
+        active: names of the limits and conditions at their bounds.
+        objective: the allocation objective used.
+    """
+
+    mechanism: Mechanism
+    balance: StaticBalance
+    f_c: np.ndarray
+    lam: np.ndarray
+    internal: np.ndarray
+    residual: float
+    active: tuple[str, ...]
+    objective: str
+
+    @property
+    def saturated(self) -> tuple[str, ...]:
+        """Actuators at one of their limits."""
+        names = {a.joint for a in self.mechanism.actuators}
+        return tuple(n for n in self.active if n in names)
+
+    @functools.cached_property
+    def _transmitted(self) -> tuple[np.ndarray, np.ndarray]:
+        b = self.balance
+        return _reactions.transmitted_forces(self.mechanism, b.q, self.lam, b.load, b.gravity)
+
+    def joint_reactions(self) -> dict[str, _reactions.JointReaction]:
+        """Force and moment every joint passes from parent to child, keyed by joint name."""
+        return _reactions.joint_reactions(self.mechanism, *self._transmitted)
+
+    def link_forces(self) -> dict[str, _reactions.LinkForce]:
+        """Axial force (tension positive) and shear of every hinged link, keyed by link name."""
+        return _reactions.link_forces(self.mechanism, self._transmitted[0], self.lam)
+
+    def slider_normal_forces(self) -> dict[str, np.ndarray]:
+        """Force each prismatic guide exerts normal to its axis [N], world, keyed by joint name."""
+        return _reactions.slider_normal_forces(self.mechanism, self._transmitted[0])
+
+    def internal_modes(self) -> tuple[InternalMode, ...]:
+        """The internal-force basis with its physical reading (loads in the links and guides)."""
+        return internal_modes(self.mechanism, self.balance)
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary of the forces (reactions included)."""
+        acts = [a.joint for a in self.mechanism.actuators]
+        return {
+            "f_c": dict(zip(acts, self.f_c.tolist(), strict=True)),
+            "lambda": {c.name: self.lam[c.rows].tolist() for c in self.mechanism.closures},
+            "internal": self.internal.tolist(),
+            "residual": self.residual,
+            "active": list(self.active),
+            "objective": self.objective,
+            "link_forces": {k: v.to_dict() for k, v in self.link_forces().items()},
+            "slider_normal_forces": {k: v.tolist() for k, v in self.slider_normal_forces().items()},
+        }
+
+
+def internal_modes(mech: Mechanism, balance: StaticBalance) -> tuple[InternalMode, ...]:
+    """Read each internal-force basis vector as the forces it causes (no load, no gravity)."""
+    out = []
+    for k in range(balance.n_internal):
+        g = balance.internal_basis[:, k].copy()
+        lam = -balance.lambda_map @ balance.generalized(g)
+        forces, _ = _reactions.transmitted_forces(mech, balance.q, lam, None, False)
+        out.append(
+            InternalMode(
+                g,
+                lam,
+                _reactions.link_forces(mech, forces, lam),
+                _reactions.slider_normal_forces(mech, forces),
+            )
+        )
+    return tuple(out)
+
+
+def actuator_limits(mech: Mechanism, limits: Any) -> np.ndarray:
+    """Actuator effort limits as an (n_act, 2) array with infinities where unbounded.
+
+    Args:
+        mech: the mechanism.
+        limits: ``"description"`` (the sidecar's ``limits``), None (unbounded), or an
+            array-like (n_act, 2) of lower and upper efforts [N, N m].
+
+    Raises:
+        InvalidInput: wrong shape, NaN, or a lower bound above its upper bound.
+    """
+    n = mech.n_actuators
+    if isinstance(limits, str):
+        if limits != "description":
+            raise InvalidInput(f"limits {limits!r} is not 'description', None or an ({n}, 2) array")
+        return np.array(
+            [a.limits if a.limits is not None else (-np.inf, np.inf) for a in mech.actuators]
+        ).reshape(n, 2)
+    if limits is None:
+        return np.tile([-np.inf, np.inf], (n, 1))
+    arr = np.asarray(limits, dtype=float)
+    if arr.shape != (n, 2) or np.isnan(arr).any() or (arr[:, 0] > arr[:, 1]).any():
+        raise InvalidInput(f"limits must be an ({n}, 2) array of lower <= upper efforts, got {arr.tolist()}")
+    return arr
+
+
+def static_forces(
+    mech: Mechanism,
+    q: Any,
+    wrench: Any = None,
+    frame: str | None = None,
+    *,
+    gravity: bool = True,
+    objective: str = "norm",
+    weights: Any = None,
+    limits: Any = "description",
+    internal: Any = None,
+    min_compression: float | None = None,
+    link_limits: Mapping[str, tuple[float, float]] | None = None,
+    singular_rtol: float = SINGULAR_RTOL,
+) -> StaticForces:
+    r"""Actuator and cut-joint forces holding the mechanism at ``q`` under gravity and a wrench.
+
+    Args:
+        mech: the mechanism.
+        q: an assembled configuration, shape (nq,).
+        wrench: external wrench **applied to** ``frame`` [N, N m]: 6 values ``(force, moment)``
+            about the frame origin, world-aligned, or one per task coordinate on the task
+            frame. Harada 2011's :math:`f_e = J_{ce}^T f_c` is the force the actuators exert
+            on the end effector, so it corresponds to ``wrench = -f_e`` with ``gravity=False``.
+        frame: frame the wrench acts on; default the task frame.
+        gravity: include the weight of the bodies.
+        objective: ``"norm"`` (weighted minimum norm) or ``"max"`` (minimum largest force).
+        weights: actuator weights: None (all 1), a vector or an SPD matrix.
+        limits: actuator effort limits: ``"description"``, None or an (n_act, 2) array.
+        internal: prescribe the internal forces instead of optimising them: coordinates in
+            the internal basis (shape (k,)), or the axial force [N] (tension positive) that the
+            internal part alone puts in ``k`` named hinged links, ``{link: force}``. Harada
+            2011's :math:`f_i` (eqs. (20)-(22)), a compression of the end plate, is
+            ``internal={"plate": -f_i}`` on the 3D4M preset.
+        min_compression: every hinged link (see :mod:`~plm_pin.statics.reactions`) in
+            compression by at least this much [N] (a preload condition).
+        link_limits: bounds on the axial force (tension positive) [N] of named links.
+        singular_rtol: see :data:`~plm_pin.statics.balance.SINGULAR_RTOL`.
+
+    Raises:
+        InvalidInput: malformed arguments (the message names the valid choices).
+        SingularConfiguration: the load cannot be resisted at ``q``.
+        AllocationInfeasible: the limits and conditions cannot all be met; the error carries
+            the least-violating allocation and the saturated actuators.
+    """
+    if objective not in OBJECTIVES:
+        raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
+    n = mech.n_actuators
+    W = check_weights(weights, n)
+    bounds = actuator_limits(mech, limits)
+    balance = static_balance(mech, q, wrench, frame, gravity=gravity, singular_rtol=singular_rtol)
+    f_p, G = balance.f_particular, balance.internal_basis
+    names = tuple(a.joint for a in mech.actuators)
+    finite = np.flatnonzero(np.isfinite(bounds).any(axis=1))
+    ineq = Inequalities(
+        tuple(names[i] for i in finite), f_p[finite], G[finite], bounds[finite, 0], bounds[finite, 1]
+    )
+    conditions = _link_conditions(mech, balance, min_compression, link_limits)
+    if conditions is not None:
+        ineq = Inequalities(
+            ineq.names + conditions.names,
+            np.concatenate([ineq.offset, conditions.offset]),
+            np.vstack([ineq.D, conditions.D]),
+            np.concatenate([ineq.lower, conditions.lower]),
+            np.concatenate([ineq.upper, conditions.upper]),
+        )
+    if isinstance(internal, Mapping):
+        internal = _internal_from_links(mech, balance, internal)
+    result = allocate(f_p, G, ineq, weights=W, objective=objective, internal=internal, actuator_names=names)
+    lam = balance.closure_forces(result.f_c)
+    for a in (result.f_c, lam, result.y):
+        a.setflags(write=False)
+    return StaticForces(
+        mech, balance, result.f_c, lam, result.y, balance.residual(result.f_c, lam), result.active, objective
+    )
+
+
+def _link_conditions(
+    mech: Mechanism,
+    balance: StaticBalance,
+    min_compression: float | None,
+    link_limits: Mapping[str, tuple[float, float]] | None,
+) -> Inequalities | None:
+    """Axial-force conditions as rows on the internal coordinates (axial forces are affine in them)."""
+    if min_compression is None and not link_limits:
+        return None
+    links = [h.link for h in _reactions.hinged_links(mech)]
+    bounds: dict[str, tuple[float, float]] = {}
+    if min_compression is not None:
+        if not np.isfinite(min_compression):
+            raise InvalidInput(f"min_compression must be a finite force [N], got {min_compression}")
+        if not links:
+            raise InvalidInput(f"{mech.name} has no hinged links to hold in compression")
+        bounds = {name: (-np.inf, -float(min_compression)) for name in links}
+    for name, (lo, hi) in (link_limits or {}).items():
+        if name not in links:
+            raise InvalidInput(f"link {name!r} is not a hinged link; hinged links are {links}")
+        if np.isnan(lo) or np.isnan(hi) or lo > hi:
+            raise InvalidInput(f"link_limits[{name!r}] must be (lower <= upper) [N], got {(lo, hi)}")
+        old = bounds.get(name, (-np.inf, np.inf))
+        bounds[name] = (max(old[0], lo), min(old[1], hi))
+    lam_p = balance.closure_forces(balance.f_particular)
+    forces_p, _ = _reactions.transmitted_forces(mech, balance.q, lam_p, balance.load, balance.gravity)
+    axial_p = _reactions.link_forces(mech, forces_p, lam_p)
+    modes = internal_modes(mech, balance)
+    chosen = list(bounds)
+    D = np.array([[m.link_forces[name].axial for m in modes] for name in chosen]).reshape(
+        len(chosen), len(modes)
+    )
+    return Inequalities(
+        tuple(f"{name} axial" for name in chosen),
+        np.array([axial_p[name].axial for name in chosen]),
+        D,
+        np.array([bounds[name][0] for name in chosen]),
+        np.array([bounds[name][1] for name in chosen]),
+    )
+
+
+def _internal_from_links(mech: Mechanism, balance: StaticBalance, targets: Mapping[str, float]) -> np.ndarray:
+    """Internal coordinates giving the internal part the named link axial forces."""
+    k = balance.n_internal
+    modes = internal_modes(mech, balance)
+    links = [h.link for h in _reactions.hinged_links(mech)]
+    unknown = [name for name in targets if name not in links]
+    if unknown:
+        raise InvalidInput(f"links {unknown} are not hinged links; hinged links are {links}")
+    if len(targets) != k:
+        raise InvalidInput(
+            f"{mech.name} has {k} internal force(s) at this configuration; "
+            f"name {k} link(s), got {list(targets)}"
+        )
+    R = np.array([[m.link_forces[name].axial for m in modes] for name in targets]).reshape(k, k)
+    s = np.linalg.svd(R, compute_uv=False) if k else np.zeros(0)
+    if k and s[-1] <= 1e-9 * max(s[0], 1e-300):
+        raise InvalidInput(
+            f"the internal forces do not load the links {list(targets)} independently; choose others"
+        )
+    return np.linalg.solve(R, np.array([float(v) for v in targets.values()])) if k else np.zeros(0)
