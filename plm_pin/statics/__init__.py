@@ -2,12 +2,14 @@
 
 from .allocation import OBJECTIVES
 from .balance import SINGULAR_RTOL, Load, StaticBalance, load_on_frame, static_balance
+from .capability import Capability, force_capability, wrench_polygon
 from .forces import InternalMode, StaticForces, actuator_limits, internal_modes, static_forces
 from .reactions import JointReaction, LinkForce
 
 __all__ = [
     "OBJECTIVES",
     "SINGULAR_RTOL",
+    "Capability",
     "InternalMode",
     "JointReaction",
     "LinkForce",
@@ -15,8 +17,10 @@ __all__ = [
     "StaticBalance",
     "StaticForces",
     "actuator_limits",
+    "force_capability",
     "internal_modes",
     "load_on_frame",
     "static_balance",
     "static_forces",
+    "wrench_polygon",
 ]

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import proxsuite
 
-from ..exceptions import AllocationInfeasible, InvalidInput
+from ..exceptions import AllocationInfeasible, InvalidInput, PlmError
 
 OBJECTIVES = ("norm", "max")
 """Allocation objectives: weighted minimum norm, or minimum largest force."""
@@ -128,7 +128,6 @@ def allocate(
     names = tuple(actuator_names) or tuple(f"f_c[{i}]" for i in range(f_p.shape[0]))
     scale = max(float(np.max(np.abs(f_p), initial=0.0)), float(np.max(np.abs(ineq.offset), initial=0.0)), 1.0)
     tol = FEASIBILITY_RTOL * scale
-    fixed = internal is not None or k == 0
     y: np.ndarray | None
     if internal is not None:
         y = np.asarray(internal, dtype=float)
@@ -138,13 +137,22 @@ def allocate(
             )
     elif k == 0:
         y = np.zeros(0)
-    elif objective == "norm":
-        y = _min_norm(f_p, G, weights, ineq, tol)
     else:
-        y = _min_max(f_p, G, weights, ineq, tol)
-    if y is None or np.max(ineq.violation(y), initial=0.0) > tol:
-        _raise_infeasible(f_p, G, ineq, names, tol, y if fixed else None)
-    assert y is not None
+        y = _unconstrained(f_p, G, weights) if objective == "norm" else None
+        if y is None or np.max(ineq.violation(y), initial=0.0) > tol:
+            # Phase 1: is any allocation within the inequalities? (ProxSuite's own infeasibility
+            # detection is unreliable on these small problems and can run to its iteration cap.)
+            y = _least_violating(G.shape[1], ineq, tol)
+            if np.max(ineq.violation(y), initial=0.0) <= tol:  # Phase 2, on a feasible problem
+                y = (
+                    _min_norm(f_p, G, weights, ineq, tol)
+                    if objective == "norm"
+                    else _min_max(f_p, G, weights, ineq, tol)
+                )
+                if y is None:
+                    raise PlmError("ProxSuite did not solve a feasible allocation problem")
+    if np.max(ineq.violation(y), initial=0.0) > tol:
+        _raise_infeasible(f_p, G, ineq, names, tol, y)
     f_c = f_p + G @ y
     v = ineq.offset + ineq.D @ y
     active = tuple(
@@ -155,15 +163,18 @@ def allocate(
     return Allocation(f_c, y, active)
 
 
+def _unconstrained(f_p: np.ndarray, G: np.ndarray, W: np.ndarray) -> np.ndarray:
+    """Internal coordinates of the weighted minimum norm without inequalities (its KKT system)."""
+    return np.linalg.solve(G.T @ W @ G, -(G.T @ W @ f_p))
+
+
 def _min_norm(
     f_p: np.ndarray, G: np.ndarray, W: np.ndarray, ineq: Inequalities, tol: float
 ) -> np.ndarray | None:
-    H = G.T @ W @ G
-    g = G.T @ W @ f_p
-    y0 = np.linalg.solve(H, -g)
+    y0 = _unconstrained(f_p, G, W)
     if np.max(ineq.violation(y0), initial=0.0) <= tol:
         return y0  # the unconstrained minimiser already meets every inequality
-    return _qp(H, g, ineq, tol)
+    return solve_qp(G.T @ W @ G, G.T @ W @ f_p, ineq, tol)
 
 
 def _min_max(
@@ -187,7 +198,7 @@ def _min_max(
     H = np.zeros((k + 1, k + 1))
     g = np.zeros(k + 1)
     g[-1] = 1.0
-    z = _qp(H, g, both, tol)
+    z = solve_qp(H, g, both, tol)
     if z is None:
         return None
     t = float(np.max(np.abs(w * (f_p + G @ z[:k]))))  # the polished optimum
@@ -211,10 +222,11 @@ def _stack(a: Inequalities, b: Inequalities) -> Inequalities:
     )
 
 
-def _qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np.ndarray | None:
-    """ProxSuite on ``min 1/2 y^T H y + g^T y, lower <= offset + D y <= upper``, polished.
+def solve_qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np.ndarray | None:
+    """Solve ``min 1/2 y^T H y + g^T y`` s.t. ``lower <= offset + D y <= upper`` with ProxSuite, polished.
 
-    Returns None when ProxSuite does not report the problem solved.
+    ``H`` may be zero (a linear programme). The answer is polished on its active set (see the
+    module docstring). Returns None when ProxSuite does not report the problem solved.
     """
     n = g.shape[0]
     p = ineq.D.shape[0]
@@ -222,7 +234,7 @@ def _qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np.ndar
     qp.settings.eps_abs = _QP_EPS
     qp.settings.eps_rel = 0.0
     qp.settings.verbose = False
-    qp.settings.max_iter = 10_000
+    qp.settings.max_iter = 1_000  # these problems converge in tens of iterations; never hang
     # ProxSuite's default infeasibility thresholds (1e-4) misjudge small LPs (H = 0) as infeasible;
     # infeasibility is decided here by the violation of the answer instead.
     qp.settings.eps_primal_inf = 1e-12
@@ -259,35 +271,32 @@ def _polish(
     return y_pol if ok else y
 
 
+def _least_violating(k: int, ineq: Inequalities, tol: float) -> np.ndarray:
+    """Internal coordinates minimising the sum of squared violations of ``ineq`` (always feasible)."""
+    # variables (y, s): min 1/2 |s|^2 with lower - s <= offset + D y <= upper + s, s >= 0
+    p = ineq.D.shape[0]
+    lo_rows = Inequalities(
+        ineq.names, ineq.offset, np.hstack([ineq.D, np.eye(p)]), ineq.lower, np.full(p, np.inf)
+    )
+    hi_rows = Inequalities(
+        ineq.names, ineq.offset, np.hstack([ineq.D, -np.eye(p)]), np.full(p, -np.inf), ineq.upper
+    )
+    pos = Inequalities(
+        ("s",) * p, np.zeros(p), np.hstack([np.zeros((p, k)), np.eye(p)]), np.zeros(p), np.full(p, np.inf)
+    )
+    H = np.zeros((k + p, k + p))
+    H[k:, k:] = np.eye(p)
+    H[:k, :k] = 1e-12 * np.eye(k)  # a unique y among equally violating ones
+    z = solve_qp(H, np.zeros(k + p), _stack(_stack(lo_rows, hi_rows), pos), tol)
+    if z is None:
+        raise PlmError("ProxSuite did not solve the least-violation problem")
+    return z[:k]
+
+
 def _raise_infeasible(
-    f_p: np.ndarray,
-    G: np.ndarray,
-    ineq: Inequalities,
-    names: tuple[str, ...],
-    tol: float,
-    y_fixed: np.ndarray | None,
+    f_p: np.ndarray, G: np.ndarray, ineq: Inequalities, names: tuple[str, ...], tol: float, y: np.ndarray
 ) -> None:
-    """Find the least-violating allocation (unless ``y`` is fixed) and raise with it."""
-    k = G.shape[1]
-    if y_fixed is not None:
-        y = y_fixed
-    else:
-        # variables (y, s): min 1/2 |s|^2 with lower - s <= offset + D y <= upper + s, s >= 0
-        p = ineq.D.shape[0]
-        lo_rows = Inequalities(
-            ineq.names, ineq.offset, np.hstack([ineq.D, np.eye(p)]), ineq.lower, np.full(p, np.inf)
-        )
-        hi_rows = Inequalities(
-            ineq.names, ineq.offset, np.hstack([ineq.D, -np.eye(p)]), np.full(p, -np.inf), ineq.upper
-        )
-        pos = Inequalities(
-            ("s",) * p, np.zeros(p), np.hstack([np.zeros((p, k)), np.eye(p)]), np.zeros(p), np.full(p, np.inf)
-        )
-        H = np.zeros((k + p, k + p))
-        H[k:, k:] = np.eye(p)
-        H[:k, :k] = 1e-12 * np.eye(k)  # a unique y among equally violating ones
-        z = _qp(H, np.zeros(k + p), _stack(_stack(lo_rows, hi_rows), pos), tol)
-        y = np.zeros(k) if z is None else z[:k]
+    """Raise AllocationInfeasible with the allocation ``y`` (the least-violating one, or the only one)."""
     f_c = f_p + G @ y
     over = ineq.violation(y)
     violated = {n: float(o) for n, o in zip(ineq.names, over, strict=True) if o > tol}

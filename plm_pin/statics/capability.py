@@ -1,0 +1,175 @@
+r"""Force capability: the largest wrench a mechanism holds within its actuator limits.
+
+Loads enter the balance linearly, so the balancing forces for gravity plus a load
+:math:`\alpha d` are :math:`f_c = f_g + \alpha f_d + G y`, with :math:`f_g` and :math:`f_d`
+the minimum-norm forces for gravity and for the unit load :math:`d`, and :math:`G y` any
+internal force. The capability along :math:`d` is the linear programme
+
+.. math:: \max \alpha \quad \text{s.t.} \quad l \le f_g + \alpha f_d + G y \le u,
+
+solved by ProxSuite (as an LP) and polished on its active set. A redundant mechanism
+chooses :math:`y` to relieve the most loaded actuator, so its capability is never below that
+of the same mechanism with an actuator removed. A planar section of the capability set
+(the *wrench polygon*) is traced by one such programme per direction of the plane: the set
+is convex, so its boundary points along rays from the origin trace it exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..exceptions import InvalidInput, PlmError
+from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_qp
+from .balance import load_on_frame, static_balance
+from .forces import actuator_limits
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+
+@dataclass(frozen=True)
+class Capability:
+    """Largest load along one direction.
+
+    Attributes:
+        direction: the unit load as given (6 values, or one per task coordinate) [N, N m].
+        alpha: the largest multiple of ``direction`` held (``inf`` when the structure alone
+            holds it, e.g. an out-of-plane force on a planar mechanism).
+        f_c: actuator forces at that load [N, N m], shape (n_act,) (NaN when ``alpha`` is inf).
+        saturated: actuators at a limit there.
+    """
+
+    direction: np.ndarray
+    alpha: float
+    f_c: np.ndarray
+    saturated: tuple[str, ...]
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary."""
+        return {
+            "direction": self.direction.tolist(),
+            "alpha": self.alpha,
+            "f_c": self.f_c.tolist(),
+            "saturated": list(self.saturated),
+        }
+
+
+def force_capability(
+    mech: Mechanism,
+    q: Any,
+    direction: Any,
+    frame: str | None = None,
+    *,
+    gravity: bool = True,
+    limits: Any = "description",
+) -> Capability:
+    r"""Largest :math:`\alpha \ge 0` such that the mechanism holds the wrench :math:`\alpha d` at ``q``.
+
+    Args:
+        mech: the mechanism.
+        q: an assembled configuration, shape (nq,).
+        direction: the load :math:`d` applied to ``frame`` (see
+            :func:`~plm_pin.statics.balance.load_on_frame`); its scale sets the unit of ``alpha``.
+        frame: frame the load acts on; default the task frame.
+        gravity: the weight of the bodies is held too.
+        limits: actuator effort limits (``"description"`` or an (n_act, 2) array); every
+            actuator needs finite limits.
+
+    Raises:
+        InvalidInput: a malformed direction, or actuators without finite limits.
+        AllocationInfeasible: the limits do not even hold gravity (``alpha = 0`` is infeasible).
+        SingularConfiguration: the load cannot be resisted at ``q``.
+    """
+    bounds = actuator_limits(mech, limits)
+    if not np.isfinite(bounds).all():
+        unbounded = [a.joint for a, b in zip(mech.actuators, bounds, strict=True) if not np.isfinite(b).all()]
+        raise InvalidInput(
+            f"force capability needs finite effort limits on every actuator; {unbounded} have none "
+            "(add 'limits' to the sidecar's actuation or pass limits=...)"
+        )
+    load = load_on_frame(mech, direction, frame)
+    with_load = static_balance(mech, q, load.wrench, load.frame, gravity=gravity)
+    base = static_balance(mech, q, gravity=gravity) if gravity else None
+    f_g = base.f_particular if base is not None else np.zeros(mech.n_actuators)
+    f_d = with_load.f_particular - f_g  # (n_act,) forces per unit load (the balance is linear)
+    G = with_load.internal_basis  # (n_act, k)
+    names = tuple(a.joint for a in mech.actuators)
+    scale = max(float(np.max(np.abs(bounds))), 1.0)
+    tol = FEASIBILITY_RTOL * scale
+    k = G.shape[1]
+    _check_gravity_held(f_g, G, bounds, names)
+    # the part of f_d the internal forces cannot cancel; none left: the structure holds the load
+    f_d_out = f_d - G @ (G.T @ f_d)
+    if np.max(np.abs(f_d_out), initial=0.0) <= tol:
+        return Capability(np.asarray(direction, dtype=float), float("inf"), np.full(len(names), np.nan), ())
+    # variables (y, alpha): max alpha, bounds <= f_g + G y + alpha f_d, alpha >= 0
+    rows = Inequalities(
+        (*names, "alpha"),
+        np.concatenate([f_g, [0.0]]),
+        np.vstack([np.hstack([G, f_d[:, None]]), np.eye(k + 1)[-1:]]),
+        np.concatenate([bounds[:, 0], [0.0]]),
+        np.concatenate([bounds[:, 1], [np.inf]]),
+    )
+    g = np.zeros(k + 1)
+    g[-1] = -1.0
+    z = solve_qp(np.zeros((k + 1, k + 1)), g, rows, tol)
+    if z is None or np.max(rows.violation(z), initial=0.0) > tol:  # alpha = 0 is feasible: a solver failure
+        raise PlmError(f"{mech.name}: ProxSuite did not solve the force-capability programme")
+    alpha = float(z[-1])
+    f_c = f_g + G @ z[:k] + alpha * f_d
+    saturated = tuple(
+        n
+        for n, f, (lo, hi) in zip(names, f_c, bounds, strict=True)
+        if f <= lo + 1e3 * tol or f >= hi - 1e3 * tol
+    )
+    return Capability(np.asarray(direction, dtype=float), alpha, f_c, saturated)
+
+
+def _check_gravity_held(f_g: np.ndarray, G: np.ndarray, bounds: np.ndarray, names: tuple[str, ...]) -> None:
+    """Raise AllocationInfeasible when no internal force brings the gravity forces within the limits."""
+    ineq = Inequalities(names, f_g, G, bounds[:, 0], bounds[:, 1])
+    allocate(f_g, G, ineq, weights=np.eye(len(names)), actuator_names=names)
+
+
+def wrench_polygon(
+    mech: Mechanism,
+    q: Any,
+    d1: Any,
+    d2: Any,
+    frame: str | None = None,
+    *,
+    n: int = 72,
+    gravity: bool = True,
+    limits: Any = "description",
+) -> np.ndarray:
+    r"""Boundary of the loads :math:`a d_1 + b d_2` the mechanism holds, traced along ``n`` rays.
+
+    Args:
+        mech: the mechanism.
+        q: an assembled configuration.
+        d1: first load direction (as for :func:`force_capability`).
+        d2: second load direction.
+        frame: frame the loads act on; default the task frame.
+        n: number of rays (at least 8).
+        gravity: hold the bodies' weight too.
+        limits: actuator effort limits.
+
+    Returns:
+        ``(n, 2)`` coordinates :math:`(a, b)` of the boundary, counter-clockwise from :math:`d_1`
+        (``inf`` along rays the structure holds without actuator force).
+    """
+    if int(n) < 8:
+        raise InvalidInput(f"n must be at least 8 rays, got {n}")
+    a = np.asarray(d1, dtype=float)
+    b = np.asarray(d2, dtype=float)
+    if a.shape != b.shape:
+        raise InvalidInput(f"d1 and d2 must have the same shape, got {a.shape} and {b.shape}")
+    out = np.empty((int(n), 2))
+    for i, phi in enumerate(np.linspace(0.0, 2.0 * np.pi, int(n), endpoint=False)):
+        u = np.array([np.cos(phi), np.sin(phi)])
+        cap = force_capability(mech, q, u[0] * a + u[1] * b, frame, gravity=gravity, limits=limits)
+        out[i] = cap.alpha * u
+    return out
