@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import warnings
+import webbrowser
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -14,10 +15,13 @@ from rich.markup import escape
 from rich.table import Table
 
 from ._io import atomic_write_text
-from .exceptions import PlmError
+from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
+from .kinematics import inverse_kinematics, task_pose
 from .loading import load
 from .mechanism import Mechanism
 from .models.registry import PRESETS
+from .viz.meshcat_server import MeshcatServer
+from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
 
 app = typer.Typer(
@@ -154,6 +158,164 @@ def report(
         )
     console.print(table)
     console.print(f"wrote {out / 'summary.json'}", markup=False, highlight=False, soft_wrap=True)
+
+
+def _numbers(text: str, what: str) -> list[float]:
+    try:
+        return [float(v) for v in text.split(",")]
+    except ValueError:
+        raise InvalidInput(f"{what}: expected comma-separated numbers, got {text!r}") from None
+
+
+def _pose_configuration(mech: Mechanism, pose: list[str]) -> np.ndarray:
+    """The configuration asked for by ``--pose``: reference, joints imposed, or a task pose (by IK).
+
+    Raises:
+        InvalidInput: malformed items, unknown names, joints mixed with task coordinates.
+        PoseUnreachable: a task pose the inverse kinematics cannot reach.
+    """
+    if not pose:
+        return np.array(mech.q_ref)
+    dofs = mech.task.dofs if mech.task is not None else ()
+    if len(pose) == 1 and "=" not in pose[0]:  # the whole task pose, in the task's order
+        if not dofs:
+            raise InvalidInput(f"--pose {pose[0]!r}: {mech.name} has no task; give JOINT=VALUE items")
+        return np.array(inverse_kinematics(mech, _numbers(pose[0], "--pose")).q)
+    joints: dict[str, float | list[float]] = {}
+    task: dict[str, float] = {}
+    for item in pose:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise InvalidInput(f"--pose {item!r}: expected NAME=VALUE (or one comma-separated task pose)")
+        numbers = _numbers(value, f"--pose {item!r}")
+        if name in mech.joint_names:
+            joints[name] = numbers[0] if len(numbers) == 1 else numbers
+        elif name in dofs and len(numbers) == 1:
+            task[name] = numbers[0]
+        else:
+            raise InvalidInput(
+                f"--pose {item!r}: {name!r} is neither a joint nor a task coordinate (one number); "
+                f"joints are {list(mech.joint_names)}, task coordinates are {list(dofs)}"
+            )
+    if joints and task:
+        raise InvalidInput("--pose mixes joints and task coordinates; give one kind only")
+    if task:
+        x = task_pose(mech, mech.q_ref)
+        for dof, number in task.items():
+            x[dofs.index(dof)] = number
+        return np.array(inverse_kinematics(mech, x).q)
+    try:
+        return np.array(mech.assemble(mech.q_ref, fixed=joints).q)
+    except ClosureNotSatisfied as exc:
+        errors.print(
+            f"[yellow]warning:[/] {escape(str(exc))}; showing the closest configuration found",
+            highlight=False,
+            soft_wrap=True,
+        )
+        return np.asarray(exc.q, dtype=float)
+
+
+def _print_status(status: SceneStatus) -> None:
+    for name in status.open_closures:
+        errors.print(
+            f"[yellow]warning:[/] closure {escape(repr(name))} is open (residual "
+            f"{status.closure_errors[name]:.3g} m/rad): its markers are magenta",
+            highlight=False,
+            soft_wrap=True,
+        )
+    report = status.singularity
+    if report is not None and report.singular:
+        console.print(
+            f"singular configuration ({', '.join(report.kinds)}): margins constraint "
+            f"{report.constraint_margin:.3g}, inverse {report.inverse_margin:.3g}, direct "
+            f"{report.direct_margin:.3g}; the mechanism is drawn in the colour of the first kind",
+            highlight=False,
+            soft_wrap=True,
+        )
+
+
+@app.command()
+def view(
+    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
+    pose: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--pose",
+            help="JOINT=VALUE or task coordinate (x y z [m], rx ry rz [rad]) =VALUE, repeatable; or the "
+            "whole task pose as x,y,... (default: the reference configuration)",
+        ),
+    ] = None,
+    port: Annotated[
+        int | None, typer.Option("--port", help="web port (default: first free from 7000)")
+    ] = None,
+    zmq_url: Annotated[
+        str | None, typer.Option("--zmq-url", help="draw into a running server, tcp://127.0.0.1:PORT")
+    ] = None,
+    open_browser: Annotated[
+        bool, typer.Option("--open/--no-open", help="open the page in a browser")
+    ] = False,
+    html: Annotated[
+        Path | None, typer.Option("--html", help="write a static page to this file instead of serving")
+    ] = None,
+) -> None:
+    """Show a mechanism in meshcat (127.0.0.1 only): frames, closure points, singularities highlighted.
+
+    Serves until Ctrl-C, unless --html writes a page that needs no server or --zmq-url draws
+    into a server that is already running.
+    """
+    mech = _load(target)
+    try:
+        if html is not None and (port is not None or zmq_url is not None):
+            raise InvalidInput(
+                "--html writes a page that needs no server: it takes neither --port nor --zmq-url"
+            )
+        if port is not None and zmq_url is not None:
+            raise InvalidInput("--zmq-url draws into a running server: it takes no --port")
+        if html is not None and html.is_dir():
+            raise InvalidInput(f"--html {html}: is a folder; give a file name")
+        q = _pose_configuration(mech, pose or [])
+        if html is not None or zmq_url is not None:
+            viewer = MeshcatViewer(mech, static=html is not None, zmq_url=zmq_url)
+            _print_status(viewer.display(q))
+            if html is not None:
+                html.parent.mkdir(parents=True, exist_ok=True)
+                viewer.write_html(html)
+                console.print(f"wrote {html}", markup=False, highlight=False, soft_wrap=True)
+                if open_browser:
+                    webbrowser.open(html.resolve().as_uri())
+            else:
+                console.print(f"{mech.name}: {viewer.url}", markup=False, highlight=False, soft_wrap=True)
+                if open_browser:
+                    viewer.open()
+            return
+        server = MeshcatServer(port)
+    except PlmError as exc:
+        raise _fail(exc) from None
+    with server:
+        if server.moved:
+            errors.print(
+                f"[yellow]warning:[/] port {port} is busy; serving on {server.port} instead", highlight=False
+            )
+        try:
+            viewer = MeshcatViewer(mech, server=server)
+            _print_status(viewer.display(q))
+        except PlmError as exc:
+            raise _fail(exc) from None
+        console.print(f"{mech.name}: {server.web_url}", markup=False, highlight=False, soft_wrap=True)
+        console.print(
+            f"draw another mechanism into it with: plm-pin view NAME --zmq-url {server.zmq_url}\n"
+            "Ctrl-C stops the server",
+            markup=False,
+            highlight=False,
+            soft_wrap=True,
+        )
+        if open_browser:
+            viewer.open()
+        try:
+            code = server.wait()
+        except KeyboardInterrupt:
+            return
+    raise _fail(PlmError(f"the meshcat server stopped unexpectedly (exit code {code})"))
 
 
 if __name__ == "__main__":  # pragma: no cover

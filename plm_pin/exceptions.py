@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .dynamics.trajectory import JointTrajectory
 
 
 class PlmError(Exception):
@@ -91,4 +95,25 @@ class AllocationInfeasible(PlmError):
         self.least_violating = least_violating
         self.saturated = tuple(saturated)
         self.violation = dict(violation)
+        super().__init__(message)
+
+
+class TrajectoryError(PlmError):
+    """A trajectory stopped at a sample that cannot be solved (out of the workspace, or singular).
+
+    Attributes:
+        partial: the trajectory computed before that sample (``index`` samples).
+        index: the sample that failed.
+        time: its time [s].
+        cause: the error met there (:class:`PoseUnreachable`, :class:`ClosureNotSatisfied`,
+            :class:`SingularConfiguration` or :class:`InvalidInput`).
+    """
+
+    def __init__(
+        self, message: str, partial: JointTrajectory, index: int, time: float, cause: PlmError
+    ) -> None:
+        self.partial = partial
+        self.index = index
+        self.time = time
+        self.cause = cause
         super().__init__(message)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
@@ -18,6 +18,9 @@ from .kinematics.assembly import Assembly, assemble
 from .kinematics.legs import Leg, find_legs
 from .kinematics.singularity import RANK_RTOL, numerical_rank
 from .kinematics.task import Task, compile_task
+
+if TYPE_CHECKING:
+    from .viz.meshcat_view import MeshcatViewer
 
 ASSEMBLY_TOL = 1e-12
 """Default closure tolerance of :meth:`Mechanism.assemble` [m, rad]."""
@@ -378,6 +381,16 @@ class Mechanism:
         if self._visual_factory is None:
             return pin.GeometryModel()
         return self._visual_factory()
+
+    def show(self, q: Any = None, **kwargs: Any) -> MeshcatViewer:
+        """Display the mechanism at ``q`` (default: :attr:`q_ref`) in meshcat; needs ``plm-pin[viz]``.
+
+        See :func:`plm_pin.viz.show` for the options. Returns the viewer: open its ``url``
+        (a server on 127.0.0.1), or let a notebook show it inline.
+        """
+        from .viz.meshcat_view import show
+
+        return show(self, q, **kwargs)
 
     def summary(self) -> dict[str, Any]:
         """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""

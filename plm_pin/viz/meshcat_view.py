@@ -1,0 +1,528 @@
+"""Meshcat inspection of a mechanism: geometry, frames, closure points, forces, singularities, motions.
+
+A :class:`MeshcatViewer` draws one mechanism under ``/meshcat/plm_pin/<name>`` of a meshcat scene,
+with Pinocchio's ``MeshcatVisualizer``:
+
+- its visual geometry, or, when it has none, a skeleton: rods between joint origins and
+  from each joint to its frames, balls at the joints;
+- triads at the joint frames and the task frame (x red, y green, z blue);
+- a ball at both frames of every closure, green when the closure holds at the displayed
+  configuration, magenta when its residual exceeds :data:`CLOSURE_TOL`;
+- the geometry recoloured when :func:`plm_pin.kinematics.classify` finds the configuration
+  singular (one colour per kind, :data:`SINGULAR_COLORS`);
+- force arrows of a static case (:meth:`MeshcatViewer.show_forces`);
+- motions as meshcat animations (:meth:`MeshcatViewer.animate`).
+
+The scene goes to a meshcat server on 127.0.0.1 (see :mod:`plm_pin.viz.meshcat_server`) or,
+with ``static=True``, stays in memory; either way :meth:`MeshcatViewer.static_html` returns
+it as one self-contained HTML page a reader can rotate without a server. Lengths in [m],
+forces in [N], angles in [rad], times in [s].
+"""
+
+from __future__ import annotations
+
+import html
+import numbers
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from .._io import atomic_write_text
+from ..exceptions import InvalidInput
+from ..kinematics.singularity import SingularityReport, classify
+from .meshcat_server import MeshcatServer, ServerWindow, StaticWindow, require_meshcat
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+CLOSURE_TOL = 1e-6
+"""Closure residual above which its markers show it open [m, rad]."""
+
+CLOSED_COLOR = (0.1, 0.7, 0.2, 1.0)
+"""RGBA of the markers of a closure that holds."""
+
+OPEN_COLOR = (1.0, 0.0, 1.0, 1.0)
+"""RGBA of the markers of a closure that does not hold."""
+
+SINGULAR_COLORS: Mapping[str, tuple[float, float, float, float]] = {
+    "constraint": (0.95, 0.8, 0.1, 1.0),
+    "inverse": (1.0, 0.5, 0.0, 1.0),
+    "direct": (0.85, 0.1, 0.1, 1.0),
+}
+"""RGBA of the whole mechanism at a singularity, by kind (the first kind found wins)."""
+
+SKELETON_COLOR = (0.45, 0.5, 0.6, 1.0)
+"""RGBA of the rods and balls drawn for a mechanism without visual geometry."""
+
+FORCE_COLOR = 0x1F5FBF
+"""Colour of force arrows (0xRRGGBB)."""
+
+ANIMATION_FPS = 30
+"""Frame rate of meshcat animation clips [1/s] (key times are not rounded to it)."""
+
+# sizes relative to the mechanism's extent (largest side of the box around its frame origins)
+_MARKER = 0.02
+_ROD = 0.006
+_BALL = 0.012
+_AXIS = 0.08
+_ARROW = 0.006
+_MIN_EXTENT = 1e-3  # [m]
+
+_VISUAL = pin.GeometryType.VISUAL
+
+
+@dataclass(frozen=True)
+class SceneStatus:
+    """What a displayed configuration shows.
+
+    Attributes:
+        closure_errors: largest absolute residual of each closure [m, rad].
+        open_closures: the closures whose residual exceeds :data:`CLOSURE_TOL`, marked apart.
+        singularity: the classification of the configuration, or None when it was not
+            classified (the mechanism has no task, or a closure is open).
+    """
+
+    closure_errors: Mapping[str, float]
+    open_closures: tuple[str, ...]
+    singularity: SingularityReport | None
+
+    @property
+    def singular_kinds(self) -> tuple[str, ...]:
+        """The singularity kinds found (empty when regular or not classified)."""
+        return self.singularity.kinds if self.singularity is not None else ()
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON."""
+        return {
+            "closure_errors": dict(self.closure_errors),
+            "open_closures": list(self.open_closures),
+            "singularity": self.singularity.to_dict() if self.singularity is not None else None,
+        }
+
+
+def scene_status(mech: Mechanism, q: Any) -> SceneStatus:
+    """Closure residuals of ``q`` and, when the loops hold and there is a task, its singularity report."""
+    errors = mech.closure_errors(q)
+    open_closures = tuple(name for name, err in errors.items() if err > CLOSURE_TOL)
+    report = None
+    if mech.task_compiled is not None and not open_closures:
+        report = classify(mech, q)
+    return SceneStatus(errors, open_closures, report)
+
+
+def _segment(name: str) -> str:
+    """A name usable as one meshcat path element ('/' separates elements)."""
+    return name.replace("/", "_") or "_"
+
+
+def _extent(mech: Mechanism) -> tuple[float, float]:
+    """Largest side of the box around the frame origins, and their largest distance to the world origin [m].
+
+    At the reference guess (no assembly needed).
+    """
+    data = mech.model.createData()
+    pin.framesForwardKinematics(mech.model, data, mech.reference_guess())
+    points = np.array([M.translation for M in data.oMf])  # (n_frames, 3)
+    size = max(float(np.max(np.ptp(points, axis=0))), _MIN_EXTENT)
+    return size, max(float(np.max(np.linalg.norm(points, axis=1))), size)
+
+
+def _along(offset: np.ndarray) -> pin.SE3:
+    """Placement of a z-axis rod (centred at its origin) spanning from 0 to ``offset``."""
+    rotation = pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), offset).matrix()
+    return pin.SE3(rotation, 0.5 * offset)
+
+
+def _skeleton(model: pin.Model, size: float) -> list[pin.GeometryObject]:
+    """Rods from each joint origin to its child joints and frames, and a ball at each joint.
+
+    A rod is fixed in its parent joint's frame, so it moves (and animates) with it; it is
+    named after the first child found at its end.
+    """
+    import coal
+
+    ends: dict[tuple[int, tuple[float, ...]], str] = {}
+    for j in range(1, model.njoints):
+        ends.setdefault((model.parents[j], tuple(model.jointPlacements[j].translation)), model.names[j])
+    for frame in model.frames:
+        ends.setdefault((frame.parentJoint, tuple(frame.placement.translation)), frame.name)
+    objects = [
+        pin.GeometryObject(
+            f"joints/{_segment(model.names[j])}", j, pin.SE3.Identity(), coal.Sphere(size * _BALL)
+        )
+        for j in range(1, model.njoints)
+    ]
+    names: set[str] = set()
+    for (parent, end), child in ends.items():
+        offset = np.array(end)
+        length = float(np.linalg.norm(offset))
+        if length <= 1e-9:
+            continue
+        name = f"links/{_segment(child)}"
+        while name in names:  # a frame may share a joint's name
+            name += "_"
+        names.add(name)
+        objects.append(pin.GeometryObject(name, parent, _along(offset), coal.Cylinder(size * _ROD, length)))
+    for obj in objects:
+        obj.meshColor = np.array(SKELETON_COLOR)
+    return objects
+
+
+def _closure_markers(mech: Mechanism, size: float) -> dict[str, tuple[str, pin.GeometryObject]]:
+    """A ball at each frame of each closure: ``{"closures/<closure>/<frame>": (closure name, ball)}``."""
+    import coal
+
+    markers = {}
+    for closure in mech.closures:
+        for fid in closure.frame_ids:
+            frame = mech.model.frames[fid]
+            name = f"closures/{_segment(closure.name)}/{_segment(frame.name)}"
+            ball = pin.GeometryObject(
+                name, frame.parentJoint, fid, frame.placement, coal.Sphere(size * _MARKER)
+            )
+            ball.meshColor = np.array(CLOSED_COLOR)
+            markers[name] = (closure.name, ball)
+    return markers
+
+
+def _check_arrows(arrows: Sequence[tuple[Any, Any, str]]) -> list[tuple[np.ndarray, np.ndarray, str]]:
+    out = []
+    labels: set[str] = set()
+    for k, arrow in enumerate(arrows):
+        try:
+            point, vector, label = arrow
+        except (TypeError, ValueError):
+            raise InvalidInput(f"arrow {k} must be (point [m], vector [N], label), got {arrow!r}") from None
+        p = np.asarray(point, dtype=float)
+        f = np.asarray(vector, dtype=float)
+        if p.shape != (3,) or f.shape != (3,) or not (np.all(np.isfinite(p)) and np.all(np.isfinite(f))):
+            raise InvalidInput(f"arrow {label!r}: point and vector must be 3 finite numbers each")
+        if not isinstance(label, str) or not label:
+            raise InvalidInput(f"arrow {k}: label must be a non-empty string, got {label!r}")
+        name = _segment(label)
+        if name in labels:
+            raise InvalidInput(f"arrow labels must be distinct; {label!r} is repeated")
+        labels.add(name)
+        out.append((p, f, name))
+    return out
+
+
+def _check_motion(mech: Mechanism, qs: Any, times: Any) -> tuple[np.ndarray, np.ndarray]:
+    q_arr = np.asarray(qs, dtype=float)
+    t_arr = np.asarray(times, dtype=float)
+    if q_arr.ndim != 2 or q_arr.shape[1] != mech.nq or q_arr.shape[0] == 0:
+        raise InvalidInput(f"qs must have shape (n, {mech.nq}) with n >= 1, got {q_arr.shape}")
+    if t_arr.shape != (q_arr.shape[0],):
+        raise InvalidInput(f"times must have shape ({q_arr.shape[0]},) like qs, got {t_arr.shape}")
+    if not (np.all(np.isfinite(q_arr)) and np.all(np.isfinite(t_arr))):
+        raise InvalidInput("qs and times must be finite")
+    if np.any(np.diff(t_arr) <= 0.0):
+        raise InvalidInput("times must be strictly increasing [s]")
+    return q_arr, t_arr
+
+
+class MeshcatViewer:
+    """One mechanism in a meshcat scene, on a local server or in memory.
+
+    Attributes:
+        mech: the mechanism shown.
+        server: the server the scene is on, when this process started it.
+        root: path of the mechanism in the scene, ``plm_pin/<name>`` (under meshcat's ``/meshcat``).
+        size: extent of the mechanism, the scale of markers, rods and triads [m].
+    """
+
+    def __init__(
+        self,
+        mech: Mechanism,
+        *,
+        static: bool = False,
+        server: MeshcatServer | None = None,
+        zmq_url: str | None = None,
+        port: int | None = None,
+        frames: bool = True,
+    ) -> None:
+        """Draw ``mech`` in a scene (not yet placed: call :meth:`display`).
+
+        Args:
+            mech: the mechanism.
+            static: keep the scene in memory (no server): for :meth:`static_html`.
+            server: a server to draw in (default: this process's shared server, started
+                on first use on ``port``).
+            zmq_url: draw in a server started elsewhere (``meshcat-server``, ``plm-pin view``),
+                given by its ``tcp://127.0.0.1:PORT`` address.
+            port: web port of the shared server when it must be started (default: the
+                first free port from 7000); a busy port is replaced by the next free one.
+            frames: draw triads at the joint frames and the task frame.
+
+        Raises:
+            ViewerError: meshcat missing, or the server cannot be started or reached.
+            InvalidInput: more than one of ``static``, ``server``, ``zmq_url``; ``port`` with
+                one of them; or a ``zmq_url`` that is not on this machine.
+        """
+        meshcat = require_meshcat()
+        if sum((static, server is not None, zmq_url is not None)) > 1:
+            raise InvalidInput("give at most one of static=True, server= and zmq_url=")
+        if port is not None and (static or server is not None or zmq_url is not None):
+            raise InvalidInput("port= is for the shared server: not with static=True, server= or zmq_url=")
+        self.mech = mech
+        self.server: MeshcatServer | None = None
+        window: StaticWindow | ServerWindow
+        if static:
+            window = StaticWindow()
+        elif zmq_url is not None:
+            window = ServerWindow(zmq_url)
+        else:
+            self.server = server if server is not None else shared_server(port)
+            window = ServerWindow(self.server.zmq_url, self.server.web_url)
+        self._window = window
+        self._vis = meshcat.Visualizer(window=window)
+        self.root = f"plm_pin/{_segment(mech.name)}"
+        self.size, reach = _extent(mech)
+        # meshcat's camera orbits the world origin from (3, 0, 1) m, too far for a 0.3 m table;
+        # place it above and in front at twice the reach (its parent is turned: y up, z towards -y)
+        direction = np.array([0.6, 2.0, 1.0]) / np.linalg.norm([0.6, 2.0, 1.0])  # world (0.6, -1, 2)
+        self._vis["/Cameras/default/rotated/<object>"].set_property(
+            "position", (2.0 * reach * direction).tolist()
+        )
+        self._animated = False
+        self._build(frames)
+
+    def _build(self, frames: bool) -> None:
+        from pinocchio.visualize import MeshcatVisualizer  # imports meshcat
+
+        mech, size = self.mech, self.size
+        geometry = mech.visual_model.copy()
+        for obj in geometry.geometryObjects:
+            obj.name = _segment(obj.name)
+        if geometry.ngeoms == 0:
+            for obj in _skeleton(mech.model, size):
+                geometry.addGeometryObject(obj)
+        markers = _closure_markers(mech, size)
+        for _, ball in markers.values():
+            geometry.addGeometryObject(ball)
+        self._marked = {name: closure for name, (closure, _) in markers.items()}  # marker -> closure
+        self._geometry = geometry
+        self._vis[self.root].delete()
+        viz = MeshcatVisualizer(mech.model, None, geometry)
+        viz.initViewer(viewer=self._vis)
+        viz.loadViewerModel(rootNodeName=self.root)
+        if frames:
+            ids = [i for i, f in enumerate(mech.model.frames) if f.type == pin.FrameType.JOINT]
+            if mech.task_frame_id is not None and mech.task_frame_id not in ids:
+                ids.append(mech.task_frame_id)
+            viz.displayFrames(True, frame_ids=ids, axis_length=size * _AXIS, axis_width=2)
+        self._viz = viz
+        self._colors = {  # own colours, as loaded
+            obj.name: CLOSED_COLOR if obj.name in self._marked else tuple(obj.meshColor)
+            for obj in geometry.geometryObjects
+        }
+        self._shown = dict(self._colors)  # colours on screen
+
+    # ---------------------------------------------------------------- scene
+    @property
+    def url(self) -> str | None:
+        """Address of the page showing the scene (None for a static scene)."""
+        return self._window.web_url
+
+    def open(self) -> MeshcatViewer:
+        """Open the page in a web browser (not for a static scene); returns the viewer."""
+        self._window.open()
+        return self
+
+    def static_html(self) -> str:
+        """The scene as one self-contained HTML page: the configuration or animation last shown."""
+        return str(self._vis.static_html())
+
+    def write_html(self, path: str | Path) -> Path:
+        """Write :meth:`static_html` to ``path`` atomically (its folder must exist); returns the path."""
+        out = Path(path)
+        atomic_write_text(out, self.static_html())
+        return out
+
+    # ------------------------------------------------------------ drawing
+    def display(self, q: Any = None) -> SceneStatus:
+        """Place the mechanism at ``q`` (default: the reference configuration) and mark its state.
+
+        Closure markers turn magenta where a closure is open; the geometry takes the colour of
+        the singularity found (:data:`SINGULAR_COLORS`). Force arrows and animations shown
+        before are removed.
+
+        Args:
+            q: configuration, shape (nq,); need not be assembled.
+
+        Returns:
+            The closure residuals and singularity classification shown.
+        """
+        qa = np.array(self.mech.q_ref if q is None else self.mech.check_q(q))
+        status = scene_status(self.mech, qa)
+        self._recolor(status)
+        if self._animated:
+            self._vis.set_animation(require_meshcat().animation.Animation(), play=False)
+            self._animated = False
+        self._vis[f"{self.root}/forces"].delete()
+        self._viz.display(qa)
+        return status
+
+    def _recolor(self, status: SceneStatus) -> None:
+        """Reload the geometry whose colour changes: closure markers by state, the rest if singular."""
+        kinds = status.singular_kinds
+        for obj in self._geometry.geometryObjects:
+            closure = self._marked.get(obj.name)
+            if closure is not None:
+                color = OPEN_COLOR if closure in status.open_closures else CLOSED_COLOR
+            else:
+                color = SINGULAR_COLORS[kinds[0]] if kinds else self._colors[obj.name]
+            if color != self._shown[obj.name]:
+                self._viz.loadViewerGeometryObject(obj, _VISUAL, np.array(color))
+                self._shown[obj.name] = color
+
+    def show_forces(self, q: Any, arrows: Sequence[tuple[Any, Any, str]], scale: float) -> SceneStatus:
+        """Display ``q`` with force arrows, e.g. the loads and actuator forces of a static case.
+
+        Each arrow starts at its point and is ``scale * |vector|`` long; it is drawn under
+        ``<root>/forces/<label>`` so the labels show in meshcat's scene tree. Zero vectors
+        draw nothing.
+
+        Args:
+            q: configuration, shape (nq,).
+            arrows: ``(point [m], vector [N], label)`` triples, point and vector in the world
+                frame, labels distinct.
+            scale: arrow length per force [m/N], positive.
+
+        Returns:
+            The status of the configuration (see :meth:`display`).
+
+        Raises:
+            InvalidInput: malformed arrows, repeated labels or a scale that is not positive.
+        """
+        if not (isinstance(scale, numbers.Real) and np.isfinite(scale) and scale > 0.0):
+            raise InvalidInput(f"scale must be a positive number [m/N], got {scale!r}")
+        scale = float(scale)  # meshcat's messages take Python numbers only
+        checked = _check_arrows(arrows)
+        status = self.display(q)
+        mg = require_meshcat().geometry
+        material = mg.MeshLambertMaterial(color=FORCE_COLOR)
+        radius = self.size * _ARROW
+        for point, vector, name in checked:
+            length = scale * float(np.linalg.norm(vector))
+            if length == 0.0:
+                continue
+            u = vector / np.linalg.norm(vector)
+            head = min(0.3 * length, 6.0 * radius)
+            rotation = pin.Quaternion.FromTwoVectors(np.array([0.0, 1.0, 0.0]), u).matrix()
+            node = self._vis[f"{self.root}/forces/{name}"]
+            for part, height, top, bottom, centre in (
+                ("shaft", length - head, radius, radius, 0.5 * (length - head)),
+                ("head", head, 0.0, 2.5 * radius, length - 0.5 * head),
+            ):
+                node[part].set_object(mg.Cylinder(height, radiusTop=top, radiusBottom=bottom), material)
+                node[part].set_transform(pin.SE3(rotation, point + centre * u).homogeneous)
+        return status
+
+    def animate(self, qs: Any, times: Any, *, play: bool = True, repetitions: int = 1) -> SceneStatus:
+        """Show a motion (simulated or planned) as a meshcat animation, starting at ``times[0]``.
+
+        Colours (closures, singularity) are those of the first configuration.
+
+        Args:
+            qs: configurations, shape (n, nq).
+            times: their times [s], shape (n,), strictly increasing.
+            play: start playing at once.
+            repetitions: times the clip is played.
+
+        Returns:
+            The status of the first configuration.
+
+        Raises:
+            InvalidInput: malformed ``qs`` or ``times``.
+        """
+        q_arr, t_arr = _check_motion(self.mech, qs, times)
+        status = self.display(q_arr[0])
+        animation = require_meshcat().animation.Animation(default_framerate=ANIMATION_FPS)
+        try:
+            for q, t in zip(q_arr, t_arr, strict=True):
+                with animation.at_frame(self._vis, (t - t_arr[0]) * ANIMATION_FPS) as frame:
+                    self._viz.viewer = frame  # Pinocchio places the nodes through its viewer
+                    self._viz.display(q)
+        finally:
+            self._viz.viewer = self._vis
+        self._vis.set_animation(animation, play=play, repetitions=repetitions)
+        self._animated = True
+        return status
+
+    # ------------------------------------------------------------ notebook
+    def _repr_html_(self) -> str:
+        """The scene inline in a notebook: the live page, or the static page for a static scene."""
+        style = 'style="width: 100%; height: 400px; border: none"'
+        if self.url is None:
+            return f'<iframe srcdoc="{html.escape(self.static_html())}" {style}></iframe>'
+        return f'<iframe src="{html.escape(self.url)}" {style}></iframe>'
+
+    def __repr__(self) -> str:
+        where = "static" if self.url is None else self.url
+        return f"MeshcatViewer({self.mech.name!r}, {where!r})"
+
+
+_shared: dict[str, MeshcatServer] = {}
+
+
+def shared_server(port: int | None = None) -> MeshcatServer:
+    """This process's meshcat server: the running one, or a new one on ``port``.
+
+    The running server is reused when ``port`` is None or the port it was asked for or
+    serves; otherwise a new server on ``port`` replaces it as the shared one.
+
+    Raises:
+        ViewerError: meshcat missing, or the server cannot be started.
+    """
+    current = _shared.get("server")
+    if current is not None and current.running and port in (None, current.port, current.requested_port):
+        return current
+    _shared["server"] = server = MeshcatServer(port)
+    return server
+
+
+def show(mech: Mechanism, q: Any = None, **kwargs: Any) -> MeshcatViewer:
+    """Display ``mech`` at ``q`` (default: its reference configuration) in a meshcat viewer.
+
+    Args:
+        mech: the mechanism.
+        q: configuration, shape (nq,).
+        **kwargs: options of :class:`MeshcatViewer` (``static``, ``server``, ``zmq_url``,
+            ``port``, ``frames``).
+
+    Returns:
+        The viewer: its :attr:`~MeshcatViewer.url` is the page to open; in a notebook it
+        shows inline.
+    """
+    viewer = MeshcatViewer(mech, **kwargs)
+    viewer.display(q)
+    return viewer
+
+
+def scene_html(mech: Mechanism, q: Any = None, *, qs: Any = None, times: Any = None) -> str:
+    """A self-contained HTML page of ``mech`` at ``q``, or of the motion ``qs`` at ``times``, no server.
+
+    For reports: the reader rotates the mechanism (and plays the motion) in the page.
+
+    Args:
+        mech: the mechanism.
+        q: configuration, shape (nq,) (default: the reference configuration).
+        qs: configurations of a motion, shape (n, nq); with ``times`` [s], shape (n,).
+        times: times of ``qs`` [s].
+
+    Raises:
+        InvalidInput: both ``q`` and ``qs`` given, ``qs`` without ``times``, or malformed arrays.
+    """
+    viewer = MeshcatViewer(mech, static=True)
+    if qs is None and times is None:
+        viewer.display(q)
+    elif q is not None or qs is None or times is None:
+        raise InvalidInput("give either q, or qs with times")
+    else:
+        viewer.animate(qs, times)
+    return viewer.static_html()
