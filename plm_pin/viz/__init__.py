@@ -1,15 +1,20 @@
 """Figures (matplotlib) and meshcat scenes of mechanisms; both packages are imported only when used."""
 
 from .figures import plot_map, plot_sweep
+from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
 from .meshcat_server import MeshcatServer, ViewerError
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
 
 __all__ = [
+    "ForceArrow",
     "MeshcatServer",
     "MeshcatViewer",
     "SceneStatus",
     "ViewerError",
+    "fig8",
+    "force_arrows",
     "plot_map",
+    "plot_static_forces",
     "plot_sweep",
     "scene_html",
     "show",
