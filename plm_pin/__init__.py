@@ -9,6 +9,7 @@ from .exceptions import (
     PlmError,
     PoseUnreachable,
     SingularConfiguration,
+    TrajectoryError,
 )
 from .loading import load
 from .mechanism import Mechanism
@@ -25,6 +26,7 @@ __all__ = [
     "PlmError",
     "PoseUnreachable",
     "SingularConfiguration",
+    "TrajectoryError",
     "__version__",
     "load",
 ]

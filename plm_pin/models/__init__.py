@@ -28,7 +28,12 @@ from .pss import (
     zhao2011_trajectory,
 )
 from .registry import PRESETS, Preset, preset_names, urdf_folder
-from .star_triangle import build_star_triangle, star_triangle_inverse_kinematics
+from .star_triangle import (
+    build_star_triangle,
+    enferadi2017_circle,
+    enferadi2017_line,
+    star_triangle_inverse_kinematics,
+)
 
 __all__ = [
     "PRESETS",
@@ -58,6 +63,8 @@ __all__ = [
     "build_fourbar",
     "build_pss",
     "build_star_triangle",
+    "enferadi2017_circle",
+    "enferadi2017_line",
     "leg_inverse_kinematics",
     "preset_names",
     "pss_inverse_kinematics",
