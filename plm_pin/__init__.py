@@ -8,6 +8,7 @@ from .exceptions import (
     InvalidInput,
     PlmError,
     PoseUnreachable,
+    SimulationFailed,
     SingularConfiguration,
     TrajectoryError,
 )
@@ -25,6 +26,7 @@ __all__ = [
     "Mechanism",
     "PlmError",
     "PoseUnreachable",
+    "SimulationFailed",
     "SingularConfiguration",
     "TrajectoryError",
     "__version__",

@@ -4,14 +4,16 @@ Run with ``make bench`` (or ``python -m plm_pin.benchmarks --out reports/bench``
 benchmark measures; correctness is asserted by the test suite, never here. Besides the
 cost per call of loading, closures, assembly, kinematics and manipulability for every
 preset, it records the wall time of a 10^5-pose manipulability map of
-``harada2011_3d4m`` and, as a reproduction note, the 3D3M's singular angle of Harada
-2011 Fig. 6.
+``harada2011_3d4m``, the cost and accuracy of closed-chain simulation (the four-bar, 10 s
+passive, against MuJoCo's soft ``connect`` constraint on the same four-bar; Harada 2011's
+simulation 1) and, as a reproduction note, the 3D3M's singular angle of Harada 2011 Fig. 6.
 """
 
 from __future__ import annotations
 
 import argparse
 import functools
+import inspect
 import json
 import math
 import os
@@ -21,12 +23,14 @@ import time
 import timeit
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from .analysis import manipulability, singular_points_along, workspace_map
 from .description.writer import write_description
+from .dynamics.simulation import SimulationResult, simulate
 from .kinematics import (
     classify,
     closed_chain_jacobians,
@@ -35,10 +39,21 @@ from .kinematics import (
     task_pose,
 )
 from .loading import load
+from .mechanism import Mechanism
+from .models.classic import build_fourbar
 from .models.registry import PRESETS, preset_names
 
 MAP_SHAPE = (317, 316)
 """Grid of the manipulability-map benchmark: 100,172 poses."""
+
+SIM_DURATION = 10.0
+"""Simulated time of the four-bar comparison [s]."""
+
+SIM_STEP = 1e-3
+"""Integration step of the four-bar comparison, both engines [s]."""
+
+SIM_OUTPUT = 1e-2
+"""Output (sampling) step of the simulation benchmarks [s]."""
 
 
 def _per_call(fn: Callable[[], object], min_time: float = 0.2) -> float:
@@ -109,6 +124,164 @@ def map_benchmark(shape: tuple[int, int] = MAP_SHAPE, workers: int | None = None
     }
 
 
+def _peak_kinetic(mech: Mechanism, run: SimulationResult) -> float:
+    data = mech.model.createData()
+    return max(pin.computeKineticEnergy(mech.model, data, q, v) for q, v in zip(run.q, run.v, strict=True))
+
+
+def _simulation_row(mech: Mechanism, case: str, **kwargs: Any) -> dict[str, object]:
+    """Accuracy and cost of one :func:`simulate` run; energy drift relative to the peak kinetic energy."""
+    start = time.perf_counter()
+    run = simulate(mech, mech.q_ref, **kwargs)
+    seconds = time.perf_counter() - start
+    return {
+        "engine": f"plm_pin ({run.solver})",
+        "mechanism": mech.name,
+        "case": case,
+        "max_closure_error": run.max_closure_residual(),
+        "max_closure_drift_before_projection": float(run.closure_drift.max()),
+        "energy_drift": run.energy_drift() / _peak_kinetic(mech, run) if not kwargs.get("wrench") else None,
+        "steps": run.steps,
+        "seconds_per_step": seconds / run.steps,
+        "seconds": seconds,
+    }
+
+
+def fourbar_mjcf() -> str:
+    """MJCF of the ``fourbar`` preset from its builder parameters, the loop closed by a site ``connect``.
+
+    Bars as in :func:`plm_pin.models.classic.build_fourbar`: mass ``density * L`` at ``L / 2``,
+    inertia ``(m r^2 / 2, m L^2 / 12, m L^2 / 12)`` with r = 5 mm; no geoms (no contacts);
+    MuJoCo's default integrator, solver and constraint softness; 1 ms steps.
+    """
+    defaults = {k: p.default for k, p in inspect.signature(build_fourbar).parameters.items()}
+    p = {**defaults, **PRESETS["fourbar"].parameters}
+
+    def inertial(length: float) -> str:
+        m = p["density"] * length
+        return (
+            f'<inertial pos="{length / 2} 0 0" mass="{m}" '
+            f'diaginertia="{0.5 * m * 0.005**2} {m * length**2 / 12} {m * length**2 / 12}"/>'
+        )
+
+    a, b, c, d = p["crank"], p["coupler"], p["rocker"], p["ground"]
+    return f"""<mujoco model="fourbar">
+  <option timestep="{SIM_STEP}" gravity="0 {-p["gravity"]} 0"><flag energy="enable"/></option>
+  <worldbody>
+    <body name="crank">
+      <joint name="crank_pivot" type="hinge" axis="0 0 1"/>
+      {inertial(a)}
+      <body name="coupler" pos="{a} 0 0">
+        <joint name="coupler_pivot" type="hinge" axis="0 0 1"/>
+        {inertial(b)}
+        <site name="coupler_tip" pos="{b} 0 0"/>
+      </body>
+    </body>
+    <body name="rocker" pos="{d} 0 0">
+      <joint name="rocker_pivot" type="hinge" axis="0 0 1"/>
+      {inertial(c)}
+      <site name="rocker_tip" pos="{c} 0 0"/>
+    </body>
+  </worldbody>
+  <equality><connect site1="coupler_tip" site2="rocker_tip"/></equality>
+</mujoco>
+"""
+
+
+def mujoco_fourbar_row(q0: np.ndarray) -> dict[str, object]:
+    """The four-bar in MuJoCo from ``q0`` at rest: closure error and energy drift at the output times."""
+    row: dict[str, object] = {
+        "engine": "MuJoCo",
+        "mechanism": "fourbar",
+        "case": f"{SIM_DURATION:g} s passive, Euler {SIM_STEP * 1e3:g} ms, soft connect (defaults)",
+    }
+    try:
+        import mujoco  # optional: pip install mujoco (dev extra)
+    except ImportError as exc:
+        return {**row, "engine": f"MuJoCo (not available: {exc})"}
+    row["engine"] = f"MuJoCo {mujoco.__version__}"
+    model = mujoco.MjModel.from_xml_string(fourbar_mjcf())
+    data = mujoco.MjData(model)
+    data.qpos[:] = q0
+    mujoco.mj_forward(model, data)
+    per_sample = round(SIM_OUTPUT / SIM_STEP)
+    n_samples = round(SIM_DURATION / SIM_OUTPUT)
+    tips = [model.site("coupler_tip").id, model.site("rocker_tip").id]
+    energy: list[float] = []
+    kinetic: list[float] = []
+    gap: list[float] = []
+
+    def sample() -> None:
+        energy.append(float(data.energy.sum()))
+        kinetic.append(float(data.energy[1]))
+        gap.append(float(np.linalg.norm(data.site_xpos[tips[0]] - data.site_xpos[tips[1]])))
+
+    sample()
+    start = time.perf_counter()
+    for _ in range(n_samples):
+        mujoco.mj_step(model, data, per_sample)
+        mujoco.mj_forward(model, data)  # energy and sites at the sample's state
+        sample()
+    seconds = time.perf_counter() - start
+    steps = n_samples * per_sample
+    return {
+        **row,
+        "max_closure_error": max(gap),
+        "max_closure_drift_before_projection": None,
+        "energy_drift": max(abs(e - energy[0]) for e in energy) / max(kinetic),
+        "steps": steps,
+        "seconds_per_step": seconds / steps,
+        "seconds": seconds,
+    }
+
+
+def simulation_benchmark() -> list[dict[str, object]]:
+    """Closed-chain simulation: the four-bar against MuJoCo, and Harada 2011's simulation 1.
+
+    The four-bar runs 10 s passive under gravity from the preset's reference configuration at
+    rest, sampled every 10 ms, in plm_pin (both solvers, RK4 at 1 and 5 ms, DOP853) and in
+    MuJoCo (1 ms, defaults). Energy drift is relative to the peak kinetic energy.
+    """
+    four = load("fourbar")
+    harada = load("harada2011_3d4m")
+    p = PRESETS["harada2011_3d4m"].parameters
+    f_y = (2 * p["rod_masses"][0] + p["plate_mass"]) * p["gravity"]
+    passive = {"duration": SIM_DURATION, "dt": SIM_OUTPUT}
+    return [
+        _simulation_row(four, f"{SIM_DURATION:g} s passive, RK4 1 ms", step=SIM_STEP, **passive),
+        _simulation_row(
+            four, f"{SIM_DURATION:g} s passive, RK4 1 ms", step=SIM_STEP, solver="kkt", **passive
+        ),
+        _simulation_row(four, f"{SIM_DURATION:g} s passive, RK4 5 ms", step=5e-3, **passive),
+        _simulation_row(four, f"{SIM_DURATION:g} s passive, DOP853 rtol 1e-9", method="adaptive", **passive),
+        mujoco_fourbar_row(four.q_ref),
+        _simulation_row(
+            harada,
+            "Harada 2011 simulation 1 (2 s, f_x = 0.2 N), RK4 1 ms",
+            duration=2.0,
+            dt=SIM_OUTPUT,
+            step=SIM_STEP,
+            wrench=[0.2, f_y, 0.0],
+        ),
+    ]
+
+
+def _simulation_line(r: dict[str, object]) -> str:
+    """One Markdown row of the simulation table ("-" where a value is missing or not applicable)."""
+
+    def cell(key: str, fmt: str, scale: float = 1.0) -> str:
+        value = r.get(key)
+        return "-" if not isinstance(value, (int, float)) else format(scale * value, fmt)
+
+    total = r.get("seconds")
+    return (
+        f"| {r['engine']} | {r['mechanism']} | {r['case']} | {cell('max_closure_error', '.1e')} "
+        f"| {cell('energy_drift', '.1e')} | {cell('seconds_per_step', '.1f', 1e6)} "
+        f"| {_fmt(total) if isinstance(total, float) else '-'} "
+        f"| {cell('max_closure_drift_before_projection', '.1e')} |"
+    )
+
+
 def fig6_note() -> str:
     """Harada 2011 Fig. 6: the 3D3M's type-4 singular angle at the y where eq. (11.4) gives 28.7 deg.
 
@@ -138,8 +311,15 @@ def _fmt(seconds: float) -> str:
     return f"{seconds * 1e6:.1f} us" if seconds < 1e-3 else f"{seconds * 1e3:.2f} ms"
 
 
-def write(rows: list[dict[str, object]], out: Path, notes: tuple[str, ...] = ()) -> Path:
-    """Write ``results.md`` (table, then ``notes``) and ``results.json`` (rows) into ``out``.
+def write(
+    rows: list[dict[str, object]],
+    out: Path,
+    notes: tuple[str, ...] = (),
+    simulation: list[dict[str, object]] | None = None,
+) -> Path:
+    """Write ``results.md`` (tables, then ``notes``) and ``results.json`` into ``out``.
+
+    ``results.json`` holds ``{"timings": rows, "simulation": simulation rows}``.
 
     Returns:
         The Markdown path.
@@ -155,11 +335,25 @@ def write(rows: list[dict[str, object]], out: Path, notes: tuple[str, ...] = ())
         "|---|---|---|",
     ]
     lines += [f"| {r['mechanism']} | {r['case']} | {_fmt(float(r['seconds_per_call']))} |" for r in rows]  # type: ignore[arg-type]
+    if simulation:
+        lines += [
+            "",
+            "## Simulation",
+            "",
+            "One run each (wall time). Closure error: largest over the samples (for plm_pin after the "
+            "projection; the drift the integrator reached before it is in the last column). Energy "
+            "drift: largest |E - E0| over the peak kinetic energy.",
+            "",
+            "| engine | mechanism | case | max closure error [m] | energy drift | us per step | total "
+            "| drift before projection [m] |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        lines += [_simulation_line(r) for r in simulation]
     if notes:
         lines += ["", "## Notes", "", *(f"- {n}" for n in notes)]
     md = out / "results.md"
     md.write_text("\n".join(lines) + "\n")
-    (out / "results.json").write_text(json.dumps(rows, indent=2))
+    (out / "results.json").write_text(json.dumps({"timings": rows, "simulation": simulation or []}, indent=2))
     return md
 
 
@@ -168,7 +362,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", type=Path, default=Path("reports/bench"), help="output folder")
     args = parser.parse_args()
-    md = write(run(), args.out, (fig6_note(),))
+    md = write(run(), args.out, (fig6_note(),), simulation_benchmark())
     print(md.read_text())
 
 

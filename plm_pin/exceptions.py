@@ -6,6 +6,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from .dynamics.simulation import SimulationResult
     from .dynamics.trajectory import JointTrajectory
 
 
@@ -114,6 +115,23 @@ class TrajectoryError(PlmError):
     ) -> None:
         self.partial = partial
         self.index = index
+        self.time = time
+        self.cause = cause
+        super().__init__(message)
+
+
+class SimulationFailed(PlmError):
+    """A simulation stopped early: the state or forces became non-finite, or the loops could not stay closed.
+
+    Attributes:
+        partial: the samples computed before the failure.
+        time: time of the step that failed [s].
+        cause: the error met there (:class:`ClosureNotSatisfied`, :class:`SingularConfiguration`),
+            or None when the state or the forces became non-finite.
+    """
+
+    def __init__(self, message: str, partial: SimulationResult, time: float, cause: PlmError | None) -> None:
+        self.partial = partial
         self.time = time
         self.cause = cause
         super().__init__(message)

@@ -1,5 +1,6 @@
 """Closed-chain dynamics: trajectories on the closure manifold, inverse and forward dynamics, task space."""
 
+from .simulation import SimulationResult, simulate
 from .trajectory import (
     JointTrajectory,
     Profile,
@@ -12,8 +13,10 @@ from .trajectory import (
 __all__ = [
     "JointTrajectory",
     "Profile",
+    "SimulationResult",
     "actuator_trajectory",
     "differentiated_profile",
     "sampled_profile",
+    "simulate",
     "task_trajectory",
 ]

@@ -170,3 +170,14 @@ def test_task_drift_matches_finite_differences(rng):
     pin.updateFramePlacements(mech.model, mech.data)
     gamma = task.drift_from_data(mech.model, mech.data)
     np.testing.assert_allclose(gamma, _drift_fd(mech, jac, q, v), atol=1e-7)
+
+
+def test_weld_drift_is_finite_and_exact_at_alignment(tmp_path, rng):
+    """At an assembled weld (rotation residual 0, where pin.Hlog3 is NaN) the drift stays finite and exact."""
+    mech = ball_joint_body(tmp_path, {"type": "weld"})
+    q = mech.neutral()
+    assert np.max(np.abs(mech.closure_residual(q))) == 0.0  # aligned: log3 of the identity
+    v = rng.normal(size=mech.nv)
+    gamma = closures.drift(mech.model, mech.data, mech.closures, q, v)
+    assert np.all(np.isfinite(gamma))
+    np.testing.assert_allclose(gamma, _drift_fd(mech, mech.closure_jacobian, q, v), atol=1e-7)

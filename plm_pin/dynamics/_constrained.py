@@ -1,0 +1,269 @@
+r"""Closed-chain forward dynamics at one state: accelerations, closure forces, velocity projection.
+
+The tree's equations of motion with the closures as constraints (index-1 form):
+
+.. math::
+    M(q)\, a + h(q, v) = \tau + J_\phi^T \lambda, \qquad J_\phi a + \dot J_\phi v = 0,
+
+:math:`M` the joint-space mass matrix with the armature (reflected rotor inertia) on its
+diagonal, :math:`h` the Coriolis, centrifugal and gravity terms (gravity from
+``model.gravity``), :math:`\tau` the applied generalized forces, :math:`\lambda` the closure
+forces in the rows of :mod:`plm_pin.kinematics.closures` (force on the second frame of a
+closure, its opposite on the first: the convention of :mod:`plm_pin.statics`).
+
+Two solvers give the same :math:`a`:
+
+- ``"kkt"`` (ours, any closure type): only :math:`r = n_v - \text{mobility}` rows of
+  :math:`J_\phi` are independent (planar point closures have zero rows), so the rows are
+  reduced by the SVD :math:`J_\phi = U \Sigma V^T` to :math:`W = V_r^T`, orthonormal, and
+  the regular saddle-point system
+
+  .. math::
+      \begin{bmatrix} M & -W^T \\ W & 0 \end{bmatrix}
+      \begin{bmatrix} a \\ \mu \end{bmatrix} =
+      \begin{bmatrix} \tau - h \\ -\Sigma_r^{-1} U_r^T \dot J_\phi v \end{bmatrix},
+      \qquad \lambda = U_r \Sigma_r^{-1} \mu
+
+  is solved: :math:`\lambda` is the minimum-norm closure force (none on redundant rows).
+- ``"pinocchio"`` (point and weld closures): ``pin.constraintDynamics`` with legacy
+  ``RigidConstraintModel`` s, ``CONTACT_3D`` world-aligned for a point closure and
+  ``CONTACT_6D`` local for a weld, no Baumgarte correction, proximal iterations. Its
+  multipliers are brought to our rows through the generalized force they exert,
+  :math:`J_\phi^T \lambda = J_{pin}^T \lambda_{pin}` (minimum-norm solution).
+
+After an integration step the state is projected back onto the closures
+(:meth:`ClosedChainDynamics.project`). The velocity projection onto :math:`J_\phi v = 0` is
+the one of least kinetic energy change, :math:`\min \|v^+ - v\|_M`, solved with the same
+saddle-point matrix for both solvers (Pinocchio 4.1's ``impulseDynamics`` with constraint
+models leaves :math:`J_\phi v^+ \ne 0` for closures between two moving bodies): it never
+adds energy and removes only the part of :math:`v` that violates the closures.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import InvalidInput, SingularConfiguration
+from ..kinematics import closures as _closures
+from ..kinematics.assembly import assemble
+from ..kinematics.singularity import RANK_RTOL
+from ..statics.balance import Load
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+SOLVERS = ("auto", "kkt", "pinocchio")
+"""Solver choices; ``auto`` is ``pinocchio`` when every closure is a point or a weld, else ``kkt``."""
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_PIN_CONTACT = {
+    "point": (pin.ContactType.CONTACT_3D, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED),
+    "weld": (pin.ContactType.CONTACT_6D, pin.ReferenceFrame.LOCAL),
+}
+PROJECTION_ITERATIONS = 20
+"""Iteration cap of the position projection."""
+
+_PROXIMAL = (1e-12, 1e-10, 20)
+"""Pinocchio proximal settings: absolute accuracy, regularization mu, iteration cap."""
+
+
+def resolve_solver(mech: Mechanism, solver: str) -> str:
+    """The solver to use for ``mech``: ``solver`` checked, ``auto`` resolved.
+
+    Raises:
+        InvalidInput: unknown solver, or ``pinocchio`` with a revolute closure.
+    """
+    if solver not in SOLVERS:
+        raise InvalidInput(f"solver {solver!r} is not one of {list(SOLVERS)}")
+    unsupported = [c.name for c in mech.closures if c.spec.type not in _PIN_CONTACT]
+    if solver == "pinocchio" and unsupported:
+        raise InvalidInput(
+            f"solver 'pinocchio' supports point and weld closures only; {unsupported} are revolute "
+            "(5 rows); use solver 'kkt' or 'auto'"
+        )
+    if solver == "auto":
+        return "pinocchio" if mech.closures and not unsupported else "kkt"
+    return solver
+
+
+class ClosedChainDynamics:
+    r"""Forward dynamics of one mechanism under a constant wrench, state by state.
+
+    Holds its own Pinocchio data (the mechanism's scratch data is left alone).
+
+    Attributes:
+        solver: ``"kkt"`` or ``"pinocchio"``.
+        rank: number of independent closure rows, :math:`n_v - \text{mobility}`.
+    """
+
+    def __init__(self, mech: Mechanism, solver: str, load: Load | None) -> None:
+        """Prepare the solver ``solver`` (``auto``, ``kkt`` or ``pinocchio``) for ``mech`` and ``load``."""
+        self.solver = resolve_solver(mech, solver)
+        self.model = model = mech.model
+        self.closures = mech.closures
+        self.data = model.createData()
+        self.rank = mech.nv - mech.mobility
+        self.load = load
+        self._name = mech.name
+        self._all_columns = np.arange(mech.nv)
+        if self.solver == "pinocchio":
+            self._pin_data = model.createData()
+            self._cms = pin.StdVec_RigidConstraintModel()
+            self._cds = pin.StdVec_RigidConstraintData()
+            for c in mech.closures:
+                fa, fb = (model.frames[i] for i in c.frame_ids)
+                kind, frame = _PIN_CONTACT[c.spec.type]
+                self._cms.append(
+                    pin.RigidConstraintModel(
+                        kind, model, fa.parentJoint, fa.placement, fb.parentJoint, fb.placement, frame
+                    )
+                )
+            for cm in self._cms:  # append stores a copy: create the datas from the stored models
+                self._cds.append(cm.createData())
+            pin.initConstraintDynamics(model, self._pin_data, self._cms, self._cds)
+            self._settings = pin.ProximalSettings(*_PROXIMAL)
+
+    # ------------------------------------------------------------- terms
+    def _mass_and_jacobian(self) -> tuple[np.ndarray, np.ndarray]:
+        """M and J_phi from ``self.data`` after computeAllTerms, or crba and joint Jacobians.
+
+        The Python bindings of ``crba`` and ``computeAllTerms`` return the whole symmetric
+        mass matrix, armature on the diagonal (Pinocchio 4.1).
+        """
+        pin.updateFramePlacements(self.model, self.data)
+        return self.data.M.copy(), _closures.jacobian_from_data(self.model, self.data, self.closures)
+
+    def _wrench_force(self, data: pin.Data) -> np.ndarray | None:
+        """Generalized force of the wrench from joint Jacobians and placements in ``data``, (nv,)."""
+        if self.load is None:
+            return None
+        return pin.getFrameJacobian(self.model, data, self.load.frame_id, _LWA).T @ self.load.wrench
+
+    def _reduced_rows(self, J: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``U_r``, ``Sigma_r`` and ``W = V_r^T`` of the closure Jacobian's independent rows.
+
+        Raises:
+            SingularConfiguration: when the r-th singular value vanishes (constraint singularity).
+        """
+        U, s, Vt = np.linalg.svd(J, full_matrices=False)
+        r = self.rank
+        if r and s[r - 1] <= RANK_RTOL * max(s[0], 1.0):
+            raise SingularConfiguration(
+                f"{self._name}: constraint singularity: closure Jacobian singular values {s.tolist()}, "
+                f"{r} independent rows expected (mobility {self.model.nv - r})"
+            )
+        return U[:, :r], s[:r], Vt[:r]
+
+    def _saddle(self, M: np.ndarray, W: np.ndarray, top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+        """Solve ``[[M, -W^T], [W, 0]] [x; mu] = [top; bottom]``, returning ``(x, mu)`` stacked."""
+        nv, r = M.shape[0], W.shape[0]
+        K = np.zeros((nv + r, nv + r))
+        K[:nv, :nv] = M
+        K[:nv, nv:] = -W.T
+        K[nv:, :nv] = W
+        return np.linalg.solve(K, np.concatenate([top, bottom]))
+
+    # ------------------------------------------------------------ public
+    def kkt(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Our KKT solve: joint accelerations (nv,) and minimum-norm closure forces (m,).
+
+        Raises:
+            SingularConfiguration: at a constraint singularity.
+        """
+        model, data = self.model, self.data
+        pin.computeAllTerms(model, data, q, v)
+        M, J = self._mass_and_jacobian()
+        rhs = tau - data.nle
+        w = self._wrench_force(data)
+        if w is not None:
+            rhs += w
+        if not self.closures:
+            return np.linalg.solve(M, rhs), np.zeros(0)
+        gamma = _closures.drift_from_data(model, data, self.closures)
+        Ur, sr, W = self._reduced_rows(J)
+        sol = self._saddle(M, W, rhs, -(Ur.T @ gamma) / sr)
+        nv = model.nv
+        return sol[:nv], Ur @ (sol[nv:] / sr)
+
+    def acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Joint accelerations [m/s^2, rad/s^2], shape (nv,), with the chosen solver."""
+        if self.solver == "kkt":
+            return self.kkt(q, v, tau)[0]
+        model, data = self.model, self._pin_data
+        if self.load is not None:
+            tau = (
+                tau + pin.computeFrameJacobian(model, data, q, self.load.frame_id, _LWA).T @ self.load.wrench
+            )
+        return np.array(pin.constraintDynamics(model, data, q, v, tau, self._cms, self._cds, self._settings))
+
+    def solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Joint accelerations (nv,) and closure forces (m,) [N, N m] with the chosen solver."""
+        if self.solver == "kkt":
+            return self.kkt(q, v, tau)
+        a = self.acceleration(q, v, tau)
+        if not self.closures:
+            return a, np.zeros(0)
+        model, pdata = self.model, self._pin_data
+        pin.computeJointJacobians(model, pdata, q)
+        force = pin.getConstraintsJacobian(model, pdata, self._cms, self._cds).T @ pdata.lambda_c  # (nv,)
+        pin.computeJointJacobians(model, self.data, q)
+        pin.updateFramePlacements(model, self.data)
+        J = _closures.jacobian_from_data(model, self.data, self.closures)
+        Ur, sr, W = self._reduced_rows(J)
+        return a, Ur @ ((W @ force) / sr)
+
+    def project(
+        self, q: np.ndarray, v: np.ndarray, tol: float, velocity_tol: float = 0.0
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        r"""Project a state onto the closure manifold, in place of a Baumgarte correction.
+
+        :math:`q` when its largest closure residual exceeds ``tol``: one minimum-norm
+        Gauss-Newton step :math:`\delta = -J_\phi^+ \phi` (with the SVD the velocity projection
+        needs anyway; from an integrator's small drift it lands at round-off), then damped
+        iterations (:func:`~plm_pin.kinematics.assembly.assemble`) if that was not enough.
+        Then :math:`v` onto :math:`J_\phi v = 0` by the least-kinetic-energy projection when
+        :math:`q` moved or :math:`|J_\phi v|` exceeds ``velocity_tol``.
+
+        Args:
+            q: configuration, shape (nq,).
+            v: joint velocities, shape (nv,).
+            tol: largest closure residual left [m, rad].
+            velocity_tol: largest closure rate left [m/s, rad/s].
+
+        Returns:
+            The projected ``q`` (nq,) and ``v`` (nv,), and the largest residual before [m, rad].
+
+        Raises:
+            ClosureNotSatisfied: when the loops cannot be closed to ``tol`` from ``q``.
+            SingularConfiguration: at a constraint singularity.
+        """
+        if not self.closures:
+            return q, v, 0.0
+        model, data, closures = self.model, self.data, self.closures
+        pin.computeAllTerms(model, data, q, v)
+        M, J = self._mass_and_jacobian()
+        phi = _closures.residual_from_placements(data, closures)
+        before = float(np.max(np.abs(phi)))
+        if before > tol:
+            Ur, sr, W = self._reduced_rows(J)
+            q = pin.integrate(model, q, -W.T @ ((Ur.T @ phi) / sr))
+            pin.computeAllTerms(model, data, q, v)
+            M, J = self._mass_and_jacobian()
+            if np.max(np.abs(_closures.residual_from_placements(data, closures))) > tol:
+                q = assemble(
+                    model, data, closures, q, self._all_columns, tol=tol, max_iterations=PROJECTION_ITERATIONS
+                ).q
+                pin.computeAllTerms(model, data, q, v)
+                M, J = self._mass_and_jacobian()
+        elif np.max(np.abs(J @ v)) <= velocity_tol:
+            return q, v, before
+        _, _, W = self._reduced_rows(J)
+        return q, v + self._saddle(M, W, np.zeros(model.nv), -(W @ v))[: model.nv], before
+
+    def energy(self, q: np.ndarray, v: np.ndarray) -> float:
+        """Kinetic (armature included) plus gravitational potential energy [J]."""
+        M = pin.crba(self.model, self.data, q)
+        return 0.5 * float(v @ M @ v) + float(pin.computePotentialEnergy(self.model, self.data, q))
