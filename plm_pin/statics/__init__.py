@@ -1,14 +1,23 @@
 """Statics of closed chains: balance, redundant actuator-force allocation, reactions, force capability."""
 
 from .allocation import OBJECTIVES
-from .balance import SINGULAR_RTOL, Load, StaticBalance, load_on_frame, static_balance
+from .balance import SINGULAR_RTOL, Load, StaticBalance, generalized_balance, load_on_frame, static_balance
 from .capability import Capability, force_capability, wrench_polygon
-from .forces import InternalMode, StaticForces, actuator_limits, internal_modes, static_forces
+from .forces import (
+    AllocationRule,
+    InternalMode,
+    StaticForces,
+    actuator_limits,
+    internal_modes,
+    solve_balance,
+    static_forces,
+)
 from .reactions import JointReaction, LinkForce
 
 __all__ = [
     "OBJECTIVES",
     "SINGULAR_RTOL",
+    "AllocationRule",
     "Capability",
     "InternalMode",
     "JointReaction",
@@ -18,8 +27,10 @@ __all__ = [
     "StaticForces",
     "actuator_limits",
     "force_capability",
+    "generalized_balance",
     "internal_modes",
     "load_on_frame",
+    "solve_balance",
     "static_balance",
     "static_forces",
     "wrench_polygon",

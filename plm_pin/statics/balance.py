@@ -25,6 +25,7 @@ With a task, :math:`C^T = T^T J_{ce}^T`, so this is Harada 2011's
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -126,6 +127,10 @@ class StaticBalance:
         lambda_map: truncated pseudo-inverse of :math:`J_\phi^T`, shape (m, nv): the cut-joint
             forces that balance a generalized force (least squares where the closure rows are
             dependent).
+        force_map: :math:`P`, shape (n_act, nv): the minimum-norm actuator forces balancing a
+            generalized force, ``f_particular = P @ tau`` (the balance is linear in the load).
+        v: joint velocities when ``tau`` comes from inverse dynamics (None: at rest).
+        a: joint accelerations when ``tau`` comes from inverse dynamics (None: at rest).
     """
 
     q: np.ndarray
@@ -139,6 +144,9 @@ class StaticBalance:
     internal_basis: np.ndarray
     actuated_v: np.ndarray
     lambda_map: np.ndarray
+    force_map: np.ndarray
+    v: np.ndarray | None = None
+    a: np.ndarray | None = None
 
     @property
     def n_internal(self) -> int:
@@ -195,14 +203,49 @@ def static_balance(
     qa = mech.check_q(q)
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
     model, data = mech.model, mech.data
-    pin.computeJointJacobians(model, data, qa)
-    pin.updateFramePlacements(model, data)
     tau = pin.computeGeneralizedGravity(model, data, qa).copy() if gravity else np.zeros(model.nv)
+    return generalized_balance(mech, qa, tau, load=load, gravity=gravity, singular_rtol=singular_rtol)
+
+
+def generalized_balance(
+    mech: Mechanism,
+    q: np.ndarray,
+    tau: np.ndarray,
+    *,
+    load: Load | None = None,
+    gravity: bool = True,
+    v: np.ndarray | None = None,
+    a: np.ndarray | None = None,
+    singular_rtol: float = SINGULAR_RTOL,
+) -> StaticBalance:
+    r"""The balance :math:`B f_c + J_\phi^T \lambda = \tau - J_w^T w` for a given generalized force.
+
+    Inverse dynamics uses it with :math:`\tau` from RNEA at :math:`(q, v, a)`.
+
+    Args:
+        mech: the mechanism.
+        q: a checked configuration, shape (nq,).
+        tau: generalized force to balance, without the load [N, N m], shape (nv,).
+        load: external wrench, or None; its generalized force is subtracted from ``tau``.
+        gravity: whether ``tau`` includes the bodies' weight (recorded for the reactions).
+        v: joint velocities, when ``tau`` is an inverse-dynamics force (recorded for the reactions).
+        a: joint accelerations, likewise.
+        singular_rtol: see :data:`SINGULAR_RTOL`.
+
+    Raises:
+        SingularConfiguration: as :func:`static_balance`.
+    """
+    model, data = mech.model, mech.data
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    tau = np.array(tau, dtype=float)
     if load is not None:
         tau -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
-    act_v = mech.actuated_v_indices
-    return _balance(mech, qa, tau, load, gravity, J_phi, act_v, singular_rtol)
+    balance = _balance(mech, q, tau, load, gravity, J_phi, mech.actuated_v_indices, singular_rtol)
+    if v is None and a is None:
+        return balance
+    return dataclasses.replace(balance, v=v, a=a)
 
 
 def _balance(
@@ -238,8 +281,9 @@ def _balance(
             f"closure singular values {s_phi.tolist()}); the load's component along them is "
             f"{unresisted.tolist()} [N, N m]"
         )
-    f_p = U[:, :r] @ ((Vt[:r] @ b) / s[:r])
+    P = (U[:, :r] / s[:r]) @ Vt[:r] @ N.T  # (n_act, nv)
+    f_p = P @ tau
     G = U[:, r:].copy()
-    for a in (f_p, G, q, tau, J_phi, N, C, lambda_map):
+    for a in (f_p, G, q, tau, J_phi, N, C, lambda_map, P):
         a.setflags(write=False)
-    return StaticBalance(q, tau, load, gravity, J_phi, N, C, f_p, G, act_v, lambda_map)
+    return StaticBalance(q, tau, load, gravity, J_phi, N, C, f_p, G, act_v, lambda_map, P)

@@ -83,7 +83,7 @@ class StaticForces:
     @functools.cached_property
     def _transmitted(self) -> tuple[np.ndarray, np.ndarray]:
         b = self.balance
-        return _reactions.transmitted_forces(self.mechanism, b.q, self.lam, b.load, b.gravity)
+        return _reactions.transmitted_forces(self.mechanism, b.q, self.lam, b.load, b.gravity, b.v, b.a)
 
     def joint_reactions(self) -> dict[str, _reactions.JointReaction]:
         """Force and moment every joint passes from parent to child, keyed by joint name."""
@@ -160,6 +160,116 @@ def actuator_limits(mech: Mechanism, limits: Any) -> np.ndarray:
     return arr
 
 
+@dataclass(frozen=True)
+class AllocationRule:
+    """How to choose the actuator forces among those that balance a load (checked once, reused per sample).
+
+    Attributes:
+        objective: ``"norm"`` or ``"max"``.
+        weights: SPD weight matrix (n_act, n_act).
+        limits: effort limits (n_act, 2), infinite where none [N, N m].
+        internal: prescribed internal forces (coordinates or ``{link: axial force}``), or None.
+        min_compression: compression required in every hinged link [N], or None.
+        link_limits: bounds on named links' axial forces [N], or None.
+    """
+
+    objective: str
+    weights: np.ndarray
+    limits: np.ndarray
+    internal: Any = None
+    min_compression: float | None = None
+    link_limits: Mapping[str, tuple[float, float]] | None = None
+
+    @classmethod
+    def checked(
+        cls,
+        mech: Mechanism,
+        *,
+        objective: str = "norm",
+        weights: Any = None,
+        limits: Any = "description",
+        internal: Any = None,
+        min_compression: float | None = None,
+        link_limits: Mapping[str, tuple[float, float]] | None = None,
+    ) -> AllocationRule:
+        """Check the options against ``mech`` (see :func:`static_forces` for their meaning).
+
+        Raises:
+            InvalidInput: an unknown objective, bad weights or limits.
+        """
+        if objective not in OBJECTIVES:
+            raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
+        W = check_weights(weights, mech.n_actuators)
+        bounds = actuator_limits(mech, limits)
+        return cls(objective, W, bounds, internal, min_compression, link_limits)
+
+    @property
+    def is_linear(self) -> bool:
+        """Whether the chosen forces are linear in the load: weighted minimum norm, nothing else."""
+        return (
+            self.objective == "norm"
+            and self.internal is None
+            and self.min_compression is None
+            and not self.link_limits
+            and not np.isfinite(self.limits).any()
+        )
+
+    def linear_map(self, balance: StaticBalance) -> np.ndarray:
+        r"""The forces per generalized force for a linear rule, shape (n_act, nv).
+
+        :math:`F = (I - G (G^T W G)^{-1} G^T W) P`: the weighted minimum norm of the balance.
+        """
+        G, W = balance.internal_basis, self.weights
+        P = balance.force_map
+        if G.shape[1] == 0:
+            return P
+        return P - G @ np.linalg.solve(G.T @ W @ G, G.T @ W @ P)
+
+
+def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule) -> StaticForces:
+    """Allocate the actuator forces of a balance by ``rule`` and complete the solution.
+
+    Raises:
+        AllocationInfeasible: the limits and conditions cannot all be met.
+        InvalidInput: malformed preload names or values.
+    """
+    f_p, G = balance.f_particular, balance.internal_basis
+    bounds = rule.limits
+    names = tuple(a.joint for a in mech.actuators)
+    finite = np.flatnonzero(np.isfinite(bounds).any(axis=1))
+    ineq = Inequalities(
+        tuple(names[i] for i in finite), f_p[finite], G[finite], bounds[finite, 0], bounds[finite, 1]
+    )
+    conditions = _link_conditions(mech, balance, rule.min_compression, rule.link_limits)
+    if conditions is not None:
+        ineq = Inequalities(
+            ineq.names + conditions.names,
+            np.concatenate([ineq.offset, conditions.offset]),
+            np.vstack([ineq.D, conditions.D]),
+            np.concatenate([ineq.lower, conditions.lower]),
+            np.concatenate([ineq.upper, conditions.upper]),
+        )
+    internal = rule.internal
+    if isinstance(internal, Mapping):
+        internal = _internal_from_links(mech, balance, internal)
+    result = allocate(
+        f_p, G, ineq, weights=rule.weights, objective=rule.objective, internal=internal, actuator_names=names
+    )
+    lam = balance.closure_forces(result.f_c)
+    for a in (result.f_c, lam, result.y):
+        a.setflags(write=False)
+    return StaticForces(
+        mech,
+        balance,
+        result.f_c,
+        lam,
+        result.y,
+        balance.residual(result.f_c, lam),
+        result.active,
+        rule.objective,
+    )
+
+
 def static_forces(
     mech: Mechanism,
     q: Any,
@@ -205,36 +315,17 @@ def static_forces(
         AllocationInfeasible: the limits and conditions cannot all be met; the error carries
             the least-violating allocation and the saturated actuators.
     """
-    if objective not in OBJECTIVES:
-        raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
-    n = mech.n_actuators
-    W = check_weights(weights, n)
-    bounds = actuator_limits(mech, limits)
+    rule = AllocationRule.checked(
+        mech,
+        objective=objective,
+        weights=weights,
+        limits=limits,
+        internal=internal,
+        min_compression=min_compression,
+        link_limits=link_limits,
+    )
     balance = static_balance(mech, q, wrench, frame, gravity=gravity, singular_rtol=singular_rtol)
-    f_p, G = balance.f_particular, balance.internal_basis
-    names = tuple(a.joint for a in mech.actuators)
-    finite = np.flatnonzero(np.isfinite(bounds).any(axis=1))
-    ineq = Inequalities(
-        tuple(names[i] for i in finite), f_p[finite], G[finite], bounds[finite, 0], bounds[finite, 1]
-    )
-    conditions = _link_conditions(mech, balance, min_compression, link_limits)
-    if conditions is not None:
-        ineq = Inequalities(
-            ineq.names + conditions.names,
-            np.concatenate([ineq.offset, conditions.offset]),
-            np.vstack([ineq.D, conditions.D]),
-            np.concatenate([ineq.lower, conditions.lower]),
-            np.concatenate([ineq.upper, conditions.upper]),
-        )
-    if isinstance(internal, Mapping):
-        internal = _internal_from_links(mech, balance, internal)
-    result = allocate(f_p, G, ineq, weights=W, objective=objective, internal=internal, actuator_names=names)
-    lam = balance.closure_forces(result.f_c)
-    for a in (result.f_c, lam, result.y):
-        a.setflags(write=False)
-    return StaticForces(
-        mech, balance, result.f_c, lam, result.y, balance.residual(result.f_c, lam), result.active, objective
-    )
+    return solve_balance(mech, balance, rule)
 
 
 def _link_conditions(
@@ -262,7 +353,9 @@ def _link_conditions(
         old = bounds.get(name, (-np.inf, np.inf))
         bounds[name] = (max(old[0], lo), min(old[1], hi))
     lam_p = balance.closure_forces(balance.f_particular)
-    forces_p, _ = _reactions.transmitted_forces(mech, balance.q, lam_p, balance.load, balance.gravity)
+    forces_p, _ = _reactions.transmitted_forces(
+        mech, balance.q, lam_p, balance.load, balance.gravity, balance.v, balance.a
+    )
     axial_p = _reactions.link_forces(mech, forces_p, lam_p)
     modes = internal_modes(mech, balance)
     chosen = list(bounds)

@@ -136,7 +136,7 @@ def hinged_links(mech: Mechanism) -> tuple[_Hinged, ...]:
             if all(np.linalg.norm(p - d) > ATTACHMENT_ATOL for d, _ in distinct):
                 distinct.append((p, ref))
         if len(distinct) == 1:
-            out.append(_Hinged(_body_name(model, j), j, distinct[0][1], at_hinge))
+            out.append(_Hinged(body_name(model, j), j, distinct[0][1], at_hinge))
     return tuple(out)
 
 
@@ -146,7 +146,7 @@ def _is_rotational(model: pin.Model, data: pin.Data, j: int) -> bool:
     return S.size > 0 and bool(np.allclose(S[:3], 0.0)) and model.joints[j].nq != 7
 
 
-def _body_name(model: pin.Model, j: int) -> str:
+def body_name(model: pin.Model, j: int) -> str:
     """Name of the body a joint carries (its first BODY frame), else the joint name."""
     for f in model.frames:
         if f.parentJoint == j and f.type == pin.FrameType.BODY:
@@ -160,8 +160,10 @@ def transmitted_forces(
     lam: np.ndarray,
     load: Load | None,
     gravity: bool,
+    v: np.ndarray | None = None,
+    a: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Forces every joint passes from parent to child at rest, world-aligned, about the joint origin.
+    """Forces every joint passes from parent to child, world-aligned, about the joint origin.
 
     Args:
         mech: the mechanism.
@@ -169,6 +171,8 @@ def transmitted_forces(
         lam: cut-joint forces, shape (m,).
         load: external wrench, or None.
         gravity: include the bodies' weight.
+        v: joint velocities (None: at rest); the bodies' inertia forces are then included.
+        a: joint accelerations (None: zero).
 
     Returns:
         forces (njoints, 6) as ``(force, moment)`` rows (row 0, the universe, is zero) and the
@@ -189,11 +193,14 @@ def transmitted_forces(
     if load is not None:
         _add_world_wrench(model, data, fext, load.frame_id, load.wrench[:3], load.wrench[3:])
     zero = np.zeros(model.nv)
-    drive = pin.rnea(model, data, q, zero, zero, fext).copy()
+    vel = zero if v is None else v
+    acc = zero if a is None else a
+    drive = pin.rnea(model, data, q, vel, acc, fext).copy()
     local = [data.f[j].copy() for j in range(model.njoints)]
-    if not gravity:
-        drive -= pin.rnea(model, data, q, zero, zero)
+    if not gravity:  # remove the weight: RNEA is linear in gravity and external forces
+        drive -= pin.computeGeneralizedGravity(model, data, q)
         local = [f - data.f[j] for j, f in enumerate(local)]
+    pin.framesForwardKinematics(model, data, q)  # placements of q for the world-aligned reading
     out = np.zeros((model.njoints, 6))
     for j in range(1, model.njoints):
         fw = data.oMi[j].act(local[j])  # world frame, about the world origin
