@@ -30,7 +30,9 @@ import pinocchio as pin
 
 from .analysis import manipulability, singular_points_along, workspace_map
 from .description.writer import write_description
+from .dynamics.inverse_dynamics import inverse_dynamics
 from .dynamics.simulation import SimulationResult, simulate
+from .dynamics.trajectory import task_trajectory
 from .kinematics import (
     classify,
     closed_chain_jacobians,
@@ -41,7 +43,9 @@ from .kinematics import (
 from .loading import load
 from .mechanism import Mechanism
 from .models.classic import build_fourbar
+from .models.pss import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 from .models.registry import PRESETS, preset_names
+from .statics import static_forces
 
 MAP_SHAPE = (317, 316)
 """Grid of the manipulability-map benchmark: 100,172 poses."""
@@ -93,11 +97,56 @@ def run() -> list[dict[str, object]]:
             "closed_chain_jacobians": functools.partial(closed_chain_jacobians, mech, q),
             "manipulability": functools.partial(manipulability, mech, q),
             "classify": functools.partial(classify, mech, q),
+            "static_forces (gravity, min-norm)": functools.partial(static_forces, mech, q),
         }
         for case, fn in cases.items():
             rows.append({"mechanism": name, "case": case, "seconds_per_call": _per_call(fn)})
+    rows.extend(allocation_benchmark())
     rows.append(map_benchmark())
     return rows
+
+
+def allocation_benchmark() -> list[dict[str, object]]:
+    """Bounded and min-peak static allocation, trajectory and inverse dynamics per sample (3D4M, 8-PSS)."""
+    rows: list[dict[str, object]] = []
+    profiles: dict[str, tuple[Callable[[float], Any], float]] = {
+        "harada2011_3d4m": (_harada_profile, 1.0),
+        "zhao2011_8pss": (zhao2011_trajectory, ZHAO2011_TRAJECTORY_DURATION),
+    }
+    for name, (profile, duration) in profiles.items():
+        mech = load(name)
+        q = mech.q_ref
+        free = np.max(np.abs(static_forces(mech, q).f_c))
+        least = np.max(np.abs(static_forces(mech, q, objective="max").f_c))
+        bound = [(-(free + least) / 2, (free + least) / 2)] * mech.n_actuators  # the limits bind
+        times = np.linspace(0.0, duration, 51)
+        traj = task_trajectory(mech, profile, times)
+        cases: dict[str, tuple[Callable[[], object], int]] = {
+            "static_forces (gravity, limits active)": (
+                functools.partial(static_forces, mech, q, limits=bound),
+                1,
+            ),
+            "static_forces (gravity, objective='max')": (
+                functools.partial(static_forces, mech, q, objective="max"),
+                1,
+            ),
+            "task_trajectory, per sample": (functools.partial(task_trajectory, mech, profile, times), 51),
+            "inverse_dynamics (min-norm, splits), per sample": (
+                functools.partial(inverse_dynamics, mech, traj),
+                51,
+            ),
+        }
+        for case, (fn, per) in cases.items():
+            rows.append({"mechanism": name, "case": case, "seconds_per_call": _per_call(fn) / per})
+    return rows
+
+
+def _harada_profile(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A smooth motion of the Harada plate around its reference pose (x, y, theta)."""
+    x0 = np.array([0.0, 0.08, math.radians(-20.0)])
+    amp = np.array([0.02, 0.01, 0.2])
+    w = np.array([2.0, 3.0, 2.5])
+    return x0 + amp * np.sin(w * t), amp * w * np.cos(w * t), -amp * w**2 * np.sin(w * t)
 
 
 def map_benchmark(shape: tuple[int, int] = MAP_SHAPE, workers: int | None = None) -> dict[str, object]:
