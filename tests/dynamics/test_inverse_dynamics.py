@@ -11,7 +11,12 @@ from plm_pin.dynamics import simulate, task_trajectory
 from plm_pin.dynamics.inverse_dynamics import InverseDynamicsFailed, inverse_dynamics
 from plm_pin.dynamics.work import adaptive_trapezoid_work, power_along, spline_work
 from plm_pin.exceptions import AllocationInfeasible, InvalidInput
-from plm_pin.models import ZHAO2011_TRAJECTORY_DURATION, enferadi2017_circle, zhao2011_trajectory
+from plm_pin.models import (
+    ZHAO2011_TRAJECTORY_DURATION,
+    enferadi2017_circle,
+    enferadi2017_line,
+    zhao2011_trajectory,
+)
 from plm_pin.statics import static_forces
 from tests.conftest import preset
 
@@ -162,3 +167,37 @@ def test_zhao_work_by_both_quadratures_agree():
     spline = spline_work(t, power(t))
     np.testing.assert_allclose(trap.work, spline, atol=1e-2)
     assert 9 <= trap.n1 <= 13
+
+
+@pytest.mark.parametrize(
+    ("profile", "times", "expected"),
+    [
+        (
+            enferadi2017_line,
+            [1.0, 2.0, 4.0],
+            [(-0.239237, 0.239237, 0.0), (0.0, 0.0, 0.0), (0.338332, -0.338332, 0.0)],
+        ),
+        (
+            enferadi2017_circle,
+            [0.0, 0.25, 0.3, 0.5, 0.75],
+            [
+                (-2.254403, -2.254403, 3.605675),
+                (-3.986470, 0.798263, 2.549597),
+                (-4.062266, 1.412056, 2.119362),
+                (-3.383317, 3.383317, 0.0),
+                (-0.798263, 3.986470, -2.549597),
+            ],
+        ),
+    ],
+    ids=["line", "circle"],
+)
+def test_enferadi_forces_match_the_corrected_lagrange_equations(profile, times, expected):
+    """Enferadi 2017 section 6: f_q from the corrected eqs. (25)-(31) (analyses/specs/enferadi2017.md, 5)."""
+    mech = preset("enferadi2017_star_triangle")
+    grid = np.linspace(0.0, times[-1], round(times[-1] / 0.05) + 1)
+    traj = task_trajectory(mech, profile, grid)
+    idr = inverse_dynamics(mech, traj)
+    for t, f in zip(times, expected, strict=True):
+        k = int(np.argmin(np.abs(grid - t)))
+        assert grid[k] == pytest.approx(t)
+        np.testing.assert_allclose(idr.f_c[k], f, atol=2e-6)  # the spec prints 6 decimals
