@@ -226,8 +226,9 @@ def inverse_dynamics(
 
     Raises:
         InvalidInput: malformed options or a trajectory of another mechanism.
-        InverseDynamicsFailed: at the first sample whose allocation is infeasible or whose
-            load cannot be resisted, with the samples before it.
+        InverseDynamicsFailed: at the first sample whose allocation is infeasible, whose load
+            cannot be resisted, or (non-redundant mechanisms with a square task) past a direct
+            singularity (a sign change of det J_ce), with the samples before it.
     """
     rule = AllocationRule.checked(
         mech,
@@ -257,6 +258,8 @@ def inverse_dynamics(
         if missing
     )
     out = _Buffers(n, n_act, mech.n_closure_rows, body.names, absent)
+    square = mech.task_compiled is not None and mech.task_compiled.size == mech.mobility == n_act
+    previous_sign = 0.0
     for i in range(n):
         q, v, a = trajectory.q[i], trajectory.v[i], trajectory.a[i]
         load = load_at(float(trajectory.t[i]))
@@ -267,6 +270,14 @@ def inverse_dynamics(
                 mech, q, tau, load=load, gravity=gravity, v=v, a=a, singular_rtol=singular_rtol
             )
             sol = solve_balance(mech, balance, rule)
+            if square:  # a sign change of det J_ce between samples: a direct singularity was crossed
+                sign = _direct_sign(mech, balance.N, balance.C)
+                if sign * previous_sign < 0:
+                    raise SingularConfiguration(
+                        f"det J_ce changed sign after t = {trajectory.t[i - 1]:.9g} s: the trajectory "
+                        "crossed a direct (type 2) singularity, where the actuators cannot hold the mechanism"
+                    )
+                previous_sign = sign
         except (AllocationInfeasible, SingularConfiguration) as exc:
             partial = out.result(mech, trajectory, i, rule.is_linear)
             raise InverseDynamicsFailed(
@@ -298,6 +309,17 @@ def inverse_dynamics(
         out.f_c[i], out.lam[i], out.residual[i] = sol.f_c, sol.lam, sol.residual
         out.internal.append(sol.internal)
     return out.result(mech, trajectory, n, rule.is_linear)
+
+
+def _direct_sign(mech: Mechanism, N: np.ndarray, C: np.ndarray) -> float:
+    r"""Sign of :math:`\det J_{ce} = \det C / \det T`, independent of the basis :math:`N`.
+
+    ``mech.data`` must hold the joint Jacobians of the configuration.
+    """
+    task = mech.task_compiled
+    assert task is not None
+    T = task.jacobian_from_data(mech.model, mech.data) @ N
+    return float(np.sign(np.linalg.det(C)) * np.sign(np.linalg.det(T)))
 
 
 def _load_function(mech: Mechanism, wrench: Any, frame: str | None) -> Callable[[float], Load | None]:
