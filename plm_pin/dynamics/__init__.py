@@ -1,7 +1,9 @@
 """Closed-chain dynamics: trajectories on the closure manifold, inverse and forward dynamics, task space."""
 
+from .decoupling import DECOUPLING_RTOL, DecouplingReport, EntryBehaviour, decoupling_check
 from .inverse_dynamics import TERMS, InverseDynamics, InverseDynamicsFailed, inverse_dynamics
 from .simulation import SimulationResult, simulate
+from .task_space import TaskSpaceDynamics, task_space_dynamics
 from .trajectory import (
     JointTrajectory,
     Profile,
@@ -13,20 +15,26 @@ from .trajectory import (
 from .work import AdaptiveWork, adaptive_trapezoid_work, power_along, spline_work
 
 __all__ = [
+    "DECOUPLING_RTOL",
     "TERMS",
     "AdaptiveWork",
+    "DecouplingReport",
+    "EntryBehaviour",
     "InverseDynamics",
     "InverseDynamicsFailed",
     "JointTrajectory",
     "Profile",
     "SimulationResult",
+    "TaskSpaceDynamics",
     "actuator_trajectory",
     "adaptive_trapezoid_work",
+    "decoupling_check",
     "differentiated_profile",
     "inverse_dynamics",
     "power_along",
     "sampled_profile",
     "simulate",
     "spline_work",
+    "task_space_dynamics",
     "task_trajectory",
 ]

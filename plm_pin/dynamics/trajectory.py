@@ -403,7 +403,7 @@ def _check_regular(mech: Mechanism, jac: ClosedChainJacobians, tol: float, kind:
         raise SingularConfiguration(f"{' and '.join(bad)} singular, at or below the tolerance {tol:.3g}")
 
 
-def _drift_and_particular(mech: Mechanism, q: np.ndarray, v: np.ndarray, J_phi: np.ndarray) -> np.ndarray:
+def particular_acceleration(mech: Mechanism, q: np.ndarray, v: np.ndarray, J_phi: np.ndarray) -> np.ndarray:
     r"""Kinematics of ``(q, v, 0)`` into ``mech.data``, and the least-norm :math:`a_p` of the closure rows.
 
     :math:`J_\phi a_p = -\dot J_\phi v`; the rows are consistent on the closure manifold, so
@@ -538,7 +538,7 @@ def task_trajectory(
             raise rec.stop("task", k, exc) from exc
         T_r = J_r @ jac.N  # (n_task, mobility)
         v = jac.N @ np.linalg.solve(T_r, xd_all[k])
-        a_p = _drift_and_particular(mech, sol.q, v, jac.J_phi)
+        a_p = particular_acceleration(mech, sol.q, v, jac.J_phi)
         a = a_p + jac.N @ np.linalg.solve(T_r, xdd_all[k] - rows.drift(mech.data) - J_r @ a_p)
         rec.record(k, sol.q, v, a, jac.J_x, sol.actuators)
     return rec.result()
@@ -627,7 +627,7 @@ def actuator_trajectory(
                 det_sign, N_prev = sign, N
             C = N[act]  # (n_act, mobility)
             v = N @ _fit(C, cd_all[k], consistency_tol, "rates", names)
-            a_p = _drift_and_particular(mech, q, v, jac.J_phi)
+            a_p = particular_acceleration(mech, q, v, jac.J_phi)
             a = a_p + N @ _fit(C, cdd_all[k] - a_p[act], consistency_tol, "accelerations", names)
         except (ClosureNotSatisfied, SingularConfiguration, InvalidInput) as exc:
             raise rec.stop("actuator", k, exc) from exc

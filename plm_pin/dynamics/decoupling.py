@@ -1,0 +1,477 @@
+r"""Decoupling checks: which task-space terms vanish or stay constant over a workspace sample.
+
+Harada 2011 (eq. (23), (26), (M.29)-(M.30)) designs its 2-PRRRP table so that the x motion
+is *decoupled with constant inertia*: :math:`m_{xx}` constant, :math:`m_{xy} = m_{x\theta} = 0`,
+no velocity or gravity term along x. :func:`decoupling_check` tests such claims numerically
+for any mechanism: it evaluates :func:`plm_pin.dynamics.task_space.task_space_dynamics` at
+every pose of a sample (and at random task velocities for :math:`h_x`) and classifies
+
+- each entry of :math:`M_x` and each row of :math:`g_x` as ``zero`` (vanishes at every
+  pose), ``constant`` (one value at every pose) or ``varies`` (with its range);
+- each row of :math:`h_x` as ``zero`` or ``varies`` (:math:`h_x` is quadratic in the task
+  velocity, so a row that does not vanish varies).
+
+Tolerances. Each entry is compared with the largest value it could take, its
+Cauchy-Schwarz bound in the kinetic-energy metric of the tree (:math:`s_i = S e_i` the
+motion of task coordinate :math:`i`, :math:`\|s_i\|_M^2 = M_{x,ii}`):
+
+.. math::
+    |M_{x,ij}| \le \sqrt{M_{x,ii} M_{x,jj}}, \qquad
+    |g_{x,i}| \le \sqrt{M_{x,ii}}\, \sqrt{g^T M^{-1} g}, \qquad
+    |h_{x,i}| \le \sqrt{M_{x,ii}}\, \sqrt{h^T M^{-1} h},
+
+(:math:`M, g, h` the joint-space terms). An entry is ``zero`` when at every pose (and
+velocity) its magnitude is at most :math:`\text{atol} + \text{rtol}\, B` with :math:`B`
+its bound there, and ``constant`` when its range (max - min) over the sample is at most
+:math:`\text{tol} = \text{atol} + \text{rtol} \max B`; tolerances are in the entry's own
+unit (:func:`plm_pin.dynamics.task_space.task_units`). An entry that
+vanishes by design is a cancellation (of the legs' contributions in Harada's table), exact
+up to rounding, about 1e-16 of the bound; the default ``rtol``, :data:`DECOUPLING_RTOL`, is
+far above rounding and far below any physical coupling. Raise it (say 1e-3) to ask whether
+a term is negligible rather than absent.
+
+Sample. Either task poses, each solved by inverse kinematics
+(:func:`plm_pin.kinematics.inverse_kinematics`) in one working mode (default: the
+reference configuration's), or a :class:`plm_pin.analysis.WorkspaceSlice` whose reachable
+points are used as solved. Poses that cannot be reached in that working mode, and poses at
+or near an inverse-kinematics (type 1) or constraint singularity (margin at most
+``singular_tol``, :func:`plm_pin.kinematics.classify`), where :math:`M_x` is undefined or
+unbounded, are *skipped* and reported (counts and poses), not raised: a box of poses usually overlaps the
+workspace boundary. Malformed input (an empty sample, a wrong shape, a non-finite pose)
+raises, and so does a sample of which no pose can be evaluated.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..analysis.workspace import WorkspaceSlice
+from ..exceptions import InvalidInput, PoseUnreachable
+from ..kinematics.inverse import inverse_kinematics
+from ..kinematics.jacobians import check_square_task, require_task
+from ..kinematics.legs import working_mode
+from ..kinematics.singularity import SINGULARITY_TOL, classify
+from .task_space import TaskSpaceDynamics, task_space_dynamics, task_units
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+DECOUPLING_RTOL = 1e-9
+"""Default cancellation ratio below which an entry counts as zero or constant [-]."""
+
+
+@dataclass(frozen=True)
+class EntryBehaviour:
+    """How one task-space entry behaves over the sample.
+
+    Attributes:
+        kind: ``zero`` (vanishes at every pose), ``constant`` (one value at every pose) or
+            ``varies``; a velocity-term row is ``zero`` or ``varies``.
+        minimum: smallest value over the sample [unit].
+        maximum: largest value over the sample [unit].
+        tolerance: ``atol + rtol *`` the entry's largest bound over the sample: the threshold
+            of ``constant`` and the largest threshold of ``zero`` (module docstring) [unit].
+        ratio: largest ratio of the entry's magnitude to its Cauchy-Schwarz bound over the
+            sample [-]: how strongly an off-diagonal inertia couples two coordinates (0 to 1),
+            or what fraction of the joint-space term reaches the row; 1 on the diagonal.
+        unit: SI unit of the entry (``kg``, ``kg m``, ``kg m^2``, ``N``, ``N m``).
+    """
+
+    kind: str
+    minimum: float
+    maximum: float
+    tolerance: float
+    ratio: float
+    unit: str
+
+    @property
+    def value(self) -> float:
+        """Mid-range value [unit]: the constant for a ``constant`` entry."""
+        return 0.5 * (self.minimum + self.maximum)
+
+    @property
+    def spread(self) -> float:
+        """Range ``maximum - minimum`` over the sample [unit]."""
+        return self.maximum - self.minimum
+
+    @property
+    def largest(self) -> float:
+        """Largest magnitude over the sample [unit]."""
+        return max(abs(self.minimum), abs(self.maximum))
+
+    def describe(self) -> str:
+        """Short text: ``0``, the constant value, or the range, with the unit."""
+        if self.kind == "zero":
+            return "0"
+        if self.kind == "constant":
+            return f"{self.value:.6g} {self.unit}"
+        return f"{self.minimum:.4g} .. {self.maximum:.4g} {self.unit}"
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON."""
+        return {
+            "kind": self.kind,
+            "min": self.minimum,
+            "max": self.maximum,
+            "tolerance": self.tolerance,
+            "ratio": self.ratio if np.isfinite(self.ratio) else str(self.ratio),
+            "unit": self.unit,
+        }
+
+
+def _behaviour(
+    zero: bool, minimum: float, maximum: float, tol: float, ratio: float, unit: str, *, constant: bool = True
+) -> EntryBehaviour:
+    """Classify an entry; ``constant=False`` for velocity terms, which vanish at zero velocity."""
+    kind = "zero" if zero else "constant" if constant and maximum - minimum <= tol else "varies"
+    return EntryBehaviour(kind, float(minimum), float(maximum), float(tol), float(ratio), unit)
+
+
+@dataclass(frozen=True)
+class DecouplingReport:
+    r"""Behaviour of :math:`M_x`, :math:`g_x` and :math:`h_x` over a sample of task poses.
+
+    Arrays are read-only. Per-entry behaviours come from :meth:`inertia`, :meth:`gravity`
+    and :meth:`velocity`; the tolerance rule is in the module docstring.
+
+    Attributes:
+        mechanism: the mechanism's name.
+        dofs: task coordinates (rows and columns of the terms).
+        poses: poses evaluated [m, rad], shape (k, n_task).
+        configurations: their configurations, shape (k, nq).
+        unreachable: poses skipped as unreachable in the working mode [m, rad], shape (u, n_task).
+        singular: poses skipped at an inverse-kinematics singularity [m, rad], shape (s, n_task).
+        M_min: smallest value of each entry of :math:`M_x` [kg, kg m, kg m^2], shape (n_task, n_task).
+        M_max: largest value of each entry of :math:`M_x`, shape (n_task, n_task).
+        M_tol: tolerance of each entry of :math:`M_x`, ``atol + rtol B``, shape (n_task, n_task).
+        M_zero: whether each entry of :math:`M_x` vanishes at every pose, shape (n_task, n_task).
+        M_ratio: largest ratio of each entry to its bound [-], shape (n_task, n_task).
+        g_min: smallest value of each row of :math:`g_x` [N, N m], shape (n_task,).
+        g_max: largest value of each row of :math:`g_x`, shape (n_task,).
+        g_tol: tolerance of each row of :math:`g_x`, shape (n_task,).
+        g_zero: whether each row of :math:`g_x` vanishes at every pose, shape (n_task,).
+        g_ratio: largest ratio of each row of :math:`g_x` to its bound [-], shape (n_task,).
+        h_min: smallest value of each row of :math:`h_x` at the sampled velocities [N, N m], shape (n_task,).
+        h_max: largest value of each row of :math:`h_x`, shape (n_task,).
+        h_tol: tolerance of each row of :math:`h_x`, shape (n_task,).
+        h_zero: whether each row of :math:`h_x` vanishes at every pose and velocity, shape (n_task,).
+        h_ratio: largest ratio of each row of :math:`h_x` to its bound [-], shape (n_task,).
+        rtol: cancellation ratio used [-].
+        atol: absolute tolerance used, in each entry's unit.
+        n_velocities: random task velocities per pose.
+        velocity_scale: standard deviation of their components [m/s, rad/s].
+    """
+
+    mechanism: str
+    dofs: tuple[str, ...]
+    poses: np.ndarray
+    configurations: np.ndarray
+    unreachable: np.ndarray
+    singular: np.ndarray
+    M_min: np.ndarray
+    M_max: np.ndarray
+    M_tol: np.ndarray
+    M_zero: np.ndarray
+    M_ratio: np.ndarray
+    g_min: np.ndarray
+    g_max: np.ndarray
+    g_tol: np.ndarray
+    g_zero: np.ndarray
+    g_ratio: np.ndarray
+    h_min: np.ndarray
+    h_max: np.ndarray
+    h_tol: np.ndarray
+    h_zero: np.ndarray
+    h_ratio: np.ndarray
+    rtol: float
+    atol: float
+    n_velocities: int
+    velocity_scale: float
+
+    def __post_init__(self) -> None:
+        n = len(self.dofs)
+        shapes: dict[str, tuple[int, ...]] = {
+            **{f"M_{s}": (n, n) for s in ("min", "max", "tol", "zero", "ratio")},
+            **{f"{t}_{s}": (n,) for t in "gh" for s in ("min", "max", "tol", "zero", "ratio")},
+        }
+        for name in ("poses", "unreachable", "singular"):
+            shapes[name] = (getattr(self, name).shape[0], n)
+        shapes["configurations"] = (self.poses.shape[0], self.configurations.shape[-1])
+        for name, shape in shapes.items():
+            arr = getattr(self, name)
+            if arr.shape != shape:
+                raise InvalidInput(f"{name} has shape {arr.shape}, expected {shape}")
+            arr.setflags(write=False)
+
+    @property
+    def n_poses(self) -> int:
+        """Number of poses evaluated."""
+        return int(self.poses.shape[0])
+
+    def _index(self, dof: str) -> int:
+        if dof not in self.dofs:
+            raise InvalidInput(
+                f"unknown task coordinate {dof!r}; the task's coordinates are {list(self.dofs)}"
+            )
+        return self.dofs.index(dof)
+
+    def inertia(self, row: str, column: str) -> EntryBehaviour:
+        """Behaviour of the entry of :math:`M_x` at task coordinates ``row``, ``column`` (e.g. x, y)."""
+        i, j = self._index(row), self._index(column)
+        unit = task_units(self.dofs)[0][i * len(self.dofs) + j]
+        return _behaviour(
+            bool(self.M_zero[i, j]),
+            self.M_min[i, j],
+            self.M_max[i, j],
+            self.M_tol[i, j],
+            self.M_ratio[i, j],
+            unit,
+        )
+
+    def gravity(self, row: str) -> EntryBehaviour:
+        """Behaviour of the row ``row`` of :math:`g_x`."""
+        i = self._index(row)
+        unit = task_units(self.dofs)[1][i]
+        return _behaviour(
+            bool(self.g_zero[i]), self.g_min[i], self.g_max[i], self.g_tol[i], self.g_ratio[i], unit
+        )
+
+    def velocity(self, row: str) -> EntryBehaviour:
+        """Behaviour of the row ``row`` of :math:`h_x` at the sampled velocities (``zero`` or ``varies``)."""
+        i = self._index(row)
+        unit = task_units(self.dofs)[1][i]
+        return _behaviour(
+            bool(self.h_zero[i]),
+            self.h_min[i],
+            self.h_max[i],
+            self.h_tol[i],
+            self.h_ratio[i],
+            unit,
+            constant=False,
+        )
+
+    def decoupled(self) -> tuple[str, ...]:
+        r"""Task coordinates decoupled with constant inertia (Harada 2011's x).
+
+        Those whose off-diagonal inertias vanish, diagonal inertia and gravity term are
+        constant (or zero) and velocity term vanishes, so that :math:`m_{ii} \ddot x_i + g_i = f_i`.
+        """
+        out = []
+        for d in self.dofs:
+            couplings = [self.inertia(d, e).kind == "zero" for e in self.dofs if e != d]
+            if (
+                all(couplings)
+                and self.inertia(d, d).kind != "varies"
+                and self.gravity(d).kind != "varies"
+                and self.velocity(d).kind == "zero"
+            ):
+                out.append(d)
+        return tuple(out)
+
+    def to_table(self) -> str:
+        """Readable text table: ``0``, a constant value, or a range per entry, with the tolerances."""
+        header = [
+            f"Decoupling of {self.mechanism} over {self.n_poses} poses ({len(self.unreachable)} unreachable "
+            f"and {len(self.singular)} singular skipped), h_x at {self.n_velocities} random task velocities "
+            f"per pose (components of standard deviation {self.velocity_scale:g} m/s, rad/s)",
+            f"zero: |value| <= atol + rtol x its Cauchy-Schwarz bound at every pose; constant: max - min <= "
+            f"tol = atol + rtol x largest bound (atol = {self.atol:g}, rtol = {self.rtol:g}); (n%): largest "
+            f"|value| / bound",
+        ]
+        rows: list[list[str]] = [["", *self.dofs]]
+        for d in self.dofs:
+            rows.append([f"M_x {d}", *(self._cell(self.inertia(d, e), d != e) for e in self.dofs)])
+        rows.append(["g_x", *(self._cell(self.gravity(d), True) for d in self.dofs)])
+        rows.append(["h_x", *(self._cell(self.velocity(d), True) for d in self.dofs)])
+        widths = [max(len(r[c]) for r in rows) for c in range(len(rows[0]))]
+        lines = ["  ".join(cell.ljust(w) for cell, w in zip(r, widths, strict=True)).rstrip() for r in rows]
+        decoupled = self.decoupled()
+        footer = f"decoupled with constant inertia: {', '.join(decoupled) if decoupled else 'none'}"
+        return "\n".join([*header, "", *lines, "", footer])
+
+    @staticmethod
+    def _cell(entry: EntryBehaviour, with_ratio: bool) -> str:
+        if entry.kind != "varies":
+            return entry.describe()
+        return f"varies {entry.describe()}" + (f" ({entry.ratio:.0%})" if with_ratio else "")
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON: per-entry behaviours, tolerances and the skipped poses."""
+        return {
+            "mechanism": self.mechanism,
+            "dofs": list(self.dofs),
+            "n_poses": self.n_poses,
+            "poses": self.poses.tolist(),
+            "unreachable": self.unreachable.tolist(),
+            "singular": self.singular.tolist(),
+            "rtol": self.rtol,
+            "atol": self.atol,
+            "n_velocities": self.n_velocities,
+            "velocity_scale": self.velocity_scale,
+            "M_x": [[self.inertia(d, e).to_dict() for e in self.dofs] for d in self.dofs],
+            "g_x": [self.gravity(d).to_dict() for d in self.dofs],
+            "h_x": [self.velocity(d).to_dict() for d in self.dofs],
+            "decoupled": list(self.decoupled()),
+        }
+
+
+def _sample(
+    mech: Mechanism, sample: Any, mode: tuple[int, ...] | None, n_task: int
+) -> tuple[np.ndarray, list[np.ndarray | None]]:
+    """Poses (k, n_task) and their configurations (None: unreachable in the working mode)."""
+    if isinstance(sample, WorkspaceSlice):
+        if sample.dofs != tuple(require_task(mech).dofs) or sample.q.shape[-1] != mech.nq:
+            raise InvalidInput(
+                f"the workspace slice (task {list(sample.dofs)}, nq = {sample.q.shape[-1]}) does not belong "
+                f"to {mech.name}"
+            )
+        poses = sample.poses().reshape(-1, n_task)
+        qs = sample.q.reshape(-1, mech.nq)
+        return poses, [q if ok else None for q, ok in zip(qs, sample.reachable.ravel(), strict=True)]
+    try:
+        poses = np.asarray(sample, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInput(f"poses must be numbers, shape (k, {n_task}): {exc}") from None
+    if poses.ndim == 1 and poses.size == n_task:
+        poses = poses[None, :]
+    if poses.ndim != 2 or poses.shape[1] != n_task:
+        raise InvalidInput(f"poses must have shape (k, {n_task}), got {poses.shape}")
+    if poses.shape[0] == 0:
+        raise InvalidInput("the sample is empty: give at least one pose")
+    bad = np.flatnonzero(~np.all(np.isfinite(poses), axis=1))
+    if bad.size:
+        raise InvalidInput(f"poses hold non-finite entries in rows {bad.tolist()}")
+    target = working_mode(mech, mech.q_ref) if mode is None else tuple(mode)
+    return poses, [_solve(mech, x, target) for x in poses]
+
+
+def _solve(mech: Mechanism, x: np.ndarray, mode: tuple[int, ...]) -> np.ndarray | None:
+    """Configuration at ``x`` in working mode ``mode``, or None when it cannot be reached there.
+
+    Newton from the reference configuration first (its basin is normally the reference
+    working mode); all working modes are enumerated only when it lands elsewhere. A leg at
+    an actuator singularity (mode sign 0) is on the border of every branch and is accepted.
+    """
+    try:
+        sol = inverse_kinematics(mech, x)
+        if any(s != t for s, t in zip(sol.mode, mode, strict=True) if s != 0):
+            sol = inverse_kinematics(mech, x, mode=mode)
+    except PoseUnreachable:
+        return None
+    return sol.q
+
+
+def decoupling_check(
+    mech: Mechanism,
+    sample: Any,
+    *,
+    mode: tuple[int, ...] | None = None,
+    rtol: float = DECOUPLING_RTOL,
+    atol: float = 0.0,
+    n_velocities: int = 2,
+    velocity_scale: float = 1.0,
+    seed: int = 0,
+    singular_tol: float = SINGULARITY_TOL,
+) -> DecouplingReport:
+    """Classify the entries of :math:`M_x`, :math:`g_x` and :math:`h_x` over a workspace sample.
+
+    Args:
+        mech: the mechanism (its task must have as many coordinates as it has DOF).
+        sample: task poses [m, rad], shape (k, n_task) (or one pose), or a
+            :class:`plm_pin.analysis.WorkspaceSlice` of this mechanism (its reachable points).
+        mode: working mode the poses are solved in (default: the reference configuration's);
+            a workspace slice keeps its own.
+        rtol: cancellation ratio for ``zero`` and ``constant`` [-].
+        atol: absolute tolerance added, in each entry's unit.
+        n_velocities: random task velocities per pose at which :math:`h_x` is evaluated.
+        velocity_scale: standard deviation of their components [m/s, rad/s].
+        seed: random seed of the velocities (results are deterministic for a given seed).
+        singular_tol: inverse or constraint margin (:func:`plm_pin.kinematics.classify`) at or
+            below which a pose is skipped as singular [-]; direct (type 2) singularities are
+            kept, :math:`M_x` being defined there.
+
+    Returns:
+        The report; unreachable and singular poses are skipped and listed.
+
+    Raises:
+        InvalidInput: no task, a task size different from the DOF, an empty or malformed
+            sample, a non-finite pose, or bad tolerances or velocity settings.
+        PoseUnreachable: when no pose of the sample can be evaluated.
+    """
+    task = require_task(mech)
+    n = task.size
+    check_square_task(n, mech.mobility, "decoupling checks need", mech.name)
+    if not (rtol >= 0.0 and atol >= 0.0 and np.isfinite(rtol) and np.isfinite(atol)):
+        raise InvalidInput(f"rtol and atol must be finite and non-negative, got rtol={rtol!r}, atol={atol!r}")
+    if n_velocities < 1 or not (velocity_scale > 0.0 and np.isfinite(velocity_scale)):
+        raise InvalidInput(
+            f"n_velocities must be at least 1 and velocity_scale finite and positive, got "
+            f"{n_velocities!r} and {velocity_scale!r}"
+        )
+    poses, configurations = _sample(mech, sample, mode, n)
+    rng = np.random.default_rng(seed)
+    kept: list[int] = []
+    kept_q: list[np.ndarray] = []
+    singular: list[int] = []
+    terms: dict[str, list[np.ndarray]] = {k: [] for k in ("M", "M_bound", "g", "g_bound", "h", "h_bound")}
+    for k, q in enumerate(configurations):
+        if q is None:
+            continue
+        if {"inverse", "constraint"}.intersection(classify(mech, q, singular_tol).kinds):
+            singular.append(k)
+            continue
+        dyn = [
+            task_space_dynamics(mech, q, xdot=velocity_scale * rng.standard_normal(n))
+            for _ in range(n_velocities)
+        ]
+        kept.append(k)
+        kept_q.append(q)
+        _collect(terms, dyn)
+    unreachable = [k for k, q in enumerate(configurations) if q is None]
+    if not kept:
+        raise PoseUnreachable(
+            f"{mech.name}: none of the {len(poses)} poses could be evaluated ({len(unreachable)} unreachable "
+            f"in the working mode, {len(singular)} singular)"
+        )
+    stacked = {key: np.stack(values) for key, values in terms.items()}
+    fields: dict[str, np.ndarray] = {}
+    for key in ("M", "g", "h"):
+        values, bounds = stacked[key], stacked[f"{key}_bound"]
+        fields[f"{key}_min"] = values.min(axis=0)
+        fields[f"{key}_max"] = values.max(axis=0)
+        fields[f"{key}_tol"] = atol + rtol * bounds.max(axis=0)
+        fields[f"{key}_zero"] = np.all(np.abs(values) <= atol + rtol * bounds, axis=0)
+        ratio = np.divide(
+            np.abs(values), bounds, out=np.where(values == 0.0, 0.0, np.inf), where=bounds > 0.0
+        )
+        fields[f"{key}_ratio"] = ratio.max(axis=0)
+    return DecouplingReport(
+        mechanism=mech.name,
+        dofs=tuple(task.dofs),
+        poses=poses[kept],
+        configurations=np.stack(kept_q),
+        unreachable=poses[unreachable].reshape(-1, n),
+        singular=poses[singular].reshape(-1, n),
+        **fields,
+        rtol=float(rtol),
+        atol=float(atol),
+        n_velocities=int(n_velocities),
+        velocity_scale=float(velocity_scale),
+    )
+
+
+def _collect(terms: dict[str, list[np.ndarray]], dyn: list[TaskSpaceDynamics]) -> None:
+    """Append the task-space terms of one pose and their Cauchy-Schwarz bounds (module docstring)."""
+    first = dyn[0]
+    M_inv = np.linalg.pinv(first.M, hermitian=True)
+    d = np.sqrt(np.diag(first.M_x))  # kinetic-energy norm of each task direction
+    terms["M"].append(first.M_x)
+    terms["M_bound"].append(np.outer(d, d))
+    terms["g"].append(first.g_x)
+    terms["g_bound"].append(d * np.sqrt(first.g @ M_inv @ first.g))
+    for t in dyn:
+        terms["h"].append(t.h_x)
+        terms["h_bound"].append(d * np.sqrt(t.h @ M_inv @ t.h))

@@ -1,0 +1,247 @@
+r"""Task-space dynamics of a closed chain: :math:`M_x \ddot x + h_x + g_x = f_x`.
+
+The tree's equations of motion with the closure forces :math:`\lambda`,
+
+.. math:: M(q)\, a + C(q, v)\, v + g(q) = \tau + J_\phi^T \lambda,
+
+are projected on the feasible motions :math:`v = S \dot x`
+(:attr:`plm_pin.kinematics.ClosedChainJacobians.S`, :math:`J_\phi S = 0`, :math:`J_x S = I`),
+which removes the closure forces. Every feasible acceleration is
+:math:`a = S \ddot x + a_0` with :math:`a_0` the tree acceleration at zero task
+acceleration,
+
+.. math::
+    J_\phi a_0 + \dot J_\phi v = 0, \qquad J_x a_0 + \dot J_x v = 0, \qquad
+    a_0 = a_p - S (\dot J_x v + J_x a_p),
+
+:math:`a_p` the minimum-norm solution of the closure rows. Hence
+
+.. math::
+    M_x = S^T M S, \qquad h_x = S^T (C(q, v)\, v + M a_0), \qquad g_x = S^T g(q),
+    \qquad f_x = S^T \tau,
+
+:math:`f_x` being the generalized task force of the applied joint forces; with actuator
+forces :math:`f_c` alone, :math:`f_x = J_{ce}^T f_c` (:math:`S_a S = J_{ce}`), Harada 2011
+eq. (23) with :math:`\mathbf f_e = f_x`. :math:`M` holds the armature (reflected rotor
+inertia) on its diagonal (``pin.crba``) and :math:`g` uses the model's gravity:
+:math:`g_x` is the task force that *holds* the mechanism against gravity (for Harada's
+tables, gravity along -y, :math:`g_y = (2 m_l + m_t) g > 0`).
+
+Meaning of the rows. Task velocities are the world-aligned twist rows of the end-effector
+frame (:mod:`plm_pin.kinematics.task`): the velocity of the frame origin and the angular
+velocity :math:`\omega`, both in world axes. So :math:`\ddot x` is the classical
+acceleration of the origin and the angular acceleration :math:`\dot\omega`, and the rows of
+:math:`f_x` are the force on the origin and the moment about it (world axes) whose power
+is :math:`f_x^T \dot x`. For a planar task ``x y rz`` these are the Lagrangian coordinates
+:math:`(x, y, \theta)` of the papers (:math:`\omega_z = \dot\theta`); for spatial rotations
+:math:`\ddot x` is :math:`\dot\omega`, *not* the second derivative of the roll-pitch-yaw
+angles :math:`r`: the kinetic energy is :math:`\tfrac12 \dot x^T M_x \dot x`, which in rpy
+rates (:math:`\omega = E(r) \dot r`) reads :math:`\tfrac12 \dot r^T E^T M_x E \dot r`.
+
+At a constraint singularity (the closure Jacobian loses rank, see
+:func:`plm_pin.kinematics.classify`) the terms are those of the generic mobility and lose
+their meaning; :func:`plm_pin.dynamics.decoupling.decoupling_check` skips such poses.
+
+Units (SI): for rows :math:`i, j` linear (l) or angular (a), :math:`M_{x,ij}` is [kg]
+(l-l), [kg m] (l-a) or [kg m^2] (a-a); :math:`h_x, g_x, f_x` are [N] (l) or [N m] (a).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from .._checks import as_vector
+from ..exceptions import ClosureNotSatisfied, InvalidInput
+from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
+from ..kinematics.task import check_task_vector
+from .trajectory import particular_acceleration
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+CLOSURE_TOL = 1e-8
+"""Largest closure residual of a configuration accepted by :func:`task_space_dynamics` [m, rad]."""
+
+VELOCITY_RTOL = 1e-9
+r"""Largest :math:`|J_\phi v|` accepted, relative to :math:`\max(1, |v|)` [m/s, rad/s]."""
+
+
+def task_units(dofs: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """SI units of the task-space terms: of each entry of ``M_x`` (row-major) and of each row of ``f_x``.
+
+    Args:
+        dofs: task coordinates, among ``x y z rx ry rz``.
+
+    Returns:
+        The units of ``M_x`` flattened row by row (``kg``, ``kg m``, ``kg m^2``) and of the
+        force rows (``N``, ``N m``).
+    """
+    angular = [d.startswith("r") for d in dofs]
+    mass = tuple(("kg", "kg m", "kg m", "kg m^2")[2 * ai + aj] for ai in angular for aj in angular)
+    return mass, tuple("N m" if a else "N" for a in angular)
+
+
+@dataclass(frozen=True)
+class TaskSpaceDynamics:
+    r"""Task-space terms of a closed chain at one state :math:`(q, v)`: :math:`M_x \ddot x + h_x + g_x = f_x`.
+
+    Rows follow ``dofs`` (the task's coordinates); see the module docstring for their
+    meaning and units. Arrays are read-only.
+
+    Attributes:
+        dofs: task coordinates, e.g. ``("x", "y", "rz")``.
+        q: configuration, shape (nq,).
+        v: tree velocity :math:`S \dot x` [m/s, rad/s], shape (nv,).
+        xdot: task velocity :math:`J_x v` (twist rows) [m/s, rad/s], shape (n_task,).
+        M_x: task inertia :math:`S^T M S` [kg, kg m, kg m^2], shape (n_task, n_task), symmetric.
+        h_x: velocity terms :math:`S^T (C v + M a_0)` [N, N m], shape (n_task,).
+        g_x: gravity terms :math:`S^T g` [N, N m], shape (n_task,).
+        S: velocity map :math:`v = S \dot x`, shape (nv, n_task).
+        M: joint-space inertia with armature [kg, kg m, kg m^2], shape (nv, nv).
+        h: joint-space velocity terms :math:`C v + M a_0` [N, N m], shape (nv,).
+        g: joint-space gravity terms [N, N m], shape (nv,).
+    """
+
+    dofs: tuple[str, ...]
+    q: np.ndarray
+    v: np.ndarray
+    xdot: np.ndarray
+    M_x: np.ndarray
+    h_x: np.ndarray
+    g_x: np.ndarray
+    S: np.ndarray
+    M: np.ndarray
+    h: np.ndarray
+    g: np.ndarray
+
+    def __post_init__(self) -> None:
+        n, nv = len(self.dofs), self.v.shape[0]
+        shapes = {
+            "xdot": (n,),
+            "M_x": (n, n),
+            "h_x": (n,),
+            "g_x": (n,),
+            "S": (nv, n),
+            "M": (nv, nv),
+            "h": (nv,),
+            "g": (nv,),
+        }
+        for name, shape in shapes.items():
+            arr = getattr(self, name)
+            if arr.shape != shape:
+                raise InvalidInput(f"{name} has shape {arr.shape}, expected {shape}")
+        for name in ("q", "v", *shapes):
+            getattr(self, name).setflags(write=False)
+
+    def force(self, xddot: Any) -> np.ndarray:
+        r"""Task force :math:`f_x = M_x \ddot x + h_x + g_x` [N, N m] at a task acceleration, shape (n_task,).
+
+        Args:
+            xddot: task acceleration (twist-row derivatives) [m/s^2, rad/s^2], shape (n_task,).
+        """
+        return self.M_x @ check_task_vector(xddot, len(self.dofs), "xddot") + self.h_x + self.g_x
+
+    def acceleration(self, f_x: Any) -> np.ndarray:
+        r"""Task acceleration :math:`M_x^{-1} (f_x - h_x - g_x)` [m/s^2, rad/s^2], shape (n_task,).
+
+        Args:
+            f_x: generalized task force, e.g. :math:`J_{ce}^T f_c` [N, N m], shape (n_task,).
+        """
+        return np.linalg.solve(self.M_x, check_task_vector(f_x, len(self.dofs), "f_x") - self.h_x - self.g_x)
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON, with the units of ``M_x`` (row-major) and of the force rows."""
+        mass_units, force_units = task_units(self.dofs)
+        return {
+            "dofs": list(self.dofs),
+            "q": self.q.tolist(),
+            "v": self.v.tolist(),
+            "xdot": self.xdot.tolist(),
+            "M_x": self.M_x.tolist(),
+            "h_x": self.h_x.tolist(),
+            "g_x": self.g_x.tolist(),
+            "units": {"M_x": list(mass_units), "h_x": list(force_units), "g_x": list(force_units)},
+        }
+
+
+def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = None) -> TaskSpaceDynamics:
+    r"""Task inertia, velocity and gravity terms at an assembled state.
+
+    Args:
+        mech: the mechanism (its task must have as many coordinates as it has DOF).
+        q: assembled configuration, shape (nq,).
+        v: feasible tree velocity (:math:`J_\phi v = 0`) [m/s, rad/s], shape (nv,).
+        xdot: task velocity (twist rows) [m/s, rad/s], shape (n_task,), instead of ``v``
+            (then :math:`v = S \dot x`). Neither: at rest (:math:`h_x = 0`).
+
+    Returns:
+        :math:`M_x, h_x, g_x` with the joint-space terms they come from.
+
+    Raises:
+        InvalidInput: no task, a task size different from the DOF, malformed ``q``, ``v`` or
+            ``xdot``, both ``v`` and ``xdot``, or ``v`` opening the loops.
+        ClosureNotSatisfied: ``q`` is not assembled to :data:`CLOSURE_TOL`.
+        SingularConfiguration: at an inverse-kinematics (type 1) singularity, where :math:`S`
+            is undefined.
+    """
+    task = require_task(mech)
+    check_square_task(task.size, mech.mobility, "task-space dynamics needs", mech.name)
+    qa = mech.check_q(q)
+    _check_assembled(mech, qa)
+    jac = closed_chain_jacobians(mech, qa)
+    S = jac.S  # (nv, n_task)
+    if xdot is not None:
+        if v is not None:
+            raise InvalidInput("give the tree velocity v or the task velocity xdot, not both")
+        va = S @ check_task_vector(xdot, task.size, "xdot")
+    elif v is None:
+        va = np.zeros(mech.nv)
+    else:
+        va = as_vector(v, mech.nv, "v")
+        opening = float(np.max(np.abs(jac.J_phi @ va), initial=0.0))
+        if opening > VELOCITY_RTOL * max(1.0, float(np.max(np.abs(va)))):
+            raise InvalidInput(
+                f"{mech.name}: v is not a feasible velocity: |J_phi v| = {opening:.3g} opens the loops "
+                f"(tolerance {VELOCITY_RTOL:.0e} x max(1, |v|)); pass xdot, or v = S @ xdot"
+            )
+    model, data = mech.model, mech.data
+    a_p = particular_acceleration(mech, qa, va, jac.J_phi)  # leaves the kinematics of (q, v, 0) in data
+    a0 = a_p - S @ (task.drift_from_data(model, data) + jac.J_x @ a_p)
+    M = np.array(pin.crba(model, data, qa))  # whole symmetric matrix, armature included (Pinocchio 4.1)
+    g = np.array(pin.computeGeneralizedGravity(model, data, qa))
+    h = np.array(pin.rnea(model, data, qa, va, a0)) - g
+    M_x = S.T @ M @ S
+    return TaskSpaceDynamics(
+        dofs=tuple(task.dofs),
+        q=qa.copy(),
+        v=va,
+        xdot=jac.J_x @ va,
+        M_x=0.5 * (M_x + M_x.T),
+        h_x=S.T @ h,
+        g_x=S.T @ g,
+        S=S,
+        M=M,
+        h=h,
+        g=g,
+    )
+
+
+def _check_assembled(mech: Mechanism, q: np.ndarray) -> None:
+    """Refuse a configuration whose loops are open by more than :data:`CLOSURE_TOL`."""
+    if not mech.closures:
+        return
+    errors = mech.closure_errors(q)
+    worst = max(errors, key=lambda k: errors[k])
+    if errors[worst] > CLOSURE_TOL:
+        raise ClosureNotSatisfied(
+            f"{mech.name}: q is not assembled: closure {worst!r} is open by {errors[worst]:.3g} "
+            f"(tolerance {CLOSURE_TOL:.0e} m/rad); assemble it first (Mechanism.assemble)",
+            errors[worst],
+            CLOSURE_TOL,
+            q,
+            worst,
+        )
