@@ -129,18 +129,24 @@ def star_triangle_inverse_kinematics(pose: Sequence[float], side: float) -> tupl
     x, y, phi = (float(v) for v in pose)
     if abs(math.sin(phi)) < 1e-9:
         raise ValueError(f"phi = {phi:.6g} rad: star lines parallel to their rails (sin phi = 0)")
-    E = np.array([[0.0, -1.0], [1.0, 0.0]])
-    c = np.array([x, y])
     origins, directions = rails(side)
     q = np.empty(3)
     rho = np.empty(3)
     for k, i in enumerate(LEGS):
         psi = phi + _LINE_OFFSET[i]
-        ui = np.array([math.cos(psi), math.sin(psi)])
-        d = c - origins[k]
-        q[k] = ui @ E @ d / (ui @ E @ directions[k])
-        rho[k] = directions[k] @ E @ d / (directions[k] @ E @ ui)
+        u = (math.cos(psi), math.sin(psi))
+        a = (float(directions[k][0]), float(directions[k][1]))
+        d = (x - float(origins[k][0]), y - float(origins[k][1]))
+        # u^T E v = -(u x v): the signs cancel in each ratio. Plain float arithmetic (no BLAS)
+        # keeps the written preset identical on every machine.
+        q[k] = _cross(u, d) / _cross(u, a)
+        rho[k] = _cross(a, d) / _cross(a, u)
     return q, rho
+
+
+def _cross(u: tuple[float, float], v: tuple[float, float]) -> float:
+    """Planar cross product u_x v_y - u_y v_x."""
+    return u[0] * v[1] - u[1] * v[0]
 
 
 def build_star_triangle(
