@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.plm-pin-installed
 REPORTS ?= reports
 
-.PHONY: all setup test test-fast report lint format bench urdf clean
+.PHONY: all setup test test-fast browser report lint format bench urdf clean
 
 all: test
 
@@ -17,8 +17,26 @@ $(STAMP): pyproject.toml
 
 setup: $(STAMP)
 
-test: $(STAMP)
+test: $(STAMP) browser
 	$(PY) -m pytest
+
+# The browser check (tests/report/test_browser.py) drives Debian's chromium with chromium-driver.
+# Installed here when missing, as root or with passwordless sudo; otherwise the check fails and
+# says how to install them (PLM_PIN_SKIP_BROWSER=1 skips it on purpose, except on CI).
+BROWSER_PACKAGES := chromium chromium-driver fonts-liberation
+browser:
+	@if { [ "$$PLM_PIN_SKIP_BROWSER" != 1 ] || [ -n "$$CI" ]; } \
+	    && ! { command -v chromium && command -v chromedriver; } >/dev/null; then \
+	  if [ "$$(id -u)" -eq 0 ]; then sudo=; \
+	  elif command -v sudo >/dev/null && sudo -n true 2>/dev/null; then sudo="sudo -n"; \
+	  else echo "make: chromium/chromedriver missing and no root: the browser check will fail;" \
+	    "sudo apt-get install $(BROWSER_PACKAGES)" >&2; exit 0; fi; \
+	  if ! command -v apt-get >/dev/null; then \
+	    echo "make: no apt-get: install chromium and chromedriver yourself; the browser check will fail" >&2; \
+	  elif ! { $$sudo apt-get update -qq && $$sudo env DEBIAN_FRONTEND=noninteractive \
+	      apt-get install -y -qq --no-install-recommends $(BROWSER_PACKAGES) >/dev/null; }; then \
+	    echo "make: installing $(BROWSER_PACKAGES) failed; the browser check will fail" >&2; fi; \
+	fi
 
 test-fast: $(STAMP)
 	$(PY) -m pytest -m "not slow" -x -q

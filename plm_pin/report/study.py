@@ -1,0 +1,223 @@
+"""Studies: modules of the ``analyses`` package that fill a report through a :class:`StudyContext`.
+
+A study is a module ``analyses/<name>.py`` defining:
+
+- ``TITLE``: the report title;
+- ``SUMMARY``: one line for the index (optional);
+- ``MECHANISM``: the mechanism it studies by default, a preset name or a path (optional:
+  only a study that defines it takes ``--mechanism``, e.g. the generic ``overview``);
+- ``run(ctx: StudyContext) -> None``: loads its mechanisms with :meth:`StudyContext.load`,
+  adds sections with :meth:`StudyContext.section` and reports progress with
+  :meth:`StudyContext.step`.
+
+The engine runs it in memory (:func:`run_study`); nothing is written until it has finished
+(:mod:`plm_pin.report.writer`). Modules whose names start with ``_`` are helpers, not studies.
+"""
+
+from __future__ import annotations
+
+import importlib
+import pkgutil
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+from types import ModuleType
+
+from ..exceptions import InvalidInput, PlmError
+from ..loading import load
+from ..mechanism import Mechanism
+from ..models.registry import PRESETS
+from ..warnings import PlmWarning
+from ._private import FOLDER, slug, software_versions
+from .content import MechanismInfo, Parameter, Section, StudyResult
+
+STUDY_PACKAGE = "analyses"
+"""The package the studies are modules of."""
+
+
+@dataclass(frozen=True)
+class Study:
+    """A study module, checked.
+
+    Attributes:
+        name: module name in :data:`STUDY_PACKAGE`, also the report's folder.
+        title: ``TITLE``.
+        summary: ``SUMMARY`` (empty when absent).
+        mechanism: ``MECHANISM``: the default mechanism, None when the study takes none.
+        run: ``run(ctx)``.
+    """
+
+    name: str
+    title: str
+    summary: str
+    mechanism: str | None
+    run: Callable[[StudyContext], None]
+
+
+def _package() -> ModuleType:
+    try:
+        return importlib.import_module(STUDY_PACKAGE)
+    except ModuleNotFoundError:
+        raise PlmError(
+            f"the studies (package {STUDY_PACKAGE!r}) are not importable: they live in the analyses/ "
+            "folder of the plm_pin checkout; install it with `pip install -e .` or run from it"
+        ) from None
+
+
+def study_names() -> list[str]:
+    """Names of the studies in :data:`STUDY_PACKAGE`, sorted."""
+    package = _package()
+    return sorted(
+        m.name
+        for m in pkgutil.iter_modules(package.__path__)
+        if not m.ispkg and not m.name.startswith("_") and FOLDER.fullmatch(m.name)
+    )
+
+
+def find_study(name: str) -> Study:
+    """Import and check the study ``name``.
+
+    Raises:
+        InvalidInput: no such study (the message lists them).
+        PlmError: the module is not a study (no ``TITLE`` or ``run``).
+    """
+    names = study_names()
+    if name not in names:
+        raise InvalidInput(f"unknown study {name!r}; studies are {names}")
+    module = importlib.import_module(f"{STUDY_PACKAGE}.{name}")
+    title, run = getattr(module, "TITLE", None), getattr(module, "run", None)
+    if not isinstance(title, str) or not callable(run):
+        raise PlmError(f"{module.__name__} is not a study: it must define TITLE (a string) and run(ctx)")
+    mechanism = getattr(module, "MECHANISM", None)
+    if mechanism is not None and not isinstance(mechanism, str):
+        raise PlmError(f"{module.__name__}.MECHANISM must be a preset name or a path, got {mechanism!r}")
+    return Study(name, title, str(getattr(module, "SUMMARY", "")), mechanism, run)
+
+
+def _describe(mech: Mechanism, target: str | Path | Mechanism) -> MechanismInfo:
+    if isinstance(target, Mechanism):
+        return MechanismInfo(mech.name, "built by the study", mech.summary(), (), ())
+    preset = PRESETS.get(str(target))
+    if preset is None:
+        return MechanismInfo(mech.name, f"description {target}", mech.summary(), (), ())
+    parameters = tuple(Parameter(key, value) for key, value in preset.parameters.items())
+    return MechanismInfo(mech.name, f"preset {preset.name}", mech.summary(), parameters, preset.notes)
+
+
+class StudyContext:
+    """What a study writes its report with: mechanisms, sections, progress.
+
+    Attributes:
+        study: the study being run.
+        target: the mechanism it was asked to study (``--mechanism``, else its ``MECHANISM``),
+            None for a study that takes none.
+    """
+
+    def __init__(
+        self, study: Study, target: str | Path | None, observer: Callable[[str], None] | None = None
+    ) -> None:
+        """Start an empty report for ``study`` on ``target``; ``observer`` receives the steps."""
+        self.study = study
+        self.target = target
+        self._observer = observer
+        self._sections: list[Section] = []
+        self._mechanisms: dict[str, MechanismInfo] = {}
+
+    def load(self, target: str | Path | Mechanism | None = None) -> Mechanism:
+        """Load a mechanism (default: :attr:`target`) and describe it in the report.
+
+        A preset's parameters and notes (its assumptions) are listed; a mechanism the study
+        built itself (e.g. a variant) is passed as the object.
+
+        Raises:
+            InvalidInput: no target given and the study has none.
+            PlmError: the description cannot be loaded (the loader's message).
+        """
+        chosen = self.target if target is None else target
+        if chosen is None:
+            raise InvalidInput(f"study {self.study.name!r} takes no mechanism; give one to ctx.load")
+        mech = chosen if isinstance(chosen, Mechanism) else load(chosen)
+        mech.summary()  # mobility now, inside the study's error handling
+        self._mechanisms.setdefault(mech.name, _describe(mech, chosen))
+        return mech
+
+    def step(self, description: str) -> None:
+        """Say what is being computed now (shown by the progress bar)."""
+        if self._observer is not None:
+            self._observer(description)
+
+    def section(self, title: str) -> Section:
+        """Start a new section, after the ones already added; returns it to fill."""
+        section = Section(title)
+        self._sections.append(section)
+        return section
+
+    @property
+    def mechanisms(self) -> tuple[MechanismInfo, ...]:
+        """The mechanisms loaded so far, in order."""
+        return tuple(self._mechanisms.values())
+
+    @property
+    def sections(self) -> tuple[Section, ...]:
+        """The sections added so far, in order."""
+        return tuple(self._sections)
+
+
+def report_folder(study: Study, mechanisms: tuple[MechanismInfo, ...]) -> str:
+    """Folder name of a report: the study name, and for a study of a chosen mechanism its name too."""
+    if study.mechanism is None or not mechanisms:
+        return study.name
+    return f"{study.name}-{slug(mechanisms[0].name)}"
+
+
+def run_study(
+    study: Study,
+    mechanism: str | Path | None = None,
+    *,
+    command: str = "",
+    observer: Callable[[str], None] | None = None,
+) -> StudyResult:
+    """Run a study in memory and return its report (nothing is written).
+
+    Warnings plm_pin emits meanwhile are listed in the report; other warnings pass through.
+
+    Args:
+        study: the study.
+        mechanism: the mechanism to study instead of its ``MECHANISM`` (preset name or path).
+        command: the shell command that writes this report, shown in it.
+        observer: called with each step's description (for a progress display).
+
+    Raises:
+        InvalidInput: a mechanism given to a study that takes none.
+        PlmError: the study failed; the message names it and says why.
+    """
+    if mechanism is not None and study.mechanism is None:
+        raise InvalidInput(f"study {study.name!r} takes no mechanism")
+    ctx = StudyContext(study, study.mechanism if mechanism is None else mechanism, observer)
+    start = time.perf_counter()
+    generated = datetime.now(timezone.utc).isoformat(timespec="seconds")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PlmWarning)
+        try:
+            study.run(ctx)
+        except PlmError as exc:
+            raise PlmError(f"study {study.name!r} failed: {exc}") from exc
+    for w in caught:
+        if not issubclass(w.category, PlmWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return StudyResult(
+        study=study.name,
+        title=study.title,
+        summary=study.summary,
+        folder=report_folder(study, ctx.mechanisms),
+        mechanisms=ctx.mechanisms,
+        sections=ctx.sections,
+        warnings=tuple(dict.fromkeys(str(w.message) for w in caught if issubclass(w.category, PlmWarning))),
+        command=command,
+        versions=software_versions(),
+        generated=generated,
+        elapsed=time.perf_counter() - start,
+    )
