@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import shlex
 import warnings
 import webbrowser
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -12,14 +14,23 @@ import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    SpinnerColumn,
+    TaskID,
+    TextColumn,
+    TimeElapsedColumn,
+)
 from rich.table import Table
 
-from ._io import atomic_write_text
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .kinematics import inverse_kinematics, task_pose
 from .loading import load
 from .mechanism import Mechanism
 from .models.registry import PRESETS
+from .report import Study, find_study, output_folder, run_study, study_names, write_index, write_report
 from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
@@ -127,37 +138,105 @@ def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or descr
     )
 
 
+OVERVIEW = "overview"
+"""The study run on a mechanism given instead of a study (``plm-pin report path/to/robot.urdf``)."""
+
+
+def _report_runs(target: str, mechanism: str | None) -> list[tuple[Study, str | None]]:
+    """The studies to run and the mechanism each is asked to study (None: its own).
+
+    Raises:
+        InvalidInput: an unknown target, or ``--mechanism`` where it does not apply.
+    """
+    names = study_names()
+    if target == "all":
+        if mechanism is not None:
+            raise InvalidInput("--mechanism picks the mechanism of one study; it does not go with 'all'")
+        return [(find_study(name), None) for name in names]
+    if target in names:
+        study = find_study(target)
+        if mechanism is not None and study.mechanism is None:
+            raise InvalidInput(f"study {target!r} takes no --mechanism (it studies the paper's mechanisms)")
+        return [(study, mechanism)]
+    if target in PRESETS or Path(target).exists():
+        if mechanism is not None:
+            raise InvalidInput(f"{target!r} is a mechanism: give it alone, or as --mechanism of a study")
+        return [(find_study(OVERVIEW), target)]
+    raise InvalidInput(
+        f"{target!r} is neither a study, 'all', a preset nor an existing path; studies are {names}"
+    )
+
+
+def _regenerate(study: Study, mechanism: str | None, out: Path) -> str:
+    """The shell command that writes this study's report again."""
+    chosen = ["--mechanism", mechanism] if mechanism is not None else []
+    return shlex.join(["plm-pin", "report", study.name, *chosen, "--out", str(out)])
+
+
+def _show_step(progress: Progress, task: TaskID, study: str) -> Callable[[str], None]:
+    return lambda step: progress.update(task, description=f"{study}: {step}")
+
+
 @app.command()
 def report(
-    study: Annotated[str, typer.Argument(help="'all' (every preset) or a preset name / description path")],
-    out: Annotated[Path, typer.Option("--out", help="output folder")] = Path("reports"),
+    target: Annotated[
+        str,
+        typer.Argument(
+            help="a study, 'all' (every study), or a preset / .urdf / .plm.yaml / folder to run the "
+            "overview study on"
+        ),
+    ],
+    out: Annotated[Path, typer.Option("--out", help="output folder (created if missing)")] = Path("reports"),
+    mechanism: Annotated[
+        str | None,
+        typer.Option("--mechanism", help="mechanism of a study that takes one (overview): preset or path"),
+    ] = None,
 ) -> None:
-    """Write the mechanism summaries (the full study reports are planned work)."""
-    targets = list(PRESETS) if study == "all" else [study]
-    rows = []
-    for target in targets:
-        mech = _load(target)
-        summary = mech.summary()
-        summary["q_ref"] = np.asarray(mech.q_ref).tolist()
-        rows.append(summary)
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out / "summary.json", json.dumps(rows, indent=2))
-    table = Table(title="plm_pin mechanisms")
-    for col in ("name", "source", "nv", "closures", "actuators", "mobility", "redundancy", "residual"):
-        table.add_column(col, overflow="fold")
-    for s in rows:
-        table.add_row(
-            escape(s["name"]),
-            escape(s["source"]),
-            str(s["nv"]),
-            str(len(s["closures"])),
-            str(len(s["actuators"])),
-            str(s["mobility"]),
-            str(s["redundancy"]),
-            f"{s['reference_residual']:.1e}",
-        )
-    console.print(table)
-    console.print(f"wrote {out / 'summary.json'}", markup=False, highlight=False, soft_wrap=True)
+    """Write study reports: per study a self-contained HTML page and results.json, then index.html.
+
+    Each report is written to a temporary folder inside OUT, then swapped in
+    whole: a failed or interrupted run leaves the previous report as it was.
+    Nothing is written outside OUT.
+    """
+    try:
+        runs = _report_runs(target, mechanism)
+        root = output_folder(out)
+    except PlmError as exc:
+        raise _fail(exc) from None
+    for _, chosen in runs:
+        if chosen is not None:
+            _load(chosen)  # a broken description fails here, with the loader's message
+    columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
+    progress = Progress(
+        *columns, TimeElapsedColumn(), console=errors, transient=True, disable=not errors.is_terminal
+    )
+    written, failed = 0, 0
+    with progress:
+        task = progress.add_task("reports", total=len(runs))
+        for study, chosen in runs:
+            progress.update(task, description=study.name)
+            try:
+                result = run_study(
+                    study,
+                    chosen,
+                    command=_regenerate(study, chosen, out),
+                    observer=_show_step(progress, task, study.name),
+                )
+                path = write_report(result, root)
+            except PlmError as exc:
+                errors.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
+                failed += 1
+            else:
+                written += 1
+                console.print(
+                    f"wrote {path} ({result.elapsed:.1f} s)", markup=False, highlight=False, soft_wrap=True
+                )
+            progress.advance(task)
+    if written:
+        index = write_index(root)
+        console.print(f"wrote {index}", markup=False, highlight=False, soft_wrap=True)
+    if failed:
+        raise typer.Exit(code=1)
 
 
 def _numbers(text: str, what: str) -> list[float]:

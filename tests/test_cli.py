@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -10,8 +12,11 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
+from plm_pin import cli
 from plm_pin.cli import app
+from plm_pin.exceptions import PlmError
 from plm_pin.models import PRESETS, urdf_folder
+from tests.report.numbers import unlisted_numbers
 
 runner = CliRunner()
 
@@ -148,33 +153,156 @@ def test_check_reports_missing_meshes_as_a_warning(fourbar):
     assert result.stdout.startswith("ok: fourbar:")
 
 
-def test_report_all_writes_every_preset(tmp_path):
-    """`report all --out DIR` writes summary.json with one entry per preset, loops closed."""
+def _tree(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` with its bytes."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _rename_mechanism(urdf: Path, name: str) -> None:
+    sidecar = urdf.with_name(urdf.name.replace(".urdf", ".plm.yaml"))
+    data = yaml.safe_load(sidecar.read_text())
+    data["name"] = name
+    sidecar.write_text(yaml.safe_dump(data, sort_keys=False))
+
+
+def test_report_on_a_description_runs_the_overview(tmp_path, fourbar):
+    """`report PATH` writes overview-<name>/ (page, results.json) and the index, and says so on stdout."""
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    folder = out / "overview-fourbar"
+    assert sorted(p.name for p in out.iterdir()) == ["index.html", "overview-fourbar"]
+    assert sorted(p.name for p in folder.iterdir()) == ["report.html", "results.json"]
+    lines = result.stdout.splitlines()
+    assert re.fullmatch(rf"wrote {re.escape(str(folder.resolve() / 'report.html'))} \(\d+\.\d s\)", lines[0])
+    assert lines[1] == f"wrote {out.resolve() / 'index.html'}"
+    data = json.loads((folder / "results.json").read_text())
+    assert data["command"] == f"plm-pin report overview --mechanism {fourbar} --out {out}"
+    assert data["mechanisms"][0]["origin"] == f"description {fourbar}"
+    assert 'href="overview-fourbar/report.html"' in (out / "index.html").read_text()
+
+
+def test_report_overview_with_mechanism_option_writes_the_same_report(tmp_path, fourbar):
+    """`report overview --mechanism PATH` is the long form of `report PATH`."""
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", "overview", "--mechanism", str(fourbar), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert (out / "overview-fourbar" / "report.html").is_file()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["nope"], "'nope' is neither a study, 'all', a preset nor an existing path; studies are ["),
+        (
+            ["all", "--mechanism", "fivebar"],
+            "--mechanism picks the mechanism of one study; it does not go with 'all'",
+        ),
+        (["harada2015", "--mechanism", "fivebar"], "study 'harada2015' takes no --mechanism"),
+        (
+            ["fivebar", "--mechanism", "fourbar"],
+            "'fivebar' is a mechanism: give it alone, or as --mechanism of a study",
+        ),
+    ],
+)
+def test_report_bad_target_is_one_error_line_and_writes_nothing(tmp_path, args, message):
+    """Unknown studies and misplaced --mechanism exit 1 with one line, before creating anything."""
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", *args, "--out", str(out)])
+    assert result.exit_code == 1
+    assert result.stdout == ""
+    assert result.stderr.startswith(f"error: {message}") and result.stderr.count("\n") == 1
+    assert not out.exists()
+
+
+def test_report_out_that_is_a_file_is_refused(tmp_path):
+    """--out naming a file exits 1 and leaves the file alone."""
+    target = tmp_path / "reports"
+    target.write_text("mine")
+    result = runner.invoke(app, ["report", "fourbar", "--out", str(target)])
+    _assert_clean_failure(result, f"--out {target}: is not a folder")
+    assert target.read_text() == "mine"
+
+
+def test_report_on_broken_description_leaves_existing_reports_untouched(tmp_path, fourbar):
+    """A broken description exits 1 with the loader's message; earlier reports and index stay as they were."""
+    out = tmp_path / "reports"
+    assert runner.invoke(app, ["report", str(fourbar), "--out", str(out)]).exit_code == 0
+    before = _tree(out)
+    sidecar = _break_closure_type(fourbar, "hinge")
+    result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
+    _assert_clean_failure(
+        result,
+        f"{sidecar}: closures[0] (coupler_rocker): invalid closure type 'hinge'; "
+        "valid types are ['point', 'revolute', 'weld']",
+    )
+    assert _tree(out) == before
+
+
+def test_report_study_failing_midway_keeps_the_old_report(tmp_path, fourbar, monkeypatch):
+    """A study raising after some work exits 1 with 'study ... failed'; the previous report is kept."""
+    out = tmp_path / "reports"
+    assert runner.invoke(app, ["report", str(fourbar), "--out", str(out)]).exit_code == 0
+    before = _tree(out)
+    real = cli.find_study("overview")
+
+    def failing(ctx):
+        ctx.load()
+        ctx.section("started").text("half done")
+        raise PlmError("the solver gave up")
+
+    monkeypatch.setattr(cli, "find_study", lambda name: dataclasses.replace(real, run=failing))
+    result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
+    assert result.exit_code == 1
+    assert result.stderr == "error: study 'overview' failed: the solver gave up\n"
+    assert _tree(out) == before
+
+
+def test_report_escapes_names_from_user_files(tmp_path, fourbar):
+    """A mechanism named like a script is shown as text in the report and the index, and slugged in paths."""
+    _rename_mechanism(fourbar, "<script>alert(1)</script>")
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    folder = out / "overview-script_alert_1_script"
+    for page in (folder / "report.html", out / "index.html"):
+        text = page.read_text()
+        assert "<script>alert(1)" not in text
+        assert "&lt;script&gt;alert(1)&lt;/script&gt;" in text
+    assert (
+        json.loads((folder / "results.json").read_text())["mechanisms"][0]["name"]
+        == "<script>alert(1)</script>"
+    )
+
+
+def test_report_never_writes_outside_out(tmp_path, fourbar):
+    """A mechanism named '../x' is written to out/overview-x; nothing appears outside out."""
+    _rename_mechanism(fourbar, "../x")
+    outside_before = sorted(p.name for p in tmp_path.iterdir())
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in out.iterdir()) == ["index.html", "overview-x"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([*outside_before, "reports"])
+
+
+@pytest.mark.slow
+def test_report_all_runs_every_study_and_indexes_them(tmp_path):
+    """`report all` writes every study, each number its tables show is in its results.json, all indexed."""
     out = tmp_path / "reports"
     result = runner.invoke(app, ["report", "all", "--out", str(out)])
     assert result.exit_code == 0, result.output
-    rows = json.loads((out / "summary.json").read_text())
-    assert [r["name"] for r in rows] == list(PRESETS)
-    for r in rows:
-        assert r["mobility"] == PRESETS[r["name"]].dof
-        assert r["redundancy"] == PRESETS[r["name"]].redundancy
-        assert r["reference_residual"] <= 1e-12
-        assert len(r["q_ref"]) == r["nq"]
-    assert result.stdout.splitlines()[-1] == f"wrote {out / 'summary.json'}"
-
-
-def test_report_on_broken_description_leaves_summary_untouched(tmp_path, fourbar):
-    """`report` on a broken description exits 1 and leaves an existing summary.json byte-identical."""
-    out = tmp_path / "reports"
-    out.mkdir()
-    previous = '[{"name": "earlier run"}]'
-    (out / "summary.json").write_text(previous)
-    sidecar = _break_closure_type(fourbar, "hinge")
-    result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
-    assert result.exit_code == 1
-    assert result.stderr.startswith(f"error: {sidecar}: closures[0] (coupler_rocker): invalid closure type")
-    assert (out / "summary.json").read_text() == previous
-    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
+    studies = cli.study_names()
+    folders = sorted(p.name for p in out.iterdir() if p.is_dir())
+    overview = f"overview-{cli.find_study('overview').mechanism}"
+    assert folders == sorted(overview if s == "overview" else s for s in studies)
+    index = (out / "index.html").read_text()
+    for folder in folders:
+        data = json.loads((out / folder / "results.json").read_text())
+        assert data["command"] == f"plm-pin report {data['study']} --out {out}"
+        assert f'href="{folder}/report.html"' in index
+        shown, missing = unlisted_numbers(out / folder)
+        assert shown > 20 and missing == [], folder
 
 
 def test_no_arguments_shows_help():
