@@ -1,0 +1,143 @@
+"""Enferadi 2017: inverse and direct dynamics of the star-triangle (3-PRP) planar manipulator.
+
+Reproduces section 6: the actuator forces of the two case-study paths (vertical line and
+circle, Figs. 5 and 7), then the direct dynamics driven by those forces, which must retrace
+the path (Figs. 6 and 8). The paper's figures carry no numbers; the reference values are the
+paper's own equations (25)-(31), corrected, evaluated in ``analyses/specs/enferadi2017.md``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from plm_pin import Mechanism
+from plm_pin.dynamics import inverse_dynamics, simulate, task_trajectory
+from plm_pin.models import enferadi2017_circle, enferadi2017_line
+from plm_pin.report import Column, Comparison, Section, StudyContext
+from plm_pin.viz import scene_html
+
+TITLE = "Enferadi 2017: dynamics of a star-triangle 3-PRP planar manipulator"
+SUMMARY = "Section 6: forces along a line and a circle, and the direct-dynamics round trip."
+
+REFERENCE = {
+    "line": {1.0: (-0.239237, 0.239237, 0.0), 4.0: (0.338332, -0.338332, 0.0)},
+    "circle": {
+        0.0: (-2.254403, -2.254403, 3.605675),
+        0.25: (-3.986470, 0.798263, 2.549597),
+        0.5: (-3.383317, 3.383317, 0.0),
+    },
+}
+"""Forces [N] of the corrected eqs. (25)-(31) (spec, section 5), printed to 6 decimals."""
+
+PATHS: dict[str, tuple[Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray]], float, str]] = {
+    "line": (enferadi2017_line, 8.0, "Figs. 5, 6: vertical line y = 0.25 + 0.1 cos(pi t / 4) m"),
+    "circle": (enferadi2017_circle, 2.0, "Figs. 7, 8: circle of radius 0.0625 m, one turn"),
+}
+
+
+def run(ctx: StudyContext) -> None:
+    """Fill the Enferadi 2017 report."""
+    mech = ctx.load("enferadi2017_star_triangle")
+    section = ctx.section("Model")
+    section.assumptions(
+        "Reconstruction (analyses/specs/enferadi2017.md)",
+        [
+            "Geometry rebuilt from the constraint equations (1)-(2); the figures are missing.",
+            "Typos corrected: q1 for a1 in Gamma_2, the sign of theta_2 in Lambda_4, M and N swapped in "
+            "(31), (33), (34), the slider mass m_a + m_il.",
+            "Inertias 37.5 and 25 kg m^2 kept as printed although implausible (radius of gyration 3.5 m); "
+            "with phi held at pi/2 they do not enter the forces.",
+            "Horizontal plane: gravity does no work.",
+        ],
+    )
+    for name, (profile, duration, caption) in PATHS.items():
+        ctx.step(f"{name}: inverse dynamics and round trip")
+        _path(ctx.section(f"Path: {name}"), mech, name, profile, duration, caption)
+
+
+def _path(
+    section: Section,
+    mech: Mechanism,
+    name: str,
+    profile: Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray]],
+    duration: float,
+    caption: str,
+) -> None:
+    import matplotlib.pyplot as plt
+
+    t = np.linspace(0.0, duration, round(duration / 0.01) + 1)
+    traj = task_trajectory(mech, profile, t)
+    idr = inverse_dynamics(mech, traj)
+    forces = CubicSpline(t, idr.f_c)
+    run = simulate(
+        mech,
+        traj.q[0],
+        traj.v[0],
+        duration=duration,
+        dt=duration / 100,
+        actuator_forces=lambda time, q, v: forces(time),
+        method="adaptive",
+        rtol=1e-11,
+        atol=1e-13,
+    )
+    target = np.array([profile(s)[0] for s in run.t])
+    error = np.max(np.linalg.norm((run.x - target)[:, :2], axis=1))
+    fig, axes = plt.subplots(1, 3, figsize=(13.0, 3.6), layout="constrained")
+    for i in range(3):
+        axes[0].plot(t, idr.f_c[:, i], label=f"f_{i + 1}")
+        axes[1].plot(t, traj.c[:, i], label=f"q_{i + 1}")
+    axes[0].set(xlabel="t [s]", ylabel="actuator force [N]", title="inverse dynamics")
+    axes[1].set(xlabel="t [s]", ylabel="slider position [m]", title="actuators")
+    axes[2].plot(target[:, 0], target[:, 1], "k-", lw=4, alpha=0.3, label="path")
+    axes[2].plot(run.x[:, 0], run.x[:, 1], "r--", label="direct dynamics")
+    axes[2].set(xlabel="x [m]", ylabel="y [m]", title="round trip", aspect="equal")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize="small")
+    section.figure(
+        fig,
+        f"{caption}: forces, slider positions, and the path retraced by direct dynamics.",
+        {"t": t, "f_c": idr.f_c, "q": traj.c, "x_direct": run.x, "t_direct": run.t},
+    )
+    rows = []
+    for time, expected in REFERENCE[name].items():
+        k = int(np.argmin(np.abs(t - time)))
+        for i in range(3):
+            rows.append(
+                Comparison(
+                    f"f_{i + 1}(t = {time:g} s), corrected eqs. (25)-(31)",
+                    expected[i],
+                    float(idr.f_c[k, i]),
+                    "N",
+                    rtol=0.0,
+                    atol=1e-6,
+                    fmt=".6f",
+                )
+            )
+    rows.append(
+        Comparison("round trip: largest path error of the direct dynamics", 0.0, float(error), "m", atol=1e-6)
+    )
+    section.comparison(f"{name}: forces and round trip", rows, note="The paper's figures give no numbers.")
+    section.table(
+        f"{name}: extremes",
+        ["actuator", Column("min f", "N"), Column("max f", "N"), Column("min q", "m"), Column("max q", "m")],
+        [
+            (
+                i + 1,
+                float(idr.f_c[:, i].min()),
+                float(idr.f_c[:, i].max()),
+                float(traj.c[:, i].min()),
+                float(traj.c[:, i].max()),
+            )
+            for i in range(3)
+        ],
+    )
+    step = max(1, len(t) // 80)
+    section.scene(
+        scene_html(mech, qs=traj.q[::step], times=t[::step]),
+        f"{name}: the motion, to rotate and play in the page.",
+        {"times": t[::step], "qs": traj.q[::step]},
+    )

@@ -1,0 +1,47 @@
+"""The Harada 2015 study (analyses/harada2015.py): its claims against the paper's text."""
+
+from __future__ import annotations
+
+import pytest
+
+from plm_pin.report import find_study, run_study
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def result():
+    """The study, run once."""
+    return run_study(find_study("harada2015"))
+
+
+def test_every_paper_claim_agrees(result):
+    """All rows of the paper-vs-plm_pin table agree; there are rows for each claim of the paper."""
+    (table,) = result.comparisons()
+    assert table.n_agree == len(table.rows) >= 15
+
+
+def test_routes_and_lengths_are_the_papers(result):
+    """The paper's routes (Sec. V) and rod lengths (Fig. 2), as printed, are the 'paper' column."""
+    rows = {r.quantity: r for r in result.comparisons()[0].rows}
+    assert (
+        rows["singularity-free route [+ +] to [- -] (Fig. 6, Sec. V)"].ours
+        == "[+ +] → [+ 0] → [+ -] → [0 -] → [- -]"
+    )
+    assert rows["working-mode change (Fig. 7, Sec. V)"].ours == "(- + - +) → (- + 0 +) → (- + + +)"
+    assert [rows[f"rod length l{i} (Fig. 2)"].paper for i in (1, 2, 3, 4)] == [0.240, 0.170, 0.170, 0.240]
+    assert rows["assembly modes of the 2-PRRRP (Sec. III)"].ours == 9
+
+
+def test_figures_and_animations(result):
+    """Graph, both changes with snapshots, and two animations whose times are increasing."""
+    figures = [b for s in result.sections for b in s.blocks if b.kind == "figure"]
+    scenes = [b for s in result.sections for b in s.blocks if b.kind == "scene"]
+    assert len(figures) == 5 and len(scenes) == 2
+    for scene in scenes:
+        assert len(scene.data["qs"]) == len(scene.data["times"]) > 50
+    assert [m.name for m in result.mechanisms] == [
+        "harada2015_asymmetric",
+        "harada2015_asymmetric_symmetric_240mm",
+        "harada2011_3d3m",
+    ]

@@ -1,0 +1,114 @@
+"""The generic overview study (analyses/overview.py) on a user's description."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+
+import plm_pin
+from plm_pin.report import find_study, run_study
+from tests.report.conftest import rename
+
+SECTIONS = [
+    "Mobility and redundancy",
+    "Workspace slice: manipulability and singularities",
+    "Static forces at the reference configuration",
+    "3D view",
+]
+
+
+def _blocks(result, kind):
+    return {
+        b.title if hasattr(b, "title") else b.caption: b
+        for s in result.sections
+        for b in s.blocks
+        if b.kind == kind
+    }
+
+
+def _rows(table) -> dict:
+    return {row[0]: row[1] for row in table.rows}
+
+
+@pytest.fixture(scope="module")
+def fivebar_overview(tmp_path_factory):
+    """The overview of a copy of the five-bar, renamed, as a user's description."""
+    import shutil
+
+    from plm_pin.models import urdf_folder
+
+    folder = tmp_path_factory.mktemp("user")
+    for suffix in (".urdf", ".plm.yaml"):
+        shutil.copy(urdf_folder() / f"fivebar{suffix}", folder / f"myfivebar{suffix}")
+    rename(folder / "myfivebar.urdf", "my five-bar")
+    return folder / "myfivebar.urdf", run_study(find_study("overview"), folder / "myfivebar.urdf")
+
+
+def test_overview_sections_and_mobility(fivebar_overview):
+    """Four sections; mobility 2 and redundancy 0 of the RRRRR five-bar (2 motors, one point closure)."""
+    _, result = fivebar_overview
+    assert [s.title for s in result.sections] == SECTIONS
+    assert result.folder == "overview-my_five-bar"
+    assert result.mechanisms[0].name == "my five-bar"
+    rows = _rows(_blocks(result, "table")["Sizes, ranks and margins at the reference"])
+    # 4 revolutes, a planar point closure: 3 rows of rank 2
+    assert (rows["velocity size nv"], rows["closure rows"], rows["rank of J_phi at the reference"]) == (
+        4,
+        3,
+        2,
+    )
+    assert (rows["mobility (DOF)"], rows["redundancy"]) == (2, 0)
+    assert rows["singular at the reference"] is False
+
+
+def test_overview_static_forces_balance_gravity(fivebar_overview):
+    """The report's f_c balances Pinocchio's generalized gravity with some closure force (least squares)."""
+    path, result = fivebar_overview
+    mech = plm_pin.load(path)
+    table = _blocks(result, "table")["Actuator forces f_c"]
+    f_c = np.array([row[2] for row in table.rows])
+    assert [row[0] for row in table.rows] == ["left_motor", "right_motor"]
+    q = mech.q_ref
+    g = pin.computeGeneralizedGravity(mech.model, mech.model.createData(), q)  # (nv,)
+    B = np.zeros((mech.nv, mech.n_actuators))
+    B[mech.actuated_v_indices, np.arange(mech.n_actuators)] = 1.0
+    J = mech.closure_jacobian(q)
+    lam, *_ = np.linalg.lstsq(J.T, g - B @ f_c, rcond=None)
+    assert np.max(np.abs(B @ f_c + J.T @ lam - g)) < 1e-10
+    assert np.max(np.abs(f_c)) > 0.1  # gravity does load the motors
+
+
+def test_overview_map_figure_and_scene(fivebar_overview):
+    """The slice figure stores its grid; the scene shows the reference configuration with force arrows."""
+    _, result = fivebar_overview
+    (figure, _) = _blocks(result, "figure").values()
+    data = figure.data["slice"]
+    assert data["axes"] == ["x", "y"] and np.shape(data["manipulability"]) == (41, 41)
+    summary = _rows(_blocks(result, "table")["Slice summary"])
+    assert summary["grid points"] == 41 * 41 and 0.0 < summary["reachable fraction"] <= 1.0
+    (scene,) = _blocks(result, "scene").values()
+    assert scene.html.lstrip().startswith("<!DOCTYPE html>")
+    np.testing.assert_allclose(scene.data["q"], plm_pin.load(fivebar_overview[0]).q_ref)
+    assert scene.data["arrows"] and scene.data["scale"] > 0
+
+
+def test_overview_without_task_skips_the_slice(user_fivebar):
+    """Without end effector: mobility, statics and the 3D view still; the slice section says why not."""
+    sidecar = user_fivebar.with_name("fivebar.plm.yaml")
+    data = yaml.safe_load(sidecar.read_text())
+    del data["end_effector"]
+    sidecar.write_text(yaml.safe_dump(data, sort_keys=False))
+    result = run_study(find_study("overview"), user_fivebar)
+    slice_section = result.sections[1]
+    (text,) = slice_section.blocks
+    assert text.text.startswith("No workspace slice: it needs a task")
+    assert "Actuator forces f_c" in _blocks(result, "table")
+
+
+def test_overview_of_a_one_dof_mechanism_sweeps_its_task(tmp_path):
+    """The four-bar (task rz only) gets a sweep of its manipulability instead of a map."""
+    result = run_study(find_study("overview"), "fourbar")
+    figures = [b for s in result.sections for b in s.blocks if b.kind == "figure"]
+    assert figures[0].data["slice"]["axes"] == ["rz"]
