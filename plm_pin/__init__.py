@@ -12,7 +12,7 @@ from .exceptions import (
     SingularConfiguration,
     TrajectoryError,
 )
-from .loading import load
+from .loading import build_mechanism, load
 from .mechanism import Mechanism
 
 __version__ = "0.1.0"
@@ -30,5 +30,6 @@ __all__ = [
     "SingularConfiguration",
     "TrajectoryError",
     "__version__",
+    "build_mechanism",
     "load",
 ]

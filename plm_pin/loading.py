@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
+from typing import Any
 
 from .description.loader import Description, build_model, build_visual_model, read_description
 from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
 from .description.urdf import read_urdf_text
-from .exceptions import ClosureNotSatisfied, DescriptionError
+from .description.writer import urdf_text
+from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
 from .mechanism import Mechanism
-from .models.registry import PRESETS, urdf_folder
+from .models.registry import PRESETS, Builder, builder_parameters, urdf_folder
 
 ERD_PREFIX = "erd:"
 
@@ -142,3 +145,63 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
     description = read_description(path)
     name = description.sidecar.name or (path.name if path.is_dir() else path.name.split(".")[0])
     return mechanism_from_description(description, name, validate=validate)
+
+
+def resolve_builder(target: str | Builder) -> tuple[Builder, dict[str, Any], str]:
+    """The builder of a preset name (with the preset's parameters) or a builder callable (with none).
+
+    Returns:
+        ``(builder, base parameters, label)``; the label is the preset name or the builder's
+        ``module:qualname``.
+
+    Raises:
+        InvalidInput: an unknown preset name (the message lists them) or a non-callable target.
+    """
+    if isinstance(target, str):
+        preset = PRESETS.get(target)
+        if preset is None:
+            raise InvalidInput(f"unknown preset {target!r}; presets are {sorted(PRESETS)}")
+        return preset.builder, dict(preset.parameters), target
+    if not callable(target):
+        raise InvalidInput(f"expected a preset name or a builder callable, got {target!r}")
+    return target, {}, f"{getattr(target, '__module__', '?')}:{getattr(target, '__qualname__', repr(target))}"
+
+
+def build_mechanism(
+    target: str | Builder,
+    parameters: Mapping[str, Any] | None = None,
+    *,
+    name: str | None = None,
+    validate: bool = True,
+) -> Mechanism:
+    """Build a mechanism from a parametric builder in memory, without writing its description.
+
+    Args:
+        target: a preset name (its builder, with the preset's parameters overridden by
+            ``parameters``) or a builder such as :func:`plm_pin.models.build_2prrrp`, called
+            with ``parameters`` alone.
+        parameters: builder keyword arguments [SI units]; ``name`` and ``source`` are set here.
+        name: the mechanism's name (default: the preset's or builder's name with ``_variant``).
+        validate: assemble the reference configuration at once (see
+            :func:`mechanism_from_description`).
+
+    Returns:
+        The mechanism, as :func:`load` would return it after writing the description to disk.
+
+    Raises:
+        InvalidInput: an unknown preset or parameter name (the message lists the valid ones).
+        DescriptionError: the builder's output is not a valid description.
+        ClosureNotSatisfied: when ``validate`` and the loops cannot be closed.
+    """
+    builder, base, label = resolve_builder(target)
+    given = dict(parameters or {})
+    valid = builder_parameters(builder)
+    unknown = [key for key in given if key not in valid]
+    if unknown:
+        raise InvalidInput(f"unknown parameter(s) {unknown} of {label}; its parameters are {list(valid)}")
+    stem = target if isinstance(target, str) else getattr(target, "__name__", "mechanism")
+    label_name = name or f"{stem}_variant"
+    source = PRESETS[target].source if isinstance(target, str) else label
+    robot, sidecar = builder(name=label_name, source=source, **{**base, **given})
+    description = Description(read_urdf_text(urdf_text(robot), None, f"<{label_name}>"), sidecar)
+    return mechanism_from_description(description, label_name, validate=validate)

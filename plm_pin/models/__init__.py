@@ -27,7 +27,7 @@ from .pss import (
     pss_inverse_kinematics,
     zhao2011_trajectory,
 )
-from .registry import PRESETS, Preset, preset_names, urdf_folder
+from .registry import PRESETS, Preset, builder_parameters, preset_names, urdf_folder
 from .star_triangle import (
     build_star_triangle,
     enferadi2017_circle,
@@ -63,6 +63,7 @@ __all__ = [
     "build_fourbar",
     "build_pss",
     "build_star_triangle",
+    "builder_parameters",
     "enferadi2017_circle",
     "enferadi2017_line",
     "leg_inverse_kinematics",

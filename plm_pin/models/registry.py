@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -264,6 +265,20 @@ PRESETS: dict[str, Preset] = {
         key=lambda p: p.name,
     )
 }
+
+
+BUILDER_RESERVED = ("name", "source")
+"""Builder arguments that label a description rather than shape it (never swept or overridden)."""
+
+
+def builder_parameters(builder: Builder) -> tuple[str, ...]:
+    """Names of the keyword parameters a builder takes, :data:`BUILDER_RESERVED` excluded, in order."""
+    kinds = (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+    return tuple(
+        name
+        for name, p in inspect.signature(builder).parameters.items()
+        if p.kind in kinds and name not in BUILDER_RESERVED
+    )
 
 
 def preset_names() -> list[str]:
