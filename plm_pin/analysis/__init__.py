@@ -7,6 +7,7 @@ from .manipulability import (
     manipulability_at,
     manipulability_from_jacobians,
 )
+from .orientation import OrientationRange, orientation_range
 from .singular_loci import (
     SingularPoint,
     signed_singularity_function,
@@ -14,20 +15,23 @@ from .singular_loci import (
     singular_points,
     singular_points_along,
 )
-from .workspace import WorkspaceSlice, workspace_map, workspace_sweep
+from .workspace import WorkspaceSlice, workspace_grid, workspace_map, workspace_sweep
 
 __all__ = [
     "METRICS",
     "Manipulability",
+    "OrientationRange",
     "SingularPoint",
     "WorkspaceSlice",
     "manipulability",
     "manipulability_at",
     "manipulability_from_jacobians",
+    "orientation_range",
     "signed_singularity_function",
     "singular_loci",
     "singular_points",
     "singular_points_along",
+    "workspace_grid",
     "workspace_map",
     "workspace_sweep",
 ]

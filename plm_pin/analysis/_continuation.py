@@ -36,7 +36,7 @@ from ..kinematics import closures as _closures
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import require_task
-from ..kinematics.legs import Leg, ik_jacobian_from_data, working_mode_from_jacobian
+from ..kinematics.legs import Leg, ik_jacobian_from_data, working_mode, working_mode_from_jacobian
 from ..kinematics.task import Task, TaskTarget
 from .manipulability import batch_metrics
 
@@ -431,16 +431,45 @@ def _seed(
     order = np.argsort(np.sum(((flat - x_guess)[:, varied] / scale[varied]) ** 2, axis=1), kind="stable")
     for index in order[:SEED_CANDIDATES]:
         try:
-            sol = inverse_kinematics(mech, flat[index], guess, mode=mode)
+            q = _seed_solution(mech, flat[index], guess, mode)
         except PoseUnreachable:
             continue
-        return int(index), sol.q
+        return int(index), q
     return None
+
+
+def _seed_solution(mech: Mechanism, x: np.ndarray, guess: Any, mode: tuple[int, ...] | None) -> np.ndarray:
+    """Inverse kinematics at the seed: Newton from the guess, then (if it lands elsewhere) in ``mode``.
+
+    Enumerating the working modes costs tens of Newton solves; the guess's basin usually
+    holds the asked mode already.
+
+    Raises:
+        PoseUnreachable: when ``x`` cannot be reached (in ``mode`` when given).
+    """
+    try:
+        sol = inverse_kinematics(mech, x, guess)
+    except PoseUnreachable:
+        if mode is None:
+            raise
+    else:
+        if mode is None or sol.mode == tuple(mode):
+            return sol.q
+    return inverse_kinematics(mech, x, guess, mode=mode).q
 
 
 def start_configuration(mech: Mechanism, guess: Any) -> np.ndarray:
     """The configuration an analysis starts from: ``guess`` (checked), or the reference one."""
     return mech.q_ref if guess is None else mech.check_q(guess, "guess")
+
+
+def guess_mode(mech: Mechanism, guess: Any) -> tuple[int, ...] | None:
+    """Working mode of ``guess`` (default: the reference configuration); None if a leg is singular there.
+
+    Passed as ``mode`` it keeps an analysis in the guess's working mode wherever its seed is.
+    """
+    mode = working_mode(mech, start_configuration(mech, guess))
+    return None if 0 in mode else mode
 
 
 def base_pose(mech: Mechanism, pose: Any, guess: Any) -> np.ndarray:

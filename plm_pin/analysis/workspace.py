@@ -235,6 +235,42 @@ def workspace_map(
     return _slice(mech, tuple(axes), values, pose, guess, mode, tol, workers)
 
 
+def workspace_grid(
+    mech: Mechanism,
+    axes: Sequence[str],
+    values: Sequence[Any],
+    pose: Any = None,
+    *,
+    guess: Any = None,
+    mode: tuple[int, ...] | None = None,
+    tol: float = IK_TOL,
+) -> WorkspaceSlice:
+    """The metrics of :func:`workspace_map` over a grid of any number of task coordinates.
+
+    The continuation walks the whole grid from its seed in one process, in a fixed order,
+    so the result depends only on the arguments (the design sweeps of :mod:`plm_pin.sweep`
+    rely on it).
+
+    Args:
+        mech: the mechanism.
+        axes: the varied task coordinates, e.g. ``("x", "y", "rz")``.
+        values: their grid values [m or rad], one 1-D array per axis.
+        pose: task pose giving the fixed coordinates (default: the guess's pose) [m, rad].
+        guess: configuration the seed is solved from (default: the reference configuration).
+        mode: working mode to keep (default: the seed's).
+        tol: inverse-kinematics residual tolerance [m, rad].
+
+    Returns:
+        The grid, arrays of shape ``tuple(len(v) for v in values)``.
+
+    Raises:
+        InvalidInput: see :func:`workspace_map`.
+    """
+    if len(axes) < 1 or len(axes) != len(values):
+        raise InvalidInput(f"give one array of values per varied coordinate; got axes {list(axes)}")
+    return _slice(mech, tuple(axes), values, pose, guess, mode, tol, 1)
+
+
 def workspace_sweep(
     mech: Mechanism,
     axis: str,

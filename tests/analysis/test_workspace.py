@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from plm_pin.analysis import manipulability, workspace_map, workspace_sweep
+from plm_pin.analysis import manipulability, workspace_grid, workspace_map, workspace_sweep
 from plm_pin.analysis._continuation import IKEvaluator
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import classify, inverse_kinematics, task_pose, working_mode
@@ -139,6 +139,22 @@ def test_parallel_workers_give_the_same_map():
     np.testing.assert_array_equal(one.reachable, two.reachable)
     np.testing.assert_allclose(one.manipulability, two.manipulability, rtol=1e-9, equal_nan=True)
     np.testing.assert_allclose(one.actuators, two.actuators, atol=1e-11, equal_nan=True)
+
+
+def test_three_axis_grid_follows_the_papers_inverse_kinematics_and_the_2d_map():
+    """An x-y-theta grid: actuators follow eq. (2) with the (M.5) signs; its theta slice is the x-y map."""
+    mech = preset("harada2011_3d4m")
+    xs, ys, ths = np.linspace(-0.03, 0.03, 4), np.linspace(0.05, 0.1, 5), np.radians([-30.0, -20.0, 0.0])
+    grid = workspace_grid(mech, ("x", "y", "rz"), (xs, ys, ths))
+    assert grid.shape == (4, 5, 3) and grid.reachable.all() and grid.q.shape == (4, 5, 3, mech.nq)
+    for i, j, k in np.ndindex(grid.shape):
+        c = paper.slider_positions((xs[i], ys[j], ths[k]), L, RT, (1, 2, 3, 4))
+        np.testing.assert_allclose(grid.actuators[i, j, k], c, atol=1e-11)
+    flat = workspace_map(mech, ("x", "y"), (xs, ys), (0.0, 0.08, ths[1]))
+    np.testing.assert_allclose(grid.manipulability[:, :, 1], flat.manipulability, rtol=1e-10)
+    assert grid.working_mode == flat.working_mode == working_mode(mech, mech.q_ref)
+    with pytest.raises(InvalidInput, match=r"give one array of values per varied coordinate; got axes"):
+        workspace_grid(mech, ("x",), (xs, ys))
 
 
 def test_nothing_reachable_gives_an_empty_map():
