@@ -7,6 +7,7 @@ import pytest
 from scipy.optimize import linprog, minimize
 
 from plm_pin.exceptions import AllocationInfeasible
+from plm_pin.kinematics import inverse_kinematics
 from plm_pin.statics import static_balance, static_forces
 from tests.conftest import preset
 
@@ -164,3 +165,25 @@ def test_every_rod_in_compression_is_infeasible_for_the_3d4m_internal_mode():
     assert signs["rod1"] == -signs["rod2"] and signs["rod3"] == -signs["rod4"]
     with pytest.raises(AllocationInfeasible, match="rod"):
         static_forces(mech, mech.q_ref, [0.0, 1.0, 0.0], gravity=False, min_compression=5.0)
+
+
+def test_preload_where_proxsuite_stalls_at_its_iteration_cap_is_the_closed_form_interval():
+    """3D4M, r_t = 0.05 m, pose (0, 0.04 m, 35 deg), f_x = 1 N: the 1-D preload problem solved exactly.
+
+    ProxSuite stops there at 1000 iterations with a dual residual of 1.07e-11 (tolerance 1e-11);
+    the answer is still the interval bound: with one internal force y, each hinged link's axial
+    force is a_l + b_l y (b_l from the internal mode), and the least |y| keeping all of them <= 0
+    is 0 clipped to the interval those inequalities leave.
+    """
+    mech = preset("harada2011_3d4m")
+    q = inverse_kinematics(mech, [0.0, 0.04, np.radians(35.0)]).q
+    sol = static_forces(mech, q, [1.0, 0.0, 0.0], limits=None, min_compression=0.0)
+    free = static_forces(mech, q, [1.0, 0.0, 0.0], limits=None)
+    (mode,) = free.internal_modes()
+    a = {k: v.axial for k, v in free.link_forces().items()}
+    b = {k: v.axial for k, v in mode.link_forces.items()}
+    lo = max((-a[k] / b[k] for k in a if b[k] < 0.0), default=-np.inf)
+    hi = min((-a[k] / b[k] for k in a if b[k] > 0.0), default=np.inf)
+    assert lo <= hi
+    assert sol.internal[0] == pytest.approx(np.clip(0.0, lo, hi), abs=1e-9)
+    assert max(v.axial for v in sol.link_forces().values()) <= 1e-9
