@@ -1,5 +1,8 @@
 """plm_pin: analysis of parallel link mechanisms (closed kinematic chains) on Pinocchio."""
 
+import importlib
+from typing import Any
+
 from .exceptions import (
     AllocationInfeasible,
     ClosureNotSatisfied,
@@ -8,8 +11,10 @@ from .exceptions import (
     InvalidInput,
     PlmError,
     PoseUnreachable,
+    SchedulerUnreachable,
     SimulationFailed,
     SingularConfiguration,
+    StoreMismatch,
     TrajectoryError,
 )
 from .loading import build_mechanism, load
@@ -26,10 +31,20 @@ __all__ = [
     "Mechanism",
     "PlmError",
     "PoseUnreachable",
+    "SchedulerUnreachable",
     "SimulationFailed",
     "SingularConfiguration",
+    "StoreMismatch",
     "TrajectoryError",
     "__version__",
     "build_mechanism",
     "load",
+    "sweep",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """``plm_pin.sweep``: the design-sweep package, imported on first use (callable as its ``sweep``)."""
+    if name == "sweep":
+        return importlib.import_module(".sweep", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -134,4 +135,32 @@ class SimulationFailed(PlmError):
         self.partial = partial
         self.time = time
         self.cause = cause
+        super().__init__(message)
+
+
+class StoreMismatch(InvalidInput):
+    """A sweep's checkpoint folder holds the results of another sweep (:mod:`plm_pin.sweep.store`).
+
+    Attributes:
+        path: the folder.
+        differences: the top-level fields of the two sweeps' specs that differ.
+    """
+
+    def __init__(self, message: str, path: Path, differences: Sequence[str]) -> None:
+        self.path = path
+        self.differences = tuple(differences)
+        super().__init__(message)
+
+
+class SchedulerUnreachable(PlmError):
+    """A Dask scheduler could not be reached, or has no workers, within the time allowed.
+
+    Attributes:
+        address: the scheduler address given.
+        timeout: how long it was waited for [s].
+    """
+
+    def __init__(self, message: str, address: str, timeout: float) -> None:
+        self.address = address
+        self.timeout = timeout
         super().__init__(message)

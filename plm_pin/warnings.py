@@ -13,3 +13,7 @@ class MissingMeshWarning(PlmWarning):
 
 class IllConditionedWarning(PlmWarning):
     """A computation is close to singular; its result may be inaccurate."""
+
+
+class CorruptChunkWarning(PlmWarning):
+    """A sweep checkpoint file cannot be read or is not that sweep's; its points are computed again."""

@@ -27,8 +27,10 @@ def test_every_name_in_every_all_resolves():
 
 
 def test_core_import_does_not_pull_optional_dependencies():
-    """`import plm_pin` loads neither meshcat, matplotlib, jinja2 nor dask."""
-    optional = "('meshcat', 'matplotlib', 'jinja2', 'dask')"
+    """`import plm_pin` loads no optional dependency: meshcat, matplotlib, jinja2, dask, xarray, ..."""
+    optional = (
+        "('meshcat', 'matplotlib', 'jinja2', 'dask', 'distributed', 'xarray', 'zarr', 'pyarrow', 'pandas')"
+    )
     code = f"import sys, plm_pin; print(sorted(m for m in {optional} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

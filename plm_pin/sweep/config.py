@@ -1,0 +1,157 @@
+"""The sweep configuration file (YAML) read by ``plm-pin sweep CONFIG.yaml``.
+
+.. code-block:: yaml
+
+    format: plm-pin-sweep/1          # optional; checked when given
+    mechanism: harada2011_3d4m       # a preset, or a builder "package.module:function"
+    base: {rod_lengths: [0.14, 0.14, 0.14, 0.14]}   # fixed builder parameters (optional)
+    parameters:                      # a grid (mapping) or samples (a list of mappings)
+      legs: [[1, 2, 4], [1, 2, 3, 4]]
+      half_plate: {linspace: [0.0175, 0.07, 4]}
+    poses:                           # the pose grid, task coordinates [m, rad]
+      y: {linspace: [0.02, 0.12, 6]}
+      rz: {linspace: [-80, 80, 161], unit: deg}
+    pose: [0.0, 0.08, 0.0]           # the other coordinates (optional: reference pose)
+    metrics: [orientation_range, min_manipulability]
+    options: {over: [rz]}            # metric options (optional)
+    chunk: 4096                      # poses per task (optional; --chunk overrides)
+
+A list of values is given as a list, or as ``{linspace: [start, stop, num]}`` or
+``{values: [...]}``, either with an optional ``unit`` among ``deg`` (converted to rad),
+``mm`` (to m), ``rad`` and ``m``. A builder named ``module:function`` is imported: a
+configuration file is trusted like code.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ..exceptions import InvalidInput
+from .spec import FORMAT, SweepSpec, make_spec
+
+KEYS = ("format", "mechanism", "base", "parameters", "poses", "pose", "metrics", "options", "chunk")
+"""Keys of a configuration file."""
+
+UNITS = {"deg": math.pi / 180.0, "rad": 1.0, "mm": 1e-3, "m": 1.0}
+"""Units a list of values may be given in, and their factor to SI."""
+
+
+def _values(where: str, raw: Any) -> Any:
+    """A list of values from its YAML form: a list, or ``{linspace: ...}`` / ``{values: ...}`` with a unit."""
+    if not isinstance(raw, Mapping):
+        return raw
+    unknown = [k for k in raw if k not in ("linspace", "values", "unit")]
+    if unknown or ("linspace" in raw) == ("values" in raw):
+        raise InvalidInput(
+            f"{where}: give a list, {{linspace: [start, stop, num]}} or {{values: [...]}} (with an optional "
+            f"unit among {list(UNITS)}), got {dict(raw)!r}"
+        )
+    unit = raw.get("unit", None)
+    if unit is not None and unit not in UNITS:
+        raise InvalidInput(f"{where}: unknown unit {unit!r}; units are {list(UNITS)}")
+    if "linspace" in raw:
+        spec = raw["linspace"]
+        if (
+            not isinstance(spec, list)
+            or len(spec) != 3
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in spec)
+            or not isinstance(spec[2], int)
+            or spec[2] < 1
+        ):
+            raise InvalidInput(f"{where}: linspace takes [start, stop, number of values >= 1], got {spec!r}")
+        values: Any = np.linspace(float(spec[0]), float(spec[1]), spec[2]).tolist()
+    else:
+        values = raw["values"]
+    if unit is None or UNITS[unit] == 1.0:
+        return values
+    try:
+        return (np.asarray(values, dtype=float) * UNITS[unit]).tolist()
+    except (TypeError, ValueError):
+        raise InvalidInput(f"{where}: values in {unit} must be numbers, got {values!r}") from None
+
+
+def _mechanism(raw: Any) -> Any:
+    if not isinstance(raw, str) or not raw:
+        raise InvalidInput(f"mechanism must be a preset name or a builder 'module:function', got {raw!r}")
+    if ":" not in raw:
+        return raw
+    module, _, name = raw.partition(":")
+    try:
+        builder = getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError) as exc:
+        raise InvalidInput(f"mechanism {raw!r}: cannot import the builder ({exc})") from None
+    return builder
+
+
+def spec_from_config(config: Any, source: str = "<config>") -> tuple[SweepSpec, int | None]:
+    """The sweep a configuration mapping describes, and its ``chunk`` (None when not given).
+
+    Raises:
+        InvalidInput: an unknown key, a malformed entry, or anything :func:`~plm_pin.sweep.make_spec` refuses;
+            the message starts with ``source``.
+    """
+    try:
+        if not isinstance(config, Mapping):
+            raise InvalidInput(
+                f"a sweep configuration is a mapping of {list(KEYS)}, got {type(config).__name__}"
+            )
+        unknown = [k for k in config if k not in KEYS]
+        if unknown:
+            raise InvalidInput(f"unknown key(s) {unknown}; keys are {list(KEYS)}")
+        if "format" in config and config["format"] != FORMAT:
+            raise InvalidInput(f"format {config['format']!r} is not {FORMAT!r}")
+        for required in ("mechanism", "poses", "metrics"):
+            if required not in config:
+                raise InvalidInput(f"missing key {required!r}")
+        raw_params = config.get("parameters")
+        if isinstance(raw_params, Mapping):
+            parameters: Any = {k: _values(f"parameters.{k}", v) for k, v in raw_params.items()}
+        else:
+            parameters = raw_params
+        poses = config["poses"]
+        if isinstance(poses, Mapping):
+            poses = {k: _values(f"poses.{k}", v) for k, v in poses.items()}
+        options = config.get("options") or {}
+        if not isinstance(options, Mapping):
+            raise InvalidInput(f"options must be a mapping, got {options!r}")
+        chunk = config.get("chunk")
+        if chunk is not None and (isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1):
+            raise InvalidInput(f"chunk must be a positive number of poses per task, got {chunk!r}")
+        spec = make_spec(
+            _mechanism(config["mechanism"]),
+            parameters,
+            poses,
+            config["metrics"],
+            base=config.get("base"),
+            pose=config.get("pose"),
+            options=options,
+        )
+    except InvalidInput as exc:
+        raise InvalidInput(f"{source}: {exc}") from None
+    return spec, chunk
+
+
+def load_config(path: str | Path) -> tuple[SweepSpec, int | None]:
+    """Read a sweep configuration file (see the module docstring).
+
+    Raises:
+        InvalidInput: the file is missing, is not YAML, or describes no valid sweep.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InvalidInput(f"{p}: cannot read the sweep configuration ({exc})") from None
+    try:
+        config = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InvalidInput(f"{p}: not valid YAML ({first})") from None
+    return spec_from_config(config, str(p))

@@ -1,0 +1,486 @@
+r"""The metrics a design sweep evaluates: a name, its variables with units, the library call behind it.
+
+Every metric is computed by existing plm_pin analyses at one parameter point (one built
+mechanism), over the sweep's pose grid; none re-derives a formula:
+
+- ``reachable``, ``manipulability``, ``condition_number`` and ``singularity`` come from
+  :func:`plm_pin.analysis.workspace_grid` (inverse-kinematics continuation over the whole
+  pose grid in the working mode of the reference configuration, batched
+  :func:`~plm_pin.analysis.manipulability` and :func:`~plm_pin.kinematics.classify` margins);
+- ``min_manipulability`` and ``reachable_fraction`` reduce those over the pose axes
+  ``over`` (default: all of them);
+- ``orientation_range`` runs :func:`plm_pin.analysis.orientation_range` along the rotation
+  axis for every combination of the other pose coordinates;
+- ``peak_force`` and ``preload`` call :func:`plm_pin.statics.static_forces` at every reached
+  pose, for every wrench of the set.
+
+Variables have the dimensions of the parameter space followed by pose axes: all of them
+(``"pose"``), those left after reducing over ``over`` (``"reduced"``), or all but the
+rotation axis (``"line"``). Unreached poses hold NaN (``-1`` in codes, False in flags).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..analysis import workspace_grid
+from ..analysis._continuation import guess_mode
+from ..analysis.orientation import ENDS, RANGE_XTOL, orientation_range
+from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
+from ..kinematics.forward import task_pose
+from ..kinematics.inverse import IK_TOL
+from ..kinematics.singularity import KINDS, SINGULARITY_TOL
+from ..statics import static_forces
+from ..statics.allocation import OBJECTIVES
+
+if TYPE_CHECKING:
+    from ..analysis import WorkspaceSlice
+    from ..mechanism import Mechanism
+    from .spec import SweepSpec
+
+SINGULARITY_CODES: tuple[str, ...] = ("regular", *KINDS)
+"""Meaning of the ``singularity`` codes 0, 1, 2, 3 (-1: unreachable)."""
+
+W_UNIT = "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
+"""Unit of the manipulability w (see :mod:`plm_pin.analysis.manipulability`)."""
+
+FORCE_UNIT = "N (N m for revolute actuators)"
+
+
+@dataclass(frozen=True)
+class Variable:
+    """One array of a sweep's result.
+
+    Attributes:
+        name: variable name in the result.
+        unit: its unit, in brackets-free SI notation (``"-"`` when dimensionless).
+        description: what it holds, in words.
+        axes: which pose axes it keeps: ``"pose"`` (all), ``"reduced"`` (all but the
+            option ``over``) or ``"line"`` (all but the option ``rotation_axis``).
+        dtype: ``"float64"``, ``"int8"`` (codes) or ``"bool"``.
+        flags: meanings of the codes 0, 1, ... (``-1``: unreachable), for ``int8`` codes.
+    """
+
+    name: str
+    unit: str
+    description: str
+    axes: str = "pose"
+    dtype: str = "float64"
+    flags: tuple[str, ...] = ()
+
+    @property
+    def fill(self) -> float | int | bool:
+        """The value of an unreached pose or a failed parameter point."""
+        return {"float64": math.nan, "int8": -1, "bool": False}[self.dtype]
+
+
+@dataclass(frozen=True)
+class Option:
+    """A setting of one or more metrics, with its default and check.
+
+    Attributes:
+        name: option name.
+        default: value when not given (None: computed from the sweep, see ``doc``).
+        doc: meaning and unit.
+        check: normalises a given value or raises :class:`~plm_pin.exceptions.InvalidInput`.
+    """
+
+    name: str
+    default: Any
+    doc: str
+    check: Callable[[str, Any], Any]
+
+
+def _positive(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < math.inf:
+        raise InvalidInput(f"option {name!r} must be a positive finite number, got {value!r}")
+    return float(value)
+
+
+def _finite(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise InvalidInput(f"option {name!r} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def _flag(name: str, value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise InvalidInput(f"option {name!r} must be true or false, got {value!r}")
+    return value
+
+
+def _names(name: str, value: Any) -> tuple[str, ...] | None:
+    if value is None:
+        return None
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, Sequence) or not value or not all(isinstance(v, str) for v in value):
+        raise InvalidInput(f"option {name!r} must be a non-empty list of names, got {value!r}")
+    return tuple(value)
+
+
+def _axis(name: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise InvalidInput(f"option {name!r} must be a task coordinate name, got {value!r}")
+    return value
+
+
+def _objective(name: str, value: Any) -> str:
+    if value not in OBJECTIVES:
+        raise InvalidInput(f"option {name!r} must be one of {list(OBJECTIVES)}, got {value!r}")
+    return str(value)
+
+
+def _wrenches(name: str, value: Any) -> tuple[tuple[float, ...], ...] | None:
+    if value is None:
+        return None
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        arr = np.empty(0)
+    if arr.ndim != 2 or arr.shape[0] == 0 or not np.all(np.isfinite(arr)):
+        raise InvalidInput(
+            f"option {name!r} must be a non-empty list of wrenches (each 6 values, or one per task "
+            f"coordinate), all finite, got {value!r}"
+        )
+    return tuple(tuple(float(v) for v in row) for row in arr)
+
+
+OPTIONS: dict[str, Option] = {
+    o.name: o
+    for o in (
+        Option("ik_tol", IK_TOL, "inverse-kinematics residual tolerance [m, rad]", _positive),
+        Option(
+            "singularity_tol", SINGULARITY_TOL, "margin at or below which a pose is singular [-]", _positive
+        ),
+        Option("over", None, "pose axes reduced over (default: all pose axes)", _names),
+        Option("rotation_axis", "rz", "the task coordinate turned by the orientation range", _axis),
+        Option("reference", 0.0, "angle the orientation range must hold [rad]", _finite),
+        Option("xtol", RANGE_XTOL, "tolerance on the located ends of the orientation range [rad]", _positive),
+        Option(
+            "wrenches",
+            None,
+            "loads applied to the task frame [N, N m]: 6 values or one per task coordinate each "
+            "(default: none, gravity alone)",
+            _wrenches,
+        ),
+        Option("gravity", True, "hold the weight of the bodies too", _flag),
+        Option(
+            "objective",
+            "max",
+            "allocation of peak_force: 'max' (least peak) or 'norm' (min norm)",
+            _objective,
+        ),
+        Option("compression", 0.0, "compression every preloaded link must carry [N]", _finite),
+        Option("preload_links", None, "hinged links held in compression (default: all of them)", _names),
+    )
+}
+"""Every option any metric takes, by name."""
+
+
+@dataclass(frozen=True)
+class Metric:
+    """A quantity a sweep can evaluate.
+
+    Attributes:
+        name: metric name, as given in ``metrics=[...]``.
+        summary: its definition in one line.
+        variables: the result variables it fills.
+        options: names of the :data:`OPTIONS` it uses (``ik_tol`` is used by all).
+        compute: the variables' values at one parameter point.
+    """
+
+    name: str
+    summary: str
+    variables: tuple[Variable, ...]
+    options: tuple[str, ...]
+    compute: Callable[[PointEvaluation], dict[str, np.ndarray]]
+
+
+class PointEvaluation:
+    """One parameter point: its mechanism and the analyses its metrics share, each computed once.
+
+    Attributes:
+        spec: the sweep.
+        mech: the mechanism built at this point.
+        mode: the reference configuration's working mode, kept by every analysis (None if
+            a leg is singular there: the continuation's seed decides).
+    """
+
+    def __init__(self, spec: SweepSpec, mech: Mechanism) -> None:
+        """Prepare the evaluation of ``spec``'s metrics on ``mech``."""
+        self.spec = spec
+        self.mech = mech
+        self.mode = guess_mode(mech, None)
+
+    def option(self, name: str) -> Any:
+        """A checked option of the sweep (defaults filled in)."""
+        return self.spec.options[name]
+
+    @functools.cached_property
+    def base(self) -> np.ndarray:
+        """Task pose giving the coordinates the pose grid does not vary [m, rad]."""
+        if self.spec.pose is not None:
+            return np.asarray(self.spec.pose, dtype=float)
+        return task_pose(self.mech, self.mech.q_ref)
+
+    @functools.cached_property
+    def grid(self) -> WorkspaceSlice:
+        """The metrics of :func:`~plm_pin.analysis.workspace_grid` over the whole pose grid."""
+        spec = self.spec
+        return workspace_grid(
+            self.mech, spec.axes, spec.values, self.base, mode=self.mode, tol=self.option("ik_tol")
+        )
+
+    def over(self) -> tuple[int, ...]:
+        """Positions of the pose axes a reduction runs over."""
+        return tuple(self.spec.axes.index(a) for a in self.spec.reduced_over)
+
+    def static_peak(self, solve: Callable[[np.ndarray, Any], float]) -> np.ndarray:
+        """``max over the wrench set of solve(q, wrench)`` at every reached pose (NaN elsewhere)."""
+        grid = self.grid
+        out = np.full(grid.shape, np.nan)
+        wrenches = self.option("wrenches") or (None,)
+        for index in zip(*np.nonzero(grid.reachable), strict=True):
+            q = grid.q[index]
+            out[index] = max(solve(q, w) for w in wrenches)
+        return out
+
+
+def _grid_values(name: str) -> Callable[[PointEvaluation], dict[str, np.ndarray]]:
+    return lambda ev: {name: np.asarray(getattr(ev.grid, name))}
+
+
+def _singularity(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    grid = ev.grid
+    margins = np.stack([grid.constraint_margin, grid.inverse_margin, grid.direct_margin])  # KINDS order
+    smallest = np.min(margins, axis=0)
+    code = np.where(smallest <= ev.option("singularity_tol"), 1 + np.argmin(margins, axis=0), 0)
+    code = np.where(grid.reachable, code, -1).astype(np.int8)
+    return {"singularity": code, "singularity_margin": np.where(grid.reachable, smallest, np.nan)}
+
+
+def _min_manipulability(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    w = np.asarray(ev.grid.manipulability)  # NaN where unreached: fmin ignores it
+    return {"min_manipulability": np.asarray(np.fmin.reduce(w, axis=ev.over()))}
+
+
+def _reachable_fraction(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    return {"reachable_fraction": np.asarray(np.mean(ev.grid.reachable, axis=ev.over()))}
+
+
+def _orientation_range(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    spec = ev.spec
+    axis = ev.option("rotation_axis")
+    k = spec.axes.index(axis)
+    others = [a for a in spec.axes if a != axis]
+    shape = tuple(len(spec.values[spec.axes.index(a)]) for a in others)
+    dofs = ev.mech.sidecar.task.dofs if ev.mech.sidecar.task is not None else ()
+    out = {
+        "orientation_lower": np.full(shape, np.nan),
+        "orientation_upper": np.full(shape, np.nan),
+        "orientation_halfwidth": np.full(shape, np.nan),
+        "orientation_lower_end": np.full(shape, -1, dtype=np.int8),
+        "orientation_upper_end": np.full(shape, -1, dtype=np.int8),
+    }
+    reference = ev.option("reference")
+    for index in np.ndindex(*shape):
+        pose = ev.base.copy()
+        for a, i in zip(others, index, strict=True):
+            pose[dofs.index(a)] = spec.values[spec.axes.index(a)][i]
+        r = orientation_range(
+            ev.mech,
+            axis,
+            spec.values[k],
+            pose,
+            reference=reference,
+            xtol=ev.option("xtol"),
+            tol=ev.option("singularity_tol"),
+            ik_tol=ev.option("ik_tol"),
+        )
+        out["orientation_lower"][index] = r.lower
+        out["orientation_upper"][index] = r.upper
+        out["orientation_halfwidth"][index] = min(reference - r.lower, r.upper - reference)
+        out["orientation_lower_end"][index] = ENDS.index(r.lower_end)
+        out["orientation_upper_end"][index] = ENDS.index(r.upper_end)
+    return out
+
+
+def _peak_force(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    def peak(q: np.ndarray, wrench: Any) -> float:
+        try:
+            options = {"gravity": ev.option("gravity"), "objective": ev.option("objective")}
+            sol = static_forces(ev.mech, q, wrench, limits=None, **options)
+        except SingularConfiguration:
+            return math.inf
+        return float(np.max(np.abs(sol.f_c)))
+
+    return {"peak_force": ev.static_peak(peak)}
+
+
+def _preload(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    c = ev.option("compression")
+    links = ev.option("preload_links")
+    conditions: dict[str, Any] = (
+        {"min_compression": c} if links is None else {"link_limits": {n: (-math.inf, -c) for n in links}}
+    )
+
+    def needed(q: np.ndarray, wrench: Any) -> float:
+        try:
+            sol = static_forces(ev.mech, q, wrench, gravity=ev.option("gravity"), limits=None, **conditions)
+        except (SingularConfiguration, AllocationInfeasible):
+            return math.inf
+        return float(np.linalg.norm(sol.internal))
+
+    return {"preload": ev.static_peak(needed)}
+
+
+_W = "Yoshikawa manipulability w = sqrt(det(J_ce^T J_ce)) (Harada 2011 eq. (13)); 0 at a direct singularity"
+_ENDS_FLAGS = ENDS
+
+METRICS: dict[str, Metric] = {
+    m.name: m
+    for m in (
+        Metric(
+            "reachable",
+            "whether the pose is reached in the reference working mode by continuation over the grid",
+            (Variable("reachable", "-", "pose reached in the working mode", dtype="bool"),),
+            (),
+            _grid_values("reachable"),
+        ),
+        Metric(
+            "manipulability",
+            _W,
+            (Variable("manipulability", W_UNIT, _W),),
+            (),
+            _grid_values("manipulability"),
+        ),
+        Metric(
+            "condition_number",
+            "sigma_max / sigma_min of J_ce; inf at a singularity",
+            (Variable("condition_number", "-", "condition number of J_ce"),),
+            (),
+            _grid_values("condition_number"),
+        ),
+        Metric(
+            "singularity",
+            "singularity type (the kind of the smallest margin when it is at most singularity_tol) "
+            "and the smallest of the constraint, inverse and direct margins",
+            (
+                Variable(
+                    "singularity",
+                    "-",
+                    "0 regular, 1 constraint, 2 inverse (type 1), 3 direct (type 2); -1 unreachable",
+                    dtype="int8",
+                    flags=SINGULARITY_CODES,
+                ),
+                Variable(
+                    "singularity_margin", "-", "smallest normalised singularity margin sigma_min/sigma_max"
+                ),
+            ),
+            ("singularity_tol",),
+            _singularity,
+        ),
+        Metric(
+            "min_manipulability",
+            "smallest w over the reached poses of the axes 'over' (NaN when none is reached)",
+            (Variable("min_manipulability", W_UNIT, "smallest manipulability w", axes="reduced"),),
+            ("over",),
+            _min_manipulability,
+        ),
+        Metric(
+            "reachable_fraction",
+            "fraction of the poses of the axes 'over' (a box of the workspace) reached in the working mode",
+            (Variable("reachable_fraction", "-", "fraction of the pose box reached", axes="reduced"),),
+            ("over",),
+            _reachable_fraction,
+        ),
+        Metric(
+            "orientation_range",
+            "largest interval of the rotation axis holding the reference angle that stays reachable and "
+            "non-singular (plm_pin.analysis.orientation_range), ends located to xtol",
+            (
+                Variable("orientation_lower", "rad", "lower end of the singularity-free range", axes="line"),
+                Variable("orientation_upper", "rad", "upper end of the singularity-free range", axes="line"),
+                Variable(
+                    "orientation_halfwidth",
+                    "rad",
+                    "largest symmetric turn +/- d about the reference within the range",
+                    axes="line",
+                ),
+                Variable(
+                    "orientation_lower_end",
+                    "-",
+                    "what ends the range below: " + ", ".join(f"{i} {e}" for i, e in enumerate(ENDS)),
+                    axes="line",
+                    dtype="int8",
+                    flags=_ENDS_FLAGS,
+                ),
+                Variable(
+                    "orientation_upper_end",
+                    "-",
+                    "what ends the range above (codes as orientation_lower_end)",
+                    axes="line",
+                    dtype="int8",
+                    flags=_ENDS_FLAGS,
+                ),
+            ),
+            ("rotation_axis", "reference", "xtol", "singularity_tol"),
+            _orientation_range,
+        ),
+        Metric(
+            "peak_force",
+            "largest |f_c| over the actuators and the wrench set, static allocation by 'objective' "
+            "without limits (plm_pin.statics.static_forces); inf where a load cannot be held",
+            (Variable("peak_force", FORCE_UNIT, "static peak actuator force over the wrench set"),),
+            ("wrenches", "gravity", "objective"),
+            _peak_force,
+        ),
+        Metric(
+            "preload",
+            "norm of the internal actuator forces the minimum-norm allocation adds so that the preloaded "
+            "links carry at least 'compression', largest over the wrench set; 0 when the load alone does, "
+            "inf when no internal force can",
+            (Variable("preload", "N", "internal preload needed over the wrench set"),),
+            ("wrenches", "gravity", "compression", "preload_links"),
+            _preload,
+        ),
+    )
+}
+"""Every metric, by name."""
+
+
+def metric_options(metrics: Sequence[str]) -> tuple[str, ...]:
+    """Names of the options the given metrics use, ``ik_tol`` first."""
+    names = ["ik_tol"]
+    for m in metrics:
+        names.extend(o for o in METRICS[m].options if o not in names)
+    return tuple(names)
+
+
+def check_options(metrics: Sequence[str], given: Mapping[str, Any]) -> dict[str, Any]:
+    """The options of ``metrics``, checked, with the defaults filled in (``over`` left None: all axes).
+
+    Raises:
+        InvalidInput: an unknown option, one no chosen metric uses, or a bad value.
+    """
+    used = metric_options(metrics)
+    for name in given:
+        if name not in OPTIONS:
+            raise InvalidInput(f"unknown option {name!r}; options are {sorted(OPTIONS)}")
+        if name not in used:
+            users = [m for m, metric in METRICS.items() if name in metric.options]
+            raise InvalidInput(
+                f"option {name!r} is used by the metrics {users}, none of which is asked for; "
+                f"the options of {list(metrics)} are {list(used)}"
+            )
+    return {
+        name: OPTIONS[name].check(name, given[name]) if name in given else OPTIONS[name].default
+        for name in used
+    }

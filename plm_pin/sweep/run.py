@@ -1,0 +1,169 @@
+"""``plm_pin.sweep(...)``: check a design sweep, resume it from its checkpoints, run the rest, label it."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..exceptions import InvalidInput
+from ..models.registry import Builder
+from ._deps import require
+from .execution import DEFAULT_CHUNK, ChunkValues, check_execution, plan_chunks, points_per_chunk, run_chunks
+from .result import ChunkFailure, PointFailure, SweepResult, build_dataset
+from .spec import SweepSpec, make_spec
+from .store import SweepStore
+
+Progress = Callable[[int, int], None]
+"""Called with (parameter points done, parameter points in all) at the start and after each chunk."""
+
+
+def _check_storable(spec: SweepSpec) -> None:
+    if "<" in spec.label:
+        raise InvalidInput(
+            f"a checkpointed sweep needs a builder importable by name (module:function); {spec.label} is a "
+            "lambda or a local function, whose name does not identify it"
+        )
+
+
+def run_spec(
+    spec: SweepSpec,
+    *,
+    store: str | Path | None = None,
+    scheduler: Any = None,
+    workers: int | None = None,
+    chunk: int = DEFAULT_CHUNK,
+    progress: Progress | None = None,
+) -> SweepResult:
+    """Run a checked sweep (see :func:`sweep` for the arguments)."""
+    start = time.perf_counter()
+    require("xarray")
+    per_chunk = points_per_chunk(spec, chunk)
+    check_execution(scheduler, workers)
+    checkpoints = None
+    if store is not None:
+        _check_storable(spec)
+        require("pyarrow")
+        checkpoints = SweepStore(store, spec)
+    variables = spec.variables()
+    n = spec.n_points
+    arrays = {
+        v.name: np.full((n, *spec.variable_shape(v)), v.fill, dtype=np.dtype(v.dtype)) for v in variables
+    }
+    done = np.zeros(n, dtype=bool)
+    failed = np.zeros(n, dtype=bool)
+
+    def fill(values: ChunkValues) -> None:
+        for name, arr in values.values.items():
+            arrays[name][values.points] = arr
+
+    loaded = 0
+    for finished in checkpoints.load() if checkpoints is not None else []:
+        fresh = ~done[finished.points]
+        fill(ChunkValues(finished.points[fresh], {k: v[fresh] for k, v in finished.values.items()}, {}))
+        done[finished.points] = True
+        loaded += int(fresh.sum())
+    finished_points = loaded
+    if progress is not None:
+        progress(finished_points, n)
+    computed: list[tuple[int, int]] = []
+    failures: list[ChunkFailure] = []
+    chunks = plan_chunks(done, per_chunk)
+    local = checkpoints.root if checkpoints is not None else None
+    for part, outcome in run_chunks(
+        spec, chunks, scheduler=scheduler, workers=workers, local_directory=local
+    ):
+        if isinstance(outcome, BaseException):
+            message = f"{type(outcome).__name__}: {outcome}"
+            points = tuple(PointFailure(i, spec.parameters.point(i), message) for i in part.points)
+            failures.append(ChunkFailure(part.first, part.last, points))
+            failed[list(part.points)] = True
+        else:
+            fill(outcome)
+            if outcome.errors:
+                points = tuple(
+                    PointFailure(i, spec.parameters.point(i), m) for i, m in outcome.errors.items()
+                )
+                failures.append(ChunkFailure(part.first, part.last, points))
+                failed[list(outcome.errors)] = True
+            else:
+                if checkpoints is not None:
+                    checkpoints.write(outcome)
+                computed.append((part.first, part.last))
+        finished_points += len(part.points)
+        if progress is not None:
+            progress(finished_points, n)
+    dataset = build_dataset(spec, arrays, failed)
+    return SweepResult(
+        dataset,
+        spec,
+        spec.key(),
+        tuple(computed),
+        loaded,
+        tuple(failures),
+        None if checkpoints is None else checkpoints.root,
+        time.perf_counter() - start,
+    )
+
+
+def sweep(
+    mechanism: str | Builder,
+    parameters: Mapping[str, Sequence[Any]] | Sequence[Mapping[str, Any]] | None = None,
+    poses: Mapping[str, Sequence[float]] | None = None,
+    metrics: Sequence[str] = ("manipulability",),
+    *,
+    base: Mapping[str, Any] | None = None,
+    pose: Sequence[float] | None = None,
+    options: Mapping[str, Any] | None = None,
+    store: str | Path | None = None,
+    scheduler: Any = None,
+    workers: int | None = None,
+    chunk: int = DEFAULT_CHUNK,
+    progress: Progress | None = None,
+) -> SweepResult:
+    """Evaluate metrics over a grid of builder parameters times a grid of task poses.
+
+    Every argument is checked before any work starts. At each parameter point the
+    mechanism is built (:func:`plm_pin.build_mechanism`) and the metrics of
+    :data:`plm_pin.sweep.METRICS` are evaluated over the pose grid in the working mode of
+    its reference configuration. Results do not depend on ``chunk``, ``workers`` or
+    ``scheduler``: each parameter point is computed whole, by the same calls, wherever it runs.
+
+    Args:
+        mechanism: a preset name (its builder, with the preset's parameters) or a builder
+            callable returning ``(robot, sidecar)`` (see :mod:`plm_pin.models`).
+        parameters: the builder parameters varied: a mapping ``name -> values`` (their
+            grid, row-major in the order given) or a list of mappings (samples, dimension
+            ``sample``). A value is a number, a name or a list of them (e.g. ``rod_lengths``).
+        poses: the task poses of every point: a mapping ``coordinate -> values`` [m or rad]
+            (their grid, e.g. ``{"y": ..., "rz": ...}``).
+        metrics: names among :data:`~plm_pin.sweep.METRICS`.
+        base: builder parameters fixed for the whole sweep (over the preset's).
+        pose: task pose giving the coordinates ``poses`` does not vary [m, rad] (default:
+            each variant's reference pose).
+        options: metric options (:data:`~plm_pin.sweep.OPTIONS`), e.g. ``{"over": ["rz"]}``.
+        store: checkpoint folder: finished chunks are saved there and a re-run with the
+            same arguments computes only the missing ones; another sweep's folder is refused.
+        scheduler: None (local: in this process when small, else a local cluster of
+            ``workers`` processes), a Dask scheduler address ``tcp://host:8786``, or a
+            :class:`distributed.Client`.
+        workers: processes of the local cluster (default: all CPUs).
+        chunk: about how many poses each task evaluates (whole parameter points).
+        progress: called with (points done, points in all) as chunks finish.
+
+    Returns:
+        The result: ``result.dataset`` is an ``xarray.Dataset`` with units; failed chunks
+        are in ``result.failures`` (their points NaN, flagged ``failed``), the rest complete.
+
+    Raises:
+        InvalidInput: an unknown preset, parameter, metric, option or task coordinate (the
+            message lists the valid ones), an empty grid or a non-finite value.
+        StoreMismatch: ``store`` holds another sweep.
+        SchedulerUnreachable: the scheduler does not answer, or has no worker, in time.
+        ImportError: the ``sweep`` extra is not installed (``pip install 'plm-pin[sweep]'``).
+    """
+    spec = make_spec(mechanism, parameters, poses, metrics, base=base, pose=pose, options=options)
+    return run_spec(spec, store=store, scheduler=scheduler, workers=workers, chunk=chunk, progress=progress)

@@ -1,0 +1,392 @@
+"""What a design sweep computes, checked in full before any work starts: :class:`SweepSpec`.
+
+A sweep varies the parameters of a mechanism builder (a grid, or a list of samples) and,
+at every parameter point, evaluates metrics over a grid of task poses. The spec holds
+everything that decides the numbers, normalised (SI units, radians, floats as given), so
+that its :meth:`SweepSpec.key` identifies the results: a checkpoint store refuses another
+sweep's spec (:mod:`plm_pin.sweep.store`). How the work is split and where it runs is not
+part of it (results do not depend on it).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .. import __version__
+from ..description.sidecar import TASK_DOFS
+from ..exceptions import InvalidInput, PlmError
+from ..loading import build_mechanism, resolve_builder
+from ..models.registry import Builder, builder_parameters
+from .metrics import METRICS, Variable, check_options
+
+Scalar = float | int | str
+Value = Scalar | tuple[Scalar, ...]
+"""A builder-parameter value: a number, a name, or a tuple of them (e.g. ``rod_lengths``)."""
+
+RESERVED = ("sample", "failed")
+"""Names of the result that no parameter may take."""
+
+FORMAT = "plm-pin-sweep/1"
+"""Format of a sweep's canonical description (and of its checkpoint manifest)."""
+
+
+def _scalar(where: str, v: Any) -> Scalar:
+    if isinstance(v, (bool, np.bool_)):
+        raise InvalidInput(f"{where}: {v!r} is a boolean; give a number, a name or a list of them")
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        if not math.isfinite(v):
+            raise InvalidInput(f"{where} holds a non-finite value {float(v)!r}")
+        return float(v)
+    if isinstance(v, str):
+        return v
+    raise InvalidInput(f"{where}: {v!r} is not a number, a name or a list of them")
+
+
+def normalise_value(where: str, v: Any) -> Value:
+    """A builder-parameter value checked and normalised: numbers finite, lists made tuples.
+
+    Raises:
+        InvalidInput: a non-finite number, an empty list, or another type.
+    """
+    if isinstance(v, (list, tuple, np.ndarray)):
+        items = list(np.asarray(v).tolist()) if isinstance(v, np.ndarray) else list(v)
+        if not items:
+            raise InvalidInput(f"{where}: an empty list is not a parameter value")
+        return tuple(_scalar(where, item) for item in items)
+    return _scalar(where, v)
+
+
+def value_label(v: Value) -> str:
+    """Text naming a value in a result's coordinate (tuples as ``(0.24, 0.17)``)."""
+    if isinstance(v, tuple):
+        return "(" + ", ".join(str(x) for x in v) + ")"
+    return str(v)
+
+
+@dataclass(frozen=True)
+class ParameterSpace:
+    """The builder parameters a sweep varies: a grid (Cartesian product) or a list of samples.
+
+    Attributes:
+        names: the varied parameters, in the order given.
+        values: grid: one tuple of values per name; samples: one tuple per sample, aligned with ``names``.
+        samples: whether the space is a list of samples (dimension ``sample``) rather than a grid.
+    """
+
+    names: tuple[str, ...]
+    values: tuple[tuple[Value, ...], ...]
+    samples: bool = False
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Points along each dimension (``()`` when nothing is varied: one point)."""
+        return (len(self.values),) if self.samples else tuple(len(v) for v in self.values)
+
+    @property
+    def dims(self) -> tuple[str, ...]:
+        """Dimension names of the result: the parameters of a grid, or ``("sample",)``."""
+        return ("sample",) if self.samples else self.names
+
+    @property
+    def size(self) -> int:
+        """Number of parameter points."""
+        return math.prod(self.shape)
+
+    def point(self, index: int) -> dict[str, Value]:
+        """The parameters of the point with flat (row-major) ``index``."""
+        if self.samples:
+            return dict(zip(self.names, self.values[index], strict=True))
+        at = np.unravel_index(index, self.shape) if self.shape else ()
+        return {name: self.values[k][int(i)] for k, (name, i) in enumerate(zip(self.names, at, strict=True))}
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON (tuples as lists)."""
+
+        def plain(v: Value) -> object:
+            return list(v) if isinstance(v, tuple) else v
+
+        if self.samples:
+            return {
+                "samples": [{n: plain(v) for n, v in zip(self.names, s, strict=True)} for s in self.values]
+            }
+        return {"grid": {n: [plain(v) for v in vs] for n, vs in zip(self.names, self.values, strict=True)}}
+
+
+def _parameter_space(parameters: Any, valid: tuple[str, ...], label: str) -> ParameterSpace:
+    def check_name(name: Any) -> str:
+        if name not in valid:
+            raise InvalidInput(f"unknown parameter {name!r} of {label}; its parameters are {list(valid)}")
+        return str(name)
+
+    if parameters is None:
+        return ParameterSpace((), ())
+    if isinstance(parameters, Mapping):
+        names = tuple(check_name(n) for n in parameters)
+        values = []
+        for name in names:
+            raw = parameters[name]
+            if isinstance(raw, (str, bytes)) or not isinstance(raw, (Sequence, np.ndarray)):
+                raise InvalidInput(f"parameter {name!r}: give a list of values, got {raw!r}")
+            if len(raw) == 0:
+                raise InvalidInput(f"parameter {name!r} has no values: an empty grid")
+            values.append(tuple(normalise_value(f"parameter {name!r}", v) for v in raw))
+        return ParameterSpace(names, tuple(values))
+    if isinstance(parameters, Sequence) and not isinstance(parameters, (str, bytes)):
+        if not parameters:
+            raise InvalidInput("parameters: the list of samples is empty")
+        if not all(isinstance(s, Mapping) for s in parameters):
+            raise InvalidInput(
+                "parameters: give a mapping name -> values (a grid) or a list of mappings (samples)"
+            )
+        names = tuple(check_name(n) for n in parameters[0])
+        rows = []
+        for i, sample in enumerate(parameters):
+            if tuple(sample) != names:
+                raise InvalidInput(
+                    f"parameters: sample {i} sets {list(sample)}; every sample must set {list(names)}, "
+                    "in order"
+                )
+            rows.append(tuple(normalise_value(f"parameter {n!r} of sample {i}", sample[n]) for n in names))
+        return ParameterSpace(names, tuple(rows), samples=True)
+    raise InvalidInput(
+        "parameters must be a mapping name -> values (a grid) or a list of mappings (samples), "
+        f"got {parameters!r}"
+    )
+
+
+def _pose_axes(poses: Any) -> tuple[tuple[str, ...], tuple[np.ndarray, ...]]:
+    if not isinstance(poses, Mapping) or not poses:
+        raise InvalidInput(
+            f"poses must map task coordinates among {list(TASK_DOFS)} to their values, got {poses!r}"
+        )
+    axes, values = [], []
+    for axis, raw in poses.items():
+        if axis not in TASK_DOFS:
+            raise InvalidInput(f"poses: unknown task coordinate {axis!r}; coordinates are {list(TASK_DOFS)}")
+        try:
+            arr = np.array(raw, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidInput(f"poses: values of {axis!r} must be numbers, got {raw!r}") from None
+        if arr.ndim != 1 or arr.size == 0:
+            raise InvalidInput(
+                f"poses: values of {axis!r} must be a non-empty 1-D list, got shape {arr.shape}"
+            )
+        if not np.all(np.isfinite(arr)):
+            raise InvalidInput(
+                f"poses: values of {axis!r} hold non-finite entries {arr[~np.isfinite(arr)].tolist()}"
+            )
+        arr.setflags(write=False)
+        axes.append(str(axis))
+        values.append(arr)
+    return tuple(axes), tuple(values)
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A design sweep, checked and normalised (build one with :func:`make_spec`).
+
+    Attributes:
+        mechanism: the preset name or the builder callable.
+        label: the preset name, or the builder's ``module:qualname``.
+        base: fixed builder parameters given on top of the preset's (SI units).
+        parameters: the varied builder parameters.
+        axes: the pose grid's task coordinates, in order.
+        values: their values [m or rad], one read-only array per axis.
+        pose: task pose giving the other coordinates [m, rad], or None (each variant's
+            reference pose).
+        metrics: the metrics asked for, in order.
+        options: every option of those metrics, defaults filled in.
+    """
+
+    mechanism: str | Builder
+    label: str
+    base: Mapping[str, Value]
+    parameters: ParameterSpace
+    axes: tuple[str, ...]
+    values: tuple[np.ndarray, ...]
+    pose: tuple[float, ...] | None
+    metrics: tuple[str, ...]
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def pose_shape(self) -> tuple[int, ...]:
+        """Points along each pose axis."""
+        return tuple(len(v) for v in self.values)
+
+    @property
+    def n_poses(self) -> int:
+        """Poses per parameter point."""
+        return math.prod(self.pose_shape)
+
+    @property
+    def n_points(self) -> int:
+        """Parameter points."""
+        return self.parameters.size
+
+    @property
+    def reduced_over(self) -> tuple[str, ...]:
+        """Pose axes the reduced metrics run over (the option ``over``, default all)."""
+        over = self.options.get("over")
+        return self.axes if over is None else tuple(over)
+
+    def variables(self) -> tuple[Variable, ...]:
+        """The result variables of the metrics, in order."""
+        return tuple(v for m in self.metrics for v in METRICS[m].variables)
+
+    def variable_axes(self, variable: Variable) -> tuple[str, ...]:
+        """The pose axes a variable keeps."""
+        if variable.axes == "reduced":
+            return tuple(a for a in self.axes if a not in self.reduced_over)
+        if variable.axes == "line":
+            return tuple(a for a in self.axes if a != self.options["rotation_axis"])
+        return self.axes
+
+    def variable_shape(self, variable: Variable) -> tuple[int, ...]:
+        """Shape of a variable at one parameter point."""
+        return tuple(len(self.values[self.axes.index(a)]) for a in self.variable_axes(variable))
+
+    def point_parameters(self, index: int) -> dict[str, Value]:
+        """Builder parameters of a parameter point: ``base`` and its values (preset defaults aside)."""
+        return {**self.base, **self.parameters.point(index)}
+
+    def build(self, index: int) -> Any:
+        """The mechanism at a parameter point (:func:`plm_pin.build_mechanism`)."""
+        stem = self.label.rsplit(":", 1)[-1]
+        return build_mechanism(self.mechanism, self.point_parameters(index), name=f"{stem}_p{index}")
+
+    def to_dict(self) -> dict[str, object]:
+        """Canonical plain data: everything that decides the results, nothing about how they are computed."""
+        options = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.options.items()}
+        if isinstance(options.get("wrenches"), list):
+            options["wrenches"] = [list(w) for w in options["wrenches"]]
+        return {
+            "format": FORMAT,
+            "plm_pin": __version__,
+            "mechanism": self.label,
+            "base": {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.base.items()},
+            "parameters": self.parameters.to_dict(),
+            "poses": {a: v.tolist() for a, v in zip(self.axes, self.values, strict=True)},
+            "pose": None if self.pose is None else list(self.pose),
+            "metrics": list(self.metrics),
+            "options": options,
+        }
+
+    def key(self) -> str:
+        """SHA-256 of :meth:`to_dict` as canonical JSON: equal keys, equal results."""
+        text = json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"), allow_nan=False)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def make_spec(
+    mechanism: str | Builder,
+    parameters: Mapping[str, Sequence[Any]] | Sequence[Mapping[str, Any]] | None = None,
+    poses: Mapping[str, Sequence[float]] | None = None,
+    metrics: Sequence[str] = ("manipulability",),
+    *,
+    base: Mapping[str, Any] | None = None,
+    pose: Sequence[float] | None = None,
+    options: Mapping[str, Any] | None = None,
+) -> SweepSpec:
+    """Check a sweep's arguments and normalise them (see :func:`plm_pin.sweep.sweep` for their meaning).
+
+    The mechanism at the first parameter point is built to check the pose axes, the fixed
+    pose and the wrenches against its task; if it cannot be built, that point is reported
+    by the sweep like any other failure.
+
+    Raises:
+        InvalidInput: an unknown preset, parameter, metric, option or task coordinate (the
+            message lists the valid ones), an empty grid, a non-finite value, or a value of
+            the wrong shape.
+    """
+    builder, _, label = resolve_builder(mechanism)
+    valid = builder_parameters(builder)
+    fixed = {}
+    for name, v in (base or {}).items():
+        if name not in valid:
+            raise InvalidInput(f"unknown parameter {name!r} of {label}; its parameters are {list(valid)}")
+        fixed[str(name)] = normalise_value(f"base parameter {name!r}", v)
+    space = _parameter_space(parameters, valid, label)
+    both = [n for n in space.names if n in fixed]
+    if both:
+        raise InvalidInput(f"parameters {both} are both varied and fixed (base); give each once")
+    if isinstance(metrics, str) or not metrics:
+        raise InvalidInput(f"metrics must be a non-empty list among {list(METRICS)}, got {metrics!r}")
+    for m in metrics:
+        if m not in METRICS:
+            raise InvalidInput(f"unknown metric {m!r}; metrics are {list(METRICS)}")
+    if len(set(metrics)) != len(metrics):
+        raise InvalidInput(f"metrics are repeated: {list(metrics)}")
+    axes, values = _pose_axes(poses)
+    taken = {*axes, *(v.name for m in metrics for v in METRICS[m].variables), *RESERVED}
+    clash = [n for n in space.names if n in taken]
+    if clash:
+        raise InvalidInput(
+            f"parameters {clash} share their names with pose axes or result variables {sorted(taken)}; "
+            "they would be ambiguous dimensions of the result"
+        )
+    fixed_pose = None
+    if pose is not None:
+        arr = np.asarray(pose, dtype=float)
+        if arr.ndim != 1 or not np.all(np.isfinite(arr)):
+            raise InvalidInput(f"pose must be a 1-D list of finite task coordinates [m, rad], got {pose!r}")
+        fixed_pose = tuple(float(v) for v in arr)
+    checked = check_options(tuple(metrics), dict(options or {}))
+    spec = SweepSpec(mechanism, label, fixed, space, axes, values, fixed_pose, tuple(metrics), checked)
+    _check_axes_options(spec)
+    _check_against_first_point(spec)
+    return spec
+
+
+def _check_axes_options(spec: SweepSpec) -> None:
+    options = spec.options
+    if "rotation_axis" in options:
+        axis = options["rotation_axis"]
+        if axis not in spec.axes:
+            raise InvalidInput(
+                f"the orientation range turns {axis!r} (option rotation_axis), which the poses do not vary; "
+                f"pose axes are {list(spec.axes)}"
+            )
+        ts = spec.values[spec.axes.index(axis)]
+        if ts.size < 2 or np.any(np.diff(ts) <= 0.0):
+            raise InvalidInput(
+                f"poses: values of the rotation axis {axis!r} must increase, at least 2 of them"
+            )
+    over = options.get("over")
+    if over is not None:
+        unknown = [a for a in over if a not in spec.axes]
+        if unknown or len(set(over)) != len(over):
+            raise InvalidInput(
+                f"option 'over' must name distinct pose axes among {list(spec.axes)}, got {list(over)}"
+            )
+
+
+def _check_against_first_point(spec: SweepSpec) -> None:
+    try:
+        mech = spec.build(0)
+    except PlmError:
+        return  # reported as that point's failure
+    except (TypeError, ValueError):
+        return
+    dofs = mech.sidecar.task.dofs if mech.sidecar.task is not None else ()
+    unknown = [a for a in spec.axes if a not in dofs]
+    if unknown:
+        raise InvalidInput(
+            f"poses: {mech.name} has no task coordinate {unknown}; its task coordinates are {list(dofs)}"
+        )
+    if spec.pose is not None and len(spec.pose) != len(dofs):
+        raise InvalidInput(f"pose must hold {len(dofs)} task coordinates {list(dofs)}, got {list(spec.pose)}")
+    for w in spec.options.get("wrenches") or ():
+        if len(w) not in (6, len(dofs)):
+            raise InvalidInput(
+                "option 'wrenches': each wrench holds 6 values or one per task coordinate "
+                f"{list(dofs)}, got {list(w)}"
+            )

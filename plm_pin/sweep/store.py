@@ -1,0 +1,138 @@
+"""The checkpoint store of a sweep: one Parquet file per finished chunk, and a manifest naming the sweep.
+
+Layout of a store folder::
+
+    manifest.json                          the sweep's canonical spec and its key (SHA-256)
+    chunks/points-0000000-0000039.parquet  one row per parameter point of a finished chunk
+
+Every file is written to a temporary name in its folder, then renamed over its final name
+(``os.replace``, atomic on POSIX and Windows), so an interrupted sweep leaves finished
+chunks whole and at most a temporary file, removed by the next run. A folder whose
+manifest names another sweep is refused, never mixed with it. Each Parquet file carries
+the key too, and a file whose key or columns do not match is ignored (with a warning) and
+its points computed again.
+
+In a chunk file, column ``point`` holds the flat parameter index and every result variable
+is a fixed-size list column (its values at that point, flattened row-major) of float64,
+int8 or bool: floats are stored bit for bit.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._io import atomic_path, atomic_write_text
+from ..exceptions import InvalidInput, StoreMismatch
+from ..warnings import CorruptChunkWarning
+from ._deps import require
+from .spec import FORMAT
+
+if TYPE_CHECKING:
+    from .execution import ChunkValues
+    from .spec import SweepSpec
+
+MANIFEST = "manifest.json"
+CHUNKS = "chunks"
+KEY_METADATA = b"plm_pin_sweep_key"
+
+
+def chunk_name(first: int, last: int) -> str:
+    """File name of the chunk holding the parameter points ``first`` .. ``last``."""
+    return f"points-{first:07d}-{last:07d}.parquet"
+
+
+class SweepStore:
+    """Checkpoints of one sweep in a folder (created if needed).
+
+    Attributes:
+        root: the folder.
+        key: the sweep's key.
+    """
+
+    def __init__(self, root: str | Path, spec: SweepSpec) -> None:
+        """Open the store of ``spec`` in ``root``, or start one.
+
+        Raises:
+            StoreMismatch: ``root`` holds another sweep (the message says which fields differ).
+            InvalidInput: ``root`` is a file, or its manifest is unreadable.
+        """
+        self.root = Path(root)
+        self.spec = spec
+        self.key = spec.key()
+        if self.root.exists() and not self.root.is_dir():
+            raise InvalidInput(f"checkpoint folder {self.root} is a file; give a folder")
+        self.chunks = self.root / CHUNKS
+        self.chunks.mkdir(parents=True, exist_ok=True)
+        manifest = self.root / MANIFEST
+        document = {"format": FORMAT, "key": self.key, "spec": spec.to_dict()}
+        if manifest.exists():
+            try:
+                found = json.loads(manifest.read_text(encoding="utf-8"))
+                found_key, found_spec = found["key"], found["spec"]
+            except (OSError, ValueError, KeyError, TypeError) as exc:
+                raise InvalidInput(f"{manifest}: not a plm_pin sweep manifest ({exc})") from None
+            if found_key != self.key:
+                ours = document["spec"]
+                assert isinstance(ours, dict)
+                fields = tuple(
+                    k for k in sorted(set(ours) | set(found_spec)) if ours.get(k) != found_spec.get(k)
+                )
+                raise StoreMismatch(
+                    f"{self.root} holds the checkpoints of another sweep (key {found_key[:12]}, this one "
+                    f"{self.key[:12]}; they differ in {list(fields)}): give another folder, or delete it to "
+                    "start again",
+                    self.root,
+                    fields,
+                )
+        else:
+            atomic_write_text(manifest, json.dumps(document, indent=2) + "\n")
+        for stale in [*self.chunks.glob(".*.tmp"), *self.root.glob(f".{MANIFEST}.*.tmp")]:
+            stale.unlink(missing_ok=True)  # left by an interrupted write: never a finished chunk
+
+    def load(self) -> list[ChunkValues]:
+        """Every finished chunk of this sweep (files that do not belong are skipped with a warning)."""
+        from .execution import ChunkValues
+
+        pq = require("pyarrow.parquet")
+        variables = self.spec.variables()
+        out = []
+        for path in sorted(self.chunks.glob("points-*.parquet")):
+            try:
+                table = pq.read_table(path)
+                key = (table.schema.metadata or {}).get(KEY_METADATA, b"").decode()
+                if key != self.key:
+                    raise ValueError(f"key {key[:12] or 'missing'} is not this sweep's")
+                points = table.column("point").to_numpy().astype(np.int64)
+                values = {}
+                for v in variables:
+                    flat = table.column(v.name).combine_chunks().flatten().to_numpy(zero_copy_only=False)
+                    values[v.name] = flat.astype(v.dtype).reshape(len(points), *self.spec.variable_shape(v))
+            except Exception as exc:  # any unreadable file is recomputed, never trusted
+                warnings.warn(
+                    f"{path}: cannot be used ({type(exc).__name__}: {exc}); its points are computed again",
+                    CorruptChunkWarning,
+                    stacklevel=2,
+                )
+                continue
+            out.append(ChunkValues(points, values, {}))
+        return out
+
+    def write(self, chunk: ChunkValues) -> Path:
+        """Write a finished chunk atomically; returns its path."""
+        pa = require("pyarrow")
+        pq = require("pyarrow.parquet")
+        columns: dict[str, Any] = {"point": pa.array(chunk.points, type=pa.int64())}
+        for v in self.spec.variables():
+            arr = np.ascontiguousarray(chunk.values[v.name])
+            size = int(np.prod(arr.shape[1:]))
+            columns[v.name] = pa.FixedSizeListArray.from_arrays(pa.array(arr.reshape(-1)), size)
+        table = pa.table(columns).replace_schema_metadata({KEY_METADATA: self.key.encode()})
+        path = self.chunks / chunk_name(int(chunk.points[0]), int(chunk.points[-1]))
+        with atomic_path(path) as tmp:
+            pq.write_table(table, tmp)
+        return path

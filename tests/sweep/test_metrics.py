@@ -1,0 +1,180 @@
+"""Sweep metrics against independent paths: Harada 2011's closed forms and direct library calls."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from plm_pin import build_mechanism, sweep
+from plm_pin.analysis import manipulability, orientation_range
+from plm_pin.kinematics import classify, inverse_kinematics
+from plm_pin.statics import static_forces
+from plm_pin.sweep import METRICS
+from tests.analysis import paper
+from tests.statics.test_harada2011 import _internal_paper
+from tests.sweep.conftest import FIG6_L, FIG6_RT, FIG6_Y, THETAS, small
+
+LEGS = {"(1, 2, 4)": (1, 2, 4), "(1, 2, 3, 4)": (1, 2, 3, 4)}
+
+
+@pytest.fixture(scope="module")
+def result():
+    """The small sweep, run once in this process."""
+    return sweep(**small())
+
+
+def _paper_w(pose, rt, legs) -> float:
+    """sqrt(det(J_ce^T J_ce)) from eqs. (2), (4), (12), (13) with the (M.5) working modes."""
+    J = paper.J_ce(pose, paper.slider_positions(pose, FIG6_L, rt, legs), FIG6_L, rt, legs)
+    return float(np.prod(np.linalg.svd(J, compute_uv=False)))
+
+
+def test_manipulability_is_the_papers_closed_form_at_every_reached_pose(result):
+    """At every reached (legs, r_t, y, theta) w is eq. (13) of the paper's J_ce (1e-9: IK tolerance 1e-12)."""
+    ds = result.dataset
+    checked = 0
+    for label, legs in LEGS.items():
+        for rt in ds.half_plate.values:
+            for y in ds.y.values:
+                w = ds.manipulability.sel(legs=label, half_plate=rt, y=y).values
+                lo, hi = paper.reachable_sin_interval(y, FIG6_L, rt)
+                for theta, ours in zip(ds.rz.values, w, strict=True):
+                    inside = lo < math.sin(theta) < hi
+                    assert np.isfinite(ours) == inside, (label, rt, y, theta)
+                    if inside:
+                        assert ours == pytest.approx(_paper_w((0.0, y, theta), rt, legs), rel=1e-9)
+                        checked += 1
+    assert checked > 200
+
+
+def test_pose_metrics_equal_direct_calls_on_the_same_variant(result):
+    """At sample poses, w and the margins equal manipulability() and classify() after inverse_kinematics."""
+    ds = result.dataset
+    for label, rt, y, theta in [
+        ("(1, 2, 4)", FIG6_RT, FIG6_Y, THETAS[10]),
+        ("(1, 2, 3, 4)", 0.05, 0.11, 0.0),
+    ]:
+        mech = build_mechanism("harada2011_3d4m", {"legs": LEGS[label], "half_plate": rt})
+        q = inverse_kinematics(mech, [0.0, y, theta]).q
+        at = {"legs": label, "half_plate": rt, "y": y, "rz": theta}
+        assert ds.manipulability.sel(at).item() == pytest.approx(manipulability(mech, q).w, rel=1e-12)
+        report = classify(mech, q)
+        margin = min(report.constraint_margin, report.inverse_margin, report.direct_margin)
+        assert ds.singularity_margin.sel(at).item() == pytest.approx(margin, rel=1e-9)
+        assert ds.singularity.sel(at).item() == 0
+
+
+def test_orientation_range_of_the_3d3m_is_eq_11_4_at_the_fig6_geometry(result):
+    """At l : 2 r_t = 2 : 1, y = 0.084039 m, the 3D3M's range ends at -28.7 deg (eq. (11.4)), to 2e-9 rad."""
+    ds = result.dataset
+    at = {"half_plate": FIG6_RT, "y": FIG6_Y}
+    paper_angle = -math.acos(math.sqrt(((FIG6_L + FIG6_RT) ** 2 - FIG6_Y**2) / (FIG6_L + FIG6_RT) ** 2))
+    assert math.degrees(paper_angle) == pytest.approx(-28.7, abs=1e-12)
+    three = ds.sel(legs="(1, 2, 4)", **at)
+    assert abs(three.orientation_lower.item() - paper_angle) < 2e-9
+    assert three.orientation_lower_end.item() == three.orientation_lower_end.attrs[
+        "flag_meanings"
+    ].split().index("direct")
+    assert three.orientation_halfwidth.item() == pytest.approx(-paper_angle, abs=2e-9)
+    four = ds.sel(legs="(1, 2, 3, 4)", **at)  # the fourth motor removes the singularity: the grid's ends
+    assert (four.orientation_lower.item(), four.orientation_upper.item()) == (THETAS[0], THETAS[-1])
+    mech = build_mechanism("harada2011_3d4m", {"legs": (1, 2, 4), "half_plate": FIG6_RT})
+    direct = orientation_range(mech, "rz", THETAS, (0.0, FIG6_Y, 0.0), xtol=1e-9)
+    assert three.orientation_lower.item() == direct.lower and three.orientation_upper.item() == direct.upper
+
+
+def test_singularity_code_is_direct_on_the_eq_11_4_locus():
+    """A pose exactly on eq. (11.4) is coded 3 (direct) for the 3D3M and 0 for the 3D4M."""
+    theta = -math.radians(28.7)
+    out = sweep(
+        "harada2011_3d4m",
+        {"legs": [[1, 2, 4], [1, 2, 3, 4]]},
+        {"y": [FIG6_Y], "rz": [theta, 0.0]},
+        ["singularity"],
+        base={"half_plate": FIG6_RT},
+    ).dataset
+    flags = out.singularity.attrs["flag_meanings"].split()
+    assert flags == ["regular", "constraint", "inverse", "direct"]
+    assert out.singularity.values[:, 0, :].tolist() == [[3, 0], [0, 0]]
+    assert out.singularity_margin.values[0, 0, 0] <= 1e-9
+
+
+def test_reductions_are_the_minimum_and_mean_over_the_axes_asked(result):
+    """min_manipulability is w's minimum over rz; reachable_fraction is eq. (9)'s share of the box."""
+    ds = result.dataset
+    np.testing.assert_array_equal(ds.min_manipulability.values, ds.manipulability.min("rz").values)
+    fractions = sweep(**small(metrics=["reachable_fraction"], options={})).dataset.reachable_fraction
+    for rt in ds.half_plate.values:
+        inside = [
+            lo < math.sin(t) < hi
+            for y in ds.y.values
+            for lo, hi in [paper.reachable_sin_interval(y, FIG6_L, rt)]
+            for t in ds.rz.values
+        ]
+        assert fractions.sel(half_plate=rt).values.tolist() == [np.mean(inside)] * 2
+
+
+def test_peak_force_of_the_3d3m_is_eq_15_and_redundancy_never_raises_it():
+    """No gravity, unit loads: the 3D3M's peak is max |J_ce^-T f_e| (eq. (15)); the 3D4M's is never above."""
+    loads = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.01]]
+    ds = sweep(
+        "harada2011_3d4m",
+        {"legs": [[1, 2, 4], [1, 2, 3, 4]]},
+        {"y": [0.07, 0.1], "rz": np.radians([-10.0, 0.0, 15.0])},
+        ["peak_force"],
+        options={"wrenches": loads, "gravity": False},
+    ).dataset
+    peak = ds.peak_force.values
+    for j, y in enumerate(ds.y.values):
+        for k, theta in enumerate(ds.rz.values):
+            pose = (0.0, y, theta)
+            J = paper.J_ce(pose, paper.slider_positions(pose, 0.14, 0.05, (1, 2, 4)), 0.14, 0.05, (1, 2, 4))
+            expected = max(np.max(np.abs(np.linalg.solve(J.T, -np.asarray(f)))) for f in loads)
+            assert peak[0, j, k] == pytest.approx(expected, rel=1e-10)
+    assert np.all(peak[1] <= peak[0] * (1 + 1e-9))
+    mech = build_mechanism("harada2011_3d4m")
+    q = inverse_kinematics(mech, [0.0, 0.1, 0.0]).q
+    direct = max(
+        np.max(np.abs(static_forces(mech, q, f, gravity=False, objective="max", limits=None).f_c))
+        for f in loads
+    )
+    assert peak[1, 1, 1] == pytest.approx(direct, rel=1e-12)
+
+
+def test_plate_preload_is_the_internal_force_of_eq_21_needed_for_the_compression():
+    """3D4M, plate compressed by 2 N: the preload is (2 N + its axial force) times |eq. (22)'s mode|."""
+    c = 2.0
+    poses = [(0.0, 0.08, math.radians(-20.0)), (0.0, 0.08, 0.0), (0.0, 0.08, math.radians(15.0))]
+    load = [0.0, -1.0, 0.0]
+    ds = sweep(
+        "harada2011_3d4m",
+        None,
+        {"y": [0.08], "rz": [p[2] for p in poses]},
+        ["preload"],
+        options={"wrenches": [load], "gravity": False, "compression": c, "preload_links": ["plate"]},
+    ).dataset
+    mech = build_mechanism("harada2011_3d4m")
+    for k, pose in enumerate(poses):
+        free = static_forces(mech, inverse_kinematics(mech, pose).q, load, gravity=False)
+        axial = free.link_forces()["plate"].axial  # of the minimum-norm forces
+        z = [
+            (paper.pair_position(pose, i, 0.05) - ci * paper.A) / 0.14
+            for i, ci in zip(
+                (1, 2, 3, 4), paper.slider_positions(pose, 0.14, 0.05, (1, 2, 3, 4)), strict=True
+            )
+        ]
+        unit = np.linalg.norm(_internal_paper(pose, z, np.diag([zi @ paper.A for zi in z]), 1.0))
+        assert ds.preload.values[0, k] == pytest.approx(max(0.0, c + axial) * unit, rel=1e-8, abs=1e-10)
+
+
+def test_every_metric_documents_its_variables_and_options():
+    """Each metric has a one-line definition, variables with units and descriptions, and known options."""
+    from plm_pin.sweep import OPTIONS
+
+    for name, metric in METRICS.items():
+        assert metric.name == name and metric.summary
+        for v in metric.variables:
+            assert v.unit and v.description and v.dtype in ("float64", "int8", "bool")
+        assert set(metric.options) <= set(OPTIONS)
