@@ -1,4 +1,4 @@
-"""The ``plm-pin`` command line: list presets, inspect and check descriptions, write reports."""
+"""The ``plm-pin`` command line: list presets, inspect and check descriptions, write reports, run sweeps."""
 
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ from rich.progress import (
 )
 from rich.table import Table
 
+from ._io import atomic_path
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .kinematics import inverse_kinematics, task_pose
 from .loading import load
@@ -395,6 +396,71 @@ def view(
         except KeyboardInterrupt:
             return
     raise _fail(PlmError(f"the meshcat server stopped unexpectedly (exit code {code})"))
+
+
+RESULT = "result.nc"
+"""File of a sweep's labelled result inside its output folder (netCDF, read with xarray.open_dataset)."""
+
+
+@app.command("sweep")
+def sweep_command(
+    config: Annotated[Path, typer.Argument(help="sweep configuration (YAML; format in the README)")],
+    out: Annotated[Path, typer.Option("--out", help="output folder: checkpoints and the result")],
+    scheduler: Annotated[
+        str | None,
+        typer.Option("--scheduler", help="Dask scheduler tcp://HOST:8786 (default: this machine, all cores)"),
+    ] = None,
+    chunk: Annotated[
+        int | None, typer.Option("--chunk", min=1, help="poses per task (default: the config's, else 4096)")
+    ] = None,
+    workers: Annotated[
+        int | None, typer.Option("--workers", min=1, help="local processes (default: all CPUs)")
+    ] = None,
+) -> None:
+    """Run a design sweep; a re-run with the same configuration computes only the missing chunks.
+
+    Finished chunks are checkpointed in OUT/chunks (Parquet) as they complete, and the
+    labelled result is written to OUT/result.nc at the end. A folder holding another
+    sweep is refused. Failed chunks are listed with their parameters (exit code 1) and
+    the rest is written. Nothing is written outside OUT.
+    """
+    from .sweep import DEFAULT_CHUNK, load_config, run_spec
+
+    try:
+        spec, config_chunk = load_config(config)
+        if out.exists() and not out.is_dir():
+            raise InvalidInput(f"--out {out}: is a file; give a folder")
+        columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
+        progress = Progress(
+            *columns, TimeElapsedColumn(), console=errors, transient=True, disable=not errors.is_terminal
+        )
+        with progress:
+            task = progress.add_task(f"sweep {spec.label}: parameter points", total=spec.n_points)
+            result = run_spec(
+                spec,
+                store=out,
+                scheduler=scheduler,
+                workers=workers,
+                chunk=chunk or config_chunk or DEFAULT_CHUNK,
+                progress=lambda done, total: progress.update(task, completed=done, total=total),
+            )
+        path = out / RESULT
+        with atomic_path(path) as tmp:
+            result.dataset.to_netcdf(tmp, engine="scipy")
+    except (PlmError, ImportError) as exc:
+        raise _fail(exc) from None
+    console.print(
+        f"wrote {path}: {spec.n_points} parameter points x {spec.n_poses} poses; {result.computed_points} "
+        f"computed now ({result.poses_per_second():.0f} poses/s), {result.loaded} from checkpoints "
+        f"({result.elapsed:.1f} s)",
+        markup=False,
+        highlight=False,
+        soft_wrap=True,
+    )
+    for failure in result.failures:
+        errors.print(f"[bold red]failed:[/] {escape(failure.describe())}", highlight=False, soft_wrap=True)
+    if result.failures:
+        raise typer.Exit(code=1)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -310,3 +310,113 @@ def test_no_arguments_shows_help():
     result = runner.invoke(app, [])
     for command in ("list", "info", "check", "report"):
         assert command in result.output
+
+
+SWEEP_CONFIG = """\
+mechanism: harada2011_3d4m
+parameters:
+  legs: [[1, 2, 4], [1, 2, 3, 4]]
+poses:
+  y: [0.06, 0.1]
+  rz: {linspace: [-40, 40, 9], unit: deg}
+pose: [0.0, 0.08, 0.0]
+metrics: [manipulability, orientation_range]
+"""
+
+
+def _sweep_config(tmp_path, text: str = SWEEP_CONFIG) -> Path:
+    path = tmp_path / "sweep.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_sweep_writes_the_result_and_resumes_from_its_checkpoints(tmp_path):
+    """`sweep CONFIG --out DIR` writes DIR/result.nc (the API's dataset); a re-run computes nothing."""
+    import xarray as xr
+
+    from plm_pin.sweep import load_config, run_spec
+
+    config, out = _sweep_config(tmp_path), tmp_path / "out"
+    result = runner.invoke(app, ["sweep", str(config), "--out", str(out), "--chunk", "18"])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.startswith(
+        f"wrote {out / 'result.nc'}: 2 parameter points x 18 poses; 2 computed now ("
+    )
+    assert sorted(p.name for p in out.iterdir()) == ["chunks", "manifest.json", "result.nc"]
+    assert len(list((out / "chunks").iterdir())) == 2
+    with xr.open_dataset(out / "result.nc", engine="scipy") as written:
+        expected = run_spec(load_config(config)[0]).dataset
+        xr.testing.assert_identical(written.load(), expected)
+    again = runner.invoke(app, ["sweep", str(config), "--out", str(out)])
+    assert again.exit_code == 0, again.output
+    assert "; 0 computed now (0 poses/s), 2 from checkpoints (" in again.stdout
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "sweep.yaml"]  # nothing outside OUT
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (SWEEP_CONFIG.replace("manipulability,", "stiffness,"), "unknown metric 'stiffness'; metrics are ["),
+        (
+            SWEEP_CONFIG.replace("legs:", "leg:"),
+            "unknown parameter 'leg' of harada2011_3d4m; its parameters are",
+        ),
+        (
+            SWEEP_CONFIG.replace("y: [0.06, 0.1]", "y: []"),
+            "poses: values of 'y' must be a non-empty 1-D list",
+        ),
+        (
+            SWEEP_CONFIG.replace("[0.06, 0.1]", "[0.06, .nan]"),
+            "poses: values of 'y' hold non-finite entries [nan]",
+        ),
+    ],
+)
+def test_sweep_bad_config_is_one_error_line_and_writes_nothing(tmp_path, text, message):
+    """A config the spec refuses exits 1 with one error line naming the file, before any work."""
+    config, out = _sweep_config(tmp_path, text), tmp_path / "out"
+    result = runner.invoke(app, ["sweep", str(config), "--out", str(out)])
+    assert result.exit_code == 1 and result.stdout == ""
+    assert result.stderr.startswith(f"error: {config}: {message}") and result.stderr.count("\n") == 1
+    assert not out.exists()
+
+
+def test_sweep_refuses_another_sweeps_folder(tmp_path):
+    """An OUT holding another sweep's checkpoints is refused in one line; its files are kept."""
+    out = tmp_path / "out"
+    assert runner.invoke(app, ["sweep", str(_sweep_config(tmp_path)), "--out", str(out)]).exit_code == 0
+    other = _sweep_config(tmp_path, SWEEP_CONFIG.replace("[0.06, 0.1]", "[0.06, 0.11]"))
+    result = runner.invoke(app, ["sweep", str(other), "--out", str(out)])
+    assert result.exit_code == 1
+    assert result.stderr.startswith(f"error: {out} holds the checkpoints of another sweep (key ")
+    assert "they differ in ['poses']" in result.stderr
+
+
+def test_sweep_reports_failed_chunks_with_their_parameters(tmp_path):
+    """A point the builder refuses is listed with its parameters (exit 1); the rest is written."""
+    text = SWEEP_CONFIG.replace("harada2011_3d4m", "tests.sweep.conftest:fragile_2prrrp").replace(
+        "legs: [[1, 2, 4], [1, 2, 3, 4]]", "half_plate: [0.05, 0.07]"
+    )
+    out = tmp_path / "out"
+    result = runner.invoke(
+        app, ["sweep", str(_sweep_config(tmp_path, text)), "--out", str(out), "--chunk", "1"]
+    )
+    assert result.exit_code == 1
+    assert "1 computed now" in result.stdout and (out / "result.nc").is_file()
+    assert result.stderr == (
+        "failed: chunk of points 1-1: 1 point(s) failed\n"
+        "  point 1 (half_plate=0.07): RuntimeError: fragile builder refuses half_plate = 0.07 m\n"
+    )
+
+
+def test_sweep_unreachable_scheduler_is_one_error_line(tmp_path, monkeypatch):
+    """--scheduler tcp://127.0.0.1:1: one line saying the scheduler cannot be reached, exit 1."""
+    from plm_pin.sweep import execution
+
+    monkeypatch.setattr(execution, "CONNECT_TIMEOUT", 1.0)
+    config, out = _sweep_config(tmp_path), tmp_path / "out"
+    result = runner.invoke(app, ["sweep", str(config), "--out", str(out), "--scheduler", "tcp://127.0.0.1:1"])
+    assert result.exit_code == 1 and result.stdout == ""
+    assert result.stderr.startswith(
+        "error: cannot reach the Dask scheduler at 'tcp://127.0.0.1:1' within 1 s"
+    )
+    assert result.stderr.count("\n") == 1
