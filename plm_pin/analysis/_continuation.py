@@ -439,22 +439,19 @@ def _seed(
 
 
 def _seed_solution(mech: Mechanism, x: np.ndarray, guess: Any, mode: tuple[int, ...] | None) -> np.ndarray:
-    """Inverse kinematics at the seed: Newton from the guess, then (if it lands elsewhere) in ``mode``.
+    """Inverse kinematics at a seed candidate: Newton from the guess, re-solved in ``mode`` if elsewhere.
 
-    Enumerating the working modes costs tens of Newton solves; the guess's basin usually
-    holds the asked mode already.
+    A candidate that Newton from the guess cannot reach is skipped (with or without a mode);
+    the working modes are enumerated (tens of Newton solves) only when it converges in
+    another mode than ``mode``.
 
     Raises:
-        PoseUnreachable: when ``x`` cannot be reached (in ``mode`` when given).
+        PoseUnreachable: when Newton from the guess does not reach ``x``, or ``x`` has no
+            solution in ``mode``.
     """
-    try:
-        sol = inverse_kinematics(mech, x, guess)
-    except PoseUnreachable:
-        if mode is None:
-            raise
-    else:
-        if mode is None or sol.mode == tuple(mode):
-            return sol.q
+    sol = inverse_kinematics(mech, x, guess, explain=False)
+    if mode is None or sol.mode == tuple(mode):
+        return sol.q
     return inverse_kinematics(mech, x, guess, mode=mode).q
 
 

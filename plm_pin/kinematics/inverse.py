@@ -89,6 +89,7 @@ def inverse_kinematics(
     *,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
+    explain: bool = True,
 ) -> IKSolution:
     """Solve the inverse kinematics at task coordinates ``x``.
 
@@ -102,13 +103,15 @@ def inverse_kinematics(
         guess: starting configuration (default: the reference configuration).
         mode: working mode to return, one sign per square leg (see :attr:`IKSolution.mode`).
         tol: largest residual accepted [m, rad].
+        explain: on failure, find which leg misses and by how much (a leg-by-leg solve from
+            random starts, about 0.2 s on a 2-PRRRP); False raises at once with a short message.
 
     Returns:
         The solution.
 
     Raises:
         PoseUnreachable: when no assembly puts the task frame at ``x``; the message names
-            the leg that cannot reach and by how much it misses.
+            the leg that cannot reach and by how much it misses (with ``explain``).
         InvalidInput: malformed ``x``, ``guess`` or ``mode``.
     """
     task = require_task(mech)
@@ -128,6 +131,10 @@ def inverse_kinematics(
     try:
         q = _solve(mech, target, q0, np.arange(mech.nv), tol)
     except ClosureNotSatisfied:
+        if not explain:
+            raise PoseUnreachable(
+                f"{mech.name}: pose {xa.tolist()} could not be solved from this guess"
+            ) from None
         raise _unreachable(mech, target, q0, tol) from None
     return _solution(mech, target, q)
 

@@ -226,6 +226,14 @@ def test_unreachable_pose_names_the_legs_and_their_misses():
     )
 
 
+def test_unreachable_pose_without_explanation_raises_a_short_message():
+    """explain=False skips the leg-by-leg diagnosis: the same error class, a message without legs."""
+    mech = preset("harada2015_asymmetric")
+    with pytest.raises(PoseUnreachable) as err:
+        inverse_kinematics(mech, [0.0, 0.2, 0.1], explain=False)
+    assert str(err.value) == "harada2015_asymmetric: pose [0.0, 0.2, 0.1] could not be solved from this guess"
+
+
 def test_unreachable_pose_of_the_symmetric_table_lists_both_right_legs():
     """Plate tilted up to the right: both right rods of the 3D4M miss by |L_y| - l, the left ones reach."""
     mech = preset("harada2011_3d4m")
