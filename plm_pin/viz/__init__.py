@@ -4,6 +4,7 @@ from .figures import plot_map, plot_sweep
 from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
 from .meshcat_server import MeshcatServer, ViewerError
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
+from .sweep_figures import plot_sweep_heatmap, plot_sweep_lines
 
 __all__ = [
     "ForceArrow",
@@ -16,6 +17,8 @@ __all__ = [
     "plot_map",
     "plot_static_forces",
     "plot_sweep",
+    "plot_sweep_heatmap",
+    "plot_sweep_lines",
     "scene_html",
     "show",
 ]
