@@ -6,7 +6,9 @@ cost per call of loading, closures, assembly, kinematics and manipulability for 
 preset, it records the wall time of a 10^5-pose manipulability map of
 ``harada2011_3d4m``, the cost and accuracy of closed-chain simulation (the four-bar, 10 s
 passive, against MuJoCo's soft ``connect`` constraint on the same four-bar; Harada 2011's
-simulation 1) and, as a reproduction note, the 3D3M's singular angle of Harada 2011 Fig. 6.
+simulation 1), the throughput of a design sweep (:mod:`plm_pin.sweep`) in one process and on
+a 2-worker Dask LocalCluster and, as a reproduction note, the 3D3M's singular angle of
+Harada 2011 Fig. 6.
 """
 
 from __future__ import annotations
@@ -18,7 +20,6 @@ import json
 import math
 import os
 import platform
-import tempfile
 import time
 import timeit
 from collections.abc import Callable
@@ -29,7 +30,6 @@ import numpy as np
 import pinocchio as pin
 
 from .analysis import manipulability, singular_points_along, workspace_map
-from .description.writer import write_description
 from .dynamics.inverse_dynamics import inverse_dynamics
 from .dynamics.simulation import SimulationResult, simulate
 from .dynamics.trajectory import task_trajectory
@@ -40,7 +40,7 @@ from .kinematics import (
     inverse_kinematics,
     task_pose,
 )
-from .loading import load
+from .loading import build_mechanism, load
 from .mechanism import Mechanism
 from .models.classic import build_fourbar
 from .models.pss import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
@@ -58,6 +58,30 @@ SIM_STEP = 1e-3
 
 SIM_OUTPUT = 1e-2
 """Output (sampling) step of the simulation benchmarks [s]."""
+
+SWEEP_CASES: dict[str, dict[str, Any]] = {
+    "w, singularity, min w (3D4M, 12 plate sizes x 20 heights x 101 angles)": {
+        "mechanism": "harada2011_3d4m",
+        "parameters": {"half_plate": np.linspace(0.02, 0.07, 12).tolist()},
+        "poses": {
+            "y": np.linspace(0.03, 0.12, 20).tolist(),
+            "rz": np.radians(np.linspace(-60, 60, 101)).tolist(),
+        },
+        "metrics": ["manipulability", "singularity", "min_manipulability"],
+        "pose": [0.0, 0.08, 0.0],
+    },
+    "orientation range (3D3M, 12 plate sizes x 20 heights x 81 angles)": {
+        "mechanism": "harada2011_3d3m",
+        "parameters": {"half_plate": np.linspace(0.02, 0.07, 12).tolist()},
+        "poses": {
+            "y": np.linspace(0.03, 0.12, 20).tolist(),
+            "rz": np.radians(np.linspace(-80, 80, 81)).tolist(),
+        },
+        "metrics": ["orientation_range"],
+        "pose": [0.0, 0.08, 0.0],
+    },
+}
+"""The design sweeps timed by :func:`sweep_benchmark` (arguments of :func:`plm_pin.sweep.make_spec`)."""
 
 
 def _per_call(fn: Callable[[], object], min_time: float = 0.2) -> float:
@@ -334,25 +358,68 @@ def _simulation_line(r: dict[str, object]) -> str:
 def fig6_note() -> str:
     """Harada 2011 Fig. 6: the 3D3M's type-4 singular angle at the y where eq. (11.4) gives 28.7 deg.
 
-    The table with l : 2 r_t = 2 : 1 (r_t = l / 4) is built, written and loaded; the angle
+    The table with l : 2 r_t = 2 : 1 (r_t = l / 4) is built (:func:`plm_pin.build_mechanism`); the angle
     is located by root finding along theta (:func:`plm_pin.analysis.singular_points_along`).
     """
-    params = {**PRESETS["harada2011_3d3m"].parameters}
-    l = float(params["rod_lengths"][0])
+    l = float(PRESETS["harada2011_3d3m"].parameters["rod_lengths"][0])
     rt = l / 4.0
-    params["half_plate"] = rt
-    robot, sidecar = PRESETS["harada2011_3d3m"].builder(
-        name="fig6_3d3m", source="Harada 2011 Fig. 6", **params
-    )
-    with tempfile.TemporaryDirectory() as folder:
-        write_description(robot, sidecar, folder, "fig6_3d3m")
-        mech = load(Path(folder) / "fig6_3d3m.urdf")
+    mech = build_mechanism("harada2011_3d3m", {"half_plate": rt}, name="fig6_3d3m")
     y = (l + rt) * math.sin(math.radians(28.7))
     points = singular_points_along(mech, "rz", np.radians(np.linspace(-80.0, 80.0, 65)), (0.0, y, 0.0))
     angles = ", ".join(f"{math.degrees(p.parameter):.2f} deg ({p.kind})" for p in points)
     return (
         f"Harada 2011 Fig. 6 (l = {l:.3f} m, r_t = l/4 = {rt:.4f} m): at y = {y:.6f} m = {y / l:.4f} l "
         f"(where eq. (11.4) gives 28.7 deg), the 3D3M's singular angle found numerically: {angles}."
+    )
+
+
+def sweep_benchmark(cases: dict[str, dict[str, Any]] | None = None) -> list[dict[str, object]]:
+    """Poses per second of design sweeps: in one process, and on a 2-worker Dask LocalCluster.
+
+    The cluster (2 single-threaded processes on 127.0.0.1) is started once; its start-up time
+    is reported apart and the sweeps on it are timed without it. Each sweep runs once (wall time).
+    """
+    from .sweep import make_spec, run_spec
+    from .sweep.execution import local_cluster
+
+    rows: list[dict[str, object]] = []
+    specs = {case: make_spec(**kwargs) for case, kwargs in (cases or SWEEP_CASES).items()}
+    for case, spec in specs.items():
+        result = run_spec(spec, workers=1)
+        rows.append(_sweep_row(case, "1 process", result.elapsed, spec.n_points * spec.n_poses))
+    try:
+        start = time.perf_counter()
+        with local_cluster(2, None) as client:
+            startup = time.perf_counter() - start
+            for case, spec in specs.items():
+                chunk = max(1, spec.n_points * spec.n_poses // 12)  # 12 tasks: both workers busy to the end
+                result = run_spec(spec, scheduler=client, chunk=chunk)
+                rows.append(_sweep_row(case, "2 Dask workers", result.elapsed, spec.n_points * spec.n_poses))
+        rows.append(
+            {"case": "Dask LocalCluster start-up (2 worker processes)", "executor": "-", "seconds": startup}
+        )
+    except ImportError as exc:
+        rows.append({"case": f"Dask not available: {exc}", "executor": "-", "seconds": None})
+    return rows
+
+
+def _sweep_row(case: str, executor: str, seconds: float, poses: int) -> dict[str, object]:
+    return {
+        "case": case,
+        "executor": executor,
+        "poses": poses,
+        "seconds": seconds,
+        "poses_per_second": poses / seconds,
+    }
+
+
+def _sweep_line(r: dict[str, object]) -> str:
+    rate = r.get("poses_per_second")
+    seconds = r.get("seconds")
+    return (
+        f"| {r['case']} | {r['executor']} | {r.get('poses', '-')} "
+        f"| {f'{seconds:.2f}' if isinstance(seconds, float) else '-'} "
+        f"| {f'{rate:.0f}' if isinstance(rate, float) else '-'} |"
     )
 
 
@@ -365,10 +432,11 @@ def write(
     out: Path,
     notes: tuple[str, ...] = (),
     simulation: list[dict[str, object]] | None = None,
+    sweep: list[dict[str, object]] | None = None,
 ) -> Path:
     """Write ``results.md`` (tables, then ``notes``) and ``results.json`` into ``out``.
 
-    ``results.json`` holds ``{"timings": rows, "simulation": simulation rows}``.
+    ``results.json`` holds ``{"timings": rows, "simulation": simulation rows, "sweep": sweep rows}``.
 
     Returns:
         The Markdown path.
@@ -398,11 +466,25 @@ def write(
             "|---|---|---|---|---|---|---|---|",
         ]
         lines += [_simulation_line(r) for r in simulation]
+    if sweep:
+        lines += [
+            "",
+            "## Design sweeps (plm_pin.sweep)",
+            "",
+            "One run each (wall time), results identical on both executors (tested). The cluster's start-up "
+            "is timed apart.",
+            "",
+            "| sweep | executor | poses | seconds | poses per second |",
+            "|---|---|---|---|---|",
+        ]
+        lines += [_sweep_line(r) for r in sweep]
     if notes:
         lines += ["", "## Notes", "", *(f"- {n}" for n in notes)]
     md = out / "results.md"
     md.write_text("\n".join(lines) + "\n")
-    (out / "results.json").write_text(json.dumps({"timings": rows, "simulation": simulation or []}, indent=2))
+    (out / "results.json").write_text(
+        json.dumps({"timings": rows, "simulation": simulation or [], "sweep": sweep or []}, indent=2)
+    )
     return md
 
 
@@ -411,7 +493,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", type=Path, default=Path("reports/bench"), help="output folder")
     args = parser.parse_args()
-    md = write(run(), args.out, (fig6_note(),), simulation_benchmark())
+    md = write(run(), args.out, (fig6_note(),), simulation_benchmark(), sweep_benchmark())
     print(md.read_text())
 
 
