@@ -59,27 +59,28 @@ SIM_STEP = 1e-3
 SIM_OUTPUT = 1e-2
 """Output (sampling) step of the simulation benchmarks [s]."""
 
+
+def _sweep_case(mechanism: str, angles: int, span: float, metrics: list[str]) -> dict[str, Any]:
+    """A sweep of 12 plate sizes x 20 heights x ``angles`` plate angles over +/-``span`` deg."""
+    return {
+        "mechanism": mechanism,
+        "parameters": {"half_plate": np.linspace(0.02, 0.07, 12).tolist()},
+        "poses": {
+            "y": np.linspace(0.03, 0.12, 20).tolist(),
+            "rz": np.radians(np.linspace(-span, span, angles)),
+        },
+        "metrics": metrics,
+        "pose": [0.0, 0.08, 0.0],
+    }
+
+
 SWEEP_CASES: dict[str, dict[str, Any]] = {
-    "w, singularity, min w (3D4M, 12 plate sizes x 20 heights x 101 angles)": {
-        "mechanism": "harada2011_3d4m",
-        "parameters": {"half_plate": np.linspace(0.02, 0.07, 12).tolist()},
-        "poses": {
-            "y": np.linspace(0.03, 0.12, 20).tolist(),
-            "rz": np.radians(np.linspace(-60, 60, 101)).tolist(),
-        },
-        "metrics": ["manipulability", "singularity", "min_manipulability"],
-        "pose": [0.0, 0.08, 0.0],
-    },
-    "orientation range (3D3M, 12 plate sizes x 20 heights x 81 angles)": {
-        "mechanism": "harada2011_3d3m",
-        "parameters": {"half_plate": np.linspace(0.02, 0.07, 12).tolist()},
-        "poses": {
-            "y": np.linspace(0.03, 0.12, 20).tolist(),
-            "rz": np.radians(np.linspace(-80, 80, 81)).tolist(),
-        },
-        "metrics": ["orientation_range"],
-        "pose": [0.0, 0.08, 0.0],
-    },
+    "w, singularity, min w (3D4M, 12 plate sizes x 20 heights x 101 angles)": _sweep_case(
+        "harada2011_3d4m", 101, 60.0, ["manipulability", "singularity", "min_manipulability"]
+    ),
+    "orientation range (3D3M, 12 plate sizes x 20 heights x 81 angles)": _sweep_case(
+        "harada2011_3d3m", 81, 80.0, ["orientation_range"]
+    ),
 }
 """The design sweeps timed by :func:`sweep_benchmark` (arguments of :func:`plm_pin.sweep.make_spec`)."""
 

@@ -109,10 +109,15 @@ def _finite(name: str, value: Any) -> float:
     return float(value)
 
 
-def _flag(name: str, value: Any) -> bool:
-    if not isinstance(value, bool):
-        raise InvalidInput(f"option {name!r} must be true or false, got {value!r}")
-    return value
+def _of_type(kind: type, text: str) -> Callable[[str, Any], Any]:
+    """A check that the value is a ``kind`` (described as ``text`` in the message)."""
+
+    def check(name: str, value: Any) -> Any:
+        if not isinstance(value, kind):
+            raise InvalidInput(f"option {name!r} must be {text}, got {value!r}")
+        return value
+
+    return check
 
 
 def _names(name: str, value: Any) -> tuple[str, ...] | None:
@@ -123,12 +128,6 @@ def _names(name: str, value: Any) -> tuple[str, ...] | None:
     if not isinstance(value, Sequence) or not value or not all(isinstance(v, str) for v in value):
         raise InvalidInput(f"option {name!r} must be a non-empty list of names, got {value!r}")
     return tuple(value)
-
-
-def _axis(name: str, value: Any) -> str:
-    if not isinstance(value, str):
-        raise InvalidInput(f"option {name!r} must be a task coordinate name, got {value!r}")
-    return value
 
 
 def _objective(name: str, value: Any) -> str:
@@ -160,7 +159,12 @@ OPTIONS: dict[str, Option] = {
             "singularity_tol", SINGULARITY_TOL, "margin at or below which a pose is singular [-]", _positive
         ),
         Option("over", None, "pose axes reduced over (default: all pose axes)", _names),
-        Option("rotation_axis", "rz", "the task coordinate turned by the orientation range", _axis),
+        Option(
+            "rotation_axis",
+            "rz",
+            "the task coordinate turned by the orientation range",
+            _of_type(str, "a task coordinate name"),
+        ),
         Option("reference", 0.0, "angle the orientation range must hold [rad]", _finite),
         Option("xtol", RANGE_XTOL, "tolerance on the located ends of the orientation range [rad]", _positive),
         Option(
@@ -170,7 +174,7 @@ OPTIONS: dict[str, Option] = {
             "(default: none, gravity alone)",
             _wrenches,
         ),
-        Option("gravity", True, "hold the weight of the bodies too", _flag),
+        Option("gravity", True, "hold the weight of the bodies too", _of_type(bool, "true or false")),
         Option(
             "objective",
             "max",

@@ -14,7 +14,7 @@ from ..models.registry import Builder
 from ._deps import require
 from .execution import DEFAULT_CHUNK, ChunkValues, check_execution, plan_chunks, points_per_chunk, run_chunks
 from .result import ChunkFailure, PointFailure, SweepResult, build_dataset
-from .spec import SweepSpec, make_spec
+from .spec import ParametersArg, PosesArg, SweepSpec, make_spec
 from .store import SweepStore
 
 Progress = Callable[[int, int], None]
@@ -111,8 +111,8 @@ def run_spec(
 
 def sweep(
     mechanism: str | Builder,
-    parameters: Mapping[str, Sequence[Any]] | Sequence[Mapping[str, Any]] | None = None,
-    poses: Mapping[str, Sequence[float]] | None = None,
+    parameters: ParametersArg = None,
+    poses: PosesArg = None,
     metrics: Sequence[str] = ("manipulability",),
     *,
     base: Mapping[str, Any] | None = None,

@@ -30,6 +30,12 @@ Scalar = float | int | str
 Value = Scalar | tuple[Scalar, ...]
 """A builder-parameter value: a number, a name, or a tuple of them (e.g. ``rod_lengths``)."""
 
+ParametersArg = Mapping[str, Sequence[Any]] | Sequence[Mapping[str, Any]] | None
+"""Varied builder parameters as given: a grid ``{name: values}`` or samples ``[{name: value}, ...]``."""
+
+PosesArg = Mapping[str, Sequence[float]] | None
+"""The pose grid as given: ``{task coordinate: values}`` [m, rad]."""
+
 RESERVED = ("sample", "failed")
 """Names of the result that no parameter may take."""
 
@@ -288,8 +294,8 @@ class SweepSpec:
 
 def make_spec(
     mechanism: str | Builder,
-    parameters: Mapping[str, Sequence[Any]] | Sequence[Mapping[str, Any]] | None = None,
-    poses: Mapping[str, Sequence[float]] | None = None,
+    parameters: ParametersArg = None,
+    poses: PosesArg = None,
     metrics: Sequence[str] = ("manipulability",),
     *,
     base: Mapping[str, Any] | None = None,
