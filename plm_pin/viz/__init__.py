@@ -4,6 +4,7 @@ from .figures import plot_map, plot_sweep
 from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
 from .meshcat_server import MeshcatServer, ViewerError
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
+from .skeleton import plot_skeletons
 
 __all__ = [
     "ForceArrow",
@@ -14,6 +15,7 @@ __all__ = [
     "fig8",
     "force_arrows",
     "plot_map",
+    "plot_skeletons",
     "plot_static_forces",
     "plot_sweep",
     "scene_html",
