@@ -138,19 +138,15 @@ def allocate(
     elif k == 0:
         y = np.zeros(0)
     else:
-        y = _unconstrained(f_p, G, weights) if objective == "norm" else None
+        solve = _min_norm if objective == "norm" else _min_max
+        y = solve(f_p, G, weights, ineq, tol)
         if y is None or np.max(ineq.violation(y), initial=0.0) > tol:
-            # Phase 1: is any allocation within the inequalities? (ProxSuite's own infeasibility
-            # detection is unreliable on these small problems and can run to its iteration cap.)
-            y = _least_violating(G.shape[1], ineq, tol)
-            if np.max(ineq.violation(y), initial=0.0) <= tol:  # Phase 2, on a feasible problem
-                y = (
-                    _min_norm(f_p, G, weights, ineq, tol)
-                    if objective == "norm"
-                    else _min_max(f_p, G, weights, ineq, tol)
-                )
-                if y is None:
-                    raise PlmError("ProxSuite did not solve a feasible allocation problem")
+            # No answer within the inequalities: decide by the least violation whether there is
+            # one (ProxSuite's own infeasibility detection is unreliable on these small problems).
+            least = _least_violating(G.shape[1], ineq, tol)
+            if np.max(ineq.violation(least), initial=0.0) <= tol:
+                raise PlmError("ProxSuite did not solve a feasible allocation problem")
+            y = least
     if np.max(ineq.violation(y), initial=0.0) > tol:
         _raise_infeasible(f_p, G, ineq, names, tol, y)
     f_c = f_p + G @ y
@@ -260,8 +256,15 @@ def _polish(
     n = y.shape[0]
     Da = ineq.D[active]
     rhs = np.where(at_lower[active], ineq.lower[active], ineq.upper[active]) - ineq.offset[active]
-    K = np.block([[H, Da.T], [Da, np.zeros((active.size, active.size))]])
-    sol, *_ = np.linalg.lstsq(K, np.concatenate([-g, rhs]), rcond=None)
+    K = np.zeros((n + active.size, n + active.size))
+    K[:n, :n] = H
+    K[:n, n:] = Da.T
+    K[n:, :n] = Da
+    b = np.concatenate([-g, rhs])
+    try:
+        sol = np.linalg.solve(K, b)
+    except np.linalg.LinAlgError:  # a degenerate active set: the least-squares solution
+        sol = np.linalg.lstsq(K, b, rcond=None)[0]
     y_pol = sol[:n]
     objective = 0.5 * y @ H @ y + g @ y
     polished = 0.5 * y_pol @ H @ y_pol + g @ y_pol
