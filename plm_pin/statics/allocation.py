@@ -170,7 +170,29 @@ def _min_norm(
     y0 = _unconstrained(f_p, G, W)
     if np.max(ineq.violation(y0), initial=0.0) <= tol:
         return y0  # the unconstrained minimiser already meets every inequality
+    if G.shape[1] == 1:
+        return _clipped(y0, ineq)
     return solve_qp(G.T @ W @ G, G.T @ W @ f_p, ineq, tol)
+
+
+def _clipped(y0: np.ndarray, ineq: Inequalities) -> np.ndarray:
+    """One internal force: the convex quadratic's minimiser ``y0`` clipped into the feasible interval.
+
+    Each row bounds y to an interval; their intersection is the feasible set, and the
+    minimiser of a convex quadratic over an interval is its free minimiser clipped into it.
+    An intersection emptied by rounding alone (a single point, as at the minimum peak) gives
+    the middle of the crossed ends; the caller checks the answer's violation either way.
+    """
+    d = ineq.D[:, 0]
+    moving = d != 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = (ineq.lower[moving] - ineq.offset[moving]) / d[moving]
+        b = (ineq.upper[moving] - ineq.offset[moving]) / d[moving]
+    lo = float(np.max(np.minimum(a, b), initial=-np.inf))
+    hi = float(np.min(np.maximum(a, b), initial=np.inf))
+    if lo > hi:
+        return np.array([0.5 * (lo + hi)])
+    return np.array([min(max(float(y0[0]), lo), hi)])
 
 
 def _min_max(
