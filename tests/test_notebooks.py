@@ -13,7 +13,7 @@ import nbformat
 import pytest
 
 NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
-PAPERS = ("enferadi2017", "harada2011", "harada2015")
+PAPERS = ("enferadi2017", "harada2011", "harada2015", "zhao2011")
 PUBLIC_MODULES = {
     "plm_pin",
     "plm_pin.analysis",
