@@ -66,6 +66,9 @@ def plot_skeletons(
 ) -> Axes:
     """Draw the mechanism's skeleton at each configuration of ``qs``, later ones darker.
 
+    Links are segments between joints (and closure frames); joints on the base, such as
+    sliders on their stator, are squares.
+
     Args:
         mech: the mechanism.
         qs: configurations, shape (n, nq) (one configuration of shape (nq,) is accepted).
@@ -91,10 +94,14 @@ def plot_skeletons(
     _, axes = _axes(ax, (6.0, 4.0))
     data = mech.model.createData()
     shades = np.linspace(0.75, 0.0, len(configs)) if len(configs) > 1 else [0.0]
+    grounded = [j for j in range(1, mech.model.njoints) if mech.model.parents[j] == 0]
     for q, shade in zip(configs, shades, strict=True):
         pin.framesForwardKinematics(mech.model, data, q)
         for a, b in skeleton_segments(mech, data):
             axes.plot([a[i], b[i]], [a[j], b[j]], color=str(shade), lw=1.2, solid_capstyle="round")
+        # joints on the base (sliders on their stator, cranks' pivots) as squares
+        base = np.array([data.oMi[k].translation for k in grounded]).reshape(-1, 3)
+        axes.plot(base[:, i], base[:, j], "s", color=str(shade), ms=5, ls="none")
     axes.set_aspect("equal")
     axes.set_xlabel(f"{'xyz'[i]} [m]")
     axes.set_ylabel(f"{'xyz'[j]} [m]")

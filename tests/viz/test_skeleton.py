@@ -37,13 +37,17 @@ def test_snapshots_draw_the_papers_joints():
         for point in expected:
             assert np.min(np.linalg.norm(drawn - point, axis=1)) < 1e-9
     assert ax.get_title() == "two poses" and ax.get_xlabel() == "x [m]"
+    squares = np.array([p for line in ax.get_lines() if line.get_marker() == "s" for p in line.get_xydata()])
+    expected = [(c, 0.0) for pose in poses for c in slider_positions(pose, L, RT, (1, 2, 3, 4))]
+    np.testing.assert_allclose(np.sort(squares[:, 0]), np.sort([p[0] for p in expected]), atol=1e-9)
+    np.testing.assert_allclose(squares[:, 1], 0.0, atol=1e-12)
 
 
 def test_later_snapshots_are_darker():
     """Colours run from light grey (first configuration) to black (last)."""
     mech = preset("harada2011_3d4m")
     ax = plot_skeletons(mech, [mech.q_ref, mech.q_ref, mech.q_ref])
-    shades = sorted({float(line.get_color()) for line in ax.get_lines()}, reverse=True)
+    shades = sorted({float(line.get_color()) for line in ax.get_lines()}, reverse=True)  # segments, squares
     assert shades == pytest.approx([0.75, 0.375, 0.0])
 
 
