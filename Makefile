@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.plm-pin-installed
 REPORTS ?= reports
 
-.PHONY: all setup test test-fast browser report lint format bench urdf clean
+.PHONY: all setup test test-fast browser report lint format bench urdf clear-notebooks clean
 
 all: test
 
@@ -58,6 +58,10 @@ bench: $(STAMP)
 
 urdf: $(STAMP)
 	$(PY) -m plm_pin.models.generate
+
+# Notebooks are committed without outputs: run this after saving one from Jupyter.
+clear-notebooks: $(STAMP)
+	$(PY) tests/test_notebooks.py
 
 clean:
 	rm -rf $(VENV) $(REPORTS) .pytest_cache .mypy_cache .ruff_cache build dist

@@ -8,16 +8,16 @@ paper's own equations (25)-(31), corrected, evaluated in ``analyses/specs/enfera
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from plm_pin import Mechanism
-from plm_pin.dynamics import inverse_dynamics, simulate, task_trajectory
+from plm_pin import Mechanism, load
+from plm_pin.dynamics import JointTrajectory, inverse_dynamics, simulate, task_trajectory
 from plm_pin.models import enferadi2017_circle, enferadi2017_line
-from plm_pin.report import Column, Comparison, Section, StudyContext
-from plm_pin.viz import scene_html
+from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 
 TITLE = "Enferadi 2017: dynamics of a star-triangle 3-PRP planar manipulator"
 SUMMARY = "Section 6: forces along a line and a circle, and the direct-dynamics round trip."
@@ -36,6 +36,26 @@ PATHS: dict[str, tuple[Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarra
     "line": (enferadi2017_line, 8.0, "Figs. 5, 6: vertical line y = 0.25 + 0.1 cos(pi t / 4) m"),
     "circle": (enferadi2017_circle, 2.0, "Figs. 7, 8: circle of radius 0.0625 m, one turn"),
 }
+
+
+SAMPLE_STEP = 0.01
+"""Time between the samples of the inverse dynamics [s]."""
+
+
+def path_trajectory(mech: Mechanism, name: str) -> JointTrajectory:
+    """The case-study path ``name`` (a key of :data:`PATHS`) sampled every :data:`SAMPLE_STEP`."""
+    profile, duration, _ = PATHS[name]
+    return task_trajectory(mech, profile, np.linspace(0.0, duration, round(duration / SAMPLE_STEP) + 1))
+
+
+def _animation(name: str) -> Animation:
+    mech = load("enferadi2017_star_triangle")
+    traj = path_trajectory(mech, name)
+    return Animation(mech, traj.q, traj.t, f"Enferadi 2017, {PATHS[name][2]}")
+
+
+ANIMATIONS = {name: functools.partial(_animation, name) for name in PATHS}
+"""Both paths, for ``plm-pin view --animate enferadi2017:line`` (or ``circle``)."""
 
 
 def run(ctx: StudyContext) -> None:
@@ -68,8 +88,8 @@ def _path(
 ) -> None:
     import matplotlib.pyplot as plt
 
-    t = np.linspace(0.0, duration, round(duration / 0.01) + 1)
-    traj = task_trajectory(mech, profile, t)
+    traj = path_trajectory(mech, name)
+    t = traj.t
     idr = inverse_dynamics(mech, traj)
     forces = CubicSpline(t, idr.f_c)
     run = simulate(
@@ -135,9 +155,4 @@ def _path(
             for i in range(3)
         ],
     )
-    step = max(1, len(t) // 80)
-    section.scene(
-        scene_html(mech, qs=traj.q[::step], times=t[::step]),
-        f"{name}: the motion, to rotate and play in the page.",
-        {"times": t[::step], "qs": traj.q[::step]},
-    )
+    section.animation(Animation(mech, traj.q, t, f"{name}: the motion, to rotate and play in the page."))

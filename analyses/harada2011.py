@@ -2,13 +2,14 @@
 
 Reproduces Fig. 6 (manipulability against the plate angle, the 3D3M's type-4 singularity at
 28.7 deg), the static forces of section 4 with Fig. 8 (external and internal forces), the
-decoupled dynamics of eq. (23), and simulations 1 and 2 (Tables 2-4, Figs. 10-12); adds the
+decoupled dynamics of eq. (23), and simulations 1 and 2 (Tables 2-4, Figs. 10-13); adds the
 force capability of the redundant and non-redundant tables and the loss of decoupling of
 the asymmetric design of Harada 2015.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import tempfile
 from pathlib import Path
@@ -18,12 +19,13 @@ import numpy as np
 from plm_pin import Mechanism, load
 from plm_pin.analysis import singular_points_along, workspace_sweep
 from plm_pin.description.writer import write_description
-from plm_pin.dynamics import simulate
-from plm_pin.dynamics.decoupling import decoupling_check
+from plm_pin.dynamics import DecouplingReport, SimulationResult, decoupling_check, simulate
 from plm_pin.models import PRESETS
-from plm_pin.report import Column, Comparison, Section, StudyContext
+from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.statics import force_capability, static_forces, wrench_polygon
-from plm_pin.viz import fig8, plot_sweep, scene_html
+from plm_pin.viz import fig8, plot_skeletons, plot_sweep
+
+from . import _harada2011_paper as paper
 
 TITLE = "Harada 2011: kinetostatics and dynamics of a redundantly actuated planar PLM"
 SUMMARY = "Fig. 6, statics eqs. (14)-(22) and Fig. 8, eq. (23) decoupling, simulations 1-2; force capability."
@@ -33,6 +35,15 @@ LIMIT = 10.0
 
 G = 9.8
 """Gravity of the paper's code (M.37) [m/s^2]."""
+
+DURATION = 2.0
+"""Length of simulations 1 and 2 [s] ((M.38))."""
+
+SIM_DT = 0.01
+"""Output step of simulations 1 and 2 [s] (RK4)."""
+
+SNAPSHOT_PERIOD = 0.2
+"""Time between the skeletons of Figs. 11 and 13, as in the paper's code (M.42) [s]."""
 
 
 def _fig6_variant(name: str) -> Mechanism:
@@ -45,6 +56,31 @@ def _fig6_variant(name: str) -> Mechanism:
         return load(Path(folder) / f"fig6_{name}.urdf")
 
 
+SIMULATIONS = {
+    "simulation1": ("simulation 1 (Table 3)", 0.2, 0.0),
+    "simulation2": ("simulation 2 (Table 4)", 0.0, 0.005),
+}
+"""Case: (label, f_x [N], tau_theta [N m]) of Tables 3, 4; f_y = (2 m_l + m_t) g balances gravity (M.30)."""
+
+
+def simulate_case(mech: Mechanism, case: str) -> SimulationResult:
+    """Simulation 1 or 2: constant task forces from the initial state of Table 2 ((M.38)), at rest, 2 s."""
+    _, f_x, tau = SIMULATIONS[case]
+    p = PRESETS["harada2011_3d4m"].parameters
+    f_y = (2 * float(p["rod_masses"][0]) + float(p["plate_mass"])) * G
+    return simulate(mech, mech.q_ref, duration=DURATION, dt=SIM_DT, wrench=[f_x, f_y, tau])
+
+
+def _animation(case: str) -> Animation:
+    mech = load("harada2011_3d4m")
+    run = simulate_case(mech, case)
+    return Animation(mech, run.q, run.t, f"Harada 2011 {SIMULATIONS[case][0]}, 2 s")
+
+
+ANIMATIONS = {case: functools.partial(_animation, case) for case in SIMULATIONS}
+"""The two simulations, for ``plm-pin view --animate harada2011:simulation1`` (or 2)."""
+
+
 def run(ctx: StudyContext) -> None:
     """Fill the Harada 2011 report."""
     four = ctx.load("harada2011_3d4m")
@@ -52,13 +88,13 @@ def run(ctx: StudyContext) -> None:
     ctx.step("Fig. 6: manipulability against the plate angle")
     _fig6(ctx, ctx.section("Manipulability and singularity (Fig. 6, eq. (11.4))"))
     ctx.step("statics: eqs. (14)-(22), Fig. 8")
-    _statics(ctx.section("Static forces (section 4, Fig. 8)"), four)
+    _statics(ctx.section("Static forces (section 4, Fig. 8)"), four, three)
     ctx.step("force capability")
     _capability(ctx.section("Force capability: redundant vs non-redundant (beyond the paper)"), four, three)
     ctx.step("task-space dynamics and decoupling")
     _decoupling(ctx.section("Decoupled dynamics (eq. (23))"), four, ctx.load("harada2015_asymmetric"))
     ctx.step("simulations 1 and 2")
-    _simulations(ctx.section("Simulations 1 and 2 (Tables 2-4, Figs. 10-12)"), four)
+    _simulations(ctx.section("Simulations 1 and 2 (Tables 2-4, Figs. 10-13)"), four)
 
 
 def _fig6(ctx: StudyContext, section: Section) -> None:
@@ -103,40 +139,75 @@ def _fig6(ctx: StudyContext, section: Section) -> None:
     )
 
 
-def _statics(section: Section, mech: Mechanism) -> None:
+STATIC_CASES = (
+    ("f_e = (1, 0, 0)", (1.0, 0.0, 0.0), 0.0),
+    ("f_e = (0, 1, 0)", (0.0, 1.0, 0.0), 0.0),
+    ("f_e = (0, 0, 1 N m)", (0.0, 0.0, 1.0), 0.0),
+    ("f_i = 1 N (no load)", (0.0, 0.0, 0.0), 1.0),
+)
+"""Unit loads f_e the actuators exert on the plate [N, N m], and unit plate compression f_i [N]."""
+
+
+def _legs(mech: Mechanism) -> tuple[int, ...]:
+    return tuple(int(a.joint.removeprefix("slider")) for a in mech.actuators)
+
+
+def _statics_rows(mech: Mechanism, pose: tuple[float, float, float]) -> tuple[list, list[Comparison]]:
+    """Table rows (case, leg, f_c, f_n, f_l) and the comparisons with eqs. (15)-(22) at ``pose``."""
+    params = PRESETS[mech.name].parameters
+    l, rt = float(params["rod_lengths"][0]), float(params["half_plate"])
+    legs = _legs(mech)
+    rows, comparisons, worst = [], [], 0.0
+    for label, f_e, f_i in STATIC_CASES:
+        if f_i and mech.redundancy == 0:
+            continue
+        sol = static_forces(
+            mech, mech.q_ref, -np.asarray(f_e), gravity=False, internal={"plate": -f_i} if f_i else None
+        )
+        f_c, f_l, f_n = paper.statics(pose, f_e, l, rt, legs, f_i)
+        links, normals = sol.link_forces(), sol.slider_normal_forces()
+        for k, (leg, act) in enumerate(zip(legs, mech.actuators, strict=True)):
+            ours_l, ours_n = links[f"rod{leg}"].axial, float(normals[act.joint][1])
+            rows.append((label, leg, float(sol.f_c[k]), ours_n, ours_l))
+            worst = max(worst, abs(ours_l - f_l[k]), abs(ours_n - f_n[k]))
+            equation = "(15)" if mech.redundancy == 0 else "(20)-(22)"
+            comparisons.append(
+                Comparison(
+                    f"{label}: f_c{leg}, eq. {equation}", float(f_c[k]), float(sol.f_c[k]), "N", atol=1e-10
+                )
+            )
+    comparisons.append(
+        Comparison("largest |f_l, f_n - eq. (19)| over the cases and legs", 0.0, worst, "N", atol=1e-10)
+    )
+    return rows, comparisons
+
+
+def _statics(section: Section, four: Mechanism, three: Mechanism) -> None:
     import matplotlib.pyplot as plt
 
-    q = mech.q_ref
+    q = four.q_ref
+    pose = tuple(float(v) for v in PRESETS[four.name].parameters["reference_pose"])
     section.text(
         "Harada's f_e = J_ce^T f_c is the force the actuators exert on the plate; plm_pin takes the load "
         "applied to the plate, so the paper's unit f_e is the load -f_e, without gravity as in the paper. "
-        "The tests check eqs. (15)-(22) against the paper's closed forms at several poses to 1e-10. "
+        "The *paper* columns are the paper's closed forms, eqs. (15)-(22), evaluated independently of "
+        "plm_pin (analyses/_harada2011_paper.py); the tests check them at several poses to 1e-10. "
         "Eq. (22) is misprinted: `J_ce43^T J_i^-1 f_i` is a 3-vector where f_c has 4 entries; with eqs. "
         "(18) and (21) the internal part is `-J_c4 J_i^-1 f_i`, which is what plm_pin reproduces."
     )
-    rows = []
-    for label, f_e, f_i in (
-        ("f_e = (1, 0, 0)", [1.0, 0.0, 0.0], 0.0),
-        ("f_e = (0, 1, 0)", [0.0, 1.0, 0.0], 0.0),
-        ("f_e = (0, 0, 1 N m)", [0.0, 0.0, 1.0], 0.0),
-        ("f_i = 1 N (no load)", [0.0, 0.0, 0.0], 1.0),
-    ):
-        sol = static_forces(mech, q, -np.asarray(f_e), gravity=False, internal={"plate": -f_i})
-        links = sol.link_forces()
-        normals = sol.slider_normal_forces()
-        for i, act in enumerate(mech.actuators, start=1):
-            rows.append(
-                (label, i, float(sol.f_c[i - 1]), float(normals[act.joint][1]), float(links[f"rod{i}"].axial))
-            )
-    section.table(
-        "Actuator, guide-normal and rod-axial forces at the reference pose (0, 0.08 m, -20 deg)",
-        ["case", "leg", Column("f_c", "N"), Column("f_n (along y)", "N"), Column("f_l (tension)", "N")],
-        rows,
-    )
-    sol = static_forces(mech, q, gravity=False)
+    for mech in (four, three):
+        rows, comparisons = _statics_rows(mech, pose)
+        name = "3D4M" if mech.redundancy else "3D3M"
+        section.table(
+            f"{name}: actuator, guide-normal and rod-axial forces at the reference pose (0, 0.08 m, -20 deg)",
+            ["case", "leg", Column("f_c", "N"), Column("f_n (along y)", "N"), Column("f_l (tension)", "N")],
+            rows,
+        )
+        section.comparison(f"{name}: eqs. (15)-(22) and plm_pin", comparisons)
+    sol = static_forces(four, q, gravity=False)
     (mode,) = sol.internal_modes()
-    right = sum(mode.lam[c.rows] for c in mech.closures if c.name.endswith("right"))
-    theta = -math.radians(20.0)
+    right = sum(mode.lam[c.rows] for c in four.closures if c.name.endswith("right"))
+    theta = pose[2]
     along = abs(float(np.cross(right[:2], [math.cos(theta), math.sin(theta)]))) / float(np.linalg.norm(right))
     section.comparison(
         "Internal force (eq. (21))",
@@ -147,7 +218,7 @@ def _statics(section: Section, mech: Mechanism) -> None:
         note=f"sine of the angle between the internal force on the plate's right end and the plate: "
         f"{along:.1e}.",
     )
-    ax_a, _ = fig8(mech, q, [0.0, 1.0, 0.0], f_i=1.0)
+    ax_a, _ = fig8(four, q, [0.0, 1.0, 0.0], f_i=1.0)
     section.figure(
         ax_a.figure,
         "Fig. 8: (a) unit external force f_e = (0, 1, 0), no internal force; (b) with a unit internal force "
@@ -228,15 +299,8 @@ def _decoupling(section: Section, four: Mechanism, asym: Mechanism) -> None:
     )
 
 
-def _entries(rep) -> list[tuple[str, str]]:  # type: ignore[no-untyped-def]
-    rows = []
-    for i, a in enumerate(rep.dofs):
-        for b in rep.dofs[i:]:
-            e = rep.inertia(a, b)
-            rows.append((f"M_{a}{b}", f"{e.kind}: {e.describe()} (coupling {e.ratio:.2g})"))
-    for a in rep.dofs:
-        rows.append((f"g_{a}", f"{rep.gravity(a).kind}: {rep.gravity(a).describe()}"))
-    return rows
+def _entries(rep: DecouplingReport) -> list[tuple[str, str]]:
+    return [(name, f"{e.kind}: {e.describe()} (coupling {e.ratio:.2g})") for name, e in rep.entries()]
 
 
 def _simulations(section: Section, mech: Mechanism) -> None:
@@ -244,11 +308,7 @@ def _simulations(section: Section, mech: Mechanism) -> None:
 
     p = PRESETS["harada2011_3d4m"].parameters
     m_l, m_m, m_t = float(p["rod_masses"][0]), float(p["slider_mass"]), float(p["plate_mass"])
-    f_y = (2 * m_l + m_t) * G
-    runs = {
-        "simulation 1 (Table 3)": simulate(mech, mech.q_ref, duration=2.0, dt=0.01, wrench=[0.2, f_y, 0.0]),
-        "simulation 2 (Table 4)": simulate(mech, mech.q_ref, duration=2.0, dt=0.01, wrench=[0.0, f_y, 0.005]),
-    }
+    runs = {SIMULATIONS[case][0]: simulate_case(mech, case) for case in SIMULATIONS}
     fig, axes = plt.subplots(2, 3, figsize=(12.0, 6.0), layout="constrained")
     for row, (name, run) in zip(axes, runs.items(), strict=True):
         for ax, k, label in zip(row, range(3), ("x [m]", "y [m]", "theta [deg]"), strict=True):
@@ -262,8 +322,20 @@ def _simulations(section: Section, mech: Mechanism) -> None:
         "Figs. 10 and 12: x, y, theta under constant task forces from (0, 0.08 m, -20 deg) at rest, 2 s.",
         {name: {"t": r.t, "x": r.x} for name, r in runs.items()},
     )
+    fig, axes = plt.subplots(1, 2, figsize=(12.0, 3.4), layout="constrained")
+    snapshots = {}
+    for ax, (name, run), number in zip(axes, runs.items(), (11, 13), strict=True):
+        every = slice(None, None, round(SNAPSHOT_PERIOD / SIM_DT))
+        plot_skeletons(mech, run.q[every], ax=ax, title=f"Fig. {number}: {name}")
+        snapshots[name] = {"t": run.t[every], "x": run.x[every]}
+    section.figure(
+        fig,
+        f"Figs. 11 and 13: the table every {SNAPSHOT_PERIOD:g} s (light: t = 0, black: t = 2 s), as drawn "
+        "by the paper's code (M.42).",
+        snapshots,
+    )
     one, two = runs.values()
-    expected = 0.2 / (4 * m_l + 4 * m_m + m_t) * 2.0**2 / 2
+    expected = SIMULATIONS["simulation1"][1] / (4 * m_l + 4 * m_m + m_t) * DURATION**2 / 2
     section.comparison(
         "Simulations (Tables 2-4)",
         [
@@ -277,11 +349,10 @@ def _simulations(section: Section, mech: Mechanism) -> None:
             ),
         ],
         note=f"Largest closure residual {max(r.max_closure_residual() for r in runs.values()):.1e} m; "
-        f"y moves by {np.ptp(two.x[:, 1]) * 1e3:.3f} mm in simulation 2 (the slight motion of Fig. 12 (b)).",
+        f"in simulation 2, theta reaches {np.degrees(two.x[-1, 2]):.1f} deg at 2 s and y stays within "
+        f"[{two.x[:, 1].min() * 1e3:.1f}, {two.x[:, 1].max() * 1e3:.1f}] mm: the slight motion of "
+        "Fig. 12 (b), whose axis spans -0.1 to 0.3 m ((M.40)).",
     )
-    step = max(1, len(two.t) // 100)
-    section.scene(
-        scene_html(mech, qs=two.q[::step], times=two.t[::step]),
-        "Simulation 2 animated: rotate, zoom and play in the page.",
-        {"times": two.t[::step], "qs": two.q[::step]},
+    section.animation(
+        Animation(mech, two.q, two.t, "Simulation 2 animated: rotate, zoom and play in the page.")
     )

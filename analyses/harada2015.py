@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from plm_pin import Mechanism
+from plm_pin import Mechanism, load
 from plm_pin.kinematics import (
     AssemblyModeChange,
     ComplexSingularityCase,
@@ -36,8 +36,7 @@ from plm_pin.kinematics import (
 )
 from plm_pin.kinematics.prrrp_modes import PAPER_ASSEMBLY_ROUTE, PAPER_WORKING_ROUTE
 from plm_pin.kinematics.singularity import SINGULARITY_TOL
-from plm_pin.report import Column, Comparison, Section, StudyContext
-from plm_pin.viz import scene_html
+from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 
 TITLE = "Harada 2015: mode changes of the asymmetric 2-PRRRP"
 SUMMARY = (
@@ -56,6 +55,42 @@ ARROW = " → "
 
 def _route(modes: Sequence[Sequence[int]], label: Callable[[Sequence[int]], str] = mode_label) -> str:
     return ARROW.join(label(m) for m in modes)
+
+
+def assembly_animation(mech: Mechanism, change: AssemblyModeChange) -> Animation:
+    """The assembly-mode change, its samples spread evenly over :data:`ASSEMBLY_DURATION`."""
+    path = change.path
+    return Animation(
+        mech,
+        path.q,
+        np.linspace(0.0, ASSEMBLY_DURATION, path.n_samples),
+        f"The assembly-mode change as an animation ({ASSEMBLY_DURATION:g} s): open the controls and play it.",
+    )
+
+
+def working_animation(mech: Mechanism, flip: WorkingModeChange) -> Animation:
+    """The working-mode change of leg 3, its samples spread evenly over :data:`WORKING_DURATION`."""
+    path = flip.path
+    return Animation(
+        mech,
+        path.q,
+        np.linspace(0.0, WORKING_DURATION, path.n_samples),
+        f"The working-mode change as an animation ({WORKING_DURATION:g} s); open the controls to replay it.",
+    )
+
+
+def _plan_assembly() -> Animation:
+    mech = load("harada2015_asymmetric")
+    return assembly_animation(mech, plan_assembly_mode_change(mech))
+
+
+def _plan_working() -> Animation:
+    mech = load("harada2015_asymmetric")
+    return working_animation(mech, plan_working_mode_change(mech, leg=3))
+
+
+ANIMATIONS = {"assembly": _plan_assembly, "working": _plan_working}
+"""The two mode changes, for ``plm-pin view --animate harada2015:assembly`` (or ``working``)."""
 
 
 def run(ctx: StudyContext) -> None:
@@ -361,12 +396,7 @@ def _assembly_section(
             for c in change.crossings
         ],
     )
-    times = np.linspace(0.0, ASSEMBLY_DURATION, path.n_samples)
-    section.scene(
-        scene_html(mech, qs=path.q, times=times),
-        f"The assembly-mode change as an animation ({ASSEMBLY_DURATION:g} s): open the controls and play it.",
-        {"qs": path.q, "times": times},
-    )
+    section.animation(assembly_animation(mech, change))
 
 
 def _working_section(section: Section, mech: Mechanism, layout: PrrrpLayout, flip: WorkingModeChange) -> None:
@@ -431,12 +461,7 @@ def _working_section(section: Section, mech: Mechanism, layout: PrrrpLayout, fli
             ("route followed, non-singular", flip.ok, ""),
         ],
     )
-    times = np.linspace(0.0, WORKING_DURATION, path.n_samples)
-    section.scene(
-        scene_html(mech, qs=path.q, times=times),
-        f"The working-mode change as an animation ({WORKING_DURATION:g} s); open the controls to replay it.",
-        {"qs": path.q, "times": times},
-    )
+    section.animation(working_animation(mech, flip))
 
 
 def _complex_section(section: Section, cases: Sequence[ComplexSingularityCase]) -> None:

@@ -1,4 +1,4 @@
-"""Overview of any mechanism plm_pin loads: mobility, workspace slice, statics, 3D view.
+"""Overview of any mechanism plm_pin loads: mobility, workspace slice, statics, decoupling, motion, 3D view.
 
 ``plm-pin report overview --mechanism path/to/robot.urdf`` (or ``plm-pin report
 path/to/robot.urdf``) runs it on a user's description; ``plm-pin report all`` on
@@ -7,18 +7,24 @@ path/to/robot.urdf``) runs it on a user's description; ``plm-pin report all`` on
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pinocchio as pin
 
-from plm_pin import Mechanism, PlmError
-from plm_pin.analysis import manipulability, singular_loci, workspace_map, workspace_sweep
+from plm_pin import Mechanism, PlmError, SimulationFailed, load
+from plm_pin.analysis import WorkspaceSlice, manipulability, singular_loci, workspace_map, workspace_sweep
+from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
 from plm_pin.kinematics import classify, task_pose
-from plm_pin.report import Column, Section, StudyContext
-from plm_pin.statics import StaticForces, static_forces
+from plm_pin.report import Animation, Column, Section, StudyContext
+from plm_pin.statics import StaticForces, actuator_limits, internal_force_range, static_forces
 from plm_pin.viz import MeshcatViewer, force_arrows, plot_map, plot_static_forces, plot_sweep
 
 TITLE = "Overview"
-SUMMARY = "Mobility, redundancy, a workspace slice, statics at the reference pose and a 3D view."
+SUMMARY = (
+    "Mobility, redundancy, a workspace slice, statics with the internal-force range, decoupling, "
+    "a short simulation and a 3D view."
+)
 MECHANISM = "harada2011_3d4m"
 
 ANGLE_SPAN = np.radians(30.0)
@@ -33,10 +39,25 @@ GRID = 41
 LOCI_LINES = 11
 """Lines of the slice searched for singular points."""
 
+DECOUPLING_POSES = 6
+"""Poses per slice axis in the decoupling sample (taken from the slice's reachable points)."""
+
+SIMULATION_TIME = 1.0
+"""Length of the passive simulation [s]."""
+
+SIMULATION_DT = 0.005
+"""Output step of the passive simulation [s] (RK4 with 1 ms steps)."""
+
 
 def _display(dof: str, value: float) -> tuple[float, str]:
     """A task coordinate in report units: degrees for angles (said so), metres otherwise."""
     return (float(np.degrees(value)), "deg") if dof.startswith("r") else (float(value), "m")
+
+
+NEEDS_SQUARE_TASK = (
+    "{what}: it needs a task (`end_effector` in the sidecar) with as many coordinates as the "
+    "mechanism has degrees of freedom."
+)
 
 
 def _frame_origins(mech: Mechanism, q: np.ndarray) -> np.ndarray:
@@ -46,6 +67,28 @@ def _frame_origins(mech: Mechanism, q: np.ndarray) -> np.ndarray:
     return np.array([M.translation for M in data.oMf])
 
 
+def passive_motion(mech: Mechanism) -> tuple[SimulationResult, SimulationFailed | None]:
+    """The mechanism released at rest from its reference configuration, actuators free, under gravity.
+
+    Returns:
+        The samples (up to the failure, if any) and the failure (None when the run completed).
+    """
+    try:
+        return simulate(mech, mech.q_ref, duration=SIMULATION_TIME, dt=SIMULATION_DT), None
+    except SimulationFailed as exc:
+        return exc.partial, exc
+
+
+def _passive_animation(target: str) -> Animation:
+    mech = load(target)
+    run, _ = passive_motion(mech)
+    return Animation(mech, run.q, run.t, f"{mech.name} released at rest under gravity, actuators free")
+
+
+ANIMATIONS = {"simulation": _passive_animation}
+"""The passive simulation, for ``plm-pin view NAME|PATH --animate overview:simulation``."""
+
+
 def run(ctx: StudyContext) -> None:
     """Fill the overview report of ``ctx.target``."""
     mech = ctx.load()
@@ -53,16 +96,22 @@ def run(ctx: StudyContext) -> None:
     square = mech.task is not None and len(mech.task.dofs) == mech.mobility
     _mobility(ctx.section("Mobility and redundancy"), mech, square)
     section = ctx.section("Workspace slice: manipulability and singularities")
+    grid = None
     if square:
         ctx.step(f"{mech.name}: workspace slice")
-        _workspace(section, mech)
+        grid = _workspace(section, mech)
     else:
-        section.text(
-            "No workspace slice: it needs a task (`end_effector` in the sidecar) with as many "
-            "coordinates as the mechanism has degrees of freedom."
-        )
+        section.text(NEEDS_SQUARE_TASK.format(what="No workspace slice"))
     ctx.step(f"{mech.name}: static forces at the reference")
     forces = _statics(ctx.section("Static forces at the reference configuration"), mech)
+    section = ctx.section("Task-space dynamics and decoupling")
+    if grid is not None:
+        ctx.step(f"{mech.name}: decoupling")
+        _decoupling(section, mech, grid)
+    else:
+        section.text(NEEDS_SQUARE_TASK.format(what="No decoupling check"))
+    ctx.step(f"{mech.name}: passive simulation")
+    _simulation(ctx.section("Short simulation: released under gravity"), mech)
     ctx.step(f"{mech.name}: 3D scene")
     _scene(ctx.section("3D view"), mech, forces)
 
@@ -108,7 +157,7 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
         )
 
 
-def _workspace(section: Section, mech: Mechanism) -> None:
+def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
     assert mech.task is not None
     dofs = mech.task.dofs
     axes = ("x", "y") if {"x", "y"} <= set(dofs) else tuple(dofs[:2])
@@ -179,6 +228,84 @@ def _workspace(section: Section, mech: Mechanism) -> None:
                 for p in loci
             ],
         )
+    return grid
+
+
+def _decoupling_sample(grid: WorkspaceSlice) -> np.ndarray:
+    """Task poses [m, rad] at the reachable points of a coarse sub-grid of the slice, shape (k, n_task)."""
+    picks = [
+        np.unique(np.rint(np.linspace(0, v.size - 1, DECOUPLING_POSES)).astype(int)) for v in grid.values
+    ]
+    poses = []
+    for point in itertools.product(*picks):
+        if grid.reachable[point]:
+            pose = np.array(grid.pose, dtype=float)
+            for axis, values, k in zip(grid.axes, grid.values, point, strict=True):
+                pose[grid.dofs.index(axis)] = values[k]
+            poses.append(pose)
+    return np.array(poses)
+
+
+def _decoupling(section: Section, mech: Mechanism, grid: WorkspaceSlice) -> None:
+    sample = _decoupling_sample(grid)
+    if sample.size == 0:
+        section.text("No decoupling check: no point of the slice is reachable.")
+        return
+    report = decoupling_check(mech, sample, mode=grid.working_mode)
+    section.text(
+        f"The task-space dynamics M_x xdd + h_x + g_x = f_x (M_x = S^T M S) over {report.n_poses} "
+        "reachable poses of the slice. An entry is *zero* when it stays within its tolerance of zero "
+        f"at every pose (relative to its Cauchy-Schwarz bound, rtol = {report.rtol:g}), *constant* "
+        "when its spread stays within that tolerance, and *varies* otherwise; the coupling is its "
+        f"largest ratio to the bound (0 to 1). h_x is evaluated at {report.n_velocities} random task "
+        "velocities per pose."
+    )
+    section.table(
+        "Decoupling table",
+        ["entry", "behaviour", Column("min"), Column("max"), "unit", Column("coupling", "-")],
+        [(name, e.kind, e.minimum, e.maximum, e.unit, e.ratio) for name, e in report.entries()],
+        note="Decoupled with constant inertia: "
+        + (", ".join(report.decoupled()) or "none")
+        + f"; poses skipped: {len(report.unreachable)} unreachable, {len(report.singular)} singular.",
+    )
+
+
+def _simulation(section: Section, mech: Mechanism) -> None:
+    run, failure = passive_motion(mech)
+    section.text(
+        f"The mechanism released at rest from its reference configuration with its actuators free, "
+        f"under gravity, for {SIMULATION_TIME:g} s (RK4, 1 ms steps, each state projected back onto the "
+        "closures). With no friction and no input, the energy must stay constant."
+    )
+    if failure is not None:
+        section.text(f"The simulation stopped at t = {failure.time:.4g} s: {failure}", markdown=False)
+    drift = np.max(np.abs(run.energy - run.energy[0]))
+    section.table(
+        "Passive simulation",
+        ["quantity", "value", "unit"],
+        [
+            ("time simulated", float(run.t[-1]), "s"),
+            ("samples", int(run.t.size), ""),
+            ("largest closure residual", run.max_closure_residual(), "m, rad"),
+            ("energy drift (max |E - E(0)|)", float(drift), "J"),
+            ("largest joint speed", float(np.max(np.abs(run.v))), "m/s, rad/s"),
+        ],
+    )
+    if run.x is not None and run.t.size > 1:
+        import matplotlib.pyplot as plt
+
+        assert mech.task is not None
+        fig, ax = plt.subplots(figsize=(6.5, 3.5), layout="constrained")
+        for k, dof in enumerate(mech.task.dofs):
+            unit = _display(dof, 0.0)[1]
+            values = np.degrees(run.x[:, k]) if unit == "deg" else run.x[:, k]
+            ax.plot(run.t, values, label=f"{dof} [{unit}]")
+        ax.set_xlabel("t [s]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize="small")
+        section.figure(fig, "Task coordinates during the passive simulation.", {"t": run.t, "x": run.x})
+    if run.t.size > 1:
+        section.animation(Animation(mech, run.q, run.t, "The passive simulation: play it in the page."))
 
 
 def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
@@ -221,6 +348,7 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
                 ["mode", *(Column(n, "N") for n in names)],
                 [(k + 1, *(m.link_forces[n].axial for n in names)) for k, m in enumerate(modes)],
             )
+        _internal_range(section, mech, sol)
     spread = np.ptp(_frame_origins(mech, mech.q_ref), axis=0)
     plane = "".join(sorted("xyz"[k] for k in np.argsort(spread)[-2:]))
     axes = plot_static_forces(sol, plane=plane, title=f"static forces in the {plane} plane")
@@ -231,6 +359,29 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
         {"forces": sol.to_dict(), "arrows": force_arrows(sol)},
     )
     return sol
+
+
+def _internal_range(section: Section, mech: Mechanism, sol: StaticForces) -> None:
+    limits = actuator_limits(mech, "description")
+    if not np.isfinite(limits).all():
+        section.text(
+            "Internal-force range: the description gives no effort limits for some actuators, so every "
+            "internal force is admissible. Add `limits: [lo, hi]` to each actuator in the sidecar to see "
+            "how far the actuators can preload the mechanism while holding it."
+        )
+        return
+    try:
+        span = internal_force_range(mech, mech.q_ref)
+    except PlmError as exc:
+        section.text(f"No internal-force range: {exc}", markdown=False)
+        return
+    section.table(
+        "Internal-force range within the actuator limits, holding gravity",
+        ["mode", Column("lowest", "N or N m"), Column("min-norm", "N or N m"), Column("highest", "N or N m")],
+        [(k + 1, span.lower[k], sol.internal[k], span.upper[k]) for k in range(span.lower.size)],
+        note="Coordinates along the modes above (one linear programme per bound, the other modes free); "
+        "multiply a mode's link forces by a coordinate to read the preload it stands for.",
+    )
 
 
 def _scene(section: Section, mech: Mechanism, forces: StaticForces | None) -> None:

@@ -45,7 +45,7 @@ from .mechanism import Mechanism
 from .models.classic import build_fourbar
 from .models.pss import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 from .models.registry import PRESETS, preset_names
-from .statics import static_forces
+from .statics import AllocationRule, solve_balance, static_balance, static_forces
 
 MAP_SHAPE = (317, 316)
 """Grid of the manipulability-map benchmark: 100,172 poses."""
@@ -146,7 +146,20 @@ def allocation_benchmark() -> list[dict[str, object]]:
         bound = [(-(free + least) / 2, (free + least) / 2)] * mech.n_actuators  # the limits bind
         times = np.linspace(0.0, duration, 51)
         traj = task_trajectory(mech, profile, times)
+        balance = static_balance(mech, q)
         cases: dict[str, tuple[Callable[[], object], int]] = {
+            "static_balance (gravity): B, J_phi, internal basis": (
+                functools.partial(static_balance, mech, q),
+                1,
+            ),
+            "solve_balance on it (min-norm)": (
+                functools.partial(solve_balance, mech, balance, AllocationRule.checked(mech)),
+                1,
+            ),
+            "solve_balance on it (limits active)": (
+                functools.partial(solve_balance, mech, balance, AllocationRule.checked(mech, limits=bound)),
+                1,
+            ),
             "static_forces (gravity, limits active)": (
                 functools.partial(static_forces, mech, q, limits=bound),
                 1,

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import shlex
 import warnings
 import webbrowser
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -31,7 +32,18 @@ from .kinematics import inverse_kinematics, task_pose
 from .loading import load
 from .mechanism import Mechanism
 from .models.registry import PRESETS
-from .report import Study, find_study, output_folder, run_study, study_names, write_index, write_report
+from .report import (
+    Animation,
+    Study,
+    compute_animation,
+    find_study,
+    output_folder,
+    parse_case,
+    run_study,
+    study_names,
+    write_index,
+    write_report,
+)
 from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
@@ -52,17 +64,25 @@ def _fail(exc: Exception) -> typer.Exit:
     return typer.Exit(code=1)
 
 
-def _load(target: str | Path) -> Mechanism:
-    """Load a mechanism, printing its warnings on stderr and turning errors into exit 1."""
+@contextlib.contextmanager
+def _reported() -> Iterator[None]:
+    """Print plm_pin's warnings on stderr, and turn its errors into one line and exit 1."""
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", PlmWarning)
-            mech = load(target)
-            mech.summary()  # computes mobility now, inside the error handling
+            yield
     except PlmError as exc:
         raise _fail(exc) from None
-    for w in caught:
-        errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
+    finally:
+        for w in caught:
+            errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
+
+
+def _load(target: str | Path) -> Mechanism:
+    """Load a mechanism, printing its warnings on stderr and turning errors into exit 1."""
+    with _reported():
+        mech = load(target)
+        mech.summary()  # computes mobility now, inside the error handling
     return mech
 
 
@@ -314,9 +334,41 @@ def _print_status(status: SceneStatus) -> None:
         )
 
 
+def _animation(spec: str, target: str | None) -> Animation:
+    """The motion ``STUDY:CASE``; ``target`` is the mechanism to move, or must be the animation's own."""
+    with _reported():
+        name, case = parse_case(spec)
+        study = find_study(name)
+        motion = compute_animation(study, case, target if study.mechanism is not None else None)
+        if target is not None and study.mechanism is None and target != motion.mechanism.name:
+            raise InvalidInput(
+                f"--animate {spec} moves {motion.mechanism.name}, not {target!r}: give that mechanism or none"
+            )
+    return motion
+
+
+def _draw(viewer: MeshcatViewer, q: np.ndarray | None, motion: Animation | None) -> SceneStatus:
+    """Place the mechanism at ``q``, or play ``motion``."""
+    if motion is None:
+        return viewer.display(q)
+    console.print(
+        f"{motion.caption} ({motion.times.size} frames, {motion.times[-1] - motion.times[0]:.3g} s)",
+        markup=False,
+        highlight=False,
+        soft_wrap=True,
+    )
+    return viewer.animate(motion.qs, motion.times)
+
+
 @app.command()
 def view(
-    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
+    target: Annotated[
+        str | None,
+        typer.Argument(
+            help="preset name, erd:<robot>, .urdf, .plm.yaml or folder (optional with --animate: the "
+            "animation's own mechanism)"
+        ),
+    ] = None,
     pose: Annotated[
         list[str] | None,
         typer.Option(
@@ -337,13 +389,29 @@ def view(
     html: Annotated[
         Path | None, typer.Option("--html", help="write a static page to this file instead of serving")
     ] = None,
+    animate: Annotated[
+        str | None,
+        typer.Option(
+            "--animate",
+            help="STUDY:CASE: play a motion a study computes, e.g. harada2015:assembly, "
+            "harada2011:simulation2, enferadi2017:circle, zhao2011:8pss, overview:simulation",
+        ),
+    ] = None,
 ) -> None:
     """Show a mechanism in meshcat (127.0.0.1 only): frames, closure points, singularities highlighted.
 
     Serves until Ctrl-C, unless --html writes a page that needs no server or --zmq-url draws
-    into a server that is already running.
+    into a server that is already running. With --animate, plays a study's motion instead.
     """
-    mech = _load(target)
+    if animate is None:
+        if target is None:
+            raise _fail(InvalidInput("give a mechanism (preset, erd:<robot>, .urdf, folder) or --animate"))
+        mech, motion = _load(target), None
+    else:
+        if pose:
+            raise _fail(InvalidInput("--animate plays a motion: it takes no --pose"))
+        motion = _animation(animate, target)
+        mech = motion.mechanism
     try:
         if html is not None and (port is not None or zmq_url is not None):
             raise InvalidInput(
@@ -353,10 +421,10 @@ def view(
             raise InvalidInput("--zmq-url draws into a running server: it takes no --port")
         if html is not None and html.is_dir():
             raise InvalidInput(f"--html {html}: is a folder; give a file name")
-        q = _pose_configuration(mech, pose or [])
+        q = _pose_configuration(mech, pose or []) if motion is None else None
         if html is not None or zmq_url is not None:
             viewer = MeshcatViewer(mech, static=html is not None, zmq_url=zmq_url)
-            _print_status(viewer.display(q))
+            _print_status(_draw(viewer, q, motion))
             if html is not None:
                 html.parent.mkdir(parents=True, exist_ok=True)
                 viewer.write_html(html)
@@ -378,7 +446,7 @@ def view(
             )
         try:
             viewer = MeshcatViewer(mech, server=server)
-            _print_status(viewer.display(q))
+            _print_status(_draw(viewer, q, motion))
         except PlmError as exc:
             raise _fail(exc) from None
         console.print(f"{mech.name}: {server.web_url}", markup=False, highlight=False, soft_wrap=True)

@@ -271,6 +271,13 @@ class DecouplingReport:
                 out.append(d)
         return tuple(out)
 
+    def entries(self) -> list[tuple[str, EntryBehaviour]]:
+        """Every entry by name: the upper triangle of M_x (``M_xy``), then the g_x and h_x rows."""
+        out = [(f"M_{a}{b}", self.inertia(a, b)) for i, a in enumerate(self.dofs) for b in self.dofs[i:]]
+        out += [(f"g_{a}", self.gravity(a)) for a in self.dofs]
+        out += [(f"h_{a}", self.velocity(a)) for a in self.dofs]
+        return out
+
     def to_table(self) -> str:
         """Readable text table: ``0``, a constant value, or a range per entry, with the tolerances."""
         header = [

@@ -76,7 +76,7 @@ def adaptive_trapezoid_work(
         raise InvalidInput(f"need finite ts < te, got ts = {ts}, te = {te}")
     if not tol > 0:
         raise InvalidInput(f"tol must be positive [J], got {tol}")
-    previous = None
+    previous = change = None
     for n in range(1, int(n_max) + 1):
         t = np.linspace(ts, te, 2**n + 1)
         work = np.trapezoid(np.abs(np.asarray(power_at(t), dtype=float)), t, axis=0)
@@ -85,7 +85,8 @@ def adaptive_trapezoid_work(
             if np.all(change <= tol):
                 return AdaptiveWork(work, n, change)
         previous = work
-    raise InvalidInput(f"the trapezoid rule did not converge to {tol} J with 2**{n_max} intervals")
+    last = "" if change is None else f"; the last change was {np.max(change):.6g} J"
+    raise InvalidInput(f"the trapezoid rule did not converge to {tol} J with 2**{n_max} intervals{last}")
 
 
 def spline_work(t: Any, power: Any) -> np.ndarray:

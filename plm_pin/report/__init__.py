@@ -1,5 +1,6 @@
 """Study reports: self-contained HTML pages with results.json, written atomically, and their index."""
 
+from .animation import Animation, compute_animation, parse_case
 from .content import (
     Column,
     Comparison,
@@ -14,6 +15,7 @@ from .writer import output_folder, write_index, write_report
 
 __all__ = [
     "STUDY_PACKAGE",
+    "Animation",
     "Column",
     "Comparison",
     "MechanismInfo",
@@ -22,8 +24,10 @@ __all__ = [
     "Study",
     "StudyContext",
     "StudyResult",
+    "compute_animation",
     "find_study",
     "output_folder",
+    "parse_case",
     "render_index",
     "render_report",
     "run_study",

@@ -23,6 +23,8 @@ from ._private import plain
 if TYPE_CHECKING:
     from matplotlib.figure import Figure as MplFigure
 
+    from .animation import Animation
+
 FORMAT = "plm-pin-report/1"
 """Format tag of ``results.json``."""
 
@@ -414,6 +416,14 @@ class Section:
         block = Scene(caption, html, data)
         self.blocks.append(block)
         return block
+
+    def animation(self, animation: Animation, frames: int = 120) -> Scene:
+        """Add a motion as a scene the reader plays in the page (at most ``frames`` configurations)."""
+        from ..viz import scene_html
+
+        shown = animation.thinned(frames)
+        html = scene_html(shown.mechanism, qs=shown.qs, times=shown.times)
+        return self.scene(html, animation.caption, {"qs": shown.qs, "times": shown.times})
 
     def parameters(self, title: str, items: Sequence[Parameter]) -> Parameters:
         """Add a list of parameters."""

@@ -8,7 +8,10 @@ A study is a module ``analyses/<name>.py`` defining:
   only a study that defines it takes ``--mechanism``, e.g. the generic ``overview``);
 - ``run(ctx: StudyContext) -> None``: loads its mechanisms with :meth:`StudyContext.load`,
   adds sections with :meth:`StudyContext.section` and reports progress with
-  :meth:`StudyContext.step`.
+  :meth:`StudyContext.step`;
+- ``ANIMATIONS``: case name -> function returning an :class:`~plm_pin.report.Animation`
+  (optional; played by ``plm-pin view --animate STUDY:CASE``, see
+  :mod:`plm_pin.report.animation`).
 
 The engine runs it in memory (:func:`run_study`); nothing is written until it has finished
 (:mod:`plm_pin.report.writer`). Modules whose names start with ``_`` are helpers, not studies.
@@ -20,8 +23,8 @@ import importlib
 import pkgutil
 import time
 import warnings
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 from types import ModuleType
@@ -32,6 +35,7 @@ from ..mechanism import Mechanism
 from ..models.registry import PRESETS
 from ..warnings import PlmWarning
 from ._private import FOLDER, slug, software_versions
+from .animation import Animation
 from .content import MechanismInfo, Parameter, Section, StudyResult
 
 STUDY_PACKAGE = "analyses"
@@ -48,6 +52,7 @@ class Study:
         summary: ``SUMMARY`` (empty when absent).
         mechanism: ``MECHANISM``: the default mechanism, None when the study takes none.
         run: ``run(ctx)``.
+        animations: ``ANIMATIONS``: case name -> function computing the motion (empty when absent).
     """
 
     name: str
@@ -55,6 +60,7 @@ class Study:
     summary: str
     mechanism: str | None
     run: Callable[[StudyContext], None]
+    animations: Mapping[str, Callable[..., Animation]] = field(default_factory=dict)
 
 
 def _package() -> ModuleType:
@@ -82,7 +88,8 @@ def find_study(name: str) -> Study:
 
     Raises:
         InvalidInput: no such study (the message lists them).
-        PlmError: the module is not a study (no ``TITLE`` or ``run``).
+        PlmError: the module is not a study (no ``TITLE`` or ``run``, or malformed
+            ``MECHANISM`` or ``ANIMATIONS``).
     """
     names = study_names()
     if name not in names:
@@ -94,7 +101,12 @@ def find_study(name: str) -> Study:
     mechanism = getattr(module, "MECHANISM", None)
     if mechanism is not None and not isinstance(mechanism, str):
         raise PlmError(f"{module.__name__}.MECHANISM must be a preset name or a path, got {mechanism!r}")
-    return Study(name, title, str(getattr(module, "SUMMARY", "")), mechanism, run)
+    animations = getattr(module, "ANIMATIONS", {})
+    if not isinstance(animations, Mapping) or not all(
+        isinstance(k, str) and callable(f) for k, f in animations.items()
+    ):
+        raise PlmError(f"{module.__name__}.ANIMATIONS must map case names to functions")
+    return Study(name, title, str(getattr(module, "SUMMARY", "")), mechanism, run, dict(animations))
 
 
 def _describe(mech: Mechanism, target: str | Path | Mechanism) -> MechanismInfo:

@@ -2,7 +2,7 @@
 
 from .allocation import OBJECTIVES
 from .balance import SINGULAR_RTOL, Load, StaticBalance, generalized_balance, load_on_frame, static_balance
-from .capability import Capability, force_capability, wrench_polygon
+from .capability import Capability, InternalRange, force_capability, internal_force_range, wrench_polygon
 from .forces import (
     AllocationRule,
     InternalMode,
@@ -20,6 +20,7 @@ __all__ = [
     "AllocationRule",
     "Capability",
     "InternalMode",
+    "InternalRange",
     "JointReaction",
     "LinkForce",
     "Load",
@@ -28,6 +29,7 @@ __all__ = [
     "actuator_limits",
     "force_capability",
     "generalized_balance",
+    "internal_force_range",
     "internal_modes",
     "load_on_frame",
     "solve_balance",

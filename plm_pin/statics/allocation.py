@@ -37,10 +37,6 @@ FEASIBILITY_RTOL = 1e-9
 
 _QP_EPS = 1e-11
 
-_QP_STALL = 100.0
-"""ProxSuite may stall at its iteration cap just above ``_QP_EPS`` (dual residual 1.07e-11 after 1000
-iterations on a 3D4M preload problem); an answer within ``_QP_STALL * _QP_EPS`` is taken, then polished."""
-
 
 @dataclass(frozen=True)
 class Inequalities:
@@ -142,19 +138,15 @@ def allocate(
     elif k == 0:
         y = np.zeros(0)
     else:
-        y = _unconstrained(f_p, G, weights) if objective == "norm" else None
+        solve = _min_norm if objective == "norm" else _min_max
+        y = solve(f_p, G, weights, ineq, tol)
         if y is None or np.max(ineq.violation(y), initial=0.0) > tol:
-            # Phase 1: is any allocation within the inequalities? (ProxSuite's own infeasibility
-            # detection is unreliable on these small problems and can run to its iteration cap.)
-            y = _least_violating(G.shape[1], ineq, tol)
-            if np.max(ineq.violation(y), initial=0.0) <= tol:  # Phase 2, on a feasible problem
-                y = (
-                    _min_norm(f_p, G, weights, ineq, tol)
-                    if objective == "norm"
-                    else _min_max(f_p, G, weights, ineq, tol)
-                )
-                if y is None:
-                    raise PlmError("ProxSuite did not solve a feasible allocation problem")
+            # No answer within the inequalities: decide by the least violation whether there is
+            # one (ProxSuite's own infeasibility detection is unreliable on these small problems).
+            least = _least_violating(G.shape[1], ineq, tol)
+            if np.max(ineq.violation(least), initial=0.0) <= tol:
+                raise PlmError("ProxSuite did not solve a feasible allocation problem")
+            y = least
     if np.max(ineq.violation(y), initial=0.0) > tol:
         _raise_infeasible(f_p, G, ineq, names, tol, y)
     f_c = f_p + G @ y
@@ -178,7 +170,29 @@ def _min_norm(
     y0 = _unconstrained(f_p, G, W)
     if np.max(ineq.violation(y0), initial=0.0) <= tol:
         return y0  # the unconstrained minimiser already meets every inequality
+    if G.shape[1] == 1:
+        return _clipped(y0, ineq)
     return solve_qp(G.T @ W @ G, G.T @ W @ f_p, ineq, tol)
+
+
+def _clipped(y0: np.ndarray, ineq: Inequalities) -> np.ndarray:
+    """One internal force: the convex quadratic's minimiser ``y0`` clipped into the feasible interval.
+
+    Each row bounds y to an interval; their intersection is the feasible set, and the
+    minimiser of a convex quadratic over an interval is its free minimiser clipped into it.
+    An intersection emptied by rounding alone (a single point, as at the minimum peak) gives
+    the middle of the crossed ends; the caller checks the answer's violation either way.
+    """
+    d = ineq.D[:, 0]
+    moving = d != 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = (ineq.lower[moving] - ineq.offset[moving]) / d[moving]
+        b = (ineq.upper[moving] - ineq.offset[moving]) / d[moving]
+    lo = float(np.max(np.minimum(a, b), initial=-np.inf))
+    hi = float(np.min(np.maximum(a, b), initial=np.inf))
+    if lo > hi:
+        return np.array([0.5 * (lo + hi)])
+    return np.array([min(max(float(y0[0]), lo), hi)])
 
 
 def _min_max(
@@ -230,8 +244,7 @@ def solve_qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np
     """Solve ``min 1/2 y^T H y + g^T y`` s.t. ``lower <= offset + D y <= upper`` with ProxSuite, polished.
 
     ``H`` may be zero (a linear programme). The answer is polished on its active set (see the
-    module docstring). Returns None when ProxSuite does not report the problem solved (or stalled
-    at its iteration cap within ``_QP_STALL`` times the tolerance).
+    module docstring). Returns None when ProxSuite does not report the problem solved.
     """
     n = g.shape[0]
     p = ineq.D.shape[0]
@@ -248,12 +261,7 @@ def solve_qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np
     upper = np.where(np.isfinite(ineq.upper), ineq.upper - ineq.offset, 1e20)
     qp.init(H, g, None, None, ineq.D, lower, upper)
     qp.solve()
-    info = qp.results.info
-    stalled = (
-        info.status == proxsuite.proxqp.QPSolverOutput.PROXQP_MAX_ITER_REACHED
-        and max(info.pri_res, info.dua_res) <= _QP_STALL * _QP_EPS
-    )
-    if info.status != proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED and not stalled:
+    if qp.results.info.status != proxsuite.proxqp.QPSolverOutput.PROXQP_SOLVED:
         return None
     y = np.array(qp.results.x)
     return _polish(H, g, ineq, y, np.array(qp.results.z), tol)
@@ -270,8 +278,15 @@ def _polish(
     n = y.shape[0]
     Da = ineq.D[active]
     rhs = np.where(at_lower[active], ineq.lower[active], ineq.upper[active]) - ineq.offset[active]
-    K = np.block([[H, Da.T], [Da, np.zeros((active.size, active.size))]])
-    sol, *_ = np.linalg.lstsq(K, np.concatenate([-g, rhs]), rcond=None)
+    K = np.zeros((n + active.size, n + active.size))
+    K[:n, :n] = H
+    K[:n, n:] = Da.T
+    K[n:, :n] = Da
+    b = np.concatenate([-g, rhs])
+    try:
+        sol = np.linalg.solve(K, b)
+    except np.linalg.LinAlgError:  # a degenerate active set: the least-squares solution
+        sol = np.linalg.lstsq(K, b, rcond=None)[0]
     y_pol = sol[:n]
     objective = 0.5 * y @ H @ y + g @ y
     polished = 0.5 * y_pol @ H @ y_pol + g @ y_pol

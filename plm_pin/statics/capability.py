@@ -83,13 +83,7 @@ def force_capability(
         AllocationInfeasible: the limits do not even hold gravity (``alpha = 0`` is infeasible).
         SingularConfiguration: the load cannot be resisted at ``q``.
     """
-    bounds = actuator_limits(mech, limits)
-    if not np.isfinite(bounds).all():
-        unbounded = [a.joint for a, b in zip(mech.actuators, bounds, strict=True) if not np.isfinite(b).all()]
-        raise InvalidInput(
-            f"force capability needs finite effort limits on every actuator; {unbounded} have none "
-            "(add 'limits' to the sidecar's actuation or pass limits=...)"
-        )
+    bounds = _finite_limits(mech, limits, "force capability")
     load = load_on_frame(mech, direction, frame)
     with_load = static_balance(mech, q, load.wrench, load.frame, gravity=gravity)
     base = static_balance(mech, q, gravity=gravity) if gravity else None
@@ -126,6 +120,112 @@ def force_capability(
         if f <= lo + 1e3 * tol or f >= hi - 1e3 * tol
     )
     return Capability(np.asarray(direction, dtype=float), alpha, f_c, saturated)
+
+
+def _finite_limits(mech: Mechanism, limits: Any, what: str) -> np.ndarray:
+    """The actuator limits, shape (n_act, 2); refused unless every one is finite."""
+    bounds = actuator_limits(mech, limits)
+    if not np.isfinite(bounds).all():
+        unbounded = [a.joint for a, b in zip(mech.actuators, bounds, strict=True) if not np.isfinite(b).all()]
+        raise InvalidInput(
+            f"{what} needs finite effort limits on every actuator; {unbounded} have none "
+            "(add 'limits' to the sidecar's actuation or pass limits=...)"
+        )
+    return bounds
+
+
+@dataclass(frozen=True)
+class InternalRange:
+    r"""The internal forces the actuator limits admit under one load.
+
+    The balancing forces are :math:`f_c = f_p + G y` (:math:`f_p` of minimum norm, :math:`G`
+    the orthonormal internal basis of :attr:`StaticBalance.internal_basis`); the admissible
+    :math:`y` form the polytope :math:`l \le f_p + G y \le u`. Its extent along each basis
+    vector is :attr:`lower` .. :attr:`upper`.
+
+    Attributes:
+        lower: smallest admissible coordinate along each internal mode, shape (k,) [N, N m].
+        upper: largest admissible coordinate along each internal mode, shape (k,) [N, N m].
+        f_lower: actuator forces at each lower end, shape (k, n_act) [N, N m].
+        f_upper: actuator forces at each upper end, shape (k, n_act) [N, N m].
+        internal_basis: the basis :math:`G` the coordinates refer to, shape (n_act, k).
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    f_lower: np.ndarray
+    f_upper: np.ndarray
+    internal_basis: np.ndarray
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready dictionary."""
+        return {
+            "lower": self.lower.tolist(),
+            "upper": self.upper.tolist(),
+            "f_lower": self.f_lower.tolist(),
+            "f_upper": self.f_upper.tolist(),
+            "internal_basis": self.internal_basis.tolist(),
+        }
+
+
+def internal_force_range(
+    mech: Mechanism,
+    q: Any,
+    wrench: Any = None,
+    frame: str | None = None,
+    *,
+    gravity: bool = True,
+    limits: Any = "description",
+) -> InternalRange:
+    r"""How far each internal force can go while the actuators hold the load within their limits.
+
+    One linear programme per bound: :math:`\min / \max\ y_k` s.t.
+    :math:`l \le f_p + G y \le u` (the other coordinates free), solved by ProxSuite and
+    polished on its active set, as in :func:`force_capability`. Multiply a mode's
+    :class:`~plm_pin.statics.InternalMode` readings (link axial forces, guide forces) by a
+    coordinate to read the preload it stands for.
+
+    Args:
+        mech: a redundantly actuated mechanism.
+        q: an assembled configuration, shape (nq,).
+        wrench: load applied to ``frame`` (see :func:`~plm_pin.statics.balance.load_on_frame`);
+            default none.
+        frame: frame the load acts on; default the task frame.
+        gravity: the weight of the bodies is held too.
+        limits: actuator effort limits (``"description"`` or an (n_act, 2) array); every
+            actuator needs finite limits.
+
+    Raises:
+        InvalidInput: no redundancy (no internal force), a malformed load, or actuators
+            without finite limits.
+        AllocationInfeasible: the limits do not hold the load at all.
+        SingularConfiguration: the load cannot be resisted at ``q``.
+    """
+    bounds = _finite_limits(mech, limits, "the internal-force range")
+    if wrench is None:
+        balance = static_balance(mech, q, gravity=gravity)
+    else:
+        load = load_on_frame(mech, wrench, frame)
+        balance = static_balance(mech, q, load.wrench, load.frame, gravity=gravity)
+    G = balance.internal_basis  # (n_act, k)
+    k = G.shape[1]
+    if k == 0:
+        raise InvalidInput(f"{mech.name} has no internal forces (redundancy {mech.redundancy})")
+    names = tuple(a.joint for a in mech.actuators)
+    f_p = balance.f_particular
+    _check_gravity_held(f_p, G, bounds, names)
+    rows = Inequalities(names, f_p, G, bounds[:, 0], bounds[:, 1])
+    tol = FEASIBILITY_RTOL * max(float(np.max(np.abs(bounds))), 1.0)
+    ends = np.empty((2, k))
+    f_lower, f_upper = np.empty((k, len(names))), np.empty((k, len(names)))
+    for side, sign in enumerate((1.0, -1.0)):  # minimise y_k, then -y_k
+        for i in range(k):
+            y = solve_qp(np.zeros((k, k)), sign * np.eye(k)[i], rows, tol)
+            if y is None or np.max(rows.violation(y), initial=0.0) > tol:
+                raise PlmError(f"{mech.name}: ProxSuite did not solve the internal-force range programme")
+            ends[side, i] = y[i]
+            (f_lower if side == 0 else f_upper)[i] = f_p + G @ y
+    return InternalRange(ends[0], ends[1], f_lower, f_upper, G.copy())
 
 
 def _check_gravity_held(f_g: np.ndarray, G: np.ndarray, bounds: np.ndarray, names: tuple[str, ...]) -> None:

@@ -4,6 +4,7 @@ from .figures import plot_map, plot_sweep
 from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
 from .meshcat_server import MeshcatServer, ViewerError
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
+from .skeleton import plot_skeletons
 from .sweep_figures import plot_sweep_heatmap, plot_sweep_lines
 
 __all__ = [
@@ -15,6 +16,7 @@ __all__ = [
     "fig8",
     "force_arrows",
     "plot_map",
+    "plot_skeletons",
     "plot_static_forces",
     "plot_sweep",
     "plot_sweep_heatmap",

@@ -25,13 +25,13 @@ import pinocchio as pin
 
 from ..exceptions import InvalidInput
 from .figures import _axes, _pyplot
+from .skeleton import plane_axes, skeleton_segments
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
     from ..statics import StaticForces
 
-PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 COLOURS = {"f_c": "tab:red", "f_n": "tab:green", "f_l": "tab:blue", "load": "black"}
 
 
@@ -77,23 +77,6 @@ def force_arrows(sol: StaticForces) -> list[ForceArrow]:
     return out
 
 
-def _skeleton(sol: StaticForces) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Segments from each joint to its child joints and closure frames, world coordinates."""
-    mech = sol.mechanism
-    model, data = mech.model, mech.data
-    segments = []
-    for j in range(1, model.njoints):
-        parent = model.parents[j]
-        if parent > 0:
-            segments.append((data.oMi[parent].translation.copy(), data.oMi[j].translation.copy()))
-    for c in mech.closures:
-        for fid in c.frame_ids:
-            joint = model.frames[fid].parentJoint
-            if joint > 0:
-                segments.append((data.oMi[joint].translation.copy(), data.oMf[fid].translation.copy()))
-    return segments
-
-
 def plot_static_forces(
     sol: StaticForces,
     overlay: StaticForces | None = None,
@@ -118,14 +101,12 @@ def plot_static_forces(
     Returns:
         The axes.
     """
-    if plane not in PLANES:
-        raise InvalidInput(f"plane {plane!r} is not one of {list(PLANES)}")
+    i, j = plane_axes(plane)
     if overlay is not None and not np.allclose(overlay.balance.q, sol.balance.q):
         raise InvalidInput("overlay must be a solution at the same configuration")
-    i, j = PLANES[plane]
     arrows = force_arrows(sol)
     extra = force_arrows(overlay) if overlay is not None else []
-    segments = _skeleton(sol)
+    segments = skeleton_segments(sol.mechanism, sol.mechanism.data)
     points = np.array([p for seg in segments for p in seg] or [np.zeros(3)])
     extent = float(np.max(np.ptp(points[:, [i, j]], axis=0))) or 1.0
     if scale is None:

@@ -119,8 +119,8 @@ def _segment(name: str) -> str:
     return name.replace("/", "_") or "_"
 
 
-def _extent(mech: Mechanism) -> tuple[float, float]:
-    """Largest side of the box around the frame origins, and their largest distance to the world origin [m].
+def _extent(mech: Mechanism) -> tuple[float, np.ndarray]:
+    """Largest side of the box around the frame origins [m], and the box's centre [m], shape (3,).
 
     At the reference guess (no assembly needed).
     """
@@ -128,7 +128,14 @@ def _extent(mech: Mechanism) -> tuple[float, float]:
     pin.framesForwardKinematics(mech.model, data, mech.reference_guess())
     points = np.array([M.translation for M in data.oMf])  # (n_frames, 3)
     size = max(float(np.max(np.ptp(points, axis=0))), _MIN_EXTENT)
-    return size, max(float(np.max(np.linalg.norm(points, axis=1))), size)
+    return size, 0.5 * (points.min(axis=0) + points.max(axis=0))
+
+
+CAMERA_DIRECTION = np.array([0.6, 2.0, 1.0]) / np.linalg.norm([0.6, 2.0, 1.0])
+"""Where the camera looks from, in meshcat's turned camera frame (y up): world (0.6, -1, 2), normalised."""
+
+CAMERA_DISTANCE = 2.0
+"""Camera distance from the mechanism's centre, in mechanism sizes [-]."""
 
 
 def _along(offset: np.ndarray) -> pin.SE3:
@@ -281,12 +288,17 @@ class MeshcatViewer:
         self._window = window
         self._vis = meshcat.Visualizer(window=window)
         self.root = f"plm_pin/{_segment(mech.name)}"
-        self.size, reach = _extent(mech)
-        # meshcat's camera orbits the world origin from (3, 0, 1) m, too far for a 0.3 m table;
-        # place it above and in front at twice the reach (its parent is turned: y up, z towards -y)
-        direction = np.array([0.6, 2.0, 1.0]) / np.linalg.norm([0.6, 2.0, 1.0])  # world (0.6, -1, 2)
+        self.size, centre = _extent(mech)
+        # meshcat's camera orbits the world origin from (3, 0, 1) m: too far for a 0.3 m table and
+        # off-centre for a mechanism away from the origin. Shift the scene (and the grid and world
+        # axes with it) so that the mechanism's centre is at the orbit point, and look from above
+        # and in front at twice its size.
+        shift = np.eye(4)
+        shift[:3, 3] = -centre
+        for path in ("/meshcat", "/Grid", "/Axes"):
+            self._vis[path].set_transform(shift)
         self._vis["/Cameras/default/rotated/<object>"].set_property(
-            "position", (2.0 * reach * direction).tolist()
+            "position", (CAMERA_DISTANCE * self.size * CAMERA_DIRECTION).tolist()
         )
         self._animated = False
         self._build(frames)

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from analyses import _harada2011_paper as paper
 from plm_pin.report import find_study, run_study
-from tests.analysis import paper
 
 pytestmark = pytest.mark.slow
 

@@ -15,6 +15,8 @@ SECTIONS = [
     "Mobility and redundancy",
     "Workspace slice: manipulability and singularities",
     "Static forces at the reference configuration",
+    "Task-space dynamics and decoupling",
+    "Short simulation: released under gravity",
     "3D view",
 ]
 
@@ -47,7 +49,7 @@ def fivebar_overview(tmp_path_factory):
 
 
 def test_overview_sections_and_mobility(fivebar_overview):
-    """Four sections; mobility 2 and redundancy 0 of the RRRRR five-bar (2 motors, one point closure)."""
+    """Six sections; mobility 2 and redundancy 0 of the RRRRR five-bar (2 motors, one point closure)."""
     _, result = fivebar_overview
     assert [s.title for s in result.sections] == SECTIONS
     assert result.folder == "overview-my_five-bar"
@@ -83,12 +85,13 @@ def test_overview_static_forces_balance_gravity(fivebar_overview):
 def test_overview_map_figure_and_scene(fivebar_overview):
     """The slice figure stores its grid; the scene shows the reference configuration with force arrows."""
     _, result = fivebar_overview
-    (figure, _) = _blocks(result, "figure").values()
+    figure = next(iter(_blocks(result, "figure").values()))
     data = figure.data["slice"]
     assert data["axes"] == ["x", "y"] and np.shape(data["manipulability"]) == (41, 41)
     summary = _rows(_blocks(result, "table")["Slice summary"])
     assert summary["grid points"] == 41 * 41 and 0.0 < summary["reachable fraction"] <= 1.0
-    (scene,) = _blocks(result, "scene").values()
+    scenes = _blocks(result, "scene")
+    scene = next(b for caption, b in scenes.items() if caption.startswith("The mechanism at the reference"))
     assert scene.html.lstrip().startswith("<!DOCTYPE html>")
     np.testing.assert_allclose(scene.data["q"], plm_pin.load(fivebar_overview[0]).q_ref)
     assert scene.data["arrows"] and scene.data["scale"] > 0
@@ -101,9 +104,9 @@ def test_overview_without_task_skips_the_slice(user_fivebar):
     del data["end_effector"]
     sidecar.write_text(yaml.safe_dump(data, sort_keys=False))
     result = run_study(find_study("overview"), user_fivebar)
-    slice_section = result.sections[1]
-    (text,) = slice_section.blocks
-    assert text.text.startswith("No workspace slice: it needs a task")
+    for index, what in ((1, "No workspace slice"), (3, "No decoupling check")):
+        (text,) = result.sections[index].blocks
+        assert text.text.startswith(f"{what}: it needs a task")
     assert "Actuator forces f_c" in _blocks(result, "table")
 
 
@@ -112,3 +115,65 @@ def test_overview_of_a_one_dof_mechanism_sweeps_its_task(tmp_path):
     result = run_study(find_study("overview"), "fourbar")
     figures = [b for s in result.sections for b in s.blocks if b.kind == "figure"]
     assert figures[0].data["slice"]["axes"] == ["rz"]
+
+
+@pytest.fixture(scope="module")
+def limited_3d4m_overview(tmp_path_factory):
+    """The overview of the 3D4M with effort limits of +-1.5 N on every slider, as a user's description."""
+    import shutil
+
+    from plm_pin.models import urdf_folder
+
+    folder = tmp_path_factory.mktemp("limited")
+    for suffix in (".urdf", ".plm.yaml"):
+        shutil.copy(urdf_folder() / f"harada2011_3d4m{suffix}", folder / f"table{suffix}")
+    sidecar = folder / "table.plm.yaml"
+    data = yaml.safe_load(sidecar.read_text())
+    for act in data["actuation"]:
+        act["limits"] = [-LIMIT, LIMIT]
+    sidecar.write_text(yaml.safe_dump(data, sort_keys=False))
+    return run_study(find_study("overview"), folder / "table.urdf")
+
+
+LIMIT = 1.5
+"""Effort limit of the sliders in the limited 3D4M [N]."""
+
+
+def test_overview_internal_range_is_the_interval_intersection(limited_3d4m_overview):
+    """One internal mode g: y is admissible iff -L <= f_p,i + g_i y <= L for all i (interval intersection)."""
+    tables = _blocks(limited_3d4m_overview, "table")
+    f_p = np.array([row[2] for row in tables["Actuator forces f_c"].rows])
+    (mode,) = tables["Internal-force modes (unit vectors of the internal basis)"].rows
+    g = np.array(mode[1:])
+    ends = np.sort(np.stack([(-LIMIT - f_p) / g, (LIMIT - f_p) / g]), axis=0)
+    (row,) = tables["Internal-force range within the actuator limits, holding gravity"].rows
+    assert row[1] == pytest.approx(np.max(ends[0]), abs=1e-9)
+    assert row[3] == pytest.approx(np.min(ends[1]), abs=1e-9)
+    assert row[1] < 0.0 < row[3] and row[2] == pytest.approx(0.0, abs=1e-12)  # min norm: y = 0
+
+
+def test_overview_decoupling_of_the_3d4m_is_harada_s(limited_3d4m_overview):
+    """Harada 2011 eq. (26), (M.30): m_xx = 4 m_l + 4 m_m + m_t constant, m_xy = m_xθ = 0, g_x along y."""
+    m_l, m_m, m_t, gravity = 0.026, 0.375, 0.132, 9.8  # Table 1 and (M.37)
+    rows = {r[0]: r for r in _blocks(limited_3d4m_overview, "table")["Decoupling table"].rows}
+    assert rows["M_xx"][1] == "constant"
+    assert rows["M_xx"][2] == pytest.approx(4 * m_l + 4 * m_m + m_t, rel=1e-9)
+    assert (
+        rows["M_xy"][1] == rows["M_xrz"][1] == rows["g_x"][1] == rows["g_rz"][1] == rows["h_x"][1] == "zero"
+    )
+    assert rows["g_y"][1] == "constant" and rows["g_y"][2] == pytest.approx(
+        (2 * m_l + m_t) * gravity, rel=1e-9
+    )
+    assert rows["M_yy"][1] == "varies"
+
+
+def test_overview_simulation_conserves_energy_and_closure(limited_3d4m_overview):
+    """Released at rest, actuators free: 1 s simulated, loops closed to 1e-10 m, energy drift < 1e-7 J."""
+    rows = _rows(_blocks(limited_3d4m_overview, "table")["Passive simulation"])
+    assert rows["time simulated"] == pytest.approx(1.0)
+    assert rows["largest closure residual"] <= 1e-10
+    assert rows["energy drift (max |E - E(0)|)"] < 1e-7
+    assert rows["largest joint speed"] > 0.1  # it does fall
+    scenes = _blocks(limited_3d4m_overview, "scene")
+    animation = scenes["The passive simulation: play it in the page."]
+    assert len(animation.data["qs"]) == len(animation.data["times"]) > 50

@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
+from analyses import _harada2011_paper as paper
 from plm_pin.analysis import orientation_range
 from plm_pin.exceptions import InvalidInput
-from tests.analysis import paper
 from tests.analysis.conftest import FIG6_L, FIG6_RT
 from tests.analysis.test_singular_loci import expected_3d3m
 from tests.conftest import preset

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from analyses import _harada2011_paper as paper
 from plm_pin.analysis import (
     signed_singularity_function,
     singular_loci,
@@ -17,7 +18,6 @@ from plm_pin.analysis import (
 )
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, working_mode
-from tests.analysis import paper
 from tests.analysis.conftest import FIG6_L, FIG6_RT
 from tests.conftest import preset, with_rotated_null_basis
 

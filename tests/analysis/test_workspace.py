@@ -10,11 +10,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from analyses import _harada2011_paper as paper
 from plm_pin.analysis import manipulability, workspace_grid, workspace_map, workspace_sweep
 from plm_pin.analysis._continuation import IKEvaluator
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import classify, inverse_kinematics, task_pose, working_mode
-from tests.analysis import paper
 from tests.conftest import preset
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1

@@ -157,6 +157,19 @@ def test_spline_and_trapezoid_work_against_a_closed_form():
         adaptive_trapezoid_work(lambda s: s[:, None], 1.0, 0.0)
 
 
+def test_trapezoid_that_does_not_converge_says_by_how_much():
+    """No convergence by 2**n_max intervals: the message gives the tolerance and the last change."""
+    t4, t8 = (np.linspace(0.0, 3 * np.pi, k + 1) for k in (4, 8))
+    last = abs(np.trapezoid(np.abs(np.sin(t8)), t8) - np.trapezoid(np.abs(np.sin(t4)), t4))
+    with pytest.raises(
+        InvalidInput,
+        match=rf"did not converge to 1e-12 J with 2\*\*3 intervals; the last change was {last:.6g} J",
+    ):
+        adaptive_trapezoid_work(lambda s: np.sin(s)[:, None], 0.0, 3 * np.pi, tol=1e-12, n_max=3)
+    with pytest.raises(InvalidInput, match=r"with 2\*\*1 intervals$"):  # one rule: no change to give
+        adaptive_trapezoid_work(lambda s: np.sin(s)[:, None], 0.0, 3 * np.pi, tol=1e-12, n_max=1)
+
+
 @pytest.mark.slow
 def test_zhao_work_by_both_quadratures_agree():
     """Zhao 2011 eqs. (30)-(34): the adaptive trapezoid (tol 1e-3 J) and the spline agree to 0.01 J."""

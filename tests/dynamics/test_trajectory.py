@@ -2,7 +2,7 @@
 
 Oracles: the closure residual and drift recomputed from Pinocchio; five-point differences in time
 of inverse-kinematics solutions solved independently; the papers' closed forms: Harada 2011 eqs.
-(2), (4) and (11.4) (tests/analysis/paper.py), Zhao 2011's strut-length equation and eq. (35),
+(2), (4) and (11.4) (analyses/_harada2011_paper.py), Zhao 2011's strut-length equation and eq. (35),
 Enferadi 2017's velocity map at phi = pi/2 and the section 6 ranges of analyses/specs/enferadi2017.md.
 """
 
@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from analyses import _harada2011_paper as paper
 from plm_pin.description.sidecar import TaskSpec
 from plm_pin.dynamics.trajectory import (
     JointTrajectory,
@@ -45,7 +46,6 @@ from plm_pin.models import (
     zhao2011_trajectory,
 )
 from plm_pin.models.star_triangle import enferadi2017_circle, enferadi2017_line
-from tests.analysis import paper
 from tests.conftest import preset, spatial_6r
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1

@@ -167,13 +167,13 @@ def test_every_rod_in_compression_is_infeasible_for_the_3d4m_internal_mode():
         static_forces(mech, mech.q_ref, [0.0, 1.0, 0.0], gravity=False, min_compression=5.0)
 
 
-def test_preload_where_proxsuite_stalls_at_its_iteration_cap_is_the_closed_form_interval():
-    """3D4M, r_t = 0.05 m, pose (0, 0.04 m, 35 deg), f_x = 1 N: the 1-D preload problem solved exactly.
+def test_preload_where_proxsuite_stalled_is_the_closed_form_interval():
+    """3D4M, pose (0, 0.04 m, 35 deg), f_x = 1 N, every link compressed: the 1-D problem solved exactly.
 
-    ProxSuite stops there at 1000 iterations with a dual residual of 1.07e-11 (tolerance 1e-11);
-    the answer is still the interval bound: with one internal force y, each hinged link's axial
-    force is a_l + b_l y (b_l from the internal mode), and the least |y| keeping all of them <= 0
-    is 0 clipped to the interval those inequalities leave.
+    ProxSuite's least-violation QP stopped there at 1000 iterations (dual residual 1.07e-11 for a
+    tolerance of 1e-11). With one internal force y, each hinged link's axial force is a_l + b_l y
+    (b_l from the internal mode), and the least |y| keeping all of them <= 0 is 0 clipped to the
+    interval those inequalities leave.
     """
     mech = preset("harada2011_3d4m")
     q = inverse_kinematics(mech, [0.0, 0.04, np.radians(35.0)]).q

@@ -6,9 +6,15 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
+from analyses import _harada2011_paper as paper
 from plm_pin.exceptions import AllocationInfeasible, InvalidInput
-from plm_pin.statics import force_capability, static_balance, static_forces, wrench_polygon
-from tests.analysis import paper
+from plm_pin.statics import (
+    force_capability,
+    internal_force_range,
+    static_balance,
+    static_forces,
+    wrench_polygon,
+)
 from tests.conftest import preset, prrrp_paper_configuration
 
 POSE = (0.01, 0.09, np.radians(10.0))
@@ -100,3 +106,41 @@ def test_wrench_polygon_is_the_convex_boundary_of_held_loads():
     edges = np.roll(P, -1, axis=0) - P
     turns = edges[:, 0] * np.roll(edges, -1, axis=0)[:, 1] - edges[:, 1] * np.roll(edges, -1, axis=0)[:, 0]
     assert np.all(turns >= -1e-9)
+
+
+@pytest.mark.parametrize(
+    ("name", "load"),
+    [("harada2011_3d4m", [0.3, -1.0, 0.01]), ("zhao2011_8pss", [0.0, 0.0, -500.0, 0.0, 20.0, 0.0])],
+)
+def test_internal_range_matches_highs(name, load):
+    """Each end of the range is HiGHS's min / max of g_k . f_c s.t. C^T f_c = N^T tau and the limits."""
+    mech = preset(name)
+    q = _q(mech) if name == "harada2011_3d4m" else mech.q_ref
+    n = mech.n_actuators
+    limits = [(-8.0, 10.0)] * n if n == 4 else [(-6000.0, 6000.0)] * n
+    balance = static_balance(mech, q, load)
+    r = internal_force_range(mech, q, load, limits=limits)
+    assert r.lower.shape == r.upper.shape == (mech.redundancy,)
+    for k in range(mech.redundancy):
+        g = balance.internal_basis[:, k]
+        for sign, end, forces in ((1.0, r.lower[k], r.f_lower[k]), (-1.0, r.upper[k], r.f_upper[k])):
+            lp = linprog(sign * g, A_eq=balance.C.T, b_eq=balance.N.T @ balance.tau, bounds=limits)
+            assert lp.status == 0
+            assert end == pytest.approx(g @ lp.x, abs=1e-8 * 6000.0)
+            assert g @ forces == pytest.approx(end, abs=1e-8 * 6000.0)
+            held = static_forces(mech, q, load, internal=forces @ balance.internal_basis)
+            np.testing.assert_allclose(held.f_c, forces, atol=1e-8 * 6000.0)
+            assert np.all(forces >= np.array(limits)[:, 0] - 1e-9 * 6000.0)
+            assert np.all(forces <= np.array(limits)[:, 1] + 1e-9 * 6000.0)
+
+
+def test_internal_range_refuses_what_has_no_answer():
+    """No redundancy, no limits, or limits below the load: typed errors naming the problem."""
+    three = preset("harada2011_3d3m")
+    with pytest.raises(InvalidInput, match=r"harada2011_3d3m has no internal forces \(redundancy 0\)"):
+        internal_force_range(three, three.q_ref, limits=[(-5.0, 5.0)] * 3)
+    four = preset("harada2011_3d4m")
+    with pytest.raises(InvalidInput, match="the internal-force range needs finite effort limits"):
+        internal_force_range(four, four.q_ref)
+    with pytest.raises(AllocationInfeasible):
+        internal_force_range(four, four.q_ref, [0.0, -50.0, 0.0], limits=[(-0.1, 0.1)] * 4)

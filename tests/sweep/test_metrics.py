@@ -7,13 +7,12 @@ import math
 import numpy as np
 import pytest
 
+from analyses import _harada2011_paper as paper
 from plm_pin import build_mechanism, sweep
 from plm_pin.analysis import manipulability, orientation_range
 from plm_pin.kinematics import classify, inverse_kinematics
 from plm_pin.statics import static_forces
 from plm_pin.sweep import METRICS
-from tests.analysis import paper
-from tests.statics.test_harada2011 import _internal_paper
 from tests.sweep.conftest import FIG6_L, FIG6_RT, FIG6_Y, THETAS, small
 
 LEGS = {"(1, 2, 4)": (1, 2, 4), "(1, 2, 3, 4)": (1, 2, 3, 4)}
@@ -130,8 +129,9 @@ def test_peak_force_of_the_3d3m_is_eq_15_and_redundancy_never_raises_it():
     for j, y in enumerate(ds.y.values):
         for k, theta in enumerate(ds.rz.values):
             pose = (0.0, y, theta)
-            J = paper.J_ce(pose, paper.slider_positions(pose, 0.14, 0.05, (1, 2, 4)), 0.14, 0.05, (1, 2, 4))
-            expected = max(np.max(np.abs(np.linalg.solve(J.T, -np.asarray(f)))) for f in loads)
+            expected = max(
+                np.max(np.abs(paper.statics(pose, -np.asarray(f), 0.14, 0.05, (1, 2, 4))[0])) for f in loads
+            )
             assert peak[0, j, k] == pytest.approx(expected, rel=1e-10)
     assert np.all(peak[1] <= peak[0] * (1 + 1e-9))
     mech = build_mechanism("harada2011_3d4m")
@@ -159,13 +159,8 @@ def test_plate_preload_is_the_internal_force_of_eq_21_needed_for_the_compression
     for k, pose in enumerate(poses):
         free = static_forces(mech, inverse_kinematics(mech, pose).q, load, gravity=False)
         axial = free.link_forces()["plate"].axial  # of the minimum-norm forces
-        z = [
-            (paper.pair_position(pose, i, 0.05) - ci * paper.A) / 0.14
-            for i, ci in zip(
-                (1, 2, 3, 4), paper.slider_positions(pose, 0.14, 0.05, (1, 2, 3, 4)), strict=True
-            )
-        ]
-        unit = np.linalg.norm(_internal_paper(pose, z, np.diag([zi @ paper.A for zi in z]), 1.0))
+        z, J_cm, _, _ = paper.leg_matrices(pose, 0.14, 0.05, (1, 2, 3, 4))
+        unit = np.linalg.norm(paper.internal_part(pose, z, J_cm, 1.0))
         assert ds.preload.values[0, k] == pytest.approx(max(0.0, c + axial) * unit, rel=1e-8, abs=1e-10)
 
 

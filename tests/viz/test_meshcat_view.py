@@ -479,10 +479,56 @@ def test_view_pose_that_cannot_close_shows_the_open_loop(tmp_path):
     assert scene.color("/meshcat/plm_pin/fivebar/visuals/closures/tip/left_tip") == rgb(OPEN_COLOR)
 
 
+def test_view_animate_writes_the_studys_motion(tmp_path):
+    """--animate harada2015:working: the page animates the planned path of the mode change, key by key."""
+    from analyses.harada2015 import WORKING_DURATION
+    from plm_pin.kinematics import plan_working_mode_change
+
+    out = tmp_path / "flip.html"
+    result = runner.invoke(app, ["view", "--animate", "harada2015:working", "--html", str(out)])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.endswith(f"wrote {out}\n")
+    mech = preset("harada2015_asymmetric")
+    path = plan_working_mode_change(mech, leg=3).path  # computed again here, independently of the CLI
+    scene = Scene(out.read_text())
+    clip = {a["path"]: a["clip"] for a in scene.animations}[
+        f"{root(mech)}/visuals/closures/rod4_plate_right/rod4_tip"
+    ]
+    (position,) = (t for t in clip["tracks"] if t["name"] == ".position")
+    assert len(position["keys"]) == path.n_samples
+    assert position["keys"][-1]["time"] == pytest.approx(WORKING_DURATION * clip["fps"])
+    for key, q in zip(position["keys"][:: path.n_samples // 5], path.q[:: path.n_samples // 5], strict=True):
+        np.testing.assert_allclose(key["value"], frame_origins(mech, q)["rod4_tip"], atol=1e-12)
+
+
+def test_view_animate_moves_a_users_mechanism_in_the_overview(tmp_path):
+    """overview:simulation takes the mechanism given: the five-bar falls under gravity in the page."""
+    out = tmp_path / "fall.html"
+    result = runner.invoke(app, ["view", "fivebar", "--animate", "overview:simulation", "--html", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "fivebar released at rest under gravity" in result.stdout
+    assert Scene(out.read_text()).animations
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
         (["nonsense"], "'nonsense' is neither a preset nor an existing path"),
+        ([], "give a mechanism (preset, erd:<robot>, .urdf, folder) or --animate"),
+        (["--animate", "harada2015"], "--animate 'harada2015': give STUDY:CASE, e.g. harada2015:assembly"),
+        (["--animate", "nostudy:x"], "unknown study 'nostudy'; studies are ['enferadi2017', 'harada2011'"),
+        (
+            ["--animate", "harada2015:flip"],
+            "study 'harada2015' has no animation 'flip'; its animations are ['assembly', 'working']",
+        ),
+        (
+            ["fourbar", "--animate", "harada2015:working"],
+            "--animate harada2015:working moves harada2015_asymmetric, not 'fourbar'",
+        ),
+        (
+            ["--animate", "overview:simulation", "--pose", "x=0"],
+            "--animate plays a motion: it takes no --pose",
+        ),
         (
             ["fivebar", "--pose", "x=0.1", "--pose", "left_motor=1"],
             "--pose mixes joints and task coordinates",

@@ -1,0 +1,68 @@
+"""The Harada 2011 study (analyses/harada2011.py): figures, statics, decoupling and simulations."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from plm_pin.report import find_study, run_study
+
+pytestmark = pytest.mark.slow
+
+M_L, M_M, M_T, L, RT = 0.026, 0.375, 0.132, 0.14, 0.05  # Table 1 [kg, kg, kg, m, m]
+
+
+@pytest.fixture(scope="module")
+def result():
+    """The study, run once."""
+    return run_study(find_study("harada2011"))
+
+
+def _figures(result) -> dict:
+    return {b.caption.split(":")[0]: b for s in result.sections for b in s.blocks if b.kind == "figure"}
+
+
+def test_every_comparison_agrees_with_the_closed_forms(result):
+    """All rows agree: eqs. (15)-(22) per leg and case, (11.4), (M.30), eq. (26), Tables 2-4."""
+    tables = result.comparisons()
+    rows = [r for t in tables for r in t.rows]
+    assert all(r.agrees for r in rows), [r.quantity for r in rows if not r.agrees]
+    quantities = {r.quantity for r in rows}
+    assert sum(q.endswith("eq. (20)-(22)") for q in quantities) == 16  # 4 legs x (3 loads + f_i)
+    assert sum(q.endswith("eq. (15)") for q in quantities) == 9  # 3 legs x 3 loads
+
+
+def test_fig6_finds_the_type4_singularity_of_eq_11_4(result):
+    """The 3D3M's w vanishes at |theta| = 28.7 deg for y = (l + r_t) sin 28.7 deg; the 3D4M's does not."""
+    data = _figures(result)["Fig. 6"].data
+    assert data["y"] == pytest.approx((L + L / 4) * math.sin(math.radians(28.7)))
+    theta = np.degrees(data["theta"])
+    w3, w4 = np.asarray(data["w_3d3m"]), np.asarray(data["w_3d4m"])
+    k = int(np.argmin(np.abs(theta + 28.7)))  # the sweep holds -28.7 deg within half a degree
+    assert w3[k] < 0.02 * np.nanmax(w3)
+    assert np.nanmin(w4) > 0.1
+
+
+def test_simulation_snapshots_follow_the_closed_form(result):
+    """Figs. 11 and 13: 11 skeletons each, 0.2 s apart; x of simulation 1 is f_x t^2 / (2 m_xx)."""
+    data = _figures(result)["Figs. 11 and 13"].data
+    one = data["simulation 1 (Table 3)"]
+    np.testing.assert_allclose(one["t"], np.arange(11) * 0.2, atol=1e-12)
+    m_xx = 4 * M_L + 4 * M_M + M_T  # eq. (26)
+    np.testing.assert_allclose(
+        np.asarray(one["x"])[:, 0], 0.2 * np.asarray(one["t"]) ** 2 / (2 * m_xx), atol=1e-9
+    )
+    assert len(data["simulation 2 (Table 4)"]["t"]) == 11
+
+
+def test_report_has_every_figure_and_the_animation(result):
+    """Figs. 6, 8, 10-13 and the capability polygon are drawn; simulation 2 is animated in the page."""
+    figures = _figures(result)
+    for caption in ("Fig. 6", "Fig. 8", "Figs. 10 and 12", "Figs. 11 and 13"):
+        assert caption in figures
+    scenes = [b for s in result.sections for b in s.blocks if b.kind == "scene"]
+    (scene,) = scenes
+    assert len(scene.data["qs"]) == len(scene.data["times"]) > 50
+    assert scene.data["times"][-1] == pytest.approx(2.0)
