@@ -166,6 +166,7 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
     )
     fig, ax = plt.subplots(figsize=(7.0, 4.2), layout="constrained")
     for legs, name, style in (("(1, 2, 4)", "3D3M", "-"), ("(1, 2, 3, 4)", "3D4M", "--")):
+        ax.set_prop_cycle(None)  # the same colour for a ratio on both tables
         plot_sweep_lines(
             half.sel(legs=legs).transpose("y", "ratio"),
             "y",
@@ -178,7 +179,8 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
     ax.set_ylabel("rotation half-width [deg]")
     section.figure(
         fig,
-        "Half-width against the height: the 3D3M (solid) and the 3D4M (dashed), one colour per l / r_t.",
+        "Half-width against the height: the 3D3M (solid) and the 3D4M (dashed), one colour per l / r_t; "
+        "80 deg is the edge of the samples.",
         {name: np.degrees(half.sel(legs=legs).values) for legs, name in labels.items()},
     )
     rows = []
@@ -414,7 +416,12 @@ def _asymmetry(
     ax.legend(fontsize="small")
     section.figure(
         fig,
-        "Rotation half-width against the height for each rod set (gaps: theta = 0 out of reach).",
+        "Rotation half-width against the height for each rod set (gaps: theta = 0 out of reach)"
+        + (
+            "; the 0.24 / 0.17 m and the all-0.17 m curves coincide."
+            if np.array_equal(half.values[1], half.values[-1], equal_nan=True)
+            else "."
+        ),
         {"y": heights, "halfwidth_deg": np.degrees(half.values), "designs": names},
     )
     rows = []
