@@ -26,6 +26,14 @@ ASSEMBLY_TOL = 1e-12
 """Default closure tolerance of :meth:`Mechanism.assemble` [m, rad]."""
 
 
+def body_name(model: pin.Model, j: int) -> str:
+    """Name of the body joint ``j`` carries (its first BODY frame), else the joint name."""
+    for f in model.frames:
+        if f.parentJoint == j and f.type == pin.FrameType.BODY:
+            return str(f.name)
+    return str(model.names[j])
+
+
 @dataclass(frozen=True)
 class Actuator:
     """A driven joint, resolved against the model.
@@ -168,6 +176,14 @@ class Mechanism:
     def frame_names(self) -> tuple[str, ...]:
         """Names of every frame of the model."""
         return tuple(f.name for f in self.model.frames)
+
+    @property
+    def body_names(self) -> tuple[str, ...]:
+        """Name of the body each tree joint carries, in joint order (the names body groups take).
+
+        A body is named by its joint's first body frame (the URDF link), else by the joint.
+        """
+        return tuple(body_name(self.model, j) for j in range(1, self.model.njoints))
 
     # ------------------------------------------------------------ checking
     def check_q(self, q: Any, name: str = "q") -> np.ndarray:

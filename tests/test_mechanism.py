@@ -210,3 +210,15 @@ def test_frame_names_hold_the_urdf_links_and_joints():
     names = preset("harada2011_3d4m").frame_names
     for name in ("base", "plate", "plate_center", "rod2_tip", "slider1", "rod1_pivot", "plate_pivot"):
         assert name in names
+
+
+def test_body_names_are_the_urdf_links_each_joint_carries():
+    """body_names: the child link of every URDF joint, in Pinocchio's joint order (the root excluded)."""
+    import yourdfpy
+
+    from plm_pin.models import urdf_folder
+
+    mech = preset("zhao2011_8pss")
+    urdf = yourdfpy.URDF.load(str(urdf_folder() / "zhao2011_8pss.urdf"), load_meshes=False)
+    child = {j.name: j.child for j in urdf.robot.joints}
+    assert mech.body_names == tuple(child[name] for name in mech.joint_names)

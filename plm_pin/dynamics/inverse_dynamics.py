@@ -35,7 +35,6 @@ import pinocchio as pin
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
 from ..statics import AllocationRule, generalized_balance, load_on_frame, solve_balance
 from ..statics.balance import SINGULAR_RTOL, Load
-from ..statics.reactions import body_name
 from .trajectory import JointTrajectory
 
 if TYPE_CHECKING:
@@ -155,7 +154,7 @@ class _BodyGroups:
 def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) -> _BodyGroups:
     """One zero-armature model per group of bodies (bodies named by their joint's first body frame)."""
     model = mech.model
-    bodies = {body_name(model, j): j for j in range(1, model.njoints)}
+    bodies = {name: j for j, name in enumerate(mech.body_names, start=1)}
     if groups is None:
         chosen = {name: [name] for name in bodies}
     else:
@@ -214,8 +213,9 @@ def inverse_dynamics(
             (see :func:`~plm_pin.statics.load_on_frame`).
         frame: frame the wrench acts on; default the task frame.
         gravity: include the bodies' weight (the model's gravity).
-        groups: body groups for the body split, ``{group: [body, ...]}``; bodies not listed
-            form ``"other"``; default one group per body.
+        groups: body groups for the body split, ``{group: [body, ...]}`` with bodies among
+            :attr:`Mechanism.body_names`; bodies not listed form ``"other"``; default one
+            group per body.
         objective: allocation objective, as in :func:`~plm_pin.statics.static_forces`.
         weights: actuator weights.
         limits: actuator effort limits.

@@ -9,6 +9,8 @@ from .legs import Leg, find_legs, working_mode
 from .mode_graph import ModeEdge, ModeGraph, ModeNode, compress_modes
 from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
 from .prrrp_modes import (
+    PAPER_ASSEMBLY_ROUTE,
+    PAPER_WORKING_ROUTE,
     AssemblyModeChange,
     CoincidentCircleSample,
     ComplexSingularityCase,
@@ -33,10 +35,13 @@ from .prrrp_modes import (
     symmetric_variant,
     working_mode_label,
 )
-from .singularity import SingularityReport, classify
+from .singularity import SINGULARITY_TOL, SingularityReport, classify
 from .task import Task, TaskTarget, compile_task
 
 __all__ = [
+    "PAPER_ASSEMBLY_ROUTE",
+    "PAPER_WORKING_ROUTE",
+    "SINGULARITY_TOL",
     "Assembly",
     "AssemblyModeChange",
     "ClosedChainJacobians",

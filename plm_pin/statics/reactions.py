@@ -28,6 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics import closures as _closures
+from ..mechanism import body_name
 from .balance import Load
 
 if TYPE_CHECKING:
@@ -144,14 +145,6 @@ def _is_rotational(model: pin.Model, data: pin.Data, j: int) -> bool:
     """Whether joint ``j`` only rotates about its origin (revolute, spherical)."""
     S = np.asarray(data.joints[j].S).reshape(6, -1)
     return S.size > 0 and bool(np.allclose(S[:3], 0.0)) and model.joints[j].nq != 7
-
-
-def body_name(model: pin.Model, j: int) -> str:
-    """Name of the body a joint carries (its first BODY frame), else the joint name."""
-    for f in model.frames:
-        if f.parentJoint == j and f.type == pin.FrameType.BODY:
-            return str(f.name)
-    return str(model.names[j])
 
 
 def transmitted_forces(
