@@ -11,14 +11,11 @@ from __future__ import annotations
 
 import functools
 import math
-import tempfile
-from pathlib import Path
 
 import numpy as np
 
-from plm_pin import Mechanism, load
+from plm_pin import Mechanism, build_mechanism, load
 from plm_pin.analysis import singular_points_along, workspace_sweep
-from plm_pin.description.writer import write_description
 from plm_pin.dynamics import DecouplingReport, SimulationResult, decoupling_check, simulate
 from plm_pin.models import PRESETS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
@@ -48,12 +45,8 @@ SNAPSHOT_PERIOD = 0.2
 
 def _fig6_variant(name: str) -> Mechanism:
     """The table of Fig. 6: l : 2 r_t = 2 : 1 (r_t = l / 4), other parameters of Table 1."""
-    params = {**PRESETS[name].parameters}
-    params["half_plate"] = float(params["rod_lengths"][0]) / 4.0
-    robot, sidecar = PRESETS[name].builder(name=f"fig6_{name}", source="Harada 2011 Fig. 6", **params)
-    with tempfile.TemporaryDirectory() as folder:
-        write_description(robot, sidecar, folder, f"fig6_{name}")
-        return load(Path(folder) / f"fig6_{name}.urdf")
+    rod = float(PRESETS[name].parameters["rod_lengths"][0])
+    return build_mechanism(name, {"half_plate": rod / 4.0}, name=f"fig6_{name}")
 
 
 SIMULATIONS = {

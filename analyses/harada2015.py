@@ -19,6 +19,9 @@ import numpy as np
 
 from plm_pin import Mechanism, load
 from plm_pin.kinematics import (
+    PAPER_ASSEMBLY_ROUTE,
+    PAPER_WORKING_ROUTE,
+    SINGULARITY_TOL,
     AssemblyModeChange,
     ComplexSingularityCase,
     ModeGraph,
@@ -34,8 +37,6 @@ from plm_pin.kinematics import (
     symmetric_variant,
     working_mode_label,
 )
-from plm_pin.kinematics.prrrp_modes import PAPER_ASSEMBLY_ROUTE, PAPER_WORKING_ROUTE
-from plm_pin.kinematics.singularity import SINGULARITY_TOL
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 
 TITLE = "Harada 2015: mode changes of the asymmetric 2-PRRRP"

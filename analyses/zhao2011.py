@@ -49,9 +49,7 @@ GROUPS = {
 
 def _groups(mech: Mechanism) -> dict[str, list[str]]:
     """The paper's components, restricted to the legs the mechanism has."""
-    from plm_pin.statics.reactions import body_name
-
-    bodies = {body_name(mech.model, j) for j in range(1, mech.model.njoints)}
+    bodies = set(mech.body_names)
     return {g: [b for b in members if b in bodies] for g, members in GROUPS.items()}
 
 

@@ -17,7 +17,6 @@ PAPERS = ("enferadi2017", "harada2011", "harada2015", "zhao2011")
 PUBLIC_MODULES = {
     "plm_pin",
     "plm_pin.analysis",
-    "plm_pin.description",  # write_description: a variant of a preset, built and loaded back
     "plm_pin.dynamics",
     "plm_pin.kinematics",
     "plm_pin.models",
