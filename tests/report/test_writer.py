@@ -141,4 +141,4 @@ def test_index_links_reports_and_ignores_other_folders(demo_report):
     assert page.count('href="demo/report.html"') == 1
     assert "notes/" not in page and "broken/" not in page and ".tmp" not in page
     assert "Demo &lt;title&gt;" in page and "<title>Demo" not in page
-    assert "2 of 3 agree" in page
+    assert "2 of 3 agree" in page and "1 differ, each explained in the report" in page
