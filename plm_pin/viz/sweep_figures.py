@@ -10,6 +10,7 @@ objects only.
 
 from __future__ import annotations
 
+import textwrap
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -43,9 +44,14 @@ def _coordinate(data: Any, dim: str) -> tuple[np.ndarray, str, list[str] | None]
     return values.astype(float), label, None
 
 
+LABEL_WIDTH = 40
+"""Characters per line of an axis label; longer labels (long units) are wrapped."""
+
+
 def _label(data: Any) -> str:
     _, units = _values(data)
-    return f"{data.name} [{units}]" if units and units != "-" else str(data.name)
+    label = f"{data.name} [{units}]" if units and units != "-" else str(data.name)
+    return textwrap.fill(label, LABEL_WIDTH)
 
 
 def plot_sweep_heatmap(
