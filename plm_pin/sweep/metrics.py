@@ -346,7 +346,6 @@ def _preload(ev: PointEvaluation) -> dict[str, np.ndarray]:
 
 
 _W = "Yoshikawa manipulability w = sqrt(det(J_ce^T J_ce)) (Harada 2011 eq. (13)); 0 at a direct singularity"
-_ENDS_FLAGS = ENDS
 
 METRICS: dict[str, Metric] = {
     m.name: m
@@ -424,7 +423,7 @@ METRICS: dict[str, Metric] = {
                     "what ends the range below: " + ", ".join(f"{i} {e}" for i, e in enumerate(ENDS)),
                     axes="line",
                     dtype="int8",
-                    flags=_ENDS_FLAGS,
+                    flags=ENDS,
                 ),
                 Variable(
                     "orientation_upper_end",
@@ -432,7 +431,7 @@ METRICS: dict[str, Metric] = {
                     "what ends the range above (codes as orientation_lower_end)",
                     axes="line",
                     dtype="int8",
-                    flags=_ENDS_FLAGS,
+                    flags=ENDS,
                 ),
             ),
             ("rotation_axis", "reference", "xtol", "singularity_tol"),
