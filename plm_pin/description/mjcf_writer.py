@@ -378,6 +378,7 @@ def _measure(mj_model: Any, sites: list[tuple[str, str, str]], duration: float) 
     position = rotation = 0.0
     for _ in range(max(1, round(duration / mj_model.opt.timestep))):
         mujoco.mj_step(mj_model, data)
+        mujoco.mj_kinematics(mj_model, data)  # mj_step leaves the poses of the step's start
         for kind, a, b in ids:
             position = max(position, float(np.linalg.norm(data.site_xpos[a] - data.site_xpos[b])))
             if kind == "weld":
