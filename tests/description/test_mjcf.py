@@ -448,3 +448,22 @@ def test_cli_checks_an_mjcf(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["check", str(path)])
     assert result.exit_code == 0, result.output
     assert "ok: fourbar_hand: 1 closures, 1 actuators, mobility 1, redundancy 0" in result.output
+
+
+def test_visual_geoms_follow_mujoco(tmp_path: Path) -> None:
+    """Box, capsule and sphere geoms become visual objects placed where MuJoCo puts the geoms."""
+    mjcf = read_mjcf(_write(tmp_path, "spatial", {".xml": SPATIAL_MJCF}))
+    visuals = mjcf.visual_model()
+    m = mjcf.mj_model
+    assert visuals.ngeoms == m.ngeom == 3
+    q = pin.randomConfiguration(mjcf.model, -np.ones(mjcf.model.nq), np.ones(mjcf.model.nq))
+    data = mujoco.MjData(m)
+    data.qpos[:] = mjcf.state_map().qpos(q)
+    mujoco.mj_kinematics(m, data)
+    pdata, gdata = mjcf.model.createData(), pin.GeometryData(visuals)
+    pin.updateGeometryPlacements(mjcf.model, pdata, visuals, gdata, q)
+    for g in range(m.ngeom):
+        np.testing.assert_allclose(gdata.oMg[g].translation, data.geom_xpos[g], atol=1e-12)
+        np.testing.assert_allclose(gdata.oMg[g].rotation, data.geom_xmat[g].reshape(3, 3), atol=1e-12)
+    box = visuals.geometryObjects[0].geometry
+    np.testing.assert_allclose(box.halfSide, [0.1, 0.02, 0.03])

@@ -52,6 +52,17 @@ def test_every_preset_round_trips(tmp_path: Path, name: str) -> None:
         )
         np.testing.assert_allclose(a.closure_jacobian(q_a) @ T, b.closure_jacobian(q_b), atol=1e-12)
         np.testing.assert_allclose(a.closure_residual(q_a), b.closure_residual(q_b), atol=1e-12)
+    # armature: the reflected rotor and screw inertia (J_r + J_s)(2 pi / lead)^2 of each drive (Zhao 2011)
+    for spec in a.sidecar.actuation:
+        expected = (
+            (spec.rotor_inertia + spec.screw_inertia) * (2 * np.pi / spec.lead) ** 2 if spec.lead else 0.0
+        )
+        assert mj.dof_armature[mj.joint(spec.joint).dofadr[0]] == pytest.approx(expected, rel=1e-15, abs=0)
+    assert sum(
+        g.name == o.name
+        for g in [mj.geom(i) for i in range(mj.ngeom)]
+        for o in a.visual_model.geometryObjects
+    ) == (a.visual_model.ngeoms)
     # the re-imported reference is the exported one (keyframe), assembled
     q_b, _ = _tangent_map(a, b, mj, a.q_ref)
     assert np.abs(pin.difference(b.model, b.q_ref, q_b)).max() < 1e-12
