@@ -310,15 +310,16 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
     where: dict[int, tuple[int, pin.SE3]] = {0: (0, pin.SE3.Identity())}
     body_frame: dict[int, int] = {0: 0}
     used: dict[str, str] = {}
-
-    def claim(name: str, kind: str) -> None:
-        if name in used:
-            raise DescriptionError(
-                f"the {kind} and the {used[name]} named {name!r} would give two "
-                "Pinocchio frames of one name; rename one",
-                label,
-            )
-        used[name] = kind
+    for kind, count in (("body", m.nbody), ("site", m.nsite)):
+        for i in range(1 if kind == "body" else 0, count):
+            name = _name(mujoco, m, kind, i) or f"{kind}{i}"
+            if name in used:
+                raise DescriptionError(
+                    f"the {kind} and the {used[name]} named {name!r} would give two Pinocchio frames "
+                    "of one name; rename one",
+                    label,
+                )
+            used[name] = kind
 
     for b in range(1, m.nbody):
         bname = _name(mujoco, m, "body", b) or f"body{b}"
@@ -328,7 +329,6 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
         for k in range(int(m.body_jntadr[b]), int(m.body_jntadr[b] + m.body_jntnum[b])):
             kind = int(m.jnt_type[k])
             jname = _name(mujoco, m, "joint", k) or f"{bname}_joint{k}"
-            claim(jname, "joint")
             anchor = pin.SE3(np.eye(3), np.array(m.jnt_pos[k], dtype=float))
             if kind == _FREE:
                 if parent != 0:
@@ -345,9 +345,9 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
                 q0 = float(m.qpos0[m.jnt_qposadr[k]])
                 model.lowerPositionLimit[model.joints[current].idx_q] = m.jnt_range[k][0] - q0
                 model.upperPositionLimit[model.joints[current].idx_q] = m.jnt_range[k][1] - q0
-            model.addJointFrame(current, body_frame[parent])
+            if jname not in used:  # a body or site of that name keeps the frame name
+                model.addJointFrame(current, body_frame[parent])
             offset = anchor.inverse()
-        claim(bname, "body")
         R = quat_wxyz_to_se3_rotation(m.body_iquat[b])
         inertia = pin.Inertia(
             float(m.body_mass[b]), np.array(m.body_ipos[b], dtype=float), R @ np.diag(m.body_inertia[b]) @ R.T
@@ -357,7 +357,6 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
         where[b] = (current, offset)
     for s in range(m.nsite):
         sname = _name(mujoco, m, "site", s) or f"site{s}"
-        claim(sname, "site")
         b = int(m.site_bodyid[s])
         j, M = where[b]
         model.addFrame(

@@ -467,3 +467,22 @@ def test_visual_geoms_follow_mujoco(tmp_path: Path) -> None:
         np.testing.assert_allclose(gdata.oMg[g].rotation, data.geom_xmat[g].reshape(3, 3), atol=1e-12)
     box = visuals.geometryObjects[0].geometry
     np.testing.assert_allclose(box.halfSide, [0.1, 0.02, 0.03])
+
+
+def test_names_shared_by_a_joint_and_a_body(tmp_path: Path) -> None:
+    """A joint named as its body loads (the name is the body's frame); a site named as a body is refused."""
+    text = FOURBAR_MJCF.replace('joint name="crank_pivot"', 'joint name="crank"').replace(
+        'joint="crank_pivot"', 'joint="crank"'
+    )
+    mech = plm_pin.load(
+        _write(tmp_path, "fb", {".xml": text, ".plm.yaml": FOURBAR_SIDECAR.replace("crank_pivot", "crank")})
+    )
+    assert mech.model.frames[mech.model.getFrameId("crank")].type == pin.FrameType.BODY
+    assert mech.actuators[0].joint == "crank"
+    text = FOURBAR_MJCF.replace('<site name="coupler_tip"', '<site name="rocker"').replace(
+        'site1="coupler_tip"', 'site1="rocker"'
+    )
+    with pytest.raises(
+        DescriptionError, match="the site and the body named 'rocker' would give two Pinocchio frames"
+    ):
+        plm_pin.load(_write(tmp_path, "bad", {".xml": text}))
