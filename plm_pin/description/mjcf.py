@@ -310,16 +310,16 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
     where: dict[int, tuple[int, pin.SE3]] = {0: (0, pin.SE3.Identity())}
     body_frame: dict[int, int] = {0: 0}
     used: dict[str, str] = {}
-    for kind, count in (("body", m.nbody), ("site", m.nsite)):
-        for i in range(1 if kind == "body" else 0, count):
-            name = _name(mujoco, m, kind, i) or f"{kind}{i}"
+    for element, count in (("body", m.nbody), ("site", m.nsite)):
+        for i in range(1 if element == "body" else 0, count):
+            name = _name(mujoco, m, element, i) or f"{element}{i}"
             if name in used:
                 raise DescriptionError(
-                    f"the {kind} and the {used[name]} named {name!r} would give two Pinocchio frames "
+                    f"the {element} and the {used[name]} named {name!r} would give two Pinocchio frames "
                     "of one name; rename one",
                     label,
                 )
-            used[name] = kind
+            used[name] = element
 
     for b in range(1, m.nbody):
         bname = _name(mujoco, m, "body", b) or f"body{b}"

@@ -28,6 +28,24 @@ def _mj_inertial(link: str) -> str:
     return f'<inertial pos="{c[0]} {c[1]} {c[2]}" mass="{m}" fullinertia="{" ".join(map(str, i))}"/>'
 
 
+def _crank_coupler(crank_joint: str, coupler_joint: str, tip: str) -> str:
+    """MJCF bodies of a crank (0.1 m) on the world carrying a coupler that holds ``tip``."""
+    return f"""<body name="crank">
+      <joint name="{crank_joint}" type="hinge" axis="0 0 1"/>
+      {_mj_inertial("crank")}
+      <body name="coupler" pos="0.1 0 0">
+        <joint name="{coupler_joint}" type="hinge" axis="0 0 1"/>
+        {_mj_inertial("coupler")}
+        {tip}
+      </body>
+    </body>"""
+
+
+PLATE = """<body name="plate" pos="0.25 0 0" quat="0.9238795325112867 0 0 0.3826834323650898">
+          <inertial pos="0.02 0 0" mass="0.3" diaginertia="1e-4 2e-4 3e-4"/>
+        </body>"""
+
+
 def _urdf_link(link: str) -> str:
     m, c, i = INERTIA[link]
     return (
@@ -52,15 +70,7 @@ def _urdf_joint(
 FOURBAR_MJCF = f"""<mujoco model="fourbar_hand">
   <option gravity="0 -9.81 0"/>
   <worldbody>
-    <body name="crank">
-      <joint name="crank_pivot" type="hinge" axis="0 0 1"/>
-      {_mj_inertial("crank")}
-      <body name="coupler" pos="0.1 0 0">
-        <joint name="coupler_pivot" type="hinge" axis="0 0 1"/>
-        {_mj_inertial("coupler")}
-        <site name="coupler_tip" pos="0.25 0 0"/>
-      </body>
-    </body>
+    {_crank_coupler("crank_pivot", "coupler_pivot", '<site name="coupler_tip" pos="0.25 0 0"/>')}
     <body name="rocker" pos="0.3 0 0" euler="0 0 90">
       <joint name="rocker_pivot" type="hinge" axis="0 0 1" ref="30"/>
       {_mj_inertial("rocker")}
@@ -100,17 +110,7 @@ FIVEBAR_MJCF = f"""<mujoco model="fivebar_weld">
   <compiler angle="radian"/>
   <option gravity="0 -9.81 0"/>
   <worldbody>
-    <body name="crank">
-      <joint name="motor_l" type="hinge" axis="0 0 1"/>
-      {_mj_inertial("crank")}
-      <body name="coupler" pos="0.1 0 0">
-        <joint name="elbow_l" type="hinge" axis="0 0 1"/>
-        {_mj_inertial("coupler")}
-        <body name="plate" pos="0.25 0 0" quat="0.9238795325112867 0 0 0.3826834323650898">
-          <inertial pos="0.02 0 0" mass="0.3" diaginertia="1e-4 2e-4 3e-4"/>
-        </body>
-      </body>
-    </body>
+    {_crank_coupler("motor_l", "elbow_l", PLATE)}
     <body name="rocker" pos="0.15 0 0">
       <joint name="motor_r" type="hinge" axis="0 0 1"/>
       {_mj_inertial("rocker")}
