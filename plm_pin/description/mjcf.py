@@ -4,8 +4,8 @@ The MJCF is compiled by MuJoCo itself (``mujoco.MjModel.from_xml_path``, the ``m
 so defaults, ``<include>``, angle units, ``euler``/``axisangle`` orientations, inertias
 computed from geoms and the anchors of ``connect`` / ``weld`` equalities are exactly what
 MuJoCo simulates; the Pinocchio model is then built from the compiled model. (Pinocchio
-4.1's own MJCF constraint parser drops a branch of the benchmark four-bar: 2 configuration
-entries for 3 hinges.)
+4.1's MJCF parser keeps only the first body of ``<worldbody>``: the benchmark four-bar comes
+out with 2 of its 3 hinges, with or without its constraints.)
 
 Mapping:
 

@@ -486,3 +486,21 @@ def test_names_shared_by_a_joint_and_a_body(tmp_path: Path) -> None:
         DescriptionError, match="the site and the body named 'rocker' would give two Pinocchio frames"
     ):
         plm_pin.load(_write(tmp_path, "bad", {".xml": text}))
+
+
+def test_benchmark_fourbar_mjcf_is_the_preset(tmp_path: Path) -> None:
+    """The benchmarks' MuJoCo four-bar (two bodies on the world) loads whole and is the fourbar preset."""
+    from plm_pin.benchmarks import fourbar_mjcf
+    from tests.conftest import preset
+
+    ref = preset("fourbar")
+    side = f"format: plm-pin/1\nreference: {dict(zip(ref.joint_names, ref.q_ref.tolist(), strict=True))}\n"
+    mech = plm_pin.load(_write(tmp_path, "fourbar", {".xml": fourbar_mjcf(), ".plm.yaml": side}))
+    assert mech.joint_names == ref.joint_names
+    assert (mech.mobility, mech.n_closure_rows) == (ref.mobility, ref.n_closure_rows)
+    np.testing.assert_allclose(mech.q_ref, ref.q_ref, atol=1e-12)
+    q = ref.q_ref
+    np.testing.assert_allclose(
+        pin.crba(mech.model, mech.data, q), pin.crba(ref.model, ref.data, q), atol=1e-12
+    )
+    np.testing.assert_allclose(mech.closure_jacobian(q), ref.closure_jacobian(q), atol=1e-12)
