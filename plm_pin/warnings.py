@@ -21,3 +21,7 @@ class CorruptChunkWarning(PlmWarning):
 
 class IgnoredElementWarning(PlmWarning):
     """An element of a description (an MJCF joint's damping, say) has no plm_pin counterpart: ignored."""
+
+
+class SimulationUnstableWarning(PlmWarning):
+    """A simulation another engine runs of an exported model (MuJoCo's) diverges."""

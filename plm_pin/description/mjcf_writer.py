@@ -22,7 +22,8 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   mechanism, the reference configuration as keyframe ``reference``.
 - **Measured**: the model is compiled and simulated by MuJoCo for :data:`MEASURE_DURATION`
   passive under gravity from the reference at rest; the largest closure error (position
-  [m], rotation [rad]) is written in an XML comment and returned.
+  [m], rotation [rad]) is written in an XML comment and returned; when MuJoCo's run
+  diverges (very light or very heavy bodies for the step), the comment and a warning say so.
 
 The task, name and source go to a sidecar ``<stem>.plm.yaml`` beside the file (see
 :mod:`plm_pin.description.mjcf`), so that :func:`plm_pin.load` reads the export back.
@@ -43,7 +44,7 @@ from lxml import etree
 
 from .._io import atomic_write_text
 from ..exceptions import DescriptionError, InvalidInput
-from ..warnings import IgnoredElementWarning
+from ..warnings import IgnoredElementWarning, SimulationUnstableWarning
 from .mjcf import StateMap, require_mujoco, rotation_to_quat_wxyz
 from .sidecar import Sidecar
 
@@ -74,15 +75,24 @@ class ClosureError:
         rotation: largest rotation between welded frames [rad] (0 without welds).
         duration: simulated time [s].
         timestep: MuJoCo step [s].
+        diverged_at: time at which MuJoCo found the state non-finite or huge and reset it [s],
+            or None; the errors above are those before it.
     """
 
     position: float
     rotation: float
     duration: float
     timestep: float
+    diverged_at: float | None = None
 
     def describe(self) -> str:
         """One line for the XML comment."""
+        if self.diverged_at is not None:
+            return (
+                f"MuJoCo's passive run from the reference DIVERGES at t = {self.diverged_at:.3g} s with "
+                f"{self.timestep * 1e3:g} ms steps (closure error before: {self.position:.2g} m, "
+                f"{self.rotation:.2g} rad); export with a smaller timestep or integrator implicitfast"
+            )
         return (
             f"closure error measured by MuJoCo over {self.duration:g} s passive under gravity from the "
             f"reference at rest, {self.timestep * 1e3:g} ms steps: {self.position:.2g} m, "
@@ -376,16 +386,17 @@ def _measure(mj_model: Any, sites: list[tuple[str, str, str]], duration: float) 
     mujoco.mj_resetDataKeyframe(mj_model, data, 0)
     ids = [(kind, mj_model.site(a).id, mj_model.site(b).id) for kind, a, b in sites]
     position = rotation = 0.0
+    unstable = [int(getattr(mujoco.mjtWarning, f"mjWARN_BAD{x}")) for x in ("QPOS", "QVEL", "QACC")]
     for _ in range(max(1, round(duration / mj_model.opt.timestep))):
         mujoco.mj_step(mj_model, data)
+        if any(data.warning[k].number for k in unstable):
+            return ClosureError(position, rotation, duration, float(mj_model.opt.timestep), float(data.time))
         mujoco.mj_kinematics(mj_model, data)  # mj_step leaves the poses of the step's start
         for kind, a, b in ids:
             position = max(position, float(np.linalg.norm(data.site_xpos[a] - data.site_xpos[b])))
             if kind == "weld":
                 relative = data.site_xmat[a].reshape(3, 3).T @ data.site_xmat[b].reshape(3, 3)
                 rotation = max(rotation, float(np.linalg.norm(pin.log3(relative))))
-    if not np.all(np.isfinite(data.qpos)):
-        raise DescriptionError("the exported model diverges in MuJoCo; try a smaller timestep")
     return ClosureError(position, rotation, duration, float(mj_model.opt.timestep))
 
 
@@ -455,7 +466,8 @@ def export_mjcf(
             :func:`plm_pin.load` reads the export back as the same mechanism.
 
     Returns:
-        The closure error MuJoCo reached in the measuring simulation (also in an XML comment).
+        The closure error MuJoCo reached in the measuring simulation (also in an XML comment);
+        a :class:`~plm_pin.warnings.SimulationUnstableWarning` says when that run diverged.
 
     Raises:
         InvalidInput: a path not ending in ``.xml``, a bad timestep or integrator.
@@ -465,6 +477,8 @@ def export_mjcf(
     if out.suffix != ".xml":
         raise InvalidInput(f"MJCF file name must end in .xml, got {out.name!r}")
     text, error = mjcf_text(mech, timestep=timestep, integrator=integrator)
+    if error.diverged_at is not None:
+        warnings.warn(f"{out}: {error.describe()}", SimulationUnstableWarning, stacklevel=2)
     out.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out, text)
     if sidecar:

@@ -15,6 +15,7 @@ from plm_pin.description.mjcf_writer import REVOLUTE_PAIR_SPACING, mjcf_text
 from plm_pin.dynamics.simulation import simulate
 from plm_pin.exceptions import InvalidInput
 from plm_pin.models.registry import PRESETS
+from plm_pin.warnings import SimulationUnstableWarning
 from tests.conftest import ball_joint_body, preset
 
 mujoco = pytest.importorskip("mujoco")
@@ -32,7 +33,7 @@ def test_every_preset_round_trips(tmp_path: Path, name: str) -> None:
     """Export then import keeps mobility, redundancy, mass matrix, closure rows, actuation and task."""
     a = preset(name)
     path = tmp_path / f"{name}.xml"
-    plm_pin.export_mjcf(a, path)
+    assert plm_pin.export_mjcf(a, path).diverged_at is None
     b = plm_pin.load(path)
     mj = mujoco.MjModel.from_xml_path(str(path))
     assert (b.name, b.task) == (a.name, a.task)
@@ -152,3 +153,11 @@ def test_cli_exports_a_preset(tmp_path: Path) -> None:
     assert plm_pin.load(out).mobility == 2
     result = CliRunner().invoke(app, ["export", "fivebar"])
     assert result.exit_code == 1 and "give a format to export to: --mjcf OUT.xml" in result.output
+
+
+def test_divergence_is_reported(tmp_path: Path) -> None:
+    """A step too long for the stiff closures: the comment and a warning say MuJoCo's run diverges."""
+    with pytest.warns(SimulationUnstableWarning, match=r"DIVERGES at t = .* with 100 ms steps"):
+        error = plm_pin.export_mjcf(preset("fourbar"), tmp_path / "fourbar.xml", timestep=0.1)
+    assert error.diverged_at is not None and 0.0 < error.diverged_at <= error.duration
+    assert "DIVERGES" in (tmp_path / "fourbar.xml").read_text()
