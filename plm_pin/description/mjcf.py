@@ -22,7 +22,9 @@ Mapping:
   ``torquescale = 0`` constrains no rotation: ``point``); between sites (site semantics) or
   between frames added at the body anchors (body semantics, ``<name>/1`` and ``<name>/2``).
 - actuator on a hinge or slide -> actuation of that joint, limits ``gear * forcerange`` when
-  force-limited, else ``gear * gain * ctrlrange`` for a motor; joint ``armature`` -> armature.
+  force-limited, else ``gear * gain * ctrlrange`` for a motor; joint ``armature`` -> armature;
+  the ball-screw lead and inertias of :data:`DRIVE_FIELDS` from ``<custom><numeric
+  name="plm_pin:<actuator>:<field>">`` (as the export writes them).
 - gravity from ``<option gravity>`` (zero when gravity is disabled); the reference
   configuration from the first ``<keyframe>``, else ``qpos0``.
 
@@ -425,8 +427,36 @@ def _actuation(mujoco: Any, m: Any, label: str) -> tuple[ActuatorSpec, ...]:
         if limits is not None:
             lo, hi = sorted(float(x) for x in limits)
             bounds = (lo, hi) if lo < hi else None
-        out.append(ActuatorSpec(joint=jname, limits=bounds))
+        drive = _drive(mujoco, m, aname)
+        out.append(
+            ActuatorSpec(
+                jname,
+                bounds,
+                drive.get("lead"),
+                drive.get("rotor_inertia", 0.0),
+                drive.get("screw_inertia", 0.0),
+            )
+        )
     return tuple(out)
+
+
+DRIVE_FIELDS = ("lead", "rotor_inertia", "screw_inertia")
+"""Drive data an actuator keeps in ``<custom><numeric name="plm_pin:<actuator>:<field>">``."""
+
+
+def _drive(mujoco: Any, m: Any, actuator: str) -> dict[str, float]:
+    """The lead [m/rev] and rotor and screw inertias [kg m^2] recorded for an actuator, if any.
+
+    The joint armature already holds their reflected inertia; these values are kept for the
+    motor torques and speeds of :func:`plm_pin.dynamics.inverse_dynamics`.
+    """
+    out = {}
+    for k in range(m.nnumeric):
+        prefix, _, rest = _name(mujoco, m, "numeric", k).partition(":")
+        name, _, field = rest.rpartition(":")
+        if prefix == "plm_pin" and name == actuator and field in DRIVE_FIELDS:
+            out[field] = float(m.numeric_data[m.numeric_adr[k]])
+    return out
 
 
 def _visuals(model: pin.Model, m: Any) -> pin.GeometryModel:

@@ -16,7 +16,8 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   ``solimp = (0.99, 0.999, 0.001)``.
 - **Actuation**: a ``motor`` per driven joint (gear 1), ``ctrlrange`` and ``forcerange`` the
   effort limits; the joint ``armature`` is the model's, reflected rotor and screw inertia
-  included (the lead itself is not kept).
+  included; lead, rotor and screw inertia kept as ``<custom><numeric>`` data
+  ``plm_pin:<actuator>:<field>`` for the motor torques of a re-import.
 - **Solver**: RK4 (or ``implicitfast``), the given timestep, Newton with tolerance 1e-10,
   contacts disabled (the geoms are visuals: ``contype = conaffinity = 0``), gravity from the
   mechanism, the reference configuration as keyframe ``reference``.
@@ -45,7 +46,7 @@ from lxml import etree
 from .._io import atomic_write_text
 from ..exceptions import DescriptionError, InvalidInput
 from ..warnings import IgnoredElementWarning, SimulationUnstableWarning
-from .mjcf import StateMap, require_mujoco, rotation_to_quat_wxyz
+from .mjcf import DRIVE_FIELDS, StateMap, require_mujoco, rotation_to_quat_wxyz
 from .sidecar import Sidecar
 
 if TYPE_CHECKING:
@@ -343,12 +344,18 @@ class _Writer:
                     equality, "connect", name=f"{c.name}_axis", site1=ends[0], site2=ends[1], **common
                 )
 
-    def actuators(self, actuator: etree._Element) -> None:
-        for a in self.mech.actuators:
-            attrs = {"name": a.joint, "joint": a.joint, "gear": "1"}
-            if a.limits is not None:
-                attrs["ctrlrange"] = attrs["forcerange"] = _fmt(a.limits)
+    def actuators(self, actuator: etree._Element, custom: etree._Element) -> None:
+        for spec in self.mech.sidecar.actuation:
+            attrs = {"name": spec.joint, "joint": spec.joint, "gear": "1"}
+            if spec.limits is not None:
+                attrs["ctrlrange"] = attrs["forcerange"] = _fmt(spec.limits)
             etree.SubElement(actuator, "motor", **attrs)
+            for field in DRIVE_FIELDS:
+                value = getattr(spec, field)
+                if value:
+                    etree.SubElement(
+                        custom, "numeric", name=f"plm_pin:{spec.joint}:{field}", data=repr(float(value))
+                    )
 
     def document(self) -> etree._Element:
         mech = self.mech
@@ -373,8 +380,9 @@ class _Writer:
         equality = etree.SubElement(root, "equality")
         self.closures(world, equality)
         actuator = etree.SubElement(root, "actuator")
-        self.actuators(actuator)
-        for element in (asset, equality, actuator):
+        custom = etree.SubElement(root, "custom")
+        self.actuators(actuator, custom)
+        for element in (asset, equality, actuator, custom):
             if not len(element):
                 root.remove(element)
         return root
