@@ -16,7 +16,7 @@ from plm_pin.dynamics.simulation import simulate
 from plm_pin.exceptions import InvalidInput
 from plm_pin.models.registry import PRESETS
 from plm_pin.warnings import SimulationUnstableWarning
-from tests.conftest import ball_joint_body, preset
+from tests.conftest import INTEROP, ball_joint_body, preset
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -28,24 +28,13 @@ def _tangent_map(a, b, mj, q_a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return q_b, np.linalg.solve(to_a.velocity_matrix(q_a), to_b.velocity_matrix(q_b))
 
 
-@pytest.mark.parametrize("name", sorted(PRESETS))
-def test_every_preset_round_trips(tmp_path: Path, name: str) -> None:
-    """Export then import keeps mobility, redundancy, mass matrix, closure rows, actuation and task."""
-    a = preset(name)
-    path = tmp_path / f"{name}.xml"
-    assert plm_pin.export_mjcf(a, path).diverged_at is None
+def _round_trip(a, path: Path, configurations: list[np.ndarray]):
+    """Export ``a`` and load it back: mobility, redundancy, closure rows, visuals, M, J_phi and phi agree."""
+    error = plm_pin.export_mjcf(a, path)
     b = plm_pin.load(path)
     mj = mujoco.MjModel.from_xml_path(str(path))
-    assert (b.name, b.task) == (a.name, a.task)
     assert (b.mobility, b.redundancy, b.n_closure_rows) == (a.mobility, a.redundancy, a.n_closure_rows)
-    assert b.sidecar.actuation == a.sidecar.actuation  # limits, lead, rotor and screw inertia
-    assert [c.spec.type for c in b.closures] == [c.spec.type for c in a.closures]
-    np.testing.assert_allclose(b.model.gravity.linear, a.model.gravity.linear, atol=0)
-    rng = np.random.default_rng(5)
-    configurations = [
-        a.q_ref,
-        a.assemble(pin.integrate(a.model, a.q_ref, rng.normal(scale=0.05, size=a.nv))).q,
-    ]
+    assert b.visual_model.ngeoms == a.visual_model.ngeoms == mj.ngeom
     for q_a in configurations:
         q_b, T = _tangent_map(a, b, mj, q_a)
         np.testing.assert_allclose(
@@ -53,20 +42,41 @@ def test_every_preset_round_trips(tmp_path: Path, name: str) -> None:
         )
         np.testing.assert_allclose(a.closure_jacobian(q_a) @ T, b.closure_jacobian(q_b), atol=1e-12)
         np.testing.assert_allclose(a.closure_residual(q_a), b.closure_residual(q_b), atol=1e-12)
+    return b, mj, error
+
+
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_every_preset_round_trips(tmp_path: Path, name: str) -> None:
+    """Export then import keeps mobility, redundancy, mass matrix, closure rows, actuation and task."""
+    a = preset(name)
+    step = np.random.default_rng(5).normal(scale=0.05, size=a.nv)
+    moved = a.assemble(pin.integrate(a.model, a.q_ref, step)).q
+    b, mj, error = _round_trip(a, tmp_path / f"{name}.xml", [a.q_ref, moved])
+    assert error.diverged_at is None
+    assert (b.name, b.task) == (a.name, a.task)
+    assert b.sidecar.actuation == a.sidecar.actuation  # limits, lead, rotor and screw inertia
+    assert [c.spec.type for c in b.closures] == [c.spec.type for c in a.closures]
+    np.testing.assert_allclose(b.model.gravity.linear, a.model.gravity.linear, atol=0)
     # armature: the reflected rotor and screw inertia (J_r + J_s)(2 pi / lead)^2 of each drive (Zhao 2011)
     for spec in a.sidecar.actuation:
         expected = (
             (spec.rotor_inertia + spec.screw_inertia) * (2 * np.pi / spec.lead) ** 2 if spec.lead else 0.0
         )
         assert mj.dof_armature[mj.joint(spec.joint).dofadr[0]] == pytest.approx(expected, rel=1e-15, abs=0)
-    assert sum(
-        g.name == o.name
-        for g in [mj.geom(i) for i in range(mj.ngeom)]
-        for o in a.visual_model.geometryObjects
-    ) == (a.visual_model.ngeoms)
     # the re-imported reference is the exported one (keyframe), assembled
     q_b, _ = _tangent_map(a, b, mj, a.q_ref)
     assert np.abs(pin.difference(b.model, b.q_ref, q_b)).max() < 1e-12
+
+
+ROBOTS_WRITTEN_ELSEWHERE = ("5bar_linkage", "5bar_linkage_iso6d", "cassie_like", "robot_delta", "wl16_like")
+
+
+@pytest.mark.filterwarnings("ignore::plm_pin.warnings.PlmWarning")  # missing meshes, a diverging run
+@pytest.mark.parametrize("name", ROBOTS_WRITTEN_ELSEWHERE)
+def test_example_parallel_robots_round_trip(tmp_path: Path, name: str) -> None:
+    """Robots of example-parallel-robots (STL meshes, welds, free-floating bases) export and load back."""
+    a = plm_pin.load(INTEROP / name)
+    _round_trip(a, tmp_path / f"{name}.xml", [a.q_ref])
 
 
 def test_comment_solver_settings_and_timestep(tmp_path: Path) -> None:
