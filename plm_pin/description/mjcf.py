@@ -41,7 +41,6 @@ actuators on one joint. Joint damping, stiffness and friction loss are ignored w
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -79,7 +78,7 @@ def require_mujoco() -> Any:
     return mujoco
 
 
-def quat_wxyz_to_se3_rotation(quat: np.ndarray) -> np.ndarray:
+def quat_wxyz_to_rotation(quat: np.ndarray) -> np.ndarray:
     """Rotation matrix of a MuJoCo quaternion (w, x, y, z)."""
     w, x, y, z = (float(c) for c in quat)
     return np.asarray(pin.Quaternion(w, x, y, z).normalized().toRotationMatrix())
@@ -93,7 +92,7 @@ def rotation_to_quat_wxyz(rotation: np.ndarray) -> np.ndarray:
 
 
 def _se3(pos: np.ndarray, quat: np.ndarray) -> pin.SE3:
-    return pin.SE3(quat_wxyz_to_se3_rotation(quat), np.asarray(pos, dtype=float).copy())
+    return pin.SE3(quat_wxyz_to_rotation(quat), np.asarray(pos, dtype=float).copy())
 
 
 def _name(mujoco: Any, m: Any, kind: str, i: int) -> str:
@@ -153,7 +152,6 @@ class StateMap:
                 f"the MuJoCo model has {len(pairs)} joints, the Pinocchio model {model.njoints - 1}"
             )
         self._pairs = tuple(pairs)
-        self._data = model.createData()
 
     def _free_placement(self, pair: _JointPair) -> pin.SE3:
         return self.model.jointPlacements[pair.pin_id]
@@ -350,7 +348,7 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
             if jname not in used:  # a body or site of that name keeps the frame name
                 model.addJointFrame(current, body_frame[parent])
             offset = anchor.inverse()
-        R = quat_wxyz_to_se3_rotation(m.body_iquat[b])
+        R = quat_wxyz_to_rotation(m.body_iquat[b])
         inertia = pin.Inertia(
             float(m.body_mass[b]), np.array(m.body_ipos[b], dtype=float), R @ np.diag(m.body_inertia[b]) @ R.T
         )
@@ -534,12 +532,11 @@ def _read_mjcf_sidecar(path: Path) -> tuple[Sidecar | None, Path | None]:
     return parse_sidecar(raw, str(sidecar_path)), sidecar_path
 
 
-def read_mjcf(path: str | Path, compile_model: Callable[[str], Any] | None = None) -> MjcfDescription:
+def read_mjcf(path: str | Path) -> MjcfDescription:
     """Compile an MJCF with MuJoCo and build the Pinocchio model and sidecar of the closed chain.
 
     Args:
         path: the ``.xml`` file; a sidecar ``<stem>.plm.yaml`` beside it is read when present.
-        compile_model: MJCF compiler (default ``mujoco.MjModel.from_xml_path``).
 
     Returns:
         The description (see the module docstring for the mapping).
@@ -553,7 +550,7 @@ def read_mjcf(path: str | Path, compile_model: Callable[[str], Any] | None = Non
     p = Path(path)
     label = str(p)
     try:
-        m = (compile_model or mujoco.MjModel.from_xml_path)(str(p))
+        m = mujoco.MjModel.from_xml_path(str(p))
     except (ValueError, RuntimeError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise DescriptionError(f"MuJoCo cannot compile this MJCF: {first}", label) from None

@@ -504,3 +504,19 @@ def test_benchmark_fourbar_mjcf_is_the_preset(tmp_path: Path) -> None:
         pin.crba(mech.model, mech.data, q), pin.crba(ref.model, ref.data, q), atol=1e-12
     )
     np.testing.assert_allclose(mech.closure_jacobian(q), ref.closure_jacobian(q), atol=1e-12)
+
+
+def test_enum_values_are_mujocos() -> None:
+    """The joint, equality, transmission, object and geom codes the reader uses are MuJoCo's."""
+    from plm_pin.description import mjcf
+
+    for name in ("FREE", "BALL", "SLIDE", "HINGE"):
+        assert getattr(mjcf, f"_{name}") == int(getattr(mujoco.mjtJoint, f"mjJNT_{name}"))
+    assert (mjcf._EQ_CONNECT, mjcf._EQ_WELD) == (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD))
+    for code, name in mjcf._EQ_NAMES.items():
+        assert int(getattr(mujoco.mjtEq, f"mjEQ_{name.upper()}")) == code
+    assert mjcf._TRN_JOINT == int(mujoco.mjtTrn.mjTRN_JOINT) and mjcf._OBJ_SITE == int(
+        mujoco.mjtObj.mjOBJ_SITE
+    )
+    for name in ("PLANE", "HFIELD", "SPHERE", "CAPSULE", "ELLIPSOID", "CYLINDER", "BOX", "MESH"):
+        assert getattr(mjcf, f"_GEOM_{name}") == int(getattr(mujoco.mjtGeom, f"mjGEOM_{name}"))
