@@ -282,6 +282,12 @@ class _Writer:
             j = obj.parentJoint
             body = world if j == 0 else self.body_of_joint[j]
             if j and self.last_of_group[j] != j:
+                warnings.warn(
+                    f"visual {obj.name!r} sits on the massless joint {self.model.names[j]!r}, merged into "
+                    "one MuJoCo body with the next joint: left out",
+                    IgnoredElementWarning,
+                    stacklevel=4,
+                )
                 continue
             shape = obj.geometry
             attrs: dict[str, str]
@@ -296,6 +302,17 @@ class _Writer:
             elif obj.meshPath and Path(obj.meshPath).suffix.lower() in _MESH_SUFFIXES:
                 mesh = f"mesh{len(asset)}"
                 etree.SubElement(asset, "mesh", name=mesh, file=str(obj.meshPath), scale=_fmt(obj.meshScale))
+                attrs = {"type": "mesh", "mesh": mesh}
+            elif isinstance(shape, coal.BVHModelBase) and shape.num_tris:  # a mesh read from an MJCF
+                mesh = f"mesh{len(asset)}"
+                faces = [shape.tri_indices(k) for k in range(shape.num_tris)]
+                etree.SubElement(
+                    asset,
+                    "mesh",
+                    name=mesh,
+                    vertex=_fmt(np.asarray(shape.vertices()).ravel()),
+                    face=" ".join(str(t[i]) for t in faces for i in range(3)),
+                )
                 attrs = {"type": "mesh", "mesh": mesh}
             else:
                 warnings.warn(

@@ -171,3 +171,29 @@ def test_divergence_is_reported(tmp_path: Path) -> None:
         error = plm_pin.export_mjcf(preset("fourbar"), tmp_path / "fourbar.xml", timestep=0.1)
     assert error.diverged_at is not None and 0.0 < error.diverged_at <= error.duration
     assert "DIVERGES" in (tmp_path / "fourbar.xml").read_text()
+
+
+def test_mesh_read_from_mjcf_exports_inline(tmp_path: Path) -> None:
+    """A mesh geom of an MJCF is written back as an inline mesh whose vertices land where MuJoCo put them."""
+    from tests.description.test_mjcf import FOURBAR_MJCF, FOURBAR_SIDECAR
+
+    tetra = '<asset><mesh name="tetra" vertex="0 0 0  0.05 0 0  0 0.03 0  0 0 0.02"/></asset>'
+    text = FOURBAR_MJCF.replace("<worldbody>", tetra + "<worldbody>").replace(
+        '<site name="coupler_tip"',
+        '<geom type="mesh" mesh="tetra" pos="0.1 0 0" euler="10 20 30"/><site name="coupler_tip"',
+    )
+    (tmp_path / "in").mkdir()
+    (tmp_path / "in" / "fb.xml").write_text(text)
+    (tmp_path / "in" / "fb.plm.yaml").write_text(FOURBAR_SIDECAR)
+    a = plm_pin.load(tmp_path / "in" / "fb.xml")
+    b, _, _ = _round_trip(a, tmp_path / "out" / "fb.xml", [a.q_ref])
+
+    def world_vertices(mech) -> np.ndarray:
+        obj = mech.visual_model.geometryObjects[0]
+        pin.forwardKinematics(mech.model, mech.data, mech.q_ref)
+        oMg = mech.data.oMi[obj.parentJoint] * obj.placement
+        points = np.asarray(obj.geometry.vertices()) @ oMg.rotation.T + oMg.translation
+        return points[np.lexsort(points.T)]
+
+    # MuJoCo stores mesh vertices in single precision: 2^-24 relative on coordinates below 0.25 m
+    np.testing.assert_allclose(world_vertices(b), world_vertices(a), atol=0.25 * 2.0**-24)
