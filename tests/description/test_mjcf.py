@@ -520,3 +520,14 @@ def test_enum_values_are_mujocos() -> None:
     )
     for name in ("PLANE", "HFIELD", "SPHERE", "CAPSULE", "ELLIPSOID", "CYLINDER", "BOX", "MESH"):
         assert getattr(mjcf, f"_GEOM_{name}") == int(getattr(mujoco.mjtGeom, f"mjGEOM_{name}"))
+
+
+def test_sidecar_path_loads_its_mjcf(tmp_path: Path) -> None:
+    """Giving the ``.plm.yaml`` of an MJCF (no URDF beside it) loads the MJCF."""
+    _write(tmp_path, "fourbar_hand", {".xml": FOURBAR_MJCF, ".plm.yaml": FOURBAR_SIDECAR})
+    mech = plm_pin.load(tmp_path / "fourbar_hand.plm.yaml")
+    assert (mech.name, mech.task.frame, mech.source) == (
+        "fourbar_hand",
+        "rocker_tip",
+        "MJCF fourbar_hand.xml",
+    )
