@@ -168,10 +168,11 @@ class StateMap:
                 out[a] = value + p.qpos0
             elif p.kind == _BALL:
                 out[a : a + 4] = [qj[3], qj[0], qj[1], qj[2]]
-            else:
-                oM = self._free_placement(p) * pin.XYZQUATToSE3(qj)
-                out[a : a + 3] = oM.translation
-                out[a + 3 : a + 7] = rotation_to_quat_wxyz(oM.rotation)
+            else:  # world pose of the joint frame; quaternion product, so the sign is kept
+                P = self._free_placement(p)
+                out[a : a + 3] = P.act(qj[:3])
+                x, y, z, w = (pin.Quaternion(P.rotation) * pin.Quaternion(qj[6], *qj[3:6])).coeffs()
+                out[a + 3 : a + 7] = [w, x, y, z]
         return out
 
     def q(self, qpos: np.ndarray) -> np.ndarray:
@@ -187,8 +188,12 @@ class StateMap:
                 w, x, y, z = qpos[a : a + 4]
                 out[j.idx_q : j.idx_q + 4] = np.array([x, y, z, w]) / np.linalg.norm(qpos[a : a + 4])
             else:
-                oM = _se3(qpos[a : a + 3], qpos[a + 3 : a + 7])
-                out[j.idx_q : j.idx_q + 7] = pin.SE3ToXYZQUAT(self._free_placement(p).inverse() * oM)
+                P = self._free_placement(p).inverse()
+                w, x, y, z = qpos[a + 3 : a + 7] / np.linalg.norm(qpos[a + 3 : a + 7])
+                out[j.idx_q : j.idx_q + 3] = P.act(np.array(qpos[a : a + 3], dtype=float))
+                out[j.idx_q + 3 : j.idx_q + 7] = (
+                    pin.Quaternion(P.rotation) * pin.Quaternion(w, x, y, z)
+                ).coeffs()
         return out
 
     def velocity_matrix(self, q: np.ndarray) -> np.ndarray:
