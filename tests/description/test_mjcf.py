@@ -322,6 +322,7 @@ def test_against_mujoco_mass_matrix_bias_and_frames(tmp_path: Path) -> None:
     data = mujoco.MjData(m)
     pdata = model.createData()
     rng = np.random.default_rng(3)
+    pin.seed(3)  # pin.randomConfiguration's generator
     from plm_pin.mechanism import Mechanism
 
     mech = Mechanism(model, mjcf.sidecar, name="spatial")
@@ -356,6 +357,7 @@ def test_state_map_round_trip(tmp_path: Path) -> None:
     """Qpos <-> q and qvel <-> v are inverse maps (quaternion order, joint ref, free-joint velocity frame)."""
     mjcf = read_mjcf(_write(tmp_path, "spatial", {".xml": SPATIAL_MJCF}))
     state = mjcf.state_map()
+    pin.seed(4)
     q = pin.randomConfiguration(mjcf.model, -np.ones(mjcf.model.nq), np.ones(mjcf.model.nq))
     v = np.arange(mjcf.model.nv, dtype=float)
     np.testing.assert_allclose(state.q(state.qpos(q)), q, atol=1e-15)
@@ -455,6 +457,7 @@ def test_visual_geoms_follow_mujoco(tmp_path: Path) -> None:
     visuals = mjcf.visual_model()
     m = mjcf.mj_model
     assert visuals.ngeoms == m.ngeom == 3
+    pin.seed(5)
     q = pin.randomConfiguration(mjcf.model, -np.ones(mjcf.model.nq), np.ones(mjcf.model.nq))
     data = mujoco.MjData(m)
     data.qpos[:] = mjcf.state_map().qpos(q)
