@@ -12,6 +12,7 @@ import pytest
 import plm_pin
 from plm_pin.description.mjcf import read_mjcf
 from plm_pin.exceptions import DescriptionError, FrameNotFound
+from plm_pin.mechanism import Mechanism
 from plm_pin.warnings import IgnoredElementWarning
 
 mujoco = pytest.importorskip("mujoco")
@@ -323,8 +324,6 @@ def test_against_mujoco_mass_matrix_bias_and_frames(tmp_path: Path) -> None:
     pdata = model.createData()
     rng = np.random.default_rng(3)
     pin.seed(3)  # pin.randomConfiguration's generator
-    from plm_pin.mechanism import Mechanism
-
     mech = Mechanism(model, mjcf.sidecar, name="spatial")
     for _ in range(4):
         q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
