@@ -3,6 +3,7 @@
 import importlib
 from typing import Any
 
+from .description.mjcf_writer import export_mjcf
 from .exceptions import (
     AllocationInfeasible,
     ClosureNotSatisfied,
@@ -38,6 +39,7 @@ __all__ = [
     "TrajectoryError",
     "__version__",
     "build_mechanism",
+    "export_mjcf",
     "load",
     "sweep",
 ]

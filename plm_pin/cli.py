@@ -159,6 +159,26 @@ def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or descr
     )
 
 
+@app.command("export")
+def export_command(
+    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml, .xml or folder")],
+    mjcf: Annotated[
+        Path | None, typer.Option("--mjcf", help="write a MuJoCo model (and its .plm.yaml task) to this .xml")
+    ] = None,
+    timestep: Annotated[float, typer.Option("--timestep", help="MuJoCo step [s]")] = 1e-3,
+    integrator: Annotated[str, typer.Option("--integrator", help="RK4 or implicitfast")] = "RK4",
+) -> None:
+    """Write a mechanism for another tool: --mjcf OUT.xml for MuJoCo, loops closed by equalities."""
+    if mjcf is None:
+        raise _fail(InvalidInput("give a format to export to: --mjcf OUT.xml"))
+    mech = _load(target)
+    from .description.mjcf_writer import export_mjcf
+
+    with _reported():
+        error = export_mjcf(mech, mjcf, timestep=timestep, integrator=integrator)
+    console.print(f"wrote {mjcf}: {error.describe()}", markup=False, highlight=False, soft_wrap=True)
+
+
 OVERVIEW = "overview"
 """The study run on a mechanism given instead of a study (``plm-pin report path/to/robot.urdf``)."""
 

@@ -9,6 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from .description.loader import Description, build_model, build_visual_model, read_description
+from .description.mjcf import MJCF_SUFFIX, read_mjcf
+from .description.sidecar import SIDECAR_SUFFIX_DEFAULT as SIDECAR_SUFFIX
 from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
 from .description.urdf import read_urdf_text
 from .description.writer import urdf_text
@@ -40,13 +42,44 @@ def mechanism_from_description(description: Description, name: str, *, validate:
         source=description.sidecar.source or str(description.urdf_path or ""),
         visual_factory=lambda: build_visual_model(model, description),
     )
+    guess = "sidecar reference" if description.sidecar.reference else "neutral configuration"
+    return _validated(mech, guess, validate)
+
+
+def mechanism_from_mjcf(path: str | Path, *, validate: bool = True) -> Mechanism:
+    """Build a :class:`Mechanism` from a MuJoCo model (see :mod:`plm_pin.description.mjcf`).
+
+    Args:
+        path: the ``.xml`` file (a ``.plm.yaml`` sidecar beside it is read when present).
+        validate: assemble the reference configuration now.
+
+    Raises:
+        DescriptionError: when MuJoCo is missing or rejects the file, or an element cannot be
+            represented.
+        ClosureNotSatisfied: when ``validate`` and the loops cannot be closed.
+    """
+    mjcf = read_mjcf(path)
+    name = mjcf.sidecar.name or Path(path).name.split(".")[0]
+    mech = Mechanism(
+        mjcf.model,
+        mjcf.sidecar,
+        name=name,
+        source=mjcf.sidecar.source or "",
+        visual_factory=mjcf.visual_model,
+    )
+    return _validated(mech, mjcf.reference_origin, validate)
+
+
+def _validated(mech: Mechanism, guess: str, validate: bool) -> Mechanism:
+    """``mech`` once its reference is assembled (when ``validate``) from ``guess`` (named in messages)."""
+    name = mech.name
     if validate and mech.closures:
         try:
             mech.q_ref  # noqa: B018 - assembles and caches
         except ClosureNotSatisfied as exc:
             raise ClosureNotSatisfied(
                 f"{name}: the closures cannot be assembled from the reference guess "
-                f"({'sidecar reference' if description.sidecar.reference else 'neutral configuration'}): "
+                f"({guess}): "
                 f"residual {exc.residual_norm:.3g} m/rad, worst closure {exc.worst_closure!r}. Give a "
                 "configuration close to an assembled one in the sidecar's 'reference', or check "
                 "that the closure frames can meet.",
@@ -118,7 +151,8 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
     Args:
         name_or_path: a preset name (see ``plm-pin list``), ``erd:<robot>`` for an
             example-robot-data robot, a ``.urdf`` with its ``.plm.yaml`` sidecar beside it,
-            a ``.plm.yaml``, or an example-parallel-robots folder.
+            a ``.plm.yaml``, an example-parallel-robots folder, or a MuJoCo ``.xml`` (MJCF, with
+            an optional ``.plm.yaml`` beside it; needs ``plm-pin[mjcf]``).
         validate: assemble the reference configuration at once (see
             :func:`mechanism_from_description`).
 
@@ -142,6 +176,11 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
             f"{text!r} is neither a preset nor an existing path; presets are {sorted(PRESETS)}; "
             f"example-robot-data robots load as 'erd:<name>'"
         )
+    if path.suffix == MJCF_SUFFIX:
+        return mechanism_from_mjcf(path, validate=validate)
+    mjcf = path.with_name(path.name.removesuffix(SIDECAR_SUFFIX) + MJCF_SUFFIX)
+    if path.name.endswith(SIDECAR_SUFFIX) and mjcf.is_file() and not mjcf.with_suffix(".urdf").is_file():
+        return mechanism_from_mjcf(mjcf, validate=validate)
     description = read_description(path)
     name = description.sidecar.name or (path.name if path.is_dir() else path.name.split(".")[0])
     return mechanism_from_description(description, name, validate=validate)

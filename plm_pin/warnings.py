@@ -17,3 +17,11 @@ class IllConditionedWarning(PlmWarning):
 
 class CorruptChunkWarning(PlmWarning):
     """A sweep checkpoint file cannot be read or is not that sweep's; its points are computed again."""
+
+
+class IgnoredElementWarning(PlmWarning):
+    """An element of a description (an MJCF joint's damping, say) has no plm_pin counterpart: ignored."""
+
+
+class SimulationUnstableWarning(PlmWarning):
+    """A simulation another engine runs of an exported model (MuJoCo's) diverges."""
