@@ -48,6 +48,7 @@ Units (SI): for rows :math:`i, j` linear (l) or angular (a), :math:`M_{x,ij}` is
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -57,7 +58,9 @@ import pinocchio as pin
 from .._checks import as_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
+from ..kinematics.singularity import inverse_margins
 from ..kinematics.task import check_task_vector
+from ..warnings import IllConditionedWarning
 from .trajectory import particular_acceleration
 
 if TYPE_CHECKING:
@@ -65,6 +68,12 @@ if TYPE_CHECKING:
 
 CLOSURE_TOL = 1e-8
 """Largest closure residual of a configuration accepted by :func:`task_space_dynamics` [m, rad]."""
+
+ILL_CONDITIONED_MARGIN = 1e-3
+"""Inverse margin (:func:`plm_pin.kinematics.classify`) below which :func:`task_space_dynamics` warns.
+
+:math:`S = N T^{-1}` grows as the inverse of that margin and :math:`M_x` as its square, so
+below 1e-3 the task inertia is amplified more than a million times over the joint-space one."""
 
 VELOCITY_RTOL = 1e-9
 r"""Largest :math:`|J_\phi v|` accepted, relative to :math:`\max(1, |v|)` [m/s, rad/s]."""
@@ -187,6 +196,11 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
         ClosureNotSatisfied: ``q`` is not assembled to :data:`CLOSURE_TOL`.
         SingularConfiguration: at an inverse-kinematics (type 1) singularity, where :math:`S`
             is undefined.
+
+    Warns:
+        IllConditionedWarning: when the inverse margin is below :data:`ILL_CONDITIONED_MARGIN`
+            (near a type 1 singularity, e.g. a four-bar's rocker at its extreme): the terms
+            are large and inaccurate.
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "task-space dynamics needs", mech.name)
@@ -194,6 +208,14 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
     _check_assembled(mech, qa)
     jac = closed_chain_jacobians(mech, qa)
     S = jac.S  # (nv, n_task)
+    margin = float(inverse_margins(jac.T, jac.J_x))
+    if margin < ILL_CONDITIONED_MARGIN:
+        warnings.warn(
+            f"{mech.name}: near an inverse (type 1) singularity: inverse margin {margin:.3g} below "
+            f"{ILL_CONDITIONED_MARGIN:.0e}; M_x grows as 1/margin^2 and is inaccurate",
+            IllConditionedWarning,
+            stacklevel=2,
+        )
     if xdot is not None:
         if v is not None:
             raise InvalidInput("give the tree velocity v or the task velocity xdot, not both")
