@@ -55,8 +55,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .._checks import as_vector
-from ..exceptions import ClosureNotSatisfied, InvalidInput
+from .._checks import as_vector, check_assembled, check_finite_model
+from ..exceptions import InvalidInput
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
 from ..kinematics.singularity import inverse_margins
 from ..kinematics.task import check_task_vector
@@ -65,9 +65,6 @@ from .trajectory import particular_acceleration
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
-
-CLOSURE_TOL = 1e-8
-"""Largest closure residual of a configuration accepted by :func:`task_space_dynamics` [m, rad]."""
 
 ILL_CONDITIONED_MARGIN = 1e-3
 """Inverse margin (:func:`plm_pin.kinematics.classify`) below which :func:`task_space_dynamics` warns.
@@ -193,7 +190,8 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
     Raises:
         InvalidInput: no task, a task size different from the DOF, malformed ``q``, ``v`` or
             ``xdot``, both ``v`` and ``xdot``, or ``v`` opening the loops.
-        ClosureNotSatisfied: ``q`` is not assembled to :data:`CLOSURE_TOL`.
+        DescriptionError: a body's inertia is not finite (see :func:`plm_pin._checks.check_finite_model`).
+        ClosureNotSatisfied: ``q`` is not assembled to :data:`plm_pin._checks.CLOSURE_TOL`.
         SingularConfiguration: at an inverse-kinematics (type 1) singularity, where :math:`S`
             is undefined.
 
@@ -204,8 +202,8 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "task-space dynamics needs", mech.name)
-    qa = mech.check_q(q)
-    _check_assembled(mech, qa)
+    qa = check_assembled(mech, q)
+    check_finite_model(mech)
     jac = closed_chain_jacobians(mech, qa)
     S = jac.S  # (nv, n_task)
     margin = float(inverse_margins(jac.T, jac.J_x))
@@ -250,20 +248,3 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
         h=h,
         g=g,
     )
-
-
-def _check_assembled(mech: Mechanism, q: np.ndarray) -> None:
-    """Refuse a configuration whose loops are open by more than :data:`CLOSURE_TOL`."""
-    if not mech.closures:
-        return
-    errors = mech.closure_errors(q)
-    worst = max(errors, key=lambda k: errors[k])
-    if errors[worst] > CLOSURE_TOL:
-        raise ClosureNotSatisfied(
-            f"{mech.name}: q is not assembled: closure {worst!r} is open by {errors[worst]:.3g} "
-            f"(tolerance {CLOSURE_TOL:.0e} m/rad); assemble it first (Mechanism.assemble)",
-            errors[worst],
-            CLOSURE_TOL,
-            q,
-            worst,
-        )

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from .._checks import check_assembled
 from ..exceptions import InvalidInput, SingularConfiguration
 from . import closures as _closures
 from .task import Task
@@ -135,7 +136,7 @@ def times_T_inverse(M: np.ndarray, T: np.ndarray, J_x: np.ndarray) -> tuple[np.n
 
 
 def closed_chain_jacobians(mech: Mechanism, q: Any) -> ClosedChainJacobians:
-    """Compute :class:`ClosedChainJacobians` at ``q`` (need not be assembled, but should be).
+    """Compute :class:`ClosedChainJacobians` at an assembled ``q``.
 
     The null-space dimension is the mechanism's generic mobility, so at a constraint
     singularity the extra near-null direction is left out of :math:`N` and shows in
@@ -143,8 +144,10 @@ def closed_chain_jacobians(mech: Mechanism, q: Any) -> ClosedChainJacobians:
 
     Raises:
         InvalidInput: on a malformed ``q`` or a mechanism without a task.
+        ClosureNotSatisfied: ``q`` is off the closure manifold (residual above
+            :data:`plm_pin._checks.CLOSURE_TOL`); assemble it first, ``mech.assemble(q).q``.
     """
-    qa = mech.check_q(q)
+    qa = check_assembled(mech, q)
     task = require_task(mech)
     model, data = mech.model, mech.data
     pin.computeJointJacobians(model, data, qa)

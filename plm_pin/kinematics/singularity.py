@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._checks import check_tolerance
 from ..exceptions import SingularConfiguration
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
 
@@ -183,16 +184,20 @@ def classify(
     Args:
         mech: the mechanism (needs a task with as many coordinates as DOF).
         q: assembled configuration, shape (nq,).
-        tol: margin at or below which a kind counts as singular.
+        tol: margin at or below which a kind counts as singular (a finite number >= 0).
         raise_if_singular: raise instead of returning a singular report.
 
     Returns:
         The report (check :attr:`SingularityReport.singular` and ``kinds``).
 
     Raises:
+        InvalidInput: a malformed ``q`` or ``tol``.
+        ClosureNotSatisfied: ``q`` is off the closure manifold (see
+            :func:`plm_pin.kinematics.closed_chain_jacobians`).
         SingularConfiguration: when ``raise_if_singular`` and the configuration is singular;
             the message names the kinds and margins.
     """
+    tol = check_tolerance(tol, "tol")
     report = report_from_jacobians(mech, closed_chain_jacobians(mech, q), tol)
     if raise_if_singular and report.singular:
         raise SingularConfiguration(
