@@ -215,3 +215,20 @@ def test_body_groups_named_like_the_split_shares_are_refused(group):
     ok = inverse_dynamics(mech, traj, groups={"plate": ["plate"]})
     assert set(ok.bodies) == {"plate", "other"}  # no rotor, screw or load on this table: no such share
     np.testing.assert_allclose(sum(ok.bodies.values()), ok.f_c, atol=1e-10 * np.max(np.abs(ok.f_c)))
+
+
+@pytest.mark.parametrize("speed", [1e160, -1e200, 1e250])
+def test_task_space_terms_that_overflow_are_refused(speed):
+    """A velocity whose squares overflow gives h = inf or NaN: refused by the final guard, not returned."""
+    mech = preset("fourbar")
+    S = closed_chain_jacobians(mech, mech.q_ref).S
+    with (
+        np.errstate(over="ignore", invalid="ignore"),
+        pytest.raises(
+            InvalidInput,
+            match=r"^fourbar: the task-space terms are not finite \(h\); an input is too large for "
+            r"floating point$",
+        ),
+    ):
+        task_space_dynamics(mech, mech.q_ref, xdot=[speed])
+    assert np.all(np.isfinite(S * speed))  # the velocity itself is finite

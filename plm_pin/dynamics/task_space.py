@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .._checks import as_vector, check_assembled, check_finite_model
+from .._checks import as_vector, check_assembled, check_finite_model, check_finite_result
 from ..exceptions import InvalidInput
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
 from ..kinematics.singularity import inverse_margins
@@ -235,6 +235,7 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
     g = np.array(pin.computeGeneralizedGravity(model, data, qa))
     h = np.array(pin.rnea(model, data, qa, va, a0)) - g
     M_x = S.T @ M @ S
+    check_finite_result(mech, "the task-space terms", M_x=M_x, h=h, g=g)
     return TaskSpaceDynamics(
         dofs=tuple(task.dofs),
         q=qa.copy(),
