@@ -17,7 +17,7 @@ import pytest
 from plm_pin import ClosureNotSatisfied, DescriptionError, InvalidInput
 from plm_pin._checks import CLOSURE_TOL
 from plm_pin.analysis import manipulability
-from plm_pin.dynamics import inverse_dynamics, task_space_dynamics, task_trajectory
+from plm_pin.dynamics import actuator_trajectory, inverse_dynamics, task_space_dynamics, task_trajectory
 from plm_pin.kinematics import classify, closed_chain_jacobians
 from plm_pin.kinematics.paths import redundancy_margin
 from plm_pin.mechanism import Mechanism
@@ -163,6 +163,13 @@ def test_force_capability_refuses_a_zero_direction(direction):
 # ------------------------------------------------------------------ bodies that overflow
 
 
+def _crank_turning():
+    """The four-bar's crank turning at 1 rad/s for 0.1 s (3 samples)."""
+    fb = preset("fourbar")
+    c0 = fb.actuator_positions(fb.q_ref)[0]
+    return actuator_trajectory(fb, lambda t: ([c0 + t], [1.0], [0.0]), [0.0, 0.05, 0.1])
+
+
 def _overflowing(joint: int, com) -> Mechanism:
     """The four-bar with the body on tree joint ``joint`` given a centre of mass at ``com`` [m]."""
     fb = preset("fourbar")
@@ -180,8 +187,9 @@ def _overflowing(joint: int, com) -> Mechanism:
         lambda m: static_forces(m, m.q_ref),
         lambda m: task_space_dynamics(m, m.q_ref),
         lambda m: static_balance(m, m.q_ref),
+        lambda m: inverse_dynamics(m, _crank_turning()),
     ],
-    ids=["static_forces", "task_space_dynamics", "static_balance"],
+    ids=["static_forces", "task_space_dynamics", "static_balance", "inverse_dynamics"],
 )
 def test_a_centre_of_mass_that_overflows_is_refused(joint, com, call):
     """A COM at 1e300 m gave f_c = [nan] or 1e300 N; the overflowing body is named instead."""
