@@ -17,7 +17,12 @@ import plm_pin
 from plm_pin import PoseUnreachable, SingularConfiguration
 from plm_pin.description import write_description
 from plm_pin.kinematics import classify, closed_chain_jacobians, forward_kinematics, inverse_kinematics
-from plm_pin.kinematics.singularity import normalised_margin, normalised_margins
+from plm_pin.kinematics.singularity import (
+    direct_margins,
+    inverse_margins,
+    normalised_margin,
+    normalised_margins,
+)
 from plm_pin.mechanism import Mechanism
 from plm_pin.models import build_2prrrp, preset_names
 from tests.conftest import preset
@@ -360,3 +365,25 @@ def test_fourbar_task_space_dynamics_refuses_or_warns_at_the_rocker_extreme():
         r"M_x grows as 1/margin\^2 and is inaccurate$",
     ):
         task_space_dynamics(fb, near)
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 6])
+def test_margins_do_not_depend_on_the_basis_nor_the_scale(k, rng):
+    """Any size: margins unchanged by N -> N R (R orthogonal) and by scaling the task; 1 x 1: |T| / |J_x|."""
+    nv = k + 4
+    N = np.linalg.qr(rng.normal(size=(nv, k)))[0]  # orthonormal feasible motions
+    J_x = rng.normal(size=(k, nv))
+    S_a = np.eye(nv)[rng.choice(nv, size=k + 1, replace=False)]
+    R = np.linalg.qr(rng.normal(size=(k, k)))[0]
+    T, C = J_x @ N, S_a @ N
+    inverse, direct = float(inverse_margins(T, J_x)), float(direct_margins(C))
+    assert inverse == pytest.approx(
+        np.linalg.svd(T, compute_uv=False)[-1] / np.linalg.norm(J_x, 2), rel=1e-12
+    )
+    assert float(inverse_margins(T @ R, J_x)) == pytest.approx(inverse, rel=1e-12)
+    assert float(direct_margins(C @ R)) == pytest.approx(direct, rel=1e-12)
+    assert float(inverse_margins(1e-3 * T, 1e-3 * J_x)) == pytest.approx(inverse, rel=1e-12)
+    assert 0.0 < inverse <= 1.0 and 0.0 < direct <= 1.0
+    if k == 1:
+        assert inverse == pytest.approx(abs(T[0, 0]) / np.linalg.norm(J_x), rel=1e-12)
+        assert normalised_margin(T) == 1.0  # the old ratio, blind for one DOF
