@@ -237,7 +237,7 @@ def generalized_balance(
         singular_rtol: see :data:`SINGULAR_RTOL`.
 
     Raises:
-        InvalidInput: ``singular_rtol`` not in [0, 1).
+        InvalidInput: ``singular_rtol`` not in [0, 1), or ``tau`` (load included) not finite.
         DescriptionError: ``tau`` is not finite because a body's inertia overflows.
         SingularConfiguration: as :func:`static_balance`.
     """
