@@ -34,7 +34,7 @@ from ..kinematics.jacobians import (
     feasible_motions,
     times_T_inverse,
 )
-from ..kinematics.singularity import constraint_margins, normalised_margins
+from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
@@ -94,24 +94,25 @@ class Manipulability:
 def manipulability_from_jacobians(jac: ClosedChainJacobians) -> Manipulability:
     """Manipulability from Jacobians already computed (see :func:`manipulability`)."""
     check_square_task(jac.T.shape[0], jac.T.shape[1], "manipulability needs")
-    J_ce, s, w, cond, singular = _manipulability_values(jac.T, jac.C)
+    J_ce, s, w, cond, singular = _manipulability_values(jac.T, jac.C, jac.J_x)
     return Manipulability(float(w), float(cond), s, None if singular else J_ce, bool(singular))
 
 
 def _manipulability_values(
-    T: np.ndarray, C: np.ndarray
+    T: np.ndarray, C: np.ndarray, J_x: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     r""":math:`J_{ce} = C T^{-1}`, its singular values, :math:`w` and :math:`\kappa`, batched.
 
     Args:
         T: shape (..., k, k).
         C: shape (..., n_act, k).
+        J_x: task Jacobians, shape (..., k, nv) (the scale of :math:`T`'s singularity test).
 
     Returns:
         ``J_ce`` (..., n_act, k) and its singular values (..., k) (NaN where :math:`T` is
         singular), ``w`` and ``condition_number`` (...) (inf there), and the singular mask (...).
     """
-    J_ce, singular = times_T_inverse(C, T)
+    J_ce, singular = times_T_inverse(C, T, J_x)
     if singular.any():  # NaN blocks: SVD of zeros there, then NaN
         s = np.linalg.svd(np.where(singular[..., None, None], 0.0, J_ce), compute_uv=False)
         s[singular] = np.nan
@@ -187,11 +188,11 @@ def batch_metrics(J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mo
         ``{name: (b,) array}`` for every name of :data:`METRICS`.
     """
     _, s_phi, T, C = feasible_motions(J_phi, J_x, actuated_v, mobility)
-    _, _, w, cond, _ = _manipulability_values(T, C)
+    _, _, w, cond, _ = _manipulability_values(T, C, J_x)
     return {
         "manipulability": w,
         "condition_number": cond,
         "constraint_margin": constraint_margins(s_phi, J_phi.shape[-1] - mobility),
-        "inverse_margin": normalised_margins(T),
-        "direct_margin": normalised_margins(C),
+        "inverse_margin": inverse_margins(T, J_x),
+        "direct_margin": direct_margins(C),
     }

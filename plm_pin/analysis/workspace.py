@@ -56,8 +56,8 @@ class WorkspaceSlice:
             direct singularity, inf at an inverse one.
         condition_number: :math:`\sigma_{max}/\sigma_{min}` of J_ce [-].
         constraint_margin: normalised smallest closure singular value at the generic rank [-].
-        inverse_margin: :math:`\sigma_{min}/\sigma_{max}` of :math:`T = J_x N` (type 1) [-].
-        direct_margin: :math:`\sigma_{min}/\sigma_{max}` of :math:`C = S_a N` (type 2) [-].
+        inverse_margin: :math:`\sigma_{min}(T)/\sigma_{max}(J_x)`, :math:`T = J_x N` (type 1) [-].
+        direct_margin: :math:`\sigma_{min}(C)`, :math:`C = S_a N` (type 2) [-].
         actuators: actuator positions [m or rad], shape ``shape + (n_act,)``.
         q: configurations, shape ``shape + (nq,)``.
         mode: working mode of each point (one sign per square leg), shape ``shape + (n_legs,)``.

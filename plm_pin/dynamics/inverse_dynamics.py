@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from .._checks import check_finite_model, check_samples_assembled
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
 from ..statics import AllocationRule, generalized_balance, load_on_frame, solve_balance
 from ..statics.balance import SINGULAR_RTOL, Load
@@ -42,6 +43,9 @@ if TYPE_CHECKING:
 
 TERMS = ("inertia", "velocity", "gravity", "external")
 """Parts of the inverse-dynamics force by physical term."""
+
+RESERVED_GROUPS = ("external", "other", "rotor", "screw")
+"""Names of the body split's own shares, which no body group may take."""
 
 
 @dataclass(frozen=True)
@@ -157,8 +161,10 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
     bodies = {name: j for j, name in enumerate(mech.body_names, start=1)}
     if groups is None:
         chosen = {name: [name] for name in bodies}
+        _check_group_names(list(chosen), default=True)
     else:
         chosen = {str(g): list(members) for g, members in groups.items()}
+        _check_group_names(list(chosen), default=False)
         listed = [b for members in chosen.values() for b in members]
         unknown = sorted(set(listed) - set(bodies))
         if unknown:
@@ -188,6 +194,17 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
     return _BodyGroups(tuple(chosen), tuple(models), tuple(datas), rotor, screw)
 
 
+def _check_group_names(names: Sequence[str], default: bool) -> None:
+    """Refuse body groups named like a share of the split itself (:data:`RESERVED_GROUPS`)."""
+    clash = sorted(set(map(str, names)) & set(RESERVED_GROUPS))
+    if clash:
+        whose = "bodies are" if default else "body groups are"
+        raise InvalidInput(
+            f"{whose} named {clash}, a name the body split keeps for its own shares "
+            f"{list(RESERVED_GROUPS)}; name the groups otherwise with groups={{name: [body, ...]}}"
+        )
+
+
 def inverse_dynamics(
     mech: Mechanism,
     trajectory: JointTrajectory,
@@ -215,7 +232,7 @@ def inverse_dynamics(
         gravity: include the bodies' weight (the model's gravity).
         groups: body groups for the body split, ``{group: [body, ...]}`` with bodies among
             :attr:`Mechanism.body_names`; bodies not listed form ``"other"``; default one
-            group per body.
+            group per body. No group may be named as one of :data:`RESERVED_GROUPS`.
         objective: allocation objective, as in :func:`~plm_pin.statics.static_forces`.
         weights: actuator weights.
         limits: actuator effort limits.
@@ -225,7 +242,11 @@ def inverse_dynamics(
         singular_rtol: see :data:`~plm_pin.statics.balance.SINGULAR_RTOL`.
 
     Raises:
-        InvalidInput: malformed options or a trajectory of another mechanism.
+        InvalidInput: malformed options, a trajectory of another mechanism, or a body group
+            named as one of :data:`RESERVED_GROUPS`.
+        DescriptionError: a body's inertia is not finite (see :func:`plm_pin._checks.check_finite_model`).
+        ClosureNotSatisfied: a sample of ``trajectory`` is off the closure manifold (see
+            :func:`plm_pin._checks.check_assembled`).
         InverseDynamicsFailed: at the first sample whose allocation is infeasible, whose load
             cannot be resisted, or (non-redundant mechanisms with a square task) past a direct
             singularity (a sign change of det J_ce), with the samples before it.
@@ -244,6 +265,8 @@ def inverse_dynamics(
             f"the trajectory has q of width {trajectory.q.shape[1]} and v of width {trajectory.v.shape[1]}; "
             f"{mech.name} has nq = {mech.nq}, nv = {mech.nv}"
         )
+    check_samples_assembled(mech, trajectory.q, trajectory.t)
+    check_finite_model(mech)
     load_at = _load_function(mech, wrench, frame)
     body = _body_groups(mech, groups)
     model, data = mech.model, mech.data

@@ -48,23 +48,29 @@ Units (SI): for rows :math:`i, j` linear (l) or angular (a), :math:`M_{x,ij}` is
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
-from .._checks import as_vector
-from ..exceptions import ClosureNotSatisfied, InvalidInput
+from .._checks import as_vector, check_assembled, check_finite_model, check_finite_result
+from ..exceptions import InvalidInput
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
+from ..kinematics.singularity import inverse_margins
 from ..kinematics.task import check_task_vector
+from ..warnings import IllConditionedWarning
 from .trajectory import particular_acceleration
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
 
-CLOSURE_TOL = 1e-8
-"""Largest closure residual of a configuration accepted by :func:`task_space_dynamics` [m, rad]."""
+ILL_CONDITIONED_MARGIN = 1e-3
+"""Inverse margin (:func:`plm_pin.kinematics.classify`) below which :func:`task_space_dynamics` warns.
+
+:math:`S = N T^{-1}` grows as the inverse of that margin and :math:`M_x` as its square, so
+below 1e-3 the task inertia is amplified more than a million times over the joint-space one."""
 
 VELOCITY_RTOL = 1e-9
 r"""Largest :math:`|J_\phi v|` accepted, relative to :math:`\max(1, |v|)` [m/s, rad/s]."""
@@ -184,16 +190,30 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
     Raises:
         InvalidInput: no task, a task size different from the DOF, malformed ``q``, ``v`` or
             ``xdot``, both ``v`` and ``xdot``, or ``v`` opening the loops.
-        ClosureNotSatisfied: ``q`` is not assembled to :data:`CLOSURE_TOL`.
+        DescriptionError: a body's inertia is not finite (see :func:`plm_pin._checks.check_finite_model`).
+        ClosureNotSatisfied: ``q`` is not assembled to :data:`plm_pin._checks.CLOSURE_TOL`.
         SingularConfiguration: at an inverse-kinematics (type 1) singularity, where :math:`S`
             is undefined.
+
+    Warns:
+        IllConditionedWarning: when the inverse margin is below :data:`ILL_CONDITIONED_MARGIN`
+            (near a type 1 singularity, e.g. a four-bar's rocker at its extreme): the terms
+            are large and inaccurate.
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "task-space dynamics needs", mech.name)
-    qa = mech.check_q(q)
-    _check_assembled(mech, qa)
+    qa = check_assembled(mech, q)
+    check_finite_model(mech)
     jac = closed_chain_jacobians(mech, qa)
     S = jac.S  # (nv, n_task)
+    margin = float(inverse_margins(jac.T, jac.J_x))
+    if margin < ILL_CONDITIONED_MARGIN:
+        warnings.warn(
+            f"{mech.name}: near an inverse (type 1) singularity: inverse margin {margin:.3g} below "
+            f"{ILL_CONDITIONED_MARGIN:.0e}; M_x grows as 1/margin^2 and is inaccurate",
+            IllConditionedWarning,
+            stacklevel=2,
+        )
     if xdot is not None:
         if v is not None:
             raise InvalidInput("give the tree velocity v or the task velocity xdot, not both")
@@ -215,6 +235,7 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
     g = np.array(pin.computeGeneralizedGravity(model, data, qa))
     h = np.array(pin.rnea(model, data, qa, va, a0)) - g
     M_x = S.T @ M @ S
+    check_finite_result(mech, "the task-space terms", M_x=M_x, h=h, g=g)
     return TaskSpaceDynamics(
         dofs=tuple(task.dofs),
         q=qa.copy(),
@@ -228,20 +249,3 @@ def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = N
         h=h,
         g=g,
     )
-
-
-def _check_assembled(mech: Mechanism, q: np.ndarray) -> None:
-    """Refuse a configuration whose loops are open by more than :data:`CLOSURE_TOL`."""
-    if not mech.closures:
-        return
-    errors = mech.closure_errors(q)
-    worst = max(errors, key=lambda k: errors[k])
-    if errors[worst] > CLOSURE_TOL:
-        raise ClosureNotSatisfied(
-            f"{mech.name}: q is not assembled: closure {worst!r} is open by {errors[worst]:.3g} "
-            f"(tolerance {CLOSURE_TOL:.0e} m/rad); assemble it first (Mechanism.assemble)",
-            errors[worst],
-            CLOSURE_TOL,
-            q,
-            worst,
-        )

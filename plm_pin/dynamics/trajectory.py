@@ -87,7 +87,13 @@ from ..kinematics.jacobians import (
     closed_chain_jacobians,
     require_task,
 )
-from ..kinematics.singularity import RANK_RTOL, SINGULARITY_TOL, constraint_margins, normalised_margin
+from ..kinematics.singularity import (
+    RANK_RTOL,
+    SINGULARITY_TOL,
+    constraint_margins,
+    direct_margins,
+    inverse_margins,
+)
 from ..kinematics.task import Task
 
 if TYPE_CHECKING:
@@ -389,14 +395,15 @@ class _Recorder:
 def _check_regular(mech: Mechanism, jac: ClosedChainJacobians, tol: float, kind: str) -> None:
     """Refuse a configuration whose constraint or ``kind`` margin is at most ``tol``.
 
-    ``kind`` is ``inverse`` (margin of :math:`T`) or ``direct`` (margin of :math:`C`).
+    ``kind`` is ``inverse`` (margin of :math:`T`) or ``direct`` (margin of :math:`C`), as
+    :func:`plm_pin.kinematics.classify` defines them.
 
     Raises:
         SingularConfiguration: naming the kinds and margins.
     """
     margins = {
         "constraint": float(constraint_margins(jac.closure_singular_values, mech.nv - mech.mobility)),
-        kind: normalised_margin(jac.T if kind == "inverse" else jac.C),
+        kind: float(inverse_margins(jac.T, jac.J_x) if kind == "inverse" else direct_margins(jac.C)),
     }
     bad = [f"{name} (margin {m:.3g})" for name, m in margins.items() if m <= tol]
     if bad:

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from .._checks import check_assembled
 from ..exceptions import InvalidInput, SingularConfiguration
 from . import closures as _closures
 from .task import Task
@@ -28,7 +29,10 @@ if TYPE_CHECKING:
     from ..mechanism import Mechanism
 
 INVERSE_RTOL = 1e-12
-r""":math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x its largest."""
+r""":math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x :math:`|J_x|`.
+
+Relative to the whole task Jacobian (:math:`|J_x| = \sigma_{max}(J_x)`), not to :math:`T`
+itself, whose ratio is 1 for any 1 x 1 :math:`T` (see :mod:`plm_pin.kinematics.singularity`)."""
 
 
 @dataclass(frozen=True)
@@ -71,7 +75,7 @@ class ClosedChainJacobians:
 
     def _times_T_inverse(self, M: np.ndarray) -> np.ndarray:
         check_square_task(self.T.shape[0], self.T.shape[1], "S and J_ce need")
-        out, singular = times_T_inverse(M, self.T)
+        out, singular = times_T_inverse(M, self.T, self.J_x)
         if singular:
             s = np.linalg.svd(self.T, compute_uv=False)
             raise SingularConfiguration(
@@ -106,21 +110,22 @@ def feasible_motions(
     return N, s, J_x @ N, N[..., actuated_v, :]
 
 
-def times_T_inverse(M: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def times_T_inverse(M: np.ndarray, T: np.ndarray, J_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r""":math:`M T^{-1}` for square :math:`T`, batched over leading axes, and where :math:`T` is singular.
 
     :math:`T` counts as singular (an inverse-kinematics, type 1, singularity) when
-    :math:`\sigma_{min}(T) \le` :data:`INVERSE_RTOL` :math:`\sigma_{max}(T)`; the product is NaN there.
+    :math:`\sigma_{min}(T) \le` :data:`INVERSE_RTOL` :math:`\sigma_{max}(J_x)`; the product is NaN there.
 
     Args:
         M: shape (..., r, k).
         T: shape (..., k, k).
+        J_x: the task Jacobians :math:`T` restricts, shape (..., k, nv).
 
     Returns:
         :math:`M T^{-1}` (..., r, k), and the singular mask (...).
     """
     sT = np.linalg.svd(T, compute_uv=False)
-    singular = sT[..., -1] <= INVERSE_RTOL * sT[..., 0]
+    singular = sT[..., -1] <= INVERSE_RTOL * np.linalg.norm(J_x, ord=2, axis=(-2, -1))
     any_singular = bool(singular.any())
     if any_singular:  # solve with the identity in their place, then blank them
         T = np.where(singular[..., None, None], np.eye(T.shape[-1]), T)
@@ -131,7 +136,7 @@ def times_T_inverse(M: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def closed_chain_jacobians(mech: Mechanism, q: Any) -> ClosedChainJacobians:
-    """Compute :class:`ClosedChainJacobians` at ``q`` (need not be assembled, but should be).
+    """Compute :class:`ClosedChainJacobians` at an assembled ``q``.
 
     The null-space dimension is the mechanism's generic mobility, so at a constraint
     singularity the extra near-null direction is left out of :math:`N` and shows in
@@ -139,8 +144,10 @@ def closed_chain_jacobians(mech: Mechanism, q: Any) -> ClosedChainJacobians:
 
     Raises:
         InvalidInput: on a malformed ``q`` or a mechanism without a task.
+        ClosureNotSatisfied: ``q`` is off the closure manifold (residual above
+            :data:`plm_pin._checks.CLOSURE_TOL`); assemble it first, ``mech.assemble(q).q``.
     """
-    qa = mech.check_q(q)
+    qa = check_assembled(mech, q)
     task = require_task(mech)
     model, data = mech.model, mech.data
     pin.computeJointJacobians(model, data, qa)

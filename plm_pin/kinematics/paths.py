@@ -28,7 +28,7 @@ import pinocchio as pin
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from .assembly import assemble
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians, require_task
-from .singularity import SINGULARITY_TOL, SingularityReport, normalised_margin, report_from_jacobians
+from .singularity import SINGULARITY_TOL, SingularityReport, direct_margins, report_from_jacobians
 from .task import TaskTarget, compile_task
 
 if TYPE_CHECKING:
@@ -41,8 +41,8 @@ TRACK_TOL = 1e-11
 def redundancy_margin(mech: Mechanism, q: Any, jac: ClosedChainJacobians | None = None) -> float:
     r"""Smallest direct margin left when any one actuator is removed [-].
 
-    For each actuator :math:`k`, the normalised smallest singular value of :math:`C`
-    (:mod:`plm_pin.kinematics.jacobians`) without row :math:`k`; the minimum over
+    For each actuator :math:`k`, the direct margin (:mod:`plm_pin.kinematics.singularity`) of
+    :math:`C` without row :math:`k`, the smallest singular value; the minimum over
     :math:`k`. It is zero where some single actuator has become indispensable: a
     redundantly actuated chain that *loses its redundancy* (Harada 2015: a sub-mechanism
     at ``[0]``) while :math:`C` keeps full rank. Zero for a non-redundant chain.
@@ -56,7 +56,7 @@ def redundancy_margin(mech: Mechanism, q: Any, jac: ClosedChainJacobians | None 
     C = j.C  # (n_act, mobility)
     if C.shape[0] <= C.shape[1]:
         return 0.0
-    return min(normalised_margin(np.delete(C, k, axis=0)) for k in range(C.shape[0]))
+    return min(float(direct_margins(np.delete(C, k, axis=0))) for k in range(C.shape[0]))
 
 
 def _predict(mech: Mechanism, qs: Sequence[np.ndarray], s: np.ndarray, k: int) -> np.ndarray:

@@ -12,10 +12,27 @@ With the feasible motions :math:`v = N s` (:mod:`plm_pin.kinematics.jacobians`):
 - **direct** (type 2) singularity: :math:`C = S_a N` loses rank: a motion moves the task
   frame with every actuator locked (Harada 2011 eq. (10), :math:`\det J_e = 0`).
 
-Margins are normalised smallest singular values (:math:`\sigma_{min} / \sigma_{max}`, and
-:math:`\sigma_r / \sigma_1` for the closure at its generic rank ``r``); they do not depend on
-the choice of :math:`N`. A configuration is singular of a kind when its margin is at most
-the tolerance.
+Margins. Each kind is the loss of rank of a map restricted to the feasible motions (or, for
+the closure, of its generic rank ``r``); its margin is the smallest singular value that
+should be nonzero divided by the norm of the *whole* map it is restricted from, so that
+it is scale-aware for every size, a 1 x 1 ``T`` or ``C`` included:
+
+.. math::
+    m_{constraint} = \frac{\sigma_r(J_\phi)}{\sigma_1(J_\phi)}, \qquad
+    m_{inverse} = \frac{\sigma_{min}(J_x N)}{\sigma_{max}(J_x)}, \qquad
+    m_{direct} = \frac{\sigma_{min}(S_a N)}{\sigma_{max}(S_a)} = \sigma_{min}(S_a N).
+
+They lie in [0, 1] and do not depend on the choice of :math:`N` (another orthonormal basis
+is :math:`N R` with :math:`R` orthogonal). Since :math:`N` has orthonormal columns and
+:math:`S_a` orthonormal rows, the singular values of :math:`C = S_a N` are the cosines of
+the principal angles between the feasible motions and the actuated coordinates: the direct
+margin is how much the least-seen feasible motion moves the actuators, per unit of joint
+speed [m/s, rad/s]. Likewise the inverse margin is the smallest task rate of a unit feasible
+motion relative to the largest task rate of any unit tree motion. A ratio
+:math:`\sigma_{min}(T) / \sigma_{max}(T)` of the restricted map alone would be 1 for every
+1 x 1 matrix, so a one-DOF chain (the four-bar at its rocker's extremes, where the rocker
+rate vanishes while the crank turns) would never be found singular. A configuration is
+singular of a kind when its margin is at most the tolerance.
 """
 
 from __future__ import annotations
@@ -25,6 +42,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._checks import check_tolerance
 from ..exceptions import SingularConfiguration
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
 
@@ -39,6 +57,29 @@ KINDS: tuple[str, ...] = ("constraint", "inverse", "direct")
 
 RANK_RTOL = 1e-9
 """Relative tolerance of every rank decision: singular values below ``RANK_RTOL * s_max`` count as zero."""
+
+
+def inverse_margins(T: np.ndarray, J_x: np.ndarray) -> np.ndarray:
+    r"""Inverse (type 1) margin :math:`\sigma_{min}(T) / \sigma_{max}(J_x)`, batched.
+
+    ``T`` (..., k, k) and ``J_x`` (..., k, nv) give (...). 1 for an empty ``T``; 0 where :math:`J_x` vanishes.
+    """
+    if min(T.shape[-2:]) == 0:
+        return np.ones(T.shape[:-2])
+    s_min = np.linalg.svd(T, compute_uv=False)[..., -1]
+    return _ratio(s_min, np.linalg.norm(J_x, ord=2, axis=(-2, -1)), 0.0)
+
+
+def direct_margins(C: np.ndarray) -> np.ndarray:
+    r"""Direct (type 2) margin :math:`\sigma_{min}(C)` of :math:`C = S_a N`, (..., n_act, k) -> (...).
+
+    :math:`\sigma_{max}(S_a) = 1`, so this is the margin of the module docstring; the
+    smallest of the ``min(n_act, k)`` singular values, i.e. for a redundantly actuated chain
+    that of its rank-``k`` part. 1 for an empty ``C``.
+    """
+    if min(C.shape[-2:]) == 0:
+        return np.ones(C.shape[:-2])
+    return np.linalg.svd(C, compute_uv=False)[..., -1]
 
 
 def normalised_margin(M: np.ndarray) -> float:
@@ -93,9 +134,9 @@ class SingularityReport:
     r"""Singularity margins of one configuration.
 
     Attributes:
-        constraint_margin: :math:`\sigma_r / \sigma_1` of the closure Jacobian at its generic rank.
-        inverse_margin: :math:`\sigma_{min} / \sigma_{max}` of :math:`T = J_x N` (type 1).
-        direct_margin: :math:`\sigma_{min} / \sigma_{max}` of :math:`C = S_a N` (type 2); for a
+        constraint_margin: :math:`\sigma_r / \sigma_1` of the closure Jacobian at its generic rank [-].
+        inverse_margin: :math:`\sigma_{min}(T) / \sigma_{max}(J_x)`, :math:`T = J_x N` (type 1) [-].
+        direct_margin: :math:`\sigma_{min}(C)`, :math:`C = S_a N` (type 2) [-]; for a
             redundantly actuated chain, of its rank-``mobility`` part.
         tol: the tolerance used.
     """
@@ -130,7 +171,9 @@ class SingularityReport:
 def report_from_jacobians(mech: Mechanism, jac: ClosedChainJacobians, tol: float) -> SingularityReport:
     """Build the report from Jacobians already computed."""
     constraint = float(constraint_margins(jac.closure_singular_values, mech.nv - mech.mobility))
-    return SingularityReport(constraint, normalised_margin(jac.T), normalised_margin(jac.C), tol)
+    return SingularityReport(
+        constraint, float(inverse_margins(jac.T, jac.J_x)), float(direct_margins(jac.C)), tol
+    )
 
 
 def classify(
@@ -141,16 +184,20 @@ def classify(
     Args:
         mech: the mechanism (needs a task with as many coordinates as DOF).
         q: assembled configuration, shape (nq,).
-        tol: margin at or below which a kind counts as singular.
+        tol: margin at or below which a kind counts as singular (a finite number >= 0).
         raise_if_singular: raise instead of returning a singular report.
 
     Returns:
         The report (check :attr:`SingularityReport.singular` and ``kinds``).
 
     Raises:
+        InvalidInput: a malformed ``q`` or ``tol``.
+        ClosureNotSatisfied: ``q`` is off the closure manifold (see
+            :func:`plm_pin.kinematics.closed_chain_jacobians`).
         SingularConfiguration: when ``raise_if_singular`` and the configuration is singular;
             the message names the kinds and margins.
     """
+    tol = check_tolerance(tol, "tol")
     report = report_from_jacobians(mech, closed_chain_jacobians(mech, q), tol)
     if raise_if_singular and report.singular:
         raise SingularConfiguration(

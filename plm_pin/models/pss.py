@@ -34,8 +34,18 @@ revolutes through a massless cross) -> ``strut<i>`` (local z along the strut, ce
 mass at mid-length) -> frame ``strut<i>_tip``, closed on the platform frame
 ``platform_p<i>`` by a ``point`` closure (3 rows). The universal joint replaces the
 slider-side ball: the third rotation, the strut's spin about its own axis, is an idle
-freedom the paper drops too (its strut angular velocity is normal to the strut, eqs.
-(6b), (9)), and the strut is axisymmetric, so nothing changes. The universal joint's
+freedom (a ball there would add 8 DOF, mobility 14). The paper drops it: an S-S strut
+transmits no axial torque, so an axisymmetric strut's spin rate stays constant (Euler:
+:math:`I_a \dot\omega_3 = (I_t - I_t) \omega_1 \omega_2 = 0`), zero, and its angular velocity
+is :math:`\omega_i = w_i 	imes \dot w_i`, normal to the strut (eqs. (6b), (9)). The
+universal joint instead slaves the spin to the swing (:math:`\omega \cdot w = \dotlpha
+\sineta`, up to 0.1 rad/s on the eq. (35) trajectory), and would make the motors drive the
+axial inertia. So the tree's strut carries the transverse moments only, its axial moment
+set to zero: the component of :math:`\omega` normal to the strut is :math:`w 	imes \dot w`
+in both models, hence the strut's kinetic energy
+:math:`	frac12 m |v_G|^2 + 	frac12 I_t |w 	imes \dot w|^2` and every dynamic result are
+exactly the paper's S-S ones (the builder refuses unequal transverse moments, for which
+that does not hold). The axial moment still sizes the drawn strut. The universal joint's
 frame is turned so that its z axis is the guide direction :math:`e_i`; its first axis is
 then normal to the guide and it locks only when the strut lies along that axis, at 90 deg
 from the guide, far outside the workspace (the angles stay below 0.43 rad on the paper's
@@ -318,7 +328,9 @@ def build_pss(
         strut_lengths: strut length :math:`l_i` [m].
         strut_mass: mass of each strut [kg], centre of mass at mid-length.
         strut_inertia: strut inertia about its centre, diagonal (transverse, transverse,
-            axial) in the strut frame [kg m^2].
+            axial) in the strut frame [kg m^2]; the transverse moments must be equal. The
+            tree's strut gets an axial moment of zero (the S-S strut's spin is idle, see
+            the module docstring); the axial value sizes the drawing.
         platform_mass: platform mass [kg], centre of mass at the platform frame's origin.
         platform_inertia: platform inertia about its centre of mass, diagonal in the
             platform frame [kg m^2].
@@ -336,7 +348,8 @@ def build_pss(
         The URDF tree and its sidecar.
 
     Raises:
-        ValueError: on an invalid leg list or direction, or an unreachable home pose.
+        ValueError: on an invalid leg list or direction, unequal transverse strut moments,
+            or an unreachable home pose.
     """
     n = len(guide_points)
     legs = tuple(sorted(legs))
@@ -346,6 +359,11 @@ def build_pss(
         norm = float(np.linalg.norm(guide_directions[i - 1]))
         if abs(norm - 1.0) > 1e-12:
             raise ValueError(f"guide direction of leg {i} must be a unit vector, |e| = {norm}")
+    if strut_inertia[0] != strut_inertia[1]:
+        raise ValueError(
+            f"strut_inertia {tuple(strut_inertia)}: the transverse moments must be equal (an axisymmetric "
+            "strut, whose idle spin the universal joint may drop)"
+        )
     ik = pss_inverse_kinematics(
         home_pose, guide_points, guide_directions, platform_points, strut_lengths, legs
     )
@@ -380,7 +398,7 @@ def build_pss(
             u.link(
                 f"strut{i}",
                 strut_mass,
-                tuple(strut_inertia),
+                (float(strut_inertia[0]), float(strut_inertia[1]), 0.0),  # axial moment: the idle spin
                 com=(0.0, 0.0, l / 2),
                 visuals=[u.cylinder_visual(strut_radius, l, "rod", (0.0, 0.0, l / 2))],
             )

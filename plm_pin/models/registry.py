@@ -127,13 +127,16 @@ _ZHAO2011_NOTES = (
     "horizontal axis (the other cannot reach); root with the slider below / outside its platform joint.",
     "Reference pose x = y = 0, z = 1.744 m, angles 0: the midpoint of the eq. (35) trajectory "
     "(the paper names no home pose); R = Rz(phi_z) Ry(phi_y) Rx(phi_x), fixed axes.",
-    "Slider ball joint replaced by a universal joint (massless cross, frame z along the guide): the "
-    "strut's spin is idle and the paper drops it too (eqs. (6b), (9)); the strut is axisymmetric.",
+    "Slider ball joint replaced by a universal joint (massless cross, frame z along the guide). It "
+    "slaves the strut's spin to its swing (up to 0.1 rad/s on eq. (35)), which the paper's S-S strut, "
+    "transmitting no axial torque, never does (its omega is normal to the strut, eqs. (6b), (9)); so "
+    "the tree's strut has axial moment 0 instead of 0.005 kg m^2, which makes the dynamics exactly "
+    "the paper's (with 0.005 the motors would drive the spin: up to 5 mN, 2.4e-4 J of work per motor).",
     "Lead printed '0.05 m^-1' (eq. (19)), read 0.05 m/rev; armature per slider "
     "(2 pi / 0.05)^2 (10.5e-4 + 248e-4) = 408.21 kg.",
     "Gravity 9.8 m/s^2 along -z: direction from the vertical screws 1-4 below the platform, "
     "magnitude not printed (the paper's a_max = 9.8 m/s^2).",
-    "Strut inertia diag(1.279, 1.279, 0.005) kg m^2 about its centre kept as printed (a uniform "
+    "Strut transverse inertia 1.279 kg m^2 about its centre kept as printed (a uniform "
     "1 m, 20 kg rod gives 1.667); slider inertia that of a 0.12 x 0.12 x 0.08 m box (it never "
     "rotates); stroke 0-1.5 m ours; no force limits given; d_i = 0.244 m enters no equation, unused.",
     "Table 5 (work per motor, sum 15242.219 J) is not reproduced by the paper's printed model "

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .._checks import as_vector
+from .._checks import as_vector, check_assembled, check_finite_model, check_finite_result, check_tolerance
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
 from ..kinematics import closures as _closures
 
@@ -195,12 +195,16 @@ def static_balance(
         singular_rtol: relative singular-value threshold, see :data:`SINGULAR_RTOL`.
 
     Raises:
-        InvalidInput: malformed ``q`` or wrench.
+        InvalidInput: malformed ``q`` or wrench, or ``singular_rtol`` not in [0, 1).
+        DescriptionError: the weight of a body is not finite (its inertia overflows).
+        ClosureNotSatisfied: ``q`` is off the closure manifold (residual above
+            :data:`plm_pin._checks.CLOSURE_TOL`); assemble it first, ``mech.assemble(q).q``.
         SingularConfiguration: the actuators (direct singularity) or the closures
             (constraint singularity) cannot resist the load at ``q``; the message names
             the unresisted generalized-force component.
     """
-    qa = mech.check_q(q)
+    qa = check_assembled(mech, q)
+    check_finite_model(mech)
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
     model, data = mech.model, mech.data
     tau = pin.computeGeneralizedGravity(model, data, qa).copy() if gravity else np.zeros(model.nv)
@@ -233,16 +237,20 @@ def generalized_balance(
         singular_rtol: see :data:`SINGULAR_RTOL`.
 
     Raises:
+        InvalidInput: ``singular_rtol`` not in [0, 1), or ``tau`` (load included) not finite.
+        DescriptionError: ``tau`` is not finite because a body's inertia overflows.
         SingularConfiguration: as :func:`static_balance`.
     """
+    rtol = check_tolerance(singular_rtol, "singular_rtol", relative=True)
     model, data = mech.model, mech.data
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
     tau = np.array(tau, dtype=float)
     if load is not None:
         tau -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
+    check_finite_result(mech, "the generalized forces to balance", tau=tau)
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
-    balance = _balance(mech, q, tau, load, gravity, J_phi, mech.actuated_v_indices, singular_rtol)
+    balance = _balance(mech, q, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol)
     if v is None and a is None:
         return balance
     return dataclasses.replace(balance, v=v, a=a)

@@ -79,12 +79,14 @@ def force_capability(
             actuator needs finite limits.
 
     Raises:
-        InvalidInput: a malformed direction, or actuators without finite limits.
+        InvalidInput: a malformed or zero direction, or actuators without finite limits.
         AllocationInfeasible: the limits do not even hold gravity (``alpha = 0`` is infeasible).
         SingularConfiguration: the load cannot be resisted at ``q``.
     """
     bounds = _finite_limits(mech, limits, "force capability")
     load = load_on_frame(mech, direction, frame)
+    if not np.any(load.wrench):
+        raise InvalidInput(f"direction must be a nonzero load (it sets the unit of alpha), got {direction!r}")
     with_load = static_balance(mech, q, load.wrench, load.frame, gravity=gravity)
     base = static_balance(mech, q, gravity=gravity) if gravity else None
     f_g = base.f_particular if base is not None else np.zeros(mech.n_actuators)

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._checks import check_finite_result
 from ..exceptions import InvalidInput
 from . import reactions as _reactions
 from .allocation import OBJECTIVES, Inequalities, allocate, check_weights
@@ -143,7 +144,8 @@ def actuator_limits(mech: Mechanism, limits: Any) -> np.ndarray:
             array-like (n_act, 2) of lower and upper efforts [N, N m].
 
     Raises:
-        InvalidInput: wrong shape, NaN, or a lower bound above its upper bound.
+        InvalidInput: wrong shape, NaN, a lower bound above its upper bound, a lower bound of
+            +inf or an upper bound of -inf (no effort would be admissible).
     """
     n = mech.n_actuators
     if isinstance(limits, str):
@@ -157,6 +159,11 @@ def actuator_limits(mech: Mechanism, limits: Any) -> np.ndarray:
     arr = np.asarray(limits, dtype=float)
     if arr.shape != (n, 2) or np.isnan(arr).any() or (arr[:, 0] > arr[:, 1]).any():
         raise InvalidInput(f"limits must be an ({n}, 2) array of lower <= upper efforts, got {arr.tolist()}")
+    if (arr[:, 0] == np.inf).any() or (arr[:, 1] == -np.inf).any():
+        raise InvalidInput(
+            f"limits must have lower bounds below +inf and upper bounds above -inf (-inf, inf: no "
+            f"limit), got {arr.tolist()}"
+        )
     return arr
 
 
@@ -256,6 +263,7 @@ def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule)
         f_p, G, ineq, weights=rule.weights, objective=rule.objective, internal=internal, actuator_names=names
     )
     lam = balance.closure_forces(result.f_c)
+    check_finite_result(mech, "static forces", f_c=result.f_c, lam=lam)
     for a in (result.f_c, lam, result.y):
         a.setflags(write=False)
     return StaticForces(

@@ -245,11 +245,20 @@ def test_times_T_inverse_is_the_inverse_product_and_blanks_singular_T(rng):
     T = rng.normal(size=(4, 3, 3))
     T[2, :, 2] = T[2, :, 0] + T[2, :, 1]  # rank 2
     M = rng.normal(size=(4, 5, 3))
-    out, singular = times_T_inverse(M, T)
+    out, singular = times_T_inverse(M, T, T)  # J_x = T: the scale is T's own norm
     assert singular.tolist() == [False, False, True, False]
     for k in (0, 1, 3):
         np.testing.assert_allclose(out[k], M[k] @ np.linalg.inv(T[k]), rtol=1e-12, atol=1e-12)
     assert np.all(np.isnan(out[2]))
+
+
+def test_times_T_inverse_scales_a_1x1_T_by_the_task_jacobian():
+    """A 1 x 1 T is singular when small against |J_x|, whatever its own ratio sigma_min / sigma_max (= 1)."""
+    J_x = np.array([[[0.0, 0.0, 1.0]], [[0.0, 0.0, 1.0]]])
+    T = np.array([[[1e-13]], [[0.2]]])
+    out, singular = times_T_inverse(np.ones((2, 1, 1)), T, J_x)
+    assert singular.tolist() == [True, False]
+    assert np.isnan(out[0, 0, 0]) and out[1, 0, 0] == pytest.approx(5.0, rel=1e-15)
 
 
 def test_feasible_motions_of_a_batch_span_each_null_space(rng):

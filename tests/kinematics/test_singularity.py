@@ -17,7 +17,12 @@ import plm_pin
 from plm_pin import PoseUnreachable, SingularConfiguration
 from plm_pin.description import write_description
 from plm_pin.kinematics import classify, closed_chain_jacobians, forward_kinematics, inverse_kinematics
-from plm_pin.kinematics.singularity import normalised_margin, normalised_margins
+from plm_pin.kinematics.singularity import (
+    direct_margins,
+    inverse_margins,
+    normalised_margin,
+    normalised_margins,
+)
 from plm_pin.mechanism import Mechanism
 from plm_pin.models import build_2prrrp, preset_names
 from tests.conftest import preset
@@ -265,3 +270,120 @@ def test_normalised_margins_of_a_stack_are_inverse_condition_numbers(rng):
         assert normalised_margin(M[k]) == margins[k]
     assert margins[3] == 0.0
     np.testing.assert_array_equal(normalised_margins(np.zeros((2, 0, 3))), [1.0, 1.0])
+
+
+# ------------------------------------------------ one-DOF chains: the four-bar's rocker extremes
+
+FOURBAR = {"a": 0.10, "b": 0.25, "c": 0.20, "d": 0.30}  # crank, coupler, rocker, ground [m]
+
+
+def rocker_extreme_crank_angles() -> tuple[float, float]:
+    """Crank angles [rad] of the rocker's two extremes, upper branch, by the law of cosines.
+
+    There crank and coupler are collinear, the crank pin at |OB| = b + a (extended) or
+    b - a (folded) from the crank pivot O; in triangle O-D-B, c^2 = |OB|^2 + d^2 - 2 |OB| d cos(beta),
+    and the crank points along OB (extended) or against it (folded).
+    """
+    a, b, c, d = FOURBAR["a"], FOURBAR["b"], FOURBAR["c"], FOURBAR["d"]
+
+    def beta(ob: float) -> float:
+        return math.acos((ob**2 + d**2 - c**2) / (2 * ob * d))
+
+    return beta(b + a), beta(b - a) + math.pi
+
+
+def fourbar_margins_by_hand(q: np.ndarray) -> tuple[float, float]:
+    """Inverse and direct margins from the four-bar's velocity ratios (loop a e2 + b e3 = d + c e4).
+
+    w3 / w2 = a sin(t4 - t2) / (b sin(t3 - t4)), w4 / w2 = a sin(t2 - t3) / (c sin(t4 - t3)); the feasible
+    tree motion is (w2, w3 - w2, w4) (crank, relative coupler, rocker); the task is the rocker angle
+    (|J_x| = 1), the actuator the crank (|S_a| = 1).
+    """
+    t2, t3, t4 = q[0], q[0] + q[1], q[2]
+    a, b, c = FOURBAR["a"], FOURBAR["b"], FOURBAR["c"]
+    w3 = a * math.sin(t4 - t2) / (b * math.sin(t3 - t4))
+    w4 = a * math.sin(t2 - t3) / (c * math.sin(t4 - t3))
+    norm = math.sqrt(1.0 + (w3 - 1.0) ** 2 + w4**2)
+    return abs(w4) / norm, 1.0 / norm
+
+
+@pytest.mark.parametrize("extreme", [0, 1])
+def test_fourbar_rocker_extremes_are_inverse_singular(extreme):
+    """At the closed-form crank angles of the rocker's extremes the 1-DOF four-bar is inverse-singular.
+
+    A 1 x 1 T has sigma_min / sigma_max = 1; the margin relative to |J_x| vanishes there and grows
+    away from it as the hand-derived velocity ratio says.
+    """
+    fb = preset("fourbar")
+    theta = rocker_extreme_crank_angles()[extreme]
+    q = fb.assemble(fb.q_ref, fixed={"crank_pivot": theta}).q
+    report = classify(fb, q)
+    assert report.kinds == ("inverse",)
+    assert report.inverse_margin < 1e-9
+    assert fourbar_margins_by_hand(q)[0] < 1e-9
+    for delta in (-0.01, 0.01):
+        q_near = fb.assemble(q, fixed={"crank_pivot": theta + delta}).q
+        near = classify(fb, q_near)
+        assert near.kinds == ()
+        inverse, direct = fourbar_margins_by_hand(q_near)
+        assert near.inverse_margin == pytest.approx(inverse, rel=1e-9)
+        assert near.direct_margin == pytest.approx(direct, rel=1e-9)
+        assert near.inverse_margin > 1e-3
+
+
+def test_fourbar_margins_match_the_velocity_ratios_around_the_crank():
+    """Over a crank turn classify's margins are the hand-derived ones, least inverse at the extremes."""
+    fb = preset("fourbar")
+    angles = np.radians(np.arange(0.0, 360.0, 5.0)) + 1e-3
+    q = fb.q_ref
+    inverse = []
+    for theta in angles:
+        q = fb.assemble(q, fixed={"crank_pivot": theta}).q
+        report = classify(fb, q)
+        by_hand = fourbar_margins_by_hand(q)
+        assert (report.inverse_margin, report.direct_margin) == pytest.approx(by_hand, rel=1e-9)
+        inverse.append(report.inverse_margin)
+    two_least = sorted(angles[np.argsort(inverse)[:2]])
+    extremes = sorted(t % (2 * math.pi) for t in rocker_extreme_crank_angles())
+    np.testing.assert_allclose(two_least, extremes, atol=math.radians(2.5))
+
+
+def test_fourbar_task_space_dynamics_refuses_or_warns_at_the_rocker_extreme():
+    """task_space_dynamics raises SingularConfiguration at the extreme, warns IllConditioned near it."""
+    from plm_pin.dynamics import task_space_dynamics
+    from plm_pin.warnings import IllConditionedWarning
+
+    fb = preset("fourbar")
+    theta = rocker_extreme_crank_angles()[1]
+    q = fb.assemble(fb.q_ref, fixed={"crank_pivot": theta}).q
+    with pytest.raises(SingularConfiguration, match=r"^inverse-kinematics \(type 1\) singular"):
+        task_space_dynamics(fb, q)
+    near = fb.assemble(fb.q_ref, fixed={"crank_pivot": 3.7765}).q
+    with pytest.warns(
+        IllConditionedWarning,
+        match=r"^fourbar: near an inverse \(type 1\) singularity: inverse margin 0\.000209 below 1e-03; "
+        r"M_x grows as 1/margin\^2 and is inaccurate$",
+    ):
+        task_space_dynamics(fb, near)
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 6])
+def test_margins_do_not_depend_on_the_basis_nor_the_scale(k, rng):
+    """Any size: margins unchanged by N -> N R (R orthogonal) and by scaling the task; 1 x 1: |T| / |J_x|."""
+    nv = k + 4
+    N = np.linalg.qr(rng.normal(size=(nv, k)))[0]  # orthonormal feasible motions
+    J_x = rng.normal(size=(k, nv))
+    S_a = np.eye(nv)[rng.choice(nv, size=k + 1, replace=False)]
+    R = np.linalg.qr(rng.normal(size=(k, k)))[0]
+    T, C = J_x @ N, S_a @ N
+    inverse, direct = float(inverse_margins(T, J_x)), float(direct_margins(C))
+    assert inverse == pytest.approx(
+        np.linalg.svd(T, compute_uv=False)[-1] / np.linalg.norm(J_x, 2), rel=1e-12
+    )
+    assert float(inverse_margins(T @ R, J_x)) == pytest.approx(inverse, rel=1e-12)
+    assert float(direct_margins(C @ R)) == pytest.approx(direct, rel=1e-12)
+    assert float(inverse_margins(1e-3 * T, 1e-3 * J_x)) == pytest.approx(inverse, rel=1e-12)
+    assert 0.0 < inverse <= 1.0 and 0.0 < direct <= 1.0
+    if k == 1:
+        assert inverse == pytest.approx(abs(T[0, 0]) / np.linalg.norm(J_x), rel=1e-12)
+        assert normalised_margin(T) == 1.0  # the old ratio, blind for one DOF

@@ -36,6 +36,9 @@ TABLE3_L = 1.0  # strut length [m], all legs
 TABLE4_STRUT, TABLE4_SLIDER = 20.0, 50.0  # [kg]
 PLATFORM_MASS, PLATFORM_I = 200.0, np.diag([17.333, 17.333, 33.333])  # section "Simulation"
 STRUT_I = np.diag([1.279, 1.279, 0.005])  # section "Simulation", strut frame, z along the strut
+# the tree's strut: transverse moments as printed, axial 0 (an S-S strut's spin is idle, never driven)
+TREE_STRUT_I = np.diag([STRUT_I[0, 0], STRUT_I[1, 1], 0.0])
+ARMATURE = (2 * math.pi / 0.05) ** 2 * (10.5e-4 + 248e-4)  # eq. (19): lead 0.05 m/rev, I_L + I_C + I_M
 
 LEGS = {"zhao2011_8pss": (1, 2, 3, 4, 5, 6, 7, 8), "zhao2011_6pss": (2, 3, 4, 5, 6, 7)}
 HOME = np.array([0.0, 0.0, 1.744, 0.0, 0.0, 0.0])
@@ -94,7 +97,7 @@ def _placements(mech, q):
 
 @pytest.mark.parametrize("name", sorted(LEGS))
 def test_masses_and_inertias_match_tables_3_4_and_the_text(name):
-    """Sliders 50 kg; struts 20 kg, diag(1.279, 1.279, 0.005) at l/2; platform 200 kg, diag(17.333, ..)."""
+    """Sliders 50 kg; struts 20 kg, 1.279 transverse, 0 axial (idle spin) at l/2; platform 200 kg, 17.333.."""
     mech = preset(name)
     for i in LEGS[name]:
         assert _body(mech, f"slider{i}").mass == pytest.approx(TABLE4_SLIDER, abs=1e-15)
@@ -102,7 +105,7 @@ def test_masses_and_inertias_match_tables_3_4_and_the_text(name):
         strut = _body(mech, f"u{i}b")
         assert strut.mass == pytest.approx(TABLE4_STRUT, abs=1e-15)
         np.testing.assert_allclose(strut.lever, [0.0, 0.0, TABLE3_L / 2], atol=1e-15)
-        np.testing.assert_allclose(strut.inertia, STRUT_I, atol=1e-15)
+        np.testing.assert_allclose(strut.inertia, TREE_STRUT_I, atol=1e-15)
     platform = _body(mech, "platform_floating")
     assert platform.mass == pytest.approx(PLATFORM_MASS, abs=1e-15)
     np.testing.assert_allclose(platform.lever, 0.0, atol=1e-15)
@@ -255,3 +258,65 @@ def test_trajectory_helper_follows_eq_35():
         np.testing.assert_allclose(acc, 0.0, atol=1e-12)
     np.testing.assert_allclose(zhao2011_trajectory(T_EQ35 / 2)[1], 2 * 0.2 / T_EQ35, rtol=1e-15)
     np.testing.assert_allclose(zhao2011_trajectory(T_EQ35 / 4)[2], 9.8, rtol=1e-15)
+
+
+def _paper_kinetic_energy(mech, q, v, legs):
+    """Kinetic energy of the paper's S-S legs from the platform twist and slider rates alone [J].
+
+    Eqs. (6b), (9): strut i has its centre at (C_i + A_i) / 2 and the angular velocity
+    w_i x (v_A - v_C) / l, normal to it; sliders carry the reflected armature of eq. (19).
+    """
+    data = _placements(mech, q)
+    j = mech.model.joints[mech.model.getJointId("platform_floating")]
+    M = data.oMi[mech.model.getJointId("platform_floating")]
+    R, p = M.rotation, M.translation
+    v_p, w_p = R @ v[j.idx_v : j.idx_v + 3], R @ v[j.idx_v + 3 : j.idx_v + 6]  # free-flyer: local -> world
+    energy = 0.5 * PLATFORM_MASS * v_p @ v_p + 0.5 * w_p @ (R @ PLATFORM_I @ R.T) @ w_p
+    for i in legs:
+        slider = mech.model.joints[mech.model.getJointId(f"slider{i}")]
+        qi, qdi = q[slider.idx_q], v[slider.idx_v]
+        C, v_C = TABLE1_B[i - 1] + qi * GUIDE_E[i - 1], qdi * GUIDE_E[i - 1]
+        r = R @ TABLE2_A[i - 1]
+        A, v_A = p + r, v_p + np.cross(w_p, r)
+        w = (A - C) / TABLE3_L
+        omega = np.cross(w, v_A - v_C) / TABLE3_L
+        v_G = 0.5 * (v_C + v_A)
+        energy += 0.5 * (TABLE4_SLIDER + ARMATURE) * qdi**2
+        energy += 0.5 * TABLE4_STRUT * v_G @ v_G + 0.5 * STRUT_I[0, 0] * omega @ omega
+    return energy
+
+
+@pytest.mark.parametrize("name", sorted(LEGS))
+@pytest.mark.parametrize("t", [0.0, 0.3 * T_EQ35, 0.8 * T_EQ35])
+def test_kinetic_energy_is_the_paper_s_s_model_exactly(name, t, rng):
+    """1/2 v^T M v of the tree equals the paper's S-S energy (strut omega normal to it) for any feasible v.
+
+    The universal joint slaves each strut's spin to its swing; with the strut's axial moment at
+    0 that spin costs nothing, as in an S-S strut that transmits no axial torque. With the printed
+    0.005 kg m^2 the energy would exceed the paper's by 1/2 0.005 (omega . w)^2 per strut.
+    """
+    mech = preset(name)
+    legs = LEGS[name]
+    sliders = _strut_length_ik(_eq35(t), legs)
+    q = mech.assemble(mech.q_ref, fixed={f"slider{i}": sliders[i] for i in legs}).q
+    N = closed_chain_jacobians(mech, q).N  # (nv, 6) feasible velocities
+    M = pin.crba(mech.model, mech.model.createData(), q)  # armature included
+    spins = []
+    for _ in range(3):
+        v = N @ rng.normal(size=6)
+        tree = 0.5 * v @ M @ v
+        assert tree == pytest.approx(_paper_kinetic_energy(mech, q, v, legs), rel=1e-12)
+        data = mech.model.createData()
+        pin.forwardKinematics(mech.model, data, q, v)
+        for i in legs:
+            jid = mech.model.getJointId(f"u{i}b")
+            spins.append(abs(data.v[jid].angular[2]))  # strut frame: z along the strut
+    assert 0.5 * STRUT_I[2, 2] * max(spins) ** 2 > 1e-9 * tree  # the spin the axial 0.005 would cost is seen
+
+
+def test_builder_refuses_unequal_transverse_strut_moments():
+    """Dropping the idle spin is exact only for an axisymmetric strut: unequal transverse moments refused."""
+    params = dict(PRESETS["zhao2011_8pss"].parameters)
+    params["strut_inertia"] = (1.279, 1.0, 0.005)
+    with pytest.raises(ValueError, match=r"^strut_inertia \(1\.279, 1\.0, 0\.005\): the transverse moments"):
+        PRESETS["zhao2011_8pss"].builder(name="zhao", **params)
