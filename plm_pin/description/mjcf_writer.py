@@ -6,6 +6,8 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   moving bodies to have mass. Revolute (bounded or not) -> ``hinge``, prismatic ->
   ``slide``, spherical -> ``ball``, free flyer (on the world only) -> ``free``. Joint
   position limits are not written: plm_pin's simulation does not enforce them either.
+  MuJoCo refuses principal moments below 1e-15 kg m^2; a body with a smaller one (a
+  slender strut's axial moment of 0) gets :data:`MIN_PRINCIPAL_MOMENT` about that axis.
 - **Frames**: body and operational frames become ``site``\ s of their name; the frames of
   closures and task that are a body's own frame get an extra site ``<frame>_site``.
 - **Closures**: ``point`` -> ``connect`` between two sites, ``weld`` -> ``weld`` between two
@@ -57,6 +59,9 @@ REVOLUTE_PAIR_SPACING = 0.05
 
 MEASURE_DURATION = 1.0
 """Passive simulation whose closure error the export measures and writes down [s]."""
+
+MIN_PRINCIPAL_MOMENT = 1e-13
+"""Smallest principal moment of inertia written [kg m^2]: MuJoCo refuses those under 1e-15."""
 
 INTEGRATORS = ("RK4", "implicitfast")
 """MuJoCo integrators :func:`export_mjcf` offers."""
@@ -123,6 +128,14 @@ def _axis(joint: pin.JointModel, name: str) -> tuple[str, np.ndarray]:
         f"joint {name!r} ({short}) has no MuJoCo counterpart; exportable joints are revolute, prismatic, "
         "spherical and free flyer"
     )
+
+
+def _with_min_moment(I: np.ndarray) -> np.ndarray:
+    """The rotational inertia with principal moments under :data:`MIN_PRINCIPAL_MOMENT` raised to it."""
+    moments, axes = np.linalg.eigh(I)
+    if moments.min() >= MIN_PRINCIPAL_MOMENT:
+        return I
+    return (axes * np.maximum(moments, MIN_PRINCIPAL_MOMENT)) @ axes.T
 
 
 def _massless(inertia: pin.Inertia) -> bool:
@@ -212,7 +225,7 @@ class _Writer:
                     f"the body of joint {model.names[group[-1]]!r} has no mass: MuJoCo refuses massless "
                     "moving bodies"
                 )
-            I = inertia.inertia
+            I = _with_min_moment(inertia.inertia)
             etree.SubElement(
                 body,
                 "inertial",
