@@ -6,6 +6,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ._text import short
+
 if TYPE_CHECKING:
     from .dynamics.simulation import SimulationResult
     from .dynamics.trajectory import JointTrajectory
@@ -44,9 +46,9 @@ class FrameNotFound(DescriptionError):
         self.name = name
         self.kind = kind
         self.choices = tuple(choices)
-        shown = ", ".join(repr(c) for c in self.choices[:40])
+        shown = ", ".join(short(c) for c in self.choices[:40])
         more = f", ... ({len(self.choices)} in all)" if len(self.choices) > 40 else ""
-        super().__init__(f"{kind} {name!r} not found; {kind}s are [{shown}{more}]", path)
+        super().__init__(f"{kind} {short(name)} not found; {kind}s are [{shown}{more}]", path)
 
 
 class ClosureNotSatisfied(PlmError):

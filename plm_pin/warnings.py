@@ -17,3 +17,7 @@ class IllConditionedWarning(PlmWarning):
 
 class CorruptChunkWarning(PlmWarning):
     """A sweep checkpoint file cannot be read or is not that sweep's; its points are computed again."""
+
+
+class DescriptionWarning(PlmWarning):
+    """A third-party URDF holds a flaw refused in plm_pin descriptions, tolerated there (see ``strict``)."""

@@ -33,6 +33,8 @@ from typing import Any, Literal
 
 import yaml
 
+from .._text import short
+from .._yaml import YamlRefused, load_yaml
 from ..exceptions import DescriptionError
 
 FORMAT = "plm-pin/1"
@@ -182,18 +184,18 @@ def _number(value: Any, where: str, path: str | None) -> float:
         try:
             value = float(value)
         except ValueError:
-            raise DescriptionError(f"{where} must be a number, got {value!r}", path) from None
+            raise DescriptionError(f"{where} must be a number, got {short(value)}", path) from None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise DescriptionError(f"{where} must be a number, got {value!r}", path)
+        raise DescriptionError(f"{where} must be a number, got {short(value)}", path)
     x = float(value)
     if not math.isfinite(x):
-        raise DescriptionError(f"{where} must be finite, got {value!r}", path)
+        raise DescriptionError(f"{where} must be finite, got {short(value)}", path)
     return x
 
 
 def _numbers(value: Any, n: int | None, where: str, path: str | None) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)):
-        raise DescriptionError(f"{where} must be a list of numbers, got {value!r}", path)
+        raise DescriptionError(f"{where} must be a list of numbers, got {short(value)}", path)
     if n is not None and len(value) != n:
         raise DescriptionError(f"{where} must have {n} numbers, got {len(value)}", path)
     return tuple(_number(v, f"{where}[{i}]", path) for i, v in enumerate(value))
@@ -207,14 +209,14 @@ def _keys(item: Mapping[str, Any], allowed: Sequence[str], where: str, path: str
 
 def _string(value: Any, where: str, path: str | None) -> str:
     if not isinstance(value, str) or not value:
-        raise DescriptionError(f"{where} must be a non-empty string, got {value!r}", path)
+        raise DescriptionError(f"{where} must be a non-empty string, got {short(value)}", path)
     return value
 
 
 def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
     where = f"closures[{i}]"
     if not isinstance(item, Mapping):
-        raise DescriptionError(f"{where} must be a mapping, got {item!r}", path)
+        raise DescriptionError(f"{where} must be a mapping, got {short(item)}", path)
     _keys(item, ("name", "frames", "type", "axis"), where, path)
     frames = item.get("frames")
     if not isinstance(frames, (list, tuple)) or len(frames) != 2:
@@ -222,10 +224,14 @@ def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
     f0 = _string(frames[0], f"{where}.frames[0]", path)
     f1 = _string(frames[1], f"{where}.frames[1]", path)
     name = _string(item.get("name", f"{f0}__{f1}"), f"{where}.name", path)
+    if f0 == f1:
+        raise DescriptionError(
+            f"{where} ({short(name)}): joins frame {short(f0)} to itself; a closure needs two frames", path
+        )
     ctype = item.get("type")
     if ctype not in CLOSURE_TYPES:
         raise DescriptionError(
-            f"{where} ({name}): invalid closure type {ctype!r}; valid types are {list(CLOSURE_TYPES)}",
+            f"{where} ({name}): invalid closure type {short(ctype)}; valid types are {list(CLOSURE_TYPES)}",
             path,
         )
     axis = None
@@ -245,7 +251,7 @@ def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
 def _actuator(item: Any, i: int, path: str | None) -> ActuatorSpec:
     where = f"actuation[{i}]"
     if not isinstance(item, Mapping):
-        raise DescriptionError(f"{where} must be a mapping, got {item!r}", path)
+        raise DescriptionError(f"{where} must be a mapping, got {short(item)}", path)
     _keys(item, ("joint", "limits", "lead", "rotor_inertia", "screw_inertia"), where, path)
     joint = _string(item.get("joint"), f"{where}.joint", path)
     limits = None
@@ -265,7 +271,19 @@ def _actuator(item: Any, i: int, path: str | None) -> ActuatorSpec:
         if value < 0.0:
             raise DescriptionError(f"{where}.{key} must be >= 0 [kg m^2], got {value}", path)
         inertias.append(value)
-    return ActuatorSpec(joint, limits, lead, inertias[0], inertias[1])
+    actuator = ActuatorSpec(joint, limits, lead, inertias[0], inertias[1])
+    try:
+        reflected = actuator.reflected_inertia()
+    except OverflowError:
+        reflected = math.inf
+    if not math.isfinite(reflected):
+        raise DescriptionError(
+            f"{where} ({short(joint)}): the reflected inertia (rotor_inertia + screw_inertia) (2 pi / "
+            f"lead)^2 overflows a float (rotor_inertia {inertias[0]:g}, screw_inertia {inertias[1]:g}, lead "
+            f"{lead:g} m/rev)",
+            path,
+        )
+    return actuator
 
 
 def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
@@ -295,7 +313,8 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
     )
     _keys(data, allowed, "sidecar", path)
     if data.get("format") != FORMAT:
-        raise DescriptionError(f"unknown sidecar format {data.get('format')!r}; expected {FORMAT!r}", path)
+        found = short(data.get("format"))
+        raise DescriptionError(f"unknown sidecar format {found}; expected {FORMAT!r}", path)
     closures_raw = data.get("closures") or []
     actuation_raw = data.get("actuation") or []
     if not isinstance(closures_raw, list):
@@ -325,7 +344,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         for d in dofs:
             if d not in TASK_DOFS:
                 raise DescriptionError(
-                    f"end_effector.task: unknown direction {d!r}; valid are {list(TASK_DOFS)}", path
+                    f"end_effector.task: unknown direction {short(d)}; valid are {list(TASK_DOFS)}", path
                 )
         if len(set(dofs)) != len(dofs):
             raise DescriptionError(f"end_effector.task repeats a direction: {dofs}", path)
@@ -344,29 +363,27 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
             reference[str(joint)] = _numbers(value, None, where, path)
         else:
             reference[str(joint)] = (_number(value, where, path),)
-    name = data.get("name")
-    source = data.get("source")
+    name = None if data.get("name") is None else _string(data["name"], "name", path)
+    source = None if data.get("source") is None else _string(data["source"], "source", path)
     return Sidecar(
         closures=closures,
         actuation=actuation,
         task=task,
         gravity=gravity,
         reference=reference,
-        name=str(name) if name is not None else None,
-        source=str(source) if source is not None else None,
+        name=name,
+        source=source,
     )
 
 
-def read_yaml(text: str, path: str | None = None) -> Any:
-    """Parse YAML text safely (no Python objects), wrapping YAML errors.
+def read_yaml(text: str | bytes, path: str | None = None) -> Any:
+    """Parse untrusted YAML text safely (see :func:`plm_pin._yaml.load_yaml`), wrapping YAML errors.
 
     Raises:
-        DescriptionError: when the text is not valid YAML.
+        DescriptionError: when the text is not valid YAML, is too large, or its aliases
+            expand it beyond the node cap.
     """
     try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise DescriptionError(f"malformed YAML{where}: {problem}", path) from None
+        return load_yaml(text)
+    except YamlRefused as exc:
+        raise DescriptionError(str(exc), path) from None
