@@ -154,6 +154,20 @@ class StoreMismatch(InvalidInput):
         super().__init__(message)
 
 
+class StoreLocked(PlmError):
+    """A sweep's checkpoint folder is in use by another running sweep (:mod:`plm_pin.sweep.store`).
+
+    Attributes:
+        path: the folder.
+        holder: who holds it (process id, host and start time), as far as it is known.
+    """
+
+    def __init__(self, message: str, path: Path, holder: str) -> None:
+        self.path = path
+        self.holder = holder
+        super().__init__(message)
+
+
 class SchedulerUnreachable(PlmError):
     """A Dask scheduler could not be reached, or has no workers, within the time allowed.
 
