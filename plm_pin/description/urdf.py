@@ -94,6 +94,9 @@ _NUMERIC: dict[str, dict[str, int]] = {
     "mimic": {"multiplier": 1, "offset": 1},
 }
 
+AXIS_MIN = 1e-9
+"""Smallest norm of a moving joint's axis: a shorter one would be normalised from rounding noise."""
+
 INERTIA_RTOL = 1e-9
 """Tolerance of the inertia checks (moments >= 0, triangle inequalities), relative to the largest moment."""
 
@@ -137,8 +140,12 @@ def check_numbers(root: etree._Element, label: str, strict: bool = True) -> None
                 if tag == "mass" and values[0] < 0.0:
                     raise DescriptionError(f"{_owner(element)}: negative mass {values[0]}", label)
                 moving = element.getparent() is not None and element.getparent().get("type") in _MOVING
-                if tag == "axis" and moving and not any(values):
-                    raise DescriptionError(f"{_owner(element)}: <axis xyz={text!r}> must be non-zero", label)
+                if tag == "axis" and moving and math.hypot(*values) < AXIS_MIN:
+                    raise DescriptionError(
+                        f"{_owner(element)}: <axis xyz={short(text)}> must be non-zero (norm at least "
+                        f"{AXIS_MIN:g}); it is normalised",
+                        label,
+                    )
     for inertial in root.iter("inertial"):
         mass = inertial.find("mass")
         inertia = inertial.find("inertia")
