@@ -88,6 +88,31 @@ class ActuatorSpec:
     rotor_inertia: float = 0.0
     screw_inertia: float = 0.0
 
+    def __post_init__(self) -> None:
+        """Refuse a drive no motor has (builders make these directly, not through the parser).
+
+        Raises:
+            DescriptionError: a lead that is not positive, a negative or non-finite inertia, or a
+                reflected inertia too large for a float; the message names the joint.
+        """
+        where = f"actuator {short(self.joint)}"
+        if self.lead is not None and not (math.isfinite(self.lead) and self.lead > 0.0):
+            raise DescriptionError(f"{where}: lead must be positive and finite [m/rev], got {self.lead!r}")
+        for key in ("rotor_inertia", "screw_inertia"):
+            value = getattr(self, key)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise DescriptionError(f"{where}: {key} must be finite and >= 0 [kg m^2], got {value!r}")
+        try:
+            reflected = self.reflected_inertia()
+        except OverflowError:
+            reflected = math.inf
+        if not math.isfinite(reflected):
+            raise DescriptionError(
+                f"{where}: the reflected inertia (rotor_inertia + screw_inertia) (2 pi / lead)^2 overflows a "
+                f"float (rotor_inertia {self.rotor_inertia:g}, screw_inertia {self.screw_inertia:g} kg m^2, "
+                f"lead {self.lead:g} m/rev)"
+            )
+
     def reflected_inertia(self) -> float:
         r"""Armature this drive adds on its joint [kg] or [kg m^2].
 
@@ -271,19 +296,10 @@ def _actuator(item: Any, i: int, path: str | None) -> ActuatorSpec:
         if value < 0.0:
             raise DescriptionError(f"{where}.{key} must be >= 0 [kg m^2], got {value}", path)
         inertias.append(value)
-    actuator = ActuatorSpec(joint, limits, lead, inertias[0], inertias[1])
     try:
-        reflected = actuator.reflected_inertia()
-    except OverflowError:
-        reflected = math.inf
-    if not math.isfinite(reflected):
-        raise DescriptionError(
-            f"{where} ({short(joint)}): the reflected inertia (rotor_inertia + screw_inertia) (2 pi / "
-            f"lead)^2 overflows a float (rotor_inertia {inertias[0]:g}, screw_inertia {inertias[1]:g}, lead "
-            f"{lead:g} m/rev)",
-            path,
-        )
-    return actuator
+        return ActuatorSpec(joint, limits, lead, inertias[0], inertias[1])
+    except DescriptionError as exc:
+        raise DescriptionError(f"{where} ({exc.problem})", path) from None
 
 
 def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
