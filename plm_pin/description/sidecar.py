@@ -249,27 +249,29 @@ def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
     f0 = _string(frames[0], f"{where}.frames[0]", path)
     f1 = _string(frames[1], f"{where}.frames[1]", path)
     name = _string(item.get("name", f"{f0}__{f1}"), f"{where}.name", path)
+    label = f"{where} ({short(name, quote=False)})"
     if f0 == f1:
         raise DescriptionError(
-            f"{where} ({short(name)}): joins frame {short(f0)} to itself; a closure needs two frames", path
+            f"{label}: joins frame {short(f0)} to itself; a closure needs two frames",
+            path,
         )
     ctype = item.get("type")
     if ctype not in CLOSURE_TYPES:
         raise DescriptionError(
-            f"{where} ({name}): invalid closure type {short(ctype)}; valid types are {list(CLOSURE_TYPES)}",
+            f"{label}: invalid closure type {short(ctype)}; valid types are {list(CLOSURE_TYPES)}",
             path,
         )
     axis = None
     if ctype == "revolute":
         if "axis" not in item:
-            raise DescriptionError(f"{where} ({name}): a revolute closure needs an 'axis'", path)
+            raise DescriptionError(f"{label}: a revolute closure needs an 'axis'", path)
         raw = _numbers(item["axis"], 3, f"{where}.axis", path)
         norm = math.sqrt(sum(a * a for a in raw))
         if norm < 1e-9:
             raise DescriptionError(f"{where}.axis must be non-zero, got {list(raw)}", path)
         axis = (raw[0] / norm, raw[1] / norm, raw[2] / norm)
     elif "axis" in item:
-        raise DescriptionError(f"{where} ({name}): 'axis' is only valid for revolute", path)
+        raise DescriptionError(f"{label}: 'axis' is only valid for revolute", path)
     return ClosureSpec(name=name, frames=(f0, f1), type=ctype, axis=axis)
 
 

@@ -18,7 +18,9 @@ URDF = REPO / "urdf"
 EXAMPLES = 40
 """Examples each property-based test of this suite tries (hypothesis ``max_examples``)."""
 
-budget = settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+budget = settings(
+    max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 """The settings of every property-based test here: a fixed number of examples, no time limit."""
 
 

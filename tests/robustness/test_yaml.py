@@ -108,7 +108,9 @@ def test_an_alias_bomb_in_an_example_parallel_robots_sidecar_is_refused(tmp_path
     entries = {"closed_loop": "[['a', 'a']]", "type": "['6d']", "name_mot": "['m']"}
     entries[key] = chain(depth, width)
     (folder / "robot.yaml").write_text("".join(f"{k}: {v}\n" for k, v in entries.items()))
-    with pytest.raises(DescriptionError, match=r"robot\.yaml: the document stands for more than 100000 nodes"):
+    with pytest.raises(
+        DescriptionError, match=r"robot\.yaml: the document stands for more than 100000 nodes"
+    ):
         load(folder)
 
 
@@ -122,7 +124,9 @@ def test_an_alias_bomb_in_a_sweep_configuration_is_refused(tmp_path, key):
     config.write_text(f"format: plm-pin-sweep/1\n{key}: {chain(9, 10)}\n")
     with pytest.raises(InvalidInput) as err:
         load_config(config)
-    assert str(err.value).startswith(f"{config}: not valid YAML (the document stands for more than 100000 nodes")
+    assert str(err.value).startswith(
+        f"{config}: not valid YAML (the document stands for more than 100000 nodes"
+    )
 
 
 @pytest.mark.parametrize(
@@ -133,7 +137,9 @@ def test_a_file_over_the_size_cap_is_refused_without_parsing(tmp_path, filler):
     """A sidecar or configuration larger than MAX_BYTES is refused by size, whatever it holds."""
     text = "format: plm-pin/1\n" + filler * (MAX_BYTES // len(filler) + 1)
     urdf = fourbar_files(tmp_path, sidecar=text)
-    with pytest.raises(DescriptionError, match=r"the file is larger than 256 KiB, the most read from a YAML file"):
+    with pytest.raises(
+        DescriptionError, match=r"the file is larger than 256 KiB, the most read from a YAML file"
+    ):
         load(urdf)
     config = tmp_path / "sweep.yaml"
     config.write_text(text)
