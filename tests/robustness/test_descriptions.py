@@ -1,4 +1,4 @@
-"""Descriptions that would be answered wrongly are refused: self-closures, detached cycles, reversed limits, bad mimics."""
+"""Descriptions that would be answered wrongly are refused: self-closures, detached cycles, limits, mimics."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Denial of service through YAML: alias chains, huge files and huge values are refused fast, messages stay short."""
+"""YAML denial of service: alias chains, huge files and huge values are refused fast, with short messages."""
 
 from __future__ import annotations
 
@@ -86,7 +86,7 @@ def test_an_alias_bomb_anywhere_in_a_sidecar_is_refused(tmp_path, place, depth, 
     width=st.integers(1, 12),
 )
 def test_any_alias_chain_in_a_sidecar_is_refused_or_reported_briefly(tmp_path_factory, place, depth, width):
-    """Small chains are allowed as data, then refused as wrong values with a short message; big ones as bombs."""
+    """Small chains load as data, then are refused as wrong values with a short message; big ones as bombs."""
     urdf = fourbar_files(tmp_path_factory.mktemp("s"), sidecar=sidecar_with(place, chain(depth, width)))
     with pytest.raises(DescriptionError) as err:
         load(urdf)
