@@ -59,7 +59,8 @@ class _Commands(TyperGroup):
             return super().invoke(ctx)
         except OSError as exc:
             where = f"{exc.filename}: " if exc.filename is not None else ""
-            raise _fail(PlmError(f"{where}{exc.strerror or exc}")) from None
+            hint = " (a file stands where a folder is needed)" if isinstance(exc, FileExistsError) else ""
+            raise _fail(PlmError(f"{where}{exc.strerror or exc}{hint}")) from None
 
 
 app = typer.Typer(

@@ -57,6 +57,24 @@ def chunk_name(first: int, last: int) -> str:
     return f"points-{first:07d}-{last:07d}.parquet"
 
 
+def _read_manifest(path: Path) -> tuple[str, dict[str, Any]]:
+    """The key and spec a manifest holds.
+
+    Raises:
+        InvalidInput: the file is unreadable, not JSON, or not an object with a key and a spec.
+    """
+    try:
+        found = json.loads(path.read_text(encoding="utf-8"))
+        problem = "it is not a JSON object with a 'key' and a 'spec'"
+    except (OSError, ValueError) as exc:  # unreadable, not UTF-8, not JSON
+        found, problem = None, short(str(exc), quote=False)
+    if isinstance(found, dict) and isinstance(found.get("key"), str) and isinstance(found.get("spec"), dict):
+        return found["key"], found["spec"]
+    raise InvalidInput(
+        f"{path}: not a plm_pin sweep manifest ({problem}); give another folder, or delete it to start again"
+    )
+
+
 def _digest(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
@@ -140,16 +158,7 @@ class SweepStore:
         manifest = self.root / MANIFEST
         document = {"format": FORMAT, "key": self.key, "spec": spec.to_dict()}
         if manifest.exists():
-            try:
-                found = json.loads(manifest.read_text(encoding="utf-8"))
-                found_key, found_spec = found["key"], found["spec"]
-                if not isinstance(found_key, str) or not isinstance(found_spec, dict):
-                    raise TypeError("its key or spec has the wrong type")
-            except (OSError, ValueError, KeyError, TypeError) as exc:
-                raise InvalidInput(
-                    f"{manifest}: not a plm_pin sweep manifest ({short(str(exc), quote=False)}); give "
-                    "another folder, or delete it to start again"
-                ) from None
+            found_key, found_spec = _read_manifest(manifest)
             if found_key != self.key:
                 ours = document["spec"]
                 assert isinstance(ours, dict)
@@ -158,8 +167,8 @@ class SweepStore:
                 )
                 raise StoreMismatch(
                     f"{self.root} holds the checkpoints of another sweep (key {found_key[:12]}, this one "
-                    f"{self.key[:12]}; they differ in {list(fields)}): give another folder, or delete it to "
-                    "start again",
+                    f"{self.key[:12]}; they differ in {short(list(fields))}): give another folder, or delete "
+                    "it to start again",
                     self.root,
                     fields,
                 )
