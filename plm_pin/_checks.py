@@ -85,7 +85,8 @@ def signs(value: object, name: str) -> tuple[int, ...] | None:
         raise InvalidInput(
             f"{name} must be None or a sequence of signs (+1 or -1), one per leg; got {short(value)}"
         )
-    if any(isinstance(s, bool) or not isinstance(s, numbers.Integral) for s in value):
+    whole = [isinstance(s, numbers.Real) and not isinstance(s, bool) and float(s).is_integer() for s in value]
+    if not all(whole):
         raise InvalidInput(f"{name} must hold signs (+1 or -1), one per leg; got {short(value)}")
     return tuple(int(s) for s in value)  # the caller checks the count and the values
 
