@@ -14,6 +14,7 @@ from .exceptions import (
     SchedulerUnreachable,
     SimulationFailed,
     SingularConfiguration,
+    StoreLocked,
     StoreMismatch,
     TrajectoryError,
 )
@@ -34,6 +35,7 @@ __all__ = [
     "SchedulerUnreachable",
     "SimulationFailed",
     "SingularConfiguration",
+    "StoreLocked",
     "StoreMismatch",
     "TrajectoryError",
     "__version__",

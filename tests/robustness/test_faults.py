@@ -13,8 +13,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
-from plm_pin import sweep
-from plm_pin.exceptions import StoreLocked
+from plm_pin import StoreLocked, sweep
 from plm_pin.report import run_study, write_index, write_report
 from plm_pin.report.writer import recover
 from plm_pin.sweep import make_spec
