@@ -50,7 +50,7 @@ def parse_epr_sidecar(data: Any, path: str | None = None, name: str | None = Non
         actuation.append(ActuatorSpec(joint=motor))
     dup = sorted({m for m in motors if motors.count(m) > 1})
     if dup:
-        raise DescriptionError(f"name_mot: joint(s) {dup} actuated twice", path)
+        raise DescriptionError(f"name_mot: joint(s) {short(dup)} actuated twice", path)
     return Sidecar(
         closures=tuple(closures),
         actuation=tuple(actuation),

@@ -229,7 +229,9 @@ def _numbers(value: Any, n: int | None, where: str, path: str | None) -> tuple[f
 def _keys(item: Mapping[str, Any], allowed: Sequence[str], where: str, path: str | None) -> None:
     unknown = sorted(set(item) - set(allowed), key=str)
     if unknown:
-        raise DescriptionError(f"{where}: unknown key(s) {unknown}; valid keys are {sorted(allowed)}", path)
+        raise DescriptionError(
+            f"{where}: unknown key(s) {short(unknown)}; valid keys are {sorted(allowed)}", path
+        )
 
 
 def _string(value: Any, where: str, path: str | None) -> str:
@@ -343,12 +345,12 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
     names = [c.name for c in closures]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise DescriptionError(f"duplicate closure name(s) {dup}", path)
+        raise DescriptionError(f"duplicate closure name(s) {short(dup)}", path)
     actuation = tuple(_actuator(a, i, path) for i, a in enumerate(actuation_raw))
     joints = [a.joint for a in actuation]
     dup = sorted({n for n in joints if joints.count(n) > 1})
     if dup:
-        raise DescriptionError(f"joint(s) {dup} actuated twice", path)
+        raise DescriptionError(f"joint(s) {short(dup)} actuated twice", path)
     task = None
     if data.get("end_effector") is not None:
         ee = data["end_effector"]
@@ -365,7 +367,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
                     f"end_effector.task: unknown direction {short(d)}; valid are {list(TASK_DOFS)}", path
                 )
         if len(set(dofs)) != len(dofs):
-            raise DescriptionError(f"end_effector.task repeats a direction: {dofs}", path)
+            raise DescriptionError(f"end_effector.task repeats a direction: {short(dofs)}", path)
         task = TaskSpec(frame, tuple(sorted(dofs, key=TASK_DOFS.index)))
     gravity = DEFAULT_GRAVITY
     if data.get("gravity") is not None:
@@ -376,7 +378,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
     if not isinstance(raw_ref, Mapping):
         raise DescriptionError("'reference' must be a mapping of joint name to value(s)", path)
     for joint, value in raw_ref.items():
-        where = f"reference.{joint}"
+        where = f"reference.{short(joint, quote=False)}"
         if isinstance(value, (list, tuple)):
             reference[str(joint)] = _numbers(value, None, where, path)
         else:

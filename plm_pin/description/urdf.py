@@ -264,7 +264,7 @@ def check_tree(root: etree._Element, label: str) -> None:
             raise DescriptionError(f"a <{kind}> has no name", label)
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
-            raise DescriptionError(f"duplicate {kind} name(s) {dup}", label)
+            raise DescriptionError(f"duplicate {kind} name(s) {short(dup)}", label)
     known = set(links)
     parent_of: dict[str, str] = {}
     for joint in root.findall("joint"):

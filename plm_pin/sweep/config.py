@@ -109,7 +109,7 @@ def spec_from_config(config: Any, source: str = "<config>") -> tuple[SweepSpec, 
             )
         unknown = [k for k in config if k not in KEYS]
         if unknown:
-            raise InvalidInput(f"unknown key(s) {unknown}; keys are {list(KEYS)}")
+            raise InvalidInput(f"unknown key(s) {short(unknown)}; keys are {list(KEYS)}")
         if "format" in config and config["format"] != FORMAT:
             raise InvalidInput(f"format {short(config['format'])} is not {short(FORMAT)}")
         for required in ("mechanism", "poses", "metrics"):

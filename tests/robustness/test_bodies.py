@@ -58,39 +58,38 @@ def test_the_inertia_of_any_cloud_of_point_masses_loads(tmp_path_factory, cloud,
     load(urdf, validate=False)
 
 
-@budget
-@given(
-    moments=st.tuples(st.floats(1e-6, 1.0), st.floats(1e-6, 1.0)),
-    negative=st.floats(1e-6, 2.0),
-    turn=angles,
-)
-def test_an_inertia_with_a_negative_principal_moment_is_refused(tmp_path_factory, moments, negative, turn):
-    """A negative principal moment (relative size 1e-6 and up) is refused, naming the link and the moments."""
-    largest = max(moments)
-    R = rotation(turn)
-    tensor = R @ np.diag([-negative * largest, *moments]) @ R.T
-    urdf = fourbar_files(tmp_path_factory.mktemp("b"), urdf=with_crank_inertia(tensor))
-    with pytest.raises(DescriptionError, match=r"link 'crank': the inertia is not positive semi-definite \("):
-        load(urdf, validate=False)
+def tensor_of(
+    kind: str, moments: tuple[float, float], size: float, turn: tuple[float, float, float]
+) -> np.ndarray:
+    """A tensor no rigid body has, by construction: principal moments (a, b) and a third made bad by ``size``.
 
-
-@budget
-@given(
-    moments=st.tuples(st.floats(1e-6, 1.0), st.floats(1e-6, 1.0)),
-    excess=st.floats(1e-6, 10.0),
-    turn=angles,
-)
-def test_principal_moments_breaking_a_triangle_inequality_are_refused(
-    tmp_path_factory, moments, excess, turn
-):
-    """I3 > I1 + I2 (by a relative 1e-6 and up) is no rigid body: refused, naming the link."""
+    ``negative``: the third is -size times the largest; ``triangle``: it is (a + b)(1 + size).
+    """
     a, b = moments
+    third = -size * max(a, b) if kind == "negative" else (a + b) * (1.0 + size)
     R = rotation(turn)
-    tensor = R @ np.diag([a, b, (a + b) * (1.0 + excess)]) @ R.T
-    urdf = fourbar_files(tmp_path_factory.mktemp("b"), urdf=with_crank_inertia(tensor))
-    with pytest.raises(
-        DescriptionError, match=r"link 'crank': the principal moments of inertia .* break the triangle"
-    ):
+    return R @ np.diag([third, a, b]) @ R.T
+
+
+NOT_A_BODY = {
+    "negative": r"link 'crank': the inertia is not positive semi-definite \(",
+    "triangle": r"link 'crank': the principal moments of inertia .* break the triangle inequality",
+}
+
+
+@budget
+@given(
+    kind=st.sampled_from(sorted(NOT_A_BODY)),
+    moments=st.tuples(st.floats(1e-6, 1.0), st.floats(1e-6, 1.0)),
+    size=st.floats(1e-6, 10.0),
+    turn=angles,
+)
+def test_an_inertia_no_rigid_body_has_is_refused(tmp_path_factory, kind, moments, size, turn):
+    """A negative principal moment, or one above the sum of the others (1e-6 relative or more): refused."""
+    urdf = fourbar_files(
+        tmp_path_factory.mktemp("b"), urdf=with_crank_inertia(tensor_of(kind, moments, size, turn))
+    )
+    with pytest.raises(DescriptionError, match=NOT_A_BODY[kind]):
         load(urdf, validate=False)
 
 

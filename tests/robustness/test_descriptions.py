@@ -145,46 +145,33 @@ def test_a_negative_effort_or_velocity_names_its_joint(tmp_path, joint, attribut
         load(urdf, validate=False)
 
 
+NAMES_NO_JOINT = r"<mimic joint=.*> must name another moving joint"
+BAD_NUMBER = r"<mimic (multiplier|offset)=.* must hold 1 finite"
 MIMICS = {
-    "no joint attribute": "<mimic multiplier='1'/>",
-    "an unknown joint": "<mimic joint='nope'/>",
-    "itself": "<mimic joint='coupler_pivot'/>",
-    "a fixed joint": "<mimic joint='rocker_tip_fixed'/>",
-    "an empty name": "<mimic joint=''/>",
+    "no joint attribute": ("<mimic multiplier='1'/>", NAMES_NO_JOINT),
+    "an unknown joint": ("<mimic joint='nope'/>", NAMES_NO_JOINT),
+    "itself": ("<mimic joint='coupler_pivot'/>", NAMES_NO_JOINT),
+    "a fixed joint": ("<mimic joint='rocker_tip_fixed'/>", NAMES_NO_JOINT),
+    "an empty name": ("<mimic joint=''/>", NAMES_NO_JOINT),
+    "a NaN multiplier": ("<mimic joint='crank_pivot' multiplier='nan'/>", BAD_NUMBER),
+    "a text offset": ("<mimic joint='crank_pivot' offset='x'/>", BAD_NUMBER),
 }
+"""Bad ``<mimic>`` elements on the coupler joint, and the message each gets."""
 
 
 @pytest.mark.parametrize("case", sorted(MIMICS))
-def test_a_mimic_naming_no_other_moving_joint_is_refused_before_pinocchio(tmp_path, case, capfd):
-    """A bad <mimic> is refused by plm_pin, naming the joint; nothing reaches urdfdom's stderr."""
-    text = fourbar_urdf().replace(
-        '<joint name="coupler_pivot" type="revolute">',
-        f'<joint name="coupler_pivot" type="revolute">{MIMICS[case]}',
-        1,
-    )
-    urdf = fourbar_files(tmp_path, urdf=text)
-    with pytest.raises(
-        DescriptionError, match=r"joint 'coupler_pivot': <mimic joint=.*> must name another moving joint"
-    ):
-        load(urdf, validate=False)
-    assert capfd.readouterr().err == ""
-
-
-@pytest.mark.parametrize(
-    "mimic", ["<mimic joint='crank_pivot' multiplier='nan'/>", "<mimic joint='crank_pivot' offset='x'/>"]
-)
-def test_a_mimic_with_a_bad_number_is_refused(tmp_path, mimic):
-    """Mimic multipliers and offsets are numbers checked like every other URDF number."""
+def test_a_bad_mimic_is_refused_before_pinocchio(tmp_path, case, capfd):
+    """A mimic naming no other moving joint, or with a bad number, is refused naming the joint; no stderr."""
+    mimic, message = MIMICS[case]
     text = fourbar_urdf().replace(
         '<joint name="coupler_pivot" type="revolute">',
         f'<joint name="coupler_pivot" type="revolute">{mimic}',
         1,
     )
     urdf = fourbar_files(tmp_path, urdf=text)
-    with pytest.raises(
-        DescriptionError, match=r"joint 'coupler_pivot': <mimic (multiplier|offset)=.* must hold 1 finite"
-    ):
+    with pytest.raises(DescriptionError, match=rf"joint 'coupler_pivot': {message}"):
         load(urdf, validate=False)
+    assert capfd.readouterr().err == ""
 
 
 @pytest.mark.parametrize("axis", ["0 0 0", "0 0 1e-12", "1e-300 0 0", "1e-10 1e-10 1e-10"])

@@ -202,3 +202,41 @@ def test_plm_pin_check_refuses_the_issue_bomb_in_one_line(tmp_path):
     urdf = fourbar_files(tmp_path, sidecar=text)
     line = one_line_error(run_cli("check", str(urdf)))
     assert line.endswith("aliases that repeat large parts are refused")
+
+
+def many(kind: str) -> str:
+    """Sidecar texts whose error lists or names something huge (within the size cap)."""
+    base = yaml.safe_dump(fourbar_sidecar(), sort_keys=False)
+    if kind == "unknown keys":
+        return base + "".join(f"k{i}: 1\n" for i in range(5000))
+    if kind == "a long reference key":
+        data = fourbar_sidecar()
+        data["reference"] = {"j" * 100_000: 1.0}
+        return yaml.safe_dump(data, sort_keys=False)
+    if kind == "duplicate closures":
+        return base.replace(
+            "closures:\n",
+            "closures:\n" + "- {name: c, frames: [coupler_tip, rocker_tip], type: point}\n" * 3000,
+            1,
+        )
+    return base.replace("actuation:\n", "actuation:\n" + "- {joint: crank_pivot}\n" * 5000, 1)
+
+
+@pytest.mark.parametrize(
+    "kind", ["unknown keys", "a long reference key", "duplicate closures", "duplicate joints"]
+)
+def test_a_long_list_of_wrong_names_is_quoted_cut_short(tmp_path, kind):
+    """Thousands of unknown keys or duplicates, or a 100 kB name, give a message of bounded length."""
+    urdf = fourbar_files(tmp_path, sidecar=many(kind))
+    with pytest.raises(DescriptionError) as err:
+        load(urdf)
+    assert len(str(err.value)) < MESSAGE_MAX
+
+
+def test_a_sweep_configuration_with_thousands_of_unknown_keys_is_quoted_cut_short(tmp_path):
+    """The sweep configuration's unknown keys are quoted cut short too."""
+    config = tmp_path / "sweep.yaml"
+    config.write_text("".join(f"k{i}: 1\n" for i in range(5000)))
+    with pytest.raises(InvalidInput, match=r"unknown key\(s\) \[") as err:
+        load_config(config)
+    assert len(str(err.value)) < MESSAGE_MAX
