@@ -177,3 +177,16 @@ def test_sweep_whose_checkpoint_cannot_be_written_is_one_line(tmp_path, monkeypa
     monkeypatch.setattr(store_module, "atomic_path", failing(errno.ENOSPC, str(tmp_path / "out" / "chunks")))
     line = one_line_error(run_cli("sweep", str(config), "--out", str(tmp_path / "out")))
     assert line == f"error: {tmp_path / 'out' / 'chunks'}: No space left on device"
+
+
+def test_sweep_onto_a_folder_in_use_is_one_line_naming_the_holder(tmp_path):
+    """A second `plm-pin sweep` on a locked --out says which process holds it."""
+    from plm_pin.sweep import load_config
+    from plm_pin.sweep.store import SweepStore
+
+    config = tmp_path / "sweep.yaml"
+    config.write_text(SWEEP)
+    out = tmp_path / "out"
+    with SweepStore(out, load_config(config)[0]):
+        line = one_line_error(run_cli("sweep", str(config), "--out", str(out)))
+    assert line.startswith(f"error: {out} is in use by another sweep (process {os.getpid()} on ")
