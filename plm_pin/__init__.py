@@ -15,6 +15,7 @@ from .exceptions import (
     SchedulerUnreachable,
     SimulationFailed,
     SingularConfiguration,
+    StoreLocked,
     StoreMismatch,
     TrajectoryError,
 )
@@ -35,6 +36,7 @@ __all__ = [
     "SchedulerUnreachable",
     "SimulationFailed",
     "SingularConfiguration",
+    "StoreLocked",
     "StoreMismatch",
     "TrajectoryError",
     "__version__",

@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import math
+import numbers
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ._text import short
 from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
 
 if TYPE_CHECKING:
+    from .dynamics.trajectory import JointTrajectory
     from .mechanism import Mechanism
 
 
@@ -29,6 +34,165 @@ def as_vector(x: object, size: int, name: str) -> np.ndarray:
             f"{name} has non-finite entries at indices {np.flatnonzero(~np.isfinite(arr)).tolist()}"
         )
     return arr
+
+
+def positive(value: object, name: str) -> float:
+    """``value`` as a float if it is a finite real number > 0 (a tolerance, a step, a duration).
+
+    Raises:
+        InvalidInput: naming ``name`` and the value (a string, a boolean, NaN, 0 or a negative number).
+    """
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, numbers.Real)
+        or not math.isfinite(value)
+        or value <= 0
+    ):
+        raise InvalidInput(f"{name} must be a positive finite number, got {short(value)}")
+    return float(value)
+
+
+def count(value: object, name: str, minimum: int = 0) -> int:
+    """``value`` as an int if it is a whole number >= ``minimum`` (not a float, not a boolean).
+
+    Raises:
+        InvalidInput: naming ``name`` and the value.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise InvalidInput(f"{name} must be a whole number >= {minimum}, got {short(value)}")
+    return int(value)
+
+
+def optional_name(value: object, name: str, kind: str = "frame") -> str | None:
+    """``value`` if it is None or a name (a string); whether the name exists is checked by the caller.
+
+    Raises:
+        InvalidInput: naming ``name`` and the value (e.g. a frame index instead of its name).
+    """
+    if value is not None and not isinstance(value, str):
+        raise InvalidInput(f"{name} must be a {kind} name (a string) or None, got {short(value)}")
+    return value
+
+
+def signs(value: object, name: str) -> tuple[int, ...] | None:
+    """``value`` as a tuple if it is None or a sequence of whole numbers, e.g. a working mode of signs.
+
+    Raises:
+        InvalidInput: naming ``name`` and the value (a bare number, a string, other entries).
+    """
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence | np.ndarray):
+        raise InvalidInput(
+            f"{name} must be None or a sequence of signs (+1 or -1), one per leg; got {short(value)}"
+        )
+    whole = [isinstance(s, numbers.Real) and not isinstance(s, bool) and float(s).is_integer() for s in value]
+    if not all(whole):
+        raise InvalidInput(f"{name} must hold signs (+1 or -1), one per leg; got {short(value)}")
+    return tuple(int(s) for s in value)  # the caller checks the count and the values
+
+
+def real_numbers(value: object, name: str) -> object:
+    """``value`` unchanged if it is None or holds real numbers only (array-like); the caller checks the shape.
+
+    Raises:
+        InvalidInput: naming ``name``: complex numbers, strings, mappings or other objects.
+    """
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes, Mapping)):
+        raise InvalidInput(f"{name} must be real numbers (array-like), got {short(value)}")
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInput(
+            f"{name} must be real numbers (array-like): {short(str(exc), quote=False)}"
+        ) from None
+    if arr.dtype.kind not in "biuf":
+        what = "complex numbers" if arr.dtype.kind == "c" else f"{short(value)}"
+        raise InvalidInput(f"{name} must be real numbers (array-like), got {what}")
+    return value
+
+
+def effort_limits(value: object, name: str, n: int) -> object:
+    """``value`` unchanged if it is a name (``"description"``), None or an (n, 2) array of efforts.
+
+    Each lower bound must be below +inf and each upper bound above -inf (``(inf, inf)`` admits
+    no force; it does not mean "unbounded").
+
+    Raises:
+        InvalidInput: naming ``name`` and the valid forms.
+    """
+    valid = f"'description', None or an ({n}, 2) array of [lower, upper] efforts [N, N m]"
+    if value is None or isinstance(value, str):  # the caller checks the name
+        return value
+    if isinstance(value, (bytes, Mapping)):
+        raise InvalidInput(f"{name} must be {valid}, got {short(value)}")
+    real_numbers(value, name)
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (n, 2) or np.isnan(arr).any():
+        raise InvalidInput(f"{name} must be {valid}, got {short(value)}")
+    if (arr[:, 0] > arr[:, 1]).any() or (arr[:, 0] == np.inf).any() or (arr[:, 1] == -np.inf).any():
+        raise InvalidInput(
+            f"{name} must have lower <= upper, lower < +inf and upper > -inf for every actuator, got "
+            f"{short(arr.tolist())}"
+        )
+    return value
+
+
+MAX_SAMPLES = 10_000_000
+"""Most samples a simulation or trajectory keeps (``duration / dt``): more would not fit in memory."""
+
+
+def sample_count(duration: object, dt: object) -> int:
+    """The number of output samples ``duration / dt`` + 1, refused beyond :data:`MAX_SAMPLES`.
+
+    Raises:
+        InvalidInput: a duration or step that is not a positive finite number, or too many samples.
+    """
+    d = positive(duration, "duration")
+    h = positive(dt, "dt")
+    n = d / h
+    if n > MAX_SAMPLES:
+        raise InvalidInput(
+            f"duration / dt = {n:.3g} output samples; at most {MAX_SAMPLES:.0e} are kept: raise dt or "
+            "shorten the duration"
+        )
+    return math.floor(n + 1e-9) + 1
+
+
+def load_arguments(
+    wrench: object, frame: object, limits: object, n_actuators: int, wrench_name: str = "wrench"
+) -> None:
+    """Check the types of a wrench, the frame it acts on and the actuator limits (statics and dynamics).
+
+    Raises:
+        InvalidInput: naming the argument (``wrench_name`` for the wrench) and its valid forms.
+    """
+    real_numbers(wrench, wrench_name)
+    optional_name(frame, "frame")
+    effort_limits(limits, "limits", n_actuators)
+
+
+def checked_trajectory(trajectory: object, name: str) -> JointTrajectory:
+    """``trajectory`` if it is a :class:`~plm_pin.dynamics.trajectory.JointTrajectory` with finite samples.
+
+    Raises:
+        InvalidInput: naming ``name``: another type (e.g. None), or the first sample holding NaN or inf.
+    """
+    from .dynamics.trajectory import JointTrajectory
+
+    if not isinstance(trajectory, JointTrajectory):
+        raise InvalidInput(
+            f"{name} must be a JointTrajectory (see plm_pin.dynamics.trajectory), got {short(trajectory)}"
+        )
+    for field in ("t", "q", "v", "a"):
+        values = np.asarray(getattr(trajectory, field))
+        bad = ~np.isfinite(values)
+        if bad.any():
+            index = int(np.argwhere(bad)[0][0])
+            raise InvalidInput(f"{name}.{field} holds NaN or inf at sample {index}")
+    return trajectory
 
 
 # ------------------------------------------------------------------ closure manifold

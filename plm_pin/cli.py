@@ -25,6 +25,7 @@ from rich.progress import (
     TimeElapsedColumn,
 )
 from rich.table import Table
+from typer.core import TyperGroup
 
 from ._io import atomic_path
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
@@ -48,7 +49,22 @@ from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
 
+
+class _Commands(TyperGroup):
+    """The command group: an operating-system error (disk full, no permission) is one line, no traceback."""
+
+    def invoke(self, ctx: Any) -> Any:  # a click Context (typer vendors click)
+        """Run the command; an ``OSError`` is printed as one line naming the file, with exit code 1."""
+        try:
+            return super().invoke(ctx)
+        except OSError as exc:
+            where = f"{exc.filename}: " if exc.filename is not None else ""
+            hint = " (a file stands where a folder is needed)" if isinstance(exc, FileExistsError) else ""
+            raise _fail(PlmError(f"{where}{exc.strerror or exc}{hint}")) from None
+
+
 app = typer.Typer(
+    cls=_Commands,
     name="plm-pin",
     help="Analyse parallel link mechanisms: closed chains described by a URDF tree plus cut joints.",
     no_args_is_help=True,

@@ -6,6 +6,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ._text import short
+
 if TYPE_CHECKING:
     from .dynamics.simulation import SimulationResult
     from .dynamics.trajectory import JointTrajectory
@@ -44,9 +46,9 @@ class FrameNotFound(DescriptionError):
         self.name = name
         self.kind = kind
         self.choices = tuple(choices)
-        shown = ", ".join(repr(c) for c in self.choices[:40])
+        shown = ", ".join(short(c) for c in self.choices[:40])
         more = f", ... ({len(self.choices)} in all)" if len(self.choices) > 40 else ""
-        super().__init__(f"{kind} {name!r} not found; {kind}s are [{shown}{more}]", path)
+        super().__init__(f"{kind} {short(name)} not found; {kind}s are [{shown}{more}]", path)
 
 
 class ClosureNotSatisfied(PlmError):
@@ -149,6 +151,20 @@ class StoreMismatch(InvalidInput):
     def __init__(self, message: str, path: Path, differences: Sequence[str]) -> None:
         self.path = path
         self.differences = tuple(differences)
+        super().__init__(message)
+
+
+class StoreLocked(PlmError):
+    """A sweep's checkpoint folder is in use by another running sweep (:mod:`plm_pin.sweep.store`).
+
+    Attributes:
+        path: the folder.
+        holder: who holds it (process id, host and start time), as far as it is known.
+    """
+
+    def __init__(self, message: str, path: Path, holder: str) -> None:
+        self.path = path
+        self.holder = holder
         super().__init__(message)
 
 

@@ -19,6 +19,10 @@ class CorruptChunkWarning(PlmWarning):
     """A sweep checkpoint file cannot be read or is not that sweep's; its points are computed again."""
 
 
+class DescriptionWarning(PlmWarning):
+    """A third-party URDF holds a flaw refused in plm_pin descriptions, tolerated there (see ``strict``)."""
+
+
 class IgnoredElementWarning(PlmWarning):
     """An element of a description (an MJCF joint's damping, say) has no plm_pin counterpart: ignored."""
 

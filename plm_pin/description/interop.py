@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from .._text import short
 from ..exceptions import DescriptionError
 from .sidecar import ActuatorSpec, ClosureSpec, Sidecar
 
@@ -34,10 +35,10 @@ def parse_epr_sidecar(data: Any, path: str | None = None, name: str | None = Non
     closures = []
     for i, (pair, kind) in enumerate(zip(loops, types, strict=True)):
         if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(f, str) for f in pair)):
-            raise DescriptionError(f"closed_loop[{i}] must be a pair of frame names, got {pair!r}", path)
+            raise DescriptionError(f"closed_loop[{i}] must be a pair of frame names, got {short(pair)}", path)
         if kind not in EPR_TYPES:
             raise DescriptionError(
-                f"type[{i}]: invalid constraint type {kind!r}; valid are {list(EPR_TYPES)}", path
+                f"type[{i}]: invalid constraint type {short(kind)}; valid are {list(EPR_TYPES)}", path
             )
         closures.append(
             ClosureSpec(name=f"loop{i + 1}", frames=(pair[0], pair[1]), type=EPR_TYPES[kind])  # type: ignore[arg-type]
@@ -45,11 +46,11 @@ def parse_epr_sidecar(data: Any, path: str | None = None, name: str | None = Non
     actuation = []
     for i, motor in enumerate(motors):
         if not isinstance(motor, str):
-            raise DescriptionError(f"name_mot[{i}] must be a joint name, got {motor!r}", path)
+            raise DescriptionError(f"name_mot[{i}] must be a joint name, got {short(motor)}", path)
         actuation.append(ActuatorSpec(joint=motor))
     dup = sorted({m for m in motors if motors.count(m) > 1})
     if dup:
-        raise DescriptionError(f"name_mot: joint(s) {dup} actuated twice", path)
+        raise DescriptionError(f"name_mot: joint(s) {short(dup)} actuated twice", path)
     return Sidecar(
         closures=tuple(closures),
         actuation=tuple(actuation),

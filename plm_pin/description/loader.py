@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from .._text import short
+from .._yaml import read_head
 from ..exceptions import DescriptionError, FrameNotFound
 from .interop import parse_epr_sidecar
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar, parse_sidecar, read_yaml
@@ -36,11 +38,11 @@ class Description:
     convention: str = "plm-pin/1"
 
 
-def _read_text(path: Path) -> str:
+def _read_head(path: Path) -> bytes:
     try:
-        return path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DescriptionError(f"cannot read file: {exc}", str(path)) from None
+        return read_head(path)
+    except OSError as exc:
+        raise DescriptionError(f"cannot read file: {exc.strerror}", str(path)) from None
 
 
 def read_description(path: str | Path) -> Description:
@@ -87,20 +89,20 @@ def read_description(path: str | Path) -> Description:
             str(p),
         )
     raise DescriptionError(
-        f"unsupported file {p.name!r}; give a .urdf, a {SIDECAR_SUFFIX} or a description folder",
+        f"unsupported file {short(p.name)}; give a .urdf, a {SIDECAR_SUFFIX} or a description folder",
         str(p),
     )
 
 
 def _read_pair(urdf_path: Path, sidecar_path: Path) -> Description:
-    sidecar = parse_sidecar(read_yaml(_read_text(sidecar_path), str(sidecar_path)), str(sidecar_path))
+    sidecar = parse_sidecar(read_yaml(_read_head(sidecar_path), str(sidecar_path)), str(sidecar_path))
     return Description(read_urdf(urdf_path), sidecar, urdf_path, sidecar_path)
 
 
 def read_epr_folder(folder: Path) -> Description:
     """Read an example-parallel-robots folder (``robot.urdf`` + ``robot.yaml``)."""
     sidecar_path = folder / EPR_SIDECAR
-    raw = read_yaml(_read_text(sidecar_path), str(sidecar_path))
+    raw = read_yaml(_read_head(sidecar_path), str(sidecar_path))
     sidecar = parse_epr_sidecar(raw, str(sidecar_path), name=folder.name)
     urdf_path = folder / "robot.urdf"
     return Description(read_urdf(urdf_path), sidecar, urdf_path, sidecar_path, "example-parallel-robots")
@@ -134,7 +136,15 @@ def build_model(description: Description) -> pin.Model:
     for closure in sidecar.closures:
         for name in closure.frames:
             if not model.existFrame(name):
-                raise FrameNotFound(name, frames, "frame", f"{side}: closure {closure.name!r}")
+                raise FrameNotFound(name, frames, "frame", f"{side}: closure {short(closure.name)}")
+        bodies = {model.frames[model.getFrameId(name)].parentJoint for name in closure.frames}
+        if len(bodies) == 1:
+            raise DescriptionError(
+                f"closure {short(closure.name)} joins {short(closure.frames[0])} and "
+                f"{short(closure.frames[1])}, two frames of one rigid body (both move with joint "
+                f"{short(model.names[bodies.pop()])}): it constrains nothing",
+                side,
+            )
     if sidecar.task is not None and not model.existFrame(sidecar.task.frame):
         raise FrameNotFound(sidecar.task.frame, frames, "frame", f"{side}: end_effector")
     joints = list(model.names)[1:]
@@ -144,7 +154,7 @@ def build_model(description: Description) -> pin.Model:
         jid = model.getJointId(actuator.joint)
         if model.joints[jid].nv != 1:
             raise DescriptionError(
-                f"actuated joint {actuator.joint!r} has {model.joints[jid].nv} DOF; only "
+                f"actuated joint {short(actuator.joint)} has {model.joints[jid].nv} DOF; only "
                 "one-DOF (prismatic or revolute) joints can be actuated",
                 side,
             )

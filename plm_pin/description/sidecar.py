@@ -33,6 +33,8 @@ from typing import Any, Literal
 
 import yaml
 
+from .._text import short
+from .._yaml import YamlRefused, load_yaml
 from ..exceptions import DescriptionError
 
 FORMAT = "plm-pin/1"
@@ -85,6 +87,31 @@ class ActuatorSpec:
     lead: float | None = None
     rotor_inertia: float = 0.0
     screw_inertia: float = 0.0
+
+    def __post_init__(self) -> None:
+        """Refuse a drive no motor has (builders make these directly, not through the parser).
+
+        Raises:
+            DescriptionError: a lead that is not positive, a negative or non-finite inertia, or a
+                reflected inertia too large for a float; the message names the joint.
+        """
+        where = f"actuator {short(self.joint)}"
+        if self.lead is not None and not (math.isfinite(self.lead) and self.lead > 0.0):
+            raise DescriptionError(f"{where}: lead must be positive and finite [m/rev], got {self.lead!r}")
+        for key in ("rotor_inertia", "screw_inertia"):
+            value = getattr(self, key)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise DescriptionError(f"{where}: {key} must be finite and >= 0 [kg m^2], got {value!r}")
+        try:
+            reflected = self.reflected_inertia()
+        except OverflowError:
+            reflected = math.inf
+        if not math.isfinite(reflected):
+            raise DescriptionError(
+                f"{where}: the reflected inertia (rotor_inertia + screw_inertia) (2 pi / lead)^2 overflows a "
+                f"float (rotor_inertia {self.rotor_inertia:g}, screw_inertia {self.screw_inertia:g} kg m^2, "
+                f"lead {self.lead:g} m/rev)"
+            )
 
     def reflected_inertia(self) -> float:
         r"""Armature this drive adds on its joint [kg] or [kg m^2].
@@ -182,18 +209,18 @@ def _number(value: Any, where: str, path: str | None) -> float:
         try:
             value = float(value)
         except ValueError:
-            raise DescriptionError(f"{where} must be a number, got {value!r}", path) from None
+            raise DescriptionError(f"{where} must be a number, got {short(value)}", path) from None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise DescriptionError(f"{where} must be a number, got {value!r}", path)
+        raise DescriptionError(f"{where} must be a number, got {short(value)}", path)
     x = float(value)
     if not math.isfinite(x):
-        raise DescriptionError(f"{where} must be finite, got {value!r}", path)
+        raise DescriptionError(f"{where} must be finite, got {short(value)}", path)
     return x
 
 
 def _numbers(value: Any, n: int | None, where: str, path: str | None) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)):
-        raise DescriptionError(f"{where} must be a list of numbers, got {value!r}", path)
+        raise DescriptionError(f"{where} must be a list of numbers, got {short(value)}", path)
     if n is not None and len(value) != n:
         raise DescriptionError(f"{where} must have {n} numbers, got {len(value)}", path)
     return tuple(_number(v, f"{where}[{i}]", path) for i, v in enumerate(value))
@@ -202,19 +229,21 @@ def _numbers(value: Any, n: int | None, where: str, path: str | None) -> tuple[f
 def _keys(item: Mapping[str, Any], allowed: Sequence[str], where: str, path: str | None) -> None:
     unknown = sorted(set(item) - set(allowed), key=str)
     if unknown:
-        raise DescriptionError(f"{where}: unknown key(s) {unknown}; valid keys are {sorted(allowed)}", path)
+        raise DescriptionError(
+            f"{where}: unknown key(s) {short(unknown)}; valid keys are {sorted(allowed)}", path
+        )
 
 
 def _string(value: Any, where: str, path: str | None) -> str:
     if not isinstance(value, str) or not value:
-        raise DescriptionError(f"{where} must be a non-empty string, got {value!r}", path)
+        raise DescriptionError(f"{where} must be a non-empty string, got {short(value)}", path)
     return value
 
 
 def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
     where = f"closures[{i}]"
     if not isinstance(item, Mapping):
-        raise DescriptionError(f"{where} must be a mapping, got {item!r}", path)
+        raise DescriptionError(f"{where} must be a mapping, got {short(item)}", path)
     _keys(item, ("name", "frames", "type", "axis"), where, path)
     frames = item.get("frames")
     if not isinstance(frames, (list, tuple)) or len(frames) != 2:
@@ -222,30 +251,36 @@ def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
     f0 = _string(frames[0], f"{where}.frames[0]", path)
     f1 = _string(frames[1], f"{where}.frames[1]", path)
     name = _string(item.get("name", f"{f0}__{f1}"), f"{where}.name", path)
+    label = f"{where} ({short(name, quote=False)})"
+    if f0 == f1:
+        raise DescriptionError(
+            f"{label}: joins frame {short(f0)} to itself; a closure needs two frames",
+            path,
+        )
     ctype = item.get("type")
     if ctype not in CLOSURE_TYPES:
         raise DescriptionError(
-            f"{where} ({name}): invalid closure type {ctype!r}; valid types are {list(CLOSURE_TYPES)}",
+            f"{label}: invalid closure type {short(ctype)}; valid types are {list(CLOSURE_TYPES)}",
             path,
         )
     axis = None
     if ctype == "revolute":
         if "axis" not in item:
-            raise DescriptionError(f"{where} ({name}): a revolute closure needs an 'axis'", path)
+            raise DescriptionError(f"{label}: a revolute closure needs an 'axis'", path)
         raw = _numbers(item["axis"], 3, f"{where}.axis", path)
         norm = math.sqrt(sum(a * a for a in raw))
         if norm < 1e-9:
             raise DescriptionError(f"{where}.axis must be non-zero, got {list(raw)}", path)
         axis = (raw[0] / norm, raw[1] / norm, raw[2] / norm)
     elif "axis" in item:
-        raise DescriptionError(f"{where} ({name}): 'axis' is only valid for revolute", path)
+        raise DescriptionError(f"{label}: 'axis' is only valid for revolute", path)
     return ClosureSpec(name=name, frames=(f0, f1), type=ctype, axis=axis)
 
 
 def _actuator(item: Any, i: int, path: str | None) -> ActuatorSpec:
     where = f"actuation[{i}]"
     if not isinstance(item, Mapping):
-        raise DescriptionError(f"{where} must be a mapping, got {item!r}", path)
+        raise DescriptionError(f"{where} must be a mapping, got {short(item)}", path)
     _keys(item, ("joint", "limits", "lead", "rotor_inertia", "screw_inertia"), where, path)
     joint = _string(item.get("joint"), f"{where}.joint", path)
     limits = None
@@ -265,7 +300,10 @@ def _actuator(item: Any, i: int, path: str | None) -> ActuatorSpec:
         if value < 0.0:
             raise DescriptionError(f"{where}.{key} must be >= 0 [kg m^2], got {value}", path)
         inertias.append(value)
-    return ActuatorSpec(joint, limits, lead, inertias[0], inertias[1])
+    try:
+        return ActuatorSpec(joint, limits, lead, inertias[0], inertias[1])
+    except DescriptionError as exc:
+        raise DescriptionError(f"{where} ({exc.problem})", path) from None
 
 
 def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
@@ -295,7 +333,8 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
     )
     _keys(data, allowed, "sidecar", path)
     if data.get("format") != FORMAT:
-        raise DescriptionError(f"unknown sidecar format {data.get('format')!r}; expected {FORMAT!r}", path)
+        found = short(data.get("format"))
+        raise DescriptionError(f"unknown sidecar format {found}; expected {FORMAT!r}", path)
     closures_raw = data.get("closures") or []
     actuation_raw = data.get("actuation") or []
     if not isinstance(closures_raw, list):
@@ -306,12 +345,12 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
     names = [c.name for c in closures]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise DescriptionError(f"duplicate closure name(s) {dup}", path)
+        raise DescriptionError(f"duplicate closure name(s) {short(dup)}", path)
     actuation = tuple(_actuator(a, i, path) for i, a in enumerate(actuation_raw))
     joints = [a.joint for a in actuation]
     dup = sorted({n for n in joints if joints.count(n) > 1})
     if dup:
-        raise DescriptionError(f"joint(s) {dup} actuated twice", path)
+        raise DescriptionError(f"joint(s) {short(dup)} actuated twice", path)
     task = None
     if data.get("end_effector") is not None:
         ee = data["end_effector"]
@@ -325,10 +364,10 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         for d in dofs:
             if d not in TASK_DOFS:
                 raise DescriptionError(
-                    f"end_effector.task: unknown direction {d!r}; valid are {list(TASK_DOFS)}", path
+                    f"end_effector.task: unknown direction {short(d)}; valid are {list(TASK_DOFS)}", path
                 )
         if len(set(dofs)) != len(dofs):
-            raise DescriptionError(f"end_effector.task repeats a direction: {dofs}", path)
+            raise DescriptionError(f"end_effector.task repeats a direction: {short(dofs)}", path)
         task = TaskSpec(frame, tuple(sorted(dofs, key=TASK_DOFS.index)))
     gravity = DEFAULT_GRAVITY
     if data.get("gravity") is not None:
@@ -339,34 +378,32 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
     if not isinstance(raw_ref, Mapping):
         raise DescriptionError("'reference' must be a mapping of joint name to value(s)", path)
     for joint, value in raw_ref.items():
-        where = f"reference.{joint}"
+        where = f"reference.{short(joint, quote=False)}"
         if isinstance(value, (list, tuple)):
             reference[str(joint)] = _numbers(value, None, where, path)
         else:
             reference[str(joint)] = (_number(value, where, path),)
-    name = data.get("name")
-    source = data.get("source")
+    name = None if data.get("name") is None else _string(data["name"], "name", path)
+    source = None if data.get("source") is None else _string(data["source"], "source", path)
     return Sidecar(
         closures=closures,
         actuation=actuation,
         task=task,
         gravity=gravity,
         reference=reference,
-        name=str(name) if name is not None else None,
-        source=str(source) if source is not None else None,
+        name=name,
+        source=source,
     )
 
 
-def read_yaml(text: str, path: str | None = None) -> Any:
-    """Parse YAML text safely (no Python objects), wrapping YAML errors.
+def read_yaml(text: str | bytes, path: str | None = None) -> Any:
+    """Parse untrusted YAML text safely (see :func:`plm_pin._yaml.load_yaml`), wrapping YAML errors.
 
     Raises:
-        DescriptionError: when the text is not valid YAML.
+        DescriptionError: when the text is not valid YAML, is too large, or its aliases
+            expand it beyond the node cap.
     """
     try:
-        return yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise DescriptionError(f"malformed YAML{where}: {problem}", path) from None
+        return load_yaml(text)
+    except YamlRefused as exc:
+        raise DescriptionError(str(exc), path) from None

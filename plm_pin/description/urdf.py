@@ -7,10 +7,12 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
+import numpy as np
 from lxml import etree
 
+from .._text import short
 from ..exceptions import DescriptionError, FrameNotFound
-from ..warnings import MissingMeshWarning
+from ..warnings import DescriptionWarning, MissingMeshWarning
 
 _MAX_BYTES = 64 * 1024 * 1024
 
@@ -89,18 +91,32 @@ _NUMERIC: dict[str, dict[str, int]] = {
     "cylinder": {"radius": 1, "length": 1},
     "sphere": {"radius": 1},
     "mesh": {"scale": 3},
+    "mimic": {"multiplier": 1, "offset": 1},
 }
+
+AXIS_MIN = 1e-9
+"""Smallest norm of a moving joint's axis: a shorter one would be normalised from rounding noise."""
+
+INERTIA_RTOL = 1e-9
+"""Tolerance of the inertia checks (moments >= 0, triangle inequalities), relative to the largest moment."""
 
 
 def _owner(element: etree._Element) -> str:
     node: etree._Element | None = element
     while node is not None and node.tag not in ("link", "joint"):
         node = node.getparent()
-    return f"{node.tag} {node.get('name')!r}" if node is not None else "robot"
+    return f"{node.tag} {short(node.get('name'))}" if node is not None else "robot"
 
 
-def check_numbers(root: etree._Element, label: str) -> None:
+def check_numbers(root: etree._Element, label: str, strict: bool = True) -> None:
     """Check every numeric attribute: Pinocchio's parser would skip a bad one silently.
+
+    Args:
+        root: the ``<robot>`` element.
+        label: the file, for messages.
+        strict: refuse (True) or only warn about the flaws third-party CAD exports often
+            hold and Pinocchio tolerates: inertias breaking a triangle inequality (see
+            :func:`check_inertia`) and a ``<mimic>`` naming no other moving joint.
 
     Raises:
         DescriptionError: naming the element, the attribute and the bad text.
@@ -124,8 +140,12 @@ def check_numbers(root: etree._Element, label: str) -> None:
                 if tag == "mass" and values[0] < 0.0:
                     raise DescriptionError(f"{_owner(element)}: negative mass {values[0]}", label)
                 moving = element.getparent() is not None and element.getparent().get("type") in _MOVING
-                if tag == "axis" and moving and not any(values):
-                    raise DescriptionError(f"{_owner(element)}: <axis xyz={text!r}> must be non-zero", label)
+                if tag == "axis" and moving and math.hypot(*values) < AXIS_MIN:
+                    raise DescriptionError(
+                        f"{_owner(element)}: <axis xyz={short(text)}> must be non-zero (norm at least "
+                        f"{AXIS_MIN:g}); it is normalised",
+                        label,
+                    )
     for inertial in root.iter("inertial"):
         mass = inertial.find("mass")
         inertia = inertial.find("inertia")
@@ -134,6 +154,9 @@ def check_numbers(root: etree._Element, label: str) -> None:
         absent = [k for k in _NUMERIC["inertia"] if inertia is None or inertia.get(k) is None]
         if absent:
             raise DescriptionError(f"{_owner(inertial)}: <inertia> lacks {absent}", label)
+        assert inertia is not None
+        moments = {k: float(inertia.get(k)) for k in _NUMERIC["inertia"]}
+        check_inertia(moments, _owner(inertial), label, strict)
     for joint in root.iter("joint"):
         if joint.get("type") in ("revolute", "prismatic"):
             limit = joint.find("limit")
@@ -142,6 +165,87 @@ def check_numbers(root: etree._Element, label: str) -> None:
                     f"{_owner(joint)}: a {joint.get('type')} joint needs <limit effort=... velocity=...>",
                     label,
                 )
+        _check_limit(joint, label)
+    _check_mimics(root, label, strict)
+
+
+def check_inertia(moments: dict[str, float], owner: str, label: str, strict: bool = True) -> None:
+    """Refuse an inertia no rigid body has: not positive semi-definite, or breaking a triangle inequality.
+
+    The principal moments of a rigid body are >= 0 and each is at most the sum of the other two.
+
+    Args:
+        moments: ``ixx ixy ixz iyy iyz izz`` [kg m^2].
+        owner: the link, for the message.
+        label: the file, for the message.
+        strict: refuse a broken triangle inequality; if False, only warn
+            (:class:`~plm_pin.warnings.DescriptionWarning`): CAD exports of open-chain robots
+            often hold such moments, and the mass matrix stays positive semi-definite.
+
+    Raises:
+        DescriptionError: naming the link, the principal moments and the broken condition.
+    """
+    m = moments
+    tensor = np.array(
+        [[m["ixx"], m["ixy"], m["ixz"]], [m["ixy"], m["iyy"], m["iyz"]], [m["ixz"], m["iyz"], m["izz"]]]
+    )
+    principal = np.linalg.eigvalsh(tensor)  # ascending
+    tol = INERTIA_RTOL * max(float(np.abs(principal).max()), 1e-300)
+    shown = ", ".join(f"{v:.6g}" for v in principal)
+    if principal[0] < -tol:
+        raise DescriptionError(
+            f"{owner}: the inertia is not positive semi-definite (principal moments {shown} kg m^2): no body "
+            "has a negative moment of inertia",
+            label,
+        )
+    if principal[0] + principal[1] < principal[2] - tol:
+        problem = (
+            f"{owner}: the principal moments of inertia {shown} kg m^2 break the triangle inequality "
+            f"({principal[0]:.6g} + {principal[1]:.6g} < {principal[2]:.6g}): no rigid body has them"
+        )
+        if strict:
+            raise DescriptionError(problem, label)
+        warnings.warn(f"{label}: {problem}", DescriptionWarning, stacklevel=4)
+
+
+def _check_limit(joint: etree._Element, label: str) -> None:
+    """Refuse a joint limit with a negative effort or velocity, or a lower bound above the upper."""
+    limit = joint.find("limit")
+    if limit is None:
+        return
+    for attribute, unit in (("effort", "N or N m"), ("velocity", "m/s or rad/s")):
+        text = limit.get(attribute)
+        if text is not None and float(text) < 0.0:
+            raise DescriptionError(
+                f"joint {short(joint.get('name'))}: <limit {attribute}={text!r}> must be >= 0 [{unit}]", label
+            )
+    lower, upper = limit.get("lower"), limit.get("upper")
+    if lower is not None and upper is not None and float(lower) > float(upper):
+        raise DescriptionError(
+            f"joint {short(joint.get('name'))}: <limit lower={lower!r} upper={upper!r}> has lower > upper",
+            label,
+        )
+
+
+def _check_mimics(root: etree._Element, label: str, strict: bool) -> None:
+    """Refuse (or if not ``strict`` warn about) a ``<mimic>`` naming no other moving joint."""
+    moving = {j.get("name") for j in root.findall("joint") if j.get("type") in _MOVING}
+    for joint in root.findall("joint"):
+        for mimic in joint.findall("mimic"):
+            target = mimic.get("joint")
+            name = joint.get("name")
+            if joint.get("type") not in _MOVING:
+                raise DescriptionError(
+                    f"joint {short(name)}: a {short(joint.get('type'))} joint cannot mimic another", label
+                )
+            if target is None or target == name or target not in moving:
+                problem = (
+                    f"joint {short(name)}: <mimic joint={short(target)}> must name another moving joint "
+                    "(continuous, prismatic, revolute) of this URDF"
+                )
+                if strict:
+                    raise DescriptionError(problem, label)
+                warnings.warn(f"{label}: {problem}; the mimic is ignored", DescriptionWarning, stacklevel=4)
 
 
 def check_tree(root: etree._Element, label: str) -> None:
@@ -160,7 +264,7 @@ def check_tree(root: etree._Element, label: str) -> None:
             raise DescriptionError(f"a <{kind}> has no name", label)
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
-            raise DescriptionError(f"duplicate {kind} name(s) {dup}", label)
+            raise DescriptionError(f"duplicate {kind} name(s) {short(dup)}", label)
     known = set(links)
     parent_of: dict[str, str] = {}
     for joint in root.findall("joint"):
@@ -189,9 +293,27 @@ def check_tree(root: etree._Element, label: str) -> None:
     roots = [link for link in links if link not in parent_of]
     if len(roots) != 1:
         raise DescriptionError(f"the links must form one tree with one root; roots are {roots}", label)
+    children: dict[str, list[str]] = {}
+    for joint in root.findall("joint"):
+        children.setdefault(joint.find("parent").get("link"), []).append(joint.find("child").get("link"))
+    reached, todo = {roots[0]}, [roots[0]]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            if child not in reached:
+                reached.add(child)
+                todo.append(child)
+    detached = [link for link in links if link not in reached]
+    if detached:
+        raise DescriptionError(
+            f"link(s) {short(detached)} do not hang from the root link {roots[0]!r}: their joints form a "
+            "cycle; a URDF is a tree: cut one joint of the cycle and declare it as a closure in the sidecar",
+            label,
+        )
 
 
-def read_urdf_text(text: str | bytes, folder: Path | None, label: str = "<urdf>") -> UrdfSource:
+def read_urdf_text(
+    text: str | bytes, folder: Path | None, label: str = "<urdf>", *, strict: bool = True
+) -> UrdfSource:
     """Check URDF text and resolve its mesh references against ``folder``.
 
     Args:
@@ -199,6 +321,9 @@ def read_urdf_text(text: str | bytes, folder: Path | None, label: str = "<urdf>"
         folder: folder that holds the URDF and its meshes, or None (meshes then count as
             missing).
         label: name used in messages.
+        strict: refuse (True) or only warn (:class:`~plm_pin.warnings.DescriptionWarning`)
+            about flaws third-party exports often hold (see :func:`check_numbers`); inertias
+            that are not positive semi-definite are always refused.
 
     Returns:
         The checked source.
@@ -229,7 +354,7 @@ def read_urdf_text(text: str | bytes, folder: Path | None, label: str = "<urdf>"
     if root.tag != "robot":
         raise DescriptionError(f"URDF root element must be <robot>, got <{root.tag}>", label)
     check_tree(root, label)
-    check_numbers(root, label)
+    check_numbers(root, label, strict)
     missing: list[str] = []
     for kind in ("visual", "collision"):
         for element in list(root.iter(kind)):

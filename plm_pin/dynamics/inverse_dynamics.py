@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .._checks import check_finite_model, check_samples_assembled
+from .._checks import check_finite_model, check_samples_assembled, checked_trajectory, load_arguments
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
 from ..statics import AllocationRule, generalized_balance, load_on_frame, solve_balance
 from ..statics.balance import SINGULAR_RTOL, Load
@@ -251,6 +251,8 @@ def inverse_dynamics(
             cannot be resisted, or (non-redundant mechanisms with a square task) past a direct
             singularity (a sign change of det J_ce), with the samples before it.
     """
+    trajectory = checked_trajectory(trajectory, "trajectory")
+    load_arguments(wrench, frame, limits, mech.n_actuators)
     rule = AllocationRule.checked(
         mech,
         objective=objective,

@@ -52,7 +52,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.integrate import solve_ivp
 
-from .._checks import as_vector
+from .._checks import as_vector, optional_name, real_numbers, sample_count
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed
 from ..kinematics import closures as _closures
 from ..statics.balance import load_on_frame
@@ -428,6 +428,8 @@ def simulate(
             be kept closed (for instance at a constraint singularity); the error carries
             the samples computed before.
     """
+    sample_count(duration, dt)
+    real_numbers(wrench, "wrench"), optional_name(wrench_frame, "wrench_frame")
     if method not in METHODS:
         raise InvalidInput(f"method {method!r} is not one of {list(METHODS)}")
     duration = _positive(duration, "duration")

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from .._checks import count, positive
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from .assembly import assemble
 from .jacobians import require_task
@@ -107,6 +108,7 @@ def forward_kinematics(
             smallest residual reached.
         InvalidInput: malformed inputs.
     """
+    starts, seed, tol = count(starts, "starts"), count(seed, "seed"), positive(tol, "tol")
     c = check_task_vector(actuators, mech.n_actuators, "actuators")
     if mech.mobility > mech.n_actuators:
         raise InvalidInput(

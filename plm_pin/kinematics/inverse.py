@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
+from .._checks import positive, signs
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from .assembly import assemble
 from .closures import Closure, compile_closures
@@ -114,6 +115,7 @@ def inverse_kinematics(
             the leg that cannot reach and by how much it misses (with ``explain``).
         InvalidInput: malformed ``x``, ``guess`` or ``mode``.
     """
+    mode, tol = signs(mode, "mode"), positive(tol, "tol")
     task = require_task(mech)
     xa = check_task_vector(x, task.size)
     target = TaskTarget(task, xa)

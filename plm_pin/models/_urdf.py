@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
 import yourdfpy
+
+from .._text import short
+from ..exceptions import DescriptionError
 
 Vec3 = Sequence[float]
 
@@ -54,7 +58,7 @@ def link(
     com: Vec3 = (0.0, 0.0, 0.0),
     visuals: Sequence[yourdfpy.Visual] = (),
 ) -> yourdfpy.Link:
-    """A link with an inertial (omitted when ``mass`` is 0) and visuals.
+    """A link with an inertial (omitted when ``mass`` and ``inertia`` are 0) and visuals.
 
     Args:
         name: link name.
@@ -62,12 +66,17 @@ def link(
         inertia: inertia tensor about the centre of mass [kg m^2], (3, 3) or diagonal (3,).
         com: centre of mass in the link frame [m].
         visuals: visual elements.
+
+    Raises:
+        DescriptionError: a negative or non-finite mass (the URDF reader checks the inertia).
     """
+    if not (math.isfinite(mass) and mass >= 0.0):
+        raise DescriptionError(f"link {short(name)}: the mass must be finite and >= 0 [kg], got {mass!r}")
+    I = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float)
+    if I.shape == (3,):
+        I = np.diag(I)
     inertial = None
-    if mass > 0.0:
-        I = np.zeros((3, 3)) if inertia is None else np.asarray(inertia, dtype=float)
-        if I.shape == (3,):
-            I = np.diag(I)
+    if mass > 0.0 or np.any(I != 0.0):
         inertial = yourdfpy.Inertial(origin=transform(com), mass=float(mass), inertia=I)
     return yourdfpy.Link(name=name, inertial=inertial, visuals=list(visuals))
 

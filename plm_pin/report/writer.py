@@ -1,15 +1,23 @@
 """Writing reports: one folder per study, swapped in whole, and the index written last.
 
 A report's ``report.html`` and ``results.json`` are written into a hidden temporary folder
-inside the output folder, then renamed over the old report folder (which is first moved
-aside, then deleted), so a failed or interrupted run leaves the previous report as it was.
+inside the output folder, then exchanged with the old report folder in one atomic step
+(Linux ``renameat2(RENAME_EXCHANGE)``), so a failed or interrupted run leaves the previous
+report as it was and the report folder never goes missing. Where that call is not
+available the old folder is renamed aside first; a kill between the two renames is undone
+by the next run, which puts the old report back. Hidden ``.tmp`` and ``.old`` folders left
+by killed runs (their process gone) are removed by the next run.
 Every path written is checked to lie inside the output folder.
 """
 
 from __future__ import annotations
 
+import ctypes
+import ctypes.util
+import errno
 import json
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Mapping
@@ -58,6 +66,39 @@ def inside(root: Path, name: str) -> Path:
     return path
 
 
+_HIDDEN = re.compile(r"\.(?P<folder>[A-Za-z0-9][A-Za-z0-9_-]*)\.(?P<pid>[0-9]+)\..*\.(?P<kind>tmp|old)")
+"""A hidden working folder: ``.<report folder>.<pid of its writer>.<random>.tmp`` (or ``.old``)."""
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs on this machine (a folder of a live writer is never touched)."""
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def recover(root: Path) -> None:
+    """Undo what killed runs left in ``root``: put a report moved aside back, remove working folders.
+
+    Only folders whose writing process has ended are touched.
+    """
+    for folder in sorted(root.iterdir()):
+        match = _HIDDEN.fullmatch(folder.name)
+        if match is None or not folder.is_dir() or folder.is_symlink() or _alive(int(match["pid"])):
+            continue
+        name = match["folder"]
+        aside = folder / name
+        if match["kind"] == "old" and aside.is_dir() and not (root / name).exists():
+            os.rename(aside, root / name)  # killed between the two renames: the old report returns
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def write_report(result: StudyResult, out: str | Path) -> Path:
     """Write one report (``report.html`` and ``results.json``) into ``out/<result.folder>``.
 
@@ -72,9 +113,10 @@ def write_report(result: StudyResult, out: str | Path) -> Path:
     """
     root = output_folder(out)
     final = inside(root, result.folder)
+    recover(root)
     page = render_report(result)
     data = json.dumps(result.to_dict(), indent=1, allow_nan=False)
-    tmp = Path(tempfile.mkdtemp(dir=root, prefix=f".{result.folder}.", suffix=".tmp"))
+    tmp = Path(tempfile.mkdtemp(dir=root, prefix=f".{result.folder}.{os.getpid()}.", suffix=".tmp"))
     try:
         (tmp / RESULTS).write_text(data, encoding="utf-8")
         (tmp / REPORT).write_text(page, encoding="utf-8")
@@ -88,12 +130,37 @@ def write_report(result: StudyResult, out: str | Path) -> Path:
     return final / REPORT
 
 
+_AT_FDCWD = -100
+_RENAME_EXCHANGE = 2
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap two existing paths in one atomic step (Linux ``renameat2``); False where not available."""
+    libc_name = ctypes.util.find_library("c")
+    renameat2 = getattr(ctypes.CDLL(libc_name, use_errno=True), "renameat2", None) if libc_name else None
+    if renameat2 is None:
+        return False
+    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.ENOSYS, errno.EINVAL, errno.ENOTSUP):  # kernel or file system without it
+        return False
+    raise OSError(code, os.strerror(code), str(b))
+
+
 def _replace_folder(new: Path, final: Path) -> None:
-    """Put the folder ``new`` at ``final``: the old one is renamed aside first, then deleted."""
+    """Put the folder ``new`` at ``final`` and delete the old one.
+
+    One atomic exchange where the system offers it; else the old folder is renamed aside
+    first (:func:`recover` undoes a kill between the two renames).
+    """
     if not final.exists():
         os.rename(new, final)
         return
-    old = Path(tempfile.mkdtemp(dir=final.parent, prefix=f".{final.name}.", suffix=".old"))
+    if _exchange(new, final):
+        shutil.rmtree(new, ignore_errors=True)  # now holds the old report
+        return
+    old = Path(tempfile.mkdtemp(dir=final.parent, prefix=f".{final.name}.{os.getpid()}.", suffix=".old"))
     os.rename(final, old / final.name)
     try:
         os.rename(new, final)
@@ -126,6 +193,7 @@ def _entry(folder: Path) -> dict[str, Any] | None:
 def write_index(out: str | Path) -> Path:
     """Write ``out/index.html`` linking every report folder in ``out`` (atomically); returns its path."""
     root = output_folder(out)
+    recover(root)
     entries = [
         e
         for folder in sorted(root.iterdir())

@@ -314,7 +314,14 @@ def _least_violating(k: int, ineq: Inequalities, tol: float) -> np.ndarray:
     H[:k, :k] = 1e-12 * np.eye(k)  # a unique y among equally violating ones
     z = solve_qp(H, np.zeros(k + p), _stack(_stack(lo_rows, hi_rows), pos), tol)
     if z is None:
-        raise PlmError("ProxSuite did not solve the least-violation problem")
+        # ProxSuite's absolute tolerances fail on huge bounds (a min_compression of 1e9 N): solve
+        # again in units of the largest bound (u = y / scale), the same minimiser
+        values = np.concatenate([ineq.lower, ineq.upper, ineq.offset])
+        scale = float(np.max(np.abs(values[np.isfinite(values)]), initial=1.0))
+        if scale <= 1.0:
+            raise PlmError("ProxSuite did not solve the least-violation problem")
+        scaled = Inequalities(ineq.names, ineq.offset / scale, ineq.D, ineq.lower / scale, ineq.upper / scale)
+        return scale * _least_violating(k, scaled, tol / scale)
     return z[:k]
 
 

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._checks import load_arguments
 from ..exceptions import InvalidInput, PlmError
 from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_qp
 from .balance import load_on_frame, static_balance
@@ -83,6 +84,7 @@ def force_capability(
         AllocationInfeasible: the limits do not even hold gravity (``alpha = 0`` is infeasible).
         SingularConfiguration: the load cannot be resisted at ``q``.
     """
+    load_arguments(direction, frame, limits, mech.n_actuators, "direction")
     bounds = _finite_limits(mech, limits, "force capability")
     load = load_on_frame(mech, direction, frame)
     if not np.any(load.wrench):

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._checks import check_finite_result
+from .._checks import check_finite_result, load_arguments
 from ..exceptions import InvalidInput
 from . import reactions as _reactions
 from .allocation import OBJECTIVES, Inequalities, allocate, check_weights
@@ -323,6 +323,7 @@ def static_forces(
         AllocationInfeasible: the limits and conditions cannot all be met; the error carries
             the least-violating allocation and the saturated actuators.
     """
+    load_arguments(wrench, frame, limits, mech.n_actuators)
     rule = AllocationRule.checked(
         mech,
         objective=objective,

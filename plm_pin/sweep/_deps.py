@@ -11,6 +11,7 @@ DISTRIBUTIONS = {
     "xarray": "xarray",
     "pyarrow": "pyarrow",
     "pyarrow.parquet": "pyarrow",
+    "filelock": "filelock",
 }
 """The distribution that provides each module imported through :func:`require`."""
 

@@ -31,8 +31,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
+from .._text import short
+from .._yaml import YamlRefused, load_yaml, read_head
 from ..exceptions import InvalidInput
 from .spec import FORMAT, SweepSpec, make_spec
 
@@ -51,11 +52,11 @@ def _values(where: str, raw: Any) -> Any:
     if unknown or ("linspace" in raw) == ("values" in raw):
         raise InvalidInput(
             f"{where}: give a list, {{linspace: [start, stop, num]}} or {{values: [...]}} (with an optional "
-            f"unit among {list(UNITS)}), got {dict(raw)!r}"
+            f"unit among {list(UNITS)}), got {short(dict(raw))}"
         )
     unit = raw.get("unit", None)
     if unit is not None and unit not in UNITS:
-        raise InvalidInput(f"{where}: unknown unit {unit!r}; units are {list(UNITS)}")
+        raise InvalidInput(f"{where}: unknown unit {short(unit)}; units are {list(UNITS)}")
     if "linspace" in raw:
         spec = raw["linspace"]
         if (
@@ -65,7 +66,9 @@ def _values(where: str, raw: Any) -> Any:
             or not isinstance(spec[2], int)
             or spec[2] < 1
         ):
-            raise InvalidInput(f"{where}: linspace takes [start, stop, number of values >= 1], got {spec!r}")
+            raise InvalidInput(
+                f"{where}: linspace takes [start, stop, number of values >= 1], got {short(spec)}"
+            )
         values: Any = np.linspace(float(spec[0]), float(spec[1]), spec[2]).tolist()
     else:
         values = raw["values"]
@@ -74,19 +77,21 @@ def _values(where: str, raw: Any) -> Any:
     try:
         return (np.asarray(values, dtype=float) * UNITS[unit]).tolist()
     except (TypeError, ValueError):
-        raise InvalidInput(f"{where}: values in {unit} must be numbers, got {values!r}") from None
+        raise InvalidInput(f"{where}: values in {unit} must be numbers, got {short(values)}") from None
 
 
 def _mechanism(raw: Any) -> Any:
     if not isinstance(raw, str) or not raw:
-        raise InvalidInput(f"mechanism must be a preset name or a builder 'module:function', got {raw!r}")
+        raise InvalidInput(
+            f"mechanism must be a preset name or a builder 'module:function', got {short(raw)}"
+        )
     if ":" not in raw:
         return raw
     module, _, name = raw.partition(":")
     try:
         builder = getattr(importlib.import_module(module), name)
     except (ImportError, AttributeError) as exc:
-        raise InvalidInput(f"mechanism {raw!r}: cannot import the builder ({exc})") from None
+        raise InvalidInput(f"mechanism {short(raw)}: cannot import the builder ({exc})") from None
     return builder
 
 
@@ -104,12 +109,12 @@ def spec_from_config(config: Any, source: str = "<config>") -> tuple[SweepSpec, 
             )
         unknown = [k for k in config if k not in KEYS]
         if unknown:
-            raise InvalidInput(f"unknown key(s) {unknown}; keys are {list(KEYS)}")
+            raise InvalidInput(f"unknown key(s) {short(unknown)}; keys are {list(KEYS)}")
         if "format" in config and config["format"] != FORMAT:
-            raise InvalidInput(f"format {config['format']!r} is not {FORMAT!r}")
+            raise InvalidInput(f"format {short(config['format'])} is not {short(FORMAT)}")
         for required in ("mechanism", "poses", "metrics"):
             if required not in config:
-                raise InvalidInput(f"missing key {required!r}")
+                raise InvalidInput(f"missing key {short(required)}")
         raw_params = config.get("parameters")
         if isinstance(raw_params, Mapping):
             parameters: Any = {k: _values(f"parameters.{k}", v) for k, v in raw_params.items()}
@@ -120,10 +125,10 @@ def spec_from_config(config: Any, source: str = "<config>") -> tuple[SweepSpec, 
             poses = {k: _values(f"poses.{k}", v) for k, v in poses.items()}
         options = config.get("options") or {}
         if not isinstance(options, Mapping):
-            raise InvalidInput(f"options must be a mapping, got {options!r}")
+            raise InvalidInput(f"options must be a mapping, got {short(options)}")
         chunk = config.get("chunk")
         if chunk is not None and (isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1):
-            raise InvalidInput(f"chunk must be a positive number of poses per task, got {chunk!r}")
+            raise InvalidInput(f"chunk must be a positive number of poses per task, got {short(chunk)}")
         spec = make_spec(
             _mechanism(config["mechanism"]),
             parameters,
@@ -146,12 +151,11 @@ def load_config(path: str | Path) -> tuple[SweepSpec, int | None]:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InvalidInput(f"{p}: cannot read the sweep configuration ({exc})") from None
+        text = read_head(p)
+    except OSError as exc:
+        raise InvalidInput(f"{p}: cannot read the sweep configuration ({exc.strerror})") from None
     try:
-        config = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InvalidInput(f"{p}: not valid YAML ({first})") from None
+        config = load_yaml(text)
+    except YamlRefused as exc:
+        raise InvalidInput(f"{p}: not valid YAML ({exc})") from None
     return spec_from_config(config, str(p))

@@ -38,16 +38,29 @@ def run_spec(
     chunk: int = DEFAULT_CHUNK,
     progress: Progress | None = None,
 ) -> SweepResult:
-    """Run a checked sweep (see :func:`sweep` for the arguments)."""
+    """Run a checked sweep (see :func:`sweep` for the arguments); the store is locked while it runs."""
     start = time.perf_counter()
     require("xarray")
     per_chunk = points_per_chunk(spec, chunk)
     check_execution(scheduler, workers)
-    checkpoints = None
-    if store is not None:
-        _check_storable(spec)
-        require("pyarrow")
-        checkpoints = SweepStore(store, spec)
+    if store is None:
+        return _run(spec, None, scheduler, workers, per_chunk, progress, start)
+    _check_storable(spec)
+    require("pyarrow")
+    with SweepStore(store, spec) as checkpoints:
+        return _run(spec, checkpoints, scheduler, workers, per_chunk, progress, start)
+
+
+def _run(
+    spec: SweepSpec,
+    checkpoints: SweepStore | None,
+    scheduler: Any,
+    workers: int | None,
+    per_chunk: int,
+    progress: Progress | None,
+    start: float,
+) -> SweepResult:
+    """Resume ``spec`` from ``checkpoints``, compute the missing chunks, label the result."""
     variables = spec.variables()
     n = spec.n_points
     arrays = {

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__
+from .._text import short
 from ..description.sidecar import TASK_DOFS
 from ..exceptions import InvalidInput, PlmError
 from ..loading import build_mechanism, resolve_builder
@@ -45,16 +46,16 @@ FORMAT = "plm-pin-sweep/1"
 
 def _scalar(where: str, v: Any) -> Scalar:
     if isinstance(v, (bool, np.bool_)):
-        raise InvalidInput(f"{where}: {v!r} is a boolean; give a number, a name or a list of them")
+        raise InvalidInput(f"{where}: {short(v)} is a boolean; give a number, a name or a list of them")
     if isinstance(v, (int, np.integer)):
         return int(v)
     if isinstance(v, (float, np.floating)):
         if not math.isfinite(v):
-            raise InvalidInput(f"{where} holds a non-finite value {float(v)!r}")
+            raise InvalidInput(f"{where} holds a non-finite value {short(float(v))}")
         return float(v)
     if isinstance(v, str):
         return v
-    raise InvalidInput(f"{where}: {v!r} is not a number, a name or a list of them")
+    raise InvalidInput(f"{where}: {short(v)} is not a number, a name or a list of them")
 
 
 def normalise_value(where: str, v: Any) -> Value:
@@ -130,7 +131,9 @@ class ParameterSpace:
 def _parameter_space(parameters: Any, valid: tuple[str, ...], label: str) -> ParameterSpace:
     def check_name(name: Any) -> str:
         if name not in valid:
-            raise InvalidInput(f"unknown parameter {name!r} of {label}; its parameters are {list(valid)}")
+            raise InvalidInput(
+                f"unknown parameter {short(name)} of {label}; its parameters are {list(valid)}"
+            )
         return str(name)
 
     if parameters is None:
@@ -141,10 +144,10 @@ def _parameter_space(parameters: Any, valid: tuple[str, ...], label: str) -> Par
         for name in names:
             raw = parameters[name]
             if isinstance(raw, (str, bytes)) or not isinstance(raw, (Sequence, np.ndarray)):
-                raise InvalidInput(f"parameter {name!r}: give a list of values, got {raw!r}")
+                raise InvalidInput(f"parameter {short(name)}: give a list of values, got {short(raw)}")
             if len(raw) == 0:
-                raise InvalidInput(f"parameter {name!r} has no values: an empty grid")
-            values.append(tuple(normalise_value(f"parameter {name!r}", v) for v in raw))
+                raise InvalidInput(f"parameter {short(name)} has no values: an empty grid")
+            values.append(tuple(normalise_value(f"parameter {short(name)}", v) for v in raw))
         return ParameterSpace(names, tuple(values))
     if isinstance(parameters, Sequence) and not isinstance(parameters, (str, bytes)):
         if not parameters:
@@ -161,34 +164,38 @@ def _parameter_space(parameters: Any, valid: tuple[str, ...], label: str) -> Par
                     f"parameters: sample {i} sets {list(sample)}; every sample must set {list(names)}, "
                     "in order"
                 )
-            rows.append(tuple(normalise_value(f"parameter {n!r} of sample {i}", sample[n]) for n in names))
+            rows.append(
+                tuple(normalise_value(f"parameter {short(n)} of sample {i}", sample[n]) for n in names)
+            )
         return ParameterSpace(names, tuple(rows), samples=True)
     raise InvalidInput(
         "parameters must be a mapping name -> values (a grid) or a list of mappings (samples), "
-        f"got {parameters!r}"
+        f"got {short(parameters)}"
     )
 
 
 def _pose_axes(poses: Any) -> tuple[tuple[str, ...], tuple[np.ndarray, ...]]:
     if not isinstance(poses, Mapping) or not poses:
         raise InvalidInput(
-            f"poses must map task coordinates among {list(TASK_DOFS)} to their values, got {poses!r}"
+            f"poses must map task coordinates among {list(TASK_DOFS)} to their values, got {short(poses)}"
         )
     axes, values = [], []
     for axis, raw in poses.items():
         if axis not in TASK_DOFS:
-            raise InvalidInput(f"poses: unknown task coordinate {axis!r}; coordinates are {list(TASK_DOFS)}")
+            raise InvalidInput(
+                f"poses: unknown task coordinate {short(axis)}; coordinates are {list(TASK_DOFS)}"
+            )
         try:
             arr = np.array(raw, dtype=float)
         except (TypeError, ValueError):
-            raise InvalidInput(f"poses: values of {axis!r} must be numbers, got {raw!r}") from None
+            raise InvalidInput(f"poses: values of {short(axis)} must be numbers, got {short(raw)}") from None
         if arr.ndim != 1 or arr.size == 0:
             raise InvalidInput(
-                f"poses: values of {axis!r} must be a non-empty 1-D list, got shape {arr.shape}"
+                f"poses: values of {short(axis)} must be a non-empty 1-D list, got shape {arr.shape}"
             )
         if not np.all(np.isfinite(arr)):
             raise InvalidInput(
-                f"poses: values of {axis!r} hold non-finite entries {arr[~np.isfinite(arr)].tolist()}"
+                f"poses: values of {short(axis)} hold non-finite entries {arr[~np.isfinite(arr)].tolist()}"
             )
         arr.setflags(write=False)
         axes.append(str(axis))
@@ -318,17 +325,19 @@ def make_spec(
     fixed = {}
     for name, v in (base or {}).items():
         if name not in valid:
-            raise InvalidInput(f"unknown parameter {name!r} of {label}; its parameters are {list(valid)}")
-        fixed[str(name)] = normalise_value(f"base parameter {name!r}", v)
+            raise InvalidInput(
+                f"unknown parameter {short(name)} of {label}; its parameters are {list(valid)}"
+            )
+        fixed[str(name)] = normalise_value(f"base parameter {short(name)}", v)
     space = _parameter_space(parameters, valid, label)
     both = [n for n in space.names if n in fixed]
     if both:
         raise InvalidInput(f"parameters {both} are both varied and fixed (base); give each once")
     if isinstance(metrics, str) or not metrics:
-        raise InvalidInput(f"metrics must be a non-empty list among {list(METRICS)}, got {metrics!r}")
+        raise InvalidInput(f"metrics must be a non-empty list among {list(METRICS)}, got {short(metrics)}")
     for m in metrics:
         if m not in METRICS:
-            raise InvalidInput(f"unknown metric {m!r}; metrics are {list(METRICS)}")
+            raise InvalidInput(f"unknown metric {short(m)}; metrics are {list(METRICS)}")
     if len(set(metrics)) != len(metrics):
         raise InvalidInput(f"metrics are repeated: {list(metrics)}")
     axes, values = _pose_axes(poses)
@@ -343,7 +352,9 @@ def make_spec(
     if pose is not None:
         arr = np.asarray(pose, dtype=float)
         if arr.ndim != 1 or not np.all(np.isfinite(arr)):
-            raise InvalidInput(f"pose must be a 1-D list of finite task coordinates [m, rad], got {pose!r}")
+            raise InvalidInput(
+                f"pose must be a 1-D list of finite task coordinates [m, rad], got {short(pose)}"
+            )
         fixed_pose = tuple(float(v) for v in arr)
     checked = check_options(tuple(metrics), dict(options or {}))
     spec = SweepSpec(mechanism, label, fixed, space, axes, values, fixed_pose, tuple(metrics), checked)
@@ -364,7 +375,7 @@ def _check_axes_options(spec: SweepSpec) -> None:
         ts = spec.values[spec.axes.index(axis)]
         if ts.size < 2 or np.any(np.diff(ts) <= 0.0):
             raise InvalidInput(
-                f"poses: values of the rotation axis {axis!r} must increase, at least 2 of them"
+                f"poses: values of the rotation axis {short(axis)} must increase, at least 2 of them"
             )
     over = options.get("over")
     if over is not None:

@@ -2,15 +2,19 @@
 
 Layout of a store folder::
 
-    manifest.json                          the sweep's canonical spec and its key (SHA-256)
-    chunks/points-0000000-0000039.parquet  one row per parameter point of a finished chunk
+    manifest.json                                 the sweep's canonical spec and its key (SHA-256)
+    chunks/points-0000000-0000039.parquet         one row per parameter point of a finished chunk
+    chunks/points-0000000-0000039.parquet.sha256  the SHA-256 of that file's bytes
+    .lock, .lock.owner                            held while a sweep runs; who holds it (pid, host)
 
 Every file is written to a temporary name in its folder, then renamed over its final name
 (``os.replace``, atomic on POSIX and Windows), so an interrupted sweep leaves finished
 chunks whole and at most a temporary file, removed by the next run. A folder whose
 manifest names another sweep is refused, never mixed with it. Each Parquet file carries
-the key too, and a file whose key or columns do not match is ignored (with a warning) and
-its points computed again.
+the key too, and a file whose key, columns or content hash do not match (a flipped bit, a
+file from elsewhere, a chunk whose hash was never written) is ignored (with a warning) and
+its points computed again. One sweep at a time uses a folder: a second one started on it
+is refused, naming the process and host that hold its lock.
 
 In a chunk file, column ``point`` holds the flat parameter index and every result variable
 is a fixed-size list column (its values at that point, flattened row-major) of float64,
@@ -19,7 +23,11 @@ int8 or bool: floats are stored bit for bit.
 
 from __future__ import annotations
 
+import datetime
+import hashlib
 import json
+import os
+import socket
 import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -27,7 +35,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._io import atomic_path, atomic_write_text
-from ..exceptions import InvalidInput, StoreMismatch
+from .._text import short
+from ..exceptions import InvalidInput, StoreLocked, StoreMismatch
 from ..warnings import CorruptChunkWarning
 from ._deps import require
 from .spec import FORMAT
@@ -39,6 +48,8 @@ if TYPE_CHECKING:
 MANIFEST = "manifest.json"
 CHUNKS = "chunks"
 KEY_METADATA = b"plm_pin_sweep_key"
+LOCK = ".lock"
+DIGEST_SUFFIX = ".sha256"
 
 
 def chunk_name(first: int, last: int) -> str:
@@ -46,8 +57,32 @@ def chunk_name(first: int, last: int) -> str:
     return f"points-{first:07d}-{last:07d}.parquet"
 
 
+def _read_manifest(path: Path) -> tuple[str, dict[str, Any]]:
+    """The key and spec a manifest holds.
+
+    Raises:
+        InvalidInput: the file is unreadable, not JSON, or not an object with a key and a spec.
+    """
+    try:
+        found = json.loads(path.read_text(encoding="utf-8"))
+        problem = "it is not a JSON object with a 'key' and a 'spec'"
+    except (OSError, ValueError) as exc:  # unreadable, not UTF-8, not JSON
+        found, problem = None, short(str(exc), quote=False)
+    if isinstance(found, dict) and isinstance(found.get("key"), str) and isinstance(found.get("spec"), dict):
+        return found["key"], found["spec"]
+    raise InvalidInput(
+        f"{path}: not a plm_pin sweep manifest ({problem}); give another folder, or delete it to start again"
+    )
+
+
+def _digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
 class SweepStore:
-    """Checkpoints of one sweep in a folder (created if needed).
+    """Checkpoints of one sweep in a folder (created if needed), locked while open.
+
+    Use it as a context manager, or call :meth:`close`, to release the folder's lock.
 
     Attributes:
         root: the folder.
@@ -55,9 +90,10 @@ class SweepStore:
     """
 
     def __init__(self, root: str | Path, spec: SweepSpec) -> None:
-        """Open the store of ``spec`` in ``root``, or start one.
+        """Open the store of ``spec`` in ``root``, or start one, and lock the folder.
 
         Raises:
+            StoreLocked: another process holds the folder (the message names its pid and host).
             StoreMismatch: ``root`` holds another sweep (the message says which fields differ).
             InvalidInput: ``root`` is a file, or its manifest is unreadable.
         """
@@ -68,14 +104,61 @@ class SweepStore:
             raise InvalidInput(f"checkpoint folder {self.root} is a file; give a folder")
         self.chunks = self.root / CHUNKS
         self.chunks.mkdir(parents=True, exist_ok=True)
+        self._lock = self._acquire()
+        try:
+            self._open_manifest()
+        except BaseException:
+            self.close()
+            raise
+        for stale in [*self.chunks.glob(".*.tmp"), *self.root.glob(f".{MANIFEST}.*.tmp")]:
+            stale.unlink(missing_ok=True)  # left by an interrupted write: never a finished chunk
+
+    def _acquire(self) -> Any:
+        """Take the folder's lock, or say who holds it."""
+        filelock = require("filelock")
+        lock = filelock.FileLock(self.root / LOCK, timeout=0)
+        owner = self.root / f"{LOCK}.owner"
+        try:
+            lock.acquire()
+        except filelock.Timeout:
+            try:
+                holder = json.loads(owner.read_text(encoding="utf-8"))
+                who = f"process {holder['pid']} on {holder['host']} since {holder['since']}"
+            except (OSError, ValueError, KeyError, TypeError):
+                who = "another process"
+            raise StoreLocked(
+                f"{self.root} is in use by another sweep ({short(who, quote=False)}): wait for it to end, "
+                "or give another folder",
+                self.root,
+                who,
+            ) from None
+        since = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+        holder = {"pid": os.getpid(), "host": socket.gethostname(), "since": since}
+        atomic_write_text(owner, json.dumps(holder))
+        return lock
+
+    def close(self) -> None:
+        """Release the folder's lock (idempotent)."""
+        if self._lock is not None:
+            (self.root / f"{LOCK}.owner").unlink(missing_ok=True)
+            self._lock.release()
+            self._lock = None
+
+    def __enter__(self) -> SweepStore:
+        """The store itself; its lock is released on leaving the block."""
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        """Release the lock."""
+        self.close()
+
+    def _open_manifest(self) -> None:
+        """Check the manifest names this sweep, or write it."""
+        spec = self.spec
         manifest = self.root / MANIFEST
         document = {"format": FORMAT, "key": self.key, "spec": spec.to_dict()}
         if manifest.exists():
-            try:
-                found = json.loads(manifest.read_text(encoding="utf-8"))
-                found_key, found_spec = found["key"], found["spec"]
-            except (OSError, ValueError, KeyError, TypeError) as exc:
-                raise InvalidInput(f"{manifest}: not a plm_pin sweep manifest ({exc})") from None
+            found_key, found_spec = _read_manifest(manifest)
             if found_key != self.key:
                 ours = document["spec"]
                 assert isinstance(ours, dict)
@@ -84,15 +167,13 @@ class SweepStore:
                 )
                 raise StoreMismatch(
                     f"{self.root} holds the checkpoints of another sweep (key {found_key[:12]}, this one "
-                    f"{self.key[:12]}; they differ in {list(fields)}): give another folder, or delete it to "
-                    "start again",
+                    f"{self.key[:12]}; they differ in {short(list(fields))}): give another folder, or delete "
+                    "it to start again",
                     self.root,
                     fields,
                 )
         else:
             atomic_write_text(manifest, json.dumps(document, indent=2) + "\n")
-        for stale in [*self.chunks.glob(".*.tmp"), *self.root.glob(f".{MANIFEST}.*.tmp")]:
-            stale.unlink(missing_ok=True)  # left by an interrupted write: never a finished chunk
 
     def load(self) -> list[ChunkValues]:
         """Every finished chunk of this sweep (files that do not belong are skipped with a warning)."""
@@ -101,9 +182,15 @@ class SweepStore:
         pq = require("pyarrow.parquet")
         variables = self.spec.variables()
         out = []
+        pa = require("pyarrow")
         for path in sorted(self.chunks.glob("points-*.parquet")):
             try:
-                table = pq.read_table(path)
+                data = path.read_bytes()
+                digest = path.with_name(path.name + DIGEST_SUFFIX)
+                expected = digest.read_text(encoding="ascii").strip() if digest.is_file() else "missing"
+                if _digest(data) != expected:
+                    raise ValueError(f"its SHA-256 is not the one recorded ({expected[:12]})")
+                table = pq.read_table(pa.BufferReader(data))
                 key = (table.schema.metadata or {}).get(KEY_METADATA, b"").decode()
                 if key != self.key:
                     raise ValueError(f"key {key[:12] or 'missing'} is not this sweep's")
@@ -135,4 +222,5 @@ class SweepStore:
         path = self.chunks / chunk_name(int(chunk.points[0]), int(chunk.points[-1]))
         with atomic_path(path) as tmp:
             pq.write_table(table, tmp)
+            atomic_write_text(path.with_name(path.name + DIGEST_SUFFIX), _digest(tmp.read_bytes()) + "\n")
         return path

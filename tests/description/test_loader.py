@@ -156,7 +156,9 @@ def test_sidecar_that_is_not_utf8_is_refused(fourbar):
     """A sidecar that is not UTF-8 text is a DescriptionError naming it."""
     sidecar = fourbar.with_name("fourbar.plm.yaml")
     sidecar.write_bytes(b"format: plm-pin/1\nname: \xff\xfe\n")
-    with pytest.raises(DescriptionError, match=r"fourbar\.plm\.yaml: cannot read file: 'utf-8' codec"):
+    with pytest.raises(
+        DescriptionError, match=r"fourbar\.plm\.yaml: not UTF-8 text \(invalid start byte at byte 24\)"
+    ):
         read_description(fourbar)
 
 

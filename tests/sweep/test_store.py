@@ -24,7 +24,7 @@ REPO = Path(__file__).resolve().parents[2]
 
 
 def _files(store: Path) -> dict[str, bytes]:
-    return {p.name: p.read_bytes() for p in sorted((store / "chunks").iterdir())}
+    return {p.name: p.read_bytes() for p in sorted((store / "chunks").glob("points-*.parquet"))}
 
 
 def test_rerun_loads_every_chunk_and_computes_nothing(tmp_path):
