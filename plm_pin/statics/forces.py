@@ -225,8 +225,9 @@ class AllocationRule:
         """:meth:`linear_map` from the minimum-norm map ``P`` (n_act, nv) and the internal basis ``G``."""
         if G.shape[1] == 0:
             return P
-        W = self.weights
-        WG = W @ G
+        WG = self.weights @ G
+        if G.shape[1] == 1:  # one internal force (3D4M): a scalar
+            return P - G @ ((WG.T @ P) / float(G[:, 0] @ WG[:, 0]))
         return P - G @ np.linalg.solve(G.T @ WG, WG.T @ P)
 
 
