@@ -237,6 +237,10 @@ class _LazyShares(Mapping[str, np.ndarray]):
     def __repr__(self) -> str:
         return "{...}" if self._compute is not None else repr(self._shares)
 
+    def __reduce__(self) -> tuple[type, tuple[dict[str, np.ndarray]]]:
+        """Pickled as the plain dictionary of the shares (computed first)."""
+        return (dict, (dict(self._get()),))
+
 
 def inverse_dynamics(
     mech: Mechanism,

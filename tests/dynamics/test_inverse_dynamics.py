@@ -258,3 +258,16 @@ def test_body_shares_match_rnea_on_a_model_holding_that_body_alone(gravity):
             expected = solve_balance(mech, generalized_balance(mech, q, tau), rule).f_c
             assert np.abs(expected).max() > 1e-4  # the body does load the actuators
             np.testing.assert_allclose(idr.bodies[name][i], expected, atol=1e-10 * np.abs(expected).max())
+
+
+def test_result_pickles_with_its_body_split():
+    """An InverseDynamics pickles; the lazily computed body split travels as a plain dictionary."""
+    import pickle
+
+    mech = preset("harada2011_3d4m")
+    traj = task_trajectory(mech, _harada_profile, np.linspace(0.0, 0.5, 6))
+    idr = inverse_dynamics(mech, traj)
+    back = pickle.loads(pickle.dumps(idr))
+    assert set(back.bodies) == set(idr.bodies)
+    for name in idr.bodies:
+        np.testing.assert_array_equal(back.bodies[name], idr.bodies[name])
