@@ -37,7 +37,7 @@ DURATION = 2.0
 """Length of simulations 1 and 2 [s] ((M.38))."""
 
 SIM_DT = 0.01
-"""Output step of simulations 1 and 2 [s] (RK4)."""
+"""Output step of simulations 1 and 2 [s] (samples of simulate's default DOP853 run)."""
 
 SNAPSHOT_PERIOD = 0.2
 """Time between the skeletons of Figs. 11 and 13, as in the paper's code (M.42) [s]."""

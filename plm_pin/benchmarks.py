@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+import proxsuite
 
 from .analysis import manipulability, singular_points_along, workspace_map
 from .dynamics.inverse_dynamics import inverse_dynamics
@@ -40,6 +41,7 @@ from .kinematics import (
     inverse_kinematics,
     task_pose,
 )
+from .kinematics.closures import jacobian_from_data as closure_jacobian_from_data
 from .loading import build_mechanism, load
 from .mechanism import Mechanism
 from .models.classic import build_fourbar
@@ -131,8 +133,36 @@ def run() -> list[dict[str, object]]:
     return rows
 
 
+def balance_floor(mech: Mechanism, data: pin.Data, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    r"""The floor of a statics or inverse-dynamics sample: ``pin.rnea`` + :math:`J_\phi` + one ProxSuite QP.
+
+    The least Python doing the balance's math with Pinocchio and ProxSuite calls: the
+    minimum-norm :math:`(f_c, \lambda)` with :math:`B f_c + J_\phi^T \lambda = \tau` (no split,
+    no checks), as an equality-constrained dense QP.
+    """
+    model = mech.model
+    tau = pin.rnea(model, data, q, v, a)
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    J = closure_jacobian_from_data(model, data, mech.closures)
+    act, n_act = mech.actuated_v_indices, mech.n_actuators
+    n = n_act + J.shape[0]
+    A = np.zeros((model.nv, n))
+    A[act, np.arange(n_act)] = 1.0
+    A[:, n_act:] = J.T
+    qp = proxsuite.proxqp.dense.QP(n, model.nv, 0)
+    qp.init(np.eye(n), np.zeros(n), A, tau, None, None, None)
+    qp.solve()
+    return np.asarray(qp.results.x)
+
+
 def allocation_benchmark() -> list[dict[str, object]]:
-    """Bounded and min-peak static allocation, trajectory and inverse dynamics per sample (3D4M, 8-PSS)."""
+    """Bounded and min-peak static allocation, trajectory and inverse dynamics per sample (3D4M, 8-PSS).
+
+    The default paths (static forces, inverse dynamics per sample) print beside their floor
+    (:func:`balance_floor`), timed in alternation; the default of :func:`inverse_dynamics` computes
+    the forces, closure forces, internal coordinates and the term split; the body split on request.
+    """
     rows: list[dict[str, object]] = []
     profiles: dict[str, tuple[Callable[[float], Any], float]] = {
         "harada2011_3d4m": (_harada_profile, 1.0),
@@ -169,14 +199,59 @@ def allocation_benchmark() -> list[dict[str, object]]:
                 1,
             ),
             "task_trajectory, per sample": (functools.partial(task_trajectory, mech, profile, times), 51),
-            "inverse_dynamics (min-norm, splits), per sample": (
-                functools.partial(inverse_dynamics, mech, traj),
+            "inverse_dynamics and its body split (on request), per sample": (
+                functools.partial(_with_bodies, mech, traj),
                 51,
             ),
         }
         for case, (fn, per) in cases.items():
             rows.append({"mechanism": name, "case": case, "seconds_per_call": _per_call(fn) / per})
+        data = mech.model.createData()
+        rest = np.zeros(mech.nv)
+
+        def floor_trajectory(traj: Any = traj, data: pin.Data = data, mech: Mechanism = mech) -> None:
+            for qi, vi, ai in zip(traj.q, traj.v, traj.a, strict=True):
+                balance_floor(mech, data, qi, vi, ai)
+
+        floored: dict[str, tuple[Callable[[], object], Callable[[], object], int]] = {
+            "static_forces (gravity, min-norm: the default)": (
+                functools.partial(static_forces, mech, q),
+                functools.partial(balance_floor, mech, data, q, rest, rest),
+                1,
+            ),
+            "inverse_dynamics (default: forces, closure forces, term split), per sample": (
+                functools.partial(inverse_dynamics, mech, traj),
+                floor_trajectory,
+                51,
+            ),
+        }
+        for case, (fn, floor, per) in floored.items():
+            ours, least = _alternating(fn, floor)
+            rows.append(
+                {
+                    "mechanism": name,
+                    "case": f"{case} [{ours / least:.2f}x the floor rnea + J_phi + one ProxSuite QP]",
+                    "seconds_per_call": ours / per,
+                    "floor_seconds_per_call": least / per,
+                }
+            )
     return rows
+
+
+def _with_bodies(mech: Mechanism, traj: Any) -> dict[str, np.ndarray]:
+    """Inverse dynamics with its body split read (computed on first access)."""
+    return dict(inverse_dynamics(mech, traj).bodies)
+
+
+def _alternating(
+    fn: Callable[[], object], floor: Callable[[], object], rounds: int = 5
+) -> tuple[float, float]:
+    """Best time per call [s] of ``fn`` and of ``floor``, measured in alternation (same load on both)."""
+    best = [math.inf, math.inf]
+    for _ in range(rounds):
+        for i, f in enumerate((fn, floor)):
+            best[i] = min(best[i], _per_call(f, 0.05))
+    return best[0], best[1]
 
 
 def _harada_profile(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -216,12 +291,20 @@ def _peak_kinetic(mech: Mechanism, run: SimulationResult) -> float:
     return max(pin.computeKineticEnergy(mech.model, data, q, v) for q, v in zip(run.q, run.v, strict=True))
 
 
-def _simulation_row(mech: Mechanism, case: str, **kwargs: Any) -> dict[str, object]:
-    """Accuracy and cost of one :func:`simulate` run; energy drift relative to the peak kinetic energy."""
+def _simulation_row(
+    mech: Mechanism, case: str, crank_1s: float | None = None, **kwargs: Any
+) -> dict[str, object]:
+    """Accuracy and cost of one :func:`simulate` run; energy drift relative to the peak kinetic energy.
+
+    ``crank_1s``: the reference crank angle at 1 s [rad], for the error column (four-bar only).
+    """
     start = time.perf_counter()
     run = simulate(mech, mech.q_ref, **kwargs)
     seconds = time.perf_counter() - start
+    at_1s = int(np.argmin(np.abs(run.t - 1.0)))
     return {
+        "crank_error_1s": None if crank_1s is None else abs(float(run.q[at_1s, 0]) - crank_1s),
+        "seconds_per_simulated_second": seconds / float(run.t[-1]),
         "engine": f"plm_pin ({run.solver})",
         "mechanism": mech.name,
         "case": case,
@@ -234,12 +317,13 @@ def _simulation_row(mech: Mechanism, case: str, **kwargs: Any) -> dict[str, obje
     }
 
 
-def fourbar_mjcf() -> str:
+def fourbar_mjcf(integrator: str = "Euler", solref: float | None = None) -> str:
     """MJCF of the ``fourbar`` preset from its builder parameters, the loop closed by a site ``connect``.
 
     Bars as in :func:`plm_pin.models.classic.build_fourbar`: mass ``density * L`` at ``L / 2``,
     inertia ``(m r^2 / 2, m L^2 / 12, m L^2 / 12)`` with r = 5 mm; no geoms (no contacts);
-    MuJoCo's default integrator, solver and constraint softness; 1 ms steps.
+    MuJoCo's default solver, ``integrator`` (default Euler) and the constraint's time constant
+    ``solref`` [s] (default MuJoCo's 0.02); 1 ms steps.
     """
     defaults = {k: p.default for k, p in inspect.signature(build_fourbar).parameters.items()}
     p = {**defaults, **PRESETS["fourbar"].parameters}
@@ -252,8 +336,11 @@ def fourbar_mjcf() -> str:
         )
 
     a, b, c, d = p["crank"], p["coupler"], p["rocker"], p["ground"]
+    stiff = "" if solref is None else f' solref="{solref} 1"'
     return f"""<mujoco model="fourbar">
-  <option timestep="{SIM_STEP}" gravity="0 {-p["gravity"]} 0"><flag energy="enable"/></option>
+  <option timestep="{SIM_STEP}" integrator="{integrator}" gravity="0 {-p["gravity"]} 0">
+    <flag energy="enable"/>
+  </option>
   <worldbody>
     <body name="crank">
       <joint name="crank_pivot" type="hinge" axis="0 0 1"/>
@@ -270,24 +357,27 @@ def fourbar_mjcf() -> str:
       <site name="rocker_tip" pos="{c} 0 0"/>
     </body>
   </worldbody>
-  <equality><connect site1="coupler_tip" site2="rocker_tip"/></equality>
+  <equality><connect site1="coupler_tip" site2="rocker_tip"{stiff}/></equality>
 </mujoco>
 """
 
 
-def mujoco_fourbar_row(q0: np.ndarray) -> dict[str, object]:
+def mujoco_fourbar_row(
+    q0: np.ndarray, integrator: str = "Euler", solref: float | None = None, crank_1s: float | None = None
+) -> dict[str, object]:
     """The four-bar in MuJoCo from ``q0`` at rest: closure error and energy drift at the output times."""
+    softness = "soft connect (defaults)" if solref is None else f"connect solref {solref:g}"
     row: dict[str, object] = {
         "engine": "MuJoCo",
         "mechanism": "fourbar",
-        "case": f"{SIM_DURATION:g} s passive, Euler {SIM_STEP * 1e3:g} ms, soft connect (defaults)",
+        "case": f"{SIM_DURATION:g} s passive, {integrator} {SIM_STEP * 1e3:g} ms, {softness}",
     }
     try:
         import mujoco  # optional: pip install mujoco (dev extra)
     except ImportError as exc:
         return {**row, "engine": f"MuJoCo (not available: {exc})"}
     row["engine"] = f"MuJoCo {mujoco.__version__}"
-    model = mujoco.MjModel.from_xml_string(fourbar_mjcf())
+    model = mujoco.MjModel.from_xml_string(fourbar_mjcf(integrator, solref))
     data = mujoco.MjData(model)
     data.qpos[:] = q0
     mujoco.mj_forward(model, data)
@@ -297,8 +387,10 @@ def mujoco_fourbar_row(q0: np.ndarray) -> dict[str, object]:
     energy: list[float] = []
     kinetic: list[float] = []
     gap: list[float] = []
+    crank: list[float] = []
 
     def sample() -> None:
+        crank.append(float(data.qpos[0]))
         energy.append(float(data.energy.sum()))
         kinetic.append(float(data.energy[1]))
         gap.append(float(np.linalg.norm(data.site_xpos[tips[0]] - data.site_xpos[tips[1]])))
@@ -311,8 +403,11 @@ def mujoco_fourbar_row(q0: np.ndarray) -> dict[str, object]:
         sample()
     seconds = time.perf_counter() - start
     steps = n_samples * per_sample
+    at_1s = round(1.0 / SIM_OUTPUT)
     return {
         **row,
+        "crank_error_1s": None if crank_1s is None else abs(crank[at_1s] - crank_1s),
+        "seconds_per_simulated_second": seconds / SIM_DURATION,
         "max_closure_error": max(gap),
         "max_closure_drift_before_projection": None,
         "energy_drift": max(abs(e - energy[0]) for e in energy) / max(kinetic),
@@ -326,31 +421,50 @@ def simulation_benchmark() -> list[dict[str, object]]:
     """Closed-chain simulation: the four-bar against MuJoCo, and Harada 2011's simulation 1.
 
     The four-bar runs 10 s passive under gravity from the preset's reference configuration at
-    rest, sampled every 10 ms, in plm_pin (both solvers, RK4 at 1 and 5 ms, DOP853) and in
-    MuJoCo (1 ms, defaults). Energy drift is relative to the peak kinetic energy.
+    rest, sampled every 10 ms, in plm_pin (the default: one DOP853 run with dense output; RK4 at
+    1 ms with both solvers) and in MuJoCo (1 ms: Euler with its defaults, RK4 with the stiffest
+    connect that is stable at 1 ms, solref 0.002). Energy drift is relative to the peak kinetic
+    energy; the crank error at 1 s is against a DOP853 run at rtol 1e-13 (which matches the
+    independent one-coordinate Lagrangian of the tests to 1e-10 rad).
     """
     four = load("fourbar")
     harada = load("harada2011_3d4m")
     p = PRESETS["harada2011_3d4m"].parameters
     f_y = (2 * p["rod_masses"][0] + p["plate_mass"]) * p["gravity"]
     passive = {"duration": SIM_DURATION, "dt": SIM_OUTPUT}
-    return [
-        _simulation_row(four, f"{SIM_DURATION:g} s passive, RK4 1 ms", step=SIM_STEP, **passive),
+    crank = float(simulate(four, four.q_ref, duration=1.0, dt=1.0, rtol=1e-13, atol=1e-14).q[-1, 0])
+    rows = [
         _simulation_row(
-            four, f"{SIM_DURATION:g} s passive, RK4 1 ms", step=SIM_STEP, solver="kkt", **passive
+            four, f"{SIM_DURATION:g} s passive, default: DOP853 rtol 1e-10, dense output", crank, **passive
         ),
-        _simulation_row(four, f"{SIM_DURATION:g} s passive, RK4 5 ms", step=5e-3, **passive),
-        _simulation_row(four, f"{SIM_DURATION:g} s passive, DOP853 rtol 1e-9", method="adaptive", **passive),
-        mujoco_fourbar_row(four.q_ref),
+        _simulation_row(
+            four, f"{SIM_DURATION:g} s passive, RK4 1 ms", crank, method="fixed", step=SIM_STEP, **passive
+        ),
+        _simulation_row(
+            four,
+            f"{SIM_DURATION:g} s passive, RK4 1 ms",
+            crank,
+            method="fixed",
+            step=SIM_STEP,
+            solver="kkt",
+            **passive,
+        ),
+        mujoco_fourbar_row(four.q_ref, crank_1s=crank),
+        mujoco_fourbar_row(four.q_ref, "RK4", 0.002, crank_1s=crank),
         _simulation_row(
             harada,
-            "Harada 2011 simulation 1 (2 s, f_x = 0.2 N), RK4 1 ms",
+            "Harada 2011 simulation 1 (2 s, f_x = 0.2 N), default",
             duration=2.0,
             dt=SIM_OUTPUT,
-            step=SIM_STEP,
             wrench=[0.2, f_y, 0.0],
         ),
     ]
+    reference = rows[4].get("seconds_per_simulated_second")
+    for r in rows:
+        cost = r.get("seconds_per_simulated_second")
+        if isinstance(reference, float) and isinstance(cost, float) and r["mechanism"] == "fourbar":
+            r["cost_vs_mujoco_rk4"] = cost / reference
+    return rows
 
 
 def _simulation_line(r: dict[str, object]) -> str:
@@ -363,8 +477,9 @@ def _simulation_line(r: dict[str, object]) -> str:
     total = r.get("seconds")
     return (
         f"| {r['engine']} | {r['mechanism']} | {r['case']} | {cell('max_closure_error', '.1e')} "
-        f"| {cell('energy_drift', '.1e')} | {cell('seconds_per_step', '.1f', 1e6)} "
-        f"| {_fmt(total) if isinstance(total, float) else '-'} "
+        f"| {cell('crank_error_1s', '.1e')} | {cell('energy_drift', '.1e')} "
+        f"| {cell('seconds_per_step', '.1f', 1e6)} | {cell('seconds_per_simulated_second', '.1f', 1e3)} "
+        f"| {cell('cost_vs_mujoco_rk4', '.2f')} | {_fmt(total) if isinstance(total, float) else '-'} "
         f"| {cell('max_closure_drift_before_projection', '.1e')} |"
     )
 
@@ -475,9 +590,9 @@ def write(
             "projection; the drift the integrator reached before it is in the last column). Energy "
             "drift: largest |E - E0| over the peak kinetic energy.",
             "",
-            "| engine | mechanism | case | max closure error [m] | energy drift | us per step | total "
-            "| drift before projection [m] |",
-            "|---|---|---|---|---|---|---|---|",
+            "| engine | mechanism | case | max closure error [m] | crank error at 1 s [rad] | energy drift "
+            "| us per step | ms per simulated s | cost / MuJoCo RK4 | total | drift before projection [m] |",
+            "|---|---|---|---|---|---|---|---|---|---|---|",
         ]
         lines += [_simulation_line(r) for r in simulation]
     if sweep:

@@ -29,7 +29,10 @@ Two solvers give the same :math:`a`:
   ``RigidConstraintModel`` s, ``CONTACT_3D`` world-aligned for a point closure and
   ``CONTACT_6D`` local for a weld, no Baumgarte correction, proximal iterations. Its
   multipliers are brought to our rows through the generalized force they exert,
-  :math:`J_\phi^T \lambda = J_{pin}^T \lambda_{pin}` (minimum-norm solution).
+  :math:`J_\phi^T \lambda = J_{pin}^T \lambda_{pin}` (minimum-norm solution). Where its proximal
+  iterations do not converge within their cap (ill-conditioned closures, near a constraint
+  singularity, where the answer would be inexact and an adaptive integrator would crawl), the
+  accelerations come from the KKT solve instead.
 
 After an integration step the state is projected back onto the closures
 (:meth:`ClosedChainDynamics.project`). The velocity projection onto :math:`J_\phi v = 0` is
@@ -41,6 +44,7 @@ adds energy and removes only the part of :math:`v` that violates the closures.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -49,6 +53,7 @@ import pinocchio as pin
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..kinematics import closures as _closures
 from ..kinematics.assembly import assemble
+from ..kinematics.closures import Closure
 from ..kinematics.singularity import RANK_RTOL
 from ..statics.balance import Load
 
@@ -68,6 +73,28 @@ PROJECTION_ITERATIONS = 20
 
 _PROXIMAL = (1e-12, 1e-10, 20)
 """Pinocchio proximal settings: absolute accuracy, regularization mu, iteration cap."""
+
+
+class ClosureDistance:
+    """Closure distance of a residual: the largest norm of a closure's point rows [m] or other rows [rad].
+
+    The Euclidean gap of each closure, not the largest entry (which can be up to sqrt(3) times smaller).
+    """
+
+    def __init__(self, closures: Sequence[Closure]) -> None:
+        """Group the residual rows of ``closures``: point rows, then rotation rows, of each."""
+        groups: list[int] = []
+        for i, c in enumerate(closures):
+            n = c.rows.stop - c.rows.start
+            groups += [2 * i] * min(3, n) + [2 * i + 1] * max(0, n - 3)
+        self._groups = np.array(groups, dtype=int)
+        self._n = 2 * len(closures)
+
+    def __call__(self, phi: np.ndarray) -> float:
+        """The closure distance of ``phi`` [m, rad] (0 without closures)."""
+        if not phi.size:
+            return 0.0
+        return float(np.sqrt(np.max(np.bincount(self._groups, phi * phi, minlength=self._n))))
 
 
 def resolve_solver(mech: Mechanism, solver: str) -> str:
@@ -106,6 +133,7 @@ class ClosedChainDynamics:
         self.closures = mech.closures
         self.data = model.createData()
         self.rank = mech.nv - mech.mobility
+        self.distance = ClosureDistance(mech.closures)
         self.load = load
         self._name = mech.name
         self._all_columns = np.arange(mech.nv)
@@ -193,11 +221,15 @@ class ClosedChainDynamics:
         if self.solver == "kkt":
             return self.kkt(q, v, tau)[0]
         model, data = self.model, self._pin_data
+        applied = tau
         if self.load is not None:
-            tau = (
+            applied = (
                 tau + pin.computeFrameJacobian(model, data, q, self.load.frame_id, _LWA).T @ self.load.wrench
             )
-        return np.array(pin.constraintDynamics(model, data, q, v, tau, self._cms, self._cds, self._settings))
+        a = np.array(pin.constraintDynamics(model, data, q, v, applied, self._cms, self._cds, self._settings))
+        if self._settings.iter >= self._settings.max_iter:  # not converged: ill-conditioned closures
+            return self.kkt(q, v, tau)[0]
+        return a
 
     def solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Joint accelerations (nv,) and closure forces (m,) [N, N m] with the chosen solver."""
@@ -220,7 +252,7 @@ class ClosedChainDynamics:
     ) -> tuple[np.ndarray, np.ndarray, float]:
         r"""Project a state onto the closure manifold, in place of a Baumgarte correction.
 
-        :math:`q` when its largest closure residual exceeds ``tol``: one minimum-norm
+        :math:`q` when its closure distance (:class:`ClosureDistance`) exceeds ``tol``: one minimum-norm
         Gauss-Newton step :math:`\delta = -J_\phi^+ \phi` (with the SVD the velocity projection
         needs anyway; from an integrator's small drift it lands at round-off), then damped
         iterations (:func:`~plm_pin.kinematics.assembly.assemble`) if that was not enough.
@@ -230,11 +262,11 @@ class ClosedChainDynamics:
         Args:
             q: configuration, shape (nq,).
             v: joint velocities, shape (nv,).
-            tol: largest closure residual left [m, rad].
+            tol: largest closure distance left [m, rad].
             velocity_tol: largest closure rate left [m/s, rad/s].
 
         Returns:
-            The projected ``q`` (nq,) and ``v`` (nv,), and the largest residual before [m, rad].
+            The projected ``q`` (nq,) and ``v`` (nv,), and the closure distance before [m, rad].
 
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol`` from ``q``.
@@ -243,23 +275,24 @@ class ClosedChainDynamics:
         if not self.closures:
             return q, v, 0.0
         model, data, closures = self.model, self.data, self.closures
-        pin.computeAllTerms(model, data, q, v)
-        M, J = self._mass_and_jacobian()
+        pin.computeJointJacobians(model, data, q)  # placements too
+        pin.updateFramePlacements(model, data)
         phi = _closures.residual_from_placements(data, closures)
-        before = float(np.max(np.abs(phi)))
+        before = self.distance(phi)
+        J = _closures.jacobian_from_data(model, data, closures)
         if before > tol:
             Ur, sr, W = self._reduced_rows(J)
             q = pin.integrate(model, q, -W.T @ ((Ur.T @ phi) / sr))
-            pin.computeAllTerms(model, data, q, v)
-            M, J = self._mass_and_jacobian()
-            if np.max(np.abs(_closures.residual_from_placements(data, closures))) > tol:
-                q = assemble(
-                    model, data, closures, q, self._all_columns, tol=tol, max_iterations=PROJECTION_ITERATIONS
-                ).q
-                pin.computeAllTerms(model, data, q, v)
-                M, J = self._mass_and_jacobian()
+            pin.framesForwardKinematics(model, data, q)
+            if self.distance(_closures.residual_from_placements(data, closures)) > tol:
+                free, cap = self._all_columns, PROJECTION_ITERATIONS
+                q = assemble(model, data, closures, q, free, tol=tol / 2, max_iterations=cap).q
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacements(model, data)
+            J = _closures.jacobian_from_data(model, data, closures)
         elif np.max(np.abs(J @ v)) <= velocity_tol:
             return q, v, before
+        M = pin.crba(model, data, q)
         _, _, W = self._reduced_rows(J)
         return q, v + self._saddle(M, W, np.zeros(model.nv), -(W @ v))[: model.nv], before
 

@@ -25,7 +25,8 @@ the difference to the forces actually chosen (``split_exact`` is False).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+import dataclasses
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -34,12 +35,15 @@ import pinocchio as pin
 
 from .._checks import check_finite_model, check_samples_assembled, checked_trajectory, load_arguments
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
-from ..statics import AllocationRule, generalized_balance, load_on_frame, solve_balance
-from ..statics.balance import SINGULAR_RTOL, Load
+from ..kinematics import closures as _closures
+from ..statics import AllocationRule, load_on_frame, solve_balance
+from ..statics.balance import SINGULAR_RTOL, Load, _balance, balance_factors
 from .trajectory import JointTrajectory
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 TERMS = ("inertia", "velocity", "gravity", "external")
 """Parts of the inverse-dynamics force by physical term."""
@@ -63,7 +67,8 @@ class InverseDynamics:
         terms: share of ``f_c`` of each term (:data:`TERMS`, and ``"allocation"`` when not
             exact), each shape (n, n_act).
         bodies: share of ``f_c`` of each body group (``"rotor"`` and ``"screw"`` for the
-            reflected inertias, ``"external"`` for the load), each shape (n, n_act).
+            reflected inertias, ``"external"`` for the load), each shape (n, n_act); computed on
+            first access, from one RNEA pass per sample.
         split_exact: whether the shares add up to ``f_c`` by linearity (weighted minimum norm).
         leads: ball-screw lead of each actuator [m/rev] (NaN without one), shape (n_act,).
     """
@@ -76,7 +81,7 @@ class InverseDynamics:
     residual: np.ndarray
     cd: np.ndarray
     terms: dict[str, np.ndarray]
-    bodies: dict[str, np.ndarray]
+    bodies: Mapping[str, np.ndarray]
     split_exact: bool
     leads: np.ndarray = field(repr=False)
 
@@ -146,17 +151,17 @@ class InverseDynamicsFailed(PlmError):
 
 @dataclass(frozen=True)
 class _BodyGroups:
-    """Models whose only inertias are one group's bodies, for RNEA per group."""
+    """Which bodies each group holds, for the body split of one RNEA pass."""
 
     names: tuple[str, ...]
-    models: tuple[pin.Model, ...]
-    datas: tuple[pin.Data, ...]
+    members: np.ndarray  # (n_groups, njoints): 1 where the group holds the joint's body
+    support: np.ndarray  # (njoints, nv): 1 on the velocities that move the joint's body
     rotor: np.ndarray  # reflected rotor inertia per velocity index
     screw: np.ndarray  # reflected screw inertia per velocity index
 
 
 def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) -> _BodyGroups:
-    """One zero-armature model per group of bodies (bodies named by their joint's first body frame)."""
+    """The groups of bodies (bodies named by their joint's first body frame), checked."""
     model = mech.model
     bodies = {name: j for j, name in enumerate(mech.body_names, start=1)}
     if groups is None:
@@ -175,23 +180,72 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
         rest = [b for b in bodies if b not in listed]
         if rest:
             chosen["other"] = rest
-    models, datas = [], []
-    for members in chosen.values():
-        m = pin.Model(model)
-        keep = {bodies[b] for b in members}
-        for j in range(1, m.njoints):
-            if j not in keep:
-                m.inertias[j] = pin.Inertia.Zero()
-        m.armature = np.zeros(m.nv)
-        models.append(m)
-        datas.append(m.createData())
+    members = np.zeros((len(chosen), model.njoints))
+    for g, names in enumerate(chosen.values()):
+        members[g, [bodies[b] for b in names]] = 1.0
+    support = np.zeros((model.njoints, model.nv))
+    for j in range(1, model.njoints):
+        for k in model.supports[j][1:]:
+            joint = model.joints[k]
+            support[j, joint.idx_v : joint.idx_v + joint.nv] = 1.0
     rotor = np.zeros(model.nv)
     screw = np.zeros(model.nv)
     for act, spec in zip(mech.actuators, mech.sidecar.actuation, strict=True):
         factor = (2.0 * np.pi / spec.lead) ** 2 if spec.lead else 1.0
         rotor[act.idx_v] = spec.rotor_inertia * factor
         screw[act.idx_v] = spec.screw_inertia * factor
-    return _BodyGroups(tuple(chosen), tuple(models), tuple(datas), rotor, screw)
+    return _BodyGroups(tuple(chosen), members, support, rotor, screw)
+
+
+def _body_forces(model: pin.Model, data: pin.Data, gravity: bool, support: np.ndarray) -> np.ndarray:
+    r"""Generalized force of each body's own inertial wrench, from the RNEA pass held in ``data``.
+
+    RNEA is linear in the bodies' inertias: :math:`\tau = \sum_b J_b^T f_b` with
+    :math:`f_b = I_b a_b + v_b \times^* I_b v_b` (gravity in :math:`a_b` as RNEA puts it, or
+    taken out), :math:`J_b` the body's world Jacobian (the columns of ``data.J`` of the joints
+    supporting it). ``data`` must hold the joint Jacobians and the RNEA pass at one state.
+
+    Returns:
+        Shape (njoints, nv), row 0 (the universe) zero.
+    """
+    wrenches = np.zeros((model.njoints, 6))
+    for j in range(1, model.njoints):
+        inertia, oMi = model.inertias[j], data.oMi[j]
+        acc = data.a_gf[j] if gravity else data.a_gf[j] + oMi.actInv(model.gravity)
+        wrenches[j] = oMi.act(inertia * acc + inertia.vxiv(data.v[j])).vector
+    return (wrenches @ data.J) * support
+
+
+class _LazyShares(Mapping[str, np.ndarray]):
+    """Shares of ``f_c`` computed on first access by ``compute`` (read-only arrays)."""
+
+    def __init__(self, compute: Callable[[], dict[str, np.ndarray]]) -> None:
+        self._compute: Callable[[], dict[str, np.ndarray]] | None = compute
+        self._shares: dict[str, np.ndarray] = {}
+
+    def _get(self) -> dict[str, np.ndarray]:
+        if self._compute is not None:
+            self._shares = self._compute()
+            for arr in self._shares.values():
+                arr.setflags(write=False)
+            self._compute = None
+        return self._shares
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        return self._get()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._get())
+
+    def __len__(self) -> int:
+        return len(self._get())
+
+    def __repr__(self) -> str:
+        return "{...}" if self._compute is not None else repr(self._shares)
+
+    def __reduce__(self) -> tuple[type, tuple[dict[str, np.ndarray]]]:
+        """Pickled as the plain dictionary of the shares (computed first)."""
+        return (dict, (dict(self._get()),))
 
 
 def _check_group_names(names: Sequence[str], default: bool) -> None:
@@ -271,32 +325,65 @@ def inverse_dynamics(
     check_finite_model(mech)
     load_at = _load_function(mech, wrench, frame)
     body = _body_groups(mech, groups)
-    model, data = mech.model, mech.data
-    n, n_act = trajectory.t.shape[0], mech.n_actuators
-    absent = tuple(
-        name
-        for name, missing in (
-            ("rotor", not body.rotor.any()),
-            ("screw", not body.screw.any()),
-            ("external", wrench is None),
-        )
-        if missing
-    )
-    out = _Buffers(n, n_act, mech.n_closure_rows, body.names, absent)
-    square = mech.task_compiled is not None and mech.task_compiled.size == mech.mobility == n_act
+    return _run(mech, trajectory, rule, load_at, body, gravity, singular_rtol, wrench is None)
+
+
+def _run(
+    mech: Mechanism,
+    trajectory: JointTrajectory,
+    rule: AllocationRule,
+    load_at: Callable[[float], Load | None],
+    body: _BodyGroups,
+    gravity: bool,
+    singular_rtol: float,
+    unloaded: bool,
+) -> InverseDynamics:
+    """The trajectory loop: one factorisation of the balance per sample, on a data of its own."""
+    model, closures, act_v = mech.model, mech.closures, mech.actuated_v_indices
+    data = model.createData()
+    n, n_act, nv = trajectory.t.shape[0], mech.n_actuators, mech.nv
+    missing = {"rotor": not body.rotor.any(), "screw": not body.screw.any(), "external": unloaded}
+    absent = tuple(name for name, gone in missing.items() if gone)
+    out = _Buffers(n, n_act, nv, mech.n_closure_rows, absent)
+    task = mech.task_compiled
+    square = task is not None and task.size == mech.mobility == n_act
+    linear = rule.is_linear
     previous_sign = 0.0
     for i in range(n):
         q, v, a = trajectory.q[i], trajectory.v[i], trajectory.a[i]
         load = load_at(float(trajectory.t[i]))
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        J_phi = _closures.jacobian_from_data(model, data, closures)
+        ext = np.zeros(nv)
+        if load is not None:
+            ext = -(pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench)
+        J_task = task.jacobian_from_data(model, data) if square and task is not None else None
         tau_full = pin.rnea(model, data, q, v, a).copy()
-        tau = tau_full if gravity else tau_full - pin.computeGeneralizedGravity(model, data, q)
+        nle = pin.nonLinearEffects(model, data, q, v).copy()
+        g_full = pin.computeGeneralizedGravity(model, data, q).copy()
+        tau = (tau_full if gravity else tau_full - g_full) + ext
         try:
-            balance = generalized_balance(
-                mech, q, tau, load=load, gravity=gravity, v=v, a=a, singular_rtol=singular_rtol
-            )
-            sol = solve_balance(mech, balance, rule)
-            if square:  # a sign change of det J_ce between samples: a direct singularity was crossed
-                sign = _direct_sign(mech, balance.N, balance.C)
+            if linear:  # weighted minimum norm: the forces are F tau, one factorisation
+                factors = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
+                F = rule.weighted_map(factors.P, factors.G)
+                f_c = F @ tau
+                applied = tau.copy()
+                applied[act_v] -= f_c
+                lam = factors.lambda_map @ applied
+                out.residual[i] = float(np.max(np.abs(J_phi.T @ lam - applied), initial=0.0))
+                out.internal.append(factors.G.T @ f_c)
+                N, C = factors.N, factors.C
+            else:
+                balance = _balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol)
+                sol = solve_balance(mech, dataclasses.replace(balance, v=v, a=a), rule)
+                F = rule.linear_map(balance)
+                f_c, lam = sol.f_c, sol.lam
+                out.residual[i] = sol.residual
+                out.internal.append(sol.internal)
+                N, C = balance.N, balance.C
+            if J_task is not None:  # a sign change of det J_ce between samples: a direct singularity
+                sign = float(np.sign(np.linalg.det(C)) * np.sign(np.linalg.det(J_task @ N)))
                 if sign * previous_sign < 0:
                     raise SingularConfiguration(
                         f"det J_ce changed sign after t = {trajectory.t[i - 1]:.9g} s: the trajectory "
@@ -304,7 +391,9 @@ def inverse_dynamics(
                     )
                 previous_sign = sign
         except (AllocationInfeasible, SingularConfiguration) as exc:
-            partial = out.result(mech, trajectory, i, rule.is_linear)
+            if len(out.internal) > i:
+                out.internal.pop()
+            partial = out.result(mech, trajectory, body, gravity, i, linear)
             raise InverseDynamicsFailed(
                 f"inverse dynamics stopped at sample {i} (t = {trajectory.t[i]:.6g} s): {exc}",
                 partial,
@@ -312,39 +401,31 @@ def inverse_dynamics(
                 float(trajectory.t[i]),
                 exc,
             ) from exc
-        F = rule.linear_map(balance)  # (n_act, nv) weighted minimum norm
-        nle = pin.nonLinearEffects(model, data, q, v)
-        g_full = pin.computeGeneralizedGravity(model, data, q)
-        parts = {
-            "inertia": tau_full - nle,
-            "velocity": nle - g_full,
-            "gravity": g_full if gravity else np.zeros(mech.nv),
-            "external": balance.tau - tau,
-        }
-        for name, part in parts.items():
-            out.terms[name][i] = F @ part
-        for name, m, d in zip(body.names, body.models, body.datas, strict=True):
-            tau_b = pin.rnea(m, d, q, v, a)
-            if not gravity:
-                tau_b = tau_b - pin.computeGeneralizedGravity(m, d, q)
-            out.bodies[name][i] = F @ tau_b
-        out.bodies["rotor"][i] = F @ (body.rotor * a)
-        out.bodies["screw"][i] = F @ (body.screw * a)
-        out.bodies["external"][i] = out.terms["external"][i]
-        out.f_c[i], out.lam[i], out.residual[i] = sol.f_c, sol.lam, sol.residual
-        out.internal.append(sol.internal)
-    return out.result(mech, trajectory, n, rule.is_linear)
+        parts = np.column_stack([tau_full - nle, nle - g_full, g_full if gravity else np.zeros(nv), ext])
+        shares = F @ parts  # (n_act, 4), in the order of TERMS
+        for k, name in enumerate(TERMS):
+            out.terms[name][i] = shares[:, k]
+        out.fixed["rotor"][i] = F @ (body.rotor * a)
+        out.fixed["screw"][i] = F @ (body.screw * a)
+        out.fixed["external"][i] = shares[:, 3]
+        out.F[i] = F
+        out.f_c[i], out.lam[i] = f_c, lam
+    return out.result(mech, trajectory, body, gravity, n, linear)
 
 
-def _direct_sign(mech: Mechanism, N: np.ndarray, C: np.ndarray) -> float:
-    r"""Sign of :math:`\det J_{ce} = \det C / \det T`, independent of the basis :math:`N`.
-
-    ``mech.data`` must hold the joint Jacobians of the configuration.
-    """
-    task = mech.task_compiled
-    assert task is not None
-    T = task.jacobian_from_data(mech.model, mech.data) @ N
-    return float(np.sign(np.linalg.det(C)) * np.sign(np.linalg.det(T)))
+def _body_shares(
+    mech: Mechanism, traj: JointTrajectory, body: _BodyGroups, gravity: bool, F: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Share of ``f_c`` of each body group at the first ``len(F)`` samples, one RNEA pass each."""
+    model = mech.model
+    data = model.createData()
+    out = np.zeros((len(body.names), F.shape[0], F.shape[1]))
+    for i in range(F.shape[0]):
+        pin.computeJointJacobians(model, data, traj.q[i])
+        pin.rnea(model, data, traj.q[i], traj.v[i], traj.a[i])
+        per_group = body.members @ _body_forces(model, data, gravity, body.support)  # (n_groups, nv)
+        out[:, i] = per_group @ F[i].T
+    return dict(zip(body.names, out, strict=True))
 
 
 def _load_function(mech: Mechanism, wrench: Any, frame: str | None) -> Callable[[float], Load | None]:
@@ -360,22 +441,36 @@ def _load_function(mech: Mechanism, wrench: Any, frame: str | None) -> Callable[
 class _Buffers:
     """Per-sample outputs, filled in place."""
 
-    def __init__(self, n: int, n_act: int, m: int, groups: tuple[str, ...], absent: tuple[str, ...]) -> None:
+    def __init__(self, n: int, n_act: int, nv: int, m: int, absent: tuple[str, ...]) -> None:
         self.absent = absent  # shares the mechanism does not have (no rotor, no screw, no load)
         self.f_c = np.zeros((n, n_act))
         self.lam = np.zeros((n, m))
         self.residual = np.zeros(n)
         self.internal: list[np.ndarray] = []
         self.terms = {name: np.zeros((n, n_act)) for name in TERMS}
-        self.bodies = {name: np.zeros((n, n_act)) for name in (*groups, "rotor", "screw", "external")}
+        self.fixed = {name: np.zeros((n, n_act)) for name in ("rotor", "screw", "external")}
+        self.F = np.zeros((n, n_act, nv))  # weighted minimum-norm map of each sample
 
-    def result(self, mech: Mechanism, traj: JointTrajectory, count: int, linear: bool) -> InverseDynamics:
-        """The first ``count`` samples as an :class:`InverseDynamics`."""
+    def result(
+        self,
+        mech: Mechanism,
+        traj: JointTrajectory,
+        body: _BodyGroups,
+        gravity: bool,
+        count: int,
+        linear: bool,
+    ) -> InverseDynamics:
+        """The first ``count`` samples as an :class:`InverseDynamics` (body split on first access)."""
         f_c = self.f_c[:count]
         terms = {k: v[:count] for k, v in self.terms.items()}
         if not linear:
             terms["allocation"] = f_c - sum(terms.values(), np.zeros_like(f_c))
-        bodies = {k: v[:count] for k, v in self.bodies.items() if k not in self.absent}
+        fixed = {k: v[:count] for k, v in self.fixed.items() if k not in self.absent}
+        F = self.F[:count]
+
+        def bodies() -> dict[str, np.ndarray]:
+            return {**_body_shares(mech, traj, body, gravity, F), **fixed}
+
         k = self.internal[0].shape[0] if self.internal else 0
         internal = np.array(self.internal).reshape(count, k)
         leads = np.array([a.lead if a.lead else np.nan for a in mech.actuators], dtype=float)
@@ -387,7 +482,7 @@ class _Buffers:
             self.residual[:count],
             traj.cd[:count].copy(),
         ]
-        for arr in [*arrays, *terms.values(), *bodies.values(), leads]:
+        for arr in [*arrays, *terms.values(), leads]:
             arr.setflags(write=False)
         return InverseDynamics(
             tuple(a.joint for a in mech.actuators),
@@ -398,7 +493,7 @@ class _Buffers:
             arrays[4],
             arrays[5],
             terms,
-            bodies,
+            _LazyShares(bodies),
             linear,
             leads,
         )

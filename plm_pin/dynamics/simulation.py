@@ -7,38 +7,55 @@ The tree state :math:`(q, v)` is integrated under
 
 (:mod:`plm_pin.dynamics._constrained`; gravity and armature from the model). The index-1
 form alone lets the closure residual :math:`\phi(q)` drift (only :math:`\ddot\phi = 0` is
-imposed), so after every step the state is **projected** back onto the closure manifold:
+imposed), so the state is **projected** back onto the closure manifold when its closure
+distance (the Euclidean gap of each closure, :class:`~plm_pin.dynamics._constrained.ClosureDistance`)
+passes ``closure_tol``:
 
-- :math:`q` by Gauss-Newton on the closure residual whenever its largest entry exceeds
-  ``closure_tol``: one minimum-norm step :math:`-J_\phi^+ \phi` (from an integrator's small
-  drift it lands at round-off), damped iterations
+- :math:`q` by one minimum-norm Gauss-Newton step :math:`-J_\phi^+ \phi` (from an
+  integrator's small drift it lands at round-off), damped iterations
   (:func:`plm_pin.kinematics.assembly.assemble`) if that is not enough;
 - :math:`v` onto :math:`J_\phi v = 0` by the mass-weighted projection
   :math:`\min \|v^+ - v\|_M`, which removes only the closure-violating part of the motion
-  and never adds kinetic energy, whenever :math:`q` moved or :math:`|J_\phi v|` would open
-  the loops by ``closure_tol`` within one step.
+  and never adds kinetic energy.
 
 Projection rather than integration in independent coordinates: it works unchanged for any
-mechanism (redundant closure rows, spatial chains, free-flyer joints), needs no choice or
-switching of independent coordinates near singularities of a partition, and with a
-:math:`p`-th order integrator each projection corrects :math:`O(h^{p+1})`, so it does not
-lower the order; the price is one residual and Jacobian evaluation per step, and an SVD
-and a linear solve when a projection is due. The residual the integrator reaches *before*
-each projection is returned as :attr:`SimulationResult.closure_drift`, so the correction is
-never hidden.
+mechanism (redundant closure rows, spatial chains, free-flyer joints) and needs no choice or
+switching of independent coordinates near singularities of a partition. The residual the
+integrator reaches *before* a projection is returned as :attr:`SimulationResult.closure_drift`,
+so the correction is never hidden.
 
 Integrators:
 
+- ``"adaptive"`` (the default): SciPy's DOP853 (8th order, error control by ``rtol`` /
+  ``atol``) in **one integration over the whole run**; the samples are read from its dense
+  output at the output times and projected there, and the integrator's own state is projected
+  (and the integration restarted from it) only when its drift passes ``closure_tol``.
 - ``"fixed"``: classical Runge-Kutta 4 with step ``step`` (default 1 ms, or ``dt`` when
-  smaller), fitted to divide every output interval; order 4, so halving the step divides
-  the position and energy errors by about 16.
-- ``"adaptive"``: SciPy's DOP853 (8th order, error control by ``rtol`` / ``atol``) over each
-  output interval, the state projected between intervals.
+  smaller), fitted to divide every output interval, the state projected after every step;
+  order 4. A step that opens the loops by more than :data:`STEP_DRIFT_TOL` before its projection
+  is too large for the dynamics there and is redone as two half steps (down to
+  :data:`MAX_HALVINGS` halvings, then the run stops).
 
-Both integrate in the chart :math:`q = q_k \oplus \delta` (``pin.integrate``) of the step's
-start, :math:`\dot\delta = (\partial (q_k \oplus \delta) / \partial \delta)^{-1} v`, which is
-:math:`v` for joints whose configuration is a vector space and keeps the order for
+Both integrate in the chart :math:`q = q_c \oplus \delta` (``pin.integrate``) of a reference
+configuration, :math:`\dot\delta = (\partial (q_c \oplus \delta) / \partial \delta)^{-1} v`,
+which is :math:`v` for joints whose configuration is a vector space and keeps the order for
 free-flyer, spherical and unbounded revolute joints.
+
+**Energy guard.** A passive run (no actuator forces, no wrench) conserves the energy; when it
+strays from its initial value by more than :data:`ENERGY_RTOL` of the largest kinetic energy
+reached, the run stops with :class:`~plm_pin.exceptions.SimulationFailed` naming the time, the
+energy change and the smallest closure singular value there, keeping the samples before. The
+case that motivated it: the passive 3D4M (``harada2011_3d4m``) under gravity swings until legs
+1 and 2 reach the same slider position with both rods vertical (t = 12.54 s from ``q_ref``).
+There the sheet of the closure manifold the motion is on (mirrored legs) crosses the sheet where
+the two legs coincide; the closure Jacobian loses a rank (a constraint singularity), so the
+index-1 accelerations of the integrator's slightly off-manifold stages are amplified by the
+inverse of a vanishing singular value; a 1 ms RK4 step took the energy from 0.144 J to 1.2 J
+before its projection (which then landed on the other sheet, 6 mm away, at 0.83 J) while the
+residual after it stayed at 1e-12.
+
+Accelerations, closure forces, energy and task pose of the samples are computed once after the
+run (the energy during it only for the guard of a passive run).
 """
 
 from __future__ import annotations
@@ -50,10 +67,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
-from scipy.integrate import solve_ivp
+from scipy.integrate import DOP853
 
-from .._checks import as_vector, optional_name, real_numbers, sample_count
-from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed
+from .._checks import as_vector, optional_name, positive, real_numbers, sample_count
+from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
 from ..kinematics import closures as _closures
 from ..statics.balance import load_on_frame
 from ._constrained import ClosedChainDynamics
@@ -68,7 +85,25 @@ DEFAULT_STEP = 1e-3
 """Default step of the fixed-step integrator [s]."""
 
 CLOSURE_TOL = 1e-12
-"""Default largest closure residual kept during a simulation [m, rad]."""
+"""Default largest closure distance kept during a simulation (Euclidean gap of each closure) [m, rad]."""
+
+STEP_DRIFT_TOL = 1e-6
+"""Largest closure distance one fixed step may open before its projection [m, rad]; larger: halve it."""
+
+MAX_HALVINGS = 10
+"""Halvings of a fixed step allowed before the run stops."""
+
+ENERGY_RTOL = 1e-3
+"""Energy change allowed in a passive run, relative to the largest kinetic energy reached."""
+
+MIN_STEP = 1e-6
+"""Adaptive step [s] below which DOP853 is taken to be stuck (at a constraint singularity): bridged."""
+
+BRIDGE_STEPS = 10
+"""Fixed RK4 steps (of DEFAULT_STEP at most) past a place DOP853 cannot step, from the sample before it."""
+
+_CHART_SPAN = 0.5
+"""Largest chart coordinate [m, rad] of the adaptive run before it re-centres on a non-vector-space joint."""
 
 V0_TOL = 1e-9
 r"""Largest :math:`|J_\phi v_0|` accepted, relative to :math:`\max(1, |v_0|)` [m/s, rad/s]."""
@@ -88,9 +123,10 @@ class SimulationResult:
         a: joint accelerations [m/s^2, rad/s^2], shape (n, nv).
         lam: closure forces [N, N m] in the rows of the closure residual (force on the second
             frame of each closure, world-aligned for point rows), shape (n, m).
-        closure_residual: largest absolute closure residual of each sample [m, rad], shape (n,).
-        closure_drift: largest residual the integrator reached before a projection since the
-            previous sample [m, rad], shape (n,).
+        closure_residual: closure distance of each sample (largest Euclidean gap of a closure's
+            point rows, or norm of its rotation rows) [m, rad], shape (n,).
+        closure_drift: largest closure distance the integrator reached before a projection since
+            the previous sample [m, rad], shape (n,).
         energy: kinetic (armature included) plus gravitational potential energy [J], shape (n,).
         x: task coordinates of the end-effector frame [m, rad] (angles wrapped to
             :math:`(-\pi, \pi]`), shape (n, n_task); None without a task.
@@ -133,7 +169,7 @@ class SimulationResult:
         return float(np.max(np.abs(self.energy - self.energy[0]))) if len(self) else 0.0
 
     def max_closure_residual(self) -> float:
-        """Largest closure residual over the samples [m, rad]."""
+        """Largest closure distance over the samples [m, rad]."""
         return float(np.max(self.closure_residual)) if len(self) else 0.0
 
     def to_dict(self) -> dict[str, object]:
@@ -158,11 +194,12 @@ class _NonFinite(Exception):
     """The state or the forces became non-finite (internal signal)."""
 
 
-def _positive(value: float, name: str) -> float:
-    x = float(value)
-    if not math.isfinite(x) or x <= 0.0:
-        raise InvalidInput(f"{name} must be a positive finite number, got {value!r}")
-    return x
+class _Stop(Exception):
+    """The run cannot go on accurately: a step too large, or a passive run's energy strayed (internal)."""
+
+
+class _StepFailed(_Stop):
+    """DOP853 could not take a step (internal signal)."""
 
 
 class _Run:
@@ -188,16 +225,18 @@ class _Run:
         self.euclidean = self.model.nq == self.model.nv
         self.actuated = mech.actuated_v_indices
         self.steps = 0
+        self.done = 0  # samples recorded
+        self.t_now = 0.0  # start of the step under way [s]
         self.tau_constant = None if callable(forces) else self._joint_forces(forces)
-        n, task = times.size, mech.task_compiled
+        # passive: nothing does work, so the energy is conserved and guarded
+        self.passive = self.tau_constant is not None and not self.tau_constant.any() and dyn.load is None
+        self.peak_kinetic = 0.0
+        n = times.size
         self.q = np.empty((n, mech.nq))
         self.v = np.empty((n, mech.nv))
-        self.a = np.empty((n, mech.nv))
-        self.lam = np.empty((n, mech.n_closure_rows))
         self.residual = np.empty(n)
         self.drift = np.empty(n)
         self.energy = np.empty(n)
-        self.x = None if task is None else np.empty((n, task.size))
 
     # ------------------------------------------------------------- forces
     def _joint_forces(self, f: np.ndarray) -> np.ndarray:
@@ -248,40 +287,123 @@ class _Run:
         self.steps += 1
         return pin.integrate(model, q, delta), v + (h / 6.0) * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
 
-    def adaptive(
-        self, t0: float, t1: float, q: np.ndarray, v: np.ndarray, rtol: float, atol: float, max_step: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """DOP853 from ``t0`` to ``t1`` [s] in the chart at ``q``."""
-        nv, model = self.mech.nv, self.model
+    def fixed_step(
+        self, t: float, q: np.ndarray, v: np.ndarray, h: float, halvings: int = 0
+    ) -> tuple[np.ndarray, np.ndarray, float]:
+        """RK4 over ``h`` [s] then projection; halved while the step opens the loops past STEP_DRIFT_TOL.
 
-        def rhs(t: float, y: np.ndarray) -> np.ndarray:
-            delta, w = y[:nv], y[nv:]
-            return np.concatenate(
-                [self._delta_rate(q, delta, w), self._accel(t, pin.integrate(model, q, delta), w)]
+        Returns the projected state and the largest closure distance before a projection.
+        """
+        self.t_now = t
+        q1, v1 = self.rk4(t, q, v, h)
+        if np.all(np.isfinite(q1)) and np.all(np.isfinite(v1)):
+            opened = self.distance(q1)
+            if opened <= STEP_DRIFT_TOL:
+                return self.project(q1, v1, h)
+        else:
+            opened = math.inf
+        if halvings >= MAX_HALVINGS:
+            raise _Stop(
+                f"a step of {h:.3g} s ({MAX_HALVINGS} halvings of the one asked) still opens the loops by "
+                f"{opened:.3g} before its projection (more than {STEP_DRIFT_TOL:g}): the dynamics change "
+                f"faster than RK4 resolves there{self._conditioning(q)}"
             )
+        qm, vm, d1 = self.fixed_step(t, q, v, 0.5 * h, halvings + 1)
+        q2, v2, d2 = self.fixed_step(t + 0.5 * h, qm, vm, 0.5 * h, halvings + 1)
+        return q2, v2, max(d1, d2)
 
-        sol = solve_ivp(
-            rhs,
-            (t0, t1),
-            np.concatenate([np.zeros(nv), v]),
-            "DOP853",
-            rtol=rtol,
-            atol=atol,
-            max_step=max_step,
-        )
-        self.steps += len(sol.t) - 1
-        if sol.status < 0:
-            raise _NonFinite(f"the adaptive integrator failed: {sol.message}")
-        return pin.integrate(model, q, sol.y[:nv, -1]), sol.y[nv:, -1]
+    def adaptive(self, q: np.ndarray, v: np.ndarray, rtol: float, atol: float, max_step: float) -> None:
+        """DOP853 over the whole run; samples from its dense output, projected; the state when it drifts.
+
+        Where DOP853 cannot step on (its step shrinks to nothing, or a closure row vanishes at a
+        stage: a constraint singularity crossed), fixed RK4 steps carry the state from the sample
+        before to :data:`BRIDGE_STEPS` steps past the place, then DOP853 resumes; a second failure
+        at the same place stops the run.
+        """
+        nv, model, times = self.mech.nv, self.model, self.times
+        t, k, first_step, drift = 0.0, 1, None, 0.0
+        bridged = -1.0  # end of the last bridge [s]
+        while k < times.size:
+            origin = q
+
+            def rhs(time: float, y: np.ndarray, origin: np.ndarray = origin) -> np.ndarray:
+                delta, w = y[:nv], y[nv:]
+                qs = delta if self.euclidean else pin.integrate(model, origin, delta)
+                return np.concatenate([self._delta_rate(origin, delta, w), self._accel(time, qs, w)])
+
+            y0 = np.concatenate([q if self.euclidean else np.zeros(nv), v])
+            solver = DOP853(
+                rhs, t, y0, float(times[-1]), rtol=rtol, atol=atol, max_step=max_step, first_step=first_step
+            )
+            first_step = None
+            try:
+                while k < times.size:
+                    self.t_now = solver.t
+                    message = solver.step()
+                    if solver.status == "failed":
+                        raise _StepFailed(f"the adaptive integrator failed: {message}")
+                    if solver.h_abs < MIN_STEP and solver.t < times[-1] - MIN_STEP:
+                        raise _StepFailed(
+                            f"the adaptive step fell to {solver.h_abs:.3g} s at t = {solver.t:.6g} s"
+                        )
+                    self.steps += 1
+                    y = solver.y
+                    if not np.all(np.isfinite(y)):
+                        raise _NonFinite("the state became non-finite")
+                    if times[k] <= solver.t:
+                        dense = solver.dense_output()
+                        while k < times.size and times[k] <= solver.t:
+                            yk = dense(float(times[k]))
+                            qk = yk[:nv] if self.euclidean else pin.integrate(model, origin, yk[:nv])
+                            qk, vk, before = self.project(qk, yk[nv:], solver.h_abs or max_step)
+                            self.record(k, qk, vk, max(drift, before))
+                            k, drift = k + 1, 0.0
+                    t = solver.t
+                    q = y[:nv] if self.euclidean else pin.integrate(model, origin, y[:nv])
+                    v = y[nv:]
+                    opened = self.distance(q)
+                    drift = max(drift, opened)
+                    rechart = not self.euclidean and float(np.max(np.abs(y[:nv]))) > _CHART_SPAN
+                    if solver.status == "finished" and k < times.size:
+                        raise _NonFinite(f"the integrator stopped at t = {solver.t:.6g} s, before the end")
+                    if k < times.size and (opened > self.closure_tol or rechart):
+                        q, v, _ = self.project(q.copy(), v.copy(), solver.h_abs)
+                        first_step = min(solver.h_abs, float(times[-1]) - t)
+                        break
+            except (_StepFailed, SingularConfiguration) as exc:
+                if t <= bridged:
+                    raise _Stop(f"{exc}{self._conditioning(q)}") from exc
+                # from the last sample: DOP853 may have crept up to the singular place itself
+                h = min(DEFAULT_STEP, max_step)
+                last = float(times[k - 1])
+                t, k, q, v, drift = self._bridge(
+                    last, k, self.q[k - 1], self.v[k - 1], t + BRIDGE_STEPS * h, h
+                )
+                bridged = t
+
+    def _bridge(
+        self, t: float, k: int, q: np.ndarray, v: np.ndarray, end: float, h: float
+    ) -> tuple[float, int, np.ndarray, np.ndarray, float]:
+        """Fixed steps of at most ``h`` [s] from ``t`` to ``end``, landing on the samples they pass."""
+        times, drift = self.times, 0.0
+        end = min(end, float(times[-1]))
+        while t < end and k < times.size:
+            t_next = min(t + h, float(times[k]))
+            q, v, before = self.fixed_step(t, q, v, t_next - t)
+            drift = max(drift, before)
+            t = t_next
+            if t >= times[k]:
+                self.record(k, q, v, drift)
+                k, drift = k + 1, 0.0
+        return t, k, q, v, drift
 
     # --------------------------------------------------------- projection
-    def residual_norm(self, q: np.ndarray) -> float:
-        """Largest absolute closure residual at ``q`` [m, rad]; leaves the placements in the data."""
-        phi = _closures.residual(self.model, self.data, self.mech.closures, q)
-        return float(np.max(np.abs(phi))) if phi.size else 0.0
+    def distance(self, q: np.ndarray) -> float:
+        """Closure distance at ``q`` [m, rad]; leaves the placements in the data."""
+        return self.dyn.distance(_closures.residual(self.model, self.data, self.mech.closures, q))
 
     def project(self, q: np.ndarray, v: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """Project the state after a step of ``h`` [s]; also return the residual before [m, rad].
+        """Project the state after a step of ``h`` [s]; also return the closure distance before [m, rad].
 
         The velocity is projected when the closure rate would open the loops by more than
         ``closure_tol`` within such a step (or when the configuration was projected).
@@ -290,33 +412,79 @@ class _Run:
             raise _NonFinite("the state became non-finite")
         return self.dyn.project(q, v, self.closure_tol, self.closure_tol / h)
 
+    def _conditioning(self, q: np.ndarray) -> str:
+        """A note on the closure Jacobian's smallest kept singular value at ``q`` (constraint singularity)."""
+        if not self.mech.closures:
+            return ""
+        s = np.linalg.svd(self.mech.closure_jacobian(q), compute_uv=False)
+        r = self.dyn.rank
+        return (
+            f"; the closure Jacobian's {r}-th singular value is {s[r - 1]:.3g} (largest {s[0]:.3g}): "
+            "near a constraint singularity, where branches of the closed loops meet, the accelerations "
+            "of slightly open states are amplified by its inverse"
+        )
+
     # ------------------------------------------------------------ samples
     def record(self, k: int, q: np.ndarray, v: np.ndarray, drift: float) -> None:
-        """Store sample ``k`` of the projected state."""
-        t = float(self.times[k])
-        a, lam = self.dyn.solve(q, v, self.tau(t, q, v))
-        if not (np.all(np.isfinite(a)) and np.all(np.isfinite(lam))):
-            raise _NonFinite("the accelerations or closure forces became non-finite")
-        self.q[k], self.v[k], self.a[k], self.lam[k] = q, v, a, lam
-        self.residual[k] = self.residual_norm(q)
-        if self.x is not None:
-            assert self.mech.task_compiled is not None
-            self.x[k] = self.mech.task_compiled.pose_from_data(self.data)
+        """Store sample ``k`` of the projected state; guard the energy of a passive run."""
+        self.q[k], self.v[k] = q, v
+        self.residual[k] = self.distance(q)
         self.drift[k] = drift
-        self.energy[k] = self.dyn.energy(q, v)
+        if self.passive:
+            self._guard_energy(k)
+        self.done = k + 1
 
-    def result(self, n: int) -> SimulationResult:
-        """The first ``n`` samples as a result."""
+    def _guard_energy(self, k: int) -> None:
+        """The energy of sample ``k``; stop when it strays from the initial energy past ENERGY_RTOL."""
+        q, v = self.q[k], self.v[k]
+        self.energy[k] = e = self.dyn.energy(q, v)
+        self.peak_kinetic = max(self.peak_kinetic, e - float(self.data.potential_energy))
+        allowed = ENERGY_RTOL * self.peak_kinetic + 1e-12 * max(1.0, abs(float(self.energy[0])))
+        if abs(e - self.energy[0]) > allowed:  # the sample that strayed is not kept
+            raise _Stop(
+                f"the passive energy changed from {self.energy[0]:.6g} J to {e:.6g} J by t = "
+                f"{self.times[k]:.6g} s (allowed {allowed:.3g} J, {ENERGY_RTOL:g} of the peak kinetic energy "
+                f"{self.peak_kinetic:.3g} J){self._conditioning(self.q[k - 1])}"
+            )
+
+    def result(self, n: int, partial: bool = False) -> SimulationResult:
+        """The first ``n`` samples as a result, with their accelerations, closure forces, energy and pose.
+
+        ``partial``: for a failed run, keep only the samples before the first one whose forces
+        cannot be computed (else that error propagates).
+        """
+        task, nv = self.mech.task_compiled, self.mech.nv
+        a = np.empty((n, nv))
+        lam = np.empty((n, self.mech.n_closure_rows))
+        x = None if task is None else np.empty((n, task.size))
+        for k in range(n):
+            q, v = self.q[k], self.v[k]
+            try:
+                a[k], lam[k] = self.dyn.solve(q, v, self.tau(float(self.times[k]), q, v))
+                if not (np.all(np.isfinite(a[k])) and np.all(np.isfinite(lam[k]))):
+                    raise _NonFinite("the accelerations or closure forces became non-finite")
+            except (_NonFinite, PlmError):
+                if not partial:
+                    raise
+                n, a, lam = k, a[:k], lam[:k]
+                x = None if x is None else x[:k]
+                break
+            if x is not None:
+                assert task is not None
+                pin.framesForwardKinematics(self.model, self.data, q)
+                x[k] = task.pose_from_data(self.data)
+            if not self.passive:
+                self.energy[k] = self.dyn.energy(q, v)
         return SimulationResult(
             t=self.times[:n].copy(),
             q=self.q[:n].copy(),
             v=self.v[:n].copy(),
-            a=self.a[:n].copy(),
-            lam=self.lam[:n].copy(),
+            a=a,
+            lam=lam,
             closure_residual=self.residual[:n].copy(),
             closure_drift=self.drift[:n].copy(),
             energy=self.energy[:n].copy(),
-            x=None if self.x is None else self.x[:n].copy(),
+            x=x,
             method=self.method,
             solver=self.dyn.solver,
             steps=self.steps,
@@ -362,7 +530,7 @@ def _check_start(
                 f"{bound:.3g}; "
                 "choose v0 = S @ xdot with S from plm_pin.kinematics.closed_chain_jacobians(mech, q0)"
             )
-        v = dyn.project(q, v, closure_tol)[1]
+        q, v, _ = dyn.project(q, v, closure_tol)
     return q, v
 
 
@@ -376,9 +544,9 @@ def simulate(
     actuator_forces: Any = None,
     wrench: Any = None,
     wrench_frame: str | None = None,
-    method: str = "fixed",
+    method: str = "adaptive",
     step: float | None = None,
-    rtol: float = 1e-9,
+    rtol: float = 1e-10,
     atol: float = 1e-12,
     solver: str = "auto",
     closure_tol: float = CLOSURE_TOL,
@@ -406,15 +574,18 @@ def simulate(
             [N, N m] world-aligned about the frame origin, or on the task frame one value
             per task coordinate (``fx fy mz`` for ``x y rz``).
         wrench_frame: frame the wrench acts on; default the end-effector (task) frame.
-        method: ``"fixed"`` (Runge-Kutta 4) or ``"adaptive"`` (DOP853).
+        method: ``"adaptive"`` (DOP853 over the whole run, samples from its dense output; the
+            default) or ``"fixed"`` (Runge-Kutta 4, projected after every step).
         step: ``fixed``: integration step [s], default ``min(dt, 1 ms)``, shortened to divide each
-            output interval; ``adaptive``: the largest step allowed (default unbounded).
+            output interval and halved where it opens the loops by more than
+            :data:`STEP_DRIFT_TOL`; ``adaptive``: the largest step allowed (default unbounded).
         rtol: relative tolerance of the adaptive integrator.
         atol: absolute tolerance of the adaptive integrator [m, rad, m/s, rad/s].
         solver: ``"auto"``, ``"kkt"`` (ours, any closure) or ``"pinocchio"``
             (``pin.constraintDynamics``, point and weld closures); ``auto`` picks ``pinocchio``
             when it applies.
-        closure_tol: largest closure residual kept [m, rad]; ``q0`` must satisfy it.
+        closure_tol: largest closure distance kept (Euclidean gap of each closure's point rows,
+            norm of its rotation rows) [m, rad]; ``q0`` must satisfy it.
 
     Returns:
         The samples at the output times.
@@ -424,20 +595,22 @@ def simulate(
             (the message lists the choices), or ``v0`` violating the closures.
         FrameNotFound: unknown ``wrench_frame``.
         ClosureNotSatisfied: ``q0`` is not assembled to ``closure_tol``.
-        SimulationFailed: the state or the forces became non-finite, or the loops could not
-            be kept closed (for instance at a constraint singularity); the error carries
-            the samples computed before.
+        SimulationFailed: the state or the forces became non-finite, the loops could not
+            be kept closed (for instance at a constraint singularity), a fixed step stayed too
+            large after :data:`MAX_HALVINGS` halvings, or a passive run's energy strayed past
+            :data:`ENERGY_RTOL`; the message names the time and the reason, and the error
+            carries the samples computed before.
     """
     sample_count(duration, dt)
     real_numbers(wrench, "wrench"), optional_name(wrench_frame, "wrench_frame")
     if method not in METHODS:
         raise InvalidInput(f"method {method!r} is not one of {list(METHODS)}")
-    duration = _positive(duration, "duration")
-    dt = _positive(dt, "dt")
-    closure_tol = _positive(closure_tol, "closure_tol")
-    rtol, atol = _positive(rtol, "rtol"), _positive(atol, "atol")
+    duration = positive(duration, "duration")
+    dt = positive(dt, "dt")
+    closure_tol = positive(closure_tol, "closure_tol")
+    rtol, atol = positive(rtol, "rtol"), positive(atol, "atol")
     default_step = min(dt, DEFAULT_STEP) if method == "fixed" else math.inf
-    h_max = default_step if step is None else _positive(step, "step")
+    h_max = default_step if step is None else positive(step, "step")
     if wrench is None and wrench_frame is not None:
         raise InvalidInput(f"wrench_frame {wrench_frame!r} given without a wrench")
     load = None if wrench is None else load_on_frame(mech, wrench, wrench_frame)
@@ -446,34 +619,29 @@ def simulate(
     q, v = _check_start(mech, dyn, q0, v0, closure_tol)
     times = _output_times(duration, dt)
     run = _Run(mech, dyn, forces, closure_tol, times, method)
-    k, t_now = 0, 0.0
     try:
-        run.record(0, q, v, run.residual_norm(q))
-        for k in range(1, times.size):
-            t0, t1 = float(times[k - 1]), float(times[k])
-            if method == "fixed":
+        run.record(0, q, v, run.distance(q))
+        if method == "adaptive":
+            run.adaptive(q, v, rtol, atol, h_max)
+        else:
+            for k in range(1, times.size):
+                t0, t1 = float(times[k - 1]), float(times[k])
                 n_sub = max(1, math.ceil((t1 - t0) / h_max - 1e-9))
                 h = (t1 - t0) / n_sub
                 drift = 0.0
                 for i in range(n_sub):
-                    t_now = t0 + i * h
-                    q, v = run.rk4(t_now, q, v, h)
-                    q, v, before = run.project(q, v, h)
+                    q, v, before = run.fixed_step(t0 + i * h, q, v, h)
                     drift = max(drift, before)
-            else:
-                t_now = t0
-                q, v = run.adaptive(t0, t1, q, v, rtol, atol, h_max)
-                q, v, drift = run.project(q, v, t1 - t0)
-            t_now = t1
-            run.record(k, q, v, drift)
-    except (_NonFinite, PlmError) as exc:
+                run.record(k, q, v, drift)
+        return run.result(times.size)
+    except (_NonFinite, _Stop, PlmError) as exc:
         if isinstance(exc, InvalidInput):
             raise
         raise SimulationFailed(
-            f"{mech.name}: simulation stopped in the step from t = {t_now:.6g} s ({method}, {dyn.solver}): "
-            f"{exc}; the {k} sample(s) before are in .partial",
-            run.result(k),
-            t_now,
+            f"{mech.name}: simulation stopped in the step from t = {run.t_now:.6g} s "
+            f"({method}, {dyn.solver}): "
+            f"{exc}; the {run.done} sample(s) before are in .partial",
+            run.result(run.done, partial=True),
+            run.t_now,
             exc if isinstance(exc, PlmError) else None,
         ) from exc
-    return run.result(times.size)

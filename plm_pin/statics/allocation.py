@@ -125,6 +125,9 @@ def allocate(
     if objective not in OBJECTIVES:
         raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
     k = G.shape[1]
+    if internal is None and objective == "norm" and not ineq.names:  # nothing to check: the KKT system
+        y0 = _unconstrained(f_p, G, weights) if k else np.zeros(0)
+        return Allocation(f_p + G @ y0, y0, ())
     names = tuple(actuator_names) or tuple(f"f_c[{i}]" for i in range(f_p.shape[0]))
     scale = max(float(np.max(np.abs(f_p), initial=0.0)), float(np.max(np.abs(ineq.offset), initial=0.0)), 1.0)
     tol = FEASIBILITY_RTOL * scale

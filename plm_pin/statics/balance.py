@@ -27,10 +27,11 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import lapack as _lapack
 
 from .._checks import as_vector, check_assembled, check_finite_model, check_finite_result, check_tolerance
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
@@ -52,6 +53,9 @@ EQUILIBRIUM_RTOL = 1e-9
 """Equilibrium residual allowed, relative to the largest generalized force in the balance."""
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+_QR_MIN_SIZE = 200
+"""Closure Jacobians with fewer (nonzero rows x velocities) entries are factored by SVD alone."""
 
 
 @dataclass(frozen=True)
@@ -256,6 +260,91 @@ def generalized_balance(
     return dataclasses.replace(balance, v=v, a=a)
 
 
+def closure_factors(
+    J_phi: np.ndarray, singular_rtol: float = SINGULAR_RTOL
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    r"""Orthonormal feasible motions :math:`N` (:math:`J_\phi N = 0`) and the minimum-norm closure-force map.
+
+    Feasible motions come from the local rank of :math:`J_\phi`: at a constraint singularity the
+    motion the closures no longer forbid joins :math:`N`, so the actuators must hold it too (or
+    the load is refused). Rows that are exactly zero (the out-of-plane rows of planar point
+    closures) are dropped; when the rest is clearly of full rank (a triangular condition
+    estimate above ``1e3 * singular_rtol``) one QR factorisation gives both maps, else the SVD
+    decides the rank with ``singular_rtol``. Below :data:`_QR_MIN_SIZE` entries the SVD is the
+    cheaper of the two (measured: 14 against 28 us on the 3D4M's 6 x 9 rows, 57 against 45 us
+    on the 8-PSS's 24 x 30), so it is used directly.
+
+    Returns:
+        ``N``, shape (nv, nullity); ``lambda_map``, shape (m, nv): the minimum-norm
+        :math:`\lambda` with :math:`J_\phi^T \lambda = y` for :math:`y` in the range of
+        :math:`J_\phi^T`; and whether ``N`` is canonical (the SVD's right singular vectors)
+        rather than an arbitrary QR basis.
+    """
+    m, nv = J_phi.shape
+    lambda_map = np.zeros((m, nv))
+    rows = np.flatnonzero(np.any(J_phi != 0.0, axis=1))
+    if rows.size == 0:
+        return np.eye(nv), lambda_map, True
+    if _QR_MIN_SIZE <= rows.size * nv and rows.size <= nv:
+        Q, R = np.linalg.qr(J_phi[rows].T, mode="complete")  # (nv, nv), (nv, r)
+        R1 = R[: rows.size]
+        rcond = _lapack.dtrcon(R1, norm="1")[0] if rows.size > 1 else 1.0
+        if np.all(np.diag(R1) != 0.0) and rcond > 1e3 * singular_rtol:
+            lambda_map[rows] = np.linalg.solve(R1, Q[:, : rows.size].T)
+            return Q[:, rows.size :], lambda_map, False
+    U, s, Vt = np.linalg.svd(J_phi)
+    rank = int(np.count_nonzero(s > singular_rtol * s[0]))
+    return Vt[rank:].T, (U[:, :rank] / s[:rank]) @ Vt[:rank], True
+
+
+class BalanceFactors(NamedTuple):
+    r"""The factorisation of one balance, reused for every generalized force at that configuration.
+
+    Attributes:
+        N: orthonormal feasible motions, shape (nv, nullity).
+        lambda_map: minimum-norm cut-joint forces per generalized force, shape (m, nv).
+        C: :math:`B^T N`, shape (n_act, nullity).
+        P: minimum-norm actuator forces per generalized force, shape (n_act, nv).
+        G: orthonormal internal-force basis, shape (n_act, k).
+    """
+
+    N: np.ndarray
+    lambda_map: np.ndarray
+    C: np.ndarray
+    P: np.ndarray
+    G: np.ndarray
+
+
+def balance_factors(
+    mech: Mechanism, J_phi: np.ndarray, act_v: np.ndarray, tau: np.ndarray, singular_rtol: float
+) -> BalanceFactors:
+    """Factor the balance at a configuration and check that ``tau`` can be resisted there.
+
+    Raises:
+        SingularConfiguration: as :func:`static_balance`.
+    """
+    N, lambda_map, canonical = closure_factors(J_phi, singular_rtol)
+    C = N[act_v]  # (n_act, nullity)
+    b = N.T @ tau  # (nullity,)
+    U, s, Vt = np.linalg.svd(C)  # C = U[:, :k] diag(s) Vt
+    r = int(np.count_nonzero(s > singular_rtol * (s[0] if s.size else 1.0)))
+    unresisted = Vt[r:] @ b  # load on feasible motions the actuators do not hold
+    if np.max(np.abs(unresisted), initial=0.0) > EQUILIBRIUM_RTOL * max(np.max(np.abs(tau)), 1e-300):
+        kind = "constraint" if N.shape[1] > mech.mobility else "direct"
+        s_phi = np.linalg.svd(J_phi, compute_uv=False)
+        raise SingularConfiguration(
+            f"{mech.name}: {kind} singularity, the actuators cannot resist the load: "
+            f"{N.shape[1] - r} feasible motion(s) not held (actuator singular values {s.tolist()}, "
+            f"closure singular values {s_phi.tolist()}); the load's component along them is "
+            f"{unresisted.tolist()} [N, N m]"
+        )
+    if not canonical:  # a QR basis is arbitrary: turn it along C's right singular vectors
+        N, C = N @ Vt.T, C @ Vt.T
+        Vt = np.eye(Vt.shape[0])
+    P = (U[:, :r] / s[:r]) @ (Vt[:r] @ N.T)  # (n_act, nv)
+    return BalanceFactors(N, lambda_map, C, P, U[:, r:].copy())
+
+
 def _balance(
     mech: Mechanism,
     q: np.ndarray,
@@ -266,32 +355,8 @@ def _balance(
     act_v: np.ndarray,
     singular_rtol: float,
 ) -> StaticBalance:
-    nv = J_phi.shape[1]
-    # Feasible motions from the local rank of J_phi: at a constraint singularity the motion the
-    # closures no longer forbid joins N, so the actuators must hold it too (or the load is refused).
-    if J_phi.shape[0]:
-        U_phi, s_phi, Vt_phi = np.linalg.svd(J_phi)
-        rank_phi = int(np.count_nonzero(s_phi > singular_rtol * s_phi[0]))
-    else:
-        U_phi, s_phi, Vt_phi, rank_phi = np.zeros((0, 0)), np.zeros(0), np.eye(nv), 0
-    N = Vt_phi[rank_phi:].T  # (nv, nullity)
-    lambda_map = (U_phi[:, :rank_phi] / s_phi[:rank_phi]) @ Vt_phi[:rank_phi]  # (m, nv)
-    C = N[act_v]  # (n_act, nullity)
-    b = N.T @ tau  # (nullity,)
-    U, s, Vt = np.linalg.svd(C)  # C = U[:, :k] diag(s) Vt
-    r = int(np.count_nonzero(s > singular_rtol * (s[0] if s.size else 1.0)))
-    unresisted = Vt[r:] @ b  # load on feasible motions the actuators do not hold
-    if np.max(np.abs(unresisted), initial=0.0) > EQUILIBRIUM_RTOL * max(np.max(np.abs(tau)), 1e-300):
-        kind = "constraint" if N.shape[1] > mech.mobility else "direct"
-        raise SingularConfiguration(
-            f"{mech.name}: {kind} singularity, the actuators cannot resist the load: "
-            f"{N.shape[1] - r} feasible motion(s) not held (actuator singular values {s.tolist()}, "
-            f"closure singular values {s_phi.tolist()}); the load's component along them is "
-            f"{unresisted.tolist()} [N, N m]"
-        )
-    P = (U[:, :r] / s[:r]) @ Vt[:r] @ N.T  # (n_act, nv)
+    N, lambda_map, C, P, G = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
     f_p = P @ tau
-    G = U[:, r:].copy()
     for a in (f_p, G, q, tau, J_phi, N, C, lambda_map, P):
         a.setflags(write=False)
     return StaticBalance(q, tau, load, gravity, J_phi, N, C, f_p, G, act_v, lambda_map, P)

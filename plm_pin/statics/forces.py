@@ -226,11 +226,16 @@ class AllocationRule:
 
         :math:`F = (I - G (G^T W G)^{-1} G^T W) P`: the weighted minimum norm of the balance.
         """
-        G, W = balance.internal_basis, self.weights
-        P = balance.force_map
+        return self.weighted_map(balance.force_map, balance.internal_basis)
+
+    def weighted_map(self, P: np.ndarray, G: np.ndarray) -> np.ndarray:
+        """:meth:`linear_map` from the minimum-norm map ``P`` (n_act, nv) and the internal basis ``G``."""
         if G.shape[1] == 0:
             return P
-        return P - G @ np.linalg.solve(G.T @ W @ G, G.T @ W @ P)
+        WG = self.weights @ G
+        if G.shape[1] == 1:  # one internal force (3D4M): a scalar
+            return P - G @ ((WG.T @ P) / float(G[:, 0] @ WG[:, 0]))
+        return P - G @ np.linalg.solve(G.T @ WG, WG.T @ P)
 
 
 def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule) -> StaticForces:

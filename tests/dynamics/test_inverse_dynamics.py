@@ -231,3 +231,43 @@ def test_crossing_a_direct_singularity_stops_at_the_first_sample_past_it():
     with pytest.raises(InverseDynamicsFailed, match="direct \\(type 2\\) singularity") as info:
         inverse_dynamics(mech, traj)
     assert info.value.index == first_past and info.value.partial.n_samples == first_past
+
+
+@pytest.mark.parametrize("gravity", [True, False])
+def test_body_shares_match_rnea_on_a_model_holding_that_body_alone(gravity):
+    """A body's share = min-norm forces of RNEA on a model copy whose only inertia is that body's."""
+    from plm_pin.statics import AllocationRule, generalized_balance, solve_balance
+
+    mech = preset("harada2011_3d4m")
+    t = np.linspace(0.0, 1.0, 6)
+    traj = task_trajectory(mech, _harada_profile, t)
+    idr = inverse_dynamics(mech, traj, gravity=gravity)
+    rule = AllocationRule.checked(mech)
+    for j, name in [(2, mech.body_names[1]), (3, mech.body_names[2])]:
+        alone = pin.Model(mech.model)
+        for k in range(1, alone.njoints):
+            if k != j:
+                alone.inertias[k] = pin.Inertia.Zero()
+        alone.armature = np.zeros(alone.nv)
+        data = alone.createData()
+        for i in (1, 4):
+            q, v, a = traj.q[i], traj.v[i], traj.a[i]
+            tau = pin.rnea(alone, data, q, v, a)
+            if not gravity:
+                tau = tau - pin.computeGeneralizedGravity(alone, data, q)
+            expected = solve_balance(mech, generalized_balance(mech, q, tau), rule).f_c
+            assert np.abs(expected).max() > 1e-4  # the body does load the actuators
+            np.testing.assert_allclose(idr.bodies[name][i], expected, atol=1e-10 * np.abs(expected).max())
+
+
+def test_result_pickles_with_its_body_split():
+    """An InverseDynamics pickles; the lazily computed body split travels as a plain dictionary."""
+    import pickle
+
+    mech = preset("harada2011_3d4m")
+    traj = task_trajectory(mech, _harada_profile, np.linspace(0.0, 0.5, 6))
+    idr = inverse_dynamics(mech, traj)
+    back = pickle.loads(pickle.dumps(idr))
+    assert set(back.bodies) == set(idr.bodies)
+    for name in idr.bodies:
+        np.testing.assert_array_equal(back.bodies[name], idr.bodies[name])

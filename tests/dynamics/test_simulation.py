@@ -164,9 +164,9 @@ def split_coupler_fourbar(tmp_path) -> plm_pin.Mechanism:
 
 
 def test_fourbar_follows_the_one_coordinate_lagrangian():
-    """Passive four-bar, 2 s: crank angle matches an independent Lagrangian integration; loop closed."""
+    """Passive four-bar, 2 s, RK4: crank angle matches an independent Lagrangian integration; loop closed."""
     mech = preset("fourbar")
-    run = simulate(mech, mech.q_ref, duration=2.0, dt=0.01)
+    run = simulate(mech, mech.q_ref, duration=2.0, dt=0.01, method="fixed")
     ref = FourBarLagrangian().trajectory(run.t, mech.q_ref[0])
     # RK4 at 1 ms with the crank up to 30 rad/s: measured 3.3e-7 rad (2.1e-8 at 0.5 ms: order 4)
     np.testing.assert_allclose(run.q[:, 0], ref, atol=1e-6)
@@ -180,7 +180,7 @@ def test_fourbar_follows_the_one_coordinate_lagrangian():
 def test_fourbar_ten_seconds_conserves_energy_and_keeps_the_loop_closed():
     """Passive four-bar, 10 s at 1 ms: energy drift < 1e-7 of the peak kinetic energy, residual <= 1e-10 m."""
     mech = preset("fourbar")
-    run = simulate(mech, mech.q_ref, duration=10.0, dt=0.01)
+    run = simulate(mech, mech.q_ref, duration=10.0, dt=0.01, method="fixed")
     kinetic = np.array(
         [
             0.5 * v @ pin.crba(mech.model, mech.model.createData(), q) @ v
@@ -195,6 +195,23 @@ def test_fourbar_ten_seconds_conserves_energy_and_keeps_the_loop_closed():
     np.testing.assert_allclose(run.q[:, 0], ref, atol=2e-5)
 
 
+def test_default_mode_meets_the_accuracy_targets():
+    """Default (one DOP853 run, dense output): crank within 1e-8 rad of the Lagrangian, gap <= 1e-12 m."""
+    mech = preset("fourbar")
+    run = simulate(mech, mech.q_ref, duration=2.0, dt=0.01)
+    assert run.method == "adaptive"
+    ref = FourBarLagrangian().trajectory(run.t, mech.q_ref[0])
+    assert abs(run.q[100, 0] - ref[100]) <= 1e-8 and run.t[100] == pytest.approx(1.0)
+    np.testing.assert_allclose(run.q[:, 0], ref, atol=1e-8)
+    # the Euclidean gap of the coupler-rocker joint, from the frames' positions
+    data = mech.model.createData()
+    ids = [mech.model.getFrameId(f) for f in ("coupler_tip", "rocker_tip")]
+    for q in run.q:
+        pin.framesForwardKinematics(mech.model, data, q)
+        assert np.linalg.norm(data.oMf[ids[0]].translation - data.oMf[ids[1]].translation) <= 1e-12
+    assert run.steps < 300  # one integration: about 100 steps per simulated second, no restart per sample
+
+
 def test_adaptive_integration_follows_the_lagrangian_closely():
     """DOP853 at rtol 1e-12: the crank angle matches the independent Lagrangian to 1e-9 rad over 2 s."""
     mech = preset("fourbar")
@@ -207,8 +224,8 @@ def test_adaptive_integration_follows_the_lagrangian_closely():
 def test_rk4_energy_error_is_fourth_order():
     """Halving the fixed step divides the energy drift by about 2^4 = 16 (measured 18.7; 3rd order: 8)."""
     mech = preset("fourbar")
-    coarse = simulate(mech, mech.q_ref, duration=1.0, dt=0.02, step=0.005).energy_drift()
-    fine = simulate(mech, mech.q_ref, duration=1.0, dt=0.02, step=0.0025).energy_drift()
+    coarse = simulate(mech, mech.q_ref, duration=1.0, dt=0.02, method="fixed", step=0.005).energy_drift()
+    fine = simulate(mech, mech.q_ref, duration=1.0, dt=0.02, method="fixed", step=0.0025).energy_drift()
     assert 12.0 < coarse / fine < 24.0
 
 
@@ -386,7 +403,7 @@ def test_fixed_and_adaptive_agree():
     """Harada simulation 2 for 1 s: RK4 at 1 ms and DOP853 at rtol 1e-10 agree to 1e-8."""
     mech, P = _harada()
     wrench = [0.0, (2 * P["ml"] + P["mt"]) * P["g"], 0.005]
-    fixed = simulate(mech, mech.q_ref, duration=1.0, dt=0.05, wrench=wrench)
+    fixed = simulate(mech, mech.q_ref, duration=1.0, dt=0.05, wrench=wrench, method="fixed")
     adaptive = simulate(mech, mech.q_ref, duration=1.0, dt=0.05, wrench=wrench, method="adaptive", rtol=1e-10)
     assert adaptive.method == "adaptive" and adaptive.steps < fixed.steps
     np.testing.assert_allclose(adaptive.q, fixed.q, atol=1e-8)
@@ -396,9 +413,10 @@ def test_fixed_and_adaptive_agree():
 
 @pytest.mark.parametrize("name", ["fourbar", "harada2011_3d4m"])
 def test_pinocchio_constraint_dynamics_and_our_kkt_agree(name):
-    """pin.constraintDynamics and our KKT solve give the same motion and closure forces."""
+    """pin.constraintDynamics and our KKT solve give the same motion and closure forces (one RK4 path)."""
     mech = preset(name)
-    kwargs = {"actuator_forces": np.full(mech.n_actuators, 0.05), "duration": 0.5, "dt": 0.05}
+    forces = np.full(mech.n_actuators, 0.05)
+    kwargs = {"actuator_forces": forces, "duration": 0.5, "dt": 0.05, "method": "fixed"}
     ours = simulate(mech, mech.q_ref, solver="kkt", **kwargs)
     theirs = simulate(mech, mech.q_ref, solver="pinocchio", **kwargs)
     assert (ours.solver, theirs.solver) == ("kkt", "pinocchio")
@@ -552,7 +570,7 @@ def test_non_finite_forces_stop_with_the_samples_so_far():
         return [float("nan") if t > 0.2 else 0.0]
 
     with pytest.raises(SimulationFailed, match=r"stopped in the step from t = 0.2 s .*non-finite") as info:
-        simulate(mech, mech.q_ref, duration=0.5, dt=0.1, actuator_forces=law)
+        simulate(mech, mech.q_ref, duration=0.5, dt=0.1, actuator_forces=law, method="fixed")
     partial = info.value.partial
     np.testing.assert_allclose(partial.t, [0.0, 0.1, 0.2])
     assert info.value.time == pytest.approx(0.2) and info.value.cause is None
@@ -576,3 +594,70 @@ def test_start_at_a_constraint_singularity_fails_with_the_cause(tmp_path, solver
         simulate(mech, mech.q_ref, duration=0.1, dt=0.05, solver=solver)
     assert isinstance(info.value.cause, SingularConfiguration)
     assert len(info.value.partial) == 0
+
+
+# ---------------------------------------------------------------------------------------------
+# Passive runs conserve energy or stop saying why (issue 13)
+
+
+def _energy_of(mech: plm_pin.Mechanism, q: np.ndarray, v: np.ndarray) -> float:
+    """Bodies' kinetic energy by their spatial velocities, the rotors', and the potential energy [J]."""
+    model, data = mech.model, mech.model.createData()
+    pin.forwardKinematics(model, data, q, v)
+    bodies = sum(0.5 * model.inertias[i].vtiv(data.v[i]) for i in range(1, model.njoints))
+    return bodies + 0.5 * model.armature @ v**2 + pin.computePotentialEnergy(model, data, q)
+
+
+def test_passive_3d4m_crosses_the_leg_coincidence_conserving_energy():
+    """harada2011_3d4m, 15 s passive, RK4: legs 1 and 2 coincide with rods vertical; energy kept.
+
+    There the closure Jacobian loses a rank; Pinocchio's proximal solve stalled unconverged and
+    the energy jumped from 0.144 J to 0.829 J at t = 12.54 s (issue 13). Now it falls back to the
+    KKT solve there.
+    """
+    mech = preset("harada2011_3d4m")
+    run = simulate(mech, mech.q_ref, duration=15.0, dt=0.01, method="fixed")
+    apart = np.abs(run.q[:, 0] - run.q[:, 3])  # sliders 1 and 2 [m]
+    vertical = np.abs(np.cos(run.q[:, 1]))  # rod 1
+    assert np.count_nonzero((apart < 0.005) & (vertical < 0.05)) >= 5  # close to the crossing, often
+    energy = np.array([_energy_of(mech, q, v) for q, v in zip(run.q, run.v, strict=True)])
+    kinetic = energy - [pin.computePotentialEnergy(mech.model, mech.model.createData(), q) for q in run.q]
+    assert np.max(np.abs(energy - energy[0])) <= 1e-6 * kinetic.max()
+
+
+def test_a_fixed_step_too_large_is_subdivided():
+    """Four-bar, one 1 s RK4 step asked: halved until it holds the loop; energy and motion stay right."""
+    mech = preset("fourbar")
+    run = simulate(mech, mech.q_ref, duration=1.0, dt=1.0, step=1.0, method="fixed")
+    assert run.steps > 100  # 1 s was cut into steps of a few ms
+    ref = FourBarLagrangian().trajectory(run.t, mech.q_ref[0])
+    assert abs(run.q[-1, 0] - ref[-1]) <= 5e-3  # RK4 at the 4-8 ms kept: measured 2.6e-3 rad (not 2 rad)
+    assert abs(run.energy[-1] - run.energy[0]) <= 1e-4 * abs(run.energy[0])
+    adaptive = simulate(mech, mech.q_ref, duration=1.0, dt=1.0, step=1.0)  # a bound on DOP853's steps
+    assert abs(adaptive.q[-1, 0] - ref[-1]) <= 1e-8
+
+
+def test_a_passive_run_whose_energy_strays_stops_with_the_reason(monkeypatch):
+    """A guard tighter than RK4's error at 5 ms: SimulationFailed names the time and the energy change."""
+    from plm_pin.dynamics import simulation
+
+    monkeypatch.setattr(simulation, "ENERGY_RTOL", 1e-12)
+    mech = preset("fourbar")
+    stray = r"the passive energy changed from .* J to .* J by t = "
+    with pytest.raises(SimulationFailed, match=stray) as info:
+        simulate(mech, mech.q_ref, duration=1.0, dt=0.1, method="fixed", step=5e-3)
+    partial = info.value.partial
+    assert 0 < len(partial) < 11 and partial.t[-1] < info.value.time < partial.t[-1] + 0.1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_sixty_seconds_passive_conserve_energy(name):
+    """Every preset, 60 s passive from q_ref at rest: energy (computed apart) within 1e-4 of peak kinetic."""
+    mech = preset(name)
+    run = simulate(mech, mech.q_ref, duration=60.0, dt=0.1)
+    assert run.t[-1] == 60.0 and run.max_closure_residual() <= 1e-12
+    energy = np.array([_energy_of(mech, q, v) for q, v in zip(run.q, run.v, strict=True)])
+    data = mech.model.createData()
+    kinetic = energy - [pin.computePotentialEnergy(mech.model, data, q) for q in run.q]
+    assert np.max(np.abs(energy - energy[0])) <= 1e-4 * kinetic.max() + 1e-12 * max(1.0, abs(energy[0]))
