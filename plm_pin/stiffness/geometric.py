@@ -1,0 +1,157 @@
+r"""Geometric stiffness: how the generalized forces of fixed loads change with the configuration.
+
+A force :math:`f` and a moment :math:`m` fixed in the world, applied to a body at a point
+:math:`p(q)`, exert the generalized force :math:`Q_c = S_c^T W` with the world twist
+:math:`S_c` of each column the body depends on and the wrench about the world origin
+:math:`W = (f, p \times f + m)`. Its derivative along a tangent direction :math:`k` is
+exact in closed form: a column moves with every joint above it,
+:math:`\partial S_c / \partial q_k = \mathrm{ad}(S_k) S_c` (Pinocchio's tangent convention:
+a joint's motion subspace is fixed in its own frame), and the point moves with
+:math:`\partial p / \partial q_k = v_k + \omega_k \times p`:
+
+.. math::
+
+    \frac{\partial Q_c}{\partial q_k} = W^T \mathrm{ad}(S_k) S_c
+    + \omega_c^T \left(\frac{\partial p}{\partial q_k} \times f\right).
+
+The cut-joint forces :math:`\lambda` of a closure are such loads (force :math:`\lambda` on
+frame B, its opposite on frame A); the rotation rows of weld and revolute closures add the
+change of the map from :math:`\lambda_{rot}` to the moment (:func:`closure_derivative`).
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ..kinematics.closures import HLOG3_MIN_ANGLE, Closure
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+@functools.cache
+def _ancestry(model_id: int, parents: tuple[int, ...], joint_of_v: tuple[int, ...]) -> np.ndarray:
+    del model_id
+    nj = len(parents)
+    anc = np.zeros((nj, nj), dtype=bool)  # anc[a, b]: joint a is joint b or above it
+    for b in range(nj):
+        a = b
+        while True:
+            anc[a, b] = True
+            if a == 0:
+                break
+            a = parents[a]
+    jv = np.array(joint_of_v, dtype=int)
+    return anc[np.ix_(jv, jv)]  # (nv, nv): [k, c]
+
+
+class TreeDerivatives:
+    """Joint ancestry of a model and the world Jacobian columns at one configuration.
+
+    Attributes:
+        S: world twists of every velocity column, rows ``(v, omega)``, shape (6, nv).
+        above: ``above[k, c]``: column ``k`` belongs to column ``c``'s joint or one above it.
+    """
+
+    def __init__(self, model: pin.Model, data: pin.Data) -> None:
+        """Read the world Jacobian from ``data`` (after ``pin.computeJointJacobians``)."""
+        joint_of_v = [0] * model.nv
+        for j in range(1, model.njoints):
+            jm = model.joints[j]
+            for i in range(jm.idx_v, jm.idx_v + jm.nv):
+                joint_of_v[i] = j
+        self.model = model
+        self.joint_of_v = np.array(joint_of_v, dtype=int)
+        self.above = _ancestry(id(model), tuple(int(p) for p in model.parents), tuple(joint_of_v))
+        self.S = np.array(data.J)  # (6, nv)
+        self._columns: dict[int, np.ndarray] = {}
+
+    def columns(self, joint: int) -> np.ndarray:
+        """Mask of the velocity columns that move ``joint``'s body, shape (nv,)."""
+        if joint not in self._columns:
+            supports = {int(j) for j in self.model.supports[joint]} - {0}
+            self._columns[joint] = np.array([j in supports for j in self.joint_of_v], dtype=bool)
+        return self._columns[joint]
+
+    def dead_wrench(self, joint: int, f: np.ndarray, m: np.ndarray, p: np.ndarray) -> np.ndarray:
+        r"""Derivative of the generalized force of a fixed world wrench on ``joint``'s body, shape (nv, nv).
+
+        Args:
+            joint: the body's joint index.
+            f: force [N], world, shape (3,).
+            m: moment [N m], world, shape (3,).
+            p: point of application [m], world, shape (3,).
+
+        Returns:
+            ``D[c, k]`` = :math:`\partial Q_c / \partial q_k`.
+        """
+        cols = self.columns(joint)
+        nv = self.model.nv
+        if not cols.any():
+            return np.zeros((nv, nv))
+        V, W = self.S[:3], self.S[3:]
+        n = np.cross(p, f) + m
+        # W . ad(S_k) S_c = v_c.(f x w_k) + w_c.(f x v_k) + w_c.(n x w_k), for k above c
+        term = V.T @ np.cross(f, W.T).T + W.T @ np.cross(f, V.T).T + W.T @ np.cross(n, W.T).T
+        term *= self.above.T
+        dp = (V + np.cross(W.T, p).T) * cols  # (3, nv): motion of the point per column
+        term += W.T @ np.cross(dp.T, f).T
+        term[~cols] = 0.0
+        return term
+
+    def angular(self, joint: int) -> np.ndarray:
+        """World angular Jacobian of ``joint``'s body, shape (3, nv)."""
+        return self.S[3:] * self.columns(joint)
+
+
+def closure_derivative(
+    tree: TreeDerivatives, data: pin.Data, closures: Sequence[Closure], lam: np.ndarray
+) -> np.ndarray:
+    r"""Derivative of the cut-joint force :math:`J_\phi^T \lambda` at fixed :math:`\lambda`, shape (nv, nv).
+
+    ``data`` must hold the frame placements of the configuration ``tree`` was read at.
+    """
+    model = tree.model
+    D = np.zeros((model.nv, model.nv))
+    for c in closures:
+        fa, fb = c.frame_ids
+        ja, jb = model.frames[fa].parentJoint, model.frames[fb].parentJoint
+        oMa, oMb = data.oMf[fa], data.oMf[fb]
+        lam_c = lam[c.rows]
+        f = lam_c[:3]
+        m = np.zeros(3)
+        if c.spec.type != "point":
+            m, dm = _closure_moment(c, tree, ja, jb, oMa.rotation, oMb.rotation, lam_c[3:])
+            D += (tree.angular(jb) - tree.angular(ja)).T @ dm
+        D += tree.dead_wrench(jb, f, m, oMb.translation) + tree.dead_wrench(ja, -f, -m, oMa.translation)
+    return D
+
+
+def _closure_moment(
+    c: Closure, tree: TreeDerivatives, ja: int, jb: int, Ra: np.ndarray, Rb: np.ndarray, lam_r: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Moment on B of the rotation rows' forces, and its derivative at fixed forces, (3,), (3, nv)."""
+    wa, wb = tree.angular(ja), tree.angular(jb)  # (3, nv)
+    if c.spec.type == "weld":
+        R = Ra.T @ Rb
+        Jl = pin.Jlog3(R)
+        moment = Rb @ Jl.T @ lam_r
+        rel = Rb.T @ (wb - wa)  # (3, nv): relative rotation rates in B's coordinates
+        near = np.linalg.norm(pin.log3(R)) <= HLOG3_MIN_ANGLE
+        dm = np.cross(wb.T, moment).T
+        for k in range(rel.shape[1]):
+            if not rel[:, k].any():
+                continue
+            dJ = 0.5 * pin.skew(rel[:, k]) if near else pin.Hlog3(R, rel[:, k])
+            dm[:, k] += Rb @ dJ.T @ lam_r
+        return moment, dm
+    assert c.axis is not None and c.normal_basis is not None
+    w = Rb @ c.axis
+    a = Ra @ c.normal_basis @ lam_r
+    moment = np.cross(w, a)
+    dw = np.cross(wb.T, w).T
+    da = np.cross(wa.T, a).T
+    return moment, np.cross(dw.T, a).T + np.cross(w, da.T).T
