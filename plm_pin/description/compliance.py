@@ -41,7 +41,7 @@ and likewise in z with :math:`I_y` (with the opposite sign of the coupling).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -132,6 +132,20 @@ class ComplianceSpec:
         if self.links:
             out["links"] = [b.to_dict() for b in self.links]
         return out
+
+
+ASSUMED = "assumed values (the source gives no stiffness): drive stiffness only, links rigid"
+"""Provenance written with the drive stiffness a preset assumes."""
+
+
+def assumed_drive_stiffness(joints: Sequence[str], k: float | None) -> ComplianceSpec | None:
+    """The compliance of a preset whose drives all have an assumed stiffness ``k`` [N/m or N m/rad].
+
+    Returns None when ``k`` is None (a rigid description).
+    """
+    if k is None:
+        return None
+    return ComplianceSpec(actuators={j: float(k) for j in joints}, source=ASSUMED)
 
 
 def _positive(value: Any, where: str, path: str | None) -> float:

@@ -235,9 +235,10 @@ def test_deflection_converges_to_linear_for_small_loads():
 
 def test_errors_name_the_problem():
     """No compliance, a stiffness on an unknown drive, an unheld task motion: one clear error each."""
-    mech = preset("harada2011_3d4m")
+    rigid = preset("fourbar")
     with pytest.raises(InvalidInput, match="has no compliance"):
-        stiffness(mech, mech.q_ref)
+        stiffness(rigid, rigid.q_ref)
+    mech = preset("harada2011_3d4m")
     with pytest.raises(InvalidInput, match="not a drive; drives are"):
         stiffness(mech, mech.q_ref, compliance=ComplianceSpec(actuators={"rod1_pivot": 1e5}))
     with pytest.raises(SingularConfiguration, match="rigid"):
