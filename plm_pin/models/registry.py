@@ -64,7 +64,7 @@ HARADA2011_DRIVE_STIFFNESS = 1.0e6
 """Assumed stiffness of each linear motor of the Harada 2011 tables [N/m] (the paper gives none)."""
 
 ZHAO2011_DRIVE_STIFFNESS = 1.0e8
-"""Assumed axial stiffness of each ball-screw drive of the Zhao 2011 platforms [N/m] (the paper gives none)."""
+"""Assumed axial stiffness of each ball-screw drive of the Zhao 2011 platforms [N/m] (none in the paper)."""
 
 # Harada 2011, Table 1 and (M.36): l = 0.140 m, r_t = 0.05 m, rods 0.026 kg 9.84e-5 kg m^2,
 # plate 0.132 kg 8.54e-4 kg m^2, moving parts 0.375 kg, g = 9.8 m/s^2 (M.37).
