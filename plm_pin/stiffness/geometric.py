@@ -71,10 +71,9 @@ class TreeDerivatives:
 
     def columns(self, joint: int) -> np.ndarray:
         """Mask of the velocity columns that move ``joint``'s body, shape (nv,)."""
-        if joint not in self._columns:
-            supports = {int(j) for j in self.model.supports[joint]} - {0}
-            self._columns[joint] = np.array([j in supports for j in self.joint_of_v], dtype=bool)
-        return self._columns[joint]
+        if joint == 0:
+            return np.zeros(self.model.nv, dtype=bool)
+        return self.above[:, self.model.joints[joint].idx_v]
 
     def dead_wrench(self, joint: int, f: np.ndarray, m: np.ndarray, p: np.ndarray) -> np.ndarray:
         r"""Derivative of the generalized force of a fixed world wrench on ``joint``'s body, shape (nv, nv).
@@ -88,19 +87,20 @@ class TreeDerivatives:
         Returns:
             ``D[c, k]`` = :math:`\partial Q_c / \partial q_k`.
         """
-        cols = self.columns(joint)
         nv = self.model.nv
-        if not cols.any():
-            return np.zeros((nv, nv))
-        V, W = self.S[:3], self.S[3:]
-        n = np.cross(p, f) + m
+        D = np.zeros((nv, nv))
+        idx = np.flatnonzero(self.columns(joint))
+        if idx.size == 0:
+            return D
+        V, W = self.S[:3, idx], self.S[3:, idx]  # (3, n): the columns moving the body
+        F = pin.skew(f)
         # W . ad(S_k) S_c = v_c.(f x w_k) + w_c.(f x v_k) + w_c.(n x w_k), for k above c
-        term = V.T @ np.cross(f, W.T).T + W.T @ np.cross(f, V.T).T + W.T @ np.cross(n, W.T).T
-        term *= self.above.T
-        dp = (V + np.cross(W.T, p).T) * cols  # (3, nv): motion of the point per column
-        term += W.T @ np.cross(dp.T, f).T
-        term[~cols] = 0.0
-        return term
+        term = V.T @ (F @ W) + W.T @ (F @ V) + W.T @ (pin.skew(m - F @ p) @ W)  # p x f = -f x p
+        term *= self.above[np.ix_(idx, idx)].T
+        # + w_c . (dp_k x f), dp_k = v_k + w_k x p the point's motion
+        term -= W.T @ (F @ (V - pin.skew(p) @ W))
+        D[np.ix_(idx, idx)] = term
+        return D
 
     def angular(self, joint: int) -> np.ndarray:
         """World angular Jacobian of ``joint``'s body, shape (3, nv)."""

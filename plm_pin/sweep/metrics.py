@@ -163,8 +163,8 @@ def _internal(name: str, value: Any) -> tuple[float, ...] | dict[str, float] | N
     if isinstance(value, Sequence) and not isinstance(value, str) and value:
         return tuple(_finite(name, v) for v in value)
     raise InvalidInput(
-        f"option {name!r} must be internal-force coordinates (a list of numbers) or {{link: axial force [N]}}, "
-        f"got {value!r}"
+        f"option {name!r} must be internal-force coordinates (a list of numbers) or "
+        f"{{link: axial force [N]}}, got {value!r}"
     )
 
 
