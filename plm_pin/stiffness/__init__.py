@@ -3,6 +3,7 @@
 from .cartesian import EigenStiffness, StiffnessResult, stiffness
 from .deflection import Deflection, deflection
 from .equilibrium import ElasticState, elastic_state
+from .maps import StiffnessMap, stiffness_map
 from .model import CompliantModel, compliant_model
 from .modes import MODELS, Modes, natural_frequencies
 
@@ -13,10 +14,12 @@ __all__ = [
     "EigenStiffness",
     "ElasticState",
     "Modes",
+    "StiffnessMap",
     "StiffnessResult",
     "compliant_model",
     "deflection",
     "elastic_state",
     "natural_frequencies",
     "stiffness",
+    "stiffness_map",
 ]

@@ -41,7 +41,8 @@ from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import KINDS, SINGULARITY_TOL
 from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
-from ..stiffness import natural_frequencies, stiffness
+from ..stiffness import stiffness_map
+from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
 
 if TYPE_CHECKING:
     from ..analysis import WorkspaceSlice
@@ -388,23 +389,14 @@ def _preload(ev: PointEvaluation) -> dict[str, np.ndarray]:
 
 
 def _stiffness(ev: PointEvaluation) -> dict[str, np.ndarray]:
-    grid = ev.grid
-    names = ("min_translational_stiffness", "compliance_along", "lowest_frequency")
-    out = {n: np.full(grid.shape, np.nan) for n in names}
-    direction = ev.option("compliance_direction")
-    for index in zip(*np.nonzero(grid.reachable), strict=True):
-        q = grid.q[index]
-        try:
-            res = stiffness(ev.mech, q, gravity=ev.option("gravity"), internal=ev.option("internal"))
-            modes = natural_frequencies(ev.mech, q, result=res)
-        except (SingularConfiguration, AllocationInfeasible):
-            continue
-        n_lin = len(res.translational.dofs)
-        u = np.eye(n_lin)[0] if direction is None else np.asarray(direction)
-        out["min_translational_stiffness"][index] = res.min_translational
-        out["compliance_along"][index] = res.compliance_along(u)
-        out["lowest_frequency"][index] = modes.lowest
-    return out
+    smap = stiffness_map(
+        ev.mech,
+        ev.grid,
+        direction=ev.option("compliance_direction"),
+        gravity=ev.option("gravity"),
+        internal=ev.option("internal"),
+    )
+    return {name: np.array(smap.variable(name)) for name in STIFFNESS_VARIABLES}
 
 
 _W = "Yoshikawa manipulability w = sqrt(det(J_ce^T J_ce)) (Harada 2011 eq. (13)); 0 at a direct singularity"
