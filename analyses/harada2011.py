@@ -16,10 +16,13 @@ import numpy as np
 
 from plm_pin import Mechanism, build_mechanism, load
 from plm_pin.analysis import singular_points_along, workspace_sweep
+from plm_pin.description.compliance import ComplianceSpec
 from plm_pin.dynamics import DecouplingReport, SimulationResult, decoupling_check, simulate
 from plm_pin.models import PRESETS
+from plm_pin.models.registry import HARADA2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.statics import force_capability, static_forces, wrench_polygon
+from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
 from plm_pin.viz import fig8, plot_skeletons, plot_sweep
 
 from . import _harada2011_paper as paper
@@ -84,6 +87,8 @@ def run(ctx: StudyContext) -> None:
     _statics(ctx.section("Static forces (section 4, Fig. 8)"), four, three)
     ctx.step("force capability")
     _capability(ctx.section("Force capability: redundant vs non-redundant (beyond the paper)"), four, three)
+    ctx.step("stiffness: preload and redundancy")
+    _stiffness(ctx.section("Stiffness: internal preload and redundancy (beyond the paper)"), four, three)
     ctx.step("task-space dynamics and decoupling")
     _decoupling(ctx.section("Decoupled dynamics (eq. (23))"), four, ctx.load("harada2015_asymmetric"))
     ctx.step("simulations 1 and 2")
@@ -248,6 +253,123 @@ def _capability(section: Section, four: Mechanism, three: Mechanism) -> None:
     ax.grid(alpha=0.3)
     ax.legend()
     section.figure(fig, "Loads (f_x, f_y) on the plate centre held within the limits (moment 0).", polygons)
+
+
+PRELOADS = (0.0, 2.0, 5.0, 10.0, 20.0)
+"""Plate compressions f_i of the preload table [N] (Harada 2011 eqs. (20)-(22), Fig. 8)."""
+
+SOFT_DRIVE = 1.0e4
+"""A soft drive stiffness [N/m] for which the geometric stiffness of the preload shows (an assumption)."""
+
+STIFFNESS_ANGLES = np.radians(np.linspace(-40.0, 40.0, 81))
+"""Plate angles of the stiffness sweep [rad]."""
+
+
+def _drives(mech: Mechanism, k: float) -> ComplianceSpec:
+    return ComplianceSpec(
+        actuators={a.joint: k for a in mech.actuators}, source=f"drives {k:g} N/m (assumed)"
+    )
+
+
+def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
+    compliance = four.sidecar.compliance
+    k = HARADA2011_DRIVE_STIFFNESS
+    section.text(
+        "The paper gives no stiffness. Each linear motor is assumed to hold its slider with "
+        f"k = {k:g} N/m ({compliance.source if compliance else 'preset'}); rods and plate rigid. The task "
+        "stiffness is the Hessian of the potential condensed on the closed chain (`plm_pin.stiffness`): "
+        "the drives' part k J_ce^T J_ce, plus the geometric stiffness of gravity and of the constraint "
+        "forces, which is where the internal force f_i enters. The plate compression f_i (eqs. (20)-(22)) "
+        "is applied as `internal={'plate': -f_i}` on top of gravity."
+    )
+    rows = []
+    data: dict[str, object] = {}
+    for drive in (k, SOFT_DRIVE):
+        base3 = stiffness(three, three.q_ref, compliance=_drives(three, drive))
+        rows.append(
+            ("3D3M", drive, None, base3.min_translational, base3.rotational.values[0], 1.0, _stable(base3))
+        )
+        base4 = None
+        for f_i in PRELOADS:
+            res = stiffness(four, four.q_ref, internal={"plate": -f_i}, compliance=_drives(four, drive))
+            base4 = res if base4 is None else base4
+            rows.append(
+                (
+                    "3D4M",
+                    drive,
+                    f_i,
+                    res.min_translational,
+                    res.rotational.values[0],
+                    res.min_translational / base3.min_translational,
+                    _stable(res),
+                )
+            )
+            data[f"3D4M k={drive:g} f_i={f_i:g}"] = res.to_dict()
+        data[f"3D3M k={drive:g}"] = base3.to_dict()
+    section.table(
+        "Eigen-stiffness at the reference pose (x = 0, y = 0.08 m, theta = -20 deg), gravity included",
+        [
+            "table",
+            Column("drive stiffness", "N/m", ".3g"),
+            Column("f_i", "N", ".3g"),
+            Column("smallest translational", "N/m", ".7g"),
+            Column("rotational", "N m/rad", ".7g"),
+            Column("translational / 3D3M", "-", ".5g"),
+            "stable",
+        ],
+        rows,
+        note="The compression f_i lowers the stiffness (compressed links soften, tension would stiffen); "
+        "with the assumed drives its geometric stiffness, of order f_i / l, is about 1e-4 of the drives' "
+        "and the fourth drive is what stiffens the 3D4M. With soft drives the 3D3M is unstable under "
+        "gravity (K_x not positive definite, eigen-stiffnesses then meaningless). Preload's practical "
+        "benefit, removing backlash, is not in this model.",
+    )
+    modes = {
+        name: natural_frequencies(mech, mech.q_ref, compliance=_drives(mech, k))
+        for name, mech in (("3D4M", four), ("3D3M", three))
+    }
+    section.table(
+        f"Natural frequencies at the reference pose (M_x and K_x, drives {k:g} N/m)",
+        ["table", *(Column(f"mode {i + 1}", "Hz", ".5g") for i in range(3))],
+        [(name, *m.frequencies.tolist()) for name, m in modes.items()],
+    )
+    _stiffness_sweep(section, four, three, data)
+
+
+def _stable(res: StiffnessResult) -> bool:
+    """Whether K_x is positive definite (a stable equilibrium)."""
+    return bool(np.linalg.eigvalsh(0.5 * (res.K_x + res.K_x.T)).min() > 0.0)
+
+
+def _stiffness_sweep(
+    section: Section, four: Mechanism, three: Mechanism, reference: dict[str, object]
+) -> None:
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.2), layout="constrained")
+    curves: dict[str, object] = {
+        "theta_deg": np.degrees(STIFFNESS_ANGLES).tolist(),
+        "reference_pose": reference,
+    }
+    for name, mech in (("3D4M", four), ("3D3M", three)):
+        line = workspace_sweep(mech, "rz", STIFFNESS_ANGLES)
+        smap = stiffness_map(mech, line)
+        left.semilogy(np.degrees(STIFFNESS_ANGLES), smap.min_translational_stiffness, label=name)
+        right.plot(np.degrees(STIFFNESS_ANGLES), smap.lowest_frequency, label=name)
+        curves[name] = smap.to_dict()
+    left.set_xlabel("theta [deg]")
+    left.set_ylabel("smallest translational eigen-stiffness [N/m]")
+    right.set_xlabel("theta [deg]")
+    right.set_ylabel("lowest natural frequency [Hz]")
+    for ax in (left, right):
+        ax.grid(alpha=0.3)
+        ax.legend()
+    section.figure(
+        fig,
+        "Stiffness and lowest natural frequency against the plate angle at x = 0, y = 0.08 m: the 3D3M "
+        "softens towards its direct singularity, the redundant 3D4M does not.",
+        curves,
+    )
 
 
 def _decoupling(section: Section, four: Mechanism, asym: Mechanism) -> None:
