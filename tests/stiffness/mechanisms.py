@@ -148,3 +148,76 @@ def pendulum(tmp_path: Path, mass: float, length: float, inertia: float, k: floa
         yourdfpy.Robot(name="pendulum", links=links, joints=joints), parse_sidecar(data), tmp_path, "pendulum"
     )
     return plm_pin.load(tmp_path / "pendulum.urdf")
+
+
+RPR_ROD = 0.3
+"""Length of each leg's rod, the flexible part beyond the slider [m]."""
+
+
+def rpr_points() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Base pivots a_i, platform anchors b_i (platform frame) and the platform centre (world), planar 3-RPR."""
+    ta = np.deg2rad([90.0, 210.0, 330.0])
+    tb = np.deg2rad([60.0, 200.0, 310.0])
+    a = np.column_stack([0.8 * np.cos(ta), 0.8 * np.sin(ta), np.zeros(3)])
+    b = np.column_stack([0.15 * np.cos(tb), 0.15 * np.sin(tb), np.zeros(3)])
+    return a, b, np.array([0.05, -0.03, 0.0])
+
+
+def rpr(tmp_path: Path, compliance: dict) -> Mechanism:
+    """A planar 3-RPR: base revolute, driven slider, rod to the platform revolute (leg 1) or point closure."""
+    a, b, p = rpr_points()
+    links = [u.link("base")]
+    joints = []
+    reference: dict[str, Any] = {}
+    closures = []
+    yaw1 = 0.0
+    for i in range(3):
+        n = i + 1
+        d = p + b[i] - a[i]
+        yaw = float(np.arctan2(d[1], d[0]))
+        yaw1 = yaw if n == 1 else yaw1
+        links += [u.link(f"leg{n}_cyl"), u.link(f"leg{n}_rod"), u.link(f"leg{n}_tip")]
+        joints += [
+            u.joint(f"leg{n}_pivot", "revolute", "base", f"leg{n}_cyl", xyz=tuple(a[i]), rpy=(0.0, 0.0, yaw)),
+            u.joint(
+                f"leg{n}_slide", "prismatic", f"leg{n}_cyl", f"leg{n}_rod", axis=(1, 0, 0), limits=(-1.0, 1.0)
+            ),
+            u.joint(f"leg{n}_tip_fixed", "fixed", f"leg{n}_rod", f"leg{n}_tip", xyz=(RPR_ROD, 0.0, 0.0)),
+        ]
+        reference.update({f"leg{n}_pivot": 0.0, f"leg{n}_slide": float(np.linalg.norm(d)) - RPR_ROD})
+        if n > 1:
+            closures.append({"name": f"leg{n}", "frames": [f"leg{n}_tip", f"platform_b{n}"], "type": "point"})
+    links.append(u.link("platform"))
+    joints.append(
+        u.joint(
+            "platform_pivot",
+            "revolute",
+            "leg1_rod",
+            "platform",
+            xyz=(RPR_ROD, 0.0, 0.0),
+            rpy=(0.0, 0.0, -yaw1),
+        )
+    )
+    reference["platform_pivot"] = 0.0
+    for i in (1, 2):
+        links.append(u.link(f"platform_b{i + 1}"))
+        joints.append(
+            u.joint(
+                f"platform_b{i + 1}_fixed", "fixed", "platform", f"platform_b{i + 1}", xyz=tuple(b[i] - b[0])
+            )
+        )
+    links.append(u.link("platform_center"))
+    joints.append(u.joint("platform_center_fixed", "fixed", "platform", "platform_center", xyz=tuple(-b[0])))
+    sidecar = parse_sidecar(
+        {
+            "format": "plm-pin/1",
+            "gravity": [0.0, 0.0, 0.0],
+            "closures": closures,
+            "actuation": [{"joint": f"leg{n}_slide"} for n in (1, 2, 3)],
+            "end_effector": {"frame": "platform_center", "task": ["x", "y", "rz"]},
+            "reference": reference,
+            "compliance": compliance,
+        }
+    )
+    write_description(yourdfpy.Robot(name="rpr", links=links, joints=joints), sidecar, tmp_path, "rpr")
+    return plm_pin.load(tmp_path / "rpr.urdf")

@@ -15,7 +15,7 @@ from plm_pin.stiffness import deflection, natural_frequencies, stiffness
 from plm_pin.stiffness.equilibrium import hessian_terms
 from tests.conftest import ball_joint_body, fd_jacobian, preset
 
-from .mechanisms import cantilever, pendulum, stewart
+from .mechanisms import RPR_ROD, cantilever, pendulum, rpr, rpr_points, stewart
 from .oracle import compliance_by_equilibria
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -243,3 +243,29 @@ def test_errors_name_the_problem():
         stiffness(mech, mech.q_ref, compliance=ComplianceSpec(actuators={"rod1_pivot": 1e5}))
     with pytest.raises(SingularConfiguration, match="rigid"):
         stiffness(mech, mech.q_ref, compliance=ComplianceSpec(actuators={"slider1": 1e5}))
+
+
+def test_planar_3rpr_with_flexible_legs_is_drives_in_series_with_rods(tmp_path):
+    """3-RPR, rods as beams: K_x = sum k_eff j j^T, 1/k_eff = 1/k + L/EA (two-force legs, unloaded)."""
+    k, E, A = 2.0e6, 2.0e11, 1.0e-5
+    beam = {"E": E, "G": 8.0e10, "A": A, "Iy": 1.0e-10, "Iz": 1.0e-10, "J": 1.0e-10}
+    links = [{"link": f"leg{n}_rod", "tip": f"leg{n}_tip", **beam} for n in (1, 2, 3)]
+    mech = rpr(tmp_path, {"actuators": {f"leg{n}_slide": k for n in (1, 2, 3)}, "links": links})
+    a, b, p = rpr_points()
+    k_eff = 1.0 / (1.0 / k + RPR_ROD / (E * A))
+    K = np.zeros((3, 3))
+    for i in range(3):
+        d = p + b[i] - a[i]
+        uu = d / np.linalg.norm(d)
+        j = np.array([uu[0], uu[1], b[i][0] * uu[1] - b[i][1] * uu[0]])  # (r x u)_z, r = b_i (world-aligned)
+        K += k_eff * np.outer(j, j)
+    res = stiffness(mech, mech.q_ref, gravity=False)
+    np.testing.assert_allclose(res.K_x, K, rtol=0, atol=1e-8 * np.abs(K).max())
+    rigid = stiffness(
+        mech,
+        mech.q_ref,
+        gravity=False,
+        compliance=ComplianceSpec(actuators={f"leg{n}_slide": k for n in (1, 2, 3)}),
+    )
+    assert rigid.min_translational > res.min_translational  # the rods' axial compliance adds in series
+    assert np.abs(res.contributions["links"]).max() > 0.0
