@@ -155,7 +155,7 @@ RPR_ROD = 0.3
 
 
 def rpr_points() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Base pivots a_i, platform anchors b_i (platform frame) and the platform centre (world), planar 3-RPR."""
+    """Base pivots a_i, platform anchors b_i (platform frame), platform centre (world) of the 3-RPR."""
     ta = np.deg2rad([90.0, 210.0, 330.0])
     tb = np.deg2rad([60.0, 200.0, 310.0])
     a = np.column_stack([0.8 * np.cos(ta), 0.8 * np.sin(ta), np.zeros(3)])
