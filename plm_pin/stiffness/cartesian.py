@@ -204,15 +204,15 @@ def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, d
 
 
 def _eigen(C: np.ndarray, idx: list[int], dofs: tuple[str, ...], unit: str) -> EigenStiffness:
-    block = C[np.ix_(idx, idx)]
-    block = 0.5 * (block + block.T)
     if not idx:
         return EigenStiffness(np.zeros(0), np.zeros((0, 0)), (), unit)
-    c, vec = np.linalg.eigh(block)
+    block = C[np.ix_(idx, idx)]
+    c, vec = np.linalg.eigh(0.5 * (block + block.T))
     order = np.argsort(-c)  # largest compliance = smallest stiffness first
-    for a in (vals := 1.0 / c[order], vecs := vec[:, order]):
-        a.setflags(write=False)
-    return EigenStiffness(vals, vecs, tuple(dofs[i] for i in idx), unit)
+    values, directions = 1.0 / c[order], vec[:, order]
+    values.setflags(write=False)
+    directions.setflags(write=False)
+    return EigenStiffness(values, directions, tuple(dofs[i] for i in idx), unit)
 
 
 def stiffness(

@@ -30,6 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..description.compliance import ComplianceSpec
+from ..exceptions import InvalidInput
 from ..kinematics import closures as _closures
 from ..statics import Load, StaticForces, load_on_frame, static_forces
 from .geometric import TreeDerivatives, closure_derivative
@@ -104,8 +105,6 @@ def elastic_state(
     if forces is None:
         forces = static_forces(mech, q, wrench, frame, gravity=gravity, internal=internal, limits=None)
     elif wrench is not None or frame is not None or internal is not None:
-        from ..exceptions import InvalidInput
-
         raise InvalidInput("give either forces= or the wrench, frame and internal preload, not both")
     balance = forces.balance
     qc = cm.lift(balance.q)
