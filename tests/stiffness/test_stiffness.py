@@ -25,10 +25,11 @@ def _drives(mech, k: float) -> ComplianceSpec:
     return ComplianceSpec(actuators={a.joint: k for a in mech.actuators})
 
 
+@pytest.mark.parametrize("offset", [0.0, 0.3])
 @pytest.mark.parametrize(
     "closure", [{"type": "point"}, {"type": "revolute", "axis": [0, 1, 1]}, {"type": "weld"}]
 )
-def test_closure_force_derivative_matches_finite_differences(tmp_path, closure, rng):
+def test_closure_force_derivative_matches_finite_differences(tmp_path, closure, offset, rng):
     """-d(J_phi^T lambda)/dq at fixed lambda equals finite differences of the exact closure Jacobian."""
     mech = ball_joint_body(tmp_path, closure)
     model = mech.model
