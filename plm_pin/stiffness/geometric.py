@@ -32,20 +32,41 @@ from ..kinematics.closures import HLOG3_MIN_ANGLE, Closure
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
+class _Structure:
+    """The joint ancestry of a model (it depends on the tree only), with per-body column sets."""
+
+    def __init__(
+        self, parents: tuple[int, ...], joint_of_v: tuple[int, ...], first_v: tuple[int, ...]
+    ) -> None:
+        nj = len(parents)
+        anc = np.zeros((nj, nj), dtype=bool)  # anc[a, b]: joint a is joint b or above it
+        for b in range(nj):
+            a = b
+            while True:
+                anc[a, b] = True
+                if a == 0:
+                    break
+                a = parents[a]
+        jv = np.array(joint_of_v, dtype=int)
+        self.above = anc[np.ix_(jv, jv)]  # (nv, nv): [k, c]
+        self.first_v = first_v
+        self._bodies: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def body(self, joint: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Columns moving the body of ``joint``: mask (nv,), indices (n,), ``above`` on them transposed (n, n)."""
+        if joint not in self._bodies:
+            mask = self.above[:, self.first_v[joint]] if joint else np.zeros(self.above.shape[0], dtype=bool)
+            idx = np.flatnonzero(mask)
+            self._bodies[joint] = (mask, idx, self.above[np.ix_(idx, idx)].T.astype(float))
+        return self._bodies[joint]
+
+
 @functools.cache
-def _ancestry(model_id: int, parents: tuple[int, ...], joint_of_v: tuple[int, ...]) -> np.ndarray:
+def _structure(
+    model_id: int, parents: tuple[int, ...], joint_of_v: tuple[int, ...], first_v: tuple[int, ...]
+) -> _Structure:
     del model_id
-    nj = len(parents)
-    anc = np.zeros((nj, nj), dtype=bool)  # anc[a, b]: joint a is joint b or above it
-    for b in range(nj):
-        a = b
-        while True:
-            anc[a, b] = True
-            if a == 0:
-                break
-            a = parents[a]
-    jv = np.array(joint_of_v, dtype=int)
-    return anc[np.ix_(jv, jv)]  # (nv, nv): [k, c]
+    return _Structure(parents, joint_of_v, first_v)
 
 
 class TreeDerivatives:
@@ -53,29 +74,27 @@ class TreeDerivatives:
 
     Attributes:
         S: world twists of every velocity column, rows ``(v, omega)``, shape (6, nv).
-        above: ``above[k, c]``: column ``k`` belongs to column ``c``'s joint or one above it.
     """
 
     def __init__(self, model: pin.Model, data: pin.Data) -> None:
         """Read the world Jacobian from ``data`` (after ``pin.computeJointJacobians``)."""
         joint_of_v = [0] * model.nv
+        first_v = [0] * model.njoints
         for j in range(1, model.njoints):
             jm = model.joints[j]
-            for i in range(jm.idx_v, jm.idx_v + jm.nv):
-                joint_of_v[i] = j
+            first_v[j] = jm.idx_v
+            joint_of_v[jm.idx_v : jm.idx_v + jm.nv] = [j] * jm.nv
         self.model = model
-        self.joint_of_v = np.array(joint_of_v, dtype=int)
-        self.above = _ancestry(id(model), tuple(int(p) for p in model.parents), tuple(joint_of_v))
+        self._structure = _structure(id(model), tuple(model.parents), tuple(joint_of_v), tuple(first_v))
         self.S = np.array(data.J)  # (6, nv)
-        self._columns: dict[int, np.ndarray] = {}
 
     def columns(self, joint: int) -> np.ndarray:
         """Mask of the velocity columns that move ``joint``'s body, shape (nv,)."""
-        if joint == 0:
-            return np.zeros(self.model.nv, dtype=bool)
-        return self.above[:, self.model.joints[joint].idx_v]
+        return self._structure.body(joint)[0]
 
-    def dead_wrench(self, joint: int, f: np.ndarray, m: np.ndarray, p: np.ndarray) -> np.ndarray:
+    def dead_wrench(
+        self, joint: int, f: np.ndarray, m: np.ndarray, p: np.ndarray, out: np.ndarray | None = None
+    ) -> np.ndarray:
         r"""Derivative of the generalized force of a fixed world wrench on ``joint``'s body, shape (nv, nv).
 
         Args:
@@ -83,23 +102,24 @@ class TreeDerivatives:
             f: force [N], world, shape (3,).
             m: moment [N m], world, shape (3,).
             p: point of application [m], world, shape (3,).
+            out: an (nv, nv) array to add the derivative to (returned), instead of a new one.
 
         Returns:
             ``D[c, k]`` = :math:`\partial Q_c / \partial q_k`.
         """
         nv = self.model.nv
-        D = np.zeros((nv, nv))
-        idx = np.flatnonzero(self.columns(joint))
+        D = np.zeros((nv, nv)) if out is None else out
+        _, idx, mask = self._structure.body(joint)
         if idx.size == 0:
             return D
         V, W = self.S[:3, idx], self.S[3:, idx]  # (3, n): the columns moving the body
         F = pin.skew(f)
         # W . ad(S_k) S_c = v_c.(f x w_k) + w_c.(f x v_k) + w_c.(n x w_k), for k above c
         term = V.T @ (F @ W) + W.T @ (F @ V) + W.T @ (pin.skew(m - F @ p) @ W)  # p x f = -f x p
-        term *= self.above[np.ix_(idx, idx)].T
+        term *= mask
         # + w_c . (dp_k x f), dp_k = v_k + w_k x p the point's motion
         term -= W.T @ (F @ (V - pin.skew(p) @ W))
-        D[np.ix_(idx, idx)] = term
+        D[np.ix_(idx, idx)] += term
         return D
 
     def angular(self, joint: int) -> np.ndarray:
@@ -126,7 +146,8 @@ def closure_derivative(
         if c.spec.type != "point":
             m, dm = _closure_moment(c, tree, ja, jb, oMa.rotation, oMb.rotation, lam_c[3:])
             D += (tree.angular(jb) - tree.angular(ja)).T @ dm
-        D += tree.dead_wrench(jb, f, m, oMb.translation) + tree.dead_wrench(ja, -f, -m, oMa.translation)
+        tree.dead_wrench(jb, f, m, oMb.translation, out=D)
+        tree.dead_wrench(ja, -f, -m, oMa.translation, out=D)
     return D
 
 
