@@ -53,7 +53,7 @@ class _Structure:
         self._bodies: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
     def body(self, joint: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Columns moving the body of ``joint``: mask (nv,), indices (n,), ``above`` on them transposed (n, n)."""
+        """Columns moving the body of ``joint``: mask (nv,), indices (n,), transposed ``above`` on them."""
         if joint not in self._bodies:
             mask = self.above[:, self.first_v[joint]] if joint else np.zeros(self.above.shape[0], dtype=bool)
             idx = np.flatnonzero(mask)
