@@ -16,7 +16,7 @@ from plm_pin.stiffness.equilibrium import hessian_terms
 from tests.conftest import ball_joint_body, fd_jacobian, preset
 
 from .mechanisms import RPR_ROD, cantilever, pendulum, rpr, rpr_points, stewart
-from .oracle import compliance_by_equilibria
+from .oracle import compliance_by_equilibria, equilibrium_displacement
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -266,3 +266,21 @@ def test_planar_3rpr_with_flexible_legs_is_drives_in_series_with_rods(tmp_path):
     )
     assert rigid.min_translational > res.min_translational  # the rods' axial compliance adds in series
     assert np.abs(res.contributions["links"]).max() > 0.0
+
+
+def test_deflection_matches_potential_minimisation_under_a_large_load():
+    """Newton's non-linear deflection of the preloaded 3D4M equals the scipy-minimised equilibrium."""
+    mech = preset("harada2011_3d4m")
+    k = 2.0e4
+    q = mech.q_ref
+    sol = static_forces(mech, q, internal={"plate": -100.0}, limits=None)
+    w = np.array([40.0, -60.0, 2.0])  # large enough that the response is visibly non-linear
+    d = deflection(mech, q, w, forces=sol, compliance=_drives(mech, k))
+    want = equilibrium_displacement(mech, q, sol.f_c, np.full(4, k), np.array([w[0], w[1], 0, 0, 0, w[2]]))
+    np.testing.assert_allclose(d.task_displacement, want[[0, 1, 5]], rtol=1e-8, atol=1e-12)
+    assert np.linalg.norm(d.task_displacement - d.linear_displacement) > 1e-3 * np.linalg.norm(
+        d.linear_displacement
+    )
+    np.testing.assert_allclose(
+        d.actuator_deflections, mech.actuator_positions(d.q_rigid) - mech.actuator_positions(q)
+    )
