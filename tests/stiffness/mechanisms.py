@@ -35,11 +35,12 @@ def stewart_points() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return a, b, np.array([0.02, -0.01, HEIGHT])
 
 
-def stewart(tmp_path: Path, platform_mass: float = 0.0) -> Mechanism:
+def stewart(tmp_path: Path, platform_mass: float = 0.0, spin: bool = False) -> Mechanism:
     """A 6-UPS Stewart-Gough platform: U at the base, driven prismatic leg, ball (point closure) at the top.
 
     Leg 1 carries the platform through a ball made of three revolutes; legs 2-6 end in a point
-    closure. The platform is world-aligned at the reference. Legs are massless.
+    closure. The platform is world-aligned at the reference. Legs are massless. With ``spin``,
+    legs 2-6 also turn about their own axis (6-SPS): five idle motions.
     """
     a, b, p = stewart_points()
     links = [u.link("base")]
@@ -61,10 +62,16 @@ def stewart(tmp_path: Path, platform_mass: float = 0.0) -> Mechanism:
                 axis=(1, 0, 0),
             ),
             u.joint(f"leg{n}_uy", "revolute", f"leg{n}_u", f"leg{n}_cyl", axis=(0, 1, 0)),
-            u.joint(
-                f"leg{n}_slide", "prismatic", f"leg{n}_cyl", f"leg{n}_rod", axis=(0, 0, 1), limits=(0.0, 2.0)
-            ),
         ]
+        cyl = f"leg{n}_cyl"
+        if spin and n > 1:
+            links.append(u.link(f"leg{n}_spun"))
+            joints.append(u.joint(f"leg{n}_spin", "revolute", cyl, f"leg{n}_spun"))
+            reference[f"leg{n}_spin"] = 0.0
+            cyl = f"leg{n}_spun"
+        joints.append(
+            u.joint(f"leg{n}_slide", "prismatic", cyl, f"leg{n}_rod", axis=(0, 0, 1), limits=(0.0, 2.0))
+        )
         reference.update({f"leg{n}_ux": 0.0, f"leg{n}_uy": 0.0, f"leg{n}_slide": float(np.linalg.norm(d))})
         if n > 1:
             links.append(u.link(f"leg{n}_tip"))

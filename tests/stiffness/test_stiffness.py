@@ -113,6 +113,16 @@ def test_stewart_gough_matches_griffis_duffy(tmp_path, force):
     assert res.idle == 0
 
 
+def test_idle_leg_spins_are_left_out(tmp_path):
+    """6-SPS (legs free to spin about their axis): five idle motions dropped, K_x still Griffis-Duffy's."""
+    mech = stewart(tmp_path, spin=True)
+    k = 2.0e5
+    res = stiffness(mech, mech.q_ref, gravity=False, compliance=_drives(mech, k))
+    want = _griffis_duffy(mech, mech.q_ref, k, np.zeros(6))
+    np.testing.assert_allclose(res.K_x, want, rtol=0, atol=1e-9 * np.abs(want).max())
+    assert res.idle == 5
+
+
 def test_preloaded_3d4m_matches_potential_minimisation():
     """3D4M with internal preload f_i = 100 N: K_x equals finite differences of scipy-minimised equilibria."""
     mech = preset("harada2011_3d4m")
