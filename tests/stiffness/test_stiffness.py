@@ -294,3 +294,13 @@ def test_deflection_matches_potential_minimisation_under_a_large_load():
     np.testing.assert_allclose(
         d.actuator_deflections, mech.actuator_positions(d.q_rigid) - mech.actuator_positions(q)
     )
+
+
+def test_stiffness_is_symmetric_under_conservative_loads():
+    """Dead forces (and a moment about a fixed axis in the plane) are conservative: K_x is symmetric."""
+    eight = preset("zhao2011_8pss")
+    res = stiffness(eight, eight.q_ref, [1000.0, -2000.0, 500.0, 0.0, 0.0, 0.0])
+    assert np.abs(res.K_x - res.K_x.T).max() <= 1e-12 * np.abs(res.K_x).max()
+    four = preset("harada2011_3d4m")
+    res = stiffness(four, four.q_ref, [10.0, -20.0, 1.0], internal={"plate": -30.0})
+    assert np.abs(res.K_x - res.K_x.T).max() <= 1e-12 * np.abs(res.K_x).max()
