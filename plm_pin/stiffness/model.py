@@ -184,11 +184,18 @@ def _place_beam(mech: Mechanism, beam: BeamSpec) -> tuple[BeamSpec, float, int, 
             raise FrameNotFound(name, mech.frame_names, "frame", "compliance.links")
     link = model.frames[model.getFrameId(beam.link)]
     tip = model.frames[model.getFrameId(beam.tip)]
-    if tip.parentJoint != link.parentJoint or link.parentJoint == 0:
+    if tip.parentJoint == link.parentJoint:
+        tip_position = tip.placement.translation
+    elif tip.type == pin.FrameType.JOINT and model.parents[tip.parentJoint] == link.parentJoint:
+        tip_position = model.jointPlacements[tip.parentJoint].translation  # a child joint's origin
+    else:
+        tip_position = None
+    if tip_position is None or link.parentJoint == 0:
         raise InvalidInput(
-            f"{mech.name}: beam {beam.link!r}: its tip frame {beam.tip!r} must be on the same moving body"
+            f"{mech.name}: beam {beam.link!r}: its tip {beam.tip!r} must be a frame on the same moving body "
+            "or a joint it carries"
         )
-    axis = tip.placement.translation - link.placement.translation
+    axis = tip_position - link.placement.translation
     length = float(np.linalg.norm(axis))
     if length < 1e-6:
         raise InvalidInput(
@@ -204,7 +211,7 @@ def _place_beam(mech: Mechanism, beam: BeamSpec) -> tuple[BeamSpec, float, int, 
         y = np.cross(np.eye(3)[int(np.argmin(np.abs(x)))], x)
     y /= np.linalg.norm(y)
     R = np.column_stack([x, y, np.cross(x, y)])
-    return beam, length, int(link.parentJoint), pin.SE3(R, tip.placement.translation.copy())
+    return beam, length, int(link.parentJoint), pin.SE3(R, np.array(tip_position))
 
 
 def _inertia(pi: np.ndarray) -> pin.Inertia:

@@ -304,3 +304,38 @@ def test_stiffness_is_symmetric_under_conservative_loads():
     four = preset("harada2011_3d4m")
     res = stiffness(four, four.q_ref, [10.0, -20.0, 1.0], internal={"plate": -30.0})
     assert np.abs(res.K_x - res.K_x.T).max() <= 1e-12 * np.abs(res.K_x).max()
+
+
+ROD = (7.0e10, 2.6e10, 3.2e-5, 4.3e-11, 1.7e-10, 1.17e-10)
+"""Aluminium 8 x 4 mm rod section: E, G [Pa], A [m^2], Iy, Iz, J [m^4] (assumed)."""
+
+
+def test_3d4m_with_flexible_rods_is_drives_and_rods_in_series():
+    """Pin-jointed rods carry axial forces only: K_x = sum k_leg j j^T, 1/k_leg = u_x^2 / k + L / EA."""
+    from plm_pin.description.compliance import BeamSpec
+
+    mech = preset("harada2011_3d4m")
+    k, L = 1.0e6, 0.14
+    tips = {1: "plate_pivot", 2: "rod2_tip", 3: "rod3_tip", 4: "rod4_tip"}  # rod 1 carries the plate's joint
+    beams = tuple(BeamSpec(f"rod{i}", tips[i], ROD, y_axis=(0.0, 1.0, 0.0)) for i in tips)
+    spec = ComplianceSpec(actuators={a.joint: k for a in mech.actuators}, links=beams)
+    res = stiffness(mech, mech.q_ref, gravity=False, compliance=spec)
+    model, data = mech.model, mech.data
+    pin.framesForwardKinematics(model, data, mech.q_ref)
+    centre = data.oMf[model.getFrameId("plate_center")].translation
+    K = np.zeros((3, 3))
+    for i, tip in tips.items():
+        s = data.oMf[model.getFrameId(f"rod{i}")].translation
+        t = (
+            data.oMi[model.getJointId("plate_pivot")].translation
+            if i == 1
+            else data.oMf[model.getFrameId(tip)].translation
+        )
+        uu = (t - s) / np.linalg.norm(t - s)
+        r = t - centre
+        j = np.array([uu[0], uu[1], r[0] * uu[1] - r[1] * uu[0]])
+        K += j[:, None] * j[None, :] / (uu[0] ** 2 / k + L / (ROD[0] * ROD[2]))
+    np.testing.assert_allclose(res.K_x, K, rtol=0, atol=1e-9 * np.abs(K).max())
+    full = natural_frequencies(mech, mech.q_ref, model="full", result=res)
+    task = natural_frequencies(mech, mech.q_ref, result=res)
+    assert full.lowest < task.lowest  # the rods' out-of-plane bending adds softer modes
