@@ -16,7 +16,7 @@ import numpy as np
 
 from plm_pin import Mechanism, build_mechanism, load
 from plm_pin.analysis import singular_points_along, workspace_sweep
-from plm_pin.description.compliance import ComplianceSpec
+from plm_pin.description.compliance import BeamSpec, ComplianceSpec
 from plm_pin.dynamics import DecouplingReport, SimulationResult, decoupling_check, simulate
 from plm_pin.models import PRESETS
 from plm_pin.models.registry import HARADA2011_DRIVE_STIFFNESS
@@ -324,16 +324,55 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
         "gravity (K_x not positive definite, eigen-stiffnesses then meaningless). Preload's practical "
         "benefit, removing backlash, is not in this model.",
     )
-    modes = {
-        name: natural_frequencies(mech, mech.q_ref, compliance=_drives(mech, k))
-        for name, mech in (("3D4M", four), ("3D3M", three))
-    }
+    flexible = _flexible_rods(four, k)
+    rigid = stiffness(four, four.q_ref, compliance=_drives(four, k))
+    bent = stiffness(four, four.q_ref, compliance=flexible)
     section.table(
-        f"Natural frequencies at the reference pose (M_x and K_x, drives {k:g} N/m)",
-        ["table", *(Column(f"mode {i + 1}", "Hz", ".5g") for i in range(3))],
-        [(name, *m.frequencies.tolist()) for name, m in modes.items()],
+        "3D4M with flexible rods (aluminium 8 x 4 mm beams, an assumption; virtual joints)",
+        [
+            "rods",
+            Column("smallest translational", "N/m", ".7g"),
+            Column("largest translational", "N/m", ".7g"),
+            Column("rotational", "N m/rad", ".7g"),
+        ],
+        [
+            (label, r.translational.values[0], r.translational.values[-1], r.rotational.values[0])
+            for label, r in (("rigid", rigid), ("flexible", bent))
+        ],
+        note=f"E = {ROD_SECTION[0]:g} Pa, G = {ROD_SECTION[1]:g} Pa, A = {ROD_SECTION[2]:g} m^2, "
+        f"I = {ROD_SECTION[3]:g} (out of plane), {ROD_SECTION[4]:g} (in plane) m^4, "
+        f"J = {ROD_SECTION[5]:g} m^4. "
+        "The pin-jointed rods add their axial compliance L/EA in series with the drives.",
+    )
+    data["3D4M flexible rods"] = bent.to_dict()
+    rows = []
+    for name, mech, spec, model in (
+        ("3D4M", four, _drives(four, k), "task"),
+        ("3D3M", three, _drives(three, k), "task"),
+        ("3D4M, flexible rods", four, flexible, "task"),
+        ("3D4M, flexible rods", four, flexible, "full"),
+    ):
+        m = natural_frequencies(mech, mech.q_ref, model=model, compliance=spec)
+        rows.append((name, model, *m.frequencies[:3].tolist()))
+    section.table(
+        f"Lowest natural frequencies at the reference pose (drives {k:g} N/m)",
+        ["table", "model", *(Column(f"mode {i + 1}", "Hz", ".5g") for i in range(3))],
+        rows,
+        note="'task': M_x and K_x (the plane's three motions); 'full': every motion of the compliant model, "
+        "here with the rods' out-of-plane bending, which lets the plate move out of the plane.",
     )
     _stiffness_sweep(section, four, three, data)
+
+
+ROD_SECTION = (7.0e10, 2.6e10, 3.2e-5, 4.3e-11, 1.7e-10, 1.17e-10)
+"""Assumed rod beams: aluminium 8 x 4 mm, E, G [Pa], A [m^2], Iy (out of plane), Iz (in plane), J [m^4]."""
+
+
+def _flexible_rods(four: Mechanism, k: float) -> ComplianceSpec:
+    """Drives of stiffness k and the four rods as beams (rod 1's tip: the plate's joint)."""
+    tips = {1: "plate_pivot", 2: "rod2_tip", 3: "rod3_tip", 4: "rod4_tip"}
+    beams = tuple(BeamSpec(f"rod{i}", tip, ROD_SECTION, y_axis=(0.0, 1.0, 0.0)) for i, tip in tips.items())
+    return ComplianceSpec(actuators={a.joint: k for a in four.actuators}, links=beams, source="assumed")
 
 
 def _stable(res: StiffnessResult) -> bool:

@@ -96,3 +96,13 @@ def test_stiffness_of_the_3d4m_is_the_drives_k_j_ce_t_j_ce_and_compression_softe
     assert "Stiffness and lowest natural frequency against the plate angle at x = 0, y = 0.08 m" in _figures(
         result
     )
+
+
+def test_flexible_rods_soften_the_3d4m_and_add_out_of_plane_modes(result):
+    """Rods as beams: every eigen-stiffness drops; the full model's lowest mode is below the task model's."""
+    rods = {r[0]: r for r in _table(result, "3D4M with flexible rods").rows}
+    assert all(f < r for f, r in zip(rods["flexible"][1:], rods["rigid"][1:], strict=True))
+    freq = {(r[0], r[1]): r[2] for r in _table(result, "Lowest natural frequencies").rows}
+    assert (
+        freq[("3D4M, flexible rods", "full")] < freq[("3D4M, flexible rods", "task")] < freq[("3D4M", "task")]
+    )
