@@ -16,10 +16,13 @@ import numpy as np
 
 from plm_pin import Mechanism, build_mechanism, load
 from plm_pin.analysis import singular_points_along, workspace_sweep
+from plm_pin.description.compliance import BeamSpec, ComplianceSpec
 from plm_pin.dynamics import DecouplingReport, SimulationResult, decoupling_check, simulate
 from plm_pin.models import PRESETS
+from plm_pin.models.registry import HARADA2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.statics import force_capability, static_forces, wrench_polygon
+from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
 from plm_pin.viz import fig8, plot_skeletons, plot_sweep
 
 from . import _harada2011_paper as paper
@@ -84,6 +87,8 @@ def run(ctx: StudyContext) -> None:
     _statics(ctx.section("Static forces (section 4, Fig. 8)"), four, three)
     ctx.step("force capability")
     _capability(ctx.section("Force capability: redundant vs non-redundant (beyond the paper)"), four, three)
+    ctx.step("stiffness: preload and redundancy")
+    _stiffness(ctx.section("Stiffness: internal preload and redundancy (beyond the paper)"), four, three)
     ctx.step("task-space dynamics and decoupling")
     _decoupling(ctx.section("Decoupled dynamics (eq. (23))"), four, ctx.load("harada2015_asymmetric"))
     ctx.step("simulations 1 and 2")
@@ -248,6 +253,162 @@ def _capability(section: Section, four: Mechanism, three: Mechanism) -> None:
     ax.grid(alpha=0.3)
     ax.legend()
     section.figure(fig, "Loads (f_x, f_y) on the plate centre held within the limits (moment 0).", polygons)
+
+
+PRELOADS = (0.0, 2.0, 5.0, 10.0, 20.0)
+"""Plate compressions f_i of the preload table [N] (Harada 2011 eqs. (20)-(22), Fig. 8)."""
+
+SOFT_DRIVE = 1.0e4
+"""A soft drive stiffness [N/m] for which the geometric stiffness of the preload shows (an assumption)."""
+
+STIFFNESS_ANGLES = np.radians(np.linspace(-40.0, 40.0, 81))
+"""Plate angles of the stiffness sweep [rad]."""
+
+
+def _drives(mech: Mechanism, k: float) -> ComplianceSpec:
+    return ComplianceSpec(
+        actuators={a.joint: k for a in mech.actuators}, source=f"drives {k:g} N/m (assumed)"
+    )
+
+
+def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
+    compliance = four.sidecar.compliance
+    k = HARADA2011_DRIVE_STIFFNESS
+    section.text(
+        "The paper gives no stiffness. Each linear motor is assumed to hold its slider with "
+        f"k = {k:g} N/m ({compliance.source if compliance else 'preset'}); rods and plate rigid. The task "
+        "stiffness is the Hessian of the potential condensed on the closed chain (`plm_pin.stiffness`): "
+        "the drives' part k J_ce^T J_ce, plus the geometric stiffness of gravity and of the constraint "
+        "forces, which is where the internal force f_i enters. The plate compression f_i (eqs. (20)-(22)) "
+        "is applied as `internal={'plate': -f_i}` on top of gravity."
+    )
+    rows = []
+    data: dict[str, object] = {}
+    for drive in (k, SOFT_DRIVE):
+        base3 = stiffness(three, three.q_ref, compliance=_drives(three, drive))
+        rows.append(
+            ("3D3M", drive, None, base3.min_translational, base3.rotational.values[0], 1.0, _stable(base3))
+        )
+        base4 = None
+        for f_i in PRELOADS:
+            res = stiffness(four, four.q_ref, internal={"plate": -f_i}, compliance=_drives(four, drive))
+            base4 = res if base4 is None else base4
+            rows.append(
+                (
+                    "3D4M",
+                    drive,
+                    f_i,
+                    res.min_translational,
+                    res.rotational.values[0],
+                    res.min_translational / base3.min_translational,
+                    _stable(res),
+                )
+            )
+            data[f"3D4M k={drive:g} f_i={f_i:g}"] = res.to_dict()
+        data[f"3D3M k={drive:g}"] = base3.to_dict()
+    section.table(
+        "Eigen-stiffness at the reference pose (x = 0, y = 0.08 m, theta = -20 deg), gravity included",
+        [
+            "table",
+            Column("drive stiffness", "N/m", ".3g"),
+            Column("f_i", "N", ".3g"),
+            Column("smallest translational", "N/m", ".7g"),
+            Column("rotational", "N m/rad", ".7g"),
+            Column("translational / 3D3M", "-", ".5g"),
+            "stable",
+        ],
+        rows,
+        note="The compression f_i lowers the stiffness (compressed links soften, tension would stiffen); "
+        "with the assumed drives its geometric stiffness, of order f_i / l, is about 1e-4 of the drives' "
+        "and the fourth drive is what stiffens the 3D4M. With soft drives the 3D3M is unstable under "
+        "gravity (K_x not positive definite, eigen-stiffnesses then meaningless). Preload's practical "
+        "benefit, removing backlash, is not in this model.",
+    )
+    flexible = _flexible_rods(four, k)
+    rigid = stiffness(four, four.q_ref, compliance=_drives(four, k))
+    bent = stiffness(four, four.q_ref, compliance=flexible)
+    section.table(
+        "3D4M with flexible rods (aluminium 8 x 4 mm beams, an assumption; virtual joints)",
+        [
+            "rods",
+            Column("smallest translational", "N/m", ".7g"),
+            Column("largest translational", "N/m", ".7g"),
+            Column("rotational", "N m/rad", ".7g"),
+        ],
+        [
+            (label, r.translational.values[0], r.translational.values[-1], r.rotational.values[0])
+            for label, r in (("rigid", rigid), ("flexible", bent))
+        ],
+        note=f"E = {ROD_SECTION[0]:g} Pa, G = {ROD_SECTION[1]:g} Pa, A = {ROD_SECTION[2]:g} m^2, "
+        f"I = {ROD_SECTION[3]:g} (out of plane), {ROD_SECTION[4]:g} (in plane) m^4, "
+        f"J = {ROD_SECTION[5]:g} m^4. "
+        "The pin-jointed rods add their axial compliance L/EA in series with the drives.",
+    )
+    data["3D4M flexible rods"] = bent.to_dict()
+    rows = []
+    for name, mech, spec, model in (
+        ("3D4M", four, _drives(four, k), "task"),
+        ("3D3M", three, _drives(three, k), "task"),
+        ("3D4M, flexible rods", four, flexible, "task"),
+        ("3D4M, flexible rods", four, flexible, "full"),
+    ):
+        m = natural_frequencies(mech, mech.q_ref, model=model, compliance=spec)
+        rows.append((name, model, *m.frequencies[:3].tolist()))
+    section.table(
+        f"Lowest natural frequencies at the reference pose (drives {k:g} N/m)",
+        ["table", "model", *(Column(f"mode {i + 1}", "Hz", ".5g") for i in range(3))],
+        rows,
+        note="'task': M_x and K_x (the plane's three motions); 'full': every motion of the compliant model, "
+        "here with the rods' out-of-plane bending, which lets the plate move out of the plane.",
+    )
+    _stiffness_sweep(section, four, three, data)
+
+
+ROD_SECTION = (7.0e10, 2.6e10, 3.2e-5, 4.3e-11, 1.7e-10, 1.17e-10)
+"""Assumed rod beams: aluminium 8 x 4 mm, E, G [Pa], A [m^2], Iy (out of plane), Iz (in plane), J [m^4]."""
+
+
+def _flexible_rods(four: Mechanism, k: float) -> ComplianceSpec:
+    """Drives of stiffness k and the four rods as beams (rod 1's tip: the plate's joint)."""
+    tips = {1: "plate_pivot", 2: "rod2_tip", 3: "rod3_tip", 4: "rod4_tip"}
+    beams = tuple(BeamSpec(f"rod{i}", tip, ROD_SECTION, y_axis=(0.0, 1.0, 0.0)) for i, tip in tips.items())
+    return ComplianceSpec(actuators={a.joint: k for a in four.actuators}, links=beams, source="assumed")
+
+
+def _stable(res: StiffnessResult) -> bool:
+    """Whether K_x is positive definite (a stable equilibrium)."""
+    return bool(np.linalg.eigvalsh(0.5 * (res.K_x + res.K_x.T)).min() > 0.0)
+
+
+def _stiffness_sweep(
+    section: Section, four: Mechanism, three: Mechanism, reference: dict[str, object]
+) -> None:
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.2), layout="constrained")
+    curves: dict[str, object] = {
+        "theta_deg": np.degrees(STIFFNESS_ANGLES).tolist(),
+        "reference_pose": reference,
+    }
+    for name, mech in (("3D4M", four), ("3D3M", three)):
+        line = workspace_sweep(mech, "rz", STIFFNESS_ANGLES)
+        smap = stiffness_map(mech, line)
+        left.semilogy(np.degrees(STIFFNESS_ANGLES), smap.min_translational_stiffness, label=name)
+        right.plot(np.degrees(STIFFNESS_ANGLES), smap.lowest_frequency, label=name)
+        curves[name] = smap.to_dict()
+    left.set_xlabel("theta [deg]")
+    left.set_ylabel("smallest translational eigen-stiffness [N/m]")
+    right.set_xlabel("theta [deg]")
+    right.set_ylabel("lowest natural frequency [Hz]")
+    for ax in (left, right):
+        ax.grid(alpha=0.3)
+        ax.legend()
+    section.figure(
+        fig,
+        "Stiffness and lowest natural frequency against the plate angle at x = 0, y = 0.08 m: the 3D3M "
+        "softens towards its direct singularity, the redundant 3D4M does not.",
+        curves,
+    )
 
 
 def _decoupling(section: Section, four: Mechanism, asym: Mechanism) -> None:

@@ -18,7 +18,15 @@ from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
 from plm_pin.kinematics import classify, task_pose
 from plm_pin.report import Animation, Column, Section, StudyContext
 from plm_pin.statics import StaticForces, actuator_limits, internal_force_range, static_forces
-from plm_pin.viz import MeshcatViewer, force_arrows, plot_map, plot_static_forces, plot_sweep
+from plm_pin.stiffness import natural_frequencies, stiffness, stiffness_map
+from plm_pin.viz import (
+    MeshcatViewer,
+    force_arrows,
+    plot_map,
+    plot_static_forces,
+    plot_stiffness_map,
+    plot_sweep,
+)
 
 TITLE = "Overview"
 SUMMARY = (
@@ -110,6 +118,8 @@ def run(ctx: StudyContext) -> None:
         _decoupling(section, mech, grid)
     else:
         section.text(NEEDS_SQUARE_TASK.format(what="No decoupling check"))
+    ctx.step(f"{mech.name}: stiffness")
+    _stiffness(ctx.section("Stiffness and natural frequencies"), mech, grid)
     ctx.step(f"{mech.name}: passive simulation")
     _simulation(ctx.section("Short simulation: released under gravity"), mech)
     ctx.step(f"{mech.name}: 3D scene")
@@ -229,6 +239,91 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
             ],
         )
     return grid
+
+
+PRELOAD_STEPS = 5
+"""Internal-force values of the preload table (from 0 to the largest, both signs)."""
+
+
+def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -> None:
+    compliance = mech.sidecar.compliance
+    if compliance is None or mech.task is None:
+        section.text(
+            "No stiffness: the description has no `compliance` section (drive stiffness under "
+            "`compliance.actuators`) or no task."
+        )
+        return
+    section.text(
+        "The task stiffness K_x is the Hessian of the potential (springs, gravity, loads, and the "
+        "constraint forces' curvature lambda^T d2phi) condensed on the closed chain, at the static "
+        "equilibrium under gravity with minimum-norm actuator forces (`plm_pin.stiffness`). "
+        "Eigen-stiffnesses are read under pure forces [N/m] and pure moments [N m/rad] apart. "
+        f"Springs of the description: {compliance.source or 'as described'}."
+    )
+    q = mech.q_ref
+    try:
+        res = stiffness(mech, q)
+        modes = natural_frequencies(mech, q, result=res)
+    except PlmError as exc:
+        section.text(f"No stiffness at the reference: {exc}", markdown=False)
+        return
+    rows: list[tuple[str, object, str]] = [
+        (f"translational eigen-stiffness {i + 1}", v, "N/m") for i, v in enumerate(res.translational.values)
+    ]
+    rows += [
+        (f"rotational eigen-stiffness {i + 1}", v, "N m/rad") for i, v in enumerate(res.rotational.values)
+    ]
+    rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(modes.frequencies)]
+    section.table(
+        "Stiffness and modes at the reference", ["quantity", Column("value", fmt=".5g"), "unit"], rows
+    )
+    dofs = res.dofs
+    section.table(
+        "Share of each source in the diagonal of K_x at the reference",
+        ["source", *(Column(d, "N/m" if not d.startswith("r") else "N m/rad", ".4g") for d in dofs)],
+        [(name, *np.diag(K).tolist()) for name, K in res.contributions.items()],
+        note="The shares add up to K_x; the geometric ones (gravity, load, closures) may be negative.",
+    )
+    if mech.redundancy > 0:
+        _preload_effect(section, mech)
+    if grid is not None and len(grid.axes) == 2:
+        smap = stiffness_map(mech, grid)
+        import matplotlib.pyplot as plt
+
+        fig, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.5), layout="constrained")
+        plot_stiffness_map(smap, "min_translational_stiffness", ax=left)
+        plot_stiffness_map(smap, "lowest_frequency", ax=right)
+        section.figure(
+            fig,
+            "Smallest translational eigen-stiffness (left) and lowest natural frequency (right) over the "
+            "workspace slice, under gravity with minimum-norm forces.",
+            {"stiffness_map": smap.to_dict()},
+        )
+
+
+def _preload_effect(section: Section, mech: Mechanism) -> None:
+    """Stiffness along the first internal-force direction, both signs, up to 5 times the weight's forces."""
+    scale = max(10.0, 5.0 * float(np.max(np.abs(static_forces(mech, mech.q_ref, limits=None).f_c))))
+    rows = []
+    for y in np.linspace(-scale, scale, 2 * PRELOAD_STEPS - 1):
+        coords = np.zeros(mech.redundancy)
+        coords[0] = y
+        try:
+            res = stiffness(mech, mech.q_ref, internal=coords)
+        except PlmError:
+            continue
+        rows.append((float(y), res.min_translational, *res.rotational.values[:1].tolist()))
+    section.table(
+        "Preload: stiffness at the reference along the first internal-force direction",
+        [
+            Column("internal force coordinate", "N", ".4g"),
+            Column("smallest translational eigen-stiffness", "N/m", ".6g"),
+            Column("smallest rotational eigen-stiffness", "N m/rad", ".6g"),
+        ],
+        rows,
+        note="The internal force changes K_x only through the curvature of the constraint forces it causes "
+        "(geometric stiffness); the springs are unchanged.",
+    )
 
 
 def _decoupling_sample(grid: WorkspaceSlice) -> np.ndarray:

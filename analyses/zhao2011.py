@@ -28,8 +28,10 @@ from plm_pin.models import (
     ZHAO2011_TRAJECTORY_DURATION,
     zhao2011_trajectory,
 )
+from plm_pin.models.registry import ZHAO2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.statics import static_forces
+from plm_pin.stiffness import natural_frequencies, stiffness
 
 TITLE = "Zhao 2011: motor torque, power and work of a redundant 8-PSS"
 SUMMARY = "Figs. 4-8 and Table 5 along eq. (35); 8-PSS vs 6-PSS; why Table 5 does not reproduce."
@@ -99,6 +101,8 @@ def run(ctx: StudyContext) -> None:
     _work_by_component(section, id8, traj8)
     ctx.step("8-PSS vs 6-PSS")
     _compare(ctx.section("8-PSS vs 6-PSS"), eight, six, id8, id6, grid)
+    ctx.step("stiffness: 8-PSS vs 6-PSS")
+    _stiffness(ctx.section("Stiffness: 8-PSS vs 6-PSS (beyond the paper)"), eight, six)
 
 
 def _assumptions(section: Section) -> None:
@@ -374,4 +378,64 @@ def _compare(
         ],
         note=f"Equilibrium residuals {s8.residual:.1e} N (8-PSS) and {s6.residual:.1e} N (6-PSS). The 8-PSS "
         f"has {s8.internal.size} internal forces; the 6-PSS's forces are unique.",
+    )
+
+
+STIFFNESS_SAMPLES = 33
+"""Poses of the eq. (35) trajectory at which the stiffness is evaluated."""
+
+
+def _stiffness(section: Section, eight: Mechanism, six: Mechanism) -> None:
+    import matplotlib.pyplot as plt
+
+    k = ZHAO2011_DRIVE_STIFFNESS
+    section.text(
+        f"The paper gives no stiffness. Each ball-screw drive is assumed to hold its slider with k = {k:g} "
+        "N/m along its guide; struts and platform rigid. The task stiffness (`plm_pin.stiffness`) includes "
+        "the geometric stiffness of gravity and of the strut forces holding the platform (minimum-norm "
+        "allocation on the 8-PSS). Eigen-stiffnesses are under pure forces [N/m] and pure moments "
+        "[N m/rad] about the platform centre."
+    )
+    rows = []
+    data: dict[str, object] = {}
+    for name, mech in (("8-PSS", eight), ("6-PSS", six)):
+        res = stiffness(mech, mech.q_ref)
+        modes = natural_frequencies(mech, mech.q_ref, result=res)
+        rows.append((name, *res.translational.values.tolist(), *res.rotational.values.tolist(), modes.lowest))
+        data[name] = {"stiffness": res.to_dict(), "modes": modes.to_dict()}
+    section.table(
+        "Eigen-stiffness and lowest natural frequency at the home pose, gravity held",
+        [
+            "platform",
+            *(Column(f"translational {i + 1}", "N/m", ".4g") for i in range(3)),
+            *(Column(f"rotational {i + 1}", "N m/rad", ".4g") for i in range(3)),
+            Column("lowest frequency", "Hz", ".4g"),
+        ],
+        rows,
+        note="Two more drives on the 8-PSS (legs 1 and 8) add their stiffness along their guides.",
+    )
+    times = np.linspace(0.0, ZHAO2011_TRAJECTORY_DURATION, STIFFNESS_SAMPLES)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.2), layout="constrained")
+    curves: dict[str, object] = {"t": times.tolist(), "home": data}
+    for name, mech in (("8-PSS", eight), ("6-PSS", six)):
+        traj = task_trajectory(mech, zhao2011_trajectory, times)
+        trans, freq = [], []
+        for q in traj.q:
+            res = stiffness(mech, q)
+            trans.append(res.min_translational)
+            freq.append(natural_frequencies(mech, q, result=res).lowest)
+        left.plot(times, trans, label=name)
+        right.plot(times, freq, label=name)
+        curves[name] = {"min_translational_stiffness": trans, "lowest_frequency": freq}
+    left.set_ylabel("smallest translational eigen-stiffness [N/m]")
+    right.set_ylabel("lowest natural frequency [Hz]")
+    for ax in (left, right):
+        ax.set_xlabel("t [s]")
+        ax.grid(alpha=0.3)
+        ax.legend()
+    section.figure(
+        fig,
+        "Stiffness along eq. (35): smallest translational eigen-stiffness and lowest natural frequency "
+        "of the 8-PSS and the 6-PSS (assumed drive stiffness, gravity held).",
+        curves,
     )

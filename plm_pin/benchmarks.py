@@ -130,6 +130,26 @@ def run() -> list[dict[str, object]]:
             rows.append({"mechanism": name, "case": case, "seconds_per_call": _per_call(fn)})
     rows.extend(allocation_benchmark())
     rows.append(map_benchmark())
+    rows.extend(stiffness_benchmark())
+    return rows
+
+
+def stiffness_benchmark() -> list[dict[str, object]]:
+    """Cost per pose of :func:`plm_pin.stiffness.stiffness` beside ``closed_chain_jacobians``.
+
+    Every preset with a compliance in its sidecar, at its reference configuration under gravity.
+    """
+    from .stiffness import stiffness
+
+    rows: list[dict[str, object]] = []
+    for name in preset_names():
+        mech = load(name)
+        if mech.sidecar.compliance is None:
+            continue
+        call = functools.partial(stiffness, mech, mech.q_ref)
+        rows.append(
+            {"mechanism": name, "case": "stiffness (gravity, min-norm)", "seconds_per_call": _per_call(call)}
+        )
     return rows
 
 

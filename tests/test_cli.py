@@ -360,7 +360,7 @@ def test_sweep_writes_the_result_and_resumes_from_its_checkpoints(tmp_path):
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        (SWEEP_CONFIG.replace("manipulability,", "stiffness,"), "unknown metric 'stiffness'; metrics are ["),
+        (SWEEP_CONFIG.replace("manipulability,", "rigidity,"), "unknown metric 'rigidity'; metrics are ["),
         (
             SWEEP_CONFIG.replace("legs:", "leg:"),
             "unknown parameter 'leg' of harada2011_3d4m; its parameters are",

@@ -22,6 +22,8 @@ directions form the task. Format ``plm-pin/1``::
       task: [x, y, rz]
     reference:                         # optional guess of an assembled configuration
       slider1: -0.1                    # [m] or [rad]; multi-DOF joints take a list (Pinocchio order)
+    compliance:                        # optional springs, see plm_pin.description.compliance
+      actuators: {slider1: 2.0e7}      # [N/m] or [N m/rad] along the actuated joint
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ import yaml
 from .._text import short
 from .._yaml import YamlRefused, load_yaml
 from ..exceptions import DescriptionError
+from .compliance import ComplianceSpec, parse_compliance
 
 FORMAT = "plm-pin/1"
 SIDECAR_SUFFIX_DEFAULT = ".plm.yaml"
@@ -153,6 +156,7 @@ class Sidecar:
         reference: a guess of an assembled configuration, per joint name.
         name: optional mechanism name.
         source: optional provenance (paper, table).
+        compliance: springs of the drives, joints and links, or None (a rigid description).
     """
 
     closures: tuple[ClosureSpec, ...] = ()
@@ -162,6 +166,7 @@ class Sidecar:
     reference: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
     name: str | None = None
     source: str | None = None
+    compliance: ComplianceSpec | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The sidecar as plain data, ready for YAML."""
@@ -197,6 +202,8 @@ class Sidecar:
             out["reference"] = {
                 k: (float(v[0]) if len(v) == 1 else [float(x) for x in v]) for k, v in self.reference.items()
             }
+        if self.compliance is not None:
+            out["compliance"] = self.compliance.to_dict()
         return out
 
     def to_yaml(self) -> str:
@@ -330,6 +337,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         "actuation",
         "end_effector",
         "reference",
+        "compliance",
     )
     _keys(data, allowed, "sidecar", path)
     if data.get("format") != FORMAT:
@@ -393,6 +401,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         reference=reference,
         name=name,
         source=source,
+        compliance=parse_compliance(data.get("compliance"), path),
     )
 
 

@@ -23,6 +23,7 @@ from collections.abc import Sequence
 
 import yourdfpy
 
+from ..description.compliance import assumed_drive_stiffness
 from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from . import _urdf as u
 
@@ -73,6 +74,7 @@ def build_2prrrp(
     reference_pose: Sequence[float] = (0.0, 0.08, 0.0),
     working_modes: Sequence[int] = (-1, 1, -1, 1),
     gravity: float = 9.81,
+    actuator_stiffness: float | None = None,
     source: str = "",
 ) -> tuple[yourdfpy.Robot, Sidecar]:
     """Build a 2-PRRRP table (or a subset of its legs) as a URDF tree plus sidecar.
@@ -90,6 +92,8 @@ def build_2prrrp(
         reference_pose: plate pose ``(x [m], y [m], theta [rad])`` of the reference configuration.
         working_modes: sign of the square root of eq. (2) per leg.
         gravity: magnitude of gravity along -y [m/s^2].
+        actuator_stiffness: stiffness of each linear motor along its guide [N/m], written
+            into the sidecar's ``compliance`` (marked assumed), or None.
         source: provenance written into the sidecar.
 
     Returns:
@@ -171,6 +175,7 @@ def build_2prrrp(
         reference={k: tuple(float(x) for x in v) for k, v in reference.items()},
         name=name,
         source=source,
+        compliance=assumed_drive_stiffness([f"slider{i}" for i in legs], actuator_stiffness),
     )
     return robot, sidecar
 

@@ -85,6 +85,7 @@ import numpy as np
 import pinocchio as pin
 import yourdfpy
 
+from ..description.compliance import assumed_drive_stiffness
 from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from . import _urdf as u
 
@@ -315,6 +316,7 @@ def build_pss(
     home_pose: Sequence[float],
     gravity: Sequence[float],
     stroke: tuple[float, float] = (0.0, 1.5),
+    actuator_stiffness: float | None = None,
     source: str = "",
 ) -> tuple[yourdfpy.Robot, Sidecar]:
     """Build an n-PSS manipulator (a subset of its legs) as a URDF tree plus sidecar.
@@ -342,6 +344,8 @@ def build_pss(
             reference configuration.
         gravity: gravity vector in the world frame [m/s^2].
         stroke: slider position limits [m] written into the URDF.
+        actuator_stiffness: axial stiffness of each ball-screw drive along its guide [N/m],
+            written into the sidecar's ``compliance`` (marked assumed), or None.
         source: provenance written into the sidecar.
 
     Returns:
@@ -447,5 +451,6 @@ def build_pss(
         reference={k: tuple(float(x) for x in v) for k, v in reference.items()},
         name=name,
         source=source,
+        compliance=assumed_drive_stiffness([f"slider{i}" for i in legs], actuator_stiffness),
     )
     return robot, sidecar

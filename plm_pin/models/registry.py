@@ -60,6 +60,12 @@ def _frozen(**kwargs: Any) -> Mapping[str, Any]:
     return MappingProxyType(kwargs)
 
 
+HARADA2011_DRIVE_STIFFNESS = 1.0e6
+"""Assumed stiffness of each linear motor of the Harada 2011 tables [N/m] (the paper gives none)."""
+
+ZHAO2011_DRIVE_STIFFNESS = 1.0e8
+"""Assumed axial stiffness of each ball-screw drive of the Zhao 2011 platforms [N/m] (none in the paper)."""
+
 # Harada 2011, Table 1 and (M.36): l = 0.140 m, r_t = 0.05 m, rods 0.026 kg 9.84e-5 kg m^2,
 # plate 0.132 kg 8.54e-4 kg m^2, moving parts 0.375 kg, g = 9.8 m/s^2 (M.37).
 _HARADA2011 = dict(
@@ -73,6 +79,7 @@ _HARADA2011 = dict(
     reference_pose=(0.0, 0.08, math.radians(-20.0)),
     working_modes=(-1, 1, -1, 1),
     gravity=9.8,
+    actuator_stiffness=HARADA2011_DRIVE_STIFFNESS,
 )
 _HARADA2011_NOTES = (
     "Working modes (-, +, -, +) as in the code (M.5) and skeletons (M.42); the text after eq. (2) "
@@ -82,6 +89,8 @@ _HARADA2011_NOTES = (
     "Rod and plate inertias are the table's values about the axis normal to the plane; the axial "
     "inertias (irrelevant in the plane) are those of a 5 mm radius bar and a 10 mm plate.",
     "No actuator force limits are given by the paper; none are set.",
+    "No stiffness is given by the paper: each linear motor is assumed to hold its slider with "
+    "1e6 N/m (a servo position loop of a small linear motor); rods and plate rigid.",
 )
 
 
@@ -120,6 +129,7 @@ _ZHAO2011 = dict(
     home_pose=pss.ZHAO2011_HOME_POSE,
     gravity=pss.ZHAO2011_GRAVITY,
     stroke=(0.0, 1.5),
+    actuator_stiffness=ZHAO2011_DRIVE_STIFFNESS,
 )
 _ZHAO2011_NOTES = (
     "Guides: sliders 1-4 along +z, 5-6 along +y, 7-8 along +x, q_i measured from B_i (Table 1); "
@@ -141,6 +151,8 @@ _ZHAO2011_NOTES = (
     "rotates); stroke 0-1.5 m ours; no force limits given; d_i = 0.244 m enters no equation, unused.",
     "Table 5 (work per motor, sum 15242.219 J) is not reproduced by the paper's printed model "
     "(a literal re-implementation gives about 8479 J); quoted in plm_pin.models.pss only.",
+    "No stiffness is given by the paper: each ball-screw drive (screw, nut, bearings, servo) is "
+    "assumed to hold its slider with 1e8 N/m along the guide; struts and platform rigid.",
 )
 
 

@@ -12,7 +12,10 @@ mechanism), over the sweep's pose grid; none re-derives a formula:
 - ``orientation_range`` runs :func:`plm_pin.analysis.orientation_range` along the rotation
   axis for every combination of the other pose coordinates;
 - ``peak_force`` and ``preload`` call :func:`plm_pin.statics.static_forces` at every reached
-  pose, for every wrench of the set.
+  pose, for every wrench of the set;
+- ``stiffness`` calls :func:`plm_pin.stiffness.stiffness` and
+  :func:`plm_pin.stiffness.natural_frequencies` at every reached pose (the mechanism's
+  sidecar compliance, gravity and the internal preload ``internal``).
 
 Variables have the dimensions of the parameter space followed by pose axes: all of them
 (``"pose"``), those left after reducing over ``over`` (``"reduced"``), or all but the
@@ -38,6 +41,8 @@ from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import KINDS, SINGULARITY_TOL
 from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
+from ..stiffness import stiffness_map
+from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
 
 if TYPE_CHECKING:
     from ..analysis import WorkspaceSlice
@@ -151,6 +156,31 @@ def _wrenches(name: str, value: Any) -> tuple[tuple[float, ...], ...] | None:
     return tuple(tuple(float(v) for v in row) for row in arr)
 
 
+def _internal(name: str, value: Any) -> tuple[float, ...] | dict[str, float] | None:
+    if value is None:
+        return None
+    if isinstance(value, Mapping):
+        return {str(k): _finite(f"{name}.{k}", v) for k, v in value.items()}
+    if isinstance(value, Sequence) and not isinstance(value, str) and value:
+        return tuple(_finite(name, v) for v in value)
+    raise InvalidInput(
+        f"option {name!r} must be internal-force coordinates (a list of numbers) or "
+        f"{{link: axial force [N]}}, got {value!r}"
+    )
+
+
+def _direction(name: str, value: Any) -> tuple[float, ...] | None:
+    if value is None:
+        return None
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        arr = np.empty(0)
+    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or not np.any(arr):
+        raise InvalidInput(f"option {name!r} must be a non-zero list of numbers, got {value!r}")
+    return tuple(float(v) for v in arr)
+
+
 OPTIONS: dict[str, Option] = {
     o.name: o
     for o in (
@@ -183,6 +213,19 @@ OPTIONS: dict[str, Option] = {
         ),
         Option("compression", 0.0, "compression every preloaded link must carry [N]", _finite),
         Option("preload_links", None, "hinged links held in compression (default: all of them)", _names),
+        Option(
+            "internal",
+            None,
+            "internal preload of the stiffness: coordinates in the internal basis or {link: axial force "
+            "[N]} (Harada 2011's f_i on the 3D4M: {plate: -f_i}); default the minimum-norm forces",
+            _internal,
+        ),
+        Option(
+            "compliance_direction",
+            None,
+            "direction in the task's translation coordinates of compliance_along (default: the first one)",
+            _direction,
+        ),
     )
 }
 """Every option any metric takes, by name."""
@@ -345,6 +388,17 @@ def _preload(ev: PointEvaluation) -> dict[str, np.ndarray]:
     return {"preload": ev.static_peak(needed)}
 
 
+def _stiffness(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    smap = stiffness_map(
+        ev.mech,
+        ev.grid,
+        direction=ev.option("compliance_direction"),
+        gravity=ev.option("gravity"),
+        internal=ev.option("internal"),
+    )
+    return {name: np.array(smap.variable(name)) for name in STIFFNESS_VARIABLES}
+
+
 _W = "Yoshikawa manipulability w = sqrt(det(J_ce^T J_ce)) (Harada 2011 eq. (13)); 0 at a direct singularity"
 
 METRICS: dict[str, Metric] = {
@@ -453,6 +507,19 @@ METRICS: dict[str, Metric] = {
             (Variable("preload", "N", "internal preload needed over the wrench set"),),
             ("wrenches", "gravity", "compression", "preload_links"),
             _preload,
+        ),
+        Metric(
+            "stiffness",
+            "Cartesian stiffness with the geometric stiffness of gravity and internal preload "
+            "(plm_pin.stiffness, the sidecar's compliance): smallest translational eigen-stiffness, "
+            "compliance along a direction, lowest natural frequency (task model); NaN where singular",
+            (
+                Variable("min_translational_stiffness", "N/m", "smallest eigen-stiffness under a pure force"),
+                Variable("compliance_along", "m/N", "displacement per unit force along compliance_direction"),
+                Variable("lowest_frequency", "Hz", "lowest natural frequency from M_x and K_x"),
+            ),
+            ("gravity", "internal", "compliance_direction"),
+            _stiffness,
         ),
     )
 }

@@ -5,6 +5,7 @@ from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
 from .meshcat_server import MeshcatServer, ViewerError
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
 from .skeleton import plot_skeletons
+from .stiffness_figures import plot_stiffness_map
 from .sweep_figures import plot_sweep_heatmap, plot_sweep_lines
 
 __all__ = [
@@ -18,6 +19,7 @@ __all__ = [
     "plot_map",
     "plot_skeletons",
     "plot_static_forces",
+    "plot_stiffness_map",
     "plot_sweep",
     "plot_sweep_heatmap",
     "plot_sweep_lines",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -66,3 +67,42 @@ def test_report_has_every_figure_and_the_animation(result):
     (scene,) = scenes
     assert len(scene.data["qs"]) == len(scene.data["times"]) > 50
     assert scene.data["times"][-1] == pytest.approx(2.0)
+
+
+def _table(result, start: str):
+    return next(
+        b for s in result.sections for b in s.blocks if b.kind == "table" and b.title.startswith(start)
+    )
+
+
+def test_stiffness_of_the_3d4m_is_the_drives_k_j_ce_t_j_ce_and_compression_softens_it(result):
+    """f_i = 0: smallest translational eigen-stiffness of k J_ce^T J_ce (eq. (12)); falls as f_i grows.
+
+    Within the gravity term (|dg/dq| ~ 20 N/m on 1.7e6 N/m: 1e-4).
+    """
+    from analyses import _harada2011_paper as paper
+
+    rows = _table(result, "Eigen-stiffness at the reference pose").rows
+    four = [r for r in rows if r[0] == "3D4M" and r[1] == 1.0e6]
+    pose, legs = (0.0, 0.08, math.radians(-20.0)), (1, 2, 3, 4)
+    J = paper.J_ce(pose, paper.slider_positions(pose, L, RT, legs), L, RT, legs)
+    C = np.linalg.inv(1.0e6 * J.T @ J)
+    assert four[0][2] == 0.0
+    assert four[0][3] == pytest.approx(1.0 / np.linalg.eigvalsh(C[:2, :2]).max(), rel=1e-4)
+    stiff = [r[3] for r in four]
+    assert all(a > b for a, b in itertools.pairwise(stiff))
+    three = [r for r in rows if r[0] == "3D3M"]
+    assert three[0][6] and not three[1][6]  # the 3D3M on soft drives cannot hold its plate under gravity
+    assert "Stiffness and lowest natural frequency against the plate angle at x = 0, y = 0.08 m" in _figures(
+        result
+    )
+
+
+def test_flexible_rods_soften_the_3d4m_and_add_out_of_plane_modes(result):
+    """Rods as beams: every eigen-stiffness drops; the full model's lowest mode is below the task model's."""
+    rods = {r[0]: r for r in _table(result, "3D4M with flexible rods").rows}
+    assert all(f < r for f, r in zip(rods["flexible"][1:], rods["rigid"][1:], strict=True))
+    freq = {(r[0], r[1]): r[2] for r in _table(result, "Lowest natural frequencies").rows}
+    assert (
+        freq[("3D4M, flexible rods", "full")] < freq[("3D4M, flexible rods", "task")] < freq[("3D4M", "task")]
+    )

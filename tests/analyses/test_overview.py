@@ -16,6 +16,7 @@ SECTIONS = [
     "Workspace slice: manipulability and singularities",
     "Static forces at the reference configuration",
     "Task-space dynamics and decoupling",
+    "Stiffness and natural frequencies",
     "Short simulation: released under gravity",
     "3D view",
 ]
@@ -177,3 +178,23 @@ def test_overview_simulation_conserves_energy_and_closure(limited_3d4m_overview)
     scenes = _blocks(limited_3d4m_overview, "scene")
     animation = scenes["The passive simulation: play it in the page."]
     assert len(animation.data["qs"]) == len(animation.data["times"]) > 50
+
+
+def test_overview_stiffness_drive_share_is_k_j_ce_t_j_ce_and_preload_changes_it(limited_3d4m_overview):
+    """Drives share of K_x: k J_ce^T J_ce (eq. (12)); the preload table varies and meets it at y = 0."""
+    from analyses import _harada2011_paper as paper
+    from plm_pin.models.registry import HARADA2011_DRIVE_STIFFNESS
+
+    tables = _blocks(limited_3d4m_overview, "table")
+    pose, legs = (0.0, 0.08, np.radians(-20.0)), (1, 2, 3, 4)
+    J = paper.J_ce(pose, paper.slider_positions(pose, 0.14, 0.05, legs), 0.14, 0.05, legs)
+    share = {r[0]: r[1:] for r in tables["Share of each source in the diagonal of K_x at the reference"].rows}
+    np.testing.assert_allclose(share["actuators"], HARADA2011_DRIVE_STIFFNESS * np.diag(J.T @ J), rtol=1e-9)
+    rows = _rows(tables["Stiffness and modes at the reference"])
+    preload = tables["Preload: stiffness at the reference along the first internal-force direction"].rows
+    at_zero = [r for r in preload if r[0] == 0.0]
+    assert at_zero and at_zero[0][1] == pytest.approx(rows["translational eigen-stiffness 1"], rel=1e-12)
+    assert max(r[1] for r in preload) - min(r[1] for r in preload) > 1e-3  # the internal force changes K_x
+    figures = _blocks(limited_3d4m_overview, "figure")
+    caption = next(c for c in figures if c.startswith("Smallest translational eigen-stiffness"))
+    assert figures[caption].data["stiffness_map"]["units"]["min_translational_stiffness"] == "N/m"

@@ -69,3 +69,29 @@ def test_motion_is_animated(result):
     (scene,) = [b for s in result.sections for b in s.blocks if b.kind == "scene"]
     assert scene.data["times"][0] == 0.0 and np.all(np.diff(scene.data["times"]) > 0)
     assert scene.data["times"][-1] == pytest.approx(ZHAO2011_TRAJECTORY_DURATION)
+
+
+def test_stiffness_is_the_drives_k_j_ce_t_j_ce_and_the_8pss_is_stiffer(result):
+    """Home pose: eigen-stiffnesses of k J_ce^T J_ce; the two extra drives stiffen every direction.
+
+    Within the gravity term: strut forces ~1e3 N on struts of ~1 m against k = 1e8 N/m, 1e-5.
+    """
+    import plm_pin
+    from plm_pin.kinematics import closed_chain_jacobians
+    from plm_pin.models.registry import ZHAO2011_DRIVE_STIFFNESS
+
+    rows = {
+        r[0]: r
+        for r in _tables(result)[
+            "Eigen-stiffness and lowest natural frequency at the home pose, gravity held"
+        ].rows
+    }
+    for name in ("8-PSS", "6-PSS"):
+        mech = plm_pin.load(f"zhao2011_{name[0]}pss")
+        J = closed_chain_jacobians(mech, mech.q_ref).J_ce
+        C = np.linalg.inv(ZHAO2011_DRIVE_STIFFNESS * J.T @ J)
+        want = np.concatenate(
+            [1 / np.linalg.eigvalsh(C[:3, :3])[::-1], 1 / np.linalg.eigvalsh(C[3:, 3:])[::-1]]
+        )
+        np.testing.assert_allclose(rows[name][1:7], want, rtol=1e-3)
+    assert all(a > b for a, b in zip(rows["8-PSS"][1:8], rows["6-PSS"][1:8], strict=True))

@@ -173,3 +173,26 @@ def test_every_metric_documents_its_variables_and_options():
         for v in metric.variables:
             assert v.unit and v.description and v.dtype in ("float64", "int8", "bool")
         assert set(metric.options) <= set(OPTIONS)
+
+
+def test_stiffness_without_gravity_is_k_j_ce_t_j_ce_of_the_paper():
+    """Unloaded and unpreloaded, the 3D4M's K_x is k J_ce^T J_ce with eq. (12)'s J_ce; metrics read it."""
+    k = 3.0e5
+    xs = np.array([-0.02, 0.0, 0.02])
+    ds = sweep(
+        "harada2011_3d4m",
+        parameters={"actuator_stiffness": [k]},
+        poses={"x": xs, "y": [0.08]},
+        metrics=["stiffness"],
+        options={"gravity": False, "compliance_direction": [0.0, 1.0]},
+    ).dataset
+    theta = math.radians(-20.0)  # the preset's reference angle, kept by the pose grid
+    legs = (1, 2, 3, 4)
+    for i, x in enumerate(xs):
+        pose = (x, 0.08, theta)
+        J = paper.J_ce(pose, paper.slider_positions(pose, 0.14, 0.05, legs), 0.14, 0.05, legs)
+        C = np.linalg.inv(k * J.T @ J)
+        got = ds.min_translational_stiffness.values[0, i, 0]
+        assert got == pytest.approx(1.0 / np.linalg.eigvalsh(C[:2, :2]).max(), rel=1e-9)
+        assert ds.compliance_along.values[0, i, 0] == pytest.approx(C[1, 1], rel=1e-9)
+        assert np.isfinite(ds.lowest_frequency.values[0, i, 0])

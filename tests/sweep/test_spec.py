@@ -43,7 +43,7 @@ def test_unknown_parameter_lists_the_builders_parameters():
 def test_unknown_metric_and_option_list_the_valid_ones():
     """Unknown metrics and options, and options no chosen metric uses, are refused by name."""
     _refused(
-        f"unknown metric 'stiffness'; metrics are {list(METRICS)}", metrics=["manipulability", "stiffness"]
+        f"unknown metric 'rigidity'; metrics are {list(METRICS)}", metrics=["manipulability", "rigidity"]
     )
     _refused(f"unknown option 'tolerance'; options are {sorted(OPTIONS)}", options={"tolerance": 1e-9})
     _refused(

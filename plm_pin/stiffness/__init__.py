@@ -1,0 +1,25 @@
+"""Elastostatics of closed chains: compliant model, Cartesian stiffness, deflection, natural frequencies."""
+
+from .cartesian import EigenStiffness, StiffnessResult, stiffness
+from .deflection import Deflection, deflection
+from .equilibrium import ElasticState, elastic_state
+from .maps import StiffnessMap, stiffness_map
+from .model import CompliantModel, compliant_model
+from .modes import MODELS, Modes, natural_frequencies
+
+__all__ = [
+    "MODELS",
+    "CompliantModel",
+    "Deflection",
+    "EigenStiffness",
+    "ElasticState",
+    "Modes",
+    "StiffnessMap",
+    "StiffnessResult",
+    "compliant_model",
+    "deflection",
+    "elastic_state",
+    "natural_frequencies",
+    "stiffness",
+    "stiffness_map",
+]

@@ -1,0 +1,173 @@
+r"""An elastostatic equilibrium of the compliant model and the Hessian of its potential.
+
+At a configuration :math:`q` held by actuator forces :math:`f_c` and cut-joint forces
+:math:`\lambda` (:func:`plm_pin.statics.static_forces`: gravity, an external wrench, internal
+preload), the springs' rest positions are taken such that :math:`q` is the equilibrium:
+each drive spring carries its :math:`f_c`, each virtual joint the wrench its link passes to
+its tip, passive joint springs none. The generalized force residual
+
+.. math:: r(q) = g(q) - J_w^T w - J_\phi^T \lambda - F_s(q)
+
+(:math:`F_s` the springs' generalized forces) then vanishes, and its derivative on the
+tangent space at fixed loads and multipliers is the Hessian of the Lagrangian of the total
+potential,
+
+.. math:: H = K_s + \frac{\partial g}{\partial q} - \frac{\partial (J_w^T w)}{\partial q}
+          - \frac{\partial (J_\phi^T \lambda)}{\partial q},
+
+springs plus the geometric stiffness of gravity, of the load and of the constraint forces
+(:mod:`~plm_pin.stiffness.geometric`): this is where internal preload changes the stiffness.
+Every term is exact (Pinocchio's gravity derivatives and closed forms); :math:`H` is
+symmetric for conservative loads (no external moment in 3-D).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..description.compliance import ComplianceSpec
+from ..exceptions import InvalidInput
+from ..kinematics import closures as _closures
+from ..statics import Load, StaticForces, load_on_frame, static_forces
+from .geometric import TreeDerivatives, closure_derivative
+from .model import SOURCES, CompliantModel, compliant_model
+
+if TYPE_CHECKING:
+    from ..mechanism import Mechanism
+
+GEOMETRIC: tuple[str, ...] = ("gravity", "load", "closures")
+"""The geometric-stiffness terms, in the order results list them."""
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+@dataclass(frozen=True)
+class ElasticState:
+    """A loaded equilibrium of the compliant model.
+
+    Attributes:
+        compliant: the compliant model.
+        q: compliant configuration, shape (nq_c,).
+        forces: the rigid static solution holding it (actuator and cut-joint forces).
+        load: the external wrench on the compliant model, or None.
+        gravity: whether the bodies' weight is included.
+        spring_forces: generalized force each spring (and each rigid drive) exerts, shape (nv_c,) [N, N m].
+    """
+
+    compliant: CompliantModel
+    q: np.ndarray
+    forces: StaticForces
+    load: Load | None
+    gravity: bool
+    spring_forces: np.ndarray
+
+    @property
+    def lam(self) -> np.ndarray:
+        """Cut-joint forces [N, N m], shape (m,)."""
+        return self.forces.lam
+
+
+def elastic_state(
+    mech: Mechanism,
+    q: Any,
+    wrench: Any = None,
+    frame: str | None = None,
+    *,
+    gravity: bool = True,
+    internal: Any = None,
+    forces: StaticForces | None = None,
+    compliance: ComplianceSpec | None = None,
+) -> ElasticState:
+    """The equilibrium at ``q`` under gravity, ``wrench`` and internal preload.
+
+    Args:
+        mech: the mechanism.
+        q: assembled configuration, shape (nq,).
+        wrench: external wrench on ``frame`` (see :func:`plm_pin.statics.static_forces`).
+        frame: frame the wrench acts on; default the task frame.
+        gravity: include the bodies' weight.
+        internal: internal preload, as ``internal`` of :func:`~plm_pin.statics.static_forces`
+            (Harada 2011's :math:`f_i` on the 3D4M: ``{"plate": -f_i}``); default the
+            minimum-norm forces.
+        forces: a static solution at ``q`` to use instead (then ``wrench``, ``frame``,
+            ``gravity`` and ``internal`` are taken from it and must not be given).
+        compliance: the springs; default the sidecar's.
+
+    Raises:
+        InvalidInput: malformed arguments, no compliance.
+        SingularConfiguration: the load cannot be held at ``q``.
+    """
+    cm = compliant_model(mech, compliance)
+    if forces is None:
+        forces = static_forces(mech, q, wrench, frame, gravity=gravity, internal=internal, limits=None)
+    elif wrench is not None or frame is not None or internal is not None:
+        raise InvalidInput("give either forces= or the wrench, frame and internal preload, not both")
+    balance = forces.balance
+    qc = cm.lift(balance.q)
+    load = None
+    if balance.load is not None:
+        load = load_on_frame(cm.mech, balance.load.wrench, balance.load.frame)
+    tau = generalized_load(cm.mech, qc, load, balance.gravity)
+    J_phi = cm.mech.closure_jacobian(qc)
+    spring = tau - J_phi.T @ forces.lam
+    spring.setflags(write=False)
+    qc.setflags(write=False)
+    return ElasticState(cm, qc, forces, load, balance.gravity, spring)
+
+
+def generalized_load(mech: Mechanism, q: np.ndarray, load: Load | None, gravity: bool) -> np.ndarray:
+    r""":math:`g(q) - J_w^T w`, shape (nv,) [N, N m]."""
+    model, data = mech.model, mech.data
+    tau = np.array(pin.computeGeneralizedGravity(model, data, q)) if gravity else np.zeros(model.nv)
+    if load is not None:
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        tau -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
+    return tau
+
+
+def hessian_terms(
+    mech: Mechanism, q: np.ndarray, load: Load | None, gravity: bool, lam: np.ndarray
+) -> dict[str, np.ndarray]:
+    r"""The geometric-stiffness terms of :math:`H` at ``q``, by :data:`GEOMETRIC` name, each (nv, nv).
+
+    ``gravity``: :math:`\partial g / \partial q`; ``load``: :math:`-\partial (J_w^T w)/\partial q`;
+    ``closures``: :math:`-\partial (J_\phi^T \lambda) / \partial q`.
+    """
+    model, data = mech.model, mech.data
+    nv = model.nv
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    tree = TreeDerivatives(model, data)
+    out = {"gravity": np.zeros((nv, nv)), "load": np.zeros((nv, nv))}
+    if load is not None:
+        M = data.oMf[load.frame_id]
+        joint = model.frames[load.frame_id].parentJoint
+        out["load"] = -tree.dead_wrench(joint, load.wrench[:3], load.wrench[3:], M.translation)
+    out["closures"] = -closure_derivative(tree, data, mech.closures, lam)
+    if gravity:
+        out["gravity"] = np.array(pin.computeGeneralizedGravityDerivatives(model, data, q))
+    return out
+
+
+def hessian(state: ElasticState) -> dict[str, np.ndarray]:
+    """Every term of the Hessian :math:`H` of the compliant model at ``state``, each (nv_c, nv_c).
+
+    Keys: the spring sources (:data:`~plm_pin.stiffness.model.SOURCES`) then :data:`GEOMETRIC`.
+    """
+    cm = state.compliant
+    terms = dict(cm.springs)
+    terms.update(hessian_terms(cm.mech, state.q, state.load, state.gravity, state.lam))
+    return {k: terms[k] for k in (*SOURCES, *GEOMETRIC)}
+
+
+def closure_and_locks(cm: CompliantModel, q: np.ndarray) -> np.ndarray:
+    """Constraint rows of the compliant model: closures then locked drives, shape (m + n_locked, nv_c)."""
+    J_phi = _closures.jacobian(cm.mech.model, cm.mech.data, cm.mech.closures, q)
+    E = np.zeros((cm.locked.size, cm.mech.nv))
+    E[np.arange(cm.locked.size), cm.locked] = 1.0
+    return np.vstack([J_phi, E])

@@ -1,0 +1,120 @@
+"""Stiffness over a workspace slice: smallest translational eigen-stiffness, a compliance, the lowest mode."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..description.compliance import ComplianceSpec
+from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
+from .cartesian import stiffness
+from .modes import natural_frequencies
+
+if TYPE_CHECKING:
+    from ..analysis import WorkspaceSlice
+    from ..mechanism import Mechanism
+
+VARIABLES: dict[str, tuple[str, str]] = {
+    "min_translational_stiffness": ("N/m", "smallest eigen-stiffness under a pure force"),
+    "compliance_along": ("m/N", "displacement per unit force along the map's direction"),
+    "lowest_frequency": ("Hz", "lowest natural frequency from M_x and K_x"),
+}
+"""The variables of a stiffness map: unit and meaning."""
+
+
+@dataclass(frozen=True)
+class StiffnessMap:
+    """Stiffness metrics at every reached point of a workspace slice (NaN elsewhere and where singular).
+
+    Attributes:
+        axes: the slice's varied task coordinates.
+        values: their grid values [m, rad].
+        reachable: points reached by the slice, shape ``shape``.
+        direction: unit direction of ``compliance_along`` in the task's translation coordinates.
+        min_translational_stiffness: [N/m], shape ``shape``.
+        compliance_along: [m/N], shape ``shape``.
+        lowest_frequency: [Hz], shape ``shape``.
+    """
+
+    axes: tuple[str, ...]
+    values: tuple[np.ndarray, ...]
+    reachable: np.ndarray
+    direction: np.ndarray
+    min_translational_stiffness: np.ndarray
+    compliance_along: np.ndarray
+    lowest_frequency: np.ndarray
+
+    def variable(self, name: str) -> np.ndarray:
+        """One of :data:`VARIABLES` by name.
+
+        Raises:
+            InvalidInput: an unknown name.
+        """
+        if name not in VARIABLES:
+            raise InvalidInput(f"unknown stiffness-map variable {name!r}; variables are {list(VARIABLES)}")
+        return np.asarray(getattr(self, name))
+
+    def to_dict(self) -> dict[str, object]:
+        """Plain data for JSON (NaN where unreached), with units."""
+        return {
+            "axes": list(self.axes),
+            "values": [v.tolist() for v in self.values],
+            "direction": self.direction.tolist(),
+            **{name: self.variable(name).tolist() for name in VARIABLES},
+            "units": {name: unit for name, (unit, _) in VARIABLES.items()},
+        }
+
+
+def stiffness_map(
+    mech: Mechanism,
+    grid: WorkspaceSlice,
+    *,
+    direction: Any = None,
+    gravity: bool = True,
+    internal: Any = None,
+    compliance: ComplianceSpec | None = None,
+) -> StiffnessMap:
+    """Stiffness metrics at the configurations of a workspace slice.
+
+    Args:
+        mech: the mechanism the slice was computed for.
+        grid: a slice from :func:`plm_pin.analysis.workspace_map` (or ``workspace_grid``).
+        direction: direction of ``compliance_along`` in the task's translation coordinates
+            (default the first one, e.g. x).
+        gravity: hold the bodies' weight (and include its geometric stiffness).
+        internal: internal preload, as in :func:`plm_pin.statics.static_forces`.
+        compliance: the springs; default the sidecar's.
+
+    Raises:
+        InvalidInput: a malformed direction, no compliance.
+    """
+    shape = grid.reachable.shape
+    out = {name: np.full(shape, np.nan) for name in VARIABLES}
+    n_lin = sum(1 for d in grid.dofs if not d.startswith("r"))
+    u = np.eye(n_lin)[0] if direction is None else np.asarray(direction, dtype=float)
+    if u.shape != (n_lin,) or not np.all(np.isfinite(u)) or not np.any(u):
+        raise InvalidInput(f"direction must be {n_lin} finite numbers, not all zero, got {direction!r}")
+    u = u / np.linalg.norm(u)
+    for index in zip(*np.nonzero(grid.reachable), strict=True):
+        q = grid.q[index]
+        try:
+            res = stiffness(mech, q, gravity=gravity, internal=internal, compliance=compliance)
+            modes = natural_frequencies(mech, q, result=res)
+        except (SingularConfiguration, AllocationInfeasible):
+            continue
+        out["min_translational_stiffness"][index] = res.min_translational
+        out["compliance_along"][index] = res.compliance_along(u)
+        out["lowest_frequency"][index] = modes.lowest
+    for arr in (*out.values(), u):
+        arr.setflags(write=False)
+    return StiffnessMap(
+        tuple(grid.axes),
+        tuple(grid.values),
+        grid.reachable,
+        u,
+        out["min_translational_stiffness"],
+        out["compliance_along"],
+        out["lowest_frequency"],
+    )
