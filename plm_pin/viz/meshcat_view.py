@@ -21,6 +21,7 @@ forces in [N], angles in [rad], times in [s].
 
 from __future__ import annotations
 
+import functools
 import html
 import numbers
 from collections.abc import Mapping, Sequence
@@ -538,3 +539,35 @@ def scene_html(mech: Mechanism, q: Any = None, *, qs: Any = None, times: Any = N
     else:
         viewer.animate(qs, times)
     return viewer.static_html()
+
+
+@functools.cache
+def meshcat_bundle() -> str:
+    """Meshcat's JavaScript bundle (about 0.85 MB), the script every static page inlines.
+
+    Raises:
+        ViewerError: meshcat missing.
+    """
+    meshcat = require_meshcat()
+    dist = Path(str(meshcat.__file__)).parent / "viewer" / "dist"
+    return (dist / "main.min.js").read_text(encoding="utf-8")
+
+
+def share_bundle(page: str, src: str) -> str:
+    """``page`` (a static meshcat page) with its inlined bundle replaced by ``<script src=src>``.
+
+    Reports write the bundle once (:data:`plm_pin.report.writer.BUNDLE`), so that every scene
+    loads the same file instead of carrying its own copy. A page that does not inline this
+    meshcat's bundle is returned unchanged.
+    """
+    bundle = meshcat_bundle()
+    start = page.find(bundle)
+    if start < 0:
+        return page
+    opening = page.rfind("<script>", 0, start)
+    closing = page.find("</script>", start + len(bundle))
+    between = (page[opening + len("<script>") : start], page[start + len(bundle) : closing])
+    if opening < 0 or closing < 0 or any(part.strip() for part in between):
+        return page
+    tag = f'<script src="{html.escape(src, quote=True)}"></script>'
+    return page[:opening] + tag + page[closing + len("</script>") :]

@@ -30,11 +30,14 @@ SKIP = "PLM_PIN_SKIP_BROWSER"
 TIMEOUT = 60.0
 """Longest wait for a page, a figure or a 3D canvas [s]."""
 
+PAGE_WEIGHT = 1_000_000
+"""Largest report page, its scenes (separate pages, loaded lazily) not counted [bytes]."""
+
 CHROMIUM_ARGS = (
     "--headless=new",
     "--no-sandbox",  # root on CI; the pages are our own local files
     "--disable-dev-shm-usage",
-    "--window-size=1200,900",
+    "--window-size=1280,900",  # the width a report must fit without horizontal scrolling
     "--use-angle=swiftshader",  # software WebGL: no GPU on CI
     "--enable-unsafe-swiftshader",
 )
@@ -190,8 +193,40 @@ def reports(tmp_path_factory) -> Path:
     return out
 
 
-def test_reports_render_with_figures_and_3d_scenes(browser, reports):
-    """From index.html each report opens; figures load and show ink, scenes draw, no console error."""
+def _load_time(driver: Any) -> float:
+    """Time from navigation start to the end of the page's load event [s] (measured, not asserted)."""
+    timing = driver.execute_script("return performance.getEntriesByType('navigation')[0].toJSON()")
+    return float(timing["loadEventEnd"] - timing["startTime"]) / 1000.0
+
+
+def _horizontal_overflow(driver: Any) -> list[str]:
+    """The page's width beyond the window, and the elements sticking out of the main column."""
+    return driver.execute_script(
+        """
+        const out = [];
+        const doc = document.documentElement;
+        if (doc.scrollWidth > window.innerWidth) {
+            out.push(`page ${doc.scrollWidth} px > ${window.innerWidth} px`);
+        }
+        const main = document.querySelector('main');
+        if (main) {
+            const right = main.getBoundingClientRect().right;
+            for (const e of main.querySelectorAll('table, figure, pre, img, iframe')) {
+                const r = e.getBoundingClientRect().right;
+                const what = (e.querySelector('caption') || e).textContent.slice(0, 60);
+                if (r > right + 1) {
+                    const tag = e.tagName.toLowerCase();
+                    out.push(`${tag} '${what}' ends at ${Math.round(r)} > ${Math.round(right)} px`);
+                }
+            }
+        }
+        return out;
+        """
+    )
+
+
+def test_reports_render_with_figures_and_3d_scenes(browser, reports, record_property):
+    """From index.html each report opens light and fits 1280 px; figures show ink, scenes draw, no error."""
     from selenium.webdriver.common.by import By
 
     _open(browser, (reports / "index.html").as_uri())
@@ -200,7 +235,12 @@ def test_reports_render_with_figures_and_3d_scenes(browser, reports):
     assert len(pages) == 2
     assert _console_errors(browser) == []
     for page in pages:
+        path = Path(page.removeprefix("file://"))
+        assert path.stat().st_size < PAGE_WEIGHT, f"{path}: {path.stat().st_size} bytes"
         _open(browser, page)
+        record_property(f"load time {path.parent.name} [s]", _load_time(browser))
+        record_property(f"page weight {path.parent.name} [bytes]", path.stat().st_size)
+        assert _horizontal_overflow(browser) == [], page
         assert _check_report(browser, page) >= 3
         assert _console_errors(browser) == [], page
 
