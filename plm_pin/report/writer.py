@@ -148,6 +148,7 @@ def _entry(folder: Path) -> dict[str, Any] | None:
             "mechanisms": [str(m["name"]) for m in data["mechanisms"]],
             "rows": int(data["agreement"]["rows"]),
             "agree": int(data["agreement"]["agree"]),
+            "paper_inconsistent": int(data["agreement"].get("paper_inconsistent", 0)),
             "generated": str(data["generated"]),
         }
     except (OSError, ValueError, KeyError, TypeError):

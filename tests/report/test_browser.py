@@ -181,13 +181,13 @@ def _check_report(driver: Any, where: str) -> int:
 
 @pytest.fixture(scope="module")
 def reports(tmp_path_factory) -> Path:
-    """Reports written by the CLI: Harada 2015 (animations) and the overview of a user's five-bar."""
+    """Reports written by the CLI: Harada 2015 (animations), Zhao 2011 (wide tables) and a user's five-bar."""
     out = tmp_path_factory.mktemp("reports")
     user = tmp_path_factory.mktemp("user")
     for suffix in (".urdf", ".plm.yaml"):
         shutil.copy(plm_pin.models.urdf_folder() / f"fivebar{suffix}", user / f"fivebar{suffix}")
     runner = CliRunner()
-    for target in ("harada2015", str(user / "fivebar.urdf")):
+    for target in ("harada2015", "zhao2011", str(user / "fivebar.urdf")):
         result = runner.invoke(app, ["report", target, "--out", str(out)])
         assert result.exit_code == 0, result.output
     return out
@@ -232,7 +232,7 @@ def test_reports_render_with_figures_and_3d_scenes(browser, reports, record_prop
     _open(browser, (reports / "index.html").as_uri())
     links = [a.get_attribute("href") for a in browser.find_elements(By.CSS_SELECTOR, "table.index a")]
     pages = [link for link in links if link.endswith("/report.html")]
-    assert len(pages) == 2
+    assert len(pages) == 3
     assert _console_errors(browser) == []
     for page in pages:
         path = Path(page.removeprefix("file://"))

@@ -37,7 +37,7 @@ def test_report_files_and_permissions(demo_report):
         assert oct(f.stat().st_mode & 0o777) == "0o644"
     data = json.loads((folder / "results.json").read_text())
     assert data["format"] == "plm-pin-report/1" and data["study"] == "demo"
-    assert data["agreement"] == {"rows": 3, "agree": 2}
+    assert data["agreement"] == {"rows": 3, "agree": 2, "paper_inconsistent": 0}
 
 
 def test_every_number_in_a_table_is_in_results_json(demo_report):
