@@ -23,15 +23,20 @@ from plm_pin.sweep.config import KEYS, spec_from_config
 FOURBAR = yaml.safe_load((urdf_folder() / "fourbar.plm.yaml").read_text())
 
 
-def _fourbar(**changes: Any) -> dict[str, Any]:
-    """The four-bar's sidecar with top-level keys replaced (None removes a key)."""
-    data = copy.deepcopy(FOURBAR)
+def _changed(base: dict[str, Any], changes: dict[str, Any]) -> dict[str, Any]:
+    """A copy of ``base`` with top-level keys replaced (None removes a key)."""
+    data = copy.deepcopy(base)
     for key, value in changes.items():
         if value is None:
             data.pop(key, None)
         else:
             data[key] = value
     return data
+
+
+def _fourbar(**changes: Any) -> dict[str, Any]:
+    """The four-bar's sidecar with top-level keys replaced (None removes a key)."""
+    return _changed(FOURBAR, changes)
 
 
 def _closure(**item: Any) -> dict[str, Any]:
@@ -139,13 +144,8 @@ SWEEP = yaml.safe_load(
 
 
 def _sweep(**changes: Any) -> dict[str, Any]:
-    data = copy.deepcopy(SWEEP)
-    for key, value in changes.items():
-        if value is None:
-            data.pop(key, None)
-        else:
-            data[key] = value
-    return data
+    """The example sweep configuration with top-level keys replaced (None removes a key)."""
+    return _changed(SWEEP, changes)
 
 
 SWEEPS = [
