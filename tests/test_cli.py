@@ -174,8 +174,10 @@ def test_report_on_a_description_runs_the_overview(tmp_path, fourbar):
     result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
     assert result.exit_code == 0, result.output
     folder = out / "overview-fourbar"
-    assert sorted(p.name for p in out.iterdir()) == ["index.html", "overview-fourbar"]
-    assert sorted(p.name for p in folder.iterdir()) == ["report.html", "results.json"]
+    assert sorted(p.name for p in out.iterdir()) == ["index.html", "meshcat.min.js", "overview-fourbar"]
+    names = sorted(p.name for p in folder.iterdir())
+    scenes = [n for n in names if re.fullmatch(r"scene-\d+\.html", n)]
+    assert scenes and names == ["report.html", "results.json", *scenes]  # scenes share out/meshcat.min.js
     lines = result.stdout.splitlines()
     assert re.fullmatch(rf"wrote {re.escape(str(folder.resolve() / 'report.html'))} \(\d+\.\d s\)", lines[0])
     assert lines[1] == f"wrote {out.resolve() / 'index.html'}"
@@ -285,7 +287,7 @@ def test_report_never_writes_outside_out(tmp_path, fourbar):
     out = tmp_path / "reports"
     result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == ["index.html", "overview-x"]
+    assert sorted(p.name for p in out.iterdir()) == ["index.html", "meshcat.min.js", "overview-x"]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([*outside_before, "reports"])
 
 
