@@ -130,3 +130,15 @@ def test_api_reference_lists_every_public_name(site):
         if f'id="{m}.{n}"' not in text and f'id="module-{m}.{n}"' not in text  # a name or a package
     ]
     assert missing == []
+
+
+def test_getting_started_examples_run():
+    """The Python blocks of the getting-started page execute as written, in order, in one namespace."""
+    import re
+
+    page = DOCS / "getting-started.md"
+    blocks = re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S)
+    assert blocks
+    namespace: dict[str, object] = {}
+    for block in blocks:
+        exec(compile(block, str(page), "exec"), namespace)
