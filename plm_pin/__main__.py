@@ -2,4 +2,5 @@
 
 from .cli import main
 
-main()
+if __name__ == "__main__":  # imported (e.g. by pkgutil.walk_packages), it does nothing
+    main()
