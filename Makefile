@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.plm-pin-installed
 REPORTS ?= reports
 
-.PHONY: all setup test test-fast browser report lint format bench urdf clear-notebooks clean
+.PHONY: all setup test test-fast browser report docs lint format bench urdf clear-notebooks clean
 
 all: test
 
@@ -44,6 +44,12 @@ test-fast: $(STAMP)
 report: $(STAMP)
 	$(VENV)/bin/plm-pin report all --out $(REPORTS)
 
+# The docs site (Sphinx + MyST, tutorials executed): warnings are errors. `make test` builds it too
+# (tests/test_docs.py), into a temporary folder, and checks its internal links.
+docs: $(STAMP)
+	$(PY) -m sphinx -W --keep-going -q -b html docs docs/_build/html
+	@echo "open docs/_build/html/index.html"
+
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/ruff format --check .
@@ -64,4 +70,4 @@ clear-notebooks: $(STAMP)
 	$(PY) tests/test_notebooks.py
 
 clean:
-	rm -rf $(VENV) $(REPORTS) .pytest_cache .mypy_cache .ruff_cache build dist
+	rm -rf $(VENV) $(REPORTS) .pytest_cache .mypy_cache .ruff_cache build dist docs/_build

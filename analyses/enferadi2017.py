@@ -134,6 +134,7 @@ def _path(
                     "N",
                     rtol=0.0,
                     atol=1e-6,
+                    source="closed form",
                     fmt=".6f",
                 )
             )

@@ -170,11 +170,23 @@ def _statics_rows(mech: Mechanism, pose: tuple[float, float, float]) -> tuple[li
             equation = "(15)" if mech.redundancy == 0 else "(20)-(22)"
             comparisons.append(
                 Comparison(
-                    f"{label}: f_c{leg}, eq. {equation}", float(f_c[k]), float(sol.f_c[k]), "N", atol=1e-10
+                    f"{label}: f_c{leg}, eq. {equation}",
+                    float(f_c[k]),
+                    float(sol.f_c[k]),
+                    "N",
+                    atol=1e-10,
+                    source="closed form",
                 )
             )
     comparisons.append(
-        Comparison("largest |f_l, f_n - eq. (19)| over the cases and legs", 0.0, worst, "N", atol=1e-10)
+        Comparison(
+            "largest |f_l, f_n - eq. (19)| over the cases and legs",
+            0.0,
+            worst,
+            "N",
+            atol=1e-10,
+            source="closed form",
+        )
     )
     return rows, comparisons
 
@@ -428,12 +440,24 @@ def _decoupling(section: Section, four: Mechanism, asym: Mechanism) -> None:
         "Eq. (23) and (M.30)",
         [
             Comparison(
-                "m_xx = 4 m_l + 4 m_m + m_t, constant", 4 * m_l + 4 * m_m + m_t, mxx.value, "kg", rtol=1e-9
+                "m_xx = 4 m_l + 4 m_m + m_t, constant",
+                4 * m_l + 4 * m_m + m_t,
+                mxx.value,
+                "kg",
+                rtol=1e-9,
+                source="closed form",
             ),
             Comparison("m_xx constant over the workspace", "yes", "yes" if mxx.kind == "constant" else "no"),
             Comparison("m_xy vanishes", "yes", "yes" if rep.inertia("x", "y").kind == "zero" else "no"),
             Comparison("m_x theta vanishes", "yes", "yes" if rep.inertia("x", "rz").kind == "zero" else "no"),
-            Comparison("g_y = (2 m_l + m_t) g", (2 * m_l + m_t) * G, rep.gravity("y").value, "N", rtol=1e-9),
+            Comparison(
+                "g_y = (2 m_l + m_t) g",
+                (2 * m_l + m_t) * G,
+                rep.gravity("y").value,
+                "N",
+                rtol=1e-9,
+                source="closed form",
+            ),
             Comparison(
                 "gravity acts only along y",
                 "yes",
@@ -493,7 +517,12 @@ def _simulations(section: Section, mech: Mechanism) -> None:
         "Simulations (Tables 2-4)",
         [
             Comparison(
-                "simulation 1: x(2 s) = f_x / m_xx t^2 / 2", expected, float(one.x[-1, 0]), "m", rtol=1e-9
+                "simulation 1: x(2 s) = f_x / m_xx t^2 / 2",
+                expected,
+                float(one.x[-1, 0]),
+                "m",
+                rtol=1e-9,
+                source="closed form",
             ),
             Comparison("simulation 1: y stays 0.08 m", 0.08, float(one.x[-1, 1]), "m", rtol=1e-9),
             Comparison("simulation 2: x stays 0", 0.0, float(two.x[-1, 0]), "m", atol=1e-9),

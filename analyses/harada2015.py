@@ -152,7 +152,7 @@ def _comparisons(
     off = [n for n in graph.nodes if 0 not in n.mode]
     on = [n for n in graph.nodes if 0 in n.mode and n.mode != (0, 0)]
     lengths = [
-        Comparison(f"rod length l{g.index} (Fig. 2)", paper, g.length, "m", rtol=1e-9)
+        Comparison(f"rod length l{g.index} (Fig. 2)", paper, g.length, "m", rtol=1e-9, source="input")
         for g, paper in zip(layout.legs, (0.240, 0.170, 0.170, 0.240), strict=True)
     ]
     return [

@@ -128,25 +128,50 @@ def _assumptions(section: Section) -> None:
     )
 
 
-def _time_figure(t: np.ndarray, curves: dict[str, np.ndarray], ylabel: str) -> Any:
+PANELS_PER_ROW = 3
+"""Most panels side by side in a figure: more would be unreadable at the page's width."""
+
+NOISE = 1e-9
+"""A panel whose largest value is below this fraction of the figure's largest is round-off, not drawn."""
+
+
+def _time_figure(t: np.ndarray, curves: dict[str, np.ndarray], ylabel: str, unit: str) -> tuple[Any, str]:
+    """Panels of per-motor curves against time, at most three a row, one legend for all.
+
+    Returns the figure and a sentence naming the panels left out because they are zero to round-off.
+    """
     import matplotlib.pyplot as plt
 
+    largest = max(float(np.max(np.abs(v))) for v in curves.values())
+    drawn = {k: v for k, v in curves.items() if np.max(np.abs(v)) > NOISE * largest}
+    quiet = {k: float(np.max(np.abs(v))) for k, v in curves.items() if k not in drawn}
+    cols = min(PANELS_PER_ROW, len(drawn))
+    rows = -(-len(drawn) // cols)
     fig, axes = plt.subplots(
-        1, len(curves), figsize=(4.2 * len(curves), 3.4), layout="constrained", squeeze=False
+        rows, cols, figsize=(4.2 * cols, 3.2 * rows), layout="constrained", squeeze=False
     )
-    for ax, (title, values) in zip(axes[0], curves.items(), strict=True):
+    for ax, (title, values) in zip(axes.flat, drawn.items(), strict=False):
         for i in range(values.shape[1]):
             ax.plot(t, values[:, i], label=f"{i + 1}")
         ax.set_title(title)
         ax.set_xlabel("t [s]")
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
-    axes[0, -1].legend(title="motor", fontsize="small", ncol=2)
-    return fig
+    for ax in list(axes.flat)[len(drawn) :]:
+        ax.set_visible(False)
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, title="motor", loc="outside right upper", fontsize="small")
+    said = [
+        f"{name.split(' [')[0]} (zero)"
+        if peak == 0.0
+        else f"{name.split(' [')[0]} (zero to {peak:.0e} {unit})"
+        for name, peak in quiet.items()
+    ]
+    return fig, (" Not drawn, being zero to round-off: " + ", ".join(said) + ".") if said else ""
 
 
 def _motion(section: Section, mech: Mechanism, traj: JointTrajectory, shown: slice) -> None:
-    fig = _time_figure(
+    fig, quiet = _time_figure(
         traj.t[shown],
         {
             "(a) position [m]": traj.c[shown],
@@ -154,10 +179,11 @@ def _motion(section: Section, mech: Mechanism, traj: JointTrajectory, shown: sli
             "(c) acceleration [m/s^2]": traj.cdd[shown],
         },
         "",
+        "",
     )
     section.figure(
         fig,
-        "Fig. 4: slider position, velocity and acceleration along eq. (35).",
+        "Fig. 4: slider position, velocity and acceleration along eq. (35)." + quiet,
         {"t": traj.t[shown], "c": traj.c[shown], "cd": traj.cd[shown], "cdd": traj.cdd[shown]},
     )
     section.animation(trajectory_animation(mech))
@@ -181,10 +207,12 @@ def _motion(section: Section, mech: Mechanism, traj: JointTrajectory, shown: sli
 def _torques(section: Section, idr: InverseDynamics, shown: slice) -> None:
     arm = idr.leads / (2 * np.pi)
     terms = {f"{k} [N m]": v[shown] * arm for k, v in idr.terms.items()}
-    fig = _time_figure(idr.t[shown], {"(a) total": idr.motor_torque[shown], **terms}, "motor torque [N m]")
+    fig, quiet = _time_figure(
+        idr.t[shown], {"(a) total": idr.motor_torque[shown], **terms}, "motor torque [N m]", "N m"
+    )
     section.figure(
         fig,
-        "Fig. 5: motor torque, total and by term (inertia, velocity, gravity).",
+        "Fig. 5: motor torque, total and by term (inertia, velocity, gravity)." + quiet,
         {
             "t": idr.t[shown],
             "total": idr.motor_torque[shown],
@@ -192,10 +220,10 @@ def _torques(section: Section, idr: InverseDynamics, shown: slice) -> None:
         },
     )
     bodies = {k: v[shown] * arm for k, v in idr.bodies.items()}
-    fig = _time_figure(idr.t[shown], bodies, "motor torque [N m]")
+    fig, quiet = _time_figure(idr.t[shown], bodies, "motor torque [N m]", "N m")
     section.figure(
         fig,
-        "Fig. 6: motor torque by component (platform, struts, sliders, lead screw, rotor-coupler).",
+        "Fig. 6: motor torque by component (platform, struts, sliders, lead screw, rotor-coupler)." + quiet,
         {
             "t": idr.t[shown],
             **bodies,
@@ -209,15 +237,15 @@ def _torques(section: Section, idr: InverseDynamics, shown: slice) -> None:
 
 def _powers(section: Section, idr: InverseDynamics, shown: slice) -> None:
     terms = {k: v[shown] for k, v in idr.split_power("terms").items()}
-    fig = _time_figure(idr.t[shown], {"(a) total": idr.power[shown], **terms}, "power [W]")
+    fig, quiet = _time_figure(idr.t[shown], {"(a) total": idr.power[shown], **terms}, "power [W]", "W")
     section.figure(
         fig,
-        "Fig. 7: motor power, total and by term.",
+        "Fig. 7: motor power, total and by term." + quiet,
         {"t": idr.t[shown], "total": idr.power[shown], **terms},
     )
     bodies = {k: v[shown] for k, v in idr.split_power("bodies").items()}
-    fig = _time_figure(idr.t[shown], bodies, "power [W]")
-    section.figure(fig, "Fig. 8: motor power by component.", {"t": idr.t[shown], **bodies})
+    fig, quiet = _time_figure(idr.t[shown], bodies, "power [W]", "W")
+    section.figure(fig, "Fig. 8: motor power by component." + quiet, {"t": idr.t[shown], **bodies})
 
 
 def _dyadic(grid: np.ndarray, values: np.ndarray) -> Any:
@@ -243,6 +271,7 @@ def _work(section: Section, idr: InverseDynamics, grid: np.ndarray) -> None:
             explanation="Table 5 does not follow from the paper's printed model (see below); "
             f"the literal model gives {LITERAL_MODEL_WORK[i]:.3f} J",
             rtol=1e-3,
+            paper_inconsistent=True,
         )
         for i in range(paper.size)
     ]
@@ -253,6 +282,7 @@ def _work(section: Section, idr: InverseDynamics, grid: np.ndarray) -> None:
             float(trap.work.sum()),
             "J",
             explanation="as above: the printed data give about 8.48 kJ, not 15.24 kJ",
+            paper_inconsistent=True,
         )
     )
     rows.append(Comparison("n1 of eq. (34), e = 1e-3 J", 12, trap.n1))
@@ -264,6 +294,7 @@ def _work(section: Section, idr: InverseDynamics, grid: np.ndarray) -> None:
             largest,
             explanation="follows from Table 5; with the printed geometry motor 3 (vertical, largest "
             "stroke rate) does the most",
+            paper_inconsistent=True,
         )
     )
     section.comparison("Work per motor: paper vs plm_pin", rows)

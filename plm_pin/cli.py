@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import json
 import shlex
+import sys
 import warnings
 import webbrowser
 from collections.abc import Callable, Iterator
@@ -27,6 +28,7 @@ from rich.progress import (
 from rich.table import Table
 from typer.core import TyperGroup
 
+from . import __version__
 from ._io import atomic_path
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .kinematics import inverse_kinematics, task_pose
@@ -45,6 +47,8 @@ from .report import (
     write_index,
     write_report,
 )
+from .report.render import require_renderer
+from .report.study import studies_hint
 from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
@@ -73,6 +77,58 @@ app = typer.Typer(
 )
 console = Console()
 errors = Console(stderr=True)
+
+EXTRAS = {
+    "jinja2": "report",
+    "markdown_it": "report",
+    "matplotlib": "viz",
+    "meshcat": "viz",
+    "umsgpack": "viz",
+    "dask": "sweep",
+    "distributed": "sweep",
+    "xarray": "sweep",
+    "pyarrow": "sweep",
+    "pandas": "sweep",
+    "example_robot_data": "erd",
+}
+"""The optional extra of plm-pin that provides each optional top-level module."""
+
+
+def _version(value: bool) -> None:
+    if value:
+        console.print(f"plm-pin {__version__}", markup=False, highlight=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _options(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_version, is_eager=True, help="print the version and exit"),
+    ] = False,
+) -> None:
+    """Analyse parallel link mechanisms: closed chains described by a URDF tree plus cut joints."""
+
+
+def missing_extra(exc: ImportError) -> str:
+    """One line for a missing optional dependency: the module, and the extra that installs it."""
+    message = str(exc)
+    if "pip install" in message:  # plm_pin's own message already names the extra
+        return message
+    module = (exc.name or "").split(".")[0]
+    extra = EXTRAS.get(module)
+    if extra is None:
+        return f"{message} (a dependency of plm-pin is missing: reinstall it)"
+    return f"this command needs {module}, which is not installed: pip install 'plm-pin[{extra}]'"
+
+
+def main() -> None:
+    """Entry point of ``plm-pin`` and ``python -m plm_pin``: a missing optional extra is one line."""
+    try:
+        app()
+    except ImportError as exc:
+        errors.print(f"[bold red]error:[/] {escape(missing_extra(exc))}", highlight=False, soft_wrap=True)
+        sys.exit(1)
 
 
 def _fail(exc: Exception) -> typer.Exit:
@@ -221,6 +277,7 @@ def _report_runs(target: str, mechanism: str | None) -> list[tuple[Study, str | 
         return [(find_study(OVERVIEW), target)]
     raise InvalidInput(
         f"{target!r} is neither a study, 'all', a preset nor an existing path; studies are {names}"
+        f"{studies_hint()}"
     )
 
 
@@ -255,6 +312,7 @@ def report(
     whole: a failed or interrupted run leaves the previous report as it was.
     Nothing is written outside OUT.
     """
+    require_renderer()  # a missing report extra fails now, not after the studies ran
     try:
         runs = _report_runs(target, mechanism)
         root = output_folder(out)
@@ -568,4 +626,4 @@ def sweep_command(
 
 
 if __name__ == "__main__":  # pragma: no cover
-    app()
+    main()

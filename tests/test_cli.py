@@ -6,12 +6,15 @@ import dataclasses
 import json
 import re
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 import yaml
 from typer.testing import CliRunner
 
+import plm_pin
 from plm_pin import cli
 from plm_pin.cli import app
 from plm_pin.exceptions import PlmError
@@ -171,8 +174,10 @@ def test_report_on_a_description_runs_the_overview(tmp_path, fourbar):
     result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
     assert result.exit_code == 0, result.output
     folder = out / "overview-fourbar"
-    assert sorted(p.name for p in out.iterdir()) == ["index.html", "overview-fourbar"]
-    assert sorted(p.name for p in folder.iterdir()) == ["report.html", "results.json"]
+    assert sorted(p.name for p in out.iterdir()) == ["index.html", "meshcat.min.js", "overview-fourbar"]
+    names = sorted(p.name for p in folder.iterdir())
+    scenes = [n for n in names if re.fullmatch(r"scene-\d+\.html", n)]
+    assert scenes and names == ["report.html", "results.json", *scenes]  # scenes share out/meshcat.min.js
     lines = result.stdout.splitlines()
     assert re.fullmatch(rf"wrote {re.escape(str(folder.resolve() / 'report.html'))} \(\d+\.\d s\)", lines[0])
     assert lines[1] == f"wrote {out.resolve() / 'index.html'}"
@@ -282,7 +287,7 @@ def test_report_never_writes_outside_out(tmp_path, fourbar):
     out = tmp_path / "reports"
     result = runner.invoke(app, ["report", str(fourbar), "--out", str(out)])
     assert result.exit_code == 0, result.output
-    assert sorted(p.name for p in out.iterdir()) == ["index.html", "overview-x"]
+    assert sorted(p.name for p in out.iterdir()) == ["index.html", "meshcat.min.js", "overview-x"]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([*outside_before, "reports"])
 
 
@@ -424,3 +429,49 @@ def test_sweep_unreachable_scheduler_is_one_error_line(tmp_path, monkeypatch):
         "error: cannot reach the Dask scheduler at 'tcp://127.0.0.1:1' within 1 s"
     )
     assert result.stderr.count("\n") == 1
+
+
+def test_version_is_the_package_version():
+    """`plm-pin --version` prints plm_pin.__version__, which is also the installed distribution's."""
+    from importlib.metadata import version
+
+    result = runner.invoke(app, ["--version"])
+    assert result.exit_code == 0
+    assert result.output.strip() == f"plm-pin {plm_pin.__version__}"
+    assert version("plm-pin") == plm_pin.__version__
+
+
+def test_python_dash_m_runs_the_command_line():
+    """`python -m plm_pin --version` is the same command."""
+    out = subprocess.run(
+        [sys.executable, "-m", "plm_pin", "--version"], capture_output=True, text=True, check=True
+    )
+    assert out.stdout.strip() == f"plm-pin {plm_pin.__version__}"
+
+
+def test_report_without_the_report_extra_is_one_line_naming_it(tmp_path):
+    """With jinja2 missing, `plm-pin report fourbar` prints one line with the extra and writes nothing."""
+    code = (
+        "import sys; sys.modules['jinja2'] = None; sys.argv = ['plm-pin', 'report', 'fourbar', '--out', "
+        f"{str(tmp_path / 'out')!r}]; from plm_pin.cli import main; main()"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 1
+    assert out.stderr.strip().splitlines() == [
+        "error: plm_pin.report needs jinja2 and markdown-it-py, which are not installed: "
+        "pip install 'plm-pin[report]'"
+    ]
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_missing_module_is_named_with_its_extra():
+    """An ImportError of an optional module becomes one line naming the extra that provides it."""
+    from plm_pin.cli import missing_extra
+
+    err = ModuleNotFoundError("No module named 'matplotlib'", name="matplotlib")
+    assert (
+        missing_extra(err)
+        == "this command needs matplotlib, which is not installed: pip install 'plm-pin[viz]'"
+    )
+    own = ImportError("plm_pin.sweep needs dask, which is not installed: pip install 'plm-pin[sweep]'")
+    assert missing_extra(own) == str(own)

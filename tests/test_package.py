@@ -36,9 +36,10 @@ def test_core_import_does_not_pull_optional_dependencies():
     assert out.stdout.strip() == "[]"
 
 
-@pytest.mark.slow
-def test_wheel_installed_outside_the_checkout_loads_every_preset(tmp_path):
-    """`pip wheel .` installed into a fresh venv, run outside the checkout, loads all presets."""
+@pytest.fixture(scope="module")
+def wheel_venv(tmp_path_factory) -> Path:
+    """`pip wheel .` installed (with its required dependencies only) into a fresh venv; its bin folder."""
+    tmp_path = tmp_path_factory.mktemp("wheel")
     wheels = tmp_path / "wheels"
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(wheels), str(REPO)],
@@ -50,6 +51,13 @@ def test_wheel_installed_outside_the_checkout_loads_every_preset(tmp_path):
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
     python = venv / "bin" / "python"
     subprocess.run([str(python), "-m", "pip", "install", "-q", str(wheel)], check=True, capture_output=True)
+    return venv / "bin"
+
+
+@pytest.mark.slow
+def test_wheel_installed_outside_the_checkout_loads_every_preset(wheel_venv, tmp_path):
+    """`pip wheel .` installed into a fresh venv, run outside the checkout, loads all presets."""
+    python = wheel_venv / "python"
     names = preset_names()
     code = (
         "import plm_pin, sys; from pathlib import Path\n"
@@ -60,3 +68,38 @@ def test_wheel_installed_outside_the_checkout_loads_every_preset(tmp_path):
     out = subprocess.run([str(python), "-c", code], cwd=tmp_path, capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert [line.split()[0] for line in out.stdout.splitlines()] == names
+
+
+@pytest.mark.slow
+def test_installed_wheel_runs_the_command_line_and_the_overview(wheel_venv, tmp_path):
+    """From a wheel outside the checkout: --version, python -m, the extra named, then report and view work."""
+    bin_ = wheel_venv
+
+    def run(*args: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([str(a) for a in args], cwd=tmp_path, capture_output=True, text=True)
+
+    assert run(bin_ / "plm-pin", "--version").stdout.strip() == f"plm-pin {plm_pin.__version__}"
+    assert (
+        run(bin_ / "python", "-m", "plm_pin", "--version").stdout.strip() == f"plm-pin {plm_pin.__version__}"
+    )
+    bare = run(bin_ / "plm-pin", "report", "fourbar", "--out", tmp_path / "reports")
+    assert bare.returncode == 1
+    assert bare.stderr.strip().splitlines() == [
+        "error: plm_pin.report needs jinja2 and markdown-it-py, which are not installed: "
+        "pip install 'plm-pin[report]'"
+    ]
+    subprocess.run(  # the report extra's packages (the wheel itself is already installed)
+        [str(bin_ / "pip"), "install", "-q", "jinja2", "markdown-it-py", "matplotlib", "meshcat"],
+        check=True,
+        capture_output=True,
+    )
+    report = run(bin_ / "plm-pin", "report", "fourbar", "--out", tmp_path / "reports")
+    assert report.returncode == 0, report.stderr
+    assert (tmp_path / "reports" / "overview-fourbar" / "report.html").is_file()
+    paper = run(bin_ / "plm-pin", "report", "harada2011", "--out", tmp_path / "reports")
+    assert paper.returncode == 1
+    assert "the paper studies live in the analyses/ folder of the plm_pin source checkout" in paper.stderr
+    page = tmp_path / "motion.html"
+    view = run(bin_ / "plm-pin", "view", "fourbar", "--animate", "overview:simulation", "--html", page)
+    assert view.returncode == 0, view.stderr
+    assert page.stat().st_size > 1000

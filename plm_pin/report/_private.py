@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import platform
 import re
+import subprocess
 from collections.abc import Mapping
 from importlib import metadata
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -63,12 +66,30 @@ def _version(distribution: str) -> str:
         return "not installed"
 
 
+def git_commit() -> str | None:
+    """The git commit of the plm_pin checkout this code runs from (``+ changes`` when modified), else None."""
+    root = Path(__file__).resolve().parents[2]
+    if not (root / ".git").exists():
+        return None
+    try:
+        run = functools.partial(
+            subprocess.run, cwd=root, capture_output=True, text=True, timeout=10, check=True
+        )
+        commit = run(["git", "rev-parse", "--short=12", "HEAD"]).stdout.strip()
+        dirty = run(["git", "status", "--porcelain", "--untracked-files=no"]).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return f"{commit} + changes" if dirty else commit
+
+
 def software_versions() -> dict[str, str]:
-    """Versions of plm_pin, its numerical stack, the report's libraries and Python."""
+    """Versions of plm_pin (and its git commit in a checkout), its numerical stack, libraries and Python."""
     from .. import __version__
 
+    commit = git_commit()
     return {
         "plm_pin": __version__,
+        **({"plm_pin commit": commit} if commit else {}),
         "pinocchio": _version("pin"),
         "proxsuite": _version("proxsuite"),
         "numpy": _version("numpy"),

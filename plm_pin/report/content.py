@@ -119,6 +119,14 @@ class Table:
                     f"table {self.title!r}: row {k} has {len(row)} cells for {len(self.columns)} columns"
                 )
 
+    def shown_columns(self) -> list[int]:
+        """Indices of the columns holding a cell that is not None or empty text (the others are not shown)."""
+        return [
+            k
+            for k in range(len(self.columns))
+            if any(row[k] is not None and row[k] != "" for row in self.rows)
+        ] or list(range(len(self.columns)))
+
     def formatted(self) -> list[list[tuple[str, bool]]]:
         """The rows as displayed: each cell's text and whether it is a number."""
         return [
@@ -137,6 +145,14 @@ class Table:
         }
 
 
+SOURCES = ("printed", "closed form", "input")
+"""Where a comparison's paper value comes from: printed in the paper; a closed form of the paper
+re-evaluated by the study; or an input of the study echoed back (not counted as an agreement)."""
+
+PAPER_INCONSISTENT = "paper inconsistent — explained"
+"""Verdict of a row whose difference is traced to the paper's own data."""
+
+
 @dataclass(frozen=True)
 class Comparison:
     r"""One row of a paper-vs-plm_pin table.
@@ -146,13 +162,19 @@ class Comparison:
 
     Attributes:
         quantity: what is compared, with the paper's equation, table or figure.
-        paper: the paper's value, as printed (a number, a text or a yes/no).
+        paper: the paper's value (a number, a text or a yes/no).
         ours: plm_pin's value.
         unit: unit of both numbers.
         explanation: one line saying why they differ (required when they do; optional otherwise).
         rtol: relative tolerance, e.g. the paper's printed precision [-].
         atol: absolute tolerance [unit], needed when the paper's value is zero.
         fmt: format specification of the numbers.
+        source: where ``paper`` comes from, among :data:`SOURCES`: ``printed`` in the paper, a
+            ``closed form`` of the paper re-evaluated by the study, or an ``input`` of the study
+            echoed back (a rod length checked against itself: shown, never counted as agreeing).
+        paper_inconsistent: the difference is traced to the paper's own data (its printed values
+            do not follow from its printed model), so it is no plm_pin failure; needs an
+            ``explanation`` saying where the evidence is.
     """
 
     quantity: str
@@ -163,17 +185,41 @@ class Comparison:
     rtol: float = 1e-3
     atol: float = 0.0
     fmt: str = ".4g"
+    source: str = "printed"
+    paper_inconsistent: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "paper", _cell(self.paper, f"comparison {self.quantity!r}, paper"))
         object.__setattr__(self, "ours", _cell(self.ours, f"comparison {self.quantity!r}, ours"))
         if not (self.rtol >= 0.0 and self.atol >= 0.0):
             raise InvalidInput(f"comparison {self.quantity!r}: rtol and atol must be non-negative")
-        if not self.agrees and not self.explanation:
+        if self.source not in SOURCES:
+            raise InvalidInput(
+                f"comparison {self.quantity!r}: source {self.source!r} is not one of {list(SOURCES)}"
+            )
+        if (not self.agrees or self.paper_inconsistent) and not self.explanation:
             raise InvalidInput(
                 f"comparison {self.quantity!r}: paper {format_cell(self.paper, self.fmt)} and ours "
                 f"{format_cell(self.ours, self.fmt)} differ; give an explanation"
             )
+        if self.paper_inconsistent and (self.agrees or self.source != "printed"):
+            raise InvalidInput(
+                f"comparison {self.quantity!r}: paper_inconsistent is for a printed value that differs"
+            )
+
+    @property
+    def counted(self) -> bool:
+        """Whether the row counts in the agreement (an input echo does not)."""
+        return self.source != "input"
+
+    @property
+    def verdict(self) -> str:
+        """``agrees``, ``differs``, :data:`PAPER_INCONSISTENT`, or ``input echo``."""
+        if not self.counted:
+            return "input echo"
+        if self.paper_inconsistent:
+            return PAPER_INCONSISTENT
+        return "agrees" if self.agrees else "differs"
 
     @property
     def numeric(self) -> bool:
@@ -206,6 +252,8 @@ class Comparison:
                 "unit": self.unit,
                 "relative_difference": self.relative_difference,
                 "agrees": self.agrees,
+                "verdict": self.verdict,
+                "source": self.source,
                 "explanation": self.explanation,
                 "rtol": self.rtol,
                 "atol": self.atol,
@@ -224,8 +272,18 @@ class Comparisons:
 
     @property
     def n_agree(self) -> int:
-        """Rows that agree."""
-        return sum(r.agrees for r in self.rows)
+        """Counted rows that agree (input echoes are not counted)."""
+        return sum(r.agrees for r in self.rows if r.counted)
+
+    @property
+    def n_counted(self) -> int:
+        """Rows that count in the agreement: all but the input echoes."""
+        return sum(r.counted for r in self.rows)
+
+    @property
+    def n_paper_inconsistent(self) -> int:
+        """Rows whose difference is traced to the paper's own data."""
+        return sum(r.paper_inconsistent for r in self.rows)
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for results.json."""
@@ -234,7 +292,8 @@ class Comparisons:
             "title": self.title,
             "rows": [r.to_dict() for r in self.rows],
             "agree": self.n_agree,
-            "total": len(self.rows),
+            "total": self.n_counted,
+            "paper_inconsistent": self.n_paper_inconsistent,
             "note": self.note,
         }
 
@@ -511,7 +570,7 @@ class StudyResult:
 
     def to_dict(self) -> dict[str, object]:
         """The content of ``results.json``: every number shown, with units, and how it was made."""
-        rows = [r for c in self.comparisons() for r in c.rows]
+        rows = [r for c in self.comparisons() for r in c.rows if r.counted]
         return {
             "format": FORMAT,
             "study": self.study,
@@ -520,7 +579,11 @@ class StudyResult:
             "folder": self.folder,
             "mechanisms": [m.to_dict() for m in self.mechanisms],
             "sections": [s.to_dict() for s in self.sections],
-            "agreement": {"rows": len(rows), "agree": sum(r.agrees for r in rows)},
+            "agreement": {
+                "rows": len(rows),
+                "agree": sum(r.agrees for r in rows),
+                "paper_inconsistent": sum(r.paper_inconsistent for r in rows),
+            },
             "warnings": list(self.warnings),
             "command": self.command,
             "versions": dict(self.versions),

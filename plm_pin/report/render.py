@@ -44,9 +44,30 @@ def _environment() -> jinja2.Environment:
     return env
 
 
-def render_report(result: StudyResult) -> str:
-    """The self-contained HTML page of one report."""
-    return _environment().get_template("report.html.j2").render(r=result)
+def require_renderer() -> None:
+    """Check that the report extra (jinja2, markdown-it-py) is installed, before any study runs.
+
+    Raises:
+        ImportError: naming ``pip install 'plm-pin[report]'``.
+    """
+    _environment()
+
+
+def render_report(result: StudyResult, scene_files: Mapping[int, str] | None = None) -> str:
+    """The HTML page of one report.
+
+    Args:
+        result: the report.
+        scene_files: file name, beside the page, of each scene (by ``id`` of its block), which
+            the page then shows with ``<iframe src>`` (lazily loaded); scenes not listed are
+            inlined whole in ``<iframe srcdoc>``, so that the page is self-contained.
+    """
+    files = scene_files or {}
+    return (
+        _environment()
+        .get_template("report.html.j2")
+        .render(r=result, scene_file=lambda scene: files.get(id(scene)))
+    )
 
 
 def render_index(entries: Sequence[Mapping[str, Any]], versions: Mapping[str, str]) -> str:

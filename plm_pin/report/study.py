@@ -39,7 +39,15 @@ from .animation import Animation
 from .content import MechanismInfo, Parameter, Section, StudyResult
 
 STUDY_PACKAGE = "analyses"
-"""The package the studies are modules of."""
+"""The package the studies are modules of (the ``analyses/`` folder of a source checkout)."""
+
+BUILTIN_STUDIES = "plm_pin.studies"
+"""The studies a wheel carries (the overview), used when :data:`STUDY_PACKAGE` is not importable."""
+
+PAPER_STUDIES_HINT = (
+    "the paper studies live in the analyses/ folder of the plm_pin source checkout: run plm-pin "
+    "from a checkout installed with `pip install -e .`, or put the checkout on PYTHONPATH"
+)
 
 
 @dataclass(frozen=True)
@@ -64,13 +72,13 @@ class Study:
 
 
 def _package() -> ModuleType:
+    """The package of the studies: ``analyses`` when importable, else the wheel's own."""
     try:
         return importlib.import_module(STUDY_PACKAGE)
-    except ModuleNotFoundError:
-        raise PlmError(
-            f"the studies (package {STUDY_PACKAGE!r}) are not importable: they live in the analyses/ "
-            "folder of the plm_pin checkout; install it with `pip install -e .` or run from it"
-        ) from None
+    except ModuleNotFoundError as exc:
+        if exc.name != STUDY_PACKAGE:
+            raise
+        return importlib.import_module(BUILTIN_STUDIES)
 
 
 def study_names() -> list[str]:
@@ -83,6 +91,11 @@ def study_names() -> list[str]:
     )
 
 
+def studies_hint() -> str:
+    """Where the paper studies are, when only the wheel's own studies are found (else empty)."""
+    return f" ({PAPER_STUDIES_HINT})" if _package().__name__ == BUILTIN_STUDIES else ""
+
+
 def find_study(name: str) -> Study:
     """Import and check the study ``name``.
 
@@ -93,8 +106,8 @@ def find_study(name: str) -> Study:
     """
     names = study_names()
     if name not in names:
-        raise InvalidInput(f"unknown study {name!r}; studies are {names}")
-    module = importlib.import_module(f"{STUDY_PACKAGE}.{name}")
+        raise InvalidInput(f"unknown study {name!r}; studies are {names}{studies_hint()}")
+    module = importlib.import_module(f"{_package().__name__}.{name}")
     title, run = getattr(module, "TITLE", None), getattr(module, "run", None)
     if not isinstance(title, str) or not callable(run):
         raise PlmError(f"{module.__name__} is not a study: it must define TITLE (a string) and run(ctx)")

@@ -21,6 +21,7 @@ forces in [N], angles in [rad], times in [s].
 
 from __future__ import annotations
 
+import functools
 import html
 import numbers
 from collections.abc import Mapping, Sequence
@@ -136,6 +137,55 @@ CAMERA_DIRECTION = np.array([0.6, 2.0, 1.0]) / np.linalg.norm([0.6, 2.0, 1.0])
 
 CAMERA_DISTANCE = 2.0
 """Camera distance from the mechanism's centre, in mechanism sizes [-]."""
+
+PLANAR_TILT = 0.05
+"""Tilt of the camera off a planar mechanism's normal [rad-ish]: keeps the orbit controls off their pole."""
+
+AXES_SCALE = 1.0
+"""Length of meshcat's world axes, in mechanism sizes (meshcat draws them 0.5 m long) [-]."""
+
+
+def plane_normal(mech: Mechanism, tol: float = 1e-9) -> np.ndarray | None:
+    """The unit normal of the plane a planar mechanism moves in, None for a spatial one.
+
+    Planar: at the reference guess, every joint turns about one common world axis n (or
+    slides), and no frame can move along n. Computed from the world-aligned frame Jacobians.
+    """
+    model, data = mech.model, mech.model.createData()
+    q = mech.reference_guess()
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    blocks = [
+        pin.getFrameJacobian(model, data, k, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        for k in range(model.nframes)
+    ]
+    angular = np.hstack([J[3:] for J in blocks])  # (3, nframes * nv)
+    _, sv, vt = np.linalg.svd(angular.T, full_matrices=False)
+    if sv.size == 0 or sv[0] == 0.0 or (sv.size > 1 and sv[1] > tol * sv[0]):
+        return None
+    normal = vt[0] / np.linalg.norm(vt[0])
+    linear = np.hstack([J[:3] for J in blocks])  # (3, nframes * nv)
+    scale = max(float(np.abs(linear).max()), 1e-12)
+    if np.abs(normal @ linear).max() > tol * scale:
+        return None
+    k = int(np.argmax(np.abs(normal)))
+    return normal if normal[k] > 0 else -normal  # pointing along +z for a mechanism in the xy plane
+
+
+def _camera_direction(mech: Mechanism) -> np.ndarray:
+    """Where the camera looks from, in meshcat's turned camera frame: near the normal when planar.
+
+    A planar mechanism is seen from its plane's normal, tilted by :data:`PLANAR_TILT` so that
+    world +y (or +z for a vertical plane) points up the screen.
+    """
+    normal = plane_normal(mech)
+    if normal is None:
+        return CAMERA_DIRECTION
+    up = np.array([0.0, 1.0, 0.0]) if abs(normal[1]) < 0.9 else np.array([0.0, 0.0, 1.0])
+    up -= (up @ normal) * normal
+    eye = normal - PLANAR_TILT * up / np.linalg.norm(up)  # world frame: then +up is up the screen
+    eye /= np.linalg.norm(eye)
+    return np.array([eye[0], eye[2], -eye[1]])  # world (x, y, z) -> camera frame (x, z, -y)
 
 
 def _along(offset: np.ndarray) -> pin.SE3:
@@ -291,14 +341,18 @@ class MeshcatViewer:
         self.size, centre = _extent(mech)
         # meshcat's camera orbits the world origin from (3, 0, 1) m: too far for a 0.3 m table and
         # off-centre for a mechanism away from the origin. Shift the scene (and the grid and world
-        # axes with it) so that the mechanism's centre is at the orbit point, and look from above
-        # and in front at twice its size.
+        # axes with it) so that the mechanism's centre is at the orbit point, scale the world axes
+        # to the mechanism, and look at twice its size: from above and in front, or, for a planar
+        # mechanism, from its plane's normal.
         shift = np.eye(4)
         shift[:3, 3] = -centre
-        for path in ("/meshcat", "/Grid", "/Axes"):
+        for path in ("/meshcat", "/Grid"):
             self._vis[path].set_transform(shift)
+        axes = shift.copy()
+        axes[:3, :3] *= AXES_SCALE * self.size / 0.5
+        self._vis["/Axes"].set_transform(axes)
         self._vis["/Cameras/default/rotated/<object>"].set_property(
-            "position", (CAMERA_DISTANCE * self.size * CAMERA_DIRECTION).tolist()
+            "position", (CAMERA_DISTANCE * self.size * _camera_direction(mech)).tolist()
         )
         self._animated = False
         self._build(frames)
@@ -538,3 +592,35 @@ def scene_html(mech: Mechanism, q: Any = None, *, qs: Any = None, times: Any = N
     else:
         viewer.animate(qs, times)
     return viewer.static_html()
+
+
+@functools.cache
+def meshcat_bundle() -> str:
+    """Meshcat's JavaScript bundle (about 0.85 MB), the script every static page inlines.
+
+    Raises:
+        ViewerError: meshcat missing.
+    """
+    meshcat = require_meshcat()
+    dist = Path(str(meshcat.__file__)).parent / "viewer" / "dist"
+    return (dist / "main.min.js").read_text(encoding="utf-8")
+
+
+def share_bundle(page: str, src: str) -> str:
+    """``page`` (a static meshcat page) with its inlined bundle replaced by ``<script src=src>``.
+
+    Reports write the bundle once (:data:`plm_pin.report.writer.BUNDLE`), so that every scene
+    loads the same file instead of carrying its own copy. A page that does not inline this
+    meshcat's bundle is returned unchanged.
+    """
+    bundle = meshcat_bundle()
+    start = page.find(bundle)
+    if start < 0:
+        return page
+    opening = page.rfind("<script>", 0, start)
+    closing = page.find("</script>", start + len(bundle))
+    between = (page[opening + len("<script>") : start], page[start + len(bundle) : closing])
+    if opening < 0 or closing < 0 or any(part.strip() for part in between):
+        return page
+    tag = f'<script src="{html.escape(src, quote=True)}"></script>'
+    return page[:opening] + tag + page[closing + len("</script>") :]

@@ -30,6 +30,13 @@ def test_table5_is_quoted_and_every_difference_explained(result):
     assert rows["n1 of eq. (34), e = 1e-3 J"].agrees and rows["n1 of eq. (34), e = 1e-3 J"].ours == 12
     for r in work.rows:
         assert r.agrees or r.explanation
+    inconsistent = [r.quantity for r in work.rows if r.verdict == "paper inconsistent — explained"]
+    assert inconsistent == [
+        *(f"W_{i}, Table 5" for i in range(1, 9)),
+        "sum of W_i",
+        "motor doing the most work",
+    ]
+    assert result.to_dict()["agreement"]["paper_inconsistent"] == 10
 
 
 def test_both_quadratures_agree(result):

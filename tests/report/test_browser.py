@@ -30,11 +30,14 @@ SKIP = "PLM_PIN_SKIP_BROWSER"
 TIMEOUT = 60.0
 """Longest wait for a page, a figure or a 3D canvas [s]."""
 
+PAGE_WEIGHT = 1_000_000
+"""Largest report page, its scenes (separate pages, loaded lazily) not counted [bytes]."""
+
 CHROMIUM_ARGS = (
     "--headless=new",
     "--no-sandbox",  # root on CI; the pages are our own local files
     "--disable-dev-shm-usage",
-    "--window-size=1200,900",
+    "--window-size=1280,900",  # the width a report must fit without horizontal scrolling
     "--use-angle=swiftshader",  # software WebGL: no GPU on CI
     "--enable-unsafe-swiftshader",
 )
@@ -178,29 +181,66 @@ def _check_report(driver: Any, where: str) -> int:
 
 @pytest.fixture(scope="module")
 def reports(tmp_path_factory) -> Path:
-    """Reports written by the CLI: Harada 2015 (animations) and the overview of a user's five-bar."""
+    """Reports written by the CLI: Harada 2015 (animations), Zhao 2011 (wide tables) and a user's five-bar."""
     out = tmp_path_factory.mktemp("reports")
     user = tmp_path_factory.mktemp("user")
     for suffix in (".urdf", ".plm.yaml"):
         shutil.copy(plm_pin.models.urdf_folder() / f"fivebar{suffix}", user / f"fivebar{suffix}")
     runner = CliRunner()
-    for target in ("harada2015", str(user / "fivebar.urdf")):
+    for target in ("harada2015", "zhao2011", str(user / "fivebar.urdf")):
         result = runner.invoke(app, ["report", target, "--out", str(out)])
         assert result.exit_code == 0, result.output
     return out
 
 
-def test_reports_render_with_figures_and_3d_scenes(browser, reports):
-    """From index.html each report opens; figures load and show ink, scenes draw, no console error."""
+def _load_time(driver: Any) -> float:
+    """Time from navigation start to the end of the page's load event [s] (measured, not asserted)."""
+    timing = driver.execute_script("return performance.getEntriesByType('navigation')[0].toJSON()")
+    return float(timing["loadEventEnd"] - timing["startTime"]) / 1000.0
+
+
+def _horizontal_overflow(driver: Any) -> list[str]:
+    """The page's width beyond the window, and the elements sticking out of the main column."""
+    return driver.execute_script(
+        """
+        const out = [];
+        const doc = document.documentElement;
+        if (doc.scrollWidth > window.innerWidth) {
+            out.push(`page ${doc.scrollWidth} px > ${window.innerWidth} px`);
+        }
+        const main = document.querySelector('main');
+        if (main) {
+            const right = main.getBoundingClientRect().right;
+            for (const e of main.querySelectorAll('table, figure, pre, img, iframe')) {
+                const r = e.getBoundingClientRect().right;
+                const what = (e.querySelector('caption') || e).textContent.slice(0, 60);
+                if (r > right + 1) {
+                    const tag = e.tagName.toLowerCase();
+                    out.push(`${tag} '${what}' ends at ${Math.round(r)} > ${Math.round(right)} px`);
+                }
+            }
+        }
+        return out;
+        """
+    )
+
+
+def test_reports_render_with_figures_and_3d_scenes(browser, reports, record_property):
+    """From index.html each report opens light and fits 1280 px; figures show ink, scenes draw, no error."""
     from selenium.webdriver.common.by import By
 
     _open(browser, (reports / "index.html").as_uri())
     links = [a.get_attribute("href") for a in browser.find_elements(By.CSS_SELECTOR, "table.index a")]
     pages = [link for link in links if link.endswith("/report.html")]
-    assert len(pages) == 2
+    assert len(pages) == 3
     assert _console_errors(browser) == []
     for page in pages:
+        path = Path(page.removeprefix("file://"))
+        assert path.stat().st_size < PAGE_WEIGHT, f"{path}: {path.stat().st_size} bytes"
         _open(browser, page)
+        record_property(f"load time {path.parent.name} [s]", _load_time(browser))
+        record_property(f"page weight {path.parent.name} [bytes]", path.stat().st_size)
+        assert _horizontal_overflow(browser) == [], page
         assert _check_report(browser, page) >= 3
         assert _console_errors(browser) == [], page
 

@@ -100,3 +100,38 @@ def test_slug_keeps_names_plain():
     assert slug("<script>alert(1)</script>") == "script_alert_1_script"
     assert slug("...") == "mechanism"
     assert slug("fivebar") == "fivebar"
+
+
+def test_sources_and_verdicts_of_comparisons():
+    """Printed / closed form / input; an input echo is not counted; a paper inconsistency has its verdict."""
+    assert Comparison("w", 1.0, 1.0).source == "printed"
+    assert Comparison("f_c, eq. (15)", 0.5, 0.5, source="closed form").verdict == "agrees"
+    echo = Comparison("rod length", 0.24, 0.24, "m", source="input")
+    assert echo.verdict == "input echo" and not echo.counted
+    table5 = Comparison(
+        "W_1, Table 5", 99.7, 84.6, "J", explanation="Table 5 is off", paper_inconsistent=True
+    )
+    assert table5.verdict == "paper inconsistent — explained" and table5.counted
+    section = Section("s")
+    block = section.comparison("t", [echo, table5, Comparison("n", 1, 1)])
+    assert (block.n_agree, block.n_counted, block.n_paper_inconsistent) == (1, 2, 1)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"source": "guessed"}, r"source 'guessed' is not one of \['printed', 'closed form', 'input'\]"),
+        ({"paper_inconsistent": True}, "give an explanation"),
+        ({"paper_inconsistent": True, "explanation": "x", "source": "closed form"}, "for a printed value"),
+    ],
+)
+def test_bad_sources_and_inconsistencies_are_refused(kwargs, message):
+    """An unknown source, a paper inconsistency unexplained or not on a printed value: refused."""
+    with pytest.raises(InvalidInput, match=message):
+        Comparison("W", 1.0, 2.0, **kwargs)
+
+
+def test_empty_columns_are_not_shown():
+    """A column whose cells are all None or empty text is dropped from the page (kept in the data)."""
+    block = Section("s").table("t", ["a", "b", "c"], [(1, None, ""), (2, None, "x")])
+    assert block.shown_columns() == [0, 2]

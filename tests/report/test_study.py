@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import shutil
 import warnings
+from pathlib import Path
 
 import pytest
 
@@ -53,11 +55,21 @@ def test_unknown_study_lists_the_studies():
         find_study("nope")
 
 
-def test_missing_package_says_where_studies_live(monkeypatch):
-    """Without the analyses package the message says how to get it."""
+def test_without_the_analyses_package_the_wheel_studies_are_used(monkeypatch, tmp_path):
+    """Without ``analyses`` the studies come from plm_pin.studies; a missing paper study says where it is."""
+    package = tmp_path / "builtin_studies"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    shutil.copy(Path(__file__).resolve().parents[2] / "analyses" / "overview.py", package / "overview.py")
+    monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.setattr(study_module, "STUDY_PACKAGE", "no_such_studies_package")
-    with pytest.raises(PlmError, match=r"package 'no_such_studies_package'\) are not importable"):
-        study_names()
+    monkeypatch.setattr(study_module, "BUILTIN_STUDIES", "builtin_studies")
+    assert study_names() == ["overview"]
+    assert find_study("overview").mechanism == "harada2011_3d4m"
+    with pytest.raises(
+        InvalidInput, match=r"unknown study 'harada2011'; studies are \['overview'\] \(the paper"
+    ):
+        find_study("harada2011")
 
 
 def test_run_study_records_mechanisms_sections_and_plm_warnings():

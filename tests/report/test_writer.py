@@ -37,7 +37,7 @@ def test_report_files_and_permissions(demo_report):
         assert oct(f.stat().st_mode & 0o777) == "0o644"
     data = json.loads((folder / "results.json").read_text())
     assert data["format"] == "plm-pin-report/1" and data["study"] == "demo"
-    assert data["agreement"] == {"rows": 3, "agree": 2}
+    assert data["agreement"] == {"rows": 3, "agree": 2, "paper_inconsistent": 0}
 
 
 def test_every_number_in_a_table_is_in_results_json(demo_report):
@@ -143,3 +143,45 @@ def test_index_links_reports_and_ignores_other_folders(demo_report):
     assert "notes/" not in page and "broken/" not in page and ".tmp" not in page
     assert "Demo &lt;title&gt;" in page and "<title>Demo" not in page
     assert "2 of 3 agree" in page and "1 differ, each explained in the report" in page
+
+
+def test_scenes_are_pages_beside_the_report_sharing_one_meshcat_bundle(tmp_path):
+    """Two reports with two scenes each: one bundle in out/, scene pages load it, none inlines it."""
+    from plm_pin.viz import scene_html
+    from plm_pin.viz.meshcat_view import meshcat_bundle
+
+    def run(ctx):
+        mech = ctx.load("fourbar")
+        section = ctx.section("Scenes")
+        for k in range(2):
+            section.scene(scene_html(mech), f"scene {k}", {"q": mech.q_ref})
+
+    out = tmp_path / "out"
+    for name in ("one", "two"):
+        write_report(run_study(make_study(run, name=name)), out)
+    bundle = meshcat_bundle()
+    assert (out / "meshcat.min.js").read_text() == bundle
+    assert sorted(p.name for p in out.iterdir()) == ["meshcat.min.js", "one", "two"]
+    for name in ("one", "two"):
+        folder = out / name
+        assert sorted(p.name for p in folder.iterdir()) == [
+            "report.html",
+            "results.json",
+            "scene-1.html",
+            "scene-2.html",
+        ]
+        page = (folder / "report.html").read_text()
+        assert page.count('loading="lazy"') == 2 and 'src="scene-1.html"' in page and "srcdoc" not in page
+        for scene in ("scene-1.html", "scene-2.html"):
+            text = (folder / scene).read_text()
+            assert '<script src="../meshcat.min.js"></script>' in text
+            assert bundle[:2000] not in text and len(text) < len(bundle) / 10
+    assert oct((out / "meshcat.min.js").stat().st_mode & 0o777) == "0o644"
+
+
+def test_a_page_without_the_bundle_is_kept_whole():
+    """share_bundle leaves a page that does not inline meshcat's bundle as it is."""
+    from plm_pin.viz.meshcat_view import share_bundle
+
+    page = "<html><script>var x = 1;</script></html>"
+    assert share_bundle(page, "../meshcat.min.js") == page

@@ -21,6 +21,7 @@ import pinocchio as pin
 import pytest
 from typer.testing import CliRunner
 
+import plm_pin
 from plm_pin.cli import app
 from plm_pin.exceptions import InvalidInput
 from plm_pin.mechanism import Mechanism
@@ -572,3 +573,24 @@ def test_view_on_a_busy_port_serves_on_the_next_and_stops_on_ctrl_c(monkeypatch)
     assert f"fourbar: http://127.0.0.1:{server.port}/static/" in result.stdout
     assert f"--zmq-url {server.zmq_url}" in result.stdout
     assert not server.running
+
+
+@pytest.mark.parametrize("name", ["fourbar", "fivebar", "harada2011_3d4m", "enferadi2017_star_triangle"])
+def test_planar_mechanisms_are_seen_from_their_plane_normal(name):
+    """Every joint of these presets turns about z and nothing moves along z: the camera looks down z."""
+    from plm_pin.viz.meshcat_view import PLANAR_TILT, _camera_direction, plane_normal
+
+    mech = plm_pin.load(name)
+    np.testing.assert_allclose(plane_normal(mech), [0.0, 0.0, 1.0], atol=1e-12)
+    eye = _camera_direction(mech)  # meshcat's camera frame: world z is its y, world y its -z
+    assert np.degrees(np.arccos(eye[1])) == pytest.approx(np.degrees(np.arctan(PLANAR_TILT)), rel=1e-9)
+    assert eye[2] > 0.0  # tilted towards world -y: world +y points up the screen
+
+
+def test_a_spatial_mechanism_has_no_plane_normal():
+    """The 8-PSS moves in 3-D: no plane normal, the default oblique camera."""
+    from plm_pin.viz.meshcat_view import CAMERA_DIRECTION, _camera_direction, plane_normal
+
+    mech = plm_pin.load("zhao2011_8pss")
+    assert plane_normal(mech) is None
+    np.testing.assert_array_equal(_camera_direction(mech), CAMERA_DIRECTION)

@@ -1,0 +1,57 @@
+"""Sphinx configuration of the plm_pin documentation (``make docs``; see docs/README.md)."""
+
+from __future__ import annotations
+
+import os
+import sys
+from importlib.metadata import version as _version
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # the analyses package, for the study pages
+sys.path.insert(0, str(ROOT / "docs"))
+
+import _api  # noqa: E402
+
+_api.write_pages(ROOT / "docs" / "api")  # one page per public package, from its __all__
+
+project = "plm_pin"
+author = "plm_pin developers"
+release = _version("plm-pin")
+version = release
+
+extensions = [
+    "myst_nb",  # Markdown pages (MyST) and notebooks, executed at build time
+    "sphinx.ext.autodoc",
+    "sphinx.ext.napoleon",  # Google-style docstrings
+    "sphinx.ext.mathjax",
+]
+
+source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb", ".rst": "restructuredtext"}
+exclude_patterns = ["_build", "jupyter_execute", "README.md", "_api.py", "**.ipynb_checkpoints"]
+myst_enable_extensions = ["colon_fence", "dollarmath", "deflist"]
+myst_heading_anchors = 3
+
+# Tutorials run on every build: a cell that fails (or warns as an error) fails the build.
+nb_execution_mode = os.environ.get("PLM_PIN_DOCS_EXECUTE", "force")
+nb_execution_timeout = 300
+nb_execution_raise_on_error = True
+nb_execution_show_tb = True
+nb_merge_streams = True
+
+autodoc_default_options = {"members": True, "show-inheritance": True}
+autodoc_member_order = "bysource"
+autodoc_typehints = "description"
+autodoc_typehints_format = "short"
+napoleon_google_docstring = True
+napoleon_numpy_docstring = False
+napoleon_use_rtype = False
+napoleon_attr_annotations = True
+napoleon_use_ivar = True  # "Attributes:" as a field list: no second description of dataclass fields
+
+html_theme = "furo"
+html_title = f"plm_pin {release}"
+html_extra_path = [str(ROOT / "plm_pin" / "schemas")]  # the JSON Schemas, at the site's root
+html_static_path: list[str] = []
+
+suppress_warnings = ["myst.header"]
