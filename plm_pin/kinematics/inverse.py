@@ -112,9 +112,15 @@ def inverse_kinematics(
     Raises:
         PoseUnreachable: when no assembly puts the task frame at ``x``; the message names
             the leg that cannot reach and by how much it misses (with ``explain``).
-        InvalidInput: malformed ``x``, ``guess`` or ``mode``.
+        InvalidInput: malformed ``x``, ``guess`` or ``mode``, or a task with fewer coordinates
+            than the mechanism has DOF (the pose would not determine the configuration).
     """
     task = require_task(mech)
+    if task.size < mech.mobility:
+        raise InvalidInput(
+            f"{mech.name}: the task has {task.size} coordinates but the mechanism has {mech.mobility} DOF: "
+            "a pose does not determine the configuration; give a task with as many coordinates as DOF"
+        )
     xa = check_task_vector(x, task.size)
     target = TaskTarget(task, xa)
     if mode is not None:

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..exceptions import SingularConfiguration
-from .jacobians import ClosedChainJacobians, closed_chain_jacobians
+from .jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians, require_task
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
@@ -150,7 +150,9 @@ def classify(
     Raises:
         SingularConfiguration: when ``raise_if_singular`` and the configuration is singular;
             the message names the kinds and margins.
+        InvalidInput: when the task has not as many coordinates as the mechanism has DOF.
     """
+    check_square_task(require_task(mech).size, mech.mobility, "singularity classification needs", mech.name)
     report = report_from_jacobians(mech, closed_chain_jacobians(mech, q), tol)
     if raise_if_singular and report.singular:
         raise SingularConfiguration(

@@ -63,13 +63,15 @@ def test_folder_loads_with_closed_loops(folder):
 
 @pytest.mark.parametrize("folder", LOADABLE)
 def test_closures_follow_robot_yaml(folder):
-    """Closures are the robot.yaml pairs in order, '3d' typed point and '6d' typed weld."""
+    """Closures are the robot.yaml pairs in order, '3d' typed point and '6d' typed weld, then idle gauges."""
     mech, _ = _load(folder)
     raw = _robot_yaml(folder)
     expected_type = {"3d": "point", "6d": "weld"}
-    assert [c.spec.frames for c in mech.closures] == [tuple(p) for p in raw["closed_loop"]]
-    assert [c.spec.type for c in mech.closures] == [expected_type[t] for t in raw["type"]]
-    assert [c.spec.name for c in mech.closures] == [f"loop{k + 1}" for k in range(len(raw["type"]))]
+    gauges = mech.closures[len(raw["type"]) :]
+    assert [c.name for c in gauges] == [f"idle:{g.joint}" for g in mech.idle_gauges]
+    assert [c.frames for c in mech.sidecar.closures] == [tuple(p) for p in raw["closed_loop"]]
+    assert [c.type for c in mech.sidecar.closures] == [expected_type[t] for t in raw["type"]]
+    assert [c.name for c in mech.sidecar.closures] == [f"loop{k + 1}" for k in range(len(raw["type"]))]
 
 
 @pytest.mark.parametrize("folder", LOADABLE)
