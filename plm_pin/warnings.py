@@ -17,3 +17,7 @@ class IllConditionedWarning(PlmWarning):
 
 class CorruptChunkWarning(PlmWarning):
     """A sweep checkpoint file cannot be read or is not that sweep's; its points are computed again."""
+
+
+class MissingLimitsWarning(PlmWarning):
+    """URDF joints carry no position limits (read as [0, 0]); they are treated as unlimited."""

@@ -79,8 +79,26 @@ def rrr_jce(pose: tuple[float, float, float], theta: np.ndarray) -> np.ndarray:
     return np.array(rows)
 
 
-def three_rrr(folder: Path, task: tuple[str, ...] = ("x", "y", "rz"), name: str = "rrr3") -> Mechanism:
-    """A symmetric planar 3-RRR; the platform hangs on leg 0, legs 1 and 2 close on it (point closures)."""
+def rrr_elbows(pose: tuple[float, float, float], theta: np.ndarray) -> np.ndarray:
+    """Closed-form elbow joint angles (distal direction minus motor angle) [rad], shape (3,)."""
+    A, C = rrr_points(pose)
+    out = []
+    for i in range(3):
+        B = A[i] + RRR["l1"] * np.array([math.cos(theta[i]), math.sin(theta[i])])
+        out.append(math.atan2(C[i][1] - B[1], C[i][0] - B[0]) - theta[i])
+    return np.array(out)
+
+
+def three_rrr(
+    folder: Path,
+    task: tuple[str, ...] = ("x", "y", "rz"),
+    name: str = "rrr3",
+    elbow_limits: tuple[float, float] = (-7.0, 7.0),
+) -> Mechanism:
+    """A symmetric planar 3-RRR; the platform hangs on leg 0, legs 1 and 2 close on it (point closures).
+
+    ``elbow_limits`` are the position limits of leg 1's elbow ``e1`` [rad].
+    """
     l1, l2 = RRR["l1"], RRR["l2"]
     a = rrr_angles()
     A, C = rrr_points(RRR_POSE)
@@ -94,7 +112,14 @@ def three_rrr(folder: Path, task: tuple[str, ...] = ("x", "y", "rz"), name: str 
         links += [u.link(f"dist{i}", 0.4, (1e-4, 4e-3, 4e-3), com=(l2 / 2, 0, 0)), u.link(f"tip{i}")]
         joints += [
             u.joint(f"m{i}", "revolute", "base", f"prox{i}", xyz=(*A[i], 0.0), limits=(-7.0, 7.0)),
-            u.joint(f"e{i}", "revolute", f"prox{i}", f"dist{i}", xyz=(l1, 0, 0), limits=(-7.0, 7.0)),
+            u.joint(
+                f"e{i}",
+                "revolute",
+                f"prox{i}",
+                f"dist{i}",
+                xyz=(l1, 0, 0),
+                limits=elbow_limits if i == 1 else (-7.0, 7.0),
+            ),
             u.joint(f"tip{i}_fixed", "fixed", f"dist{i}", f"tip{i}", xyz=(l2, 0, 0)),
         ]
         B = A[i] + l1 * np.array([math.cos(theta[i]), math.sin(theta[i])])

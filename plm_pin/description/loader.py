@@ -9,6 +9,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import DescriptionError, FrameNotFound
+from ..kinematics.limits import open_missing_limits
 from .interop import parse_epr_sidecar
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar, parse_sidecar, read_yaml
 from .urdf import UrdfSource, read_urdf, read_urdf_text
@@ -116,7 +117,8 @@ def build_model(description: Description) -> pin.Model:
     """Build the Pinocchio model and check every name the sidecar uses.
 
     Gravity comes from the sidecar; the reflected inertia of each drive is added to its
-    joint's armature.
+    joint's armature. Joints without position limits in the URDF are made unlimited, with
+    one :class:`~plm_pin.warnings.MissingLimitsWarning` (see :mod:`plm_pin.kinematics.limits`).
 
     Raises:
         DescriptionError: when Pinocchio rejects the URDF.
@@ -162,6 +164,7 @@ def build_model(description: Description) -> pin.Model:
                 side,
             )
     model.gravity.linear = np.array(sidecar.gravity, dtype=float)
+    open_missing_limits(model, label)
     return model
 
 

@@ -11,6 +11,8 @@ mechanism), over the sweep's pose grid; none re-derives a formula:
   ``over`` (default: all of them);
 - ``orientation_range`` runs :func:`plm_pin.analysis.orientation_range` along the rotation
   axis for every combination of the other pose coordinates;
+- ``within_limits`` checks the grid's configurations against the joints' position limits
+  (:meth:`plm_pin.analysis.WorkspaceSlice.within_limits`);
 - ``peak_force`` and ``preload`` call :func:`plm_pin.statics.static_forces` at every reached
   pose, for every wrench of the set.
 
@@ -453,6 +455,18 @@ METRICS: dict[str, Metric] = {
             (Variable("preload", "N", "internal preload needed over the wrench set"),),
             ("wrenches", "gravity", "compression", "preload_links"),
             _preload,
+        ),
+        Metric(
+            "within_limits",
+            "whether the reached pose keeps every joint inside its URDF position limits (apart from "
+            "'reachable': the loops close there, perhaps only with a passive joint beyond its range)",
+            (
+                Variable(
+                    "within_limits", "-", "pose reached with every joint inside its limits", dtype="bool"
+                ),
+            ),
+            (),
+            lambda ev: {"within_limits": ev.grid.within_limits(ev.mech)},
         ),
     )
 }

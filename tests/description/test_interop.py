@@ -15,7 +15,7 @@ import plm_pin
 from plm_pin import ClosureNotSatisfied, DescriptionError
 from plm_pin.description import parse_epr_sidecar, read_description
 from plm_pin.mechanism import Mechanism
-from plm_pin.warnings import MissingMeshWarning
+from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning
 
 CORPUS = Path(__file__).parents[2].parent / "shared/interop/example-parallel-robots"
 if not CORPUS.is_dir():
@@ -115,6 +115,7 @@ def test_kangaroo_does_not_assemble_from_zero():
     """kangaroo_like raises ClosureNotSatisfied naming the neutral guess, the worst loop and the fix."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MissingMeshWarning)
+        warnings.simplefilter("ignore", MissingLimitsWarning)
         with pytest.raises(ClosureNotSatisfied) as info:
             plm_pin.load(CORPUS / NOT_ASSEMBLING)
     exc = info.value

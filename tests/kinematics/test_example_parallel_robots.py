@@ -45,7 +45,7 @@ from plm_pin.kinematics import (
 from plm_pin.kinematics.closures import compile_closures
 from plm_pin.kinematics.closures import jacobian as closure_jacobian
 from plm_pin.mechanism import Mechanism
-from plm_pin.warnings import MissingMeshWarning
+from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning
 from tests.conftest import INTEROP, fd_jacobian
 
 if not INTEROP.is_dir():
@@ -87,6 +87,7 @@ def _sidecar(folder: str, extra_driven: list[str]) -> dict:
 def _load(path: Path) -> Mechanism:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MissingMeshWarning)
+        warnings.simplefilter("ignore", MissingLimitsWarning)  # tested in test_limits.py
         return plm_pin.load(path)
 
 
