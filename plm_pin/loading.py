@@ -143,7 +143,10 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
             f"example-robot-data robots load as 'erd:<name>'"
         )
     description = read_description(path)
-    name = description.sidecar.name or (path.name if path.is_dir() else path.name.split(".")[0])
+    stem = path.name if path.is_dir() else path.name.split(".")[0]
+    if stem == "robot":  # the example-parallel-robots file name: name the mechanism after its folder
+        stem = path.resolve().parent.name
+    name = description.sidecar.name or stem
     return mechanism_from_description(description, name, validate=validate)
 
 
