@@ -244,14 +244,15 @@ def working_modes(
         if not leg.square:
             branches.append([None])
             continue
-        found, _ = _solve_leg(mech, target, first.q, leg.columns, rng, tol, starts_per_leg)
-        branches.append([sol[list(_q_indices(mech, leg.columns))] for sol in found])
+        columns = leg.columns + leg.followers
+        found, _ = _solve_leg(mech, target, first.q, columns, rng, tol, starts_per_leg)
+        branches.append([sol[list(_q_indices(mech, columns))] for sol in found])
     out: dict[tuple[int, ...], IKSolution] = {}
     for combo in itertools.product(*branches):
         q = first.q.copy()
         for leg, values in zip(mech.legs, combo, strict=True):
             if values is not None:
-                q[list(_q_indices(mech, leg.columns))] = values
+                q[list(_q_indices(mech, leg.columns + leg.followers))] = values
         sol = _solution(mech, target, q)
         if sol.residual_norm <= max(tol, 1e-11):
             out.setdefault(sol.mode, sol)
