@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from .description.loader import Description, build_model, build_visual_model, read_description
+from .description.overrides import DescriptionBuilder
 from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
 from .description.urdf import read_urdf_text
 from .description.writer import urdf_text
@@ -151,7 +152,11 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
 
 
 def resolve_builder(target: str | Builder) -> tuple[Builder, dict[str, Any], str]:
-    """The builder of a preset name (with the preset's parameters) or a builder callable (with none).
+    """The builder of a preset name (with the preset's parameters), of a description path, or a callable.
+
+    A path (a ``.urdf``, ``.plm.yaml`` or folder) gives a
+    :class:`~plm_pin.description.overrides.DescriptionBuilder`: joint origins, lengths and
+    masses by name.
 
     Returns:
         ``(builder, base parameters, label)``; the label is the preset name or the builder's
@@ -162,8 +167,12 @@ def resolve_builder(target: str | Builder) -> tuple[Builder, dict[str, Any], str
     """
     if isinstance(target, str):
         preset = PRESETS.get(target)
+        if preset is None and Path(target).exists():
+            return DescriptionBuilder(target), {}, target
         if preset is None:
-            raise InvalidInput(f"unknown preset {target!r}; presets are {sorted(PRESETS)}")
+            raise InvalidInput(
+                f"unknown preset {target!r}; presets are {sorted(PRESETS)}, or give the path of a description"
+            )
         return preset.builder, dict(preset.parameters), target
     if not callable(target):
         raise InvalidInput(f"expected a preset name or a builder callable, got {target!r}")
@@ -202,9 +211,9 @@ def build_mechanism(
     unknown = [key for key in given if key not in valid]
     if unknown:
         raise InvalidInput(f"unknown parameter(s) {unknown} of {label}; its parameters are {list(valid)}")
-    stem = target if isinstance(target, str) else getattr(target, "__name__", "mechanism")
+    stem = getattr(builder, "__name__", "mechanism") if target not in PRESETS else target
     label_name = name or f"{stem}_variant"
-    source = PRESETS[target].source if isinstance(target, str) else label
+    source = PRESETS[target].source if isinstance(target, str) and target in PRESETS else label
     robot, sidecar = builder(name=label_name, source=source, **{**base, **given})
     description = Description(read_urdf_text(urdf_text(robot), None, f"<{label_name}>"), sidecar)
     return mechanism_from_description(description, label_name, validate=validate)

@@ -332,9 +332,13 @@ def stewart_points() -> tuple[np.ndarray, np.ndarray]:
     return B, P
 
 
-def stewart_legs(pose: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """Closed-form leg lengths L_k [m] (6,) and actuator Jacobian dL/d(v, w) (6, 6) at ``pose``."""
-    B, P = stewart_points()
+def stewart_legs(pose: tuple[float, ...], B: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-form leg lengths L_k [m] (6,) and actuator Jacobian dL/d(v, w) (6, 6) at ``pose``.
+
+    ``B`` replaces the base joints of :func:`stewart_points`.
+    """
+    B0, P = stewart_points()
+    B = B0 if B is None else B
     p, R = np.array(pose[:3]), pin.rpy.rpyToMatrix(np.array(pose[3:]))
     d = p + P @ R.T - B
     L = np.linalg.norm(d, axis=1)
