@@ -94,10 +94,13 @@ def three_rrr(
     task: tuple[str, ...] = ("x", "y", "rz"),
     name: str = "rrr3",
     elbow_limits: tuple[float, float] = (-7.0, 7.0),
+    elbow_spheres: float = 0.0,
 ) -> Mechanism:
     """A symmetric planar 3-RRR; the platform hangs on leg 0, legs 1 and 2 close on it (point closures).
 
-    ``elbow_limits`` are the position limits of leg 1's elbow ``e1`` [rad].
+    ``elbow_limits`` are the position limits of leg 1's elbow ``e1`` [rad]; with
+    ``elbow_spheres`` > 0, each proximal link carries a sphere of that radius [m] at its elbow
+    (its only visual), so that two legs collide when their elbows come closer than twice it.
     """
     l1, l2 = RRR["l1"], RRR["l2"]
     a = rrr_angles()
@@ -108,7 +111,8 @@ def three_rrr(
     reference: dict[str, float] = {}
     phi = RRR_POSE[2]
     for i in range(3):
-        links += [u.link(f"prox{i}", 0.5, (1e-4, 4e-3, 4e-3), com=(l1 / 2, 0, 0))]
+        spheres = [u.sphere_visual(elbow_spheres, "joint", xyz=(l1, 0, 0))] if elbow_spheres > 0 else []
+        links += [u.link(f"prox{i}", 0.5, (1e-4, 4e-3, 4e-3), com=(l1 / 2, 0, 0), visuals=spheres)]
         links += [u.link(f"dist{i}", 0.4, (1e-4, 4e-3, 4e-3), com=(l2 / 2, 0, 0)), u.link(f"tip{i}")]
         joints += [
             u.joint(f"m{i}", "revolute", "base", f"prox{i}", xyz=(*A[i], 0.0), limits=(-7.0, 7.0)),

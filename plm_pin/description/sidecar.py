@@ -126,6 +126,8 @@ class Sidecar:
         reference: a guess of an assembled configuration, per joint name.
         name: optional mechanism name.
         source: optional provenance (paper, table).
+        collision_ignore: body pairs whose contact is not a self-collision (key
+            ``self_collision: {ignore: [[a, b], ...]}``; see :mod:`plm_pin.kinematics.collisions`).
     """
 
     closures: tuple[ClosureSpec, ...] = ()
@@ -135,6 +137,7 @@ class Sidecar:
     reference: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
     name: str | None = None
     source: str | None = None
+    collision_ignore: tuple[tuple[str, str], ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """The sidecar as plain data, ready for YAML."""
@@ -170,6 +173,8 @@ class Sidecar:
             out["reference"] = {
                 k: (float(v[0]) if len(v) == 1 else [float(x) for x in v]) for k, v in self.reference.items()
             }
+        if self.collision_ignore:
+            out["self_collision"] = {"ignore": [list(p) for p in self.collision_ignore]}
         return out
 
     def to_yaml(self) -> str:
@@ -292,6 +297,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         "actuation",
         "end_effector",
         "reference",
+        "self_collision",
     )
     _keys(data, allowed, "sidecar", path)
     if data.get("format") != FORMAT:
@@ -346,6 +352,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
             reference[str(joint)] = (_number(value, where, path),)
     name = data.get("name")
     source = data.get("source")
+    collision_ignore = _collision_ignore(data.get("self_collision"), path)
     return Sidecar(
         closures=closures,
         actuation=actuation,
@@ -354,7 +361,23 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         reference=reference,
         name=str(name) if name is not None else None,
         source=str(source) if source is not None else None,
+        collision_ignore=collision_ignore,
     )
+
+
+def _collision_ignore(raw: Any, path: str | None) -> tuple[tuple[str, str], ...]:
+    """The ``self_collision: {ignore: [[a, b], ...]}`` body pairs, checked."""
+    if raw is None:
+        return ()
+    if not isinstance(raw, Mapping):
+        raise DescriptionError("'self_collision' must be a mapping with key 'ignore'", path)
+    _keys(raw, ("ignore",), "self_collision", path)
+    pairs = raw.get("ignore") or []
+    if not isinstance(pairs, list) or not all(
+        isinstance(p, list) and len(p) == 2 and all(isinstance(n, str) for n in p) for p in pairs
+    ):
+        raise DescriptionError("self_collision.ignore must be a list of [body, body] name pairs", path)
+    return tuple((p[0], p[1]) for p in pairs)
 
 
 def read_yaml(text: str, path: str | None = None) -> Any:

@@ -11,6 +11,8 @@ mechanism), over the sweep's pose grid; none re-derives a formula:
   ``over`` (default: all of them);
 - ``orientation_range`` runs :func:`plm_pin.analysis.orientation_range` along the rotation
   axis for every combination of the other pose coordinates;
+- ``collision_free`` checks them for self-collision
+  (:meth:`plm_pin.analysis.WorkspaceSlice.collision_free`);
 - ``within_limits`` checks the grid's configurations against the joints' position limits
   (:meth:`plm_pin.analysis.WorkspaceSlice.within_limits`);
 - ``peak_force`` and ``preload`` call :func:`plm_pin.statics.static_forces` at every reached
@@ -467,6 +469,14 @@ METRICS: dict[str, Metric] = {
             ),
             (),
             lambda ev: {"within_limits": ev.grid.within_limits(ev.mech)},
+        ),
+        Metric(
+            "collision_free",
+            "whether the reached pose is free of self-collision between non-adjacent bodies "
+            "(plm_pin.kinematics.collisions, on the description's visual shapes)",
+            (Variable("collision_free", "-", "pose reached without self-collision", dtype="bool"),),
+            (),
+            lambda ev: {"collision_free": ev.grid.collision_free(ev.mech)},
         ),
     )
 }
