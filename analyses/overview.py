@@ -203,6 +203,8 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
         [
             ("grid points", int(reached.size), ""),
             ("reachable fraction", grid.reachable_fraction, "-"),
+            ("fraction reached within the joint limits", float(np.mean(grid.within_limits(mech))), "-"),
+            ("fraction reached free of self-collision", float(np.mean(grid.collision_free(mech))), "-"),
             ("smallest manipulability reached", float(np.min(w)) if w.size else None, "J_ce units"),
             ("largest manipulability reached", float(np.max(w)) if w.size else None, "J_ce units"),
             (
