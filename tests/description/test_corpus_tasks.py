@@ -17,21 +17,13 @@ import pinocchio as pin
 import pytest
 import yaml
 
-import plm_pin
+from plm_pin import kinematics as kin
 from plm_pin.description.interop import CORPUS_TASKS
 from plm_pin.exceptions import DescriptionError
-from plm_pin.kinematics import (
-    closed_chain_jacobians,
-    forward_kinematics,
-    inverse_kinematics,
-    same_assembly,
-    task_pose,
-)
 from plm_pin.mechanism import Mechanism
 from plm_pin.report import find_study, run_study
 from plm_pin.statics import static_forces
-from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning
-from tests.conftest import INTEROP
+from tests.conftest import INTEROP, load_corpus
 
 if not INTEROP.is_dir():
     pytest.skip(f"example-parallel-robots corpus absent ({INTEROP})", allow_module_level=True)
@@ -39,17 +31,10 @@ if not INTEROP.is_dir():
 EPS = 1e-6
 
 
-def _load(path) -> Mechanism:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", MissingMeshWarning)
-        warnings.simplefilter("ignore", MissingLimitsWarning)
-        return plm_pin.load(path)
-
-
 @pytest.fixture(scope="module")
 def robots() -> dict[str, Mechanism]:
     """The corpus robots with a task, loaded from their folders."""
-    return {folder: _load(INTEROP / folder) for folder in CORPUS_TASKS}
+    return {folder: load_corpus(INTEROP / folder) for folder in CORPUS_TASKS}
 
 
 @pytest.mark.parametrize("folder", list(CORPUS_TASKS))
@@ -65,18 +50,18 @@ def test_corpus_robot_has_its_task_and_folder_name(robots, folder):
 def test_corpus_ik_fk_jacobian_and_statics(robots, folder):
     """IK -> FK round trip, J_ce against IK finite differences, statics against potential energy."""
     mech = robots[folder]
-    x = task_pose(mech, mech.q_ref) + 0.002
-    sol = inverse_kinematics(mech, x)
+    x = kin.task_pose(mech, mech.q_ref) + 0.002
+    sol = kin.inverse_kinematics(mech, x)
     assert sol.residual_norm <= 1e-12
-    found = forward_kinematics(mech, sol.actuators)
-    assert any(same_assembly(mech, s.q, sol.q) for s in found)
-    J_ce = closed_chain_jacobians(mech, sol.q).J_ce
+    found = kin.forward_kinematics(mech, sol.actuators)
+    assert any(kin.same_assembly(mech, s.q, sol.q) for s in found)
+    J_ce = kin.closed_chain_jacobians(mech, sol.q).J_ce
     data = mech.model.createData()
     dU, dc = [], []
     for k in range(len(x)):
         dx = np.zeros(len(x))
         dx[k] = EPS
-        plus, minus = inverse_kinematics(mech, x + dx, sol.q), inverse_kinematics(mech, x - dx, sol.q)
+        plus, minus = kin.inverse_kinematics(mech, x + dx, sol.q), kin.inverse_kinematics(mech, x - dx, sol.q)
         np.testing.assert_allclose(
             J_ce[:, k], (plus.actuators - minus.actuators) / (2 * EPS), rtol=1e-6, atol=1e-7
         )
@@ -93,15 +78,15 @@ def test_end_effector_in_robot_yaml_is_read_and_unknown_keys_refused(tmp_path):
     """An end_effector added to robot.yaml gives the task; a misspelt key is refused naming the valid ones."""
     folder = tmp_path / "my_fivebar"
     shutil.copytree(INTEROP / "5bar_linkage_iso3d", folder)
-    raw = yaml.safe_load((folder / "robot.yaml").read_text())
+    raw = yaml.safeload_corpus((folder / "robot.yaml").read_text())
     (folder / "robot.yaml").write_text(
         yaml.safe_dump({**raw, "end_effector": {"frame": "part_4", "task": ["x", "z"]}})
     )
-    mech = _load(folder)
+    mech = load_corpus(folder)
     assert (mech.name, mech.task.frame, mech.task.dofs) == ("my_fivebar", "part_4", ("x", "z"))
     (folder / "robot.yaml").write_text(yaml.safe_dump({**raw, "end_efector": {"frame": "part_4"}}))
     with pytest.raises(DescriptionError) as info:
-        _load(folder)
+        load_corpus(folder)
     assert str(info.value) == (
         f"{folder / 'robot.yaml'}: robot.yaml: unknown key(s) ['end_efector']; valid keys are "
         "['closed_loop', 'type', 'name_mot', 'end_effector']"
@@ -118,7 +103,7 @@ def test_robot_urdf_with_its_own_sidecar_is_named_after_the_folder(tmp_path):
         "actuation": [{"joint": "mot1_rod1"}],
     }
     (folder / "robot.plm.yaml").write_text(yaml.safe_dump(sidecar))
-    assert _load(folder / "robot.urdf").name == "delta_copy"
+    assert load_corpus(folder / "robot.urdf").name == "delta_copy"
 
 
 @pytest.mark.slow

@@ -26,15 +26,12 @@ finite differences of the IK.
 from __future__ import annotations
 
 import shutil
-import warnings
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
 
-import plm_pin
 from plm_pin.kinematics import (
     closed_chain_jacobians,
     forward_kinematics,
@@ -45,8 +42,7 @@ from plm_pin.kinematics import (
 from plm_pin.kinematics.closures import compile_closures
 from plm_pin.kinematics.closures import jacobian as closure_jacobian
 from plm_pin.mechanism import Mechanism
-from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning
-from tests.conftest import INTEROP, fd_jacobian
+from tests.conftest import INTEROP, fd_jacobian, load_corpus
 
 if not INTEROP.is_dir():
     pytest.skip(f"example-parallel-robots corpus absent ({INTEROP})", allow_module_level=True)
@@ -70,7 +66,7 @@ EPS = 1e-6
 
 
 def _sidecar(folder: str, extra_driven: list[str]) -> dict:
-    robot = yaml.safe_load((INTEROP / folder / "robot.yaml").read_text())
+    robot = yaml.safeload_corpus((INTEROP / folder / "robot.yaml").read_text())
     frame, task, _, _ = ROBOTS[folder]
     closures = [
         {"name": f"loop{k + 1}", "frames": list(pair), "type": {"3d": "point", "6d": "weld"}[kind]}
@@ -84,13 +80,6 @@ def _sidecar(folder: str, extra_driven: list[str]) -> dict:
     }
 
 
-def _load(path: Path) -> Mechanism:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", MissingMeshWarning)
-        warnings.simplefilter("ignore", MissingLimitsWarning)  # tested in test_limits.py
-        return plm_pin.load(path)
-
-
 @pytest.fixture(scope="module")
 def robots(tmp_path_factory) -> dict[str, tuple[Mechanism, Mechanism]]:
     """Each robot with its motors, and the same robot with one half-joint per weld also driven."""
@@ -101,7 +90,7 @@ def robots(tmp_path_factory) -> dict[str, tuple[Mechanism, Mechanism]]:
         (dest / "robot.plm.yaml").write_text(yaml.safe_dump(_sidecar(folder, [])))
         shutil.copy(dest / "robot.urdf", dest / "locked.urdf")
         (dest / "locked.plm.yaml").write_text(yaml.safe_dump(_sidecar(folder, [a for a, _ in welds])))
-        out[folder] = (_load(dest / "robot.urdf"), _load(dest / "locked.urdf"))
+        out[folder] = (load_corpus(dest / "robot.urdf"), load_corpus(dest / "locked.urdf"))
     return out
 
 
