@@ -78,7 +78,7 @@ def test_end_effector_in_robot_yaml_is_read_and_unknown_keys_refused(tmp_path):
     """An end_effector added to robot.yaml gives the task; a misspelt key is refused naming the valid ones."""
     folder = tmp_path / "my_fivebar"
     shutil.copytree(INTEROP / "5bar_linkage_iso3d", folder)
-    raw = yaml.safeload_corpus((folder / "robot.yaml").read_text())
+    raw = yaml.safe_load((folder / "robot.yaml").read_text())
     (folder / "robot.yaml").write_text(
         yaml.safe_dump({**raw, "end_effector": {"frame": "part_4", "task": ["x", "z"]}})
     )

@@ -66,7 +66,7 @@ EPS = 1e-6
 
 
 def _sidecar(folder: str, extra_driven: list[str]) -> dict:
-    robot = yaml.safeload_corpus((INTEROP / folder / "robot.yaml").read_text())
+    robot = yaml.safe_load((INTEROP / folder / "robot.yaml").read_text())
     frame, task, _, _ = ROBOTS[folder]
     closures = [
         {"name": f"loop{k + 1}", "frames": list(pair), "type": {"3d": "point", "6d": "weld"}[kind]}
