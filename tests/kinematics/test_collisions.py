@@ -89,3 +89,30 @@ def test_sidecar_ignores_pairs(rrr, tmp_path):
         DescriptionError, match=r"self_collision.ignore must be a list of \[body, body\] name pairs"
     ):
         parse_sidecar({**data, "self_collision": {"ignore": ["prox1"]}})
+
+
+def test_harada_sliders_passing_on_the_stator_collide():
+    """3D4M turning its plate: two carriages (boxes 3 cm long on one stator) collide iff |c_i - c_j| < 3 cm.
+
+    The sliders of Harada 2011 cannot pass each other on their common stator; here that is a
+    self-collision check of the preset's carriage boxes, decided by the slider positions alone.
+    """
+    from plm_pin.kinematics import inverse_kinematics, task_pose
+    from tests.conftest import preset
+
+    mech = preset("harada2011_3d4m")
+    x0, q = task_pose(mech, mech.q_ref), mech.q_ref
+    seen = set()
+    for theta in np.linspace(0.0, 1.2, 13):
+        sol = inverse_kinematics(mech, [x0[0], x0[1], theta], q)
+        q = sol.q
+        carriages = {p for p in self_collisions(mech, q) if all(n.startswith("carriage") for n in p)}
+        c = sol.actuators
+        expected = {
+            (f"carriage{i + 1}", f"carriage{k + 1}")
+            for i, k in itertools.combinations(range(4), 2)
+            if abs(c[i] - c[k]) < 0.03
+        }
+        assert carriages == expected
+        seen.add(bool(expected))
+    assert seen == {True, False}
