@@ -16,6 +16,7 @@ from plm_pin import Mechanism, PlmError, SimulationFailed, load
 from plm_pin.analysis import WorkspaceSlice, manipulability, singular_loci, workspace_map, workspace_sweep
 from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
 from plm_pin.kinematics import classify, task_pose
+from plm_pin.kinematics.collisions import self_collisions
 from plm_pin.report import Animation, Column, Section, StudyContext
 from plm_pin.statics import StaticForces, actuator_limits, internal_force_range, static_forces
 from plm_pin.stiffness import natural_frequencies, stiffness, stiffness_map
@@ -213,6 +214,8 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
         [
             ("grid points", int(reached.size), ""),
             ("reachable fraction", grid.reachable_fraction, "-"),
+            ("fraction reached within the joint limits", float(np.mean(grid.within_limits(mech))), "-"),
+            ("fraction reached free of self-collision", float(np.mean(grid.collision_free(mech))), "-"),
             ("smallest manipulability reached", float(np.min(w)) if w.size else None, "J_ce units"),
             ("largest manipulability reached", float(np.max(w)) if w.size else None, "J_ce units"),
             (
@@ -228,6 +231,14 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
             ("singular points found", len(loci), ""),
         ],
     )
+    touching = self_collisions(mech, mech.q_ref)
+    if touching:
+        section.text(
+            "At the reference configuration these pairs of shapes already touch, so they count as "
+            f"colliding everywhere they still do: {', '.join(f'{a}-{b}' for a, b in touching)}. A planar "
+            "drawing puts every link in one plane; pairs that move in different planes are left out with "
+            "the sidecar's `self_collision: {ignore: [[a, b]]}`."
+        )
     if loci:
         i, j = (dofs.index(a) for a in axes)
         section.table(

@@ -30,6 +30,7 @@ from typer.core import TyperGroup
 
 from . import __version__
 from ._io import atomic_path
+from .diagnostics import findings, mobility_text
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .kinematics import inverse_kinematics, task_pose
 from .loading import load
@@ -210,7 +211,11 @@ def info(
         table.add_row(escape(f"actuator {a['joint']}"), escape(f"{a['kind']}, limits {limits}"))
     task = summary["task"]
     table.add_row("task", "none" if task is None else escape(f"{task['frame']}: {' '.join(task['dofs'])}"))
-    table.add_row("mobility", str(summary["mobility"]))
+    table.add_row(
+        "mobility",
+        str(summary["mobility"])
+        + (f" ({summary['idle_mobility']} idle held)" if summary["idle_mobility"] else ""),
+    )
     red = summary["redundancy"]
     table.add_row("redundancy", f"{red}" + (" (under-actuated)" if red < 0 else ""))
     table.add_row("reference residual", f"{summary['reference_residual']:.3g} m/rad")
@@ -220,11 +225,19 @@ def info(
 
 @app.command()
 def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or description folder")]) -> None:
-    """Validate a description and say exactly what is wrong and where."""
-    summary = _load(path).summary()
+    """Validate a description and say exactly what is wrong and where (idle DOF, task size, limits)."""
+    mech = _load(path)
+    summary = mech.summary()
+    found = findings(mech)
+    for finding in found:
+        prefix = "[bold red]error:[/]" if finding.severity == "error" else "[cyan]note:[/]"
+        target = errors if finding.severity == "error" else console
+        target.print(f"{prefix} {escape(finding.message)}", highlight=False, soft_wrap=True)
+    if any(f.severity == "error" for f in found):
+        raise typer.Exit(code=1)
     console.print(
-        f"[green]ok[/]: {escape(summary['name'])}: {len(summary['closures'])} closures, "
-        f"{len(summary['actuators'])} actuators, mobility {summary['mobility']}, redundancy "
+        f"[green]ok[/]: {escape(summary['name'])}: {len(mech.sidecar.closures)} closures, "
+        f"{len(summary['actuators'])} actuators, mobility {mobility_text(mech)}, redundancy "
         f"{summary['redundancy']}, reference residual {summary['reference_residual']:.2g}",
         highlight=False,
         soft_wrap=True,

@@ -180,3 +180,18 @@ class SchedulerUnreachable(PlmError):
         self.address = address
         self.timeout = timeout
         super().__init__(message)
+
+
+class JointLimitExceeded(PoseUnreachable):
+    """The loops close at a pose, but only with joints outside their position limits.
+
+    Attributes:
+        violations: by how much each joint is outside its limits [m or rad], keyed by joint name.
+        q: the configuration that closes the loops (limits ignored), shape (nq,).
+    """
+
+    def __init__(self, message: str, violations: dict[str, float], q: object) -> None:
+        """Keep the violations and the configuration."""
+        super().__init__(message)
+        self.violations = violations
+        self.q = q

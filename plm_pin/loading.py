@@ -11,6 +11,7 @@ from typing import Any
 from ._text import short
 from .description.loader import Description, build_model, build_visual_model, read_description
 from .description.mjcf import MJCF_SUFFIX, read_mjcf
+from .description.overrides import DescriptionBuilder
 from .description.sidecar import SIDECAR_SUFFIX_DEFAULT as SIDECAR_SUFFIX
 from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
 from .description.urdf import read_urdf_text
@@ -182,12 +183,19 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
     if path.name.endswith(SIDECAR_SUFFIX) and mjcf.is_file() and not mjcf.with_suffix(".urdf").is_file():
         return mechanism_from_mjcf(mjcf, validate=validate)
     description = read_description(path)
-    name = description.sidecar.name or (path.name if path.is_dir() else path.name.split(".")[0])
+    stem = path.name if path.is_dir() else path.name.split(".")[0]
+    if stem == "robot":  # the example-parallel-robots file name: name the mechanism after its folder
+        stem = path.resolve().parent.name
+    name = description.sidecar.name or stem
     return mechanism_from_description(description, name, validate=validate)
 
 
 def resolve_builder(target: str | Builder) -> tuple[Builder, dict[str, Any], str]:
-    """The builder of a preset name (with the preset's parameters) or a builder callable (with none).
+    """The builder of a preset name (with the preset's parameters), of a description path, or a callable.
+
+    A path (a ``.urdf``, ``.plm.yaml`` or folder) gives a
+    :class:`~plm_pin.description.overrides.DescriptionBuilder`: joint origins, lengths and
+    masses by name.
 
     Returns:
         ``(builder, base parameters, label)``; the label is the preset name or the builder's
@@ -198,8 +206,12 @@ def resolve_builder(target: str | Builder) -> tuple[Builder, dict[str, Any], str
     """
     if isinstance(target, str):
         preset = PRESETS.get(target)
+        if preset is None and Path(target).exists():
+            return DescriptionBuilder(target), {}, target
         if preset is None:
-            raise InvalidInput(f"unknown preset {target!r}; presets are {sorted(PRESETS)}")
+            raise InvalidInput(
+                f"unknown preset {target!r}; presets are {sorted(PRESETS)}, or give the path of a description"
+            )
         return preset.builder, dict(preset.parameters), target
     if not callable(target):
         raise InvalidInput(f"expected a preset name or a builder callable, got {target!r}")
@@ -238,9 +250,9 @@ def build_mechanism(
     unknown = [key for key in given if key not in valid]
     if unknown:
         raise InvalidInput(f"unknown parameter(s) {unknown} of {label}; its parameters are {list(valid)}")
-    stem = target if isinstance(target, str) else getattr(target, "__name__", "mechanism")
+    stem = getattr(builder, "__name__", "mechanism") if target not in PRESETS else target
     label_name = name or f"{stem}_variant"
-    source = PRESETS[target].source if isinstance(target, str) else label
+    source = PRESETS[target].source if isinstance(target, str) and target in PRESETS else label
     robot, sidecar = builder(name=label_name, source=source, **{**base, **given})
     description = Description(read_urdf_text(urdf_text(robot), None, f"<{label_name}>"), sidecar)
     return mechanism_from_description(description, label_name, validate=validate)

@@ -15,6 +15,7 @@ from .description.sidecar import Sidecar, TaskSpec
 from .exceptions import ClosureNotSatisfied, InvalidInput
 from .kinematics import closures as _closures
 from .kinematics.assembly import Assembly, assemble
+from .kinematics.idle import IdleGauge, find_gauges
 from .kinematics.legs import Leg, find_legs
 from .kinematics.singularity import RANK_RTOL, numerical_rank
 from .kinematics.task import Task, compile_task
@@ -77,7 +78,7 @@ class Mechanism:
         name: mechanism name.
         model: the Pinocchio model of the spanning tree (gravity and armature set).
         sidecar: the description's closures, actuation and task.
-        closures: the compiled closures, in sidecar order.
+        closures: the compiled closures, in sidecar order, then the gauges of idle mobilities.
         actuators: the driven joints, in sidecar order.
         source: provenance (paper, file).
     """
@@ -98,7 +99,7 @@ class Mechanism:
         self.source = source
         self._data = model.createData()
         self._visual_factory = visual_factory
-        self.closures = _closures.compile_closures(model, sidecar.closures)
+        self._assembled_guess: np.ndarray | None = None
         actuators = []
         for spec in sidecar.actuation:
             jid = model.getJointId(spec.joint)
@@ -150,7 +151,33 @@ class Mechanism:
     @property
     def data(self) -> pin.Data:
         """Scratch Pinocchio data of this mechanism (not thread-safe: one mechanism per thread)."""
+        self.idle_gauges  # noqa: B018 - the gauge frames exist before the data is used
         return self._data
+
+    @functools.cached_property
+    def idle_gauges(self) -> tuple[IdleGauge, ...]:
+        """Gauges of the idle mobilities: one joint held per idle motion (see :mod:`plm_pin.kinematics.idle`).
+
+        Found at first use near the reference guess; the model gains two frames per gauge.
+        """
+        cut = _closures.compile_closures(self.model, self.sidecar.closures)
+        gauges, self._assembled_guess = find_gauges(
+            self.model, cut, self.reference_guess(), self.actuated_v_indices, self._task_frame
+        )
+        if gauges:
+            self._data = self.model.createData()
+        return gauges
+
+    @functools.cached_property
+    def closures(self) -> tuple[_closures.Closure, ...]:
+        """The compiled closures, in sidecar order, then one weld ``idle:<joint>`` per idle gauge."""
+        specs = (*self.sidecar.closures, *(g.closure for g in self.idle_gauges))
+        return _closures.compile_closures(self.model, specs)
+
+    @property
+    def idle_mobility(self) -> int:
+        """Number of idle mobilities (motions that move nothing else), fixed by :attr:`idle_gauges`."""
+        return len(self.idle_gauges)
 
     @property
     def task_frame_id(self) -> int | None:
@@ -197,11 +224,11 @@ class Mechanism:
     # ---------------------------------------------------------- closures
     def closure_residual(self, q: Any) -> np.ndarray:
         r"""Closure residual :math:`\phi(q)` [m, rad] (see :mod:`plm_pin.kinematics.closures`), shape (m,)."""
-        return _closures.residual(self.model, self._data, self.closures, self.check_q(q))
+        return _closures.residual(self.model, self.data, self.closures, self.check_q(q))
 
     def closure_jacobian(self, q: Any) -> np.ndarray:
         r"""Closure Jacobian :math:`J_\phi(q)` on the tangent space, shape (m, nv)."""
-        return _closures.jacobian(self.model, self._data, self.closures, self.check_q(q))
+        return _closures.jacobian(self.model, self.data, self.closures, self.check_q(q))
 
     def closure_rank(self, q: Any, rtol: float = RANK_RTOL) -> int:
         r"""Rank of :math:`J_\phi(q)` by SVD: singular values above ``rtol * max(s_max, 1)``."""
@@ -289,7 +316,7 @@ class Mechanism:
 
         return assemble(
             self.model,
-            self._data,
+            self.data,
             self.closures,
             q0,
             free,
@@ -331,9 +358,12 @@ class Mechanism:
     def q_ref(self) -> np.ndarray:
         """Reference assembled configuration, closed to 1e-12, shape (nq,).
 
-        Assembled from the sidecar's reference values (or the neutral configuration).
+        Assembled from the sidecar's reference values (or the neutral configuration), with
+        the loops closed first and the idle gauges then held where that left them.
         """
-        q = self.assemble(self.reference_guess()).q.copy()
+        self.idle_gauges  # noqa: B018 - closes the loops from the reference guess
+        guess = self._assembled_guess if self._assembled_guess is not None else self.reference_guess()
+        q = self.assemble(guess).q.copy()
         q.setflags(write=False)
         return q
 
@@ -341,6 +371,9 @@ class Mechanism:
     @functools.cached_property
     def mobility(self) -> int:
         """Degrees of freedom of the closed chain: ``nv - rank J_phi`` at a generic assembly.
+
+        Idle mobilities are not counted: their gauge rows are part of ``J_phi``
+        (see :attr:`idle_mobility`).
 
         The rank is the largest found at the reference configuration and at two
         assembled random perturbations of it (a special configuration can only lose rank,
@@ -426,6 +459,8 @@ class Mechanism:
             ],
             "task": {"frame": self.task.frame, "dofs": list(self.task.dofs)} if self.task else None,
             "mobility": self.mobility,
+            "idle_mobility": self.idle_mobility,
+            "idle_joints": [g.joint for g in self.idle_gauges],
             "redundancy": self.redundancy,
             "reference_residual": float(np.max(np.abs(self.closure_residual(self.q_ref))))
             if self.closures

@@ -29,3 +29,7 @@ class IgnoredElementWarning(PlmWarning):
 
 class SimulationUnstableWarning(PlmWarning):
     """A simulation another engine runs of an exported model (MuJoCo's) diverges."""
+
+
+class MissingLimitsWarning(PlmWarning):
+    """URDF joints carry no position limits (read as [0, 0]); they are treated as unlimited."""

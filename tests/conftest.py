@@ -19,6 +19,21 @@ REPO = Path(__file__).resolve().parents[1]
 INTEROP = REPO.parent / "shared" / "interop" / "example-parallel-robots"
 
 
+def load_corpus(path: Path) -> Mechanism:
+    """Load an example-parallel-robots description, its missing meshes and URDF limits not warned.
+
+    Those warnings are tested in tests/description/test_interop.py and tests/kinematics/test_limits.py.
+    """
+    import warnings
+
+    from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MissingMeshWarning)
+        warnings.simplefilter("ignore", MissingLimitsWarning)
+        return plm_pin.load(path)
+
+
 @functools.cache
 def preset(name: str) -> Mechanism:
     """Load a preset once per test session (Mechanism objects are not mutated by tests)."""

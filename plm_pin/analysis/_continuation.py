@@ -36,7 +36,7 @@ from ..kinematics import closures as _closures
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import require_task
-from ..kinematics.legs import Leg, ik_jacobian_from_data, working_mode, working_mode_from_jacobian
+from ..kinematics.legs import Leg, ik_jacobian_from_data, working_mode, working_mode_from_data
 from ..kinematics.task import Task, TaskTarget
 from .manipulability import batch_metrics
 
@@ -150,8 +150,8 @@ class IKEvaluator:
         return ik_jacobian_from_data(self.model, self.data, self.closures, self.task, out)
 
     def mode(self, A: np.ndarray) -> tuple[int, ...]:
-        """Working mode from the stacked Jacobian of :meth:`jacobian`: one sign per square leg."""
-        return working_mode_from_jacobian(A, self.legs)
+        """Working mode at the configuration of :meth:`solve` (``A`` of :meth:`jacobian` is not needed)."""
+        return working_mode_from_data(self.model, self.data, self.closures, self.task, self.legs)
 
     def extrapolate(self, previous: list[np.ndarray]) -> np.ndarray:
         """Next configuration on a line of equally spaced solutions ``previous`` (nearest first)."""

@@ -28,8 +28,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..exceptions import InvalidInput
+from ..kinematics.collisions import collision_free
 from ..kinematics.inverse import IK_TOL
 from ..kinematics.jacobians import check_square_task, require_task
+from ..kinematics.limits import within_limits
 from ._continuation import base_pose, solve_poses
 from .manipulability import METRICS
 
@@ -98,6 +100,21 @@ class WorkspaceSlice:
     def reachable_fraction(self) -> float:
         """Fraction of the grid reached [-]."""
         return float(np.mean(self.reachable))
+
+    def within_limits(self, mech: Mechanism) -> np.ndarray:
+        """Reached points whose configuration keeps every joint inside its position limits, shape ``shape``.
+
+        Apart from :attr:`reachable` (the loops close there): a reached point may need a passive
+        joint beyond its range (see :mod:`plm_pin.kinematics.limits`).
+        """
+        return np.asarray(self.reachable & within_limits(mech, self.q))
+
+    def collision_free(self, mech: Mechanism, ignore: Sequence[tuple[str, str]] = ()) -> np.ndarray:
+        """Reached points where no two non-adjacent bodies touch, shape ``shape``.
+
+        See :mod:`plm_pin.kinematics.collisions` (``ignore``: more body-name pairs left out).
+        """
+        return np.asarray(self.reachable & collision_free(mech, self.q, ignore))
 
     def poses(self) -> np.ndarray:
         """Task pose of every grid point [m, rad], shape ``shape + (n_task,)``."""

@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from lxml import etree
 
 from .._text import short
 from .._yaml import read_head
 from ..exceptions import DescriptionError, FrameNotFound
-from .interop import parse_epr_sidecar
+from ..kinematics.limits import open_missing_limits
+from .interop import corpus_task, parse_epr_sidecar
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar, parse_sidecar, read_yaml
 from .urdf import UrdfSource, read_urdf, read_urdf_text
 
@@ -100,12 +103,23 @@ def _read_pair(urdf_path: Path, sidecar_path: Path) -> Description:
 
 
 def read_epr_folder(folder: Path) -> Description:
-    """Read an example-parallel-robots folder (``robot.urdf`` + ``robot.yaml``)."""
+    """Read an example-parallel-robots folder (``robot.urdf`` + ``robot.yaml``).
+
+    The task is ``robot.yaml``'s ``end_effector``, else the corpus's for a known folder
+    (see :mod:`plm_pin.description.interop`).
+    """
     sidecar_path = folder / EPR_SIDECAR
     raw = read_yaml(_read_head(sidecar_path), str(sidecar_path))
     sidecar = parse_epr_sidecar(raw, str(sidecar_path), name=folder.name)
     urdf_path = folder / "robot.urdf"
-    return Description(read_urdf(urdf_path), sidecar, urdf_path, sidecar_path, "example-parallel-robots")
+    urdf = read_urdf(urdf_path)
+    if sidecar.task is None:
+        root = etree.fromstring(urdf.xml.encode())
+        frames = [str(e.get("name")) for e in root.iter("link", "joint")]
+        task = corpus_task(folder.name, frames)
+        if task is not None:
+            sidecar = dataclasses.replace(sidecar, task=task)
+    return Description(urdf, sidecar, urdf_path, sidecar_path, "example-parallel-robots")
 
 
 def description_from_text(urdf_text: str, sidecar_text: str, folder: Path | None = None) -> Description:
@@ -118,7 +132,8 @@ def build_model(description: Description) -> pin.Model:
     """Build the Pinocchio model and check every name the sidecar uses.
 
     Gravity comes from the sidecar; the reflected inertia of each drive is added to its
-    joint's armature.
+    joint's armature. Joints without position limits in the URDF are made unlimited, with
+    one :class:`~plm_pin.warnings.MissingLimitsWarning` (see :mod:`plm_pin.kinematics.limits`).
 
     Raises:
         DescriptionError: when Pinocchio rejects the URDF.
@@ -172,6 +187,7 @@ def build_model(description: Description) -> pin.Model:
                 side,
             )
     model.gravity.linear = np.array(sidecar.gravity, dtype=float)
+    open_missing_limits(model, label)
     return model
 
 

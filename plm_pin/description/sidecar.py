@@ -157,6 +157,8 @@ class Sidecar:
         name: optional mechanism name.
         source: optional provenance (paper, table).
         compliance: springs of the drives, joints and links, or None (a rigid description).
+        collision_ignore: body pairs whose contact is not a self-collision (key
+            ``self_collision: {ignore: [[a, b], ...]}``; see :mod:`plm_pin.kinematics.collisions`).
     """
 
     closures: tuple[ClosureSpec, ...] = ()
@@ -167,6 +169,7 @@ class Sidecar:
     name: str | None = None
     source: str | None = None
     compliance: ComplianceSpec | None = None
+    collision_ignore: tuple[tuple[str, str], ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """The sidecar as plain data, ready for YAML."""
@@ -204,6 +207,8 @@ class Sidecar:
             }
         if self.compliance is not None:
             out["compliance"] = self.compliance.to_dict()
+        if self.collision_ignore:
+            out["self_collision"] = {"ignore": [list(p) for p in self.collision_ignore]}
         return out
 
     def to_yaml(self) -> str:
@@ -338,6 +343,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         "end_effector",
         "reference",
         "compliance",
+        "self_collision",
     )
     _keys(data, allowed, "sidecar", path)
     if data.get("format") != FORMAT:
@@ -393,6 +399,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
             reference[str(joint)] = (_number(value, where, path),)
     name = None if data.get("name") is None else _string(data["name"], "name", path)
     source = None if data.get("source") is None else _string(data["source"], "source", path)
+    collision_ignore = _collision_ignore(data.get("self_collision"), path)
     return Sidecar(
         closures=closures,
         actuation=actuation,
@@ -402,7 +409,23 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         name=name,
         source=source,
         compliance=parse_compliance(data.get("compliance"), path),
+        collision_ignore=collision_ignore,
     )
+
+
+def _collision_ignore(raw: Any, path: str | None) -> tuple[tuple[str, str], ...]:
+    """The ``self_collision: {ignore: [[a, b], ...]}`` body pairs, checked."""
+    if raw is None:
+        return ()
+    if not isinstance(raw, Mapping):
+        raise DescriptionError("'self_collision' must be a mapping with key 'ignore'", path)
+    _keys(raw, ("ignore",), "self_collision", path)
+    pairs = raw.get("ignore") or []
+    if not isinstance(pairs, list) or not all(
+        isinstance(p, list) and len(p) == 2 and all(isinstance(n, str) for n in p) for p in pairs
+    ):
+        raise DescriptionError("self_collision.ignore must be a list of [body, body] name pairs", path)
+    return tuple((p[0], p[1]) for p in pairs)
 
 
 def read_yaml(text: str | bytes, path: str | None = None) -> Any:

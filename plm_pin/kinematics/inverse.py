@@ -3,19 +3,21 @@
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
 from .._checks import positive, signs
-from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
+from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
 from .assembly import assemble
 from .closures import Closure, compile_closures
 from .forward import same_assembly
 from .jacobians import require_task
 from .legs import working_mode
+from .limits import limit_violations, wrap_into_limits
 from .starts import random_starts
 from .task import TaskTarget, check_task_vector
 
@@ -36,6 +38,8 @@ class IKSolution:
         actuators: actuator positions [m, rad], shape (n_act,).
         mode: working mode, one sign per square leg block (0: leg at an actuator singularity).
         residual_norm: largest absolute residual of closures and task [m, rad].
+        limit_violations: joints outside their position limits at ``q``, with by how much
+            [m or rad] (revolute angles are first shifted by 2 pi into their limits where they fit).
     """
 
     q: np.ndarray
@@ -43,6 +47,12 @@ class IKSolution:
     actuators: np.ndarray
     mode: tuple[int, ...]
     residual_norm: float
+    limit_violations: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def within_limits(self) -> bool:
+        """Whether every joint respects its position limits."""
+        return not self.limit_violations
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for JSON."""
@@ -52,6 +62,7 @@ class IKSolution:
             "actuators": self.actuators.tolist(),
             "mode": list(self.mode),
             "residual_norm": self.residual_norm,
+            "limit_violations": dict(self.limit_violations),
         }
 
 
@@ -76,10 +87,16 @@ def _solve(
 
 
 def _solution(mech: Mechanism, target: TaskTarget, q: np.ndarray) -> IKSolution:
+    q = wrap_into_limits(mech, q)
     pin.framesForwardKinematics(mech.model, mech.data, q)
     res = np.concatenate([mech.closure_residual(q), target.residual(mech.data)])
     return IKSolution(
-        q, target.x.copy(), mech.actuator_positions(q), working_mode(mech, q), float(np.max(np.abs(res)))
+        q,
+        target.x.copy(),
+        mech.actuator_positions(q),
+        working_mode(mech, q),
+        float(np.max(np.abs(res))),
+        limit_violations(mech, q),
     )
 
 
@@ -91,6 +108,7 @@ def inverse_kinematics(
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
     explain: bool = True,
+    respect_limits: bool = False,
 ) -> IKSolution:
     """Solve the inverse kinematics at task coordinates ``x``.
 
@@ -106,6 +124,9 @@ def inverse_kinematics(
         tol: largest residual accepted [m, rad].
         explain: on failure, find which leg misses and by how much (a leg-by-leg solve from
             random starts, about 0.2 s on a 2-PRRRP); False raises at once with a short message.
+        respect_limits: raise :class:`~plm_pin.exceptions.JointLimitExceeded` when the solution
+            puts a joint outside its position limits (otherwise they are reported in
+            :attr:`IKSolution.limit_violations`).
 
     Returns:
         The solution.
@@ -113,10 +134,18 @@ def inverse_kinematics(
     Raises:
         PoseUnreachable: when no assembly puts the task frame at ``x``; the message names
             the leg that cannot reach and by how much it misses (with ``explain``).
-        InvalidInput: malformed ``x``, ``guess`` or ``mode``.
+        JointLimitExceeded: with ``respect_limits``, when the loops close at ``x`` only with
+            joints outside their limits (a subclass of PoseUnreachable naming them).
+        InvalidInput: malformed ``x``, ``guess`` or ``mode``, or a task with fewer coordinates
+            than the mechanism has DOF (the pose would not determine the configuration).
     """
     mode, tol = signs(mode, "mode"), positive(tol, "tol")
     task = require_task(mech)
+    if task.size < mech.mobility:
+        raise InvalidInput(
+            f"{mech.name}: the task has {task.size} coordinates but the mechanism has {mech.mobility} DOF: "
+            "a pose does not determine the configuration; give a task with as many coordinates as DOF"
+        )
     xa = check_task_vector(x, task.size)
     target = TaskTarget(task, xa)
     if mode is not None:
@@ -138,7 +167,15 @@ def inverse_kinematics(
                 f"{mech.name}: pose {xa.tolist()} could not be solved from this guess"
             ) from None
         raise _unreachable(mech, target, q0, tol) from None
-    return _solution(mech, target, q)
+    sol = _solution(mech, target, q)
+    if respect_limits and sol.limit_violations:
+        raise JointLimitExceeded(
+            f"{mech.name}: pose {xa.tolist()} closes the loops only with joints outside their limits: "
+            + ", ".join(f"{k} by {v:.3g}" for k, v in sol.limit_violations.items()),
+            dict(sol.limit_violations),
+            sol.q,
+        )
+    return sol
 
 
 def _solve_leg(
@@ -209,14 +246,15 @@ def working_modes(
         if not leg.square:
             branches.append([None])
             continue
-        found, _ = _solve_leg(mech, target, first.q, leg.columns, rng, tol, starts_per_leg)
-        branches.append([sol[list(_q_indices(mech, leg.columns))] for sol in found])
+        columns = leg.columns + leg.followers
+        found, _ = _solve_leg(mech, target, first.q, columns, rng, tol, starts_per_leg)
+        branches.append([sol[list(_q_indices(mech, columns))] for sol in found])
     out: dict[tuple[int, ...], IKSolution] = {}
     for combo in itertools.product(*branches):
         q = first.q.copy()
         for leg, values in zip(mech.legs, combo, strict=True):
             if values is not None:
-                q[list(_q_indices(mech, leg.columns))] = values
+                q[list(_q_indices(mech, leg.columns + leg.followers))] = values
         sol = _solution(mech, target, q)
         if sol.residual_norm <= max(tol, 1e-11):
             out.setdefault(sol.mode, sol)

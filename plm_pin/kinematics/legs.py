@@ -1,15 +1,25 @@
 r"""Legs as diagonal blocks of the inverse-kinematics Jacobian, and working-mode signatures.
 
-With the task frame pinned, the inverse-kinematics equations :math:`[\phi(q); x(q) - x^*] = 0`
-split into independent sub-problems: the chain that carries the end effector, then one
-per leg that closes on it. Their Jacobian is block-triangular after permutation
-(Dulmage-Mendelsohn / block-triangular form of its sparsity pattern), so its determinant
-is the product of the diagonal blocks' determinants. The blocks that hold task rows form
-the end-effector chain; the others, grouped by connectivity, are the *legs*. The sign of
-a leg's determinant is its *working mode* (branch), and a zero is an actuator (type-1)
-singularity of that leg. For a PRRRP leg of Harada 2011 the block determinant is
-:math:`l_i z_i^T a`, so the sign is that of :math:`z_i^T a` (the paper's square-root sign
-in eq. (2) is its opposite).
+With the platform (the body of the task frame) pinned, the equations
+:math:`[\phi(q); x(q) - x^*; \text{the platform's other coordinates}] = 0` split into
+independent sub-problems: the chain that carries the platform, then one per leg that closes
+on it. Pinning the whole platform, not only the task coordinates, is what separates the
+legs of a Delta whose floating platform the task places by its position alone. Their
+Jacobian is block-triangular after permutation (Dulmage-Mendelsohn / block-triangular form
+of its sparsity pattern), so its determinant is the product of the diagonal blocks'
+determinants. The blocks that hold platform rows form the end-effector chain; the others,
+grouped by connectivity, are the *legs*.
+
+The sign of the determinant of an actuated block is its leg's *working mode* (branch), and
+a zero is an actuator (type-1) singularity of that leg; blocks without an actuator (a
+floating platform's, the idle gauges') carry no mode, so a platform floating or hanging on
+a leg gives the same modes. A block with more rows than columns (a parallelogram: two
+rods, one elbow) takes the independent rows found at the generic configuration. Passive
+revolute columns are oriented by their generic axis, seen from the body the leg's passive
+chain hangs from, so the two
+joint-angle sets of a universal joint that point a rod the same way give the same sign.
+For a PRRRP leg of Harada 2011 the block determinant is :math:`l_i z_i^T a`, so the sign is
+that of :math:`z_i^T a` (the paper's square-root sign in eq. (2) is its opposite).
 
 The pattern is read numerically at a generic assembled configuration; rows that vanish
 there (the out-of-plane rows of planar closures) are dropped.
@@ -17,6 +27,7 @@ there (the out-of-plane rows of planar closures) are dropped.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Sequence
@@ -25,15 +36,19 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+import scipy.linalg
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
 from . import closures as _closures
 from .jacobians import require_task
+from .singularity import RANK_RTOL, numerical_rank
 from .task import Task
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 PATTERN_RTOL = 1e-9
 """Entries below ``PATTERN_RTOL`` times the largest entry of their row count as structural zeros."""
@@ -51,17 +66,36 @@ class Leg:
         columns: velocity indices (tree joints) in this block.
         joints: names of the joints owning ``columns``.
         actuators: actuated joints in the block.
+        mode_rows: independent rows whose determinant signs the working mode (None: ``rows``).
+        axes: passive revolutes' generic axes, to orient their columns (see
+            :func:`working_mode_from_data`).
+        followers: columns of actuator-less blocks hanging on this leg (a second rod's
+            universal joint), re-solved with it when its branch changes.
     """
 
     rows: tuple[int, ...]
     columns: tuple[int, ...]
     joints: tuple[str, ...]
     actuators: tuple[str, ...]
+    mode_rows: tuple[int, ...] | None = None
+    axes: tuple[tuple[int, int, int, tuple[float, float, float]], ...] = ()
+    followers: tuple[int, ...] = ()
 
     @property
     def square(self) -> bool:
-        """Whether the block determines its joints (as many rows as columns)."""
-        return len(self.rows) == len(self.columns)
+        """Whether the block determines its joints and carries a working-mode sign.
+
+        An actuated block with as many independent rows as columns (:attr:`mode_rows`);
+        without ``mode_rows`` given, one with as many rows as columns.
+        """
+        if self.mode_rows is None:
+            return len(self.rows) == len(self.columns)
+        return bool(self.mode_rows)
+
+    @property
+    def sign_rows(self) -> tuple[int, ...]:
+        """The rows whose determinant gives the sign."""
+        return self.rows if self.mode_rows is None else self.mode_rows
 
     @property
     def label(self) -> str:
@@ -70,8 +104,8 @@ class Leg:
 
     @functools.cached_property
     def block(self) -> tuple[np.ndarray, ...]:
-        """Index of the block in the stacked Jacobian: ``A[leg.block]`` has shape (rows, columns)."""
-        return np.ix_(self.rows, self.columns)
+        """Index of the sign block in the stacked Jacobian: ``A[leg.block]`` is square, (columns, columns)."""
+        return np.ix_(self.sign_rows, self.columns)
 
 
 def ik_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
@@ -97,9 +131,39 @@ def ik_jacobian_from_data(
     return A
 
 
+def platform_rows(task: Task) -> list[int]:
+    """The twist rows (0..5 of ``v, omega``) of the task frame that the task leaves out."""
+    return [r for r in range(6) if r not in task.rows]
+
+
+def structure_jacobian_from_data(
+    model: pin.Model, data: pin.Data, closures: Sequence[_closures.Closure], task: Task
+) -> np.ndarray:
+    """``[J_phi; J_x; J_rest]``: :func:`ik_jacobian_from_data` and the platform's other twist rows.
+
+    Shape (m + 6, nv); ``J_rest`` holds the task frame's twist rows the task leaves out, so
+    that the whole platform is pinned.
+    """
+    m = _closures.closure_rows(closures)
+    A = np.empty((m + 6, model.nv))
+    ik_jacobian_from_data(model, data, closures, task, A[: m + task.size])
+    J = pin.getFrameJacobian(model, data, task.frame_id, _LWA)
+    A[m + task.size :] = J[platform_rows(task)]
+    return A
+
+
+def structure_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
+    """:func:`structure_jacobian_from_data` at ``q``, shape (m + 6, nv)."""
+    task = require_task(mech)
+    pin.computeJointJacobians(mech.model, mech.data, q)
+    pin.updateFramePlacements(mech.model, mech.data)
+    return structure_jacobian_from_data(mech.model, mech.data, mech.closures, task)
+
+
 def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
-    """Split the inverse-kinematics Jacobian at ``q_generic`` into its diagonal blocks."""
-    A = ik_jacobian(mech, q_generic)
+    """Split the structure Jacobian (:func:`structure_jacobian`) at ``q_generic`` into its diagonal blocks."""
+    A = structure_jacobian(mech, q_generic)
+    _drop_moving_platform_rows(A, mech)
     scale = np.max(np.abs(A), axis=1, keepdims=True)
     rows_kept = np.flatnonzero(scale[:, 0] > 0.0)
     pattern = np.abs(A[rows_kept]) > PATTERN_RTOL * scale[rows_kept]
@@ -107,9 +171,7 @@ def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
     rows_kept = rows_kept[pattern.any(axis=1)]
     pattern = pattern[pattern.any(axis=1)]
     nc = pattern.shape[1]
-    match = maximum_bipartite_matching(csr_matrix(pattern.astype(np.int8)), perm_type="column")
-    # match[r] = column matched to row r (or -1)
-    col_of_row = {r: int(c) for r, c in enumerate(match) if c >= 0}
+    col_of_row = _platform_first_matching(pattern, rows_kept >= mech.n_closure_rows)
     row_of_col = {c: r for r, c in col_of_row.items()}
     # directed graph on columns: c -> c' when the row matched to c also depends on c'
     src, dst = [], []
@@ -137,13 +199,122 @@ def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
         leg_of_column[c] = weak[c]
     joint_of_v = _joint_names_by_velocity(mech)
     actuated = {a.idx_v: a.joint for a in mech.actuators}
+    row_group = {int(rows_kept[r]): leg_of_column[c] for c, r in row_of_col.items()}
+    for r, row in enumerate(pattern):  # unmatched rows (redundant ones) join the block they touch
+        groups = {leg_of_column[c] for c in np.flatnonzero(row)}
+        if int(rows_kept[r]) not in row_group and len(groups) == 1:
+            row_group[int(rows_kept[r])] = groups.pop()
     legs = []
     for group in np.unique(leg_of_column):
         cols = tuple(int(c) for c in np.flatnonzero(leg_of_column == group))
         rows = tuple(sorted(int(rows_kept[row_of_col[c]]) for c in cols if c in row_of_col))
         joints = tuple(dict.fromkeys(joint_of_v[c] for c in cols))
-        legs.append(Leg(rows, cols, joints, tuple(actuated[c] for c in cols if c in actuated)))
-    return tuple(sorted(legs, key=lambda leg: leg.columns[0]))
+        acts = tuple(actuated[c] for c in cols if c in actuated)
+        all_rows = tuple(sorted(r for r, g in row_group.items() if g == group))
+        mode_rows = _independent_rows(A, all_rows, cols) if acts else ()
+        legs.append(Leg(rows, cols, joints, acts, mode_rows, _passive_axes(mech, cols, set(actuated))))
+    return tuple(sorted(_with_followers(legs, A, mech.n_closure_rows), key=lambda leg: leg.columns[0]))
+
+
+def _with_followers(legs: list[Leg], A: np.ndarray, m: int) -> list[Leg]:
+    """Attach each actuator-less block off the platform to the first signed leg its rows touch."""
+    out = list(legs)
+    for block in legs:
+        if block.square or any(r >= m for r in block.rows):
+            continue
+        touched = {int(c) for r in block.rows for c in np.flatnonzero(A[r])}
+        for k, leg in enumerate(out):
+            if leg.square and touched & set(leg.columns):
+                out[k] = dataclasses.replace(leg, followers=leg.followers + block.columns)
+                break
+    return out
+
+
+def _drop_moving_platform_rows(A: np.ndarray, mech: Mechanism) -> None:
+    """Zero the platform rows outside the task that some feasible motion moves (in place).
+
+    The platform is pinned along the directions no motion moves (a translational Delta's
+    rotations); along the others the task frame's body differs between branches (the rod
+    carrying a single-rod Delta's tip), which pinning it would hide.
+    """
+    m, n_task = mech.n_closure_rows, require_task(mech).size
+    J_phi = A[:m]
+    rank = numerical_rank(J_phi, RANK_RTOL, floor=1.0) if m else 0
+    N = np.linalg.svd(J_phi)[2][rank:].T if m else np.eye(mech.nv)  # (nv, raw mobility)
+    extra = A[m + n_task :]
+    moved = np.abs(extra @ N).max(axis=1, initial=0.0) > PATTERN_RTOL * max(float(np.abs(A).max()), 1.0)
+    extra[moved] = 0.0
+
+
+def _platform_first_matching(pattern: np.ndarray, platform: np.ndarray) -> dict[int, int]:
+    """Row -> column matching that pins the platform first: its rows, then the closures' on the rest.
+
+    A maximum matching of the whole pattern may give a platform column to a redundant closure
+    row and tie the legs together through it.
+    """
+    out: dict[int, int] = {}
+    taken = np.zeros(pattern.shape[1], dtype=bool)
+    for stage in (platform, ~platform):
+        rows = np.flatnonzero(stage)
+        sub = pattern[rows] & ~taken
+        match = maximum_bipartite_matching(csr_matrix(sub.astype(np.int8)), perm_type="column")
+        for r, c in zip(rows, match, strict=True):
+            if c >= 0:
+                out[int(r)] = int(c)
+                taken[c] = True
+    return out
+
+
+def _independent_rows(A: np.ndarray, rows: tuple[int, ...], cols: tuple[int, ...]) -> tuple[int, ...]:
+    """As many independent rows of ``A[rows, cols]`` as columns (pivoted QR), or () if it lacks rank."""
+    if len(rows) < len(cols):
+        return ()
+    block = A[np.ix_(rows, cols)]
+    _, R, piv = scipy.linalg.qr(block.T, pivoting=True)
+    scale = max(float(np.abs(R[0, 0])), 1e-300)
+    if abs(R[len(cols) - 1, len(cols) - 1]) <= PATTERN_RTOL * scale:
+        return ()
+    return tuple(sorted(rows[int(k)] for k in piv[: len(cols)]))
+
+
+def _passive_axes(
+    mech: Mechanism, cols: tuple[int, ...], actuated: set[int]
+) -> tuple[tuple[int, int, int, tuple[float, float, float]], ...]:
+    """(column in the block, joint id, root joint id, axis in the root's frame) of passive revolutes.
+
+    The root is the nearest ancestor that is not a passive joint of this block (the body the
+    passive chain hangs from). Read from the placements and joint Jacobians left in
+    ``mech.data`` by :func:`structure_jacobian`.
+    """
+    model = mech.model
+    passive = {c for c in cols if c not in actuated}
+    out = []
+    for k, c in enumerate(cols):
+        if c not in passive:
+            continue
+        jid = _joint_of_column(model, c)
+        joint = model.joints[jid]
+        if joint.nv == 1 and not joint.shortname().startswith("JointModelP"):
+            root = int(model.parents[jid])
+            while root > 0 and model.joints[root].idx_v in passive:
+                root = int(model.parents[root])
+            axis = _axis_in(model, mech.data, jid, root)
+            out.append((k, jid, root, (float(axis[0]), float(axis[1]), float(axis[2]))))
+    return tuple(out)
+
+
+def _axis_in(model: pin.Model, data: pin.Data, jid: int, root: int) -> np.ndarray:
+    """World axis of revolute ``jid`` expressed in the frame of joint ``root``, shape (3,)."""
+    world = pin.getJointJacobian(model, data, jid, _LWA)[3:, model.joints[jid].idx_v]
+    return np.asarray(data.oMi[root].rotation.T @ world)
+
+
+def _joint_of_column(model: pin.Model, c: int) -> int:
+    for jid in range(1, model.njoints):
+        j = model.joints[jid]
+        if j.idx_v <= c < j.idx_v + j.nv:
+            return jid
+    raise IndexError(c)  # pragma: no cover - every column belongs to a joint
 
 
 def _joint_names_by_velocity(mech: Mechanism) -> list[str]:
@@ -156,20 +327,49 @@ def _joint_names_by_velocity(mech: Mechanism) -> list[str]:
 
 
 def working_mode(mech: Mechanism, q: Any, rtol: float = MODE_RTOL) -> tuple[int, ...]:
-    """Sign (+1, -1, or 0 when singular) of each square leg block's determinant at ``q``.
+    """Sign (+1, -1, or 0 when singular) of each actuated leg block's determinant at ``q``.
 
-    See :func:`working_mode_from_jacobian`.
+    See :func:`working_mode_from_data`.
     """
-    return working_mode_from_jacobian(ik_jacobian(mech, mech.check_q(q)), mech.legs, rtol)
+    structure_jacobian(mech, mech.check_q(q))
+    return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), mech.legs, rtol)
+
+
+def working_mode_from_data(
+    model: pin.Model,
+    data: pin.Data,
+    closures: Sequence[_closures.Closure],
+    task: Task,
+    legs: Sequence[Leg],
+    rtol: float = MODE_RTOL,
+) -> tuple[int, ...]:
+    """Working mode from joint Jacobians and placements already in ``data``.
+
+    The structure Jacobian, with each passive revolute column turned to keep its axis on
+    the side of its generic axis (seen from the body its chain hangs from), then the signs
+    of :func:`working_mode_from_jacobian`.
+    """
+    A = structure_jacobian_from_data(model, data, closures, task)
+    out = []
+    for leg in legs:
+        if not leg.square:
+            continue
+        M = A[leg.block]
+        for k, jid, root, axis in leg.axes:
+            if float(np.dot(_axis_in(model, data, jid, root), axis)) < 0.0:
+                M[:, k] = -M[:, k]
+        out.append(_determinant_sign(M, rtol))
+    return tuple(out)
 
 
 def working_mode_from_jacobian(
     A: np.ndarray, legs: Sequence[Leg], rtol: float = MODE_RTOL
 ) -> tuple[int, ...]:
-    """Working mode from the stacked Jacobian ``A`` of :func:`ik_jacobian`: one sign per square leg.
+    """Working mode from a stacked Jacobian ``A`` (:func:`structure_jacobian`): one sign per square leg.
 
     The sign of each square leg block's determinant, 0 when it is at most ``rtol`` times the
-    product of the block's column norms (Hadamard's bound), so the test is scale-free.
+    product of the block's column norms (Hadamard's bound), so the test is scale-free. The
+    passive axes are not turned here (see :func:`working_mode_from_data`).
     """
     return tuple(_determinant_sign(A[leg.block], rtol) for leg in legs if leg.square)
 

@@ -44,7 +44,7 @@ import numpy as np
 
 from .._checks import check_tolerance
 from ..exceptions import SingularConfiguration
-from .jacobians import ClosedChainJacobians, closed_chain_jacobians
+from .jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians, require_task
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
@@ -196,8 +196,10 @@ def classify(
             :func:`plm_pin.kinematics.closed_chain_jacobians`).
         SingularConfiguration: when ``raise_if_singular`` and the configuration is singular;
             the message names the kinds and margins.
+        InvalidInput: when the task has not as many coordinates as the mechanism has DOF.
     """
     tol = check_tolerance(tol, "tol")
+    check_square_task(require_task(mech).size, mech.mobility, "singularity classification needs", mech.name)
     report = report_from_jacobians(mech, closed_chain_jacobians(mech, q), tol)
     if raise_if_singular and report.singular:
         raise SingularConfiguration(

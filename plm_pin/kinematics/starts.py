@@ -16,7 +16,9 @@ def random_starts(
 ) -> list[np.ndarray]:
     """``n`` configurations that redraw the one-DOF joints of ``columns`` within their limits.
 
-    Joints with infinite or huge limits, and multi-DOF joints, get a unit normal step instead.
+    Revolute joints without limits (continuous, or read without ``lower``/``upper``: see
+    :mod:`plm_pin.kinematics.limits`) draw an angle in [-pi, pi); prismatic joints with
+    infinite or huge limits, and multi-DOF joints, get a unit normal step instead.
     """
     model = mech.model
     cols = set(int(c) for c in columns)
@@ -31,6 +33,8 @@ def random_starts(
             lo, hi = model.lowerPositionLimit[j.idx_q], model.upperPositionLimit[j.idx_q]
             if j.nq == 1 and j.nv == 1 and np.isfinite(lo) and np.isfinite(hi) and hi - lo < 1e3:
                 qs[j.idx_q] = rng.uniform(lo, hi)
+            elif j.nq == 1 and j.nv == 1 and not j.shortname().startswith("JointModelP"):
+                qs[j.idx_q] = rng.uniform(-np.pi, np.pi)
             else:
                 step[j.idx_v : j.idx_v + j.nv] = rng.normal(size=j.nv)
         out.append(pin.integrate(model, qs, step))

@@ -287,7 +287,14 @@ BUILDER_RESERVED = ("name", "source")
 
 
 def builder_parameters(builder: Builder) -> tuple[str, ...]:
-    """Names of the keyword parameters a builder takes, :data:`BUILDER_RESERVED` excluded, in order."""
+    """Names of the keyword parameters a builder takes, :data:`BUILDER_RESERVED` excluded, in order.
+
+    A builder that lists its parameters itself (a ``parameters`` attribute, as
+    :class:`plm_pin.description.overrides.DescriptionBuilder`) gives that list.
+    """
+    listed = getattr(builder, "parameters", None)
+    if isinstance(listed, tuple):
+        return listed
     kinds = (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
     return tuple(
         name

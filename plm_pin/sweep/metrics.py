@@ -11,6 +11,10 @@ mechanism), over the sweep's pose grid; none re-derives a formula:
   ``over`` (default: all of them);
 - ``orientation_range`` runs :func:`plm_pin.analysis.orientation_range` along the rotation
   axis for every combination of the other pose coordinates;
+- ``collision_free`` checks them for self-collision
+  (:meth:`plm_pin.analysis.WorkspaceSlice.collision_free`);
+- ``within_limits`` checks the grid's configurations against the joints' position limits
+  (:meth:`plm_pin.analysis.WorkspaceSlice.within_limits`);
 - ``peak_force`` and ``preload`` call :func:`plm_pin.statics.static_forces` at every reached
   pose, for every wrench of the set;
 - ``stiffness`` calls :func:`plm_pin.stiffness.stiffness` and
@@ -520,6 +524,26 @@ METRICS: dict[str, Metric] = {
             ),
             ("gravity", "internal", "compliance_direction"),
             _stiffness,
+        ),
+        Metric(
+            "within_limits",
+            "whether the reached pose keeps every joint inside its URDF position limits (apart from "
+            "'reachable': the loops close there, perhaps only with a passive joint beyond its range)",
+            (
+                Variable(
+                    "within_limits", "-", "pose reached with every joint inside its limits", dtype="bool"
+                ),
+            ),
+            (),
+            lambda ev: {"within_limits": ev.grid.within_limits(ev.mech)},
+        ),
+        Metric(
+            "collision_free",
+            "whether the reached pose is free of self-collision between non-adjacent bodies "
+            "(plm_pin.kinematics.collisions, on the description's visual shapes)",
+            (Variable("collision_free", "-", "pose reached without self-collision", dtype="bool"),),
+            (),
+            lambda ev: {"collision_free": ev.grid.collision_free(ev.mech)},
         ),
     )
 }

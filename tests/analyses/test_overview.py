@@ -91,6 +91,9 @@ def test_overview_map_figure_and_scene(fivebar_overview):
     assert data["axes"] == ["x", "y"] and np.shape(data["manipulability"]) == (41, 41)
     summary = _rows(_blocks(result, "table")["Slice summary"])
     assert summary["grid points"] == 41 * 41 and 0.0 < summary["reachable fraction"] <= 1.0
+    # every five-bar joint spans at least a full turn: the limits never bind; collisions only remove points
+    assert summary["fraction reached within the joint limits"] == summary["reachable fraction"]
+    assert 0.0 <= summary["fraction reached free of self-collision"] <= summary["reachable fraction"]
     scenes = _blocks(result, "scene")
     scene = next(b for caption, b in scenes.items() if caption.startswith("The mechanism at the reference"))
     assert scene.html.lstrip().startswith("<!DOCTYPE html>")

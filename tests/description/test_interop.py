@@ -15,7 +15,7 @@ import plm_pin
 from plm_pin import ClosureNotSatisfied, DescriptionError
 from plm_pin.description import parse_epr_sidecar, read_description
 from plm_pin.mechanism import Mechanism
-from plm_pin.warnings import MissingMeshWarning
+from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning
 
 CORPUS = Path(__file__).parents[2].parent / "shared/interop/example-parallel-robots"
 if not CORPUS.is_dir():
@@ -63,13 +63,15 @@ def test_folder_loads_with_closed_loops(folder):
 
 @pytest.mark.parametrize("folder", LOADABLE)
 def test_closures_follow_robot_yaml(folder):
-    """Closures are the robot.yaml pairs in order, '3d' typed point and '6d' typed weld."""
+    """Closures are the robot.yaml pairs in order, '3d' typed point and '6d' typed weld, then idle gauges."""
     mech, _ = _load(folder)
     raw = _robot_yaml(folder)
     expected_type = {"3d": "point", "6d": "weld"}
-    assert [c.spec.frames for c in mech.closures] == [tuple(p) for p in raw["closed_loop"]]
-    assert [c.spec.type for c in mech.closures] == [expected_type[t] for t in raw["type"]]
-    assert [c.spec.name for c in mech.closures] == [f"loop{k + 1}" for k in range(len(raw["type"]))]
+    gauges = mech.closures[len(raw["type"]) :]
+    assert [c.name for c in gauges] == [f"idle:{g.joint}" for g in mech.idle_gauges]
+    assert [c.frames for c in mech.sidecar.closures] == [tuple(p) for p in raw["closed_loop"]]
+    assert [c.type for c in mech.sidecar.closures] == [expected_type[t] for t in raw["type"]]
+    assert [c.name for c in mech.sidecar.closures] == [f"loop{k + 1}" for k in range(len(raw["type"]))]
 
 
 @pytest.mark.parametrize("folder", LOADABLE)
@@ -113,6 +115,7 @@ def test_kangaroo_does_not_assemble_from_zero():
     """kangaroo_like raises ClosureNotSatisfied naming the neutral guess, the worst loop and the fix."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MissingMeshWarning)
+        warnings.simplefilter("ignore", MissingLimitsWarning)
         with pytest.raises(ClosureNotSatisfied) as info:
             plm_pin.load(CORPUS / NOT_ASSEMBLING)
     exc = info.value

@@ -13,29 +13,25 @@ Idle freedoms. A ``6d`` (weld) closure joins two bodies that each hang on a revo
 with the cut joint (``closedloop<k>_A`` and ``closedloop<k>_B``), so those two revolutes turn
 together, in series, about one axis: the two small closure bodies (the ``sphere`` links) spin
 about the cut joint's axis while every other body stays still. That motion keeps the loops
-closed and moves neither the motors nor any link that matters: one idle DOF per weld. Hence
-``5bar_linkage`` has 2 + 1 DOF (one weld) and ``robot_delta`` 2 + 3 (three welds); the
-``point`` closure of ``5bar_linkage_iso3d`` leaves no idle DOF (its out-of-plane ``freeortho``
-revolute is held by the closure's normal row). With more DOF than motors the configuration is
-not determined by the motors, so ``forward_kinematics`` refuses those two robots; what is
-well defined, and tested here, is: IK; FK once each weld's idle half-joint is also fixed
-(declared as an extra driven joint in a second sidecar); and the actuator and velocity maps
-restricted to the non-idle motions, J_ce = C T^+ and S = N T^+, whose idle part is null.
+closed and moves neither the motors nor any link that matters: one idle DOF per weld, which
+plm_pin detects and fixes by holding one half-joint of each pair (:mod:`plm_pin.kinematics.idle`).
+So ``5bar_linkage`` has mobility 2 with 1 idle (one weld) and ``robot_delta`` 2 with 3 idle
+(three welds); the ``point`` closure of ``5bar_linkage_iso3d`` leaves no idle DOF (its
+out-of-plane ``freeortho`` revolute is held by the closure's normal row). Tested here: the idle
+count against the cut closures alone, IK, FK (the motors now determine the configuration), FK
+against a second sidecar that drives one half-joint per weld instead, and J_ce, S against
+finite differences of the IK.
 """
 
 from __future__ import annotations
 
 import shutil
-import warnings
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
 
-import plm_pin
-from plm_pin import InvalidInput
 from plm_pin.kinematics import (
     closed_chain_jacobians,
     forward_kinematics,
@@ -43,9 +39,10 @@ from plm_pin.kinematics import (
     same_assembly,
     task_pose,
 )
+from plm_pin.kinematics.closures import compile_closures
+from plm_pin.kinematics.closures import jacobian as closure_jacobian
 from plm_pin.mechanism import Mechanism
-from plm_pin.warnings import MissingMeshWarning
-from tests.conftest import INTEROP, fd_jacobian
+from tests.conftest import INTEROP, fd_jacobian, load_corpus
 
 if not INTEROP.is_dir():
     pytest.skip(f"example-parallel-robots corpus absent ({INTEROP})", allow_module_level=True)
@@ -83,12 +80,6 @@ def _sidecar(folder: str, extra_driven: list[str]) -> dict:
     }
 
 
-def _load(path: Path) -> Mechanism:
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", MissingMeshWarning)
-        return plm_pin.load(path)
-
-
 @pytest.fixture(scope="module")
 def robots(tmp_path_factory) -> dict[str, tuple[Mechanism, Mechanism]]:
     """Each robot with its motors, and the same robot with one half-joint per weld also driven."""
@@ -99,7 +90,7 @@ def robots(tmp_path_factory) -> dict[str, tuple[Mechanism, Mechanism]]:
         (dest / "robot.plm.yaml").write_text(yaml.safe_dump(_sidecar(folder, [])))
         shutil.copy(dest / "robot.urdf", dest / "locked.urdf")
         (dest / "locked.plm.yaml").write_text(yaml.safe_dump(_sidecar(folder, [a for a, _ in welds])))
-        out[folder] = (_load(dest / "robot.urdf"), _load(dest / "locked.urdf"))
+        out[folder] = (load_corpus(dest / "robot.urdf"), load_corpus(dest / "locked.urdf"))
     return out
 
 
@@ -109,20 +100,24 @@ def _poses(mech: Mechanism) -> list[np.ndarray]:
 
 
 @pytest.mark.parametrize("folder", list(ROBOTS))
-def test_mobility_is_motors_plus_one_idle_spin_per_weld(robots, folder):
-    """Mobility = 2 motors + one idle DOF per weld: the weld's two coaxial half-joints turning together."""
+def test_mobility_is_the_motors_with_one_idle_spin_per_weld(robots, folder):
+    """Mobility 2 plus one idle DOF per weld: the weld's two coaxial half-joints turning together."""
     mech, _ = robots[folder]
     _, _, _, welds = ROBOTS[folder]
     assert mech.n_actuators == 2
-    assert mech.mobility == 2 + len(welds)
-    jac = closed_chain_jacobians(mech, mech.q_ref)
+    assert (mech.mobility, mech.idle_mobility) == (2, len(welds))
+    assert len(mech.closures) == len(mech.sidecar.closures) + len(welds)
+    cut = compile_closures(mech.model, mech.sidecar.closures)  # the loops alone, no gauge
+    J_cut = closure_jacobian(mech.model, mech.model.createData(), cut, mech.q_ref)
     S_a = np.eye(mech.nv)[mech.actuated_v_indices]
-    locked = np.vstack([jac.J_phi, S_a])
-    s = np.linalg.svd(locked, compute_uv=False)
+    s = np.linalg.svd(np.vstack([J_cut, S_a]), compute_uv=False)
     assert mech.nv - int(np.sum(s > 1e-9 * s[0])) == len(welds)  # motions with the motors locked
+    jac = closed_chain_jacobians(mech, mech.q_ref)
+    held = {g.joint for g in mech.idle_gauges}
     for a, b in welds:
+        assert len(held & {a, b}) == 1  # one half-joint of each pair is held
         cols = [mech.model.joints[mech.model.getJointId(j)].idx_v for j in (a, b)]
-        sub = np.vstack([jac.J_phi, jac.J_x, S_a])[:, cols]  # the pair alone: loops, task, motors
+        sub = np.vstack([J_cut, jac.J_x, S_a])[:, cols]  # the pair alone: loops, task, motors
         s = np.linalg.svd(sub, compute_uv=False)
         assert s[1] <= 1e-12 * s[0]  # a combination of the two moves nothing else
 
@@ -167,9 +162,10 @@ def test_delta_keeps_its_effector_orientation(robots):
         np.testing.assert_allclose(data.oMf[mech.task_frame_id].rotation, R0, atol=1e-12)
 
 
-def test_iso3d_fivebar_ik_fk_round_trip(robots):
-    """5bar_linkage_iso3d (no idle DOF): one FK assembly of the IK's motor angles is the IK pose and q."""
-    mech, _ = robots["5bar_linkage_iso3d"]
+@pytest.mark.parametrize("folder", list(ROBOTS))
+def test_ik_fk_round_trip(robots, folder):
+    """One FK assembly of the IK's motor angles is the IK pose and the same assembly (idle DOF held)."""
+    mech, _ = robots[folder]
     for x in _poses(mech):
         ik = inverse_kinematics(mech, x)
         found = forward_kinematics(mech, ik.actuators)
@@ -179,22 +175,10 @@ def test_iso3d_fivebar_ik_fk_round_trip(robots):
 
 
 @pytest.mark.parametrize("folder", ["5bar_linkage", "robot_delta"])
-def test_fk_refuses_idle_freedoms_with_a_clear_message(robots, folder):
-    """With more DOF than motors, forward_kinematics raises InvalidInput: the motors do not fix q."""
-    mech, _ = robots[folder]
-    with pytest.raises(
-        InvalidInput,
-        match=rf"^robot has {mech.mobility} DOF but 2 actuators: fixing them does not determine the "
-        r"configuration$",
-    ):
-        forward_kinematics(mech, mech.actuator_positions(mech.q_ref))
-
-
-@pytest.mark.parametrize("folder", ["5bar_linkage", "robot_delta"])
 def test_ik_fk_round_trip_with_idle_joints_fixed(robots, folder):
-    """IK, then FK with the motors and one half-joint per weld fixed: one assembly is the IK pose and q."""
+    """IK, then FK with the motors and one half-joint per weld driven: one assembly is the IK pose and q."""
     mech, locked = robots[folder]
-    assert locked.mobility == locked.n_actuators
+    assert (locked.mobility, locked.idle_mobility) == (locked.n_actuators, 0)
     for x in _poses(mech):
         ik = inverse_kinematics(mech, x)
         found = forward_kinematics(locked, locked.actuator_positions(ik.q))
@@ -205,26 +189,13 @@ def test_ik_fk_round_trip_with_idle_joints_fixed(robots, folder):
 
 @pytest.mark.parametrize("folder", list(ROBOTS))
 def test_actuator_and_velocity_maps_match_finite_differences(robots, folder):
-    """C T^+ and N T^+ (J_ce and S; the plain ones when no DOF is idle) equal finite differences of the IK.
-
-    Idle motions neither move the task (T) nor the motors (C), so C T^+ is the actuator map;
-    N T^+ is the minimum-norm velocity map, which is what re-solving the IK by minimum-norm
-    Newton steps from the same solution follows.
-    """
+    """J_ce and S (idle DOF held) equal finite differences of the IK re-solved from the same solution."""
     mech, _ = robots[folder]
     for x in _poses(mech)[:2]:
         q = inverse_kinematics(mech, x).q
         jac = closed_chain_jacobians(mech, q)
-        J_ce = jac.C @ np.linalg.pinv(jac.T)
-        S = jac.N @ np.linalg.pinv(jac.T)
-        if mech.mobility == len(x):
-            np.testing.assert_allclose(J_ce, jac.J_ce, atol=1e-12)
-            np.testing.assert_allclose(S, jac.S, atol=1e-12)
-        else:
-            with pytest.raises(
-                InvalidInput, match=r"^the task has 2 coordinates but the mechanism has \d DOF"
-            ):
-                _ = jac.J_ce
+        J_ce, S = jac.J_ce, jac.S
+        np.testing.assert_allclose(J_ce, jac.C @ np.linalg.pinv(jac.T), atol=1e-12)
         for k in range(len(x)):
             dx = np.zeros(len(x))
             dx[k] = EPS

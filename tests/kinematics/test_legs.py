@@ -13,9 +13,10 @@ import math
 import numpy as np
 import pytest
 
-from plm_pin.kinematics import inverse_kinematics, working_mode, working_modes
+from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, working_mode, working_modes
 from plm_pin.kinematics.legs import Leg, ik_jacobian, working_mode_from_jacobian
 from plm_pin.models import preset_names
+from tests import textbook as tb
 from tests.conftest import preset, prrrp_paper_configuration
 
 # name -> (joints of the end-effector chain, joints of every other leg)
@@ -50,12 +51,17 @@ def test_every_preset_has_a_structure():
 
 @pytest.mark.parametrize("name", preset_names())
 def test_legs_are_the_expected_square_blocks(name):
-    """Legs: the end-effector chain (task rows) and one leg per loop, all square, partitioning joints."""
+    """Legs: the end-effector chain (task rows) and one leg per loop, all square, partitioning joints.
+
+    Only the actuated ones carry a working-mode sign (the fourbar's rocker and the 8-PSS's
+    floating platform do not).
+    """
     mech = preset(name)
     chain_joints, other_joints = STRUCTURE[name]
     legs = mech.legs
     assert len(legs) == 1 + len(other_joints)
-    assert all(leg.square for leg in legs)
+    assert all(len(leg.rows) == len(leg.columns) for leg in legs)
+    assert [leg.square for leg in legs] == [bool(leg.actuators) for leg in legs]  # actuated legs are signed
     n_closure = mech.n_closure_rows
     chains = [leg for leg in legs if any(r >= n_closure for r in leg.rows)]
     assert len(chains) == 1
@@ -157,3 +163,62 @@ def test_working_mode_from_jacobian_signs_are_lapack_determinant_signs(rng):
         B[list(leg.rows), leg.columns[0]] = B[list(leg.rows), leg.columns[1]]
         signs = working_mode_from_jacobian(B, legs)
         assert signs[legs.index(leg)] == 0
+
+
+DELTA_SIGNS = list(itertools.product((1, -1), repeat=3))
+
+
+@pytest.fixture(scope="module")
+def deltas(tmp_path_factory):
+    """Single-rod Delta, parallelogram Delta on a floating platform, and hanging on leg 0's rod."""
+    folder = tmp_path_factory.mktemp("delta")
+    return {
+        "single": (tb.delta(folder, False, name="single"), 0.0),
+        "floating": (tb.delta(folder, True, name="floating"), tb.DELTA["r"]),
+        "hanging": (tb.delta(folder, True, False, name="hanging"), tb.DELTA["r"]),
+    }
+
+
+def _same_angles(a, b) -> bool:
+    return bool(np.allclose(np.angle(np.exp(1j * (np.asarray(a) - np.asarray(b)))), 0.0, atol=1e-9))
+
+
+@pytest.mark.parametrize("kind", ["single", "floating", "hanging"])
+def test_delta_has_eight_working_modes_one_sign_per_leg(deltas, kind):
+    """Every Delta lists the 8 closed-form elbow branches, mode = minus Clavel's sign, whatever its tree.
+
+    The closed form (tests/textbook.py) gives each motor angle t_i = atan2(b, a) + s_i acos(c / |(a, b)|);
+    the parallelogram's platform floating or hanging on leg 0 gives the same legs and signs.
+    """
+    mech, r = deltas[kind]
+    assert [leg.label for leg in mech.legs if leg.square] == ["m0", "m1", "m2"]
+    solutions = working_modes(mech, tb.DELTA_POINT)
+    assert sorted(s.mode for s in solutions) == sorted(DELTA_SIGNS)
+    for sol in solutions:
+        assert sol.residual_norm <= 1e-11
+        signs = tuple(-m for m in sol.mode)
+        assert _same_angles(sol.actuators, tb.delta_ik(tb.DELTA_POINT, signs, r))
+    chosen = inverse_kinematics(mech, tb.DELTA_POINT, mode=(1, -1, 1))
+    assert _same_angles(chosen.actuators, tb.delta_ik(tb.DELTA_POINT, (-1, 1, -1), r))
+
+
+def test_three_rrr_working_modes_are_the_elbow_branches(tmp_path):
+    """3-RRR: 8 working modes whose motor angles are Gosselin's closed-form elbow branches."""
+    mech = tb.three_rrr(tmp_path)
+    solutions = working_modes(mech, tb.RRR_POSE)
+    assert len({s.mode for s in solutions}) == 8
+    closed = [tb.rrr_ik(tb.RRR_POSE, s) for s in DELTA_SIGNS]
+    for sol in solutions:
+        assert sum(_same_angles(sol.actuators, c) for c in closed) == 1
+    at_ref = working_mode(mech, mech.q_ref)  # the reference is in branch (+1, +1, +1)
+    flipped = next(s for s in solutions if s.mode == tuple(-m for m in at_ref))
+    assert _same_angles(flipped.actuators, tb.rrr_ik(tb.RRR_POSE, (-1, -1, -1)))
+
+
+def test_three_rrr_actuator_jacobian_is_the_closed_form(tmp_path):
+    """3-RRR J_ce at two poses equals Gosselin's rows [e_i, R c_i x e_i] / (l1 a_i x e_i)."""
+    mech = tb.three_rrr(tmp_path)
+    for pose in (tb.RRR_POSE, (0.05, 0.03, -0.1)):
+        sol = inverse_kinematics(mech, pose)
+        J = closed_chain_jacobians(mech, sol.q).J_ce
+        np.testing.assert_allclose(J, tb.rrr_jce(pose, sol.actuators), atol=1e-10)
