@@ -14,7 +14,10 @@ predicting each configuration by polynomial extrapolation along the line it is r
 on, so that one Newton step usually suffices, and keeping the working mode: a point whose
 solution changes the sign of a leg block
 (:func:`plm_pin.kinematics.legs.working_mode_from_jacobian`) is not taken from that
-neighbour. Points never reached are left unreachable.
+neighbour. When the walk ends with unreached stretches left (a leg out of reach between
+two reachable arcs, such as the flipped plate of a planar table), :func:`reseed` solves the
+inverse kinematics afresh, in the working mode kept, at a few points of each stretch, and
+walks on from those it reaches. Points never reached are left unreachable.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 from scipy.linalg.lapack import dposv as _posv
+from scipy.ndimage import label as _label
 
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics import closures as _closures
@@ -337,6 +341,12 @@ PARALLEL_MIN_POINTS = 20_000
 SEED_CANDIDATES = 16
 """Grid points nearest to the guess's pose tried, in turn, as the seed of the continuation."""
 
+RESEED_CANDIDATES = 4
+"""Points of each unreached stretch (evenly spread over it) tried as new seeds by :func:`reseed`."""
+
+RESEED_ATTEMPTS = 64
+"""Largest number of new seeds :func:`reseed` tries over one grid (bounds its cost on large voids)."""
+
 
 def _auto_workers(n_points: int, shape: tuple[int, ...], workers: int | None) -> int:
     if workers is None:
@@ -521,4 +531,66 @@ def solve_poses(
         return state, None
     target = tuple(int(s) for s in state.mode[index])
     _solve_grid(ev, state, index, target, tol, _auto_workers(flat.shape[0], shape, workers))
+    reseed(mech, ev, state, _metrics_for(ev), target, guess, tol)
     return state, target
+
+
+def reseed(
+    mech: Mechanism,
+    ev: IKEvaluator,
+    state: GridState,
+    metrics: Metrics,
+    target_mode: tuple[int, ...],
+    guess: np.ndarray,
+    tol: float,
+) -> None:
+    """Seed the continuation again inside the stretches it left unreached, in ``target_mode``.
+
+    The unreached points split into connected stretches (grid-axis neighbours, as
+    :func:`flood` walks). In each, up to :data:`RESEED_CANDIDATES` points spread evenly over
+    the stretch are solved from ``guess`` in the working mode (:func:`_seed_solution`); the
+    first one reached is flooded from, and the stretches are recomputed. At most
+    :data:`RESEED_ATTEMPTS` solves in all. Deterministic: stretches and candidates are taken
+    in flat-index order.
+
+    Args:
+        mech: the mechanism.
+        ev: its evaluator.
+        state: the grid after :func:`flood`.
+        metrics: batch metrics of the solved points.
+        target_mode: the working mode kept (zeros match either sign).
+        guess: configuration the new seeds are solved from, shape (nq,).
+        tol: residual tolerance [m, rad].
+    """
+    mode = None if 0 in target_mode else target_mode
+    attempted = np.zeros(state.reached.size, dtype=bool)
+    budget = RESEED_ATTEMPTS
+    while budget > 0 and not state.reached.all():
+        labels, count = _label(~state.reached.reshape(state.shape))
+        labels = labels.reshape(-1)
+        grown = False
+        for stretch in range(1, count + 1):
+            members = np.flatnonzero((labels == stretch) & ~attempted)
+            if members.size == 0:
+                continue
+            picks = np.unique(np.linspace(0, members.size - 1, min(RESEED_CANDIDATES, members.size)).round())
+            for index in members[picks.astype(int)].tolist():
+                if budget == 0:
+                    break
+                budget -= 1
+                attempted[index] = True
+                try:
+                    q = _seed_solution(mech, state.poses[index], guess, mode)
+                except PoseUnreachable:
+                    continue
+                sol = ev.solve(state.poses[index], q, tol)
+                if sol is None or not state.accept(ev, index, sol, target_mode):
+                    continue
+                flood(ev, state, metrics, target_mode, [index], tol)
+                grown = True
+                break
+            if grown:
+                break
+        if not grown:
+            break
+    state.flush(metrics)
