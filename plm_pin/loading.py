@@ -38,7 +38,7 @@ def mechanism_from_description(description: Description, name: str, *, validate:
         description.sidecar,
         name=name,
         source=description.sidecar.source or str(description.urdf_path or ""),
-        visual_factory=lambda: build_visual_model(model, description),
+        visual_factory=functools.partial(build_visual_model, model, description),  # picklable
     )
     if validate and mech.closures:
         try:
