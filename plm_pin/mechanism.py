@@ -186,6 +186,13 @@ class Mechanism:
         n_task = self.task_compiled.size if self.task_compiled is not None else 0
         return Workspace.create(self.model, self.n_closure_rows, n_task)
 
+    def _thread_workspace(self) -> Workspace:
+        """The workspace the public kinematics functions use in the calling thread (filled by each call)."""
+        ws = getattr(self._local, "workspace", None)
+        if ws is None:
+            ws = self._local.workspace = self.workspace()
+        return ws
+
     def __getstate__(self) -> dict[str, Any]:
         """Pickled state: everything but the per-thread scratch and the built visual geometry."""
         state = dict(self.__dict__)

@@ -32,11 +32,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg.lapack import dposv as _posv
 from scipy.ndimage import label as _label
 
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics import closures as _closures
+from ..kinematics.assembly import newton
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import require_task
@@ -46,12 +46,6 @@ from .manipulability import batch_metrics
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
-
-NEWTON_MAX_ITERATIONS = 12
-"""Newton iterations allowed per continuation step."""
-
-STALL_RATIO = 0.9
-"""A Newton iteration that does not divide the residual by at least 1 / STALL_RATIO ends the attempt."""
 
 
 @dataclass
@@ -90,7 +84,6 @@ class IKEvaluator:
         self.n_legs = sum(leg.square for leg in self.legs)
         self._r = np.empty(self.m + self.task.size)  # residual [closures; task]
         self._A = np.empty((self.m + self.task.size, self.nv))  # its Jacobian
-        self._rows = (self._r[: self.m], self._r[self.m :], self._A[: self.m], self._A[self.m :])
 
     def __getstate__(self) -> dict[str, Any]:
         keep = ("model", "closures", "task", "legs", "mobility", "actuated_v", "linear_q")
@@ -116,35 +109,27 @@ class IKEvaluator:
     def solve(self, x: np.ndarray, q0: np.ndarray, tol: float) -> np.ndarray | None:
         """Configuration at task coordinates ``x`` by Newton from ``q0``, or None.
 
-        Gauss-Newton steps through the normal equations (Cholesky); the attempt ends when
-        an iteration does not reduce the residual by the factor :data:`STALL_RATIO`, or
-        after :data:`NEWTON_MAX_ITERATIONS`. On success the data holds the joint Jacobians
-        and frame placements at the returned configuration (read them with :meth:`jacobian`).
+        :func:`plm_pin.kinematics.assembly.newton` without its polishing step: the attempt
+        ends when an iteration does not reduce the residual by the factor
+        :data:`~plm_pin.kinematics.assembly.STALL_RATIO`, or after
+        :data:`~plm_pin.kinematics.assembly.NEWTON_MAX_ITERATIONS`. On success the data holds
+        the joint Jacobians and frame placements at the returned configuration (read them
+        with :meth:`jacobian`).
         """
-        model, data, closures = self.model, self.data, self.closures
         target = TaskTarget(self.task, x)
-        r, A = self._r, self._A
-        r_phi, r_task, A_phi, A_task = self._rows
-        q = q0
-        err_prev = np.inf
-        for iteration in range(NEWTON_MAX_ITERATIONS + 1):
-            pin.computeJointJacobians(model, data, q)
-            pin.updateFramePlacements(model, data)
-            _closures.residual_from_placements(data, closures, r_phi)
-            target.residual(data, r_task)
-            err = float(np.abs(r).max())
-            if err <= tol:
-                return q
-            if iteration == NEWTON_MAX_ITERATIONS or not err < STALL_RATIO * err_prev:
-                return None
-            _closures.jacobian_from_data(model, data, closures, A_phi)
-            target.jacobian(model, data, A_task)
-            _, step, info = _posv(A.T @ A, A.T @ r)
-            if info != 0:
-                return None
-            q = pin.integrate(model, q, -step)
-            err_prev = err
-        return None  # pragma: no cover - the loop always returns
+        found = newton(
+            self.model,
+            self.data,
+            self.closures,
+            q0,
+            None,
+            self._r,
+            self._A,
+            tol=tol,
+            extra=target,
+            polish=False,
+        )
+        return None if found is None else found[0]
 
     def jacobian(self, out: np.ndarray | None = None) -> np.ndarray:
         """Stacked ``[J_phi; J_x]`` (:func:`plm_pin.kinematics.legs.ik_jacobian`) left by :meth:`solve`.
