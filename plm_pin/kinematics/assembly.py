@@ -31,8 +31,8 @@ class ExtraRows(Protocol):
         """Number of rows."""
         ...
 
-    def residual(self, data: pin.Data) -> np.ndarray:
-        """Rows from frame placements in ``data``."""
+    def residual(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
+        """Rows from frame placements in ``data`` (into ``out`` when given)."""
         ...
 
     def jacobian(self, model: pin.Model, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
