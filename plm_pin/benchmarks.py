@@ -20,6 +20,9 @@ import json
 import math
 import os
 import platform
+import shutil
+import subprocess
+import sys
 import time
 import timeit
 from collections.abc import Callable
@@ -44,7 +47,7 @@ from .loading import build_mechanism, load
 from .mechanism import Mechanism
 from .models.classic import build_fourbar
 from .models.pss import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
-from .models.registry import PRESETS, preset_names
+from .models.registry import PRESETS, preset_names, urdf_folder
 from .statics import AllocationRule, solve_balance, static_balance, static_forces
 
 MAP_SHAPE = (317, 316)
@@ -225,6 +228,87 @@ def kinematics_benchmark() -> list[dict[str, object]]:
             {"mechanism": mech.name, "case": case, "seconds_per_call": ours, "floor_seconds_per_call": least}
         )
     return rows
+
+
+PLACO_VENV = Path(os.environ.get("PLM_PIN_PLACO_VENV", ".venv-placo"))
+"""Virtual environment of PlaCo (pip ``placo`` pins an older Pinocchio than plm_pin's): made on first use."""
+
+
+def _placo_python() -> tuple[Path | None, str]:
+    """PlaCo's interpreter, creating its venv when missing; or None and why not."""
+    python = PLACO_VENV / "bin" / "python"
+    if not python.exists():
+        try:
+            subprocess.run([sys.executable, "-m", "venv", str(PLACO_VENV)], check=True, capture_output=True)
+            subprocess.run(
+                [str(python), "-m", "pip", "install", "--quiet", "placo"],
+                check=True,
+                capture_output=True,
+                timeout=900,
+            )
+        except (OSError, subprocess.SubprocessError) as exc:
+            shutil.rmtree(PLACO_VENV, ignore_errors=True)
+            return None, f"PlaCo could not be installed in {PLACO_VENV} ({type(exc).__name__}; offline?)"
+    return python, ""
+
+
+def placo_benchmark() -> tuple[list[dict[str, object]], str]:
+    """PlaCo's IK and FK on the 3D4M from the same start and targets as :func:`kinematics_benchmark`.
+
+    Runs :mod:`plm_pin.benchmarks_placo` in PlaCo's own venv (:data:`PLACO_VENV`, created with
+    pip on first use). Returns its rows and a note (the agreement with plm_pin, or why PlaCo is absent).
+    """
+    python, why = _placo_python()
+    if python is None:
+        return [], why
+    mech = load("harada2011_3d4m")
+    q = mech.q_ref
+    x = task_pose(mech, q) + 1e-3
+    ik = inverse_kinematics(mech, x, q).q
+    fk = forward_kinematics(mech, mech.actuator_positions(ik), q, all_modes=False)[0].q
+
+    def by_joint(config: np.ndarray) -> dict[str, float]:
+        return {n: float(config[mech.model.joints[mech.model.getJointId(n)].idx_q]) for n in mech.joint_names}
+
+    cfg = {
+        "urdf": str(urdf_folder() / "harada2011_3d4m.urdf"),
+        "q_ref": by_joint(q),
+        "closures": [list(c.spec.frames) for c in mech.closures],
+        "frame": mech.task.frame if mech.task else "",
+        "x": x.tolist(),
+        # PlaCo's hard equalities must be independent: hold as many sliders as DOF (the 4th follows)
+        "actuators": {a.joint: float(ik[a.idx_q]) for a in mech.actuators[: mech.mobility]},
+    }
+    script = Path(__file__).with_name("benchmarks_placo.py")
+    try:
+        done = subprocess.run(
+            [str(python), str(script), json.dumps(cfg)],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=600,
+        )
+        out = json.loads(done.stdout.strip().splitlines()[-1])
+    except (OSError, subprocess.SubprocessError, ValueError, IndexError) as exc:
+        return [], f"PlaCo run failed: {type(exc).__name__}: {str(exc)[:200]}"
+    rows: list[dict[str, object]] = []
+    agree = []
+    for key, ours in (("ik", ik), ("fk", fk)):
+        r = out[key]
+        diff = max(abs(r["q"][n] - v) for n, v in by_joint(ours).items())
+        agree.append(f"{key.upper()} {diff:.1e}")
+        rows.append(
+            {
+                "mechanism": mech.name,
+                "case": f"PlaCo {out['placo']} {key.upper()} ({r['steps']} QP steps to 1e-12, "
+                "hard planar loop-closure tasks)",
+                "seconds_per_call": float(r["seconds"]),
+            }
+        )
+    return (
+        rows,
+        f"PlaCo agrees with plm_pin's configurations to {', '.join(agree)} rad/m (max joint difference).",
+    )
 
 
 def harada_closed_form_map(poses: np.ndarray, l: float, rt: float, signs: tuple[int, ...]) -> np.ndarray:
@@ -726,7 +810,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", type=Path, default=Path("reports/bench"), help="output folder")
     args = parser.parse_args()
-    md = write(run(), args.out, (fig6_note(),), simulation_benchmark(), sweep_benchmark())
+    rows = run()
+    placo_rows, placo_note = placo_benchmark()
+    md = write(
+        rows + placo_rows, args.out, (fig6_note(), placo_note), simulation_benchmark(), sweep_benchmark()
+    )
     print(md.read_text())
 
 
