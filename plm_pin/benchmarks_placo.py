@@ -21,10 +21,11 @@ from importlib import metadata
 from typing import Any
 
 import numpy as np
-import placo
 
 
 def _solver(robot: Any, closures: list[list[str]]) -> Any:
+    import placo  # only in PlaCo's venv: importing this module elsewhere must work
+
     solver = placo.KinematicsSolver(robot)
     solver.mask_fbase(True)
     solver.enable_joint_limits(False)
@@ -61,6 +62,8 @@ def _steps_and_time(reset: Callable[[], None], step: Callable[[], None], error: 
 
 def main() -> None:
     """Read the JSON argument, time IK and FK, print one JSON line."""
+    import placo
+
     cfg = json.loads(sys.argv[1])
     robot = placo.RobotWrapper(cfg["urdf"], placo.Flags.ignore_collisions)
     closures = cfg["closures"]
