@@ -36,12 +36,13 @@ from scipy.ndimage import label as _label
 
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics import closures as _closures
-from ..kinematics.assembly import newton
+from ..kinematics.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import require_task
 from ..kinematics.legs import Leg, ik_jacobian_from_data, working_mode, working_mode_from_jacobian
 from ..kinematics.task import Task, TaskTarget
+from ._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
 from .manipulability import batch_metrics
 
 if TYPE_CHECKING:
@@ -222,6 +223,26 @@ class GridState:
         self._pending.append(index)
         return True
 
+    def accept_batch(
+        self,
+        index: np.ndarray,
+        q: np.ndarray,
+        mode: np.ndarray,
+        A: np.ndarray,
+        metrics: Metrics,
+    ) -> None:
+        """Record solutions at flat ``index`` with their modes and stacked Jacobians (metrics at once)."""
+        if index.size == 0:
+            return
+        self.q[index] = q
+        self.mode[index] = mode
+        self.reached[index] = True
+        n = self.reached.size
+        for name, v in metrics(A).items():
+            if name not in self.metrics:
+                self.metrics[name] = np.full(n, np.nan)
+            self.metrics[name][index] = v
+
     def flush(self, metrics: Metrics) -> None:
         """Compute the metrics of the buffered points."""
         if not self._pending:
@@ -354,6 +375,8 @@ def _init_worker(
 
 def _metrics_for(ev: IKEvaluator) -> Metrics:
     def metrics(A: np.ndarray) -> dict[str, np.ndarray]:
+        if ev.task.size == ev.mobility and ev.m:
+            return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility)
         return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility)
 
     return metrics
@@ -415,6 +438,64 @@ def _solve_grid(
             border.extend(int(k) for k in idx[state.reached[idx]])
     state.tried[:] = 0
     flood(ev, state, metrics, target, border, tol)
+
+
+def sweep_rows(
+    ev: IKEvaluator,
+    kin: BatchKinematics,
+    state: GridState,
+    metrics: Metrics,
+    seed: int,
+    target_mode: tuple[int, ...],
+    tol: float,
+) -> None:
+    """Solve a 2-D grid row by row with the batched evaluator, then fill what it missed point by point.
+
+    The seed's row is walked by :func:`flood`; each next row (both ways from it) is predicted
+    per column by polynomial extrapolation from the rows before it (as :meth:`IKEvaluator.extrapolate`
+    does along a line) and solved at once by :func:`~plm_pin.analysis._batch.batch_newton`;
+    a point is kept only when it converges to ``tol`` in ``target_mode``. Whatever stays
+    unreached next to a reached point is then tried by :func:`flood` from its neighbours.
+    """
+    n0, n1 = state.shape
+    nq = state.q.shape[1]
+    i0 = seed // n1
+    row = np.zeros(state.reached.size, dtype=bool)
+    row[i0 * n1 : (i0 + 1) * n1] = True
+    flood(ev, state, metrics, target_mode, [seed], tol, row)
+    Q = state.q.reshape(n0, n1, nq)
+    reached = state.reached.reshape(n0, n1)
+    poses = state.poses.reshape(n0, n1, -1)
+    wanted = np.array(target_mode)
+    for direction in (1, -1):
+        i = i0 + direction
+        while 0 <= i < n0:
+            back = [i - direction * k for k in (1, 2, 3) if 0 <= i - direction * k < n0]
+            have = reached[back[0]].copy()
+            if not have.any():
+                break
+            pred = Q[back[0]].copy()
+            if len(back) >= 2:
+                two = have & reached[back[1]]
+                pred[two] = 2.0 * Q[back[0]][two] - Q[back[1]][two]
+                if len(back) == 3:
+                    three = two & reached[back[2]]
+                    pred[three] = 3.0 * Q[back[0]][three] - 3.0 * Q[back[1]][three] + Q[back[2]][three]
+            cols = np.flatnonzero(have)
+            q, ok, A = batch_newton(kin, pred[cols], poses[i, cols], tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
+            modes = batch_modes(A[ok], ev.legs)
+            fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
+            keep = cols[ok][fits]
+            state.accept_batch(i * n1 + keep, q[ok][fits], modes[fits], A[ok][fits], metrics)
+            i += direction
+    grid = state.reached.reshape(n0, n1)
+    edge = np.zeros_like(grid)
+    edge[1:] |= ~grid[:-1]
+    edge[:-1] |= ~grid[1:]
+    edge[:, 1:] |= ~grid[:, :-1]
+    edge[:, :-1] |= ~grid[:, 1:]
+    border = np.flatnonzero((grid & edge).reshape(-1))
+    flood(ev, state, metrics, target_mode, border.tolist(), tol)
 
 
 def _seed(
@@ -515,7 +596,11 @@ def solve_poses(
     if sol is None or not state.accept(ev, index, sol, None):
         return state, None
     target = tuple(int(s) for s in state.mode[index])
-    _solve_grid(ev, state, index, target, tol, _auto_workers(flat.shape[0], shape, workers))
+    kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 else None
+    if kin is not None:
+        sweep_rows(ev, kin, state, _metrics_for(ev), index, target, tol)
+    else:
+        _solve_grid(ev, state, index, target, tol, _auto_workers(flat.shape[0], shape, workers))
     reseed(mech, ev, state, _metrics_for(ev), target, guess, tol)
     return state, target
 
