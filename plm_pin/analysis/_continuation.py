@@ -531,6 +531,46 @@ def _seed_solution(mech: Mechanism, x: np.ndarray, guess: Any, mode: tuple[int, 
     return inverse_kinematics(mech, x, guess, mode=mode).q
 
 
+RESEED_NEWTON_ITERATIONS = 30
+"""Newton iterations a new seed may take from the guess (it starts far: a stretch away)."""
+
+
+def _reseed_solution(
+    mech: Mechanism,
+    ev: IKEvaluator,
+    x: np.ndarray,
+    guess: np.ndarray,
+    mode: tuple[int, ...] | None,
+    tol: float,
+) -> np.ndarray | None:
+    """A new seed at ``x``: Newton from ``guess``, re-solved in ``mode`` if it lands in another; or None.
+
+    Undamped Newton only (no Levenberg-Marquardt): a candidate it cannot reach costs well under
+    a millisecond, so that stretches with no reachable point stay cheap. The working modes are
+    enumerated only when Newton converges in another mode than ``mode``.
+    """
+    found = newton(
+        ev.model,
+        ev.data,
+        ev.closures,
+        guess,
+        None,
+        ev._r,
+        ev._A,
+        tol=tol,
+        extra=TaskTarget(ev.task, x),
+        max_iterations=RESEED_NEWTON_ITERATIONS,
+    )
+    if found is None:
+        return None
+    if mode is None or ev.mode(ev.jacobian()) == tuple(mode):
+        return found[0]
+    try:
+        return inverse_kinematics(mech, x, guess, mode=mode).q
+    except PoseUnreachable:
+        return None
+
+
 def start_configuration(mech: Mechanism, guess: Any) -> np.ndarray:
     """The configuration an analysis starts from: ``guess`` (checked), or the reference one."""
     return mech.q_ref if guess is None else mech.check_q(guess, "guess")
@@ -618,7 +658,7 @@ def reseed(
 
     The unreached points split into connected stretches (grid-axis neighbours, as
     :func:`flood` walks). In each, up to :data:`RESEED_CANDIDATES` points spread evenly over
-    the stretch are solved from ``guess`` in the working mode (:func:`_seed_solution`); the
+    the stretch are solved from ``guess`` in the working mode (:func:`_reseed_solution`); the
     first one reached is flooded from, and the stretches are recomputed. At most
     :data:`RESEED_ATTEMPTS` solves in all. Deterministic: stretches and candidates are taken
     in flat-index order.
@@ -649,9 +689,8 @@ def reseed(
                     break
                 budget -= 1
                 attempted[index] = True
-                try:
-                    q = _seed_solution(mech, state.poses[index], guess, mode)
-                except PoseUnreachable:
+                q = _reseed_solution(mech, ev, state.poses[index], guess, mode, tol)
+                if q is None:
                     continue
                 sol = ev.solve(state.poses[index], q, tol)
                 if sol is None or not state.accept(ev, index, sol, target_mode):
