@@ -3,12 +3,13 @@
 Run with ``make bench`` (or ``python -m plm_pin.benchmarks --out reports/bench``). A
 benchmark measures; correctness is asserted by the test suite, never here. Besides the
 cost per call of loading, closures, assembly, kinematics and manipulability for every
-preset, it records the wall time of a 10^5-pose manipulability map of
-``harada2011_3d4m``, the cost and accuracy of closed-chain simulation (the four-bar, 10 s
-passive, against MuJoCo's soft ``connect`` constraint on the same four-bar; Harada 2011's
-simulation 1), the throughput of a design sweep (:mod:`plm_pin.sweep`) in one process and on
-a 2-worker Dask LocalCluster and, as a reproduction note, the 3D3M's singular angle of
-Harada 2011 Fig. 6.
+preset, it times the 3D4M's kinematics beside their Pinocchio floor (:class:`Floor`) and
+PlaCo's (in its own venv), records the wall time of a 10^5-pose manipulability map of
+``harada2011_3d4m`` on one core beside Harada's vectorised closed form and of an 8-PSS
+map, the cost and accuracy of closed-chain simulation (the four-bar, 10 s passive, against
+MuJoCo's soft ``connect`` constraint on the same four-bar; Harada 2011's simulation 1), the
+throughput of a design sweep (:mod:`plm_pin.sweep`) in one process and on a 2-worker Dask
+LocalCluster and, as a reproduction note, the 3D3M's singular angle of Harada 2011 Fig. 6.
 """
 
 from __future__ import annotations
@@ -372,7 +373,6 @@ def run() -> list[dict[str, object]]:
     rows.extend(kinematics_benchmark())
     rows.extend(allocation_benchmark())
     rows.extend(map_throughput())
-    rows.append(map_benchmark())
     return rows
 
 
@@ -430,30 +430,6 @@ def _harada_profile(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     amp = np.array([0.02, 0.01, 0.2])
     w = np.array([2.0, 3.0, 2.5])
     return x0 + amp * np.sin(w * t), amp * w * np.cos(w * t), -amp * w**2 * np.sin(w * t)
-
-
-def map_benchmark(shape: tuple[int, int] = MAP_SHAPE, workers: int | None = None) -> dict[str, object]:
-    """Wall time of one manipulability map of ``harada2011_3d4m`` over an x-y grid at theta = -20 deg.
-
-    x in [-0.1, 0.1] m, y in [0.01, 0.12] m (all reachable), ``workers`` processes
-    (default: all CPUs). One run, not best of 5: the map takes seconds.
-    """
-    mech = load("harada2011_3d4m")
-    values = (np.linspace(-0.1, 0.1, shape[0]), np.linspace(0.01, 0.12, shape[1]))
-    used = workers if workers is not None else (os.cpu_count() or 1)
-    start = time.perf_counter()
-    result = workspace_map(mech, ("x", "y"), values, (0.0, 0.08, math.radians(-20.0)), workers=used)
-    seconds = time.perf_counter() - start
-    n = shape[0] * shape[1]
-    return {
-        "mechanism": "harada2011_3d4m",
-        "case": (
-            f"workspace_map x-y {shape[0]} x {shape[1]} = {n} poses at theta = -20 deg "
-            f"({100 * result.reachable_fraction:.0f}% reachable, {used} process(es), "
-            f"{seconds / n * 1e6:.0f} us/pose, wall time)"
-        ),
-        "seconds_per_call": seconds,
-    }
 
 
 def map_throughput(shape: tuple[int, int] = MAP_SHAPE) -> list[dict[str, object]]:
