@@ -101,12 +101,18 @@ def _solution(mech: Mechanism, target: TaskTarget, q: np.ndarray) -> IKSolution:
     return _solution_from_workspace(mech, target, q, ws)
 
 
-def _solution_from_workspace(mech: Mechanism, target: TaskTarget, q: np.ndarray, ws: Workspace) -> IKSolution:
-    """The solution at ``q`` from the joint Jacobians and placements already in ``ws.data``."""
+def _solution_from_workspace(
+    mech: Mechanism, target: TaskTarget, q: np.ndarray, ws: Workspace, residual_ready: bool = False
+) -> IKSolution:
+    """The solution at ``q`` from the joint Jacobians and placements already in ``ws.data``.
+
+    With ``residual_ready``, ``ws.residual`` already holds the residual at ``q`` (Newton's last pass).
+    """
     r_phi, A_phi = ws.closure_rows
     r_x, A_x = ws.task_rows
-    _closures.residual_from_placements(ws.data, mech.closures, r_phi)
-    target.residual(ws.data, r_x)
+    if not residual_ready:
+        _closures.residual_from_placements(ws.data, mech.closures, r_phi)
+        target.residual(ws.data, r_x)
     _closures.jacobian_from_data(mech.model, ws.data, mech.closures, A_phi)
     target.task.jacobian_from_data(mech.model, ws.data, A_x)
     mode = working_mode_from_jacobian(ws.jacobian, mech.legs)
@@ -188,7 +194,7 @@ def _from_guess(mech: Mechanism, target: TaskTarget, guess: Any, tol: float) -> 
         mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
     )
     if fast is not None:
-        return _solution_from_workspace(mech, target, fast[0], ws)
+        return _solution_from_workspace(mech, target, fast[0], ws, residual_ready=True)
     try:
         q = assemble(
             mech.model,
