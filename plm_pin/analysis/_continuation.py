@@ -499,12 +499,28 @@ def sweep_rows(
 
 
 def _seed(
-    mech: Mechanism, poses: np.ndarray, x_guess: np.ndarray, scale: np.ndarray, guess: Any, mode: Any
+    mech: Mechanism,
+    ev: IKEvaluator,
+    poses: np.ndarray,
+    x_guess: np.ndarray,
+    scale: np.ndarray,
+    guess: np.ndarray,
+    mode: Any,
+    tol: float,
 ) -> tuple[int, np.ndarray] | None:
-    """The grid point nearest to the guess's pose that the inverse kinematics reaches."""
+    """The grid point nearest to the guess's pose that the inverse kinematics reaches.
+
+    The :data:`SEED_CANDIDATES` nearest points are tried by undamped Newton from the guess
+    first (:func:`_reseed_solution`: a point out of reach costs under a millisecond), then,
+    if none converges, by the general solver (Levenberg-Marquardt after Newton).
+    """
     flat = poses.reshape(-1, poses.shape[-1])
     varied = scale > 0.0  # distance over the varied coordinates only, in units of their span
     order = np.argsort(np.sum(((flat - x_guess)[:, varied] / scale[varied]) ** 2, axis=1), kind="stable")
+    for index in order[:SEED_CANDIDATES]:
+        found = _reseed_solution(mech, ev, flat[index], guess, mode, tol)
+        if found is not None:
+            return int(index), found
     for index in order[:SEED_CANDIDATES]:
         try:
             q = _seed_solution(mech, flat[index], guess, mode)
@@ -628,7 +644,7 @@ def solve_poses(
     scale = np.ptp(flat, axis=0)
     guess = start_configuration(mech, guess)
     x_guess = task_pose(mech, guess)
-    seeded = _seed(mech, flat, x_guess, scale, guess, mode)
+    seeded = _seed(mech, ev, flat, x_guess, scale, guess, mode, tol)
     if seeded is None:
         return state, None
     index, q = seeded
