@@ -448,46 +448,32 @@ def sweep_rows(
     seed: int,
     target_mode: tuple[int, ...],
     tol: float,
+    workers: int = 1,
 ) -> None:
     """Solve a 2-D grid row by row with the batched evaluator, then fill what it missed point by point.
 
-    The seed's row is walked by :func:`flood`; each next row (both ways from it) is predicted
-    per column by polynomial extrapolation from the rows before it (as :meth:`IKEvaluator.extrapolate`
-    does along a line) and solved at once by :func:`~plm_pin.analysis._batch.batch_newton`;
-    a point is kept only when it converges to ``tol`` in ``target_mode``. Whatever stays
-    unreached next to a reached point is then tried by :func:`flood` from its neighbours.
+    The seed's row is walked by :func:`flood`; the rows on either side of it are then solved
+    by :func:`_walk_rows` (the two sides in two processes when ``workers`` > 1: they do not
+    depend on each other, so the result is the same). Whatever stays unreached next to a
+    reached point is then tried by :func:`flood` from its neighbours.
     """
     n0, n1 = state.shape
-    nq = state.q.shape[1]
     i0 = seed // n1
     row = np.zeros(state.reached.size, dtype=bool)
     row[i0 * n1 : (i0 + 1) * n1] = True
     flood(ev, state, metrics, target_mode, [seed], tol, row)
-    Q = state.q.reshape(n0, n1, nq)
-    reached = state.reached.reshape(n0, n1)
-    poses = state.poses.reshape(n0, n1, -1)
-    wanted = np.array(target_mode)
-    for direction in (1, -1):
-        i = i0 + direction
-        while 0 <= i < n0:
-            back = [i - direction * k for k in (1, 2, 3) if 0 <= i - direction * k < n0]
-            have = reached[back[0]].copy()
-            if not have.any():
-                break
-            pred = Q[back[0]].copy()
-            if len(back) >= 2:
-                two = have & reached[back[1]]
-                pred[two] = 2.0 * Q[back[0]][two] - Q[back[1]][two]
-                if len(back) == 3:
-                    three = two & reached[back[2]]
-                    pred[three] = 3.0 * Q[back[0]][three] - 3.0 * Q[back[1]][three] + Q[back[2]][three]
-            cols = np.flatnonzero(have)
-            q, ok, A = batch_newton(kin, pred[cols], poses[i, cols], tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
-            modes = batch_modes(A[ok], ev.legs)
-            fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
-            keep = cols[ok][fits]
-            state.accept_batch(i * n1 + keep, q[ok][fits], modes[fits], A[ok][fits], metrics)
-            i += direction
+    if workers > 1 and 0 < i0 < n0 - 1:
+        context = multiprocessing.get_context(
+            "fork" if "fork" in multiprocessing.get_all_start_methods() else None
+        )
+        with ProcessPoolExecutor(
+            2, mp_context=context, initializer=_init_rows, initargs=(ev, kin, state, target_mode, tol, i0)
+        ) as pool:
+            for band, part in pool.map(_rows_worker, (1, -1)):
+                state.merge(part, band)
+    else:
+        for direction in (1, -1):
+            _walk_rows(ev, kin, state, metrics, i0, direction, target_mode, tol)
     grid = state.reached.reshape(n0, n1)
     edge = np.zeros_like(grid)
     edge[1:] |= ~grid[:-1]
@@ -496,6 +482,72 @@ def sweep_rows(
     edge[:, :-1] |= ~grid[:, 1:]
     border = np.flatnonzero((grid & edge).reshape(-1))
     flood(ev, state, metrics, target_mode, border.tolist(), tol)
+
+
+def _walk_rows(
+    ev: IKEvaluator,
+    kin: BatchKinematics,
+    state: GridState,
+    metrics: Metrics,
+    i0: int,
+    direction: int,
+    target_mode: tuple[int, ...],
+    tol: float,
+) -> None:
+    """Solve the rows past ``i0`` in ``direction`` (+1 or -1), each in one batched Newton.
+
+    Each row is predicted per column by polynomial extrapolation from the rows before it (as
+    :meth:`IKEvaluator.extrapolate` does along a line) and solved at once by
+    :func:`~plm_pin.analysis._batch.batch_newton`; a point is kept only when it converges to
+    ``tol`` in ``target_mode``. The walk stops at a row with no solved point before it.
+    """
+    n0, n1 = state.shape
+    Q = state.q.reshape(n0, n1, -1)
+    reached = state.reached.reshape(n0, n1)
+    poses = state.poses.reshape(n0, n1, -1)
+    wanted = np.array(target_mode)
+    i = i0 + direction
+    while 0 <= i < n0:
+        back = [i - direction * k for k in (1, 2, 3) if 0 <= i - direction * k < n0]
+        have = reached[back[0]].copy()
+        if not have.any():
+            break
+        pred = Q[back[0]].copy()
+        if len(back) >= 2:
+            two = have & reached[back[1]]
+            pred[two] = 2.0 * Q[back[0]][two] - Q[back[1]][two]
+            if len(back) == 3:
+                three = two & reached[back[2]]
+                pred[three] = 3.0 * Q[back[0]][three] - 3.0 * Q[back[1]][three] + Q[back[2]][three]
+        cols = np.flatnonzero(have)
+        q, ok, A = batch_newton(kin, pred[cols], poses[i, cols], tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
+        modes = batch_modes(A[ok], ev.legs)
+        fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
+        keep = cols[ok][fits]
+        state.accept_batch(i * n1 + keep, q[ok][fits], modes[fits], A[ok][fits], metrics)
+        i += direction
+
+
+def _init_rows(
+    ev: IKEvaluator,
+    kin: BatchKinematics,
+    state: GridState,
+    target: tuple[int, ...],
+    tol: float,
+    i0: int,
+) -> None:
+    _WORKER.update(ev=ev, kin=kin, state=state, target=target, tol=tol, i0=i0)
+
+
+def _rows_worker(direction: int) -> tuple[slice, dict[str, Any]]:
+    """Walk the rows on one side of the seed's row (in a worker); return that side's results."""
+    ev: IKEvaluator = _WORKER["ev"]
+    state: GridState = _WORKER["state"]
+    i0: int = _WORKER["i0"]
+    _walk_rows(ev, _WORKER["kin"], state, _metrics_for(ev), i0, direction, _WORKER["target"], _WORKER["tol"])
+    n0, n1 = state.shape
+    band = slice((i0 + 1) * n1, n0 * n1) if direction > 0 else slice(0, i0 * n1)
+    return band, state.part(band)
 
 
 def _seed(
@@ -654,7 +706,9 @@ def solve_poses(
     target = tuple(int(s) for s in state.mode[index])
     kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 else None
     if kin is not None:
-        sweep_rows(ev, kin, state, _metrics_for(ev), index, target, tol)
+        sweep_rows(
+            ev, kin, state, _metrics_for(ev), index, target, tol, _auto_workers(flat.shape[0], shape, workers)
+        )
     else:
         _solve_grid(ev, state, index, target, tol, _auto_workers(flat.shape[0], shape, workers))
     reseed(mech, ev, state, _metrics_for(ev), target, guess, tol)
