@@ -459,18 +459,6 @@ def map_throughput(shape: tuple[int, int] = MAP_SHAPE) -> list[dict[str, object]
             "floor_seconds_per_call": closed,
         }
     ]
-    used = os.cpu_count() or 1
-    start = time.perf_counter()
-    workspace_map(mech, ("x", "y"), values, pose, workers=used)
-    seconds = time.perf_counter() - start
-    rows.append(
-        {
-            "mechanism": mech.name,
-            "case": f"the same map, workers={used} (the rows on each side of the seed's row in a process; "
-            f"{n / seconds:.0f} poses/s, wall time)",
-            "seconds_per_call": seconds,
-        }
-    )
     pss = load("zhao2011_8pss")
     x0 = task_pose(pss, pss.q_ref)
     grid = (np.linspace(x0[0] - 0.05, x0[0] + 0.05, 40), np.linspace(x0[1] - 0.05, x0[1] + 0.05, 40))

@@ -448,32 +448,21 @@ def sweep_rows(
     seed: int,
     target_mode: tuple[int, ...],
     tol: float,
-    workers: int = 1,
 ) -> None:
     """Solve a 2-D grid row by row with the batched evaluator, then fill what it missed point by point.
 
     The seed's row is walked by :func:`flood`; the rows on either side of it are then solved
-    by :func:`_walk_rows` (the two sides in two processes when ``workers`` > 1: they do not
-    depend on each other, so the result is the same). Whatever stays unreached next to a
-    reached point is then tried by :func:`flood` from its neighbours.
+    by :func:`_walk_rows`, in this process (two processes, one per side, were slower on two
+    cores: the fork and the merge cost more than the second side saves). Whatever stays
+    unreached next to a reached point is then tried by :func:`flood` from its neighbours.
     """
     n0, n1 = state.shape
     i0 = seed // n1
     row = np.zeros(state.reached.size, dtype=bool)
     row[i0 * n1 : (i0 + 1) * n1] = True
     flood(ev, state, metrics, target_mode, [seed], tol, row)
-    if workers > 1 and 0 < i0 < n0 - 1:
-        context = multiprocessing.get_context(
-            "fork" if "fork" in multiprocessing.get_all_start_methods() else None
-        )
-        with ProcessPoolExecutor(
-            2, mp_context=context, initializer=_init_rows, initargs=(ev, kin, state, target_mode, tol, i0)
-        ) as pool:
-            for band, part in pool.map(_rows_worker, (1, -1)):
-                state.merge(part, band)
-    else:
-        for direction in (1, -1):
-            _walk_rows(ev, kin, state, metrics, i0, direction, target_mode, tol)
+    for direction in (1, -1):
+        _walk_rows(ev, kin, state, metrics, i0, direction, target_mode, tol)
     grid = state.reached.reshape(n0, n1)
     edge = np.zeros_like(grid)
     edge[1:] |= ~grid[:-1]
@@ -526,28 +515,6 @@ def _walk_rows(
         keep = cols[ok][fits]
         state.accept_batch(i * n1 + keep, q[ok][fits], modes[fits], A[ok][fits], metrics)
         i += direction
-
-
-def _init_rows(
-    ev: IKEvaluator,
-    kin: BatchKinematics,
-    state: GridState,
-    target: tuple[int, ...],
-    tol: float,
-    i0: int,
-) -> None:
-    _WORKER.update(ev=ev, kin=kin, state=state, target=target, tol=tol, i0=i0)
-
-
-def _rows_worker(direction: int) -> tuple[slice, dict[str, Any]]:
-    """Walk the rows on one side of the seed's row (in a worker); return that side's results."""
-    ev: IKEvaluator = _WORKER["ev"]
-    state: GridState = _WORKER["state"]
-    i0: int = _WORKER["i0"]
-    _walk_rows(ev, _WORKER["kin"], state, _metrics_for(ev), i0, direction, _WORKER["target"], _WORKER["tol"])
-    n0, n1 = state.shape
-    band = slice((i0 + 1) * n1, n0 * n1) if direction > 0 else slice(0, i0 * n1)
-    return band, state.part(band)
 
 
 def _seed(
@@ -704,13 +671,12 @@ def solve_poses(
     if sol is None or not state.accept(ev, index, sol, None):
         return state, None
     target = tuple(int(s) for s in state.mode[index])
+    n_workers = _auto_workers(flat.shape[0], shape, workers)  # checks ``workers`` on either path
     kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 else None
     if kin is not None:
-        sweep_rows(
-            ev, kin, state, _metrics_for(ev), index, target, tol, _auto_workers(flat.shape[0], shape, workers)
-        )
+        sweep_rows(ev, kin, state, _metrics_for(ev), index, target, tol)
     else:
-        _solve_grid(ev, state, index, target, tol, _auto_workers(flat.shape[0], shape, workers))
+        _solve_grid(ev, state, index, target, tol, n_workers)
     reseed(mech, ev, state, _metrics_for(ev), target, guess, tol)
     return state, target
 

@@ -15,9 +15,8 @@ The metrics are those of :func:`plm_pin.analysis.manipulability` and
 Cost (``make bench``): on trees of one-axis joints with point closures and a planar task
 (the 2-PRRRP tables), 2-D grids are solved a row at a time by one batched Newton over the
 row (:mod:`plm_pin.analysis._batch`, numpy forward kinematics from the model's joint
-placements), about 2 Pinocchio-equivalent passes per pose, the rows on the two sides of the
-seed's row in two processes for large grids; the points the rows miss are filled point by
-point. Other mechanisms go point by point (one Newton step
+placements), about 2 Pinocchio-equivalent passes per pose, in one process; the points the
+rows miss are filled point by point. Other mechanisms go point by point (one Newton step
 per pose, exact Jacobians, metrics in batches); their grids of 20,000 poses or more are
 split in bands of rows solved in parallel processes (``workers``, default all CPUs), then
 joined across the band borders.
@@ -226,7 +225,7 @@ def workspace_map(
         mode: working mode to keep (default: the one the seed is solved in from ``guess``).
         tol: inverse-kinematics residual tolerance [m, rad].
         workers: processes to use (default: all CPUs for grids of 20,000 poses or more, else 1);
-            where the rows are solved in batches, at most two (one per side of the seed's row).
+            unused where the rows are solved in batches (one process is faster there).
 
     Returns:
         The map, arrays of shape ``(len(values[0]), len(values[1]))``.

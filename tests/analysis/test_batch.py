@@ -83,20 +83,3 @@ def test_row_batched_map_equals_the_point_by_point_map(monkeypatch):
     ok = serial.reachable
     assert np.abs(batched.q[ok] - serial.q[ok]).max() < 1e-11
     assert np.allclose(batched.manipulability[ok], serial.manipulability[ok], rtol=1e-10, atol=0.0)
-
-
-def test_rows_on_both_sides_of_the_seed_in_two_processes_give_the_same_map():
-    """With workers=2 the two sides of the seed's row run in two processes; the map is the same.
-
-    Equal to round-off, not bit for bit: BLAS may sum in another order in a forked worker.
-    """
-    mech = preset("harada2011_3d4m")
-    values = (np.linspace(-0.16, 0.16, 17), np.linspace(0.0, 0.14, 15))
-    pose = (0.0, 0.08, math.radians(-20.0))
-    one = workspace_map(mech, ("x", "y"), values, pose, workers=1)
-    two = workspace_map(mech, ("x", "y"), values, pose, workers=2)
-    assert np.array_equal(one.reachable, two.reachable) and np.array_equal(one.mode, two.mode)
-    ok = one.reachable
-    assert 0.3 < one.reachable_fraction < 1.0
-    assert np.abs(one.q[ok] - two.q[ok]).max() < 1e-11
-    assert np.allclose(one.manipulability[ok], two.manipulability[ok], rtol=1e-10, atol=0.0)
