@@ -3,12 +3,13 @@
 Run with ``make bench`` (or ``python -m plm_pin.benchmarks --out reports/bench``). A
 benchmark measures; correctness is asserted by the test suite, never here. Besides the
 cost per call of loading, closures, assembly, kinematics and manipulability for every
-preset, it records the wall time of a 10^5-pose manipulability map of
-``harada2011_3d4m``, the cost and accuracy of closed-chain simulation (the four-bar, 10 s
-passive, against MuJoCo's soft ``connect`` constraint on the same four-bar; Harada 2011's
-simulation 1), the throughput of a design sweep (:mod:`plm_pin.sweep`) in one process and on
-a 2-worker Dask LocalCluster and, as a reproduction note, the 3D3M's singular angle of
-Harada 2011 Fig. 6.
+preset, it times the 3D4M's kinematics beside their Pinocchio floor (:class:`Floor`) and
+PlaCo's (in its own venv), records the wall time of a 10^5-pose manipulability map of
+``harada2011_3d4m`` on one core beside Harada's vectorised closed form and of an 8-PSS
+map, the cost and accuracy of closed-chain simulation (the four-bar, 10 s passive, against
+MuJoCo's soft ``connect`` constraint on the same four-bar; Harada 2011's simulation 1), the
+throughput of a design sweep (:mod:`plm_pin.sweep`) in one process and on a 2-worker Dask
+LocalCluster and, as a reproduction note, the 3D3M's singular angle of Harada 2011 Fig. 6.
 """
 
 from __future__ import annotations
@@ -20,6 +21,9 @@ import json
 import math
 import os
 import platform
+import shutil
+import subprocess
+import sys
 import time
 import timeit
 from collections.abc import Callable
@@ -46,7 +50,7 @@ from .loading import build_mechanism, load
 from .mechanism import Mechanism
 from .models.classic import build_fourbar
 from .models.pss import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
-from .models.registry import PRESETS, preset_names
+from .models.registry import PRESETS, preset_names, urdf_folder
 from .statics import AllocationRule, solve_balance, static_balance, static_forces
 
 MAP_SHAPE = (317, 316)
@@ -95,6 +99,246 @@ def _per_call(fn: Callable[[], object], min_time: float = 0.2) -> float:
     return min(timer.repeat(repeat=5, number=number)) / number
 
 
+class Floor:
+    r"""The least Python doing a kinematics path's math with Pinocchio calls (the floor of its cost).
+
+    For mechanisms whose closures are all ``point`` and whose task is planar ``(x, y, rz)``
+    (the 2-PRRRP tables): one ``computeJointJacobians`` + ``updateFramePlacements`` pass per
+    Gauss-Newton iteration, residual from ``oMf``, Jacobian from ``getFrameJacobian``, a
+    Cholesky step of the normal equations; the closed-chain Jacobians by one SVD of
+    :math:`J_\phi`. No checks, no results objects, no working mode.
+    """
+
+    def __init__(self, mech: Mechanism) -> None:
+        """Collect the frame pairs, task frame and actuated indices of ``mech``."""
+        task = mech.task_compiled
+        if (
+            task is None
+            or task.dofs != ("x", "y", "rz")
+            or any(c.spec.type != "point" for c in mech.closures)
+        ):
+            raise ValueError(f"{mech.name}: the floor is written for point closures and an x-y-rz task")
+        self.model, self.data = mech.model, mech.model.createData()
+        self.pairs = [c.frame_ids for c in mech.closures]
+        self.frame = task.frame_id
+        self.act_q, self.act_v = mech.actuated_q_indices, mech.actuated_v_indices
+        self.free = np.setdiff1d(np.arange(mech.nv), self.act_v)
+        self.mobility = mech.mobility
+
+    def _closure(self) -> tuple[np.ndarray, np.ndarray]:
+        oMf, lwa = self.data.oMf, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        model, data = self.model, self.data
+        r = np.concatenate([oMf[b].translation - oMf[a].translation for a, b in self.pairs])
+        J = np.vstack(
+            [
+                pin.getFrameJacobian(model, data, b, lwa)[:3] - pin.getFrameJacobian(model, data, a, lwa)[:3]
+                for a, b in self.pairs
+            ]
+        )
+        return r, J
+
+    def ik(self, q0: np.ndarray, x: np.ndarray, tol: float = 1e-12) -> np.ndarray:
+        """Gauss-Newton on closures and task from ``q0`` to ``tol``."""
+        model, data, q = self.model, self.data, q0
+        for _ in range(30):
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacements(model, data)
+            r_phi, J_phi = self._closure()
+            M = data.oMf[self.frame]
+            R = M.rotation
+            r = np.concatenate([r_phi, M.translation[:2] - x[:2], [math.atan2(R[1, 0], R[0, 0]) - x[2]]])
+            if np.abs(r).max() <= tol:
+                return q
+            J_x = pin.getFrameJacobian(model, data, self.frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            J = np.vstack([J_phi, J_x[[0, 1, 5]]])
+            q = pin.integrate(model, q, -np.linalg.solve(J.T @ J, J.T @ r))
+        raise RuntimeError("floor IK did not converge")
+
+    def fk(self, q0: np.ndarray, c: np.ndarray, tol: float = 1e-12) -> np.ndarray:
+        """Gauss-Newton on the closures with the actuators at ``c``, from ``q0``."""
+        model, data = self.model, self.data
+        q = q0.copy()
+        q[self.act_q] = c
+        for _ in range(30):
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacements(model, data)
+            r, J = self._closure()
+            if np.abs(r).max() <= tol:
+                return q
+            Jf = J[:, self.free]
+            step = np.zeros(model.nv)
+            step[self.free] = -np.linalg.solve(Jf.T @ Jf, Jf.T @ r)
+            q = pin.integrate(model, q, step)
+        raise RuntimeError("floor FK did not converge")
+
+    def jacobians(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """N, singular values of J_phi, T = J_x N, C = S_a N."""
+        pin.computeJointJacobians(self.model, self.data, q)
+        pin.updateFramePlacements(self.model, self.data)
+        _, J_phi = self._closure()
+        J_x = pin.getFrameJacobian(self.model, self.data, self.frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        _, s, Vt = np.linalg.svd(J_phi)
+        N = Vt[-self.mobility :].T
+        return N, s, J_x[[0, 1, 5]] @ N, N[self.act_v]
+
+    def manipulability(self, q: np.ndarray) -> tuple[float, float]:
+        """W and the condition number of J_ce = C T^-1."""
+        _, _, T, C = self.jacobians(q)
+        sv = np.linalg.svd(np.linalg.solve(T.T, C.T).T, compute_uv=False)
+        return float(sv.prod()), float(sv[0] / sv[-1])
+
+
+def _paired(fn: Callable[[], object], floor: Callable[[], object], rounds: int = 7) -> tuple[float, float]:
+    """Best time per call [s] of ``fn`` and of ``floor``, measured in alternation (same load on both)."""
+    timers = [timeit.Timer(fn), timeit.Timer(floor)]
+    numbers = [max(1, t.autorange()[0] // 2) for t in timers]
+    best = [math.inf, math.inf]
+    for _ in range(rounds):
+        for k, (t, n) in enumerate(zip(timers, numbers, strict=True)):
+            best[k] = min(best[k], t.timeit(n) / n)
+    return best[0], best[1]
+
+
+def kinematics_benchmark() -> list[dict[str, object]]:
+    """The 3D4M's kinematics paths beside their floor (:class:`Floor`), timed in alternation."""
+    mech = load("harada2011_3d4m")
+    floor = Floor(mech)
+    q = mech.q_ref
+    x = task_pose(mech, q) + 1e-3
+    c = mech.actuator_positions(inverse_kinematics(mech, x, q).q)  # a consistent set: the 3D4M is redundant
+    cases: dict[str, tuple[Callable[[], object], Callable[[], object]]] = {
+        "inverse_kinematics (from q_ref, 1e-3 m/rad off)": (
+            functools.partial(inverse_kinematics, mech, x, q),
+            functools.partial(floor.ik, q, x),
+        ),
+        "forward_kinematics, one mode (actuators of a pose 1e-3 m/rad off)": (
+            functools.partial(forward_kinematics, mech, c, q, all_modes=False),
+            functools.partial(floor.fk, q, c),
+        ),
+        "closed_chain_jacobians": (
+            functools.partial(closed_chain_jacobians, mech, q),
+            functools.partial(floor.jacobians, q),
+        ),
+        "manipulability": (
+            functools.partial(manipulability, mech, q),
+            functools.partial(floor.manipulability, q),
+        ),
+    }
+    rows: list[dict[str, object]] = []
+    for case, (fn, low) in cases.items():
+        ours, least = _paired(fn, low)
+        rows.append(
+            {"mechanism": mech.name, "case": case, "seconds_per_call": ours, "floor_seconds_per_call": least}
+        )
+    return rows
+
+
+PLACO_VENV = Path(os.environ.get("PLM_PIN_PLACO_VENV", ".venv-placo"))
+"""Virtual environment of PlaCo (pip ``placo`` pins an older Pinocchio than plm_pin's): made on first use."""
+
+
+def _placo_python() -> tuple[Path | None, str]:
+    """PlaCo's interpreter, creating its venv when missing; or None and why not."""
+    python = PLACO_VENV / "bin" / "python"
+    if not python.exists():
+        try:
+            subprocess.run([sys.executable, "-m", "venv", str(PLACO_VENV)], check=True, capture_output=True)
+            subprocess.run(
+                [str(python), "-m", "pip", "install", "--quiet", "placo"],
+                check=True,
+                capture_output=True,
+                timeout=900,
+            )
+        except (OSError, subprocess.SubprocessError) as exc:
+            shutil.rmtree(PLACO_VENV, ignore_errors=True)
+            return None, f"PlaCo could not be installed in {PLACO_VENV} ({type(exc).__name__}; offline?)"
+    return python, ""
+
+
+def placo_benchmark() -> tuple[list[dict[str, object]], str]:
+    """PlaCo's IK and FK on the 3D4M from the same start and targets as :func:`kinematics_benchmark`.
+
+    Runs :mod:`plm_pin.benchmarks_placo` in PlaCo's own venv (:data:`PLACO_VENV`, created with
+    pip on first use). Returns its rows and a note (the agreement with plm_pin, or why PlaCo is absent).
+    """
+    python, why = _placo_python()
+    if python is None:
+        return [], why
+    mech = load("harada2011_3d4m")
+    q = mech.q_ref
+    x = task_pose(mech, q) + 1e-3
+    ik = inverse_kinematics(mech, x, q).q
+    fk = forward_kinematics(mech, mech.actuator_positions(ik), q, all_modes=False)[0].q
+
+    def by_joint(config: np.ndarray) -> dict[str, float]:
+        return {n: float(config[mech.model.joints[mech.model.getJointId(n)].idx_q]) for n in mech.joint_names}
+
+    cfg = {
+        "urdf": str(urdf_folder() / "harada2011_3d4m.urdf"),
+        "q_ref": by_joint(q),
+        "closures": [list(c.spec.frames) for c in mech.closures],
+        "frame": mech.task.frame if mech.task else "",
+        "x": x.tolist(),
+        # PlaCo's hard equalities must be independent: hold as many sliders as DOF (the 4th follows)
+        "actuators": {a.joint: float(ik[a.idx_q]) for a in mech.actuators[: mech.mobility]},
+    }
+    script = Path(__file__).with_name("benchmarks_placo.py")
+    try:
+        done = subprocess.run(
+            [str(python), str(script), json.dumps(cfg)],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=600,
+        )
+        out = json.loads(done.stdout.strip().splitlines()[-1])
+    except (OSError, subprocess.SubprocessError, ValueError, IndexError) as exc:
+        return [], f"PlaCo run failed: {type(exc).__name__}: {str(exc)[:200]}"
+    rows: list[dict[str, object]] = []
+    agree = []
+    for key, ours in (("ik", ik), ("fk", fk)):
+        r = out[key]
+        diff = max(abs(r["q"][n] - v) for n, v in by_joint(ours).items())
+        agree.append(f"{key.upper()} {diff:.1e}")
+        rows.append(
+            {
+                "mechanism": mech.name,
+                "case": f"PlaCo {out['placo']} {key.upper()} ({r['steps']} QP steps to 1e-12, "
+                "hard planar loop-closure tasks)",
+                "seconds_per_call": float(r["seconds"]),
+            }
+        )
+    return (
+        rows,
+        f"PlaCo agrees with plm_pin's configurations to {', '.join(agree)} rad/m (max joint difference).",
+    )
+
+
+def harada_closed_form_map(poses: np.ndarray, l: float, rt: float, signs: tuple[int, ...]) -> np.ndarray:
+    """Manipulability w of the 3D4M by Harada 2011 eqs. (2), (3), (12), (13), vectorised over poses.
+
+    Args:
+        poses: ``(x, y, theta)`` [m, m, rad], shape (n, 3).
+        l: rod length [m] (all four equal).
+        rt: half plate length [m].
+        signs: sign of the square root of eq. (2) per leg (the paper's code (M.5)).
+
+    Returns:
+        w per pose [m/rad], shape (n,).
+    """
+    x, y, th = poses.T
+    cos, sin = np.cos(th), np.sin(th)
+    rows = []
+    for i, sign in enumerate(signs):
+        s = -rt if i < 2 else rt
+        Lx, Ly = x + s * cos, y + s * sin
+        c = Lx + sign * np.sqrt(l * l - Ly * Ly)
+        zx, zy = (Lx - c) / l, Ly / l
+        rows.append(np.stack([zx, zy, -zx * s * sin + zy * s * cos], axis=-1) / zx[:, None])
+    J = np.stack(rows, axis=1)  # (n, 4, 3)
+    return np.sqrt(np.linalg.det(np.swapaxes(J, 1, 2) @ J))
+
+
 def run() -> list[dict[str, object]]:
     """Time loading, closures, assembly, kinematics and manipulability for every preset."""
     rows: list[dict[str, object]] = []
@@ -128,8 +372,9 @@ def run() -> list[dict[str, object]]:
         }
         for case, fn in cases.items():
             rows.append({"mechanism": name, "case": case, "seconds_per_call": _per_call(fn)})
+    rows.extend(kinematics_benchmark())
     rows.extend(allocation_benchmark())
-    rows.append(map_benchmark())
+    rows.extend(map_throughput())
     rows.extend(stiffness_benchmark())
     return rows
 
@@ -282,28 +527,48 @@ def _harada_profile(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return x0 + amp * np.sin(w * t), amp * w * np.cos(w * t), -amp * w**2 * np.sin(w * t)
 
 
-def map_benchmark(shape: tuple[int, int] = MAP_SHAPE, workers: int | None = None) -> dict[str, object]:
-    """Wall time of one manipulability map of ``harada2011_3d4m`` over an x-y grid at theta = -20 deg.
+def map_throughput(shape: tuple[int, int] = MAP_SHAPE) -> list[dict[str, object]]:
+    """Maps on one core: the 3D4M's 10^5 poses beside Harada's closed form, and an 8-PSS map.
 
-    x in [-0.1, 0.1] m, y in [0.01, 0.12] m (all reachable), ``workers`` processes
-    (default: all CPUs). One run, not best of 5: the map takes seconds.
+    The 3D4M row's floor is :func:`harada_closed_form_map` over the same poses (numpy,
+    vectorised): what a mechanism-specific closed form costs. One run each (wall time).
     """
     mech = load("harada2011_3d4m")
     values = (np.linspace(-0.1, 0.1, shape[0]), np.linspace(0.01, 0.12, shape[1]))
-    used = workers if workers is not None else (os.cpu_count() or 1)
+    pose = (0.0, 0.08, math.radians(-20.0))
     start = time.perf_counter()
-    result = workspace_map(mech, ("x", "y"), values, (0.0, 0.08, math.radians(-20.0)), workers=used)
+    result = workspace_map(mech, ("x", "y"), values, pose, workers=1)
     seconds = time.perf_counter() - start
-    n = shape[0] * shape[1]
-    return {
-        "mechanism": "harada2011_3d4m",
-        "case": (
-            f"workspace_map x-y {shape[0]} x {shape[1]} = {n} poses at theta = -20 deg "
-            f"({100 * result.reachable_fraction:.0f}% reachable, {used} process(es), "
-            f"{seconds / n * 1e6:.0f} us/pose, wall time)"
-        ),
-        "seconds_per_call": seconds,
-    }
+    p = PRESETS["harada2011_3d4m"].parameters
+    poses = result.poses().reshape(-1, 3)
+    start = time.perf_counter()
+    harada_closed_form_map(poses, p["rod_lengths"][0], p["half_plate"], (-1, 1, -1, 1))
+    closed = time.perf_counter() - start
+    n = poses.shape[0]
+    rows: list[dict[str, object]] = [
+        {
+            "mechanism": mech.name,
+            "case": f"workspace_map x-y {shape[0]} x {shape[1]} = {n} poses, 1 process "
+            f"({n / seconds:.0f} poses/s; floor: Harada eqs. (2), (12), (13) vectorised, wall time)",
+            "seconds_per_call": seconds,
+            "floor_seconds_per_call": closed,
+        }
+    ]
+    pss = load("zhao2011_8pss")
+    x0 = task_pose(pss, pss.q_ref)
+    grid = (np.linspace(x0[0] - 0.05, x0[0] + 0.05, 40), np.linspace(x0[1] - 0.05, x0[1] + 0.05, 40))
+    start = time.perf_counter()
+    pss_map = workspace_map(pss, ("x", "y"), grid, workers=1)
+    seconds = time.perf_counter() - start
+    rows.append(
+        {
+            "mechanism": pss.name,
+            "case": f"workspace_map x-y 40 x 40 = 1600 poses, 1 process ({1600 / seconds:.0f} poses/s, "
+            f"{100 * pss_map.reachable_fraction:.0f}% reachable, wall time)",
+            "seconds_per_call": seconds,
+        }
+    )
+    return rows
 
 
 def _peak_kinetic(mech: Mechanism, run: SimulationResult) -> float:
@@ -572,7 +837,18 @@ def _sweep_line(r: dict[str, object]) -> str:
     )
 
 
+def _timing_line(r: dict[str, object]) -> str:
+    """One Markdown row of the timing table, with the floor and the ratio where there is a floor."""
+    ours = float(r["seconds_per_call"])  # type: ignore[arg-type]
+    floor = r.get("floor_seconds_per_call")
+    if isinstance(floor, float):
+        return f"| {r['mechanism']} | {r['case']} | {_fmt(ours)} | {_fmt(floor)} | {ours / floor:.2f} |"
+    return f"| {r['mechanism']} | {r['case']} | {_fmt(ours)} | - | - |"
+
+
 def _fmt(seconds: float) -> str:
+    if seconds >= 1.0:
+        return f"{seconds:.2f} s"
     return f"{seconds * 1e6:.1f} us" if seconds < 1e-3 else f"{seconds * 1e3:.2f} ms"
 
 
@@ -597,10 +873,13 @@ def write(
         f"Machine: {platform.machine()}, Python {platform.python_version()}, "
         f"Pinocchio {pin.__version__}. Best of 5 repeats.",
         "",
-        "| mechanism | case | time per call |",
-        "|---|---|---|",
+        "Floor: the least Python doing the same math with Pinocchio calls, in the same process "
+        "(:class:`plm_pin.benchmarks.Floor`), timed in alternation with the path.",
+        "",
+        "| mechanism | case | time per call | floor | ratio |",
+        "|---|---|---|---|---|",
     ]
-    lines += [f"| {r['mechanism']} | {r['case']} | {_fmt(float(r['seconds_per_call']))} |" for r in rows]  # type: ignore[arg-type]
+    lines += [_timing_line(r) for r in rows]
     if simulation:
         lines += [
             "",
@@ -642,7 +921,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", type=Path, default=Path("reports/bench"), help="output folder")
     args = parser.parse_args()
-    md = write(run(), args.out, (fig6_note(),), simulation_benchmark(), sweep_benchmark())
+    rows = run()
+    placo_rows, placo_note = placo_benchmark()
+    md = write(
+        rows + placo_rows, args.out, (fig6_note(), placo_note), simulation_benchmark(), sweep_benchmark()
+    )
     print(md.read_text())
 
 

@@ -42,7 +42,7 @@ def mechanism_from_description(description: Description, name: str, *, validate:
         description.sidecar,
         name=name,
         source=description.sidecar.source or str(description.urdf_path or ""),
-        visual_factory=lambda: build_visual_model(model, description),
+        visual_factory=functools.partial(build_visual_model, model, description),  # picklable
     )
     guess = "sidecar reference" if description.sidecar.reference else "neutral configuration"
     return _validated(mech, guess, validate)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import threading
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -17,6 +18,7 @@ from .kinematics import closures as _closures
 from .kinematics.assembly import Assembly, assemble
 from .kinematics.idle import IdleGauge, find_gauges
 from .kinematics.legs import Leg, find_legs
+from .kinematics.scratch import Workspace
 from .kinematics.singularity import RANK_RTOL, numerical_rank
 from .kinematics.task import Task, compile_task
 
@@ -74,6 +76,12 @@ class Mechanism:
     velocity ``v`` (size :attr:`nv`) are those of the Pinocchio spanning tree; the closures
     constrain them to :math:`\phi(q) = 0`.
 
+    A Mechanism is not changed by any analysis: its cached properties (``q_ref``,
+    ``mobility``, ``legs``) depend on the mechanism alone, and what a computation writes
+    lives in a :class:`~plm_pin.kinematics.scratch.Workspace` (:meth:`workspace`) or in a
+    per-thread scratch data, so one Mechanism may be shared by threads. It pickles (with
+    ``pickle`` or ``cloudpickle``), to be sent to worker processes as it is.
+
     Attributes:
         name: mechanism name.
         model: the Pinocchio model of the spanning tree (gravity and armature set).
@@ -97,7 +105,7 @@ class Mechanism:
         self.model = model
         self.sidecar = sidecar
         self.source = source
-        self._data = model.createData()
+        self._local = threading.local()  # per-thread scratch data (not pickled)
         self._visual_factory = visual_factory
         self._assembled_guess: np.ndarray | None = None
         actuators = []
@@ -150,9 +158,54 @@ class Mechanism:
 
     @property
     def data(self) -> pin.Data:
-        """Scratch Pinocchio data of this mechanism (not thread-safe: one mechanism per thread)."""
-        self.idle_gauges  # noqa: B018 - the gauge frames exist before the data is used
-        return self._data
+        """Scratch Pinocchio data of the calling thread, for callers that fill it before reading it.
+
+        Each thread gets its own. It holds nothing between calls: the Mechanism's own methods
+        use another scratch data, and a function must compute (``pin.forwardKinematics``,
+        ``pin.computeJointJacobians``, ...) what it reads. Loops should rather own a
+        :meth:`workspace` (or ``mech.model.createData()``).
+        """
+        return self._thread_data("user")
+
+    def _thread_data(self, key: str) -> pin.Data:
+        data = getattr(self._local, key, None)
+        if data is None:
+            self.idle_gauges  # noqa: B018 - the model is final (gauge frames added) before data is made
+            data = self.model.createData()
+            setattr(self._local, key, data)
+        return data
+
+    @property
+    def _data(self) -> pin.Data:
+        """The scratch data of the Mechanism's own methods in the calling thread."""
+        return self._thread_data("own")
+
+    def workspace(self) -> Workspace:
+        """A new :class:`~plm_pin.kinematics.scratch.Workspace`: Pinocchio data and Newton buffers.
+
+        Create one per thread (or per loop) and pass it to the calls of a hot loop.
+        """
+        n_task = self.task_compiled.size if self.task_compiled is not None else 0
+        return Workspace.create(self.model, self.n_closure_rows, n_task)
+
+    def _thread_workspace(self) -> Workspace:
+        """The workspace the public kinematics functions use in the calling thread (filled by each call)."""
+        ws = getattr(self._local, "workspace", None)
+        if ws is None:
+            ws = self._local.workspace = self.workspace()
+        return ws
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled state: everything but the per-thread scratch and the built visual geometry."""
+        state = dict(self.__dict__)
+        state.pop("_local", None)
+        state.pop("visual_model", None)  # rebuilt on first use from the factory
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """Restore a pickled Mechanism (with fresh per-thread scratch)."""
+        self.__dict__.update(state)
+        self._local = threading.local()
 
     @functools.cached_property
     def idle_gauges(self) -> tuple[IdleGauge, ...]:
@@ -164,8 +217,8 @@ class Mechanism:
         gauges, self._assembled_guess = find_gauges(
             self.model, cut, self.reference_guess(), self.actuated_v_indices, self._task_frame
         )
-        if gauges:
-            self._data = self.model.createData()
+        if gauges:  # the model gained frames: scratch data made before them is dropped
+            self._local = threading.local()
         return gauges
 
     @functools.cached_property

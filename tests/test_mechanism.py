@@ -222,3 +222,72 @@ def test_body_names_are_the_urdf_links_each_joint_carries():
     urdf = yourdfpy.URDF.load(str(urdf_folder() / "zhao2011_8pss.urdf"), load_meshes=False)
     child = {j.name: j.child for j in urdf.robot.joints}
     assert mech.body_names == tuple(child[name] for name in mech.joint_names)
+
+
+@pytest.mark.parametrize("dumps", ["pickle", "cloudpickle"])
+def test_mechanism_pickles_and_the_copy_computes_the_same(dumps):
+    """A pickled Mechanism (pickle, cloudpickle) solves IK and finds mobility and legs like the original."""
+    import pickle
+
+    from plm_pin.kinematics import inverse_kinematics, task_pose
+
+    mech = preset("harada2011_3d4m")
+    blob = (pickle if dumps == "pickle" else pytest.importorskip("cloudpickle")).dumps(mech)
+    copy = pickle.loads(blob)
+    x = task_pose(mech, mech.q_ref) + 1e-3
+    assert np.array_equal(copy.q_ref, mech.q_ref)
+    assert (copy.mobility, copy.legs) == (mech.mobility, mech.legs)
+    assert np.array_equal(inverse_kinematics(copy, x).q, inverse_kinematics(mech, x).q)
+    assert len(copy.visual_model.geometryObjects) == len(mech.visual_model.geometryObjects) > 0
+
+
+def test_cached_properties_leave_the_users_scratch_data_alone():
+    """Computing mobility and q_ref (they assemble) does not overwrite what the user put in mech.data."""
+    mech = plm_pin.load("fivebar")
+    q = mech.reference_guess()
+    pin.framesForwardKinematics(mech.model, mech.data, q)
+    before = [M.translation.copy() for M in mech.data.oMf]
+    assert mech.mobility == 2
+    mech.closure_jacobian(mech.q_ref)
+    assert all(np.array_equal(M.translation, b) for M, b in zip(mech.data.oMf, before, strict=True))
+
+
+def test_threads_share_a_mechanism_and_get_the_serial_results():
+    """Inverse kinematics from 4 threads on one Mechanism equals the serial results (per-thread scratch)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from plm_pin.kinematics import inverse_kinematics, task_pose
+
+    mech = preset("harada2011_3d4m")
+    x0 = task_pose(mech, mech.q_ref)
+    targets = [x0 + np.array([0.002 * k, -0.001 * k, 0.01 * k]) for k in range(-6, 6)]
+    serial = [inverse_kinematics(mech, x).q for x in targets]
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(lambda x: inverse_kinematics(mech, x).q, targets * 4))
+    assert all(np.array_equal(a, b) for a, b in zip(threaded, serial * 4, strict=True))
+
+
+def test_workspace_holds_buffers_of_the_stacked_newton_system():
+    """mech.workspace() gives fresh data and [closure; task] buffers of the right shapes, not shared."""
+    mech = preset("harada2011_3d4m")
+    ws, other = mech.workspace(), mech.workspace()
+    m, k = mech.n_closure_rows, mech.task_compiled.size
+    assert ws.residual.shape == (m + k,) and ws.jacobian.shape == (m + k, mech.nv)
+    assert ws.closure_rows[1].shape == (m, mech.nv) and ws.task_rows[0].shape == (k,)
+    assert ws.data is not other.data and ws.data is not mech.data
+
+
+@pytest.mark.slow
+def test_mechanism_is_shipped_to_dask_workers_as_it_is():
+    """On a 2-worker LocalCluster, a Mechanism sent as an argument solves IK like in this process."""
+    from plm_pin.kinematics import inverse_kinematics, task_pose
+    from plm_pin.sweep.execution import local_cluster
+
+    mech = preset("harada2011_3d4m")
+    x = task_pose(mech, mech.q_ref) + 1e-3
+    with local_cluster(2, None) as client:
+        remote = client.scatter(mech, broadcast=True)
+        futures = [client.submit(inverse_kinematics, remote, x + 1e-4 * k, pure=False) for k in range(4)]
+        results = client.gather(futures)
+    for k, sol in enumerate(results):
+        assert np.array_equal(sol.q, inverse_kinematics(mech, x + 1e-4 * k).q)

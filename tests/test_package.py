@@ -27,11 +27,22 @@ def test_every_name_in_every_all_resolves():
 
 
 def test_core_import_does_not_pull_optional_dependencies():
-    """`import plm_pin` loads no optional dependency: meshcat, matplotlib, jinja2, dask, xarray, ..."""
+    """`import plm_pin` loads no optional or heavy dependency: meshcat, matplotlib, yourdfpy, trimesh, ..."""
     optional = (
-        "('meshcat', 'matplotlib', 'jinja2', 'dask', 'distributed', 'xarray', 'zarr', 'pyarrow', 'pandas')"
+        "('meshcat', 'matplotlib', 'jinja2', 'dask', 'distributed', 'xarray', 'zarr', 'pyarrow', 'pandas', "
+        "'yourdfpy', 'trimesh')"
     )
     code = f"import sys, plm_pin; print(sorted(m for m in {optional} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+
+
+def test_loading_a_preset_does_not_pull_the_urdf_writer():
+    """Loading a shipped preset reads its URDF without yourdfpy / trimesh (only builders need them)."""
+    code = (
+        "import sys, plm_pin; plm_pin.load('fourbar'); "
+        "print(sorted(m for m in ('yourdfpy', 'trimesh') if m in sys.modules))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
 

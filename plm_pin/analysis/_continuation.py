@@ -14,7 +14,10 @@ predicting each configuration by polynomial extrapolation along the line it is r
 on, so that one Newton step usually suffices, and keeping the working mode: a point whose
 solution changes the sign of a leg block
 (:func:`plm_pin.kinematics.legs.working_mode_from_jacobian`) is not taken from that
-neighbour. Points never reached are left unreachable.
+neighbour. When the walk ends with unreached stretches left (a leg out of reach between
+two reachable arcs, such as the flipped plate of a planar table), :func:`reseed` solves the
+inverse kinematics afresh, in the working mode kept, at a few points of each stretch, and
+walks on from those it reaches. Points never reached are left unreachable.
 """
 
 from __future__ import annotations
@@ -29,25 +32,21 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg.lapack import dposv as _posv
+from scipy.ndimage import label as _label
 
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics import closures as _closures
+from ..kinematics.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import require_task
 from ..kinematics.legs import Leg, ik_jacobian_from_data, working_mode, working_mode_from_data
 from ..kinematics.task import Task, TaskTarget
+from ._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
 from .manipulability import batch_metrics
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
-
-NEWTON_MAX_ITERATIONS = 12
-"""Newton iterations allowed per continuation step."""
-
-STALL_RATIO = 0.9
-"""A Newton iteration that does not divide the residual by at least 1 / STALL_RATIO ends the attempt."""
 
 
 @dataclass
@@ -86,7 +85,6 @@ class IKEvaluator:
         self.n_legs = sum(leg.square for leg in self.legs)
         self._r = np.empty(self.m + self.task.size)  # residual [closures; task]
         self._A = np.empty((self.m + self.task.size, self.nv))  # its Jacobian
-        self._rows = (self._r[: self.m], self._r[self.m :], self._A[: self.m], self._A[self.m :])
 
     def __getstate__(self) -> dict[str, Any]:
         keep = ("model", "closures", "task", "legs", "mobility", "actuated_v", "linear_q")
@@ -112,35 +110,27 @@ class IKEvaluator:
     def solve(self, x: np.ndarray, q0: np.ndarray, tol: float) -> np.ndarray | None:
         """Configuration at task coordinates ``x`` by Newton from ``q0``, or None.
 
-        Gauss-Newton steps through the normal equations (Cholesky); the attempt ends when
-        an iteration does not reduce the residual by the factor :data:`STALL_RATIO`, or
-        after :data:`NEWTON_MAX_ITERATIONS`. On success the data holds the joint Jacobians
-        and frame placements at the returned configuration (read them with :meth:`jacobian`).
+        :func:`plm_pin.kinematics.assembly.newton` without its polishing step: the attempt
+        ends when an iteration does not reduce the residual by the factor
+        :data:`~plm_pin.kinematics.assembly.STALL_RATIO`, or after
+        :data:`~plm_pin.kinematics.assembly.NEWTON_MAX_ITERATIONS`. On success the data holds
+        the joint Jacobians and frame placements at the returned configuration (read them
+        with :meth:`jacobian`).
         """
-        model, data, closures = self.model, self.data, self.closures
         target = TaskTarget(self.task, x)
-        r, A = self._r, self._A
-        r_phi, r_task, A_phi, A_task = self._rows
-        q = q0
-        err_prev = np.inf
-        for iteration in range(NEWTON_MAX_ITERATIONS + 1):
-            pin.computeJointJacobians(model, data, q)
-            pin.updateFramePlacements(model, data)
-            _closures.residual_from_placements(data, closures, r_phi)
-            target.residual(data, r_task)
-            err = float(np.abs(r).max())
-            if err <= tol:
-                return q
-            if iteration == NEWTON_MAX_ITERATIONS or not err < STALL_RATIO * err_prev:
-                return None
-            _closures.jacobian_from_data(model, data, closures, A_phi)
-            target.jacobian(model, data, A_task)
-            _, step, info = _posv(A.T @ A, A.T @ r)
-            if info != 0:
-                return None
-            q = pin.integrate(model, q, -step)
-            err_prev = err
-        return None  # pragma: no cover - the loop always returns
+        found = newton(
+            self.model,
+            self.data,
+            self.closures,
+            q0,
+            None,
+            self._r,
+            self._A,
+            tol=tol,
+            extra=target,
+            polish=False,
+        )
+        return None if found is None else found[0]
 
     def jacobian(self, out: np.ndarray | None = None) -> np.ndarray:
         """Stacked ``[J_phi; J_x]`` (:func:`plm_pin.kinematics.legs.ik_jacobian`) left by :meth:`solve`.
@@ -232,6 +222,26 @@ class GridState:
         self.reached[index] = True
         self._pending.append(index)
         return True
+
+    def accept_batch(
+        self,
+        index: np.ndarray,
+        q: np.ndarray,
+        mode: np.ndarray,
+        A: np.ndarray,
+        metrics: Metrics,
+    ) -> None:
+        """Record solutions at flat ``index`` with their modes and stacked Jacobians (metrics at once)."""
+        if index.size == 0:
+            return
+        self.q[index] = q
+        self.mode[index] = mode
+        self.reached[index] = True
+        n = self.reached.size
+        for name, v in metrics(A).items():
+            if name not in self.metrics:
+                self.metrics[name] = np.full(n, np.nan)
+            self.metrics[name][index] = v
 
     def flush(self, metrics: Metrics) -> None:
         """Compute the metrics of the buffered points."""
@@ -337,6 +347,12 @@ PARALLEL_MIN_POINTS = 20_000
 SEED_CANDIDATES = 16
 """Grid points nearest to the guess's pose tried, in turn, as the seed of the continuation."""
 
+RESEED_CANDIDATES = 4
+"""Points of each unreached stretch (evenly spread over it) tried as new seeds by :func:`reseed`."""
+
+RESEED_ATTEMPTS = 64
+"""Largest number of new seeds :func:`reseed` tries over one grid (bounds its cost on large voids)."""
+
 
 def _auto_workers(n_points: int, shape: tuple[int, ...], workers: int | None) -> int:
     if workers is None:
@@ -359,6 +375,8 @@ def _init_worker(
 
 def _metrics_for(ev: IKEvaluator) -> Metrics:
     def metrics(A: np.ndarray) -> dict[str, np.ndarray]:
+        if ev.task.size == ev.mobility and ev.m:
+            return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility)
         return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility)
 
     return metrics
@@ -422,13 +440,106 @@ def _solve_grid(
     flood(ev, state, metrics, target, border, tol)
 
 
+def sweep_rows(
+    ev: IKEvaluator,
+    kin: BatchKinematics,
+    state: GridState,
+    metrics: Metrics,
+    seed: int,
+    target_mode: tuple[int, ...],
+    tol: float,
+) -> None:
+    """Solve a 2-D grid row by row with the batched evaluator, then fill what it missed point by point.
+
+    The seed's row is walked by :func:`flood`; the rows on either side of it are then solved
+    by :func:`_walk_rows`, in this process (two processes, one per side, were slower on two
+    cores: the fork and the merge cost more than the second side saves). Whatever stays
+    unreached next to a reached point is then tried by :func:`flood` from its neighbours.
+    """
+    n0, n1 = state.shape
+    i0 = seed // n1
+    row = np.zeros(state.reached.size, dtype=bool)
+    row[i0 * n1 : (i0 + 1) * n1] = True
+    flood(ev, state, metrics, target_mode, [seed], tol, row)
+    for direction in (1, -1):
+        _walk_rows(ev, kin, state, metrics, i0, direction, target_mode, tol)
+    grid = state.reached.reshape(n0, n1)
+    edge = np.zeros_like(grid)
+    edge[1:] |= ~grid[:-1]
+    edge[:-1] |= ~grid[1:]
+    edge[:, 1:] |= ~grid[:, :-1]
+    edge[:, :-1] |= ~grid[:, 1:]
+    border = np.flatnonzero((grid & edge).reshape(-1))
+    flood(ev, state, metrics, target_mode, border.tolist(), tol)
+
+
+def _walk_rows(
+    ev: IKEvaluator,
+    kin: BatchKinematics,
+    state: GridState,
+    metrics: Metrics,
+    i0: int,
+    direction: int,
+    target_mode: tuple[int, ...],
+    tol: float,
+) -> None:
+    """Solve the rows past ``i0`` in ``direction`` (+1 or -1), each in one batched Newton.
+
+    Each row is predicted per column by polynomial extrapolation from the rows before it (as
+    :meth:`IKEvaluator.extrapolate` does along a line) and solved at once by
+    :func:`~plm_pin.analysis._batch.batch_newton`; a point is kept only when it converges to
+    ``tol`` in ``target_mode``. The walk stops at a row with no solved point before it.
+    """
+    n0, n1 = state.shape
+    Q = state.q.reshape(n0, n1, -1)
+    reached = state.reached.reshape(n0, n1)
+    poses = state.poses.reshape(n0, n1, -1)
+    wanted = np.array(target_mode)
+    i = i0 + direction
+    while 0 <= i < n0:
+        back = [i - direction * k for k in (1, 2, 3) if 0 <= i - direction * k < n0]
+        have = reached[back[0]].copy()
+        if not have.any():
+            break
+        pred = Q[back[0]].copy()
+        if len(back) >= 2:
+            two = have & reached[back[1]]
+            pred[two] = 2.0 * Q[back[0]][two] - Q[back[1]][two]
+            if len(back) == 3:
+                three = two & reached[back[2]]
+                pred[three] = 3.0 * Q[back[0]][three] - 3.0 * Q[back[1]][three] + Q[back[2]][three]
+        cols = np.flatnonzero(have)
+        q, ok, A = batch_newton(kin, pred[cols], poses[i, cols], tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
+        modes = batch_modes(A[ok], ev.legs)
+        fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
+        keep = cols[ok][fits]
+        state.accept_batch(i * n1 + keep, q[ok][fits], modes[fits], A[ok][fits], metrics)
+        i += direction
+
+
 def _seed(
-    mech: Mechanism, poses: np.ndarray, x_guess: np.ndarray, scale: np.ndarray, guess: Any, mode: Any
+    mech: Mechanism,
+    ev: IKEvaluator,
+    poses: np.ndarray,
+    x_guess: np.ndarray,
+    scale: np.ndarray,
+    guess: np.ndarray,
+    mode: Any,
+    tol: float,
 ) -> tuple[int, np.ndarray] | None:
-    """The grid point nearest to the guess's pose that the inverse kinematics reaches."""
+    """The grid point nearest to the guess's pose that the inverse kinematics reaches.
+
+    The :data:`SEED_CANDIDATES` nearest points are tried by undamped Newton from the guess
+    first (:func:`_reseed_solution`: a point out of reach costs under a millisecond), then,
+    if none converges, by the general solver (Levenberg-Marquardt after Newton).
+    """
     flat = poses.reshape(-1, poses.shape[-1])
     varied = scale > 0.0  # distance over the varied coordinates only, in units of their span
     order = np.argsort(np.sum(((flat - x_guess)[:, varied] / scale[varied]) ** 2, axis=1), kind="stable")
+    for index in order[:SEED_CANDIDATES]:
+        found = _reseed_solution(mech, ev, flat[index], guess, mode, tol)
+        if found is not None:
+            return int(index), found
     for index in order[:SEED_CANDIDATES]:
         try:
             q = _seed_solution(mech, flat[index], guess, mode)
@@ -453,6 +564,46 @@ def _seed_solution(mech: Mechanism, x: np.ndarray, guess: Any, mode: tuple[int, 
     if mode is None or sol.mode == tuple(mode):
         return sol.q
     return inverse_kinematics(mech, x, guess, mode=mode).q
+
+
+RESEED_NEWTON_ITERATIONS = 30
+"""Newton iterations a new seed may take from the guess (it starts far: a stretch away)."""
+
+
+def _reseed_solution(
+    mech: Mechanism,
+    ev: IKEvaluator,
+    x: np.ndarray,
+    guess: np.ndarray,
+    mode: tuple[int, ...] | None,
+    tol: float,
+) -> np.ndarray | None:
+    """A new seed at ``x``: Newton from ``guess``, re-solved in ``mode`` if it lands in another; or None.
+
+    Undamped Newton only (no Levenberg-Marquardt): a candidate it cannot reach costs well under
+    a millisecond, so that stretches with no reachable point stay cheap. The working modes are
+    enumerated only when Newton converges in another mode than ``mode``.
+    """
+    found = newton(
+        ev.model,
+        ev.data,
+        ev.closures,
+        guess,
+        None,
+        ev._r,
+        ev._A,
+        tol=tol,
+        extra=TaskTarget(ev.task, x),
+        max_iterations=RESEED_NEWTON_ITERATIONS,
+    )
+    if found is None:
+        return None
+    if mode is None or ev.mode(ev.jacobian()) == tuple(mode):
+        return found[0]
+    try:
+        return inverse_kinematics(mech, x, guess, mode=mode).q
+    except PoseUnreachable:
+        return None
 
 
 def start_configuration(mech: Mechanism, guess: Any) -> np.ndarray:
@@ -512,7 +663,7 @@ def solve_poses(
     scale = np.ptp(flat, axis=0)
     guess = start_configuration(mech, guess)
     x_guess = task_pose(mech, guess)
-    seeded = _seed(mech, flat, x_guess, scale, guess, mode)
+    seeded = _seed(mech, ev, flat, x_guess, scale, guess, mode, tol)
     if seeded is None:
         return state, None
     index, q = seeded
@@ -520,5 +671,71 @@ def solve_poses(
     if sol is None or not state.accept(ev, index, sol, None):
         return state, None
     target = tuple(int(s) for s in state.mode[index])
-    _solve_grid(ev, state, index, target, tol, _auto_workers(flat.shape[0], shape, workers))
+    n_workers = _auto_workers(flat.shape[0], shape, workers)  # checks ``workers`` on either path
+    kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 else None
+    if kin is not None:
+        sweep_rows(ev, kin, state, _metrics_for(ev), index, target, tol)
+    else:
+        _solve_grid(ev, state, index, target, tol, n_workers)
+    reseed(mech, ev, state, _metrics_for(ev), target, guess, tol)
     return state, target
+
+
+def reseed(
+    mech: Mechanism,
+    ev: IKEvaluator,
+    state: GridState,
+    metrics: Metrics,
+    target_mode: tuple[int, ...],
+    guess: np.ndarray,
+    tol: float,
+) -> None:
+    """Seed the continuation again inside the stretches it left unreached, in ``target_mode``.
+
+    The unreached points split into connected stretches (grid-axis neighbours, as
+    :func:`flood` walks). In each, up to :data:`RESEED_CANDIDATES` points spread evenly over
+    the stretch are solved from ``guess`` in the working mode (:func:`_reseed_solution`); the
+    first one reached is flooded from, and the stretches are recomputed. At most
+    :data:`RESEED_ATTEMPTS` solves in all. Deterministic: stretches and candidates are taken
+    in flat-index order.
+
+    Args:
+        mech: the mechanism.
+        ev: its evaluator.
+        state: the grid after :func:`flood`.
+        metrics: batch metrics of the solved points.
+        target_mode: the working mode kept (zeros match either sign).
+        guess: configuration the new seeds are solved from, shape (nq,).
+        tol: residual tolerance [m, rad].
+    """
+    mode = None if 0 in target_mode else target_mode
+    attempted = np.zeros(state.reached.size, dtype=bool)
+    budget = RESEED_ATTEMPTS
+    while budget > 0 and not state.reached.all():
+        labels, count = _label(~state.reached.reshape(state.shape))
+        labels = labels.reshape(-1)
+        grown = False
+        for stretch in range(1, count + 1):
+            members = np.flatnonzero((labels == stretch) & ~attempted)
+            if members.size == 0:
+                continue
+            picks = np.unique(np.linspace(0, members.size - 1, min(RESEED_CANDIDATES, members.size)).round())
+            for index in members[picks.astype(int)].tolist():
+                if budget == 0:
+                    break
+                budget -= 1
+                attempted[index] = True
+                q = _reseed_solution(mech, ev, state.poses[index], guess, mode, tol)
+                if q is None:
+                    continue
+                sol = ev.solve(state.poses[index], q, tol)
+                if sol is None or not state.accept(ev, index, sol, target_mode):
+                    continue
+                flood(ev, state, metrics, target_mode, [index], tol)
+                grown = True
+                break
+            if grown:
+                break
+        if not grown:
+            break
+    state.flush(metrics)

@@ -172,7 +172,9 @@ def manipulability_at(
     return manipulability(mech, sol.q, raise_if_singular=raise_if_singular)
 
 
-def batch_metrics(J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mobility: int) -> dict:
+def batch_metrics(
+    J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mobility: int, basis: np.ndarray | None = None
+) -> dict:
     """Manipulability, condition number and singularity margins of a batch of configurations.
 
     The batched counterpart of :func:`manipulability` and
@@ -183,11 +185,17 @@ def batch_metrics(J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mo
         J_x: task Jacobians, shape (b, n_task, nv).
         actuated_v: velocity indices of the actuators, shape (n_act,).
         mobility: DOF of the mechanism (= n_task).
+        basis: an orthonormal basis of the feasible motions already at hand, shape (b, nv,
+            mobility) (default: from the SVD of ``J_phi``); the values do not depend on it.
 
     Returns:
         ``{name: (b,) array}`` for every name of :data:`METRICS`.
     """
-    _, s_phi, T, C = feasible_motions(J_phi, J_x, actuated_v, mobility)
+    if basis is None:
+        _, s_phi, T, C = feasible_motions(J_phi, J_x, actuated_v, mobility)
+    else:
+        s_phi = np.linalg.svd(J_phi, compute_uv=False)
+        T, C = J_x @ basis, basis[..., actuated_v, :]
     _, _, w, cond, _ = _manipulability_values(T, C, J_x)
     return {
         "manipulability": w,

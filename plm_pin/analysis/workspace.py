@@ -12,11 +12,14 @@ through the grid, which is what a mechanism moving continuously can do.
 The metrics are those of :func:`plm_pin.analysis.manipulability` and
 :func:`plm_pin.kinematics.classify` (the singularity margins), computed in batches.
 
-Cost (``make bench``): about 0.18 ms per pose on one core for the planar 2-PRRRP (one
-Newton step per pose, exact Jacobians, metrics in batches); grids of 20,000 poses or
-more are split in bands of rows solved in parallel processes (``workers``, default all
-CPUs), then joined across the band borders: a 10^5-pose map of ``harada2011_3d4m`` takes
-about 9 s on two cores.
+Cost (``make bench``): on trees of one-axis joints with point closures and a planar task
+(the 2-PRRRP tables), 2-D grids are solved a row at a time by one batched Newton over the
+row (:mod:`plm_pin.analysis._batch`, numpy forward kinematics from the model's joint
+placements), about 2 Pinocchio-equivalent passes per pose, in one process; the points the
+rows miss are filled point by point. Other mechanisms go point by point (one Newton step
+per pose, exact Jacobians, metrics in batches); their grids of 20,000 poses or more are
+split in bands of rows solved in parallel processes (``workers``, default all CPUs), then
+joined across the band borders.
 """
 
 from __future__ import annotations
@@ -238,7 +241,8 @@ def workspace_map(
         guess: configuration the seed is solved from (default: the reference configuration).
         mode: working mode to keep (default: the one the seed is solved in from ``guess``).
         tol: inverse-kinematics residual tolerance [m, rad].
-        workers: processes to use (default: all CPUs for grids of 20,000 poses or more, else 1).
+        workers: processes to use (default: all CPUs for grids of 20,000 poses or more, else 1);
+            unused where the rows are solved in batches (one process is faster there).
 
     Returns:
         The map, arrays of shape ``(len(values[0]), len(values[1]))``.

@@ -21,14 +21,19 @@ import dataclasses
 import functools
 import io
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import yourdfpy
 
+from .._lazy import lazy_module
 from ..exceptions import DescriptionError, InvalidInput
 from .loader import read_description
 from .sidecar import Sidecar
+
+if TYPE_CHECKING:
+    import yourdfpy
+else:
+    yourdfpy = lazy_module("yourdfpy")
 
 ORIGIN_KEYS: tuple[str, ...] = ("x", "y", "z", "length")
 """Joint-origin parameters: coordinates [m] and distance from the parent frame [m]."""

@@ -3,12 +3,18 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import yourdfpy
 from lxml import etree
 
 from .._io import atomic_write_text
+from .._lazy import lazy_module
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar
+
+if TYPE_CHECKING:
+    import yourdfpy
+else:
+    yourdfpy = lazy_module("yourdfpy")
 
 
 def urdf_text(robot: yourdfpy.Robot) -> str:

@@ -8,9 +8,19 @@ from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg.lapack import dposv as _posv
 
 from ..exceptions import ClosureNotSatisfied
-from .closures import Closure, jacobian_from_data, residual_from_placements
+from .closures import Closure, closure_rows, jacobian_from_data, residual_from_placements
+
+NEWTON_MAX_ITERATIONS = 12
+"""Newton iterations allowed before :func:`newton` gives up (and the caller falls back to LM)."""
+
+STALL_RATIO = 0.9
+"""A Newton iteration that does not divide the residual by at least 1 / STALL_RATIO ends the attempt."""
+
+ROUND_OFF = 1e-15
+"""Residual [m, rad] below which :func:`newton` takes no polishing step."""
 
 
 class ExtraRows(Protocol):
@@ -21,13 +31,95 @@ class ExtraRows(Protocol):
         """Number of rows."""
         ...
 
-    def residual(self, data: pin.Data) -> np.ndarray:
-        """Rows from frame placements in ``data``."""
+    def residual(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
+        """Rows from frame placements in ``data`` (into ``out`` when given)."""
         ...
 
-    def jacobian(self, model: pin.Model, data: pin.Data) -> np.ndarray:
-        """Their Jacobian from joint Jacobians and placements in ``data``."""
+    def jacobian(self, model: pin.Model, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
+        """Their Jacobian from joint Jacobians and placements in ``data`` (into ``out`` when given)."""
         ...
+
+
+def newton(
+    model: pin.Model,
+    data: pin.Data,
+    closures: Sequence[Closure],
+    q0: np.ndarray,
+    free: np.ndarray | None,
+    r: np.ndarray,
+    A: np.ndarray,
+    *,
+    tol: float,
+    extra: ExtraRows | None = None,
+    polish: bool = True,
+    max_iterations: int = NEWTON_MAX_ITERATIONS,
+) -> tuple[np.ndarray, int] | None:
+    r"""Gauss-Newton on the closures (and ``extra`` rows) from ``q0``, or None when it stalls.
+
+    Each iteration runs one Pinocchio pass (``computeJointJacobians`` then
+    ``updateFramePlacements``), from which the residual and the exact Jacobian are written
+    into the preallocated ``r`` and ``A``; the step solves the normal equations
+    :math:`A_f^T A_f \delta = A_f^T r` over the free columns by Cholesky (LAPACK ``posv``: the
+    zero rows of planar closures do not matter). No SVD, no damping: the caller falls back to
+    :func:`assemble` (Levenberg-Marquardt) when an iteration does not divide the residual by
+    1 / :data:`STALL_RATIO`, the normal matrix is not positive definite (the free columns
+    are not independent), or :data:`NEWTON_MAX_ITERATIONS` pass.
+
+    Once within ``tol``, one more step is taken (``polish``), which quadratic convergence
+    takes to round-off, as :func:`assemble` does. On success ``data`` holds the joint
+    Jacobians and frame placements at the returned configuration and ``r`` its residual.
+
+    Args:
+        model: Pinocchio model.
+        data: its data (a workspace's).
+        closures: compiled closures.
+        q0: starting configuration. # (nq,)
+        free: velocity indices allowed to move (None: all).
+        r: residual buffer, at least (m + extra rows,); its first m + extra rows are used.
+        A: Jacobian buffer, at least (m + extra rows, nv).
+        tol: target largest absolute residual [m, rad].
+        extra: further rows solved with the closures (a task target).
+        polish: take the polishing step.
+        max_iterations: iteration cap.
+
+    Returns:
+        ``(q, iterations)``, or None.
+    """
+    m = closure_rows(closures)
+    n = m + (extra.size if extra is not None else 0)
+    r, A = r[:n], A[:n]
+    r_phi, A_phi, r_x, A_x = r[:m], A[:m], r[m:], A[m:]
+    q = q0
+    err_prev = np.inf
+    polished = not polish
+    for iteration in range(max_iterations + 1):
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        residual_from_placements(data, closures, r_phi)
+        if extra is not None:
+            extra.residual(data, r_x)
+        err = float(np.abs(r).max()) if n else 0.0
+        if err <= tol:
+            if polished or err < ROUND_OFF:
+                return q, iteration
+            polished = True
+        elif iteration == max_iterations or not err < STALL_RATIO * err_prev:
+            return None
+        jacobian_from_data(model, data, closures, A_phi)
+        if extra is not None:
+            extra.jacobian(model, data, A_x)
+        Af = A if free is None else A[:, free]
+        _, step, info = _posv(Af.T @ Af, Af.T @ r)
+        if info != 0:
+            return None
+        if free is None:
+            q = pin.integrate(model, q, -step)
+        else:
+            full = np.zeros(model.nv)
+            full[free] = -step
+            q = pin.integrate(model, q, full)
+        err_prev = err
+    return None  # pragma: no cover - the loop always returns
 
 
 @dataclass(frozen=True)

@@ -96,6 +96,50 @@ def closure_rows(closures: Sequence[Closure]) -> int:
     return closures[-1].rows.stop if closures else 0
 
 
+@dataclass(frozen=True)
+class _Plan:
+    """Index arrays that evaluate a closure tuple in a few vectorised numpy steps.
+
+    Attributes:
+        frames: distinct frame ids of the closures, in first-use order.
+        a: per closure, the index of its frame A in ``frames``.
+        b: per closure, the index of its frame B in ``frames``.
+        linear_rows: per closure, its three translation rows, shape (n_closures, 3).
+        angular: ``(closure, index of A, index of B)`` of the closures with rotation rows.
+    """
+
+    frames: tuple[int, ...]
+    a: np.ndarray
+    b: np.ndarray
+    linear_rows: np.ndarray
+    angular: tuple[tuple[Closure, int, int], ...]
+
+    @classmethod
+    def build(cls, closures: Sequence[Closure]) -> _Plan:
+        """The plan of ``closures``."""
+        frames = list(dict.fromkeys(f for c in closures for f in c.frame_ids))
+        a = np.array([frames.index(c.frame_ids[0]) for c in closures], dtype=int)
+        b = np.array([frames.index(c.frame_ids[1]) for c in closures], dtype=int)
+        rows = np.array([range(c.rows.start, c.rows.start + 3) for c in closures], dtype=int).reshape(-1, 3)
+        angular = tuple((c, int(a[k]), int(b[k])) for k, c in enumerate(closures) if c.spec.type != "point")
+        return cls(tuple(frames), a, b, rows, angular)
+
+
+_PLANS: dict[int, tuple[Sequence[Closure], _Plan]] = {}
+
+
+def _plan(closures: Sequence[Closure]) -> _Plan:
+    """The plan of a closure sequence, built once per sequence object (kept alive with its plan)."""
+    hit = _PLANS.get(id(closures))
+    if hit is not None and hit[0] is closures:
+        return hit[1]
+    plan = _Plan.build(closures)
+    if len(_PLANS) >= 256:  # sequences built on the fly (one leg's closures): bound the cache
+        _PLANS.clear()
+    _PLANS[id(closures)] = (closures, plan)
+    return plan
+
+
 def residual_from_placements(
     data: pin.Data, closures: Sequence[Closure], out: np.ndarray | None = None
 ) -> np.ndarray:
@@ -104,19 +148,23 @@ def residual_from_placements(
     Written into ``out`` (shape (m,)) when given, for solvers that reuse their buffers.
     """
     phi = np.empty(closure_rows(closures)) if out is None else out
+    if not closures:
+        return phi
+    plan = _plan(closures)
     oMf = data.oMf
-    for c in closures:
-        oMa = oMf[c.frame_ids[0]]
-        oMb = oMf[c.frame_ids[1]]
+    H = np.concatenate([oMf[f].homogeneous for f in plan.frames]).reshape(
+        -1, 4, 4
+    )  # cheaper than .translation
+    P = H[:, :3, 3]
+    phi[plan.linear_rows] = P[plan.b] - P[plan.a]
+    for c, ia, ib in plan.angular:
+        Ra, Rb = H[ia, :3, :3], H[ib, :3, :3]
         start, stop = c.rows.start, c.rows.stop
-        phi[start : start + 3] = oMb.translation - oMa.translation
-        kind = c.spec.type
-        if kind == "weld":
-            phi[start + 3 : stop] = pin.log3(oMa.rotation.T @ oMb.rotation)
-        elif kind == "revolute":
+        if c.spec.type == "weld":
+            phi[start + 3 : stop] = pin.log3(Ra.T @ Rb)
+        else:
             assert c.axis is not None and c.normal_basis is not None
-            seen = oMa.rotation.T @ (oMb.rotation @ c.axis)
-            phi[start + 3 : stop] = c.normal_basis.T @ seen
+            phi[start + 3 : stop] = c.normal_basis.T @ (Ra.T @ (Rb @ c.axis))
     return phi
 
 
@@ -141,15 +189,14 @@ def jacobian_from_data(
     Written into ``out`` (shape (m, nv)) when given, for solvers that reuse their buffers.
     """
     J = np.empty((closure_rows(closures), model.nv)) if out is None else out
-    for c in closures:
-        fa, fb = c.frame_ids
-        Ja = pin.getFrameJacobian(model, data, fa, _LWA)  # (6, nv)
-        Jb = pin.getFrameJacobian(model, data, fb, _LWA)
-        start, stop = c.rows.start, c.rows.stop
-        J[start : start + 3] = Jb[:3] - Ja[:3]
-        if c.spec.type != "point":
-            # rows times the world angular velocity of B relative to A
-            J[start + 3 : stop] = angular_rows(c, data) @ (Jb[3:] - Ja[3:])
+    if not closures:
+        return J
+    plan = _plan(closures)
+    Js = np.array([pin.getFrameJacobian(model, data, f, _LWA) for f in plan.frames])  # (n_frames, 6, nv)
+    J[plan.linear_rows] = Js[plan.b, :3] - Js[plan.a, :3]
+    for c, ia, ib in plan.angular:
+        # rows times the world angular velocity of B relative to A
+        J[c.rows.start + 3 : c.rows.stop] = angular_rows(c, data) @ (Js[ib, 3:] - Js[ia, 3:])
     return J
 
 

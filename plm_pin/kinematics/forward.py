@@ -10,7 +10,7 @@ import pinocchio as pin
 
 from .._checks import count, positive
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
-from .assembly import assemble
+from .assembly import assemble, newton
 from .jacobians import require_task
 from .starts import random_starts
 from .task import check_task_vector
@@ -43,8 +43,12 @@ class FKSolution:
 
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
     out = q.copy()
+    joints = mech.model.joints
     for a, value in zip(mech.actuators, c, strict=True):
-        mech.set_joint(out, a.joint, value)
+        if joints[a.joint_id].nq == 1:
+            out[a.idx_q] = value
+        else:  # an unbounded revolute: (cos, sin)
+            mech.set_joint(out, a.joint, value)
     return out
 
 
@@ -72,6 +76,32 @@ def task_pose(mech: Mechanism, q: Any) -> np.ndarray:
     task = require_task(mech)
     pin.framesForwardKinematics(mech.model, mech.data, mech.check_q(q))
     return task.pose_from_data(mech.data)
+
+
+def _close(
+    mech: Mechanism, start: np.ndarray, free: np.ndarray, tol: float
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """Close the loops moving the ``free`` columns: Newton first, LM when it stalls.
+
+    Returns:
+        The configuration (read-only), its largest closure residual and its task pose
+        (empty without a task), from the solver's last Pinocchio pass.
+
+    Raises:
+        ClosureNotSatisfied: when neither reaches ``tol``.
+    """
+    ws = mech._thread_workspace()
+    r_phi, A_phi = ws.closure_rows
+    fast = newton(mech.model, ws.data, mech.closures, start, free, r_phi, A_phi, tol=tol)
+    if fast is None:
+        asm = assemble(mech.model, ws.data, mech.closures, start, free, tol=tol, max_iterations=60)
+        q, residual_norm = asm.q, asm.residual_norm
+        pin.framesForwardKinematics(mech.model, ws.data, q)
+    else:
+        q, residual_norm = fast[0], float(np.max(np.abs(r_phi))) if r_phi.size else 0.0
+        q.setflags(write=False)
+    task = mech.task_compiled
+    return q, residual_norm, task.pose_from_data(ws.data) if task is not None else np.zeros(0)
 
 
 def forward_kinematics(
@@ -116,7 +146,7 @@ def forward_kinematics(
             "determine the configuration"
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    free = mech.free_columns(a.joint for a in mech.actuators)
+    free = np.setdiff1d(np.arange(mech.nv), mech.actuated_v_indices)  # actuators are one-DOF joints
     starts_q = [_with_actuators(mech, q0, c)]
     if all_modes:
         rng = np.random.default_rng(seed)
@@ -125,14 +155,13 @@ def forward_kinematics(
     best = np.inf
     for start in starts_q:
         try:
-            asm = assemble(mech.model, mech.data, mech.closures, start, free, tol=tol, max_iterations=60)
+            q, residual_norm, x = _close(mech, start, free, tol)
         except ClosureNotSatisfied as exc:
             best = min(best, exc.residual_norm)
             continue
-        if any(same_assembly(mech, s.q, asm.q) for s in found):
+        if any(same_assembly(mech, s.q, q) for s in found):
             continue
-        x = task_pose(mech, asm.q) if mech.task_compiled is not None else np.zeros(0)
-        found.append(FKSolution(asm.q, x, asm.residual_norm))
+        found.append(FKSolution(q, x, residual_norm))
         if not all_modes:
             break
     if not found:

@@ -12,17 +12,20 @@ import pinocchio as pin
 
 from .._checks import positive, signs
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
-from .assembly import assemble
+from . import closures as _closures
+from .assembly import assemble, newton
 from .closures import Closure, compile_closures
+from .closures import closure_rows as _closure_rows
 from .forward import same_assembly
 from .jacobians import require_task
-from .legs import working_mode
+from .legs import working_mode_from_data
 from .limits import limit_violations, wrap_into_limits
 from .starts import random_starts
 from .task import TaskTarget, check_task_vector
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
+    from .scratch import Workspace
 
 IK_TOL = 1e-12
 """Default residual tolerance of the inverse kinematics [m, rad]."""
@@ -74,10 +77,26 @@ def _solve(
     tol: float,
     closures: tuple[Closure, ...] | None = None,
 ) -> np.ndarray:
+    """Newton from ``guess`` (:func:`plm_pin.kinematics.assembly.newton`), LM when it stalls.
+
+    Raises:
+        ClosureNotSatisfied: when neither reaches ``tol``.
+    """
+    ws = mech._thread_workspace()
+    chosen = mech.closures if closures is None else closures
+    all_free = free.size == mech.nv
+    if closures is None:
+        r, A = ws.residual, ws.jacobian
+    else:
+        n = _closure_rows(chosen) + target.size
+        r, A = np.empty(n), np.empty((n, mech.nv))
+    fast = newton(mech.model, ws.data, chosen, guess, None if all_free else free, r, A, tol=tol, extra=target)
+    if fast is not None:
+        return fast[0]
     return assemble(
         mech.model,
-        mech.data,
-        mech.closures if closures is None else closures,
+        ws.data,
+        chosen,
         guess,
         free,
         tol=tol,
@@ -87,16 +106,33 @@ def _solve(
 
 
 def _solution(mech: Mechanism, target: TaskTarget, q: np.ndarray) -> IKSolution:
-    q = wrap_into_limits(mech, q)
-    pin.framesForwardKinematics(mech.model, mech.data, q)
-    res = np.concatenate([mech.closure_residual(q), target.residual(mech.data)])
+    """The solution at ``q``: residual, actuators and working mode from one Pinocchio pass."""
+    ws = mech._thread_workspace()
+    pin.computeJointJacobians(mech.model, ws.data, q)
+    pin.updateFramePlacements(mech.model, ws.data)
+    return _solution_from_workspace(mech, target, q, ws)
+
+
+def _solution_from_workspace(
+    mech: Mechanism, target: TaskTarget, q: np.ndarray, ws: Workspace, residual_ready: bool = False
+) -> IKSolution:
+    """The solution at ``q`` from the joint Jacobians and placements already in ``ws.data``.
+
+    With ``residual_ready``, ``ws.residual`` already holds the residual at ``q`` (Newton's last pass).
+    """
+    r_phi, A_phi = ws.closure_rows
+    r_x, A_x = ws.task_rows
+    if not residual_ready:
+        _closures.residual_from_placements(ws.data, mech.closures, r_phi)
+        target.residual(ws.data, r_x)
+    _closures.jacobian_from_data(mech.model, ws.data, mech.closures, A_phi)
+    target.task.jacobian_from_data(mech.model, ws.data, A_x)
+    mode = working_mode_from_data(mech.model, ws.data, mech.closures, target.task, mech.legs)
+    residual_norm = float(np.max(np.abs(ws.residual)))
+    q = wrap_into_limits(mech, np.asarray(q))  # 2 pi shifts: same placements, same mode
+    q.setflags(write=False)
     return IKSolution(
-        q,
-        target.x.copy(),
-        mech.actuator_positions(q),
-        working_mode(mech, q),
-        float(np.max(np.abs(res))),
-        limit_violations(mech, q),
+        q, target.x.copy(), mech.actuator_positions(q), mode, residual_norm, limit_violations(mech, q)
     )
 
 
@@ -112,9 +148,11 @@ def inverse_kinematics(
 ) -> IKSolution:
     """Solve the inverse kinematics at task coordinates ``x``.
 
-    Newton (Levenberg-Marquardt) on the closures plus the task rows from ``guess``; the
-    solution is the one in the guess's basin, normally its working mode. With ``mode``
-    the working mode is imposed: all modes are enumerated and the matching one returned.
+    Newton on the closures plus the task rows from ``guess`` (Cholesky steps of the normal
+    equations, Levenberg-Marquardt only when Newton stalls); the solution is the one in the
+    guess's basin, normally its working mode. With ``mode`` the working mode is imposed: the
+    solution from the guess is returned when its signs match, otherwise all modes are
+    enumerated and the matching one returned.
 
     Args:
         mech: the mechanism (its task gives the meaning of ``x``).
@@ -152,30 +190,63 @@ def inverse_kinematics(
         n_square = sum(leg.square for leg in mech.legs)
         if len(mode) != n_square or any(m not in (-1, 1) for m in mode):
             raise InvalidInput(f"mode must hold {n_square} signs (+1 or -1), one per leg; got {mode!r}")
+        first = _from_guess(mech, target, guess, tol)
+        if first is not None and first.mode == tuple(mode):
+            return _within_limits(mech, first, respect_limits)
         for sol in working_modes(mech, xa, guess=guess, tol=tol):
             if sol.mode == tuple(mode):
-                return sol
+                return _within_limits(mech, sol, respect_limits)
         raise PoseUnreachable(
             f"{mech.name}: no inverse-kinematics solution in working mode {tuple(mode)} at x = {xa.tolist()}"
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    try:
-        q = _solve(mech, target, q0, np.arange(mech.nv), tol)
-    except ClosureNotSatisfied:
-        if not explain:
-            raise PoseUnreachable(
-                f"{mech.name}: pose {xa.tolist()} could not be solved from this guess"
-            ) from None
-        raise _unreachable(mech, target, q0, tol) from None
-    sol = _solution(mech, target, q)
+    solution = _from_guess(mech, target, q0, tol)
+    if solution is not None:
+        return _within_limits(mech, solution, respect_limits)
+    if not explain:
+        raise PoseUnreachable(f"{mech.name}: pose {xa.tolist()} could not be solved from this guess")
+    raise _unreachable(mech, target, q0, tol)
+
+
+def _within_limits(mech: Mechanism, sol: IKSolution, respect_limits: bool) -> IKSolution:
+    """``sol``, refused with ``respect_limits`` when it puts joints outside their limits."""
     if respect_limits and sol.limit_violations:
         raise JointLimitExceeded(
-            f"{mech.name}: pose {xa.tolist()} closes the loops only with joints outside their limits: "
+            f"{mech.name}: pose {sol.x.tolist()} closes the loops only with joints outside their limits: "
             + ", ".join(f"{k} by {v:.3g}" for k, v in sol.limit_violations.items()),
             dict(sol.limit_violations),
             sol.q,
         )
     return sol
+
+
+def _from_guess(mech: Mechanism, target: TaskTarget, guess: Any, tol: float) -> IKSolution | None:
+    """The solution in the basin of ``guess`` (default: the reference configuration), or None.
+
+    Newton first; its last Pinocchio pass gives the residual, the actuators and the working
+    mode of the solution. Levenberg-Marquardt when Newton stalls.
+    """
+    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
+    ws = mech._thread_workspace()
+    fast = newton(
+        mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
+    )
+    if fast is not None:
+        return _solution_from_workspace(mech, target, fast[0], ws, residual_ready=True)
+    try:
+        q = assemble(
+            mech.model,
+            ws.data,
+            mech.closures,
+            q0,
+            np.arange(mech.nv),
+            tol=tol,
+            max_iterations=60,
+            extra=target,
+        ).q
+    except ClosureNotSatisfied:
+        return None
+    return _solution(mech, target, q)
 
 
 def _solve_leg(

@@ -7,12 +7,18 @@ links are uniform bars of ``density`` [kg/m] with centroidal inertia :math:`m L^
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
-import yourdfpy
 
+from .._lazy import lazy_module
 from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from . import _urdf as u
+
+if TYPE_CHECKING:
+    import yourdfpy
+else:
+    yourdfpy = lazy_module("yourdfpy")
 
 
 def _bar(name: str, length: float, density: float) -> yourdfpy.Link:

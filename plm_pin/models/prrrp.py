@@ -20,12 +20,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-import yourdfpy
-
+from .._lazy import lazy_module
 from ..description.compliance import assumed_drive_stiffness
 from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from . import _urdf as u
+
+if TYPE_CHECKING:
+    import yourdfpy
+else:
+    yourdfpy = lazy_module("yourdfpy")
 
 LEFT_LEGS = (1, 2)
 RIGHT_LEGS = (3, 4)

@@ -80,14 +80,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
-import yourdfpy
 
+from .._lazy import lazy_module
 from ..description.compliance import assumed_drive_stiffness
 from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from . import _urdf as u
+
+if TYPE_CHECKING:
+    import yourdfpy
+else:
+    yourdfpy = lazy_module("yourdfpy")
 
 Vec3 = tuple[float, float, float]
 

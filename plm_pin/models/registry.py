@@ -8,10 +8,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import yourdfpy
-
+from .._lazy import lazy_module
 from ..description.sidecar import Sidecar
 from . import pss
 from .classic import build_fivebar, build_fourbar
@@ -19,7 +18,12 @@ from .prrrp import build_2prrrp, rod_scaled
 from .pss import build_pss
 from .star_triangle import build_star_triangle
 
-Builder = Callable[..., tuple[yourdfpy.Robot, Sidecar]]
+if TYPE_CHECKING:
+    import yourdfpy
+else:
+    yourdfpy = lazy_module("yourdfpy")
+
+Builder = Callable[..., "tuple[yourdfpy.Robot, Sidecar]"]
 
 
 @dataclass(frozen=True)

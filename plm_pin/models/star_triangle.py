@@ -75,12 +75,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import yourdfpy
 
+from .._lazy import lazy_module
 from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from . import _urdf as u
+
+if TYPE_CHECKING:
+    import yourdfpy
+else:
+    yourdfpy = lazy_module("yourdfpy")
 
 ALPHA = 2.0 * math.pi / 3.0
 """Angle between two lines of the star, :math:`\\alpha_i` [rad]."""

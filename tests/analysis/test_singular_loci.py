@@ -191,3 +191,31 @@ def test_custom_path_and_bad_samples():
     assert len(points) == 1 and abs(points[0].parameter - 1.0) < 1e-9
     with pytest.raises(InvalidInput, match="t must be an increasing 1-D array"):
         singular_points(mech, path, [0.0, 0.0, 1.0])
+
+
+def test_3d3m_flipped_plate_arc_is_reseeded_in_the_same_working_mode():
+    """Over a full turn at y = 0.10 m, both arcs of |sin theta| <= (l - y)/r_t are found, with four edges.
+
+    The continuation starts on the upright arc; the flipped-plate arc (around 180 deg) is cut off
+    from it by poses no leg reaches, so it must be seeded again, in the same working mode: its
+    edges at 180 deg - asin((y - l)/r_t) and its mirror are boundaries too, and the sweep's
+    actuators there are eq. (2) with the paper's signs (M.5).
+    """
+    mech = preset("harada2011_3d3m")
+    y = 0.10
+    thetas = np.radians(np.linspace(-180.0, 180.0, 721))
+    points = singular_points_along(mech, "rz", thetas, (0.0, y, 0.0))
+    t1 = math.asin((y - L) / RT)  # eq. (11.2): the left pair at L_y = l
+    edges = sorted([t1, -t1, math.pi - t1 - 2 * math.pi, math.pi + t1])  # wrapped to (-pi, pi]
+    found = sorted(p.parameter for p in points if p.method == "boundary")
+    assert np.allclose(found, edges, atol=TOL, rtol=0.0), (np.degrees(found), np.degrees(edges))
+    sweep = workspace_sweep(mech, "rz", thetas, (0.0, y, 0.0))
+    s = np.abs(np.sin(thetas))
+    inside, outside = s < (L - y) / RT - 1e-9, s > (L - y) / RT + 1e-9
+    assert sweep.reachable[inside].all() and not sweep.reachable[outside].any()
+    assert set(map(tuple, sweep.mode[sweep.reachable])) == {sweep.working_mode}
+    flipped = np.flatnonzero(inside & (np.abs(thetas) > math.pi / 2))
+    assert flipped.size > 50
+    expected = np.array([paper.slider_positions((0.0, y, thetas[k]), L, RT, (1, 2, 4)) for k in flipped])
+    err = np.abs(sweep.actuators[flipped] - expected).max(axis=1)
+    assert err.max() < 1e-11, err.max()  # IK residual 1e-12 times the conditioning, as on the upright arc

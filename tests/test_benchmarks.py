@@ -1,0 +1,55 @@
+"""The benchmark's floors and closed form (plm_pin/benchmarks.py) compute what the paths they time compute."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from analyses import _harada2011_paper as paper
+from plm_pin.analysis import manipulability, workspace_map
+from plm_pin.benchmarks import Floor, _timing_line, harada_closed_form_map
+from plm_pin.kinematics import closed_chain_jacobians, forward_kinematics, inverse_kinematics, task_pose
+from plm_pin.models import PRESETS
+from tests.conftest import preset
+
+
+def test_floor_solves_and_measures_like_plm_pin():
+    """The floor's IK, FK, closure singular values and manipulability equal plm_pin's on the 3D4M."""
+    mech = preset("harada2011_3d4m")
+    floor = Floor(mech)
+    q = mech.q_ref
+    x = task_pose(mech, q) + 1e-3
+    ik = inverse_kinematics(mech, x, q).q
+    assert np.abs(floor.ik(q, x) - ik).max() < 1e-13
+    c = mech.actuator_positions(ik)
+    assert np.abs(floor.fk(q, c) - forward_kinematics(mech, c, q, all_modes=False)[0].q).max() < 1e-13
+    _, s, _, _ = floor.jacobians(q)
+    assert np.allclose(s, closed_chain_jacobians(mech, q).closure_singular_values, atol=1e-14)
+    w, cond = floor.manipulability(q)
+    ref = manipulability(mech, q)
+    assert math.isclose(w, ref.w, rel_tol=1e-12) and math.isclose(cond, ref.condition_number, rel_tol=1e-12)
+
+
+def test_closed_form_map_is_harada_eq_13_and_matches_the_map():
+    """The vectorised closed form equals the paper module's eq. (12) J_ce, and workspace_map's w, to 1e-10."""
+    mech = preset("harada2011_3d4m")
+    p = PRESETS["harada2011_3d4m"].parameters
+    l, rt = p["rod_lengths"][0], p["half_plate"]
+    values = (np.linspace(-0.05, 0.05, 7), np.linspace(0.03, 0.11, 6))
+    result = workspace_map(mech, ("x", "y"), values, (0.0, 0.08, math.radians(-20.0)))
+    poses = result.poses().reshape(-1, 3)
+    w = harada_closed_form_map(poses, l, rt, (-1, 1, -1, 1))
+    for pose, wk in zip(poses[::5], w[::5], strict=True):
+        J = paper.J_ce(pose, paper.slider_positions(pose, l, rt, (1, 2, 3, 4)), l, rt, (1, 2, 3, 4))
+        assert math.isclose(wk, math.sqrt(np.linalg.det(J.T @ J)), rel_tol=1e-10)
+    assert result.reachable.all()
+    assert np.allclose(w, result.manipulability.reshape(-1), rtol=1e-10, atol=0.0)
+
+
+def test_timing_line_prints_the_floor_and_the_ratio():
+    """A row with a floor shows it and the ratio; one without shows dashes."""
+    row = {"mechanism": "m", "case": "c", "seconds_per_call": 3e-4, "floor_seconds_per_call": 2e-4}
+    assert _timing_line(row) == "| m | c | 300.0 us | 200.0 us | 1.50 |"
+    bare = {"mechanism": "m", "case": "c", "seconds_per_call": 2.5}
+    assert _timing_line(bare) == "| m | c | 2.50 s | - | - |"
