@@ -152,4 +152,8 @@ def test_local_default_starts_a_cluster_for_large_sweeps_with_the_same_results(
     result = sweep(**small(), chunk=1, workers=2, store=tmp_path / "store")
     assert started == [(2, tmp_path / "store")]
     xr.testing.assert_identical(result.dataset, reference.dataset)
-    assert sorted(p.name for p in (tmp_path / "store").iterdir()) == ["chunks", "manifest.json"]
+    assert sorted(p.name for p in (tmp_path / "store").iterdir()) == [
+        ".lock",
+        "chunks",
+        "manifest.json",
+    ]  # .lock: the store lock (filelock)
