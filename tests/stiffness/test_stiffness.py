@@ -120,7 +120,8 @@ def test_idle_leg_spins_are_left_out(tmp_path):
     res = stiffness(mech, mech.q_ref, gravity=False, compliance=_drives(mech, k))
     want = _griffis_duffy(mech, mech.q_ref, k, np.zeros(6))
     np.testing.assert_allclose(res.K_x, want, rtol=0, atol=1e-9 * np.abs(want).max())
-    assert res.idle == 5
+    assert res.idle == 5  # held by the mechanism's gauges
+    assert res.unresisted == 0
 
 
 def test_preloaded_3d4m_matches_potential_minimisation():
