@@ -96,9 +96,7 @@ FOURBAR_URDF = f"""<robot name="fourbar_hand">
 
 GUESS = {"crank_pivot": 1.05, "coupler_pivot": -0.58, "rocker_pivot": 1.70 - math.pi / 2}
 
-FOURBAR_SIDECAR = (
-    f"format: plm-pin/1\nend_effector: {{frame: rocker_tip, task: [rz]}}\nreference: {GUESS}\n"
-)
+FOURBAR_SIDECAR = f"format: plm-pin/1\nend_effector: {{frame: rocker_tip, task: [rz]}}\nreference: {GUESS}\n"
 
 URDF_SIDECAR_FOURBAR = (
     "format: plm-pin/1\ngravity: [0, -9.81, 0]\n"
