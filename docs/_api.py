@@ -27,6 +27,8 @@ PACKAGES = {
     "force capability.",
     "plm_pin.dynamics": "Trajectories on the closure manifold, inverse dynamics, power and work, task-space "
     "dynamics, decoupling, simulation.",
+    "plm_pin.stiffness": "Elastostatics of closed chains: compliant model (virtual joints), Cartesian "
+    "stiffness, deflection, natural frequencies, stiffness maps.",
     "plm_pin.sweep": "Design sweeps, local or on Dask, with checkpoints.",
     "plm_pin.viz": "matplotlib figures and meshcat scenes.",
     "plm_pin.report": "Studies and their reports.",

@@ -99,8 +99,13 @@ class Mechanism:
         name: str,
         source: str = "",
         visual_factory: Callable[[], pin.GeometryModel] | None = None,
+        idle_gauges: tuple[IdleGauge, ...] | None = None,
     ) -> None:
-        """Wrap a Pinocchio model and a validated sidecar (use :func:`plm_pin.load`)."""
+        """Wrap a Pinocchio model and a validated sidecar (use :func:`plm_pin.load`).
+
+        ``idle_gauges`` holds these gauges (their frames already in ``model``) instead of
+        detecting the idle mobilities, for a model derived from a mechanism's own.
+        """
         self.name = name
         self.model = model
         self.sidecar = sidecar
@@ -108,6 +113,8 @@ class Mechanism:
         self._local = threading.local()  # per-thread scratch data (not pickled)
         self._visual_factory = visual_factory
         self._assembled_guess: np.ndarray | None = None
+        if idle_gauges is not None:
+            self.__dict__["idle_gauges"] = idle_gauges  # fills the cached property
         actuators = []
         for spec in sidecar.actuation:
             jid = model.getJointId(spec.joint)

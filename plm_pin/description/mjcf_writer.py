@@ -16,6 +16,9 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   re-import reads them as two point closures: 6 rows of rank 5). Every equality gets
   ``solref = (2 timestep, 1)``, the stiffest MuJoCo allows at that step, and
   ``solimp = (0.99, 0.999, 0.001)``.
+- **Idle gauges** (:mod:`plm_pin.kinematics.idle`) are a plm_pin analysis device, not part
+  of the mechanism: neither their welds nor their frames are written. MuJoCo simulates the
+  idle spins as the motions they are, and a re-import detects and holds them again.
 - **Actuation**: a ``motor`` per driven joint (gear 1), ``ctrlrange`` and ``forcerange`` the
   effort limits; the joint ``armature`` is the model's, reflected rotor and screw inertia
   included; lead, rotor and screw inertia kept as ``<custom><numeric>`` data
@@ -174,6 +177,9 @@ class _Writer:
         self.last_of_group: dict[int, int] = {}  # joint -> last joint of its body
         self.site_names: dict[int, str] = {}  # frame id -> site name
         self.body_names: set[str] = set()
+        gauges = {g.closure.name for g in mech.idle_gauges}
+        self.closures_out = tuple(c for c in mech.closures if c.name not in gauges)
+        self.gauge_frames = {fid for c in mech.closures if c.name in gauges for fid in c.frame_ids}
 
     def _body_name(self, j: int) -> str:
         from ..mechanism import body_name
@@ -266,7 +272,7 @@ class _Writer:
         return name
 
     def frames(self, world: etree._Element) -> None:
-        """Sites: every body and operational frame, and the closure frames (own body frames too)."""
+        """Sites: body and operational frames but the gauges', closure frames (own body frames too)."""
         from ..mechanism import body_name
 
         model = self.model
@@ -279,13 +285,15 @@ class _Writer:
             and f.name == body_name(model, f.parentJoint)
             and f.placement.isIdentity()
         }
-        closing = {fid for c in self.mech.closures for fid in c.frame_ids}
+        closing = {fid for c in self.closures_out for fid in c.frame_ids}
         task = self.mech.task_frame_id
         for i, f in enumerate(model.frames):
             if i in closing or i == task:
                 if i not in own or i in closing:
                     self.site(world, i, "frame", "" if f.type in plain and i not in own and i else "_site")
-            elif f.type in plain and i and i not in own and not self._merged(i):
+            elif (
+                f.type in plain and i and i not in own and i not in self.gauge_frames and not self._merged(i)
+            ):
                 self.site(world, i, "frame")
 
     def visuals(self, world: etree._Element, asset: etree._Element) -> None:
@@ -350,7 +358,7 @@ class _Writer:
     def closures(self, world: etree._Element, equality: etree._Element) -> None:
         solref = _fmt([2.0 * self.timestep, 1.0])
         common = {"solref": solref, "solimp": _fmt(SOLIMP)}
-        for c in self.mech.closures:
+        for c in self.closures_out:
             a, b = (self.site(world, fid, "closure frame") for fid in c.frame_ids)
             kind = c.spec.type
             if kind == "weld":

@@ -18,7 +18,7 @@ motions span the null space of :math:`O N`, :math:`O` stacking these rows and :m
 basis of the feasible motions.
 
 Their *gauge* is fixed by holding one one-DOF joint per idle mobility at its reference
-value, chosen by a column-pivoted QR of the idle basis so that the held joints block every
+value, chosen by a column-pivoted QR (Gram-Schmidt) of the idle basis so that the held joints block every
 idle motion. Each held joint becomes a weld closure ``idle:<joint>`` between two frames
 added to the model (``idle_gauge_<joint>_parent`` on the parent body at the joint's
 reference placement, ``idle_gauge_<joint>_child`` at the joint): its one non-zero rotation
@@ -33,7 +33,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-import scipy.linalg
 
 from ..description.sidecar import ClosureSpec
 from ..exceptions import ClosureNotSatisfied
@@ -48,6 +47,9 @@ IDLE_RTOL = 1e-8
 
 GAUGE_MIN_PIVOT = 1e-3
 """Smallest share of an idle motion a held joint must carry for it to fix that motion."""
+
+GAUGE_TIE_RTOL = 1e-9
+"""Relative difference below which two joints' shares of the idle motions count as equal."""
 
 GAUGE_PREFIX = "idle:"
 """Name prefix of the gauge closures."""
@@ -125,22 +127,31 @@ def idle_motions(
 def gauge_joints(model: pin.Model, K: np.ndarray) -> list[int]:
     """Joint ids of one-DOF joints whose velocities block the idle motions ``K`` (nv, n_idle).
 
-    Column-pivoted QR of the one-DOF rows of ``K``: the joint carrying the largest share of
-    the idle motions first, then the one carrying most of what is left. Fewer joints than
-    idle motions come back when no more one-DOF joint takes a share above
-    :data:`GAUGE_MIN_PIVOT`.
+    Column-pivoted Gram-Schmidt (the pivoting of a QR) on the one-DOF rows of ``K``: the
+    joint carrying the largest share of the idle motions first, then the one carrying most
+    of what is left. Shares equal to :data:`GAUGE_TIE_RTOL` (symmetric legs) go to the first
+    joint by name, and the joints come back in the order of their names, so that the
+    gauges depend on rounding no more than on the tree order (a model exported and read
+    back holds the same joints in the same order). Fewer joints than idle motions come back
+    when no more one-DOF joint takes a share above :data:`GAUGE_MIN_PIVOT`.
     """
-    candidates = [j for j in range(1, model.njoints) if model.joints[j].nv == 1]
+    candidates = sorted(
+        (j for j in range(1, model.njoints) if model.joints[j].nv == 1), key=lambda j: str(model.names[j])
+    )
     if not candidates or K.shape[1] == 0:
         return []
     rows = K[[model.joints[j].idx_v for j in candidates]]  # (n_cand, n_idle)
-    _, R, piv = scipy.linalg.qr(rows.T, pivoting=True)
     chosen = []
-    for k in range(min(K.shape[1], len(candidates))):
-        if abs(R[k, k]) < GAUGE_MIN_PIVOT:
+    for _ in range(min(K.shape[1], len(candidates))):
+        share = np.linalg.norm(rows, axis=1)
+        best = float(share.max())
+        if best < GAUGE_MIN_PIVOT:
             break
-        chosen.append(candidates[int(piv[k])])
-    return chosen
+        k = int(np.flatnonzero(share >= best * (1.0 - GAUGE_TIE_RTOL))[0])
+        chosen.append(candidates[k])
+        u = rows[k] / share[k]
+        rows = rows - np.outer(rows @ u, u)  # what the chosen joint leaves of each share
+    return sorted(chosen, key=lambda j: str(model.names[j]))
 
 
 def add_gauges(model: pin.Model, q: np.ndarray, joints: Sequence[int]) -> tuple[IdleGauge, ...]:

@@ -8,8 +8,11 @@ with :math:`T = J_x N`, so that the task compliance and stiffness are
 
 .. math:: C_x = T H_N^{-1} T^T, \qquad K_x = C_x^{-1}.
 
-Motions no spring resists and the task does not see (the spin of an S-S strut about its
-axis) are left out first; a task motion no spring resists is refused. With rigid links and
+The idle mobilities of the mechanism (the spin of an S-S strut about its axis) are held by
+its gauge closures (:mod:`plm_pin.kinematics.idle`), so :math:`N` does not contain them.
+Other motions no spring resists and the task does not see (an unsprung passive mobility
+away from the task, without gravity) are left out; a task motion no spring resists is
+refused. With rigid links and
 as many task coordinates as DOF, :math:`K_x = T^{-T} H_N T^{-1} = J_{ce}^T K_a J_{ce}` plus
 the geometric terms (Griffis and Duffy). The share of each source,
 :math:`K_x^{(s)} = \Sigma^T H_N^{(s)} \Sigma` with :math:`\Sigma = H_N^{-1} T^T K_x` (the
@@ -41,7 +44,7 @@ if TYPE_CHECKING:
 RANK_RTOL = 1e-10
 """Singular values of the constraint rows below this fraction of the largest count as zero."""
 
-IDLE_RTOL = 1e-9
+UNRESISTED_RTOL = 1e-9
 """Eigenvalues of :math:`H_N` below this fraction of the largest are motions no spring resists."""
 
 
@@ -104,7 +107,9 @@ class StiffnessResult:
         basis: compliant-model motions kept, :math:`v = B s`, shape (nv_c, r).
         H: Hessian of the potential on them, shape (r, r).
         T: task rates per motion, shape (n_task, r).
-        idle: number of motions no spring resists and the task does not see (left out).
+        idle: idle mobilities of the mechanism, held by its gauges (left out; see
+            :attr:`plm_pin.mechanism.Mechanism.idle_mobility`).
+        unresisted: other motions no spring resists and the task does not see (left out).
         state: the equilibrium.
     """
 
@@ -121,6 +126,7 @@ class StiffnessResult:
     H: np.ndarray
     T: np.ndarray
     idle: int
+    unresisted: int
     state: ElasticState
 
     @property
@@ -159,6 +165,7 @@ class StiffnessResult:
             "contributions": {k: v.tolist() for k, v in self.contributions.items()},
             "f_c": self.f_c.tolist(),
             "idle_motions": self.idle,
+            "unresisted_motions": self.unresisted,
         }
 
 
@@ -172,11 +179,11 @@ def null_basis(A: np.ndarray, nv: int, rtol: float = RANK_RTOL) -> np.ndarray:
 
 
 def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, np.ndarray], int]:
-    r"""Motions kept, task rates, Hessian and its terms on them, and the number of idle motions.
+    r"""Motions kept, task rates, Hessian and its terms on them, and the number of unresisted motions.
 
     Returns:
         ``B`` (nv_c, r), ``T`` (n_task, r), ``H`` (r, r), the terms of ``H`` (each (r, r)) and
-        the idle count.
+        the number of motions left out (no spring resists them, the task does not see them).
 
     Raises:
         SingularConfiguration: a task motion that no spring resists.
@@ -190,17 +197,17 @@ def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, d
     H = sum(terms.values(), np.zeros((N.shape[1], N.shape[1])))
     mu, Z = np.linalg.eigh(0.5 * (H + H.T))
     scale = max(float(np.max(np.abs(mu), initial=0.0)), 1e-300)
-    idle = np.abs(mu) <= IDLE_RTOL * scale
-    if idle.any():
-        seen = np.linalg.norm(T @ Z[:, idle], axis=0)
+    free = np.abs(mu) <= UNRESISTED_RTOL * scale
+    if free.any():
+        seen = np.linalg.norm(T @ Z[:, free], axis=0)
         if np.max(seen) > 1e-8 * max(float(np.linalg.norm(T)), 1e-300):
             raise SingularConfiguration(
                 f"{cm.rigid.name}: {int(np.count_nonzero(seen > 1e-8 * np.linalg.norm(T)))} task motion(s) "
                 "resisted by no spring (zero stiffness): every drive that holds the task needs a stiffness "
                 "under compliance.actuators, or the pose is singular"
             )
-    Y = Z[:, ~idle]
-    return N @ Y, T @ Y, Y.T @ H @ Y, {k: Y.T @ v @ Y for k, v in terms.items()}, int(np.count_nonzero(idle))
+    Y = Z[:, ~free]
+    return N @ Y, T @ Y, Y.T @ H @ Y, {k: Y.T @ v @ Y for k, v in terms.items()}, int(np.count_nonzero(free))
 
 
 def _eigen(C: np.ndarray, idx: list[int], dofs: tuple[str, ...], unit: str) -> EigenStiffness:
@@ -252,7 +259,7 @@ def stiffness(
     state = elastic_state(
         mech, q, wrench, frame, gravity=gravity, internal=internal, forces=forces, compliance=compliance
     )
-    B, T, H, terms, idle = condense(state)
+    B, T, H, terms, unresisted = condense(state)
     C = T @ np.linalg.solve(H, T.T)
     s = np.linalg.svd(C, compute_uv=False)
     if s.size == 0 or s[-1] <= 1e-12 * s[0]:
@@ -282,6 +289,7 @@ def stiffness(
         basis=B,
         H=H,
         T=T,
-        idle=idle,
+        idle=mech.idle_mobility,
+        unresisted=unresisted,
         state=state,
     )

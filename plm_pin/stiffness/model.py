@@ -8,6 +8,9 @@ stiffness :math:`K_v = C^{-1}` of the beam's tip compliance
 (:meth:`~plm_pin.description.compliance.BeamSpec.tip_compliance`). At zero deflection the
 compliant model coincides with the rigid one. The virtual bodies are massless.
 
+The compliant model holds the mechanism's idle gauges (:mod:`plm_pin.kinematics.idle`):
+its closures, and so the cut-joint forces of a static solution, are the mechanism's.
+
 A drive with a stiffness :math:`k` is a spring along its joint; a drive without one is
 rigid and its joint is locked. Passive joints may carry springs too.
 """
@@ -144,10 +147,13 @@ def _build(mech: Mechanism, spec: ComplianceSpec) -> CompliantModel:
                 f"{mech.name}: compliance.joints names {name!r}, not a passive joint; passive: {passive}"
             )
         _one_dof(mech, name)
+    gauges = mech.idle_gauges  # their frames are in the model before it is copied
     beams = [_place_beam(mech, b) for b in spec.links]
     if beams:
         model, q_index, v_index, first_v = _insert_virtual_joints(mech.model, beams)
-        cmech = Mechanism(model, mech.sidecar, name=f"{mech.name}_compliant", source=mech.source)
+        cmech = Mechanism(
+            model, mech.sidecar, name=f"{mech.name}_compliant", source=mech.source, idle_gauges=gauges
+        )
     else:
         cmech, q_index, v_index, first_v = mech, np.arange(mech.nq), np.arange(mech.nv), []
     nv = cmech.nv

@@ -1,4 +1,4 @@
-"""The README's reliability section gives the counts this suite really tries (recomputed here)."""
+"""The reliability page of the guide gives the counts this suite really tries (recomputed here)."""
 
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ CLASSES = {
     "test_api_arguments.py": "API argument types and values",
     "test_faults.py": "faults (killed report swaps, sweep locks, corrupt checkpoints)",
 }
-"""The module of each class of the robustness suite, as the README names it."""
+"""The module of each class of the robustness suite, as docs/guide/reliability.md names it."""
 
 COLLECT = r"""
 import json, sys, pytest
@@ -46,7 +46,7 @@ def suite_counts() -> dict[str, tuple[int, int]]:
 
 
 def readme_rows(counts: dict[str, tuple[int, int]]) -> list[str]:
-    """The README table rows the counts give (variants = cases + property tests x EXAMPLES)."""
+    """The reliability table rows the counts give (variants = cases + property tests x EXAMPLES)."""
     rows = []
     for module, label in CLASSES.items():
         cases, props = counts[module]
@@ -56,17 +56,17 @@ def readme_rows(counts: dict[str, tuple[int, int]]) -> list[str]:
 
 @pytest.mark.slow
 def test_the_readme_counts_are_the_suites():
-    """Each row of the README's reliability table matches what pytest collects in tests/robustness."""
+    """Each row of the guide's reliability table matches what pytest collects in tests/robustness."""
     counts = suite_counts()
     assert set(counts) - {"test_readme_counts.py"} == set(CLASSES)
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    page = (REPO / "docs" / "guide" / "reliability.md").read_text(encoding="utf-8")
     for row in readme_rows(counts):
-        assert row in readme, row
+        assert row in page, row
     total = sum(c + p * EXAMPLES for m, (c, p) in counts.items() if m in CLASSES)
-    assert re.search(rf"\b{total} variants\b", readme), total
+    assert re.search(rf"\b{total} variants\b", page), total
 
 
-if __name__ == "__main__":  # print the rows for the README
+if __name__ == "__main__":  # print the rows for docs/guide/reliability.md
     found = suite_counts()
     print("\n".join(readme_rows(found)))
     print(sum(c + p * EXAMPLES for m, (c, p) in found.items() if m in CLASSES), "variants")

@@ -159,6 +159,17 @@ SIDECARS = [
         False,
     ),
     ("name as a number", _fourbar(name=3), False),
+    (
+        "self-collision: a body pair ignored",
+        _fourbar(self_collision={"ignore": [["crank", "coupler"]]}),
+        True,
+    ),
+    (
+        "self-collision: a pair of three bodies",
+        _fourbar(self_collision={"ignore": [["crank", "coupler", "rocker"]]}),
+        False,
+    ),
+    ("self-collision: an unknown key", _fourbar(self_collision={"ignore": [], "margin": 0.01}), False),
 ]
 """(case, sidecar, valid): each checked by the schema, by the parser and by ``plm-pin check``."""
 
@@ -203,7 +214,7 @@ def _valid_keys(data: dict[str, Any]) -> list[str]:
 
 
 def test_sidecar_schema_lists_the_keys_the_parser_accepts():
-    """Top-level, closure, actuator and end-effector keys: the schema's and the parser's are the same."""
+    """Top-level, closure, actuator, end-effector and self-collision keys: schema and parser agree."""
     schema = load_schema("sidecar")
     defs = schema["$defs"]
     assert sorted(schema["properties"]) == _valid_keys(_fourbar(zzz=1))
@@ -211,6 +222,8 @@ def test_sidecar_schema_lists_the_keys_the_parser_accepts():
     assert sorted(defs["actuator"]["properties"]) == _valid_keys(_actuator(zzz=1))
     ee = _fourbar(end_effector={"frame": "rocker", "task": ["rz"], "zzz": 1})
     assert sorted(defs["end_effector"]["properties"]) == _valid_keys(ee)
+    sc = _fourbar(self_collision={"ignore": [], "zzz": 1})
+    assert sorted(defs["self_collision"]["properties"]) == _valid_keys(sc)
 
 
 SWEEP = yaml.safe_load(

@@ -140,10 +140,18 @@ def cantilever(
     return plm_pin.load(tmp_path / "cantilever.urdf")
 
 
-def pendulum(tmp_path: Path, mass: float, length: float, inertia: float, k: float, g: float) -> Mechanism:
-    """A bar on a driven hinge about z with a torsional drive spring k, hanging along -y under gravity g."""
+def pendulum(
+    tmp_path: Path, mass: float, length: float, inertia: float, k: float, g: float, flap: bool = False
+) -> Mechanism:
+    """A bar on a driven hinge about z with a torsional drive spring k, hanging along -y under gravity g.
+
+    With ``flap``, a second bar of the same mass hangs on a passive hinge (no spring) at its end.
+    """
     links = [u.link("base"), u.link("bar", mass, (inertia, inertia, inertia), com=(0.0, -length, 0.0))]
     joints = [u.joint("hinge", "revolute", "base", "bar")]
+    if flap:
+        links.append(u.link("flap", mass, (inertia, inertia, inertia), com=(0.0, -length, 0.0)))
+        joints.append(u.joint("flap_hinge", "revolute", "bar", "flap", xyz=(0.0, -2.0 * length, 0.0)))
     data = {
         "format": "plm-pin/1",
         "gravity": [0.0, -g, 0.0],

@@ -120,7 +120,17 @@ def test_idle_leg_spins_are_left_out(tmp_path):
     res = stiffness(mech, mech.q_ref, gravity=False, compliance=_drives(mech, k))
     want = _griffis_duffy(mech, mech.q_ref, k, np.zeros(6))
     np.testing.assert_allclose(res.K_x, want, rtol=0, atol=1e-9 * np.abs(want).max())
-    assert res.idle == 5
+    assert res.idle == 5  # held by the mechanism's gauges
+    assert res.unresisted == 0
+
+
+def test_unsprung_motion_the_task_does_not_see_is_left_out(tmp_path):
+    """A flap on a spring-less hinge, no gravity: its swing is left out (unresisted), K_x is the drive's k."""
+    k = 40.0
+    mech = pendulum(tmp_path, 1.0, 0.2, 1e-3, k, 0.0, flap=True)
+    res = stiffness(mech, mech.q_ref, gravity=False)
+    np.testing.assert_allclose(res.K_x, [[k]], rtol=1e-12)  # rz of the bar is the hinge angle
+    assert (res.idle, res.unresisted) == (0, 1)
 
 
 def test_preloaded_3d4m_matches_potential_minimisation():
