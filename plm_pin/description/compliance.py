@@ -40,14 +40,15 @@ and likewise in z with :math:`I_y` (with the opposite sign of the coupling).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from .._text import short
 from ..exceptions import DescriptionError
+from ._numbers import positive_number
 
 BEAM_KEYS: tuple[str, ...] = ("E", "G", "A", "Iy", "Iz", "J")
 """Section and material constants of a beam link: [Pa], [Pa], [m^2], [m^4], [m^4], [m^4]."""
@@ -148,32 +149,18 @@ def assumed_drive_stiffness(joints: Sequence[str], k: float | None) -> Complianc
     return ComplianceSpec(actuators={j: float(k) for j in joints}, source=ASSUMED)
 
 
-def _positive(value: Any, where: str, path: str | None) -> float:
-    if isinstance(value, str):  # YAML 1.1 reads 1e3 (no dot) as a string
-        try:
-            value = float(value)
-        except ValueError:
-            raise DescriptionError(f"{where} must be a number, got {value!r}", path) from None
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise DescriptionError(f"{where} must be a number, got {value!r}", path)
-    x = float(value)
-    if not (math.isfinite(x) and x > 0.0):
-        raise DescriptionError(f"{where} must be a positive finite number, got {value!r}", path)
-    return x
-
-
 def _springs(raw: Any, where: str, path: str | None) -> dict[str, float]:
     if raw is None:
         return {}
     if not isinstance(raw, Mapping):
         raise DescriptionError(f"{where} must be a mapping of joint name to stiffness", path)
-    return {str(k): _positive(v, f"{where}.{k}", path) for k, v in raw.items()}
+    return {str(k): positive_number(v, f"{where}.{k}", path) for k, v in raw.items()}
 
 
 def _beam(item: Any, i: int, path: str | None) -> BeamSpec:
     where = f"compliance.links[{i}]"
     if not isinstance(item, Mapping):
-        raise DescriptionError(f"{where} must be a mapping, got {item!r}", path)
+        raise DescriptionError(f"{where} must be a mapping, got {short(item)}", path)
     allowed = ("link", "tip", "compliance", "y_axis", *BEAM_KEYS)
     unknown = sorted(set(item) - set(allowed), key=str)
     if unknown:
@@ -182,7 +169,7 @@ def _beam(item: Any, i: int, path: str | None) -> BeamSpec:
     for key in ("link", "tip"):
         value = item.get(key)
         if not isinstance(value, str) or not value:
-            raise DescriptionError(f"{where}.{key} must be a non-empty string, got {value!r}", path)
+            raise DescriptionError(f"{where}.{key} must be a non-empty string, got {short(value)}", path)
         names.append(value)
     given = [k for k in BEAM_KEYS if k in item]
     section = compliance = None
@@ -208,20 +195,22 @@ def _beam(item: Any, i: int, path: str | None) -> BeamSpec:
             raise DescriptionError(
                 f"{where}: missing {missing}; a beam needs {list(BEAM_KEYS)} or 'compliance'", path
             )
-        s = [_positive(item[k], f"{where}.{k}", path) for k in BEAM_KEYS]
+        s = [positive_number(item[k], f"{where}.{k}", path) for k in BEAM_KEYS]
         section = (s[0], s[1], s[2], s[3], s[4], s[5])
     y_axis = None
     if item.get("y_axis") is not None:
         raw = item["y_axis"]
         if not isinstance(raw, (list, tuple)) or len(raw) != 3:
-            raise DescriptionError(f"{where}.y_axis must be a list of 3 numbers, got {raw!r}", path)
+            raise DescriptionError(f"{where}.y_axis must be a list of 3 numbers, got {short(raw)}", path)
         try:
             ax = np.array(raw, dtype=float)
         except (TypeError, ValueError):
-            raise DescriptionError(f"{where}.y_axis must be a list of 3 numbers, got {raw!r}", path) from None
+            raise DescriptionError(
+                f"{where}.y_axis must be a list of 3 numbers, got {short(raw)}", path
+            ) from None
         norm = float(np.linalg.norm(ax))
         if not np.isfinite(norm) or norm < 1e-9:
-            raise DescriptionError(f"{where}.y_axis must be a non-zero vector, got {raw!r}", path)
+            raise DescriptionError(f"{where}.y_axis must be a non-zero vector, got {short(raw)}", path)
         y_axis = (float(ax[0] / norm), float(ax[1] / norm), float(ax[2] / norm))
     return BeamSpec(names[0], names[1], section, compliance, y_axis)
 

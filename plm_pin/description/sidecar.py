@@ -38,6 +38,7 @@ import yaml
 from .._text import short
 from .._yaml import YamlRefused, load_yaml
 from ..exceptions import DescriptionError
+from ._numbers import number
 from .compliance import ComplianceSpec, parse_compliance
 
 FORMAT = "plm-pin/1"
@@ -216,26 +217,12 @@ class Sidecar:
         return yaml.safe_dump(self.to_dict(), sort_keys=False, default_flow_style=None)
 
 
-def _number(value: Any, where: str, path: str | None) -> float:
-    if isinstance(value, str):  # YAML 1.1 reads 1e3 (no dot) as a string
-        try:
-            value = float(value)
-        except ValueError:
-            raise DescriptionError(f"{where} must be a number, got {short(value)}", path) from None
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise DescriptionError(f"{where} must be a number, got {short(value)}", path)
-    x = float(value)
-    if not math.isfinite(x):
-        raise DescriptionError(f"{where} must be finite, got {short(value)}", path)
-    return x
-
-
 def _numbers(value: Any, n: int | None, where: str, path: str | None) -> tuple[float, ...]:
     if not isinstance(value, (list, tuple)):
         raise DescriptionError(f"{where} must be a list of numbers, got {short(value)}", path)
     if n is not None and len(value) != n:
         raise DescriptionError(f"{where} must have {n} numbers, got {len(value)}", path)
-    return tuple(_number(v, f"{where}[{i}]", path) for i, v in enumerate(value))
+    return tuple(number(v, f"{where}[{i}]", path) for i, v in enumerate(value))
 
 
 def _keys(item: Mapping[str, Any], allowed: Sequence[str], where: str, path: str | None) -> None:
@@ -303,12 +290,12 @@ def _actuator(item: Any, i: int, path: str | None) -> ActuatorSpec:
         limits = (lo, hi)
     lead = None
     if item.get("lead") is not None:
-        lead = _number(item["lead"], f"{where}.lead", path)
+        lead = number(item["lead"], f"{where}.lead", path)
         if lead <= 0.0:
             raise DescriptionError(f"{where}.lead must be positive [m/rev], got {lead}", path)
     inertias = []
     for key in ("rotor_inertia", "screw_inertia"):
-        value = _number(item.get(key, 0.0), f"{where}.{key}", path)
+        value = number(item.get(key, 0.0), f"{where}.{key}", path)
         if value < 0.0:
             raise DescriptionError(f"{where}.{key} must be >= 0 [kg m^2], got {value}", path)
         inertias.append(value)
@@ -396,7 +383,7 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         if isinstance(value, (list, tuple)):
             reference[str(joint)] = _numbers(value, None, where, path)
         else:
-            reference[str(joint)] = (_number(value, where, path),)
+            reference[str(joint)] = (number(value, where, path),)
     name = None if data.get("name") is None else _string(data["name"], "name", path)
     source = None if data.get("source") is None else _string(data["source"], "source", path)
     collision_ignore = _collision_ignore(data.get("self_collision"), path)
