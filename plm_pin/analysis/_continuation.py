@@ -672,7 +672,9 @@ def solve_poses(
         return state, None
     target = tuple(int(s) for s in state.mode[index])
     n_workers = _auto_workers(flat.shape[0], shape, workers)  # checks ``workers`` on either path
-    kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 else None
+    ik_rows = ev.m + ev.task.size  # the batched modes read leg blocks of the IK Jacobian only
+    in_ik = all(max(leg.sign_rows) < ik_rows for leg in ev.legs if leg.square)
+    kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 and in_ik else None
     if kin is not None:
         sweep_rows(ev, kin, state, _metrics_for(ev), index, target, tol)
     else:
