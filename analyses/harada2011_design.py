@@ -302,7 +302,8 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
         + (", so redundancy still pays there." if kept4 > kept3 else ", so redundancy gains nothing there.")
         + f" Of the {len(kept)} rows of that table the 3D4M turns further than the 3D3M at {wider}"
         + (
-            f", and at {touching} its fourth carriage already touches a neighbour at theta = 0. "
+            f", and at {touching} the carriage of slider 3, which the 3D3M lacks, already overlaps a "
+            "neighbour at theta = 0. "
             if touching
             else ". "
         )

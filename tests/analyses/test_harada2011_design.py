@@ -110,13 +110,23 @@ def test_collision_free_ranges_are_the_carriage_gaps(result):
 
     table = _table(result, "Rotation half-width without and with self-collision")
     assert len(table.rows) == 15
+    wider = touching = 0
     for ratio, y, free3, kept3, free4, kept4 in table.rows:
-        for free, kept, legs in ((free3, kept3, (1, 2, 4)), (free4, kept4, (1, 2, 3, 4))):
-            expected = halfwidth(L / ratio, y, legs)
-            if expected is None:
-                assert kept is None
-            else:
-                assert kept == pytest.approx(min(free, expected), abs=1e-9)
+        three, four = (
+            None if (h := halfwidth(L / ratio, y, legs)) is None else min(free, h)
+            for free, legs in ((free3, (1, 2, 4)), (free4, (1, 2, 3, 4)))
+        )
+        assert (kept3 is None, kept4 is None) == (three is None, four is None)
+        for kept, expected in ((kept3, three), (kept4, four)):
+            if expected is not None:
+                assert kept == pytest.approx(expected, abs=1e-9)
+        wider += three is not None and four is not None and four > three + 1e-9
+        touching += three is not None and four is None
+    (text,) = [
+        b.text for s in result.sections for b in s.blocks if b.kind == "text" and "Of the 15 rows" in b.text
+    ]
+    assert f"the 3D4M turns further than the 3D3M at {wider}" in text
+    assert (f"and at {touching} the carriage of slider 3" in text) == (touching > 0)
     # the carriages bind: at l : 2 r_t = 2 : 1 and y = 0.084 m the 3D4M stops before its 80 deg
     fig6 = next(row for row in table.rows if row[0] == 4.0 and 0.084 < row[1] < 0.0841)
     assert fig6[4] == pytest.approx(80.0) and fig6[5] < fig6[4]
