@@ -130,3 +130,32 @@ def test_collision_free_ranges_are_the_carriage_gaps(result):
     # the carriages bind: at l : 2 r_t = 2 : 1 and y = 0.084 m the 3D4M stops before its 80 deg
     fig6 = next(row for row in table.rows if row[0] == 4.0 and 0.084 < row[1] < 0.0841)
     assert fig6[4] == pytest.approx(80.0) and fig6[5] < fig6[4]
+
+
+def test_box_fractions_are_eq_2_with_the_carriage_gaps(result):
+    """The box fractions of each rod set are those of eq. (2) and of the carriage gaps.
+
+    Reached: every rod short of normal to the stator (where the sweep stops); collision-free:
+    reached with every two carriages at least a carriage length apart.
+    """
+    length = _carriage_length()
+    poses = list(
+        itertools.product(
+            np.linspace(-0.1, 0.1, 9), np.linspace(0.02, 0.24, 12), np.radians(np.linspace(-60.0, 60.0, 13))
+        )
+    )
+    rods = _table(result, "Rod sets compared")
+    for row in rods.rows:
+        lengths = (
+            (0.17,) * 4 if row[0].startswith("all 0.17") else (0.24, *(float(row[0].split()[-2]),) * 2, 0.24)
+        )
+        reached = free = 0
+        for x, y, theta in poses:
+            pairs = {i: y + (-0.05 if i in (1, 2) else 0.05) * math.sin(theta) for i in (1, 2, 3, 4)}
+            if any(abs(pairs[i]) >= lengths[i - 1] - 1e-9 for i in pairs):
+                continue  # out of reach, or a rod normal to the stator (a reach limit)
+            ik = leg_inverse_kinematics((x, y, theta), lengths, 0.05, (-1, 1, -1, 1), (1, 2, 3, 4))
+            reached += 1
+            free += all(abs(ik[i][0] - ik[k][0]) >= length for i, k in itertools.combinations(ik, 2))
+        assert row[1] == pytest.approx(reached / len(poses), abs=1e-12)
+        assert row[7] == pytest.approx(free / len(poses), abs=1e-12)
