@@ -6,7 +6,8 @@ rods shorter (l1 = l4 = 0.240 m, l2 = l3 = 0.170 m) so that assembly-mode change
 complex singularity of equal rods. This study sweeps, with :func:`plm_pin.sweep`, the ratio
 l / r_t and the height y for both tables, and the inner rod length for the 2015 design, and
 reads off the singularity-free rotation range, the manipulability and the reachable part of
-a workspace box. Every number it states is computed here.
+a workspace box, each also with the carriages' self-collision excluded (sweep metric
+``collision_free``). Every number it states is computed here.
 """
 
 from __future__ import annotations
@@ -296,7 +297,8 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
             if higher
             else ""
         )
-        + "Sliders on one stator cannot pass each other: their carriages, 3 cm long, collide first. The "
+        + f"Sliders on one stator cannot pass each other: their carriages, {CARRIAGE_SIZE[0] * 100:.0f} cm "
+        "long, collide first. The "
         "sweep checks every pose for self-collision (metric collision_free, plm_pin.kinematics.collisions "
         "on the carriage boxes), and with collisions excluded the half-widths at l : 2 r_t = 2 : 1 and "
         f"y = 0.084 m are {kept3:.0f} deg (3D3M) and {kept4:.0f} deg (3D4M) on the 2 deg samples"
