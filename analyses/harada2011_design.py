@@ -6,7 +6,8 @@ rods shorter (l1 = l4 = 0.240 m, l2 = l3 = 0.170 m) so that assembly-mode change
 complex singularity of equal rods. This study sweeps, with :func:`plm_pin.sweep`, the ratio
 l / r_t and the height y for both tables, and the inner rod length for the 2015 design, and
 reads off the singularity-free rotation range, the manipulability and the reachable part of
-a workspace box. Every number it states is computed here.
+a workspace box, each also with the carriages' self-collision excluded (sweep metric
+``collision_free``). Every number it states is computed here.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import numpy as np
 import plm_pin
 from plm_pin import PlmError
 from plm_pin.kinematics import complex_singularity_check
-from plm_pin.models import leg_inverse_kinematics
+from plm_pin.models.prrrp import CARRIAGE_SIZE
 from plm_pin.report import Column, Comparison, Parameter, Section, StudyContext
 from plm_pin.viz import plot_sweep_heatmap, plot_sweep_lines
 
@@ -63,7 +64,7 @@ def run(ctx: StudyContext) -> None:
         "harada2011_3d4m",
         {"legs": [[1, 2, 4], [1, 2, 3, 4]], "half_plate": [L / r for r in RATIOS]},
         {"y": HEIGHTS, "rz": ANGLES},
-        ["orientation_range", "manipulability", "min_manipulability"],
+        ["orientation_range", "manipulability", "min_manipulability", "collision_free"],
         pose=(0.0, 0.08, 0.0),
         options={"over": ["rz"], "xtol": XTOL},
     )
@@ -87,7 +88,7 @@ def run(ctx: StudyContext) -> None:
             "y": np.linspace(0.02, 0.24, 12),
             "rz": np.radians(np.linspace(-60.0, 60.0, 13)),
         },
-        ["reachable_fraction", "min_manipulability"],
+        ["reachable_fraction", "min_manipulability", "collision_free"],
         pose=(0.0, 0.10, 0.0),
     )
     _complete(rods)
@@ -271,7 +272,10 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
         bool(np.isin(ds[end].sel(legs="(1, 2, 3, 4)").values, not_singular).all())
         for end in ("orientation_lower_end", "orientation_upper_end")
     )
-    kept3, kept4 = _order_kept_table(section, half)
+    kept = _collision_free_table(section, half, ds.collision_free)
+    kept3, kept4 = next((row[3] or math.nan, row[5] or math.nan) for row in kept if row[:2] == (4.0, FIG6_Y))
+    wider = sum(1 for row in kept if None not in (row[3], row[5]) and row[5] > row[3] + 1e-9)
+    touching = sum(1 for row in kept if row[5] is None and row[3] is not None)
     section.text(
         "**Where redundancy pays.** Below theta = 0 the 3D3M's range ends at its direct (type-4, eq. (11.4)) "
         f"singularity at {direct} of the {ends3.size} (l / r_t, y) pairs swept, the others at the reach "
@@ -293,10 +297,24 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
             if higher
             else ""
         )
-        + "Sliders on one stator cannot pass each other, which the model does not enforce: with that order "
-        f"kept, the half-widths at l : 2 r_t = 2 : 1 and y = 0.084 m are {kept3:.0f} deg (3D3M) and "
-        f"{kept4:.0f} deg (3D4M) on the 2 deg samples"
+        + f"Sliders on one stator cannot pass each other: their carriages, {CARRIAGE_SIZE[0] * 100:.0f} cm "
+        "long, collide first. The "
+        "sweep checks every pose for self-collision (metric collision_free, plm_pin.kinematics.collisions "
+        "on the carriage boxes), and with collisions excluded the half-widths at l : 2 r_t = 2 : 1 and "
+        f"y = 0.084 m are {kept3:.0f} deg (3D3M) and {kept4:.0f} deg (3D4M) on the 2 deg samples"
         + (", so redundancy still pays there." if kept4 > kept3 else ", so redundancy gains nothing there.")
+        + f" Of the {len(kept)} rows of that table the 3D4M turns further than the 3D3M at {wider}"
+        + (
+            f", and at {touching} the carriage of slider 3, which the 3D3M lacks, already overlaps a "
+            "neighbour at theta = 0. "
+            if touching
+            else ". "
+        )
+        + "Earlier versions of this study only kept the sliders' order along the stator (sliders of no "
+        "length, from eq. (2)). Carriages that have a length touch before they would pass, so the "
+        "collision check stops the ranges earlier, the more so for a short plate (large l / r_t), whose "
+        "pairs lie only 2 r_t apart on the stator; where two carriages overlap at theta = 0 there is no "
+        "collision-free range."
     )
     section.assumptions(
         "Assumptions",
@@ -305,8 +323,9 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
             "configuration.",
             "Plate angles sampled every 2 deg over +/-80 deg (Fig. 6's range): two singular points closer "
             "than that can be missed, and a range reaching 80 deg is at least that wide.",
-            "Rod and slider collisions are not modelled; the slider order is checked separately (table "
-            "above).",
+            "Self-collision: only the carriages (3 cm boxes on the one stator) can collide; each rod "
+            "moves in a layer of its own above them and the plate above the rods (the presets' "
+            "self_collision.ignore), so rods crossing in the plane do not collide.",
             "Rod length 0.14 m and the other parameters of Table 1; only r_t (and the motors) change.",
         ],
     )
@@ -323,42 +342,33 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
     )
 
 
-def _order_kept(rt: float, y: float, legs: tuple[int, ...]) -> float | None:
-    """Largest +/-d [deg] on the angle samples about theta = 0 over which the sliders keep their order.
+def _collision_free(free: np.ndarray) -> float | None:
+    """Largest +/-d [deg] on the angle samples about theta = 0 reached free of self-collision.
 
-    Slider positions from Harada 2011 eq. (2) with the (M.5) signs
-    (:func:`plm_pin.models.leg_inverse_kinematics`); None when theta = 0 is out of reach.
+    ``free`` holds the sweep's ``collision_free`` flag per sample of :data:`ANGLES`;
+    None when theta = 0 itself is unreached or colliding.
     """
-
-    def order(theta: float) -> tuple[int, ...] | None:
-        try:
-            ik = leg_inverse_kinematics((0.0, y, theta), (L,) * 4, rt, (-1, 1, -1, 1), legs)
-        except ValueError:
-            return None
-        return tuple(int(i) for i in np.argsort([ik[i][0] for i in legs]))
-
     zero = int(np.argmin(np.abs(ANGLES)))
-    start = order(0.0)
-    if start is None:
+    if not free[zero]:
         return None
     ends = []
     for step in (1, -1):
         k = zero
-        while 0 <= k + step < ANGLES.size and order(float(ANGLES[k + step])) == start:
+        while 0 <= k + step < ANGLES.size and free[k + step]:
             k += step
         ends.append(abs(math.degrees(float(ANGLES[k]))))
     return min(ends)
 
 
-def _order_kept_table(section: Section, half: Any) -> tuple[float, float]:
-    """Add the table of half-widths with the slider order kept; return the 3D3M's and 3D4M's at Fig. 6."""
-    rows = []
-    at_fig6 = (math.nan, math.nan)
+def _collision_free_table(section: Section, half: Any, free: Any) -> list[tuple[Any, ...]]:
+    """Add the table of half-widths free of self-collision and return its rows."""
+    rows: list[tuple[Any, ...]] = []
     for r in RATIOS:
         for y in (HEIGHTS[2], FIG6_Y, HEIGHTS[-2]):
             free3 = math.degrees(float(half.sel(legs="(1, 2, 4)", ratio=r, y=y)))
             free4 = math.degrees(float(half.sel(legs="(1, 2, 3, 4)", ratio=r, y=y)))
-            kept3, kept4 = _order_kept(L / r, y, (1, 2, 4)), _order_kept(L / r, y, (1, 2, 3, 4))
+            kept3 = _collision_free(free.sel(legs="(1, 2, 4)", ratio=r, y=y).values)
+            kept4 = _collision_free(free.sel(legs="(1, 2, 3, 4)", ratio=r, y=y).values)
             rows.append(
                 (
                     r,
@@ -369,24 +379,22 @@ def _order_kept_table(section: Section, half: Any) -> tuple[float, float]:
                     None if kept4 is None else min(free4, kept4),
                 )
             )
-            if r == 4.0 and y == FIG6_Y:
-                at_fig6 = (rows[-1][3] or math.nan, rows[-1][5] or math.nan)
     section.table(
-        "Rotation half-width without and with the slider order kept (sliders on one stator cannot pass)",
+        "Rotation half-width without and with self-collision (carriages on one stator cannot pass)",
         [
             "l / r_t",
             Column("y", "m"),
             Column("3D3M singularity-free", "deg"),
-            Column("3D3M, order kept", "deg"),
+            Column("3D3M, collision-free", "deg"),
             Column("3D4M singularity-free", "deg"),
-            Column("3D4M, order kept", "deg"),
+            Column("3D4M, collision-free", "deg"),
         ],
         rows,
-        note="Order kept: the largest +/-d on the 2 deg samples over which the sliders' order along the "
-        "stator stays that of theta = 0 (eq. (2), zero slider width), capped by the singularity-free "
-        "half-width.",
+        note="Collision-free: the largest +/-d on the 2 deg samples over which every pose is reached without "
+        "two carriages (3 cm boxes) touching, capped by the singularity-free half-width; empty when the "
+        "carriages already touch at theta = 0.",
     )
-    return at_fig6
+    return rows
 
 
 def _asymmetry(
@@ -439,6 +447,7 @@ def _asymmetry(
                 float(np.nanmax(heights[np.isfinite(h)])),
                 "yes" if "constraint" in case.report.kinds else "no",
                 case.min_slider_gap,
+                float(np.mean(box.dataset.collision_free.values[k])),
             )
         )
     section.table(
@@ -451,11 +460,13 @@ def _asymmetry(
             Column("theta = 0 reached up to y", "m"),
             "complex singularity",
             Column("least slider gap", "m"),
+            "box reached collision-free",
         ],
         rows,
         note="Complex singularity: plm_pin.kinematics.complex_singularity_check brings rod 3 normal to the "
         "stator; equal rods on a pair then coincide and the closure Jacobian loses rank. The least slider "
-        "gap of a pair is |l3 - l4|.",
+        "gap of a pair is |l3 - l4|. Collision-free: reached without two carriages (3 cm boxes on the "
+        "stator) touching.",
     )
     asym, sym = rows[1], rows[-1]
     longest = rows[3]
@@ -475,9 +486,24 @@ def _asymmetry(
         + f"the all-0.17 m table ({sym[1]:.3f}, {sym[3]:.3f} m), while the all-0.24 m table reaches "
         f"{longest[1]:.3f} of it and keeps +/-80 deg up to {longest[3]:.3f} m. The asymmetric table's "
         f"smallest w in the box is {asym[2]:.3g} against {sym[2]:.3g} m/rad for the all-0.17 m table. "
-        "What the unequal rods buy is a "
+        f"Counting carriage collisions, it reaches {asym[7]:.3f} of the box collision-free against "
+        f"{sym[7]:.3f} for the all-0.17 m table and {longest[7]:.3f} for the all-0.24 m one"
+        + (
+            f": its least slider gap on a pair ({asym[6]:.3f} m) exceeds the carriage length "
+            f"({CARRIAGE_SIZE[0]:.2f} m), so the two carriages of a pair never touch, which equal rods "
+            "allow. "
+            if asym[6] > CARRIAGE_SIZE[0]
+            else ". "
+        )
+        + "What the unequal rods buy is a "
         f"least slider gap of {asym[6]:.3f} m on a pair instead of 0: the complex singularity, which both "
         "symmetric tables admit, cannot occur, and that is what lets Harada 2015 change assembly and "
         "working modes without a singularity (its report). So the asymmetric design pays where mode changes "
-        "are needed; for work in one mode it gives the reach of its short rods, less than equal long rods."
+        "are needed; for work in one mode it gives the reach of its short rods, less than equal long rods"
+        + (
+            ", though with carriages that have a length it works collision-free over more of the box than "
+            "equal short rods."
+            if asym[7] > sym[7]
+            else "."
+        )
     )

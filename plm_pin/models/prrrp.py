@@ -14,6 +14,10 @@ Working modes: the sign :math:`\sigma_i` in front of the square root of eq. (2).
 paper's text gives (+, -, +, -) for links 1-4, but its code (M.5) and its skeleton plots
 (M.42) use (-, +, -, +): slider 1 left of the left pair, slider 2 right of it, and so on.
 We follow the code, which produced the paper's figures.
+
+Self-collision: the drawing puts every shape in the plane z = 0, but a real table stacks them
+(:data:`LAYERS`): only the carriages share a layer, on the stator, and can touch; the
+sidecar's ``self_collision.ignore`` lists every other pair of shapes on non-adjacent bodies.
 """
 
 from __future__ import annotations
@@ -34,6 +38,17 @@ else:
 
 LEFT_LEGS = (1, 2)
 RIGHT_LEGS = (3, 4)
+
+CARRIAGE_SIZE = (0.03, 0.02, 0.01)
+"""Box of each carriage (moving part of a linear motor): length along the stator, height, depth [m]."""
+
+LAYERS = (
+    "Self-collision (ours; the papers show no layout): the carriages ride in one layer on the stator "
+    "and collide when closer than their length (3 cm); each rod moves in a layer of its own above "
+    "them and the plate above the rods, so rod-rod, rod-carriage and plate-carriage contacts of the "
+    "planar drawing are not collisions (sidecar self_collision.ignore)."
+)
+"""The layers assumed for the self-collision check, as a preset note."""
 
 
 def leg_inverse_kinematics(
@@ -112,7 +127,7 @@ def build_2prrrp(
     joints: list[yourdfpy.Joint] = []
     stator = 1.0
     links.append(u.link("base", visuals=[u.box_visual((stator, 0.01, 0.004), "base", (0.0, -0.01, -0.01))]))
-    slider_size = (0.03, 0.02, 0.01)
+    slider_size = CARRIAGE_SIZE
     ik = leg_inverse_kinematics(reference_pose, rod_lengths, rt, working_modes, legs)
     reference: dict[str, tuple[float, ...]] = {}
     closures: list[ClosureSpec] = []
@@ -181,8 +196,20 @@ def build_2prrrp(
         name=name,
         source=source,
         compliance=assumed_drive_stiffness([f"slider{i}" for i in legs], actuator_stiffness),
+        collision_ignore=_other_layers(legs),
     )
     return robot, sidecar
+
+
+def _other_layers(legs: Sequence[int]) -> tuple[tuple[str, str], ...]:
+    """The body pairs in different layers of the real table (:data:`LAYERS`), not yet adjacent.
+
+    Adjacent pairs (a rod and its carriage, a rod and the plate) are left out by the checker.
+    """
+    pairs = [(f"rod{i}", f"rod{j}") for i in legs for j in legs if i < j]
+    pairs += [(f"rod{i}", f"carriage{j}") for i in legs for j in legs if i != j]
+    pairs += [("plate", f"carriage{i}") for i in legs]
+    return tuple(pairs)
 
 
 def rod_scaled(length: float, ref_length: float, ref_mass: float, ref_inertia: float) -> tuple[float, float]:

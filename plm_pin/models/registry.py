@@ -14,7 +14,7 @@ from .._lazy import lazy_module
 from ..description.sidecar import Sidecar
 from . import pss
 from .classic import build_fivebar, build_fourbar
-from .prrrp import build_2prrrp, rod_scaled
+from .prrrp import LAYERS, build_2prrrp, rod_scaled
 from .pss import build_pss
 from .star_triangle import build_star_triangle
 
@@ -95,6 +95,7 @@ _HARADA2011_NOTES = (
     "No actuator force limits are given by the paper; none are set.",
     "No stiffness is given by the paper: each linear motor is assumed to hold its slider with "
     "1e6 N/m (a servo position loop of a small linear motor); rods and plate rigid.",
+    LAYERS,
 )
 
 
@@ -252,6 +253,7 @@ PRESETS: dict[str, Preset] = {
                     "centroidal inertia to mass x length^2 (9.84e-5 kg m^2 x (l / 0.14 m)^3).",
                     "Gravity 9.81 m/s^2 along -y; reference pose x = 0, y = 0.10 m, theta = 0, "
                     "assembly mode [+ +], working modes (- + - +).",
+                    LAYERS,
                 ),
             ),
             Preset(

@@ -201,3 +201,29 @@ def test_overview_stiffness_drive_share_is_k_j_ce_t_j_ce_and_preload_changes_it(
     figures = _blocks(limited_3d4m_overview, "figure")
     caption = next(c for c in figures if c.startswith("Smallest translational eigen-stiffness"))
     assert figures[caption].data["stiffness_map"]["units"]["min_translational_stiffness"] == "N/m"
+
+
+def test_overview_collision_free_slice_of_the_3d4m_is_the_carriage_gaps(limited_3d4m_overview):
+    """A reached pose of the 3D4M's slice is collision-free iff its carriages are 3 cm apart.
+
+    Rods and plate move in layers above the carriages (the preset's ignore list): only carriages
+    (3 cm boxes on the stator) collide, decided by the slider positions of eq. (2), (M.5).
+    """
+    from analyses import _harada2011_paper as paper
+
+    figure = next(b for b in _blocks(limited_3d4m_overview, "figure").values() if "slice" in b.data)
+    data = figure.data["slice"]
+    legs, free = (1, 2, 3, 4), 0
+    for i, a in enumerate(data["values"][0]):
+        for j, b in enumerate(data["values"][1]):
+            if data["reachable"][i][j]:
+                pose = dict(zip(data["dofs"], data["pose"], strict=True)) | {
+                    data["axes"][0]: a,
+                    data["axes"][1]: b,
+                }
+                c = paper.slider_positions((pose["x"], pose["y"], pose["rz"]), 0.14, 0.05, legs)
+                free += bool(np.min(np.abs(c[:, None] - c[None, :])[np.triu_indices(4, 1)]) >= 0.03)
+    summary = _rows(_blocks(limited_3d4m_overview, "table")["Slice summary"])
+    total = np.size(data["reachable"])
+    assert summary["fraction reached free of self-collision"] == pytest.approx(free / total, abs=1e-12)
+    assert 0.5 * summary["reachable fraction"] < free / total < summary["reachable fraction"]
