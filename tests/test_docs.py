@@ -85,6 +85,7 @@ def test_docs_have_the_pages_the_user_needs(site):
         "guide/sweeps",
         "guide/reports",
         "guide/viewer",
+        "guide/presets",
         "studies",
         "api/index",
         "tutorials/first_mechanism",
