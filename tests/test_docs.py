@@ -85,6 +85,7 @@ def test_docs_have_the_pages_the_user_needs(site):
         "guide/sweeps",
         "guide/reports",
         "guide/viewer",
+        "guide/presets",
         "studies",
         "api/index",
         "tutorials/first_mechanism",
@@ -146,3 +147,12 @@ def test_getting_started_examples_run():
     namespace: dict[str, object] = {}
     for block in blocks:
         exec(compile(block, str(page), "exec"), namespace)
+
+
+def test_sweep_guide_lists_every_metric_and_option():
+    """The sweeps page has a table row for every metric and names every option plm_pin.sweep accepts."""
+    from plm_pin.sweep import METRICS, OPTIONS
+
+    page = (DOCS / "guide" / "sweeps.md").read_text(encoding="utf-8")
+    assert [m for m in METRICS if f"\n| `{m}` |" not in page] == []
+    assert [o for o in OPTIONS if f"`{o}`" not in page] == []

@@ -9,8 +9,19 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[1]
 README = REPO / "README.md"
-GUIDE_PAGES = ("stiffness", "mujoco", "any-robot")
-"""The docs/guide pages whose examples were the README's (each runs on its own)."""
+GUIDE_PAGES = (
+    "kinematics",
+    "singularities",
+    "statics",
+    "stiffness",
+    "viewer",
+    "dynamics",
+    "simulation",
+    "sweeps",
+    "mujoco",
+    "any-robot",
+)
+"""The docs/guide pages whose examples were the README's (each in a namespace of its own)."""
 
 
 def _run_python_blocks(page: Path) -> None:
