@@ -38,6 +38,7 @@ from plm_pin.kinematics import (
     working_mode_label,
 )
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
+from plm_pin.viz import panel_grid
 
 TITLE = "Harada 2015: mode changes of the asymmetric 2-PRRRP"
 SUMMARY = (
@@ -275,18 +276,10 @@ def _snapshots(
     titles: Sequence[str],
     caption: str,
 ) -> None:
-    """Skeletons of a 2-PRRRP at a few configurations, side by side (the paper's Fig. 8 snapshots)."""
-    import matplotlib.pyplot as plt
-
-    rows = -(-len(qs) // 5)  # at most 5 per row, rows evenly filled
-    cols = -(-len(qs) // rows)
-    fig, axes = plt.subplots(
-        rows, cols, figsize=(3.3 * cols, 2.0 * rows), sharex=True, sharey=True, layout="constrained"
-    )
+    """Skeletons of a 2-PRRRP at a few configurations, at most three a row (the paper's Fig. 8 snapshots)."""
+    fig, axes = panel_grid(len(qs), width=4.0, height=2.4, sharex=True, sharey=True)
     drawn = []
-    for ax in np.ravel(axes)[len(qs) :]:
-        ax.set_visible(False)
-    for ax, q, title in zip(np.ravel(axes), qs, titles, strict=False):
+    for ax, q, title in zip(axes, qs, titles, strict=True):
         state = prrrp_state(mech, q, layout)
         c = mech.actuator_positions(q)
         pairs = state.pairs[:, :2]
