@@ -277,7 +277,7 @@ def _snapshots(
     caption: str,
 ) -> None:
     """Skeletons of a 2-PRRRP at a few configurations, at most three a row (the paper's Fig. 8 snapshots)."""
-    fig, axes = panel_grid(len(qs), width=4.0, height=2.4, sharex=True, sharey=True)
+    fig, axes = panel_grid(len(qs), width=4.0, height=1.9, sharex=True, sharey=True)
     drawn = []
     for ax, q, title in zip(axes, qs, titles, strict=True):
         state = prrrp_state(mech, q, layout)
@@ -292,6 +292,7 @@ def _snapshots(
         ax.plot(pairs[:, 0], pairs[:, 1], color="k", lw=4, solid_capstyle="round")
         ax.set_title(title, fontsize=9)
         ax.set_aspect("equal")
+        ax.tick_params(labelbottom=True)  # a panel over a hidden cell keeps its x ticks
         drawn.append({"title": title, "actuators": c, "pairs": pairs})
     fig.supxlabel("x [m]")
     fig.supylabel("y [m]")
