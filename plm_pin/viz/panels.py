@@ -178,7 +178,7 @@ def plot_panels(
     Raises:
         InvalidInput: no curves, or values whose length differs from ``x``.
     """
-    t, unit_default = np.asarray(x, dtype=float), unit
+    t = np.asarray(x, dtype=float)
     if not curves:
         raise InvalidInput("plot_panels needs at least one curve")
     values: dict[str, np.ndarray] = {}
@@ -188,14 +188,13 @@ def plot_panels(
             raise InvalidInput(f"curve {title!r} has shape {a.shape}; expected ({t.size},) or ({t.size}, k)")
         values[title] = a.reshape(t.size, -1)
     scales: dict[str, float] = {}
+    units = {title: _unit(title, unit) for title in values}
     for title, a in values.items():
-        unit = _unit(title, unit_default)
-        scales[unit] = max(scales.get(unit, 0.0), float(np.max(np.abs(a), initial=0.0)))
+        scales[units[title]] = max(scales.get(units[title], 0.0), float(np.max(np.abs(a), initial=0.0)))
     flats: list[Flat] = []
     drawn: dict[str, np.ndarray] = {}
     for title, v in values.items():
-        unit = _unit(title, unit_default)
-        stated = flat(_name(title), v, unit, scale=scales[unit], noise=noise)
+        stated = flat(_name(title), v, units[title], scale=scales[units[title]], noise=noise)
         if stated is None:
             drawn[title] = v
         else:
@@ -209,8 +208,7 @@ def plot_panels(
             ax.plot(t, v[:, i], label=labels[i] if i < len(labels) else None)
         ax.set_title(title)
         ax.set_xlabel(xlabel)
-        unit = _unit(title, unit_default)
-        ax.set_ylabel(ylabel if ylabel is not None else (f"[{unit}]" if unit else ""))
+        ax.set_ylabel(ylabel if ylabel is not None else (f"[{units[title]}]" if units[title] else ""))
         ax.grid(alpha=0.3)
     shared_legend(fig, axes, legend_title)
     return fig, note
