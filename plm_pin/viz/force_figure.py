@@ -166,5 +166,5 @@ def fig8(mech: Any, q: Any, f_e: Any, f_i: float = 1.0) -> tuple[Axes, Axes]:
     plot_static_forces(
         b, internal_only, ax=ax_b, title=f"(b) with internal force f_i = {f_i:g} N (broken)", legend=False
     )
-    shared_legend(fig, (ax_a, ax_b))
+    shared_legend(fig, (ax_a, ax_b), below=True)
     return ax_a, ax_b

@@ -123,14 +123,30 @@ def panel_grid(
     return fig, flat_axes[:n]
 
 
-def shared_legend(fig: Figure, axes: Sequence[Axes], title: str | None = None) -> None:
-    """One legend for the figure, right of the panels, from the labelled lines of all axes (once each)."""
+def shared_legend(
+    fig: Figure, axes: Sequence[Axes], title: str | None = None, *, below: bool = False
+) -> None:
+    """One legend for the figure from the labelled lines of all axes (each label once).
+
+    Args:
+        fig: the figure (made with ``layout="constrained"``, as :func:`panel_grid` does).
+        axes: the panels whose lines are listed.
+        title: legend title.
+        below: under the panels in one row (for short, wide panels such as equal-aspect
+            drawings), instead of right of them.
+    """
     seen: dict[str, Any] = {}
     for ax in axes:
         for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
             seen.setdefault(label, handle)
     if seen:
-        fig.legend(list(seen.values()), list(seen), title=title, loc="outside right upper", fontsize="small")
+        handles, labels = list(seen.values()), list(seen)
+        if below:
+            fig.legend(
+                handles, labels, title=title, fontsize="small", loc="outside lower center", ncols=len(labels)
+            )
+        else:
+            fig.legend(handles, labels, title=title, fontsize="small", loc="outside right upper")
 
 
 def _unit(title: str, default: str = "") -> str:
