@@ -130,8 +130,8 @@ def plot_static_forces(
             )
     for kind, colour in COLOURS.items():
         axes.plot([], [], color=colour, label=kind)
-    if legend:
-        axes.legend(loc="best", fontsize="small")
+    if legend:  # right of the drawing: arrows reach every corner of it
+        axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
     axes.set_aspect("equal")
     axes.set_xlabel(f"{'xyz'[i]} [m]")
     axes.set_ylabel(f"{'xyz'[j]} [m]")
