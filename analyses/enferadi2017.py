@@ -18,6 +18,7 @@ from plm_pin import Mechanism, load
 from plm_pin.dynamics import JointTrajectory, inverse_dynamics, simulate, task_trajectory
 from plm_pin.models import enferadi2017_circle, enferadi2017_line
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
+from plm_pin.viz import flat, flat_note, panel_grid, shared_legend
 
 TITLE = "Enferadi 2017: dynamics of a star-triangle 3-PRP planar manipulator"
 SUMMARY = "Section 6: forces along a line and a circle, and the direct-dynamics round trip."
@@ -86,8 +87,6 @@ def _path(
     duration: float,
     caption: str,
 ) -> None:
-    import matplotlib.pyplot as plt
-
     traj = path_trajectory(mech, name)
     t = traj.t
     idr = inverse_dynamics(mech, traj)
@@ -105,21 +104,27 @@ def _path(
     )
     target = np.array([profile(s)[0] for s in run.t])
     error = np.max(np.linalg.norm((run.x - target)[:, :2], axis=1))
-    fig, axes = plt.subplots(1, 3, figsize=(13.0, 3.6), layout="constrained")
+    fig, axes = panel_grid(3, height=3.4)
     for i in range(3):
-        axes[0].plot(t, idr.f_c[:, i], label=f"f_{i + 1}")
-        axes[1].plot(t, traj.c[:, i], label=f"q_{i + 1}")
+        axes[0].plot(t, idr.f_c[:, i], label=f"leg {i + 1}")
+        axes[1].plot(t, traj.c[:, i], label=f"leg {i + 1}")
     axes[0].set(xlabel="t [s]", ylabel="actuator force [N]", title="inverse dynamics")
     axes[1].set(xlabel="t [s]", ylabel="slider position [m]", title="actuators")
-    axes[2].plot(target[:, 0], target[:, 1], "k-", lw=4, alpha=0.3, label="path")
-    axes[2].plot(run.x[:, 0], run.x[:, 1], "r--", label="direct dynamics")
-    axes[2].set(xlabel="x [m]", ylabel="y [m]", title="round trip", aspect="equal")
+    # a path along y keeps x constant to round-off: y against time then, x said in the caption
+    along_y = flat("x", np.concatenate([target[:, 0], run.x[:, 0]]), "m", scale=float(np.abs(target).max()))
+    u, v = (run.t, "t [s]") if along_y else (None, "x [m]")
+    axes[2].plot(target[:, 0] if u is None else u, target[:, 1], "k-", lw=4, alpha=0.3, label="path")
+    axes[2].plot(run.x[:, 0] if u is None else u, run.x[:, 1], "r--", label="direct dynamics")
+    axes[2].set(xlabel=v, ylabel="y [m]", title="round trip")
+    if u is None:
+        axes[2].set_aspect("equal")
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize="small")
+    shared_legend(fig, axes)
     section.figure(
         fig,
-        f"{caption}: forces, slider positions, and the path retraced by direct dynamics.",
+        f"{caption}: forces, slider positions, and the path retraced by direct dynamics."
+        + flat_note([along_y] if along_y else []),
         {"t": t, "f_c": idr.f_c, "q": traj.c, "x_direct": run.x, "t_direct": run.t},
     )
     rows = []

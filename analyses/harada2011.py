@@ -23,7 +23,7 @@ from plm_pin.models.registry import HARADA2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.statics import force_capability, static_forces, wrench_polygon
 from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
-from plm_pin.viz import fig8, plot_skeletons, plot_sweep
+from plm_pin.viz import fig8, panel_grid, plot_panels, plot_skeletons, plot_sweep, shared_legend
 
 from . import _harada2011_paper as paper
 
@@ -395,9 +395,8 @@ def _stable(res: StiffnessResult) -> bool:
 def _stiffness_sweep(
     section: Section, four: Mechanism, three: Mechanism, reference: dict[str, object]
 ) -> None:
-    import matplotlib.pyplot as plt
 
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.2), layout="constrained")
+    fig, (left, right) = panel_grid(2, width=5.0, height=3.8)
     curves: dict[str, object] = {
         "theta_deg": np.degrees(STIFFNESS_ANGLES).tolist(),
         "reference_pose": reference,
@@ -414,7 +413,7 @@ def _stiffness_sweep(
     right.set_ylabel("lowest natural frequency [Hz]")
     for ax in (left, right):
         ax.grid(alpha=0.3)
-        ax.legend()
+    shared_legend(fig, (left, right))
     section.figure(
         fig,
         "Stiffness and lowest natural frequency against the plate angle at x = 0, y = 0.08 m: the 3D3M "
@@ -481,25 +480,24 @@ def _entries(rep: DecouplingReport) -> list[tuple[str, str]]:
 
 
 def _simulations(section: Section, mech: Mechanism) -> None:
-    import matplotlib.pyplot as plt
 
     p = PRESETS["harada2011_3d4m"].parameters
     m_l, m_m, m_t = float(p["rod_masses"][0]), float(p["slider_mass"]), float(p["plate_mass"])
     runs = {SIMULATIONS[case][0]: simulate_case(mech, case) for case in SIMULATIONS}
-    fig, axes = plt.subplots(2, 3, figsize=(12.0, 6.0), layout="constrained")
-    for row, (name, run) in zip(axes, runs.items(), strict=True):
-        for ax, k, label in zip(row, range(3), ("x [m]", "y [m]", "theta [deg]"), strict=True):
-            values = np.degrees(run.x[:, k]) if k == 2 else run.x[:, k]
-            ax.plot(run.t, values)
-            ax.set_title(f"{name}: {label}")
-            ax.set_xlabel("t [s]")
-            ax.grid(alpha=0.3)
+    curves = {}
+    for name, run in runs.items():
+        curves[f"{name}: x [m]"] = run.x[:, 0]
+        curves[f"{name}: y [m]"] = run.x[:, 1]
+        curves[f"{name}: theta [deg]"] = np.degrees(run.x[:, 2])
+    t = next(iter(runs.values())).t
+    fig, flat = plot_panels(t, curves, xlabel="t [s]")
     section.figure(
         fig,
-        "Figs. 10 and 12: x, y, theta under constant task forces from (0, 0.08 m, -20 deg) at rest, 2 s.",
+        "Figs. 10 and 12: x, y, theta under constant task forces from (0, 0.08 m, -20 deg) at rest, 2 s."
+        + flat,
         {name: {"t": r.t, "x": r.x} for name, r in runs.items()},
     )
-    fig, axes = plt.subplots(1, 2, figsize=(12.0, 3.4), layout="constrained")
+    fig, axes = panel_grid(2, width=5.0, height=2.6)
     snapshots = {}
     for ax, (name, run), number in zip(axes, runs.items(), (11, 13), strict=True):
         every = slice(None, None, round(SNAPSHOT_PERIOD / SIM_DT))

@@ -22,7 +22,7 @@ from plm_pin import PlmError
 from plm_pin.kinematics import complex_singularity_check
 from plm_pin.models.prrrp import CARRIAGE_SIZE
 from plm_pin.report import Column, Comparison, Parameter, Section, StudyContext
-from plm_pin.viz import plot_sweep_heatmap, plot_sweep_lines
+from plm_pin.viz import panel_grid, plot_sweep_heatmap, plot_sweep_lines
 
 TITLE = "Design sweeps of the Harada tables: rotation range and manipulability against l / r_t, y and rods"
 SUMMARY = (
@@ -149,12 +149,15 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
         note=f"plm_pin locates the 3D3M's end at {_deg(float(three.orientation_lower)):.9f} deg; eq. (11.4) "
         f"gives -acos(sqrt((l + r_t)^2 - y^2) / (l + r_t)) = -28.7 deg there.",
     )
-    fig, axes = plt.subplots(1, 2, figsize=(11.0, 4.2), layout="constrained", sharey=True)
+    fig, axes = panel_grid(2, width=4.6, height=3.8, sharey=True)
     for ax, (legs, name) in zip(axes, labels.items(), strict=True):
         plot_sweep_heatmap(
-            half.sel(legs=legs), "ratio", "y", ax=ax, vmin=0.0, vmax=80.0, title=f"{name}: half-width [deg]"
+            half.sel(legs=legs), "ratio", "y", ax=ax, vmin=0.0, vmax=80.0, title=name, colorbar=False
         )
         ax.axhline(FIG6_Y, color="white", linewidth=0.6, linestyle=":")
+        ax.set_xlabel("l / r_t [-]")
+    axes[1].set_ylabel("")
+    fig.colorbar(axes[0].collections[0], ax=axes, label="rotation half-width [deg]")
     section.figure(
         fig,
         "Singularity-free rotation half-width against l / r_t and the height y (dotted: the height of "
@@ -178,6 +181,7 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
             marker=".",
         )
     ax.set_ylabel("rotation half-width [deg]")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small")
     section.figure(
         fig,
         "Half-width against the height: the 3D3M (solid) and the 3D4M (dashed), one colour per l / r_t; "
@@ -254,6 +258,8 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
         marker=".",
     )
     ax.set_yscale("log")
+    ax.set_ylabel("smallest manipulability w [m/rad]")  # linear actuators, x-y-theta task
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small")
     section.figure(
         fig,
         "The 3D4M's smallest manipulability over +/-80 deg against the height, one line per l / r_t.",
@@ -421,7 +427,7 @@ def _asymmetry(
     ax.set_xlabel("y [m]")
     ax.set_ylabel("rotation half-width [deg]")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize="small")
     section.figure(
         fig,
         "Rotation half-width against the height for each rod set (gaps: theta = 0 out of reach)"

@@ -38,6 +38,7 @@ from plm_pin.kinematics import (
     working_mode_label,
 )
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
+from plm_pin.viz import panel_grid
 
 TITLE = "Harada 2015: mode changes of the asymmetric 2-PRRRP"
 SUMMARY = (
@@ -275,18 +276,10 @@ def _snapshots(
     titles: Sequence[str],
     caption: str,
 ) -> None:
-    """Skeletons of a 2-PRRRP at a few configurations, side by side (the paper's Fig. 8 snapshots)."""
-    import matplotlib.pyplot as plt
-
-    rows = -(-len(qs) // 5)  # at most 5 per row, rows evenly filled
-    cols = -(-len(qs) // rows)
-    fig, axes = plt.subplots(
-        rows, cols, figsize=(3.3 * cols, 2.0 * rows), sharex=True, sharey=True, layout="constrained"
-    )
+    """Skeletons of a 2-PRRRP at a few configurations, at most three a row (the paper's Fig. 8 snapshots)."""
+    fig, axes = panel_grid(len(qs), width=4.0, height=1.9, sharex=True, sharey=True)
     drawn = []
-    for ax in np.ravel(axes)[len(qs) :]:
-        ax.set_visible(False)
-    for ax, q, title in zip(np.ravel(axes), qs, titles, strict=False):
+    for ax, q, title in zip(axes, qs, titles, strict=True):
         state = prrrp_state(mech, q, layout)
         c = mech.actuator_positions(q)
         pairs = state.pairs[:, :2]
@@ -299,6 +292,7 @@ def _snapshots(
         ax.plot(pairs[:, 0], pairs[:, 1], color="k", lw=4, solid_capstyle="round")
         ax.set_title(title, fontsize=9)
         ax.set_aspect("equal")
+        ax.tick_params(labelbottom=True)  # a panel over a hidden cell keeps its x ticks
         drawn.append({"title": title, "actuators": c, "pairs": pairs})
     fig.supxlabel("x [m]")
     fig.supylabel("y [m]")

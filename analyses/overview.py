@@ -24,6 +24,7 @@ from plm_pin.viz import (
     MeshcatViewer,
     force_arrows,
     plot_map,
+    plot_panels,
     plot_static_forces,
     plot_stiffness_map,
     plot_sweep,
@@ -399,18 +400,18 @@ def _simulation(section: Section, mech: Mechanism) -> None:
         ],
     )
     if run.x is not None and run.t.size > 1:
-        import matplotlib.pyplot as plt
-
         assert mech.task is not None
-        fig, ax = plt.subplots(figsize=(6.5, 3.5), layout="constrained")
+        curves = {}
         for k, dof in enumerate(mech.task.dofs):
             unit = _display(dof, 0.0)[1]
-            values = np.degrees(run.x[:, k]) if unit == "deg" else run.x[:, k]
-            ax.plot(run.t, values, label=f"{dof} [{unit}]")
-        ax.set_xlabel("t [s]")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize="small")
-        section.figure(fig, "Task coordinates during the passive simulation.", {"t": run.t, "x": run.x})
+            curves[f"{dof} [{unit}]"] = np.degrees(np.unwrap(run.x[:, k])) if unit == "deg" else run.x[:, k]
+        fig, flat = plot_panels(run.t, curves, xlabel="t [s]")
+        section.figure(
+            fig,
+            "Task coordinates during the passive simulation (angles unwrapped, not folded into +/-180 deg)."
+            + flat,
+            {"t": run.t, "x": run.x},
+        )
     if run.t.size > 1:
         section.animation(Animation(mech, run.q, run.t, "The passive simulation: play it in the page."))
 

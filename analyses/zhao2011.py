@@ -32,6 +32,7 @@ from plm_pin.models.registry import ZHAO2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.statics import static_forces
 from plm_pin.stiffness import natural_frequencies, stiffness
+from plm_pin.viz import plot_panels
 
 TITLE = "Zhao 2011: motor torque, power and work of a redundant 8-PSS"
 SUMMARY = "Figs. 4-8 and Table 5 along eq. (35); 8-PSS vs 6-PSS; why Table 5 does not reproduce."
@@ -128,46 +129,13 @@ def _assumptions(section: Section) -> None:
     )
 
 
-PANELS_PER_ROW = 3
-"""Most panels side by side in a figure: more would be unreadable at the page's width."""
-
-NOISE = 1e-9
-"""A panel whose largest value is below this fraction of the figure's largest is round-off, not drawn."""
-
-
 def _time_figure(t: np.ndarray, curves: dict[str, np.ndarray], ylabel: str, unit: str) -> tuple[Any, str]:
-    """Panels of per-motor curves against time, at most three a row, one legend for all.
-
-    Returns the figure and a sentence naming the panels left out because they are zero to round-off.
-    """
-    import matplotlib.pyplot as plt
-
-    largest = max(float(np.max(np.abs(v))) for v in curves.values())
-    drawn = {k: v for k, v in curves.items() if np.max(np.abs(v)) > NOISE * largest}
-    quiet = {k: float(np.max(np.abs(v))) for k, v in curves.items() if k not in drawn}
-    cols = min(PANELS_PER_ROW, len(drawn))
-    rows = -(-len(drawn) // cols)
-    fig, axes = plt.subplots(
-        rows, cols, figsize=(4.2 * cols, 3.2 * rows), layout="constrained", squeeze=False
+    """Panels of per-motor curves against time; returns the figure and the sentence on flat panels."""
+    n = next(iter(curves.values())).shape[1]
+    labels = [f"{i + 1}" for i in range(n)]
+    return plot_panels(
+        t, curves, xlabel="t [s]", ylabel=ylabel or None, unit=unit, labels=labels, legend_title="motor"
     )
-    for ax, (title, values) in zip(axes.flat, drawn.items(), strict=False):
-        for i in range(values.shape[1]):
-            ax.plot(t, values[:, i], label=f"{i + 1}")
-        ax.set_title(title)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel(ylabel)
-        ax.grid(alpha=0.3)
-    for ax in list(axes.flat)[len(drawn) :]:
-        ax.set_visible(False)
-    handles, labels = axes.flat[0].get_legend_handles_labels()
-    fig.legend(handles, labels, title="motor", loc="outside right upper", fontsize="small")
-    said = [
-        f"{name.split(' [')[0]} (zero)"
-        if peak == 0.0
-        else f"{name.split(' [')[0]} (zero to {peak:.0e} {unit})"
-        for name, peak in quiet.items()
-    ]
-    return fig, (" Not drawn, being zero to round-off: " + ", ".join(said) + ".") if said else ""
 
 
 def _motion(section: Section, mech: Mechanism, traj: JointTrajectory, shown: slice) -> None:

@@ -304,7 +304,7 @@ class Figure:
 
     Attributes:
         caption: caption.
-        svg: the figure as an SVG document.
+        svg: the figure as an SVG document ("" when nothing is drawn: the caption says why).
         data: the numbers drawn (for results.json).
     """
 
@@ -458,14 +458,17 @@ class Section:
         self.blocks.append(block)
         return block
 
-    def figure(self, fig: MplFigure, caption: str, data: Mapping[str, Any]) -> Figure:
+    def figure(self, fig: MplFigure | None, caption: str, data: Mapping[str, Any]) -> Figure:
         """Add a matplotlib figure (rendered to SVG and closed) with the numbers it draws.
+
+        ``fig`` None (every panel flat, see :func:`plm_pin.viz.plot_panels`): the caption, which
+        then says what the panels hold, stands alone and the numbers still go to results.json.
 
         Raises:
             InvalidInput: ``data`` that has no JSON form.
         """
         plain(data)  # refuse data that results.json could not hold, before rendering
-        block = Figure(caption, figure_svg(fig), data)
+        block = Figure(caption, "" if fig is None else figure_svg(fig), data)
         self.blocks.append(block)
         return block
 

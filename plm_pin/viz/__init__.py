@@ -4,19 +4,25 @@ from .figures import plot_map, plot_sweep
 from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
 from .meshcat_server import MeshcatServer, ViewerError
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
+from .panels import Flat, flat, flat_note, panel_grid, plot_panels, shared_legend
 from .skeleton import plot_skeletons
 from .stiffness_figures import plot_stiffness_map
 from .sweep_figures import plot_sweep_heatmap, plot_sweep_lines
 
 __all__ = [
+    "Flat",
     "ForceArrow",
     "MeshcatServer",
     "MeshcatViewer",
     "SceneStatus",
     "ViewerError",
     "fig8",
+    "flat",
+    "flat_note",
     "force_arrows",
+    "panel_grid",
     "plot_map",
+    "plot_panels",
     "plot_skeletons",
     "plot_static_forces",
     "plot_stiffness_map",
@@ -24,5 +30,6 @@ __all__ = [
     "plot_sweep_heatmap",
     "plot_sweep_lines",
     "scene_html",
+    "shared_legend",
     "show",
 ]

@@ -24,11 +24,11 @@ if TYPE_CHECKING:
 ANGLES = ("rx", "ry", "rz")
 
 LABELS = {
-    "manipulability": "manipulability w",
-    "condition_number": "condition number of J_ce",
-    "constraint_margin": "constraint margin",
-    "inverse_margin": "inverse (type 1) margin",
-    "direct_margin": "direct (type 2) margin",
+    "manipulability": "manipulability w",  # unit: product of J_ce's column units, mechanism-dependent
+    "condition_number": "condition number of J_ce [-]",
+    "constraint_margin": "constraint margin [-]",
+    "inverse_margin": "inverse (type 1) margin [-]",
+    "direct_margin": "direct (type 2) margin [-]",
 }
 
 KIND_MARKERS = {"inverse": "v", "direct": "o", "constraint": "s"}

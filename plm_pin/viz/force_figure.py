@@ -24,7 +24,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import InvalidInput
-from .figures import _axes, _pyplot
+from .figures import _axes
+from .panels import panel_grid, shared_legend
 from .skeleton import plane_axes, skeleton_segments
 
 if TYPE_CHECKING:
@@ -85,6 +86,7 @@ def plot_static_forces(
     scale: float | None = None,
     ax: Axes | None = None,
     title: str | None = None,
+    legend: bool = True,
 ) -> Axes:
     """Draw the mechanism in a plane with its static forces as arrows (Harada 2011, Fig. 8).
 
@@ -97,6 +99,8 @@ def plot_static_forces(
             a quarter of the mechanism's extent.
         ax: axes to draw into; a new figure when None.
         title: axes title.
+        legend: draw the legend of the force kinds in the axes (False: the caller shares one,
+            e.g. :func:`~plm_pin.viz.shared_legend`).
 
     Returns:
         The axes.
@@ -126,7 +130,8 @@ def plot_static_forces(
             )
     for kind, colour in COLOURS.items():
         axes.plot([], [], color=colour, label=kind)
-    axes.legend(loc="best", fontsize="small")
+    if legend:  # right of the drawing: arrows reach every corner of it
+        axes.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
     axes.set_aspect("equal")
     axes.set_xlabel(f"{'xyz'[i]} [m]")
     axes.set_ylabel(f"{'xyz'[j]} [m]")
@@ -156,7 +161,10 @@ def fig8(mech: Any, q: Any, f_e: Any, f_i: float = 1.0) -> tuple[Axes, Axes]:
     a = static_forces(mech, q, load, gravity=False)
     b = static_forces(mech, q, load, gravity=False, internal=preload)
     internal_only = static_forces(mech, q, gravity=False, internal=preload)
-    _, (ax_a, ax_b) = _pyplot().subplots(1, 2, figsize=(11.0, 3.8), layout="constrained")
-    plot_static_forces(a, ax=ax_a, title="(a) external force, no internal force")
-    plot_static_forces(b, internal_only, ax=ax_b, title=f"(b) with internal force f_i = {f_i:g} N (broken)")
+    fig, (ax_a, ax_b) = panel_grid(2, width=5.0, height=2.6)
+    plot_static_forces(a, ax=ax_a, title="(a) external force, no internal force", legend=False)
+    plot_static_forces(
+        b, internal_only, ax=ax_b, title=f"(b) with internal force f_i = {f_i:g} N (broken)", legend=False
+    )
+    shared_legend(fig, (ax_a, ax_b), below=True)
     return ax_a, ax_b

@@ -38,7 +38,7 @@ def _coordinate(data: Any, dim: str) -> tuple[np.ndarray, str, list[str] | None]
         raise InvalidInput(f"{data.name!r} has no dimension {dim!r}; its dimensions are {list(data.dims)}")
     coord = data[dim]
     values, units = _values(coord)
-    label = f"{dim} [{units}]" if units and units != "-" else dim
+    label = f"{dim} [{units}]" if units else dim
     if values.dtype.kind in "US":
         return np.arange(values.size, dtype=float), label, [str(v) for v in values]
     return values.astype(float), label, None
@@ -50,7 +50,7 @@ LABEL_WIDTH = 40
 
 def _label(data: Any) -> str:
     _, units = _values(data)
-    label = f"{data.name} [{units}]" if units and units != "-" else str(data.name)
+    label = f"{data.name} [{units}]" if units else str(data.name)
     return textwrap.fill(label, LABEL_WIDTH)
 
 
@@ -64,6 +64,7 @@ def plot_sweep_heatmap(
     vmin: float | None = None,
     vmax: float | None = None,
     cmap: str = "viridis",
+    colorbar: bool = True,
 ) -> Figure:
     """Colour map of a sweep variable over two dimensions; NaN (unreached, failed) left blank.
 
@@ -76,9 +77,11 @@ def plot_sweep_heatmap(
         vmin: lower end of the colour scale, in display units (degrees for radians).
         vmax: upper end of the colour scale.
         cmap: matplotlib colour map.
+        colorbar: add a colour bar labelled with the variable and its unit (False: panels
+            sharing ``vmin`` and ``vmax`` share one, added by the caller).
 
     Returns:
-        The figure, with a colour bar labelled with the variable and its unit.
+        The figure.
 
     Raises:
         InvalidInput: ``data`` is not 2-D over ``x`` and ``y``.
@@ -96,7 +99,8 @@ def plot_sweep_heatmap(
     mesh = ax_.pcolormesh(
         u, v, np.ma.masked_invalid(z.astype(float)), shading="nearest", vmin=vmin, vmax=vmax, cmap=cmap
     )
-    fig.colorbar(mesh, ax=ax_, label=_label(data))
+    if colorbar:
+        fig.colorbar(mesh, ax=ax_, label=_label(data))
     if uticks is not None:
         ax_.set_xticks(u, uticks, rotation=30, ha="right")
     if vticks is not None:

@@ -71,3 +71,21 @@ def test_page_shows_the_command_and_versions():
     assert "plm-pin report demo --out &#39;my reports&#39;" in page
     for name in ("plm_pin", "pinocchio", "proxsuite", "numpy", "python"):
         assert f"<th>{name}</th><td>{result.versions[name]}</td>" in page
+
+
+def test_a_figure_with_nothing_drawn_is_its_caption_alone():
+    """Section.figure(None, ...): the caption as a paragraph, no image, and its numbers in results.json."""
+
+    def run(ctx):
+        ctx.section("Flat").figure(None, "Torque. Not drawn, being flat to round-off: a: zero.", {"a": [0.0]})
+
+    result = run_study(make_study(run))
+    page = render_report(result)
+    assert '<p class="flat">Torque. Not drawn, being flat to round-off: a: zero.</p>' in page
+    assert "data:image/svg" not in page
+    (block,) = result.to_dict()["sections"][0]["blocks"]
+    assert block == {
+        "kind": "figure",
+        "caption": "Torque. Not drawn, being flat to round-off: a: zero.",
+        "data": {"a": [0.0]},
+    }

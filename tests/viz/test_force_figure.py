@@ -52,6 +52,9 @@ def test_fig8_draws_both_panels(tmp_path):
     assert styles_b.count("-") == len(styles_a) and styles_b.count("--") == len(styles_a) - 1  # no load
     ax_a.figure.savefig(tmp_path / "fig8.png")
     assert (tmp_path / "fig8.png").stat().st_size > 10_000
+    (legend,) = ax_a.figure.legends  # one legend for both panels, none inside them
+    assert ax_a.get_legend() is None and ax_b.get_legend() is None
+    assert [t.get_text() for t in legend.get_texts()] == ["f_c", "f_n", "f_l", "load"]
 
 
 def test_bad_plane_is_refused():

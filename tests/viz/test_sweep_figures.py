@@ -48,6 +48,12 @@ def test_heatmap_shows_radians_in_degrees_and_text_coordinates_as_ticks(ds, clos
         plot_sweep_heatmap(ds.orientation_halfwidth, "legs", "y")
 
 
+def test_heatmap_without_colour_bar_leaves_it_to_the_caller(ds, close_figures):
+    """colorbar=False: the figure holds the one axes drawn in, no colour-bar axes."""
+    fig = plot_sweep_heatmap(ds.orientation_halfwidth.sel(half_plate=0.035), "legs", "y", colorbar=False)
+    assert len(fig.axes) == 1
+
+
 def test_lines_draw_one_curve_per_hue_value(ds, close_figures):
     """Manipulability against the plate angle, one line per height; the angle axis in degrees."""
     data = ds.manipulability.sel(legs="(1, 2, 4)", half_plate=0.05)
