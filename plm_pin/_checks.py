@@ -285,11 +285,12 @@ def check_tolerance(value: object, name: str, *, relative: bool = False) -> floa
 
 def non_finite_bodies(mech: Mechanism) -> list[str]:
     """Bodies whose spatial inertia is not finite (a mass or a centre of mass that overflows)."""
-    return [
-        name
-        for j, name in enumerate(mech.body_names, start=1)
-        if not np.all(np.isfinite(mech.model.inertias[j].matrix()))
-    ]
+    from .mechanism import body_name
+
+    model = mech.model
+    finite = np.isfinite(np.array([inertia.matrix() for inertia in model.inertias])).all(axis=(1, 2))
+    # names only when needed: each costs a scan of the frames
+    return [body_name(model, int(j)) for j in np.flatnonzero(~finite[1:]) + 1]
 
 
 def check_finite_model(mech: Mechanism) -> None:

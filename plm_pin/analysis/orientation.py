@@ -31,7 +31,7 @@ from ..exceptions import InvalidInput
 from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import SINGULARITY_TOL
 from ._continuation import guess_mode, start_configuration
-from .singular_loci import NEAR, SingularPoint, singular_points_along
+from .singular_loci import NEAR, SingularPoint, line_path, locate_on_solved
 from .workspace import workspace_sweep
 
 if TYPE_CHECKING:
@@ -157,8 +157,15 @@ def orientation_range(
     around = [i] if ts[i] == reference else [i, i + 1]
     if not all(line.reachable[j] for j in around):
         return unreachable
-    found = singular_points_along(
-        mech, axis, ts, base, guess=q0, mode=mode, xtol=xtol, tol=tol, near=near, ik_tol=ik_tol
+    margins = {
+        "direct_margin": line.direct_margin,
+        "inverse_margin": line.inverse_margin,
+        "constraint_margin": line.constraint_margin,
+    }
+    assert line.working_mode is not None  # the reference sample was reached
+    path = line_path(mech, axis, base, q0)  # the line solved once: its samples seed the search
+    found = locate_on_solved(
+        mech, path, ts, line.q, line.reachable, margins, line.working_mode, xtol, tol, near, True, ik_tol
     )
     ends = [(p.parameter, end) for p in found if (end := _ends(p)) is not None]
     below = [e for e in ends if e[0] <= reference]

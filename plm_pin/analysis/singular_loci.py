@@ -27,7 +27,7 @@ A 2-D slice is handled line by line (:func:`singular_loci`).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -242,9 +242,31 @@ def singular_points(
     state, target = solve_poses(mech, poses, guess, mode=mode, tol=ik_tol, workers=1)
     if target is None:
         return []
+    return locate_on_solved(
+        mech, pose, ts, state.q, state.reached, state.metrics, target, xtol, tol, near, boundaries, ik_tol
+    )
+
+
+def locate_on_solved(
+    mech: Mechanism,
+    pose: Callable[[float], np.ndarray],
+    ts: np.ndarray,
+    Q: np.ndarray,
+    reached: np.ndarray,
+    metrics: Mapping[str, np.ndarray],
+    target: tuple[int, ...],
+    xtol: float,
+    tol: float,
+    near: float,
+    boundaries: bool,
+    ik_tol: float,
+) -> list[SingularPoint]:
+    """:func:`singular_points` on a path already solved at its samples (``Q``, ``reached``, margins).
+
+    ``metrics`` holds the samples' ``direct_margin``, ``inverse_margin`` and
+    ``constraint_margin`` (read for redundant mechanisms); ``target`` is the working mode kept.
+    """
     solver = _PathSolver(mech, pose, target, ik_tol)
-    reached = state.reached
-    Q = state.q
     out: list[SingularPoint] = []
     redundant = mech.n_actuators != mech.mobility
     if not redundant:
@@ -266,9 +288,9 @@ def singular_points(
             out.append(_point(mech, pose, ts[-1], Q[-1], "sign_change", (ts[-1], ts[-1]), tol))
     else:
         margins = {
-            "direct": state.metrics["direct_margin"],
-            "inverse": state.metrics["inverse_margin"],
-            "constraint": state.metrics["constraint_margin"],
+            "direct": metrics["direct_margin"],
+            "inverse": metrics["inverse_margin"],
+            "constraint": metrics["constraint_margin"],
         }
         for kind, values in margins.items():
             for i in range(1, ts.size - 1):
@@ -412,10 +434,19 @@ def singular_points_along(
     Returns:
         The points; ``parameter`` is the value of ``axis`` [m or rad].
     """
+    return singular_points(mech, line_path(mech, axis, pose, options.get("guess")), values, **options)
+
+
+def line_path(mech: Mechanism, axis: str, pose: Any, guess: Any) -> Callable[[float], np.ndarray]:
+    """The path ``s -> pose with axis = s`` of a 1-D slice (``pose`` default: the guess's).
+
+    Raises:
+        InvalidInput: an unknown axis or a malformed pose.
+    """
     task = require_task(mech)
     if axis not in task.dofs:
         raise InvalidInput(f"unknown task coordinate {axis!r}; the task's coordinates are {list(task.dofs)}")
-    base = base_pose(mech, pose, options.get("guess"))
+    base = base_pose(mech, pose, guess)
     k = task.dofs.index(axis)
 
     def path(s: float) -> np.ndarray:
@@ -423,7 +454,7 @@ def singular_points_along(
         x[k] = s
         return x
 
-    return singular_points(mech, path, values, **options)
+    return path
 
 
 def singular_loci(

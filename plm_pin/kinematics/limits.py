@@ -14,7 +14,8 @@ loops cannot close at all.
 from __future__ import annotations
 
 import warnings
-from typing import TYPE_CHECKING
+import weakref
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -61,58 +62,92 @@ def open_missing_limits(model: pin.Model, label: str = "") -> list[str]:
     return changed
 
 
-def _limited_joints(mech: Mechanism) -> list[tuple[str, int, bool, float, float]]:
-    """(name, idx_q, revolute, lower, upper) of the one-DOF joints with a finite range."""
-    model = mech.model
+_ONE_DOF: weakref.WeakKeyDictionary[pin.Model, tuple[tuple[str, int, bool], ...]] = (
+    weakref.WeakKeyDictionary()
+)
+"""(name, idx_q, revolute) of a model's one-DOF joints: the joint types never change, limits may."""
+
+
+def _one_dof_joints(model: pin.Model) -> tuple[tuple[str, int, bool], ...]:
+    """(name, idx_q, revolute) of the one-DOF joints, found once per model (a Python call per joint)."""
+    try:
+        return _ONE_DOF[model]
+    except (KeyError, TypeError):
+        pass
     out = []
     for j in range(1, model.njoints):
         joint = model.joints[j]
-        if joint.nq != 1 or joint.nv != 1:
-            continue
-        k = joint.idx_q
-        lo, hi = float(model.lowerPositionLimit[k]), float(model.upperPositionLimit[k])
-        if np.isfinite(lo) and np.isfinite(hi):
+        if joint.nq == 1 and joint.nv == 1:
             revolute = not joint.shortname().startswith("JointModelP")
-            out.append((str(model.names[j]), k, revolute, lo, hi))
-    return out
+            out.append((str(model.names[j]), int(joint.idx_q), revolute))
+    joints = tuple(out)
+    try:
+        _ONE_DOF[model] = joints
+    except TypeError:  # a model that takes no weak reference: found again next time
+        pass
+    return joints
 
 
-def _outside(value: np.ndarray, revolute: bool, lo: float, hi: float) -> np.ndarray:
-    """Distance of ``value`` outside [lo, hi] (0 inside); for an angle, of its closest 2 pi shift."""
-    if revolute and hi - lo < TWO_PI:
+class _Limits(NamedTuple):
+    """The one-DOF joints with a finite range: names, q indices, revolute flags, bounds (arrays)."""
+
+    names: tuple[str, ...]
+    k: np.ndarray
+    revolute: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+def _limited_joints(mech: Mechanism) -> _Limits:
+    """The one-DOF joints with a finite range, their bounds read from the model at each call."""
+    model = mech.model
+    joints = _one_dof_joints(model)
+    k = np.array([j[1] for j in joints], dtype=int)
+    lower, upper = np.asarray(model.lowerPositionLimit)[k], np.asarray(model.upperPositionLimit)[k]
+    keep = np.isfinite(lower) & np.isfinite(upper)
+    names = tuple(j[0] for j, kept in zip(joints, keep, strict=True) if kept)
+    revolute = np.array([j[2] for j in joints], dtype=bool)[keep]
+    return _Limits(names, k[keep], revolute, lower[keep], upper[keep])
+
+
+def _outside(value: np.ndarray, limits: _Limits) -> np.ndarray:
+    """Distance of each joint's ``value`` (last axis) outside its range (0 inside).
+
+    For a revolute joint whose range is narrower than a turn, the distance of the angle's
+    closest 2 pi shift; a revolute joint with a wider range holds every angle.
+    """
+    lo, hi = limits.lower, limits.upper
+    wrapped = limits.revolute & (hi - lo < TWO_PI)
+    with np.errstate(invalid="ignore"):  # NaN or infinite entries give NaN, as the callers expect
         shifted = lo + np.mod(value - lo, TWO_PI)  # in [lo, lo + 2 pi)
-        return np.minimum(np.maximum(shifted - hi, 0.0), lo + TWO_PI - shifted)
-    if revolute:
-        return np.zeros_like(value)
-    return np.maximum(lo - value, 0.0) + np.maximum(value - hi, 0.0)
+        angle = np.minimum(np.maximum(shifted - hi, 0.0), lo + TWO_PI - shifted)
+        linear = np.maximum(lo - value, 0.0) + np.maximum(value - hi, 0.0)
+    return np.where(wrapped, angle, np.where(limits.revolute, 0.0, linear))
 
 
 def limit_violations(mech: Mechanism, q: np.ndarray) -> dict[str, float]:
     """By how much each joint is outside its position limits at ``q`` [m or rad]; empty when none is."""
-    out = {}
-    for name, k, revolute, lo, hi in _limited_joints(mech):
-        d = float(_outside(np.asarray(q[k]), revolute, lo, hi))
-        if d > LIMIT_TOL:
-            out[name] = d
-    return out
+    limits = _limited_joints(mech)
+    d = _outside(np.asarray(q, dtype=float)[limits.k], limits)
+    return {limits.names[i]: float(d[i]) for i in np.flatnonzero(d > LIMIT_TOL)}
 
 
 def within_limits(mech: Mechanism, q: np.ndarray) -> np.ndarray:
     """Whether configurations respect every joint's limits, shape ``q.shape[:-1]``; False for NaN rows."""
     arr = np.asarray(q, dtype=float)
     ok = np.all(np.isfinite(arr), axis=-1)
-    for _, k, revolute, lo, hi in _limited_joints(mech):
-        with np.errstate(invalid="ignore"):
-            ok &= np.nan_to_num(_outside(arr[..., k], revolute, lo, hi), nan=np.inf) <= LIMIT_TOL
-    return ok
+    limits = _limited_joints(mech)
+    d = np.nan_to_num(_outside(arr[..., limits.k], limits), nan=np.inf)
+    return ok & np.all(d <= LIMIT_TOL, axis=-1)
 
 
 def wrap_into_limits(mech: Mechanism, q: np.ndarray) -> np.ndarray:
     """``q`` with each limited revolute angle shifted by a multiple of 2 pi into its limits where one fits."""
     out = np.array(q, dtype=float)
-    for _, k, revolute, lo, hi in _limited_joints(mech):
-        if revolute and not lo <= out[k] <= hi:
-            shifted = lo + float(np.mod(out[k] - lo, TWO_PI))
-            if shifted <= hi:
-                out[k] = shifted
+    limits = _limited_joints(mech)
+    lo, hi, value = limits.lower, limits.upper, out[limits.k]
+    with np.errstate(invalid="ignore"):
+        shifted = lo + np.mod(value - lo, TWO_PI)
+        move = limits.revolute & ~((lo <= value) & (value <= hi)) & (shifted <= hi)
+    out[limits.k[move]] = shifted[move]
     return out
