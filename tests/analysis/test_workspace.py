@@ -229,3 +229,15 @@ def test_continuation_evaluator_pickles_for_worker_processes():
     assert a is not None and b is not None
     np.testing.assert_array_equal(a, b)
     assert copy.mode(copy.jacobian()) == working_mode(mech, b)
+
+
+def test_parallel_bands_of_a_map_the_batched_rows_do_not_take_give_the_same_map():
+    """An 8-PSS map (floating platform: solved point by point, not by planar row batches) in two processes."""
+    mech = preset("zhao2011_8pss")
+    x0 = task_pose(mech, mech.q_ref)
+    values = (x0[0] + np.linspace(-0.05, 0.05, 8), x0[1] + np.linspace(-0.05, 0.05, 5))
+    one = workspace_map(mech, ("x", "y"), values, pose=x0, workers=1)
+    two = workspace_map(mech, ("x", "y"), values, pose=x0, workers=2)
+    assert one.reachable.all()
+    np.testing.assert_allclose(one.manipulability, two.manipulability, rtol=1e-9)
+    np.testing.assert_allclose(one.actuators, two.actuators, atol=1e-11)
