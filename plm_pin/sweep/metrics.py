@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._text import short
 from ..analysis import workspace_grid
 from ..analysis._continuation import guess_mode
 from ..analysis.orientation import ENDS, RANGE_XTOL, orientation_range
@@ -108,13 +109,13 @@ class Option:
 
 def _positive(name: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < math.inf:
-        raise InvalidInput(f"option {name!r} must be a positive finite number, got {value!r}")
+        raise InvalidInput(f"option {name!r} must be a positive finite number, got {short(value)}")
     return float(value)
 
 
 def _finite(name: str, value: Any) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InvalidInput(f"option {name!r} must be a finite number, got {value!r}")
+        raise InvalidInput(f"option {name!r} must be a finite number, got {short(value)}")
     return float(value)
 
 
@@ -123,7 +124,7 @@ def _of_type(kind: type, text: str) -> Callable[[str, Any], Any]:
 
     def check(name: str, value: Any) -> Any:
         if not isinstance(value, kind):
-            raise InvalidInput(f"option {name!r} must be {text}, got {value!r}")
+            raise InvalidInput(f"option {name!r} must be {text}, got {short(value)}")
         return value
 
     return check
@@ -135,13 +136,13 @@ def _names(name: str, value: Any) -> tuple[str, ...] | None:
     if isinstance(value, str):
         value = [value]
     if not isinstance(value, Sequence) or not value or not all(isinstance(v, str) for v in value):
-        raise InvalidInput(f"option {name!r} must be a non-empty list of names, got {value!r}")
+        raise InvalidInput(f"option {name!r} must be a non-empty list of names, got {short(value)}")
     return tuple(value)
 
 
 def _objective(name: str, value: Any) -> str:
     if value not in OBJECTIVES:
-        raise InvalidInput(f"option {name!r} must be one of {list(OBJECTIVES)}, got {value!r}")
+        raise InvalidInput(f"option {name!r} must be one of {list(OBJECTIVES)}, got {short(value)}")
     return str(value)
 
 
@@ -155,7 +156,7 @@ def _wrenches(name: str, value: Any) -> tuple[tuple[float, ...], ...] | None:
     if arr.ndim != 2 or arr.shape[0] == 0 or not np.all(np.isfinite(arr)):
         raise InvalidInput(
             f"option {name!r} must be a non-empty list of wrenches (each 6 values, or one per task "
-            f"coordinate), all finite, got {value!r}"
+            f"coordinate), all finite, got {short(value)}"
         )
     return tuple(tuple(float(v) for v in row) for row in arr)
 
@@ -169,7 +170,7 @@ def _internal(name: str, value: Any) -> tuple[float, ...] | dict[str, float] | N
         return tuple(_finite(name, v) for v in value)
     raise InvalidInput(
         f"option {name!r} must be internal-force coordinates (a list of numbers) or "
-        f"{{link: axial force [N]}}, got {value!r}"
+        f"{{link: axial force [N]}}, got {short(value)}"
     )
 
 
@@ -181,7 +182,7 @@ def _direction(name: str, value: Any) -> tuple[float, ...] | None:
     except (TypeError, ValueError):
         arr = np.empty(0)
     if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or not np.any(arr):
-        raise InvalidInput(f"option {name!r} must be a non-zero list of numbers, got {value!r}")
+        raise InvalidInput(f"option {name!r} must be a non-zero list of numbers, got {short(value)}")
     return tuple(float(v) for v in arr)
 
 

@@ -167,3 +167,19 @@ def test_samples_and_grids_enumerate_points_row_major():
     assert samples.parameters.dims == ("sample",) and samples.parameters.point(1) == {"half_plate": 0.05}
     none = make_spec("harada2011_3d4m", None, {"y": [0.08]})
     assert none.n_points == 1 and none.parameters.point(0) == {}
+
+
+def test_a_huge_option_value_is_quoted_short():
+    """An option's bad value is quoted cut short: a million-entry list does not fill the message."""
+    kwargs = small(options={"ik_tol": ["x"] * 1_000_000})
+    with pytest.raises(InvalidInput) as err:
+        make_spec(
+            kwargs.pop("mechanism"),
+            kwargs.pop("parameters"),
+            kwargs.pop("poses"),
+            kwargs.pop("metrics"),
+            **kwargs,
+        )
+    message = str(err.value)
+    assert message.startswith("option 'ik_tol' must be a positive finite number, got ['x', 'x', ")
+    assert len(message) < 200
