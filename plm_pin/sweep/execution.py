@@ -25,13 +25,14 @@ Where the mechanisms come from:
   needs neither the builder nor the description files;
 - several parameter points: each worker builds its own points from the builder and the
   parameters, the build being part of the parallel work. Measured on this 2-core machine
-  (shared, medians): a build takes 7.9 ms (``harada2011_3d4m``) and 120 ms
-  (``zhao2011_8pss``), its pickle is 38 kB and 103 kB and costs 1.4 ms and 4.1 ms to dump
-  and load. Shipping one mechanism is cheaper than building it, but the client builds one
-  after the other on one core (on a local cluster, the workers' cores): on a 2-worker
-  LocalCluster, 12 points built on the client and shipped took 1.1-1.3 times as long
-  (3D4M, 9 and 180 poses per point) and 2.3-3.0 times as long (8-PSS, 1 and 20 poses) as
-  the same points built by the workers.
+  (shared with other work, medians of runs at different loads): a build takes 6-10 ms
+  (``harada2011_3d4m``) and 20-145 ms (``zhao2011_8pss``, about 120 ms typically), its
+  pickle is 38 kB and 103 kB and costs 0.7-1.4 ms and 2.4-4.1 ms to dump and load.
+  Shipping one mechanism is cheaper than building it, but the client builds one after the
+  other on one core (on a local cluster, the workers' cores): on a 2-worker LocalCluster,
+  12 points built on the client and shipped took 1.1-2.6 times as long (3D4M, 9 and 180
+  poses per point) and 2.0-4.1 times as long (8-PSS, 1 and 20 poses) as the same points
+  built by the workers, in three runs.
 
 A parameter point that raises is recorded with its message and the chunk goes on; a chunk
 whose task fails (a worker lost) is reported whole. Either way the other chunks complete.
