@@ -1,7 +1,8 @@
 """Design sweeps: metrics over builder parameters times task poses, local or on Dask, checkpointed.
 
 ``plm_pin.sweep`` is this package and, called, its :func:`sweep` function:
-``plm_pin.sweep("harada2011_3d4m", parameters=..., poses=..., metrics=[...])``.
+``plm_pin.sweep("harada2011_3d4m", parameters=..., poses=..., metrics=[...])``, or over the
+poses of a Mechanism as it is, ``plm_pin.sweep(plm_pin.load("robot.urdf"), poses=...)``.
 Its optional dependencies (``pip install 'plm-pin[sweep]'``: dask, distributed, xarray,
 pyarrow) are imported only when a sweep runs.
 """
@@ -17,7 +18,7 @@ from .execution import DEFAULT_CHUNK, Chunk, ChunkValues, evaluate_chunk, plan_c
 from .metrics import METRICS, OPTIONS, Metric, Option, Variable
 from .result import ChunkFailure, PointFailure, SweepResult, build_dataset
 from .run import run_spec, sweep
-from .spec import ParameterSpace, SweepSpec, make_spec
+from .spec import ParameterSpace, SweepSpec, make_spec, mechanism_digest
 from .store import SweepStore
 
 __all__ = [
@@ -39,6 +40,7 @@ __all__ = [
     "evaluate_chunk",
     "load_config",
     "make_spec",
+    "mechanism_digest",
     "plan_chunks",
     "run_spec",
     "spec_from_config",

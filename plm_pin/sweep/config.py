@@ -3,7 +3,7 @@
 .. code-block:: yaml
 
     format: plm-pin-sweep/1          # optional; checked when given
-    mechanism: harada2011_3d4m       # a preset, or a builder "package.module:function"
+    mechanism: harada2011_3d4m       # a preset, a description path, or a builder "package.module:function"
     base: {rod_lengths: [0.14, 0.14, 0.14, 0.14]}   # fixed builder parameters (optional)
     parameters:                      # a grid (mapping) or samples (a list of mappings)
       legs: [[1, 2, 4], [1, 2, 3, 4]]
@@ -19,7 +19,10 @@
 A list of values is given as a list, or as ``{linspace: [start, stop, num]}`` or
 ``{values: [...]}``, either with an optional ``unit`` among ``deg`` (converted to rad),
 ``mm`` (to m), ``rad`` and ``m``. A builder named ``module:function`` is imported: a
-configuration file is trusted like code.
+configuration file is trusted like code. A description path (a ``.urdf`` with its sidecar, a
+``.plm.yaml`` or a folder, relative to the working directory as for ``plm-pin view PATH``)
+is swept like :func:`~plm_pin.sweep.sweep` sweeps it: without ``parameters``, the mechanism
+is loaded once here and shipped to the workers, which need not have the file.
 """
 
 from __future__ import annotations
@@ -83,9 +86,10 @@ def _values(where: str, raw: Any) -> Any:
 def _mechanism(raw: Any) -> Any:
     if not isinstance(raw, str) or not raw:
         raise InvalidInput(
-            f"mechanism must be a preset name or a builder 'module:function', got {short(raw)}"
+            "mechanism must be a preset name, a description path or a builder 'module:function', "
+            f"got {short(raw)}"
         )
-    if ":" not in raw:
+    if ":" not in raw or Path(raw).exists():
         return raw
     module, _, name = raw.partition(":")
     try:

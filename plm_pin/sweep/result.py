@@ -5,7 +5,8 @@ of samples), then the pose axes a variable keeps. Coordinates: the parameter val
 (numbers, or text such as ``(1, 2, 4)`` for tuple-valued parameters) and the pose values
 [m or rad] with their ``units``. Every variable has ``units`` and ``description``
 attributes (codes also ``flag_values`` and ``flag_meanings``); ``failed`` flags the
-parameter points that raised. The spec (JSON) and its key are in the dataset's attributes.
+parameter points that raised. The spec (JSON) and its key are in the dataset's attributes,
+with the mechanism's label, digest and source (:class:`~plm_pin.sweep.SweepSpec`).
 """
 
 from __future__ import annotations
@@ -188,6 +189,8 @@ def build_dataset(spec: SweepSpec, arrays: dict[str, np.ndarray], failed: np.nda
     attrs = {
         "title": f"plm_pin design sweep of {spec.label}",
         "mechanism": spec.label,
+        "mechanism_digest": spec.digest or "",
+        "mechanism_source": spec.source,
         "key": spec.key(),
         "spec": json.dumps(spec.to_dict(), sort_keys=True),
         "plm_pin": __version__,

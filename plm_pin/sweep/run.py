@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import InvalidInput
+from ..mechanism import Mechanism
 from ..models.registry import Builder
 from ._deps import require
 from .execution import DEFAULT_CHUNK, ChunkValues, check_execution, plan_chunks, points_per_chunk, run_chunks
@@ -22,7 +23,7 @@ Progress = Callable[[int, int], None]
 
 
 def _check_storable(spec: SweepSpec) -> None:
-    if "<" in spec.label:
+    if not isinstance(spec.mechanism, Mechanism) and "<" in spec.label:
         raise InvalidInput(
             f"a checkpointed sweep needs a builder importable by name (module:function); {spec.label} is a "
             "lambda or a local function, whose name does not identify it"
@@ -123,7 +124,7 @@ def _run(
 
 
 def sweep(
-    mechanism: str | Builder,
+    mechanism: str | Builder | Mechanism,
     parameters: ParametersArg = None,
     poses: PosesArg = None,
     metrics: Sequence[str] = ("manipulability",),
@@ -140,14 +141,21 @@ def sweep(
     """Evaluate metrics over a grid of builder parameters times a grid of task poses.
 
     Every argument is checked before any work starts. At each parameter point the
-    mechanism is built (:func:`plm_pin.build_mechanism`) and the metrics of
-    :data:`plm_pin.sweep.METRICS` are evaluated over the pose grid in the working mode of
-    its reference configuration. Results do not depend on ``chunk``, ``workers`` or
-    ``scheduler``: each parameter point is computed whole, by the same calls, wherever it runs.
+    mechanism is built (:func:`plm_pin.build_mechanism`), or taken as given, and the
+    metrics of :data:`plm_pin.sweep.METRICS` are evaluated over the pose grid in the
+    working mode of its reference configuration. Results do not depend on ``chunk``,
+    ``workers`` or ``scheduler``: each parameter point is computed whole, by the same calls,
+    wherever it runs. A Mechanism given (or a single point's, built here for the checks) is
+    shipped to Dask workers pickled with the sweep, never rebuilt there; several points are
+    built by the workers (:mod:`plm_pin.sweep.execution` says why, with measurements).
 
     Args:
-        mechanism: a preset name (its builder, with the preset's parameters) or a builder
-            callable returning ``(robot, sidecar)`` (see :mod:`plm_pin.models`).
+        mechanism: a preset name (its builder, with the preset's parameters), a builder
+            callable returning ``(robot, sidecar)`` (see :mod:`plm_pin.models`), the path
+            of a description (its parameters: joint origins, lengths and masses, see
+            :mod:`plm_pin.description.overrides`), or a :class:`~plm_pin.Mechanism` as it
+            is (e.g. ``plm_pin.load("robot.urdf")``: its poses only, without ``parameters``
+            or ``base``).
         parameters: the builder parameters varied: a mapping ``name -> values`` (their
             grid, row-major in the order given) or a list of mappings (samples, dimension
             ``sample``). A value is a number, a name or a list of them (e.g. ``rod_lengths``).
@@ -173,8 +181,10 @@ def sweep(
 
     Raises:
         InvalidInput: an unknown preset, parameter, metric, option or task coordinate (the
-            message lists the valid ones), an empty grid or a non-finite value.
-        StoreMismatch: ``store`` holds another sweep.
+            message lists the valid ones), an empty grid, a non-finite value, or parameters
+            given with a Mechanism.
+        StoreMismatch: ``store`` holds another sweep (also when only the mechanism's
+            digest differs: a changed description file, builder or Mechanism).
         SchedulerUnreachable: the scheduler does not answer, or has no worker, in time.
         ImportError: the ``sweep`` extra is not installed (``pip install 'plm-pin[sweep]'``).
     """

@@ -1,15 +1,19 @@
 """What a design sweep computes, checked in full before any work starts: :class:`SweepSpec`.
 
 A sweep varies the parameters of a mechanism builder (a grid, or a list of samples) and,
-at every parameter point, evaluates metrics over a grid of task poses. The spec holds
-everything that decides the numbers, normalised (SI units, radians, floats as given), so
-that its :meth:`SweepSpec.key` identifies the results: a checkpoint store refuses another
-sweep's spec (:mod:`plm_pin.sweep.store`). How the work is split and where it runs is not
-part of it (results do not depend on it).
+at every parameter point, evaluates metrics over a grid of task poses; or it evaluates them
+over the poses of one :class:`~plm_pin.Mechanism` given as it is (e.g. from :func:`plm_pin.load`).
+The spec holds everything that decides the numbers, normalised (SI units, radians, floats
+as given), so that its :meth:`SweepSpec.key` identifies the results: a checkpoint store
+refuses another sweep's spec (:mod:`plm_pin.sweep.store`). The mechanism enters the key by
+its label and by the :func:`mechanism_digest` of its first parameter point, so a resumed
+sweep whose mechanism (file, builder or object) changed is refused. How the work is split
+and where it runs is not part of it (results do not depend on it).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
@@ -24,6 +28,7 @@ from .._text import short
 from ..description.sidecar import TASK_DOFS
 from ..exceptions import InvalidInput, PlmError
 from ..loading import build_mechanism, resolve_builder
+from ..mechanism import Mechanism
 from ..models.registry import Builder, builder_parameters
 from .metrics import METRICS, Variable, check_options
 
@@ -70,6 +75,20 @@ def normalise_value(where: str, v: Any) -> Value:
             raise InvalidInput(f"{where}: an empty list is not a parameter value")
         return tuple(_scalar(where, item) for item in items)
     return _scalar(where, v)
+
+
+def mechanism_digest(mech: Mechanism) -> str:
+    """SHA-256 of what decides a mechanism's results: its Pinocchio model and its sidecar.
+
+    The model is taken as Pinocchio serialises it (``model.saveToString()``: every joint,
+    inertia, frame and limit to the last bit), once its idle gauges are in it; the sidecar as
+    canonical JSON. Equal mechanisms loaded in different processes get equal digests; a
+    Pinocchio upgrade may change them (a resumed sweep is then refused, never mixed).
+    """
+    mech.idle_gauges  # noqa: B018 - the model is final (gauge frames added) before it is hashed
+    h = hashlib.sha256(mech.model.saveToString().encode())
+    h.update(json.dumps(mech.sidecar.to_dict(), sort_keys=True, allow_nan=False).encode())
+    return h.hexdigest()
 
 
 def value_label(v: Value) -> str:
@@ -208,8 +227,10 @@ class SweepSpec:
     """A design sweep, checked and normalised (build one with :func:`make_spec`).
 
     Attributes:
-        mechanism: the preset name or the builder callable.
-        label: the preset name, or the builder's ``module:qualname``.
+        mechanism: the preset name, the builder callable, the description path, or the
+            :class:`~plm_pin.Mechanism` itself.
+        label: the preset name, the builder's ``module:qualname``, the path, or the
+            Mechanism's name.
         base: fixed builder parameters given on top of the preset's (SI units).
         parameters: the varied builder parameters.
         axes: the pose grid's task coordinates, in order.
@@ -218,9 +239,17 @@ class SweepSpec:
             reference pose).
         metrics: the metrics asked for, in order.
         options: every option of those metrics, defaults filled in.
+        digest: :func:`mechanism_digest` of the first parameter point's mechanism (None when
+            it cannot be built: that point fails).
+        built: the mechanism of the only parameter point, held by the spec and shipped with it
+            to the workers, never built there: the Mechanism given, or the one a single-point
+            sweep built on the client for its checks. None for sweeps of several points (each
+            worker builds its own points, see :mod:`plm_pin.sweep.execution`).
+        source: the first point's provenance (:attr:`plm_pin.Mechanism.source`: a paper, or the
+            file it was loaded from), recorded with the results; not part of :meth:`key`.
     """
 
-    mechanism: str | Builder
+    mechanism: str | Builder | Mechanism
     label: str
     base: Mapping[str, Value]
     parameters: ParameterSpace
@@ -229,6 +258,9 @@ class SweepSpec:
     pose: tuple[float, ...] | None
     metrics: tuple[str, ...]
     options: Mapping[str, Any] = field(default_factory=dict)
+    digest: str | None = None
+    built: Mechanism | None = field(default=None, compare=False, repr=False)
+    source: str = field(default="", compare=False)
 
     @property
     def pose_shape(self) -> tuple[int, ...]:
@@ -271,8 +303,11 @@ class SweepSpec:
         """Builder parameters of a parameter point: ``base`` and its values (preset defaults aside)."""
         return {**self.base, **self.parameters.point(index)}
 
-    def build(self, index: int) -> Any:
-        """The mechanism at a parameter point (:func:`plm_pin.build_mechanism`)."""
+    def build(self, index: int) -> Mechanism:
+        """The mechanism at a parameter point: :attr:`built`, else :func:`plm_pin.build_mechanism`."""
+        if self.built is not None:
+            return self.built
+        assert not isinstance(self.mechanism, Mechanism)  # make_spec sets built for a Mechanism
         stem = self.label.rsplit(":", 1)[-1]
         return build_mechanism(self.mechanism, self.point_parameters(index), name=f"{stem}_p{index}")
 
@@ -285,6 +320,7 @@ class SweepSpec:
             "format": FORMAT,
             "plm_pin": __version__,
             "mechanism": self.label,
+            "digest": self.digest,
             "base": {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.base.items()},
             "parameters": self.parameters.to_dict(),
             "poses": {a: v.tolist() for a, v in zip(self.axes, self.values, strict=True)},
@@ -300,7 +336,7 @@ class SweepSpec:
 
 
 def make_spec(
-    mechanism: str | Builder,
+    mechanism: str | Builder | Mechanism,
     parameters: ParametersArg = None,
     poses: PosesArg = None,
     metrics: Sequence[str] = ("manipulability",),
@@ -312,16 +348,27 @@ def make_spec(
     """Check a sweep's arguments and normalise them (see :func:`plm_pin.sweep.sweep` for their meaning).
 
     The mechanism at the first parameter point is built to check the pose axes, the fixed
-    pose and the wrenches against its task; if it cannot be built, that point is reported
-    by the sweep like any other failure.
+    pose and the wrenches against its task, and to take its :func:`mechanism_digest`; if it
+    cannot be built, that point is reported by the sweep like any other failure. A
+    single-point sweep keeps that mechanism (:attr:`SweepSpec.built`) rather than building
+    it again.
 
     Raises:
         InvalidInput: an unknown preset, parameter, metric, option or task coordinate (the
-            message lists the valid ones), an empty grid, a non-finite value, or a value of
-            the wrong shape.
+            message lists the valid ones), an empty grid, a non-finite value, a value of
+            the wrong shape, or parameters (or ``base``) given with a Mechanism.
     """
-    builder, _, label = resolve_builder(mechanism)
-    valid = builder_parameters(builder)
+    if isinstance(mechanism, Mechanism):
+        if parameters or base:
+            raise InvalidInput(
+                f"parameters and base are builder parameters; {mechanism.name} is a Mechanism, which has "
+                "none: sweep its poses alone, or give its preset, builder or description path to vary them"
+            )
+        valid: tuple[str, ...] = ()
+        label = mechanism.name
+    else:
+        builder, _, label = resolve_builder(mechanism)
+        valid = builder_parameters(builder)
     fixed = {}
     for name, v in (base or {}).items():
         if name not in valid:
@@ -357,10 +404,21 @@ def make_spec(
             )
         fixed_pose = tuple(float(v) for v in arr)
     checked = check_options(tuple(metrics), dict(options or {}))
-    spec = SweepSpec(mechanism, label, fixed, space, axes, values, fixed_pose, tuple(metrics), checked)
+    held = mechanism if isinstance(mechanism, Mechanism) else None
+    spec = SweepSpec(
+        mechanism, label, fixed, space, axes, values, fixed_pose, tuple(metrics), checked, built=held
+    )
     _check_axes_options(spec)
-    _check_against_first_point(spec)
-    return spec
+    first = _first_point(spec)
+    if first is None:
+        return spec
+    _check_against(spec, first)
+    return dataclasses.replace(
+        spec,
+        digest=mechanism_digest(first),
+        built=first if spec.n_points == 1 else None,
+        source=first.source,
+    )
 
 
 def _check_axes_options(spec: SweepSpec) -> None:
@@ -386,13 +444,18 @@ def _check_axes_options(spec: SweepSpec) -> None:
             )
 
 
-def _check_against_first_point(spec: SweepSpec) -> None:
+def _first_point(spec: SweepSpec) -> Mechanism | None:
+    """The mechanism of the first parameter point, or None when it cannot be built."""
     try:
-        mech = spec.build(0)
+        return spec.build(0)
     except PlmError:
-        return  # reported as that point's failure
+        return None  # reported as that point's failure
     except (TypeError, ValueError):
-        return
+        return None
+
+
+def _check_against(spec: SweepSpec, mech: Mechanism) -> None:
+    """Check the pose axes, the fixed pose and the wrenches against ``mech``'s task."""
     dofs = mech.sidecar.task.dofs if mech.sidecar.task is not None else ()
     unknown = [a for a in spec.axes if a not in dofs]
     if unknown:

@@ -2,7 +2,7 @@
 
 Layout of a store folder::
 
-    manifest.json                                 the sweep's canonical spec and its key (SHA-256)
+    manifest.json                                 the sweep's canonical spec, its key (SHA-256), its source
     chunks/points-0000000-0000039.parquet         one row per parameter point of a finished chunk
     chunks/points-0000000-0000039.parquet.sha256  the SHA-256 of that file's bytes
     .lock, .lock.owner                            held while a sweep runs; who holds it (pid, host)
@@ -156,7 +156,7 @@ class SweepStore:
         """Check the manifest names this sweep, or write it."""
         spec = self.spec
         manifest = self.root / MANIFEST
-        document = {"format": FORMAT, "key": self.key, "spec": spec.to_dict()}
+        document = {"format": FORMAT, "key": self.key, "spec": spec.to_dict(), "source": spec.source}
         if manifest.exists():
             found_key, found_spec = _read_manifest(manifest)
             if found_key != self.key:

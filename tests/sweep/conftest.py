@@ -1,4 +1,4 @@
-"""Fixtures of the sweep tests: small sweeps of the Harada 2011 tables, a builder that fails on purpose."""
+"""Fixtures of the sweep tests: small Harada 2011 sweeps, a builder that fails on purpose, a Dask cluster."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import math
 from typing import Any
 
 import numpy as np
+import pytest
 
 from plm_pin.models import PRESETS, build_2prrrp
 
@@ -20,6 +21,16 @@ FIG6_Y = (FIG6_L + FIG6_RT) * math.sin(math.radians(28.7))
 
 THETAS = np.radians(np.linspace(-80.0, 80.0, 33))
 """Plate angles of the small sweeps [rad]: 5 deg samples over Fig. 6's range."""
+
+
+@pytest.fixture(scope="session")
+def cluster():
+    """A Dask LocalCluster of 2 single-threaded worker processes on loopback (shared by the sweep tests)."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address="127.0.0.1:0"
+    ) as local:
+        yield local
 
 
 def small(**changes: Any) -> dict[str, Any]:

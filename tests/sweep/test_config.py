@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plm_pin import InvalidInput
+from plm_pin import InvalidInput, Mechanism
 from plm_pin.sweep import load_config, make_spec, spec_from_config
 
 REPO = Path(__file__).resolve().parents[2]
@@ -54,6 +54,17 @@ def test_builder_by_module_and_name():
         _config(mechanism="tests.sweep.conftest:fragile_2prrrp", metrics=["reachable"], poses={"y": [0.08]})
     )
     assert spec.label == "tests.sweep.conftest:fragile_2prrrp"
+
+
+def test_description_path_without_parameters_is_loaded_once_to_be_shipped(tmp_path):
+    """mechanism: PATH of a URDF with its sidecar: one point, its Mechanism held by the spec (shipped)."""
+    from tests import textbook as tb
+
+    mech = tb.stewart(tmp_path)
+    config = _config(mechanism=mech.source, parameters=None, poses={"x": [0.0]}, pose=list(tb.STEWART_POSE))
+    spec, _ = spec_from_config(config)
+    assert spec.label == mech.source and spec.n_points == 1 and spec.built is not None
+    assert isinstance(spec.built, Mechanism) and spec.built.nq == mech.nq
 
 
 @pytest.mark.parametrize(

@@ -95,16 +95,6 @@ def test_scheduler_and_workers_are_checked():
         sweep(**small(), scheduler="tcp://127.0.0.1:1", workers=2)
 
 
-@pytest.fixture(scope="module")
-def cluster():
-    """A Dask LocalCluster of 2 single-threaded worker processes on loopback."""
-    distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address="127.0.0.1:0"
-    ) as local:
-        yield local
-
-
 @pytest.mark.slow
 def test_dask_cluster_gives_the_local_results_bit_for_bit(cluster, reference):
     """On a 2-worker LocalCluster, by Client and by address, the dataset equals the in-process one."""
