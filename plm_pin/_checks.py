@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+import pinocchio as pin
 
 from ._text import short
 from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
@@ -29,7 +30,7 @@ def as_vector(x: object, size: int, name: str) -> np.ndarray:
         raise InvalidInput(f"{name} must be {size} numbers: {exc}") from None
     if arr.shape != (size,):
         raise InvalidInput(f"{name} must have shape ({size},), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InvalidInput(
             f"{name} has non-finite entries at indices {np.flatnonzero(~np.isfinite(arr)).tolist()}"
         )
@@ -212,15 +213,26 @@ def check_assembled(mech: Mechanism, q: object, name: str = "q") -> np.ndarray:
 
     Raises:
         InvalidInput: a malformed ``q``.
+        ClosureNotSatisfied: a closure is open by more than :data:`CLOSURE_TOL` (see :func:`check_closed`).
+    """
+    qa = mech.check_q(q, name)
+    if mech.closures:
+        check_closed(mech, qa, mech.closure_residual(qa), name)
+    return qa
+
+
+def check_closed(mech: Mechanism, qa: np.ndarray, phi: np.ndarray, name: str = "q") -> None:
+    """Refuse a checked ``qa`` whose closure residual ``phi`` [m, rad] is above :data:`CLOSURE_TOL`.
+
+    For callers that have the residual already, from the frame placements of their own
+    Pinocchio pass (the check then costs no second pass).
+
+    Raises:
         ClosureNotSatisfied: a closure is open by more than :data:`CLOSURE_TOL`; the error
             carries the residual, the tolerance and the worst closure. Assemble first:
             ``mech.assemble(q).q``.
     """
-    qa = mech.check_q(q, name)
-    if not mech.closures:
-        return qa
-    phi = mech.closure_residual(qa)
-    if not np.max(np.abs(phi)) <= CLOSURE_TOL:  # NaN refused too
+    if phi.size and not np.abs(phi).max() <= CLOSURE_TOL:  # NaN refused too
         errors = {c.name: float(np.max(np.abs(phi[c.rows]))) for c in mech.closures}
         worst = max(errors, key=lambda k: errors[k])
         raise ClosureNotSatisfied(
@@ -231,7 +243,6 @@ def check_assembled(mech: Mechanism, q: object, name: str = "q") -> np.ndarray:
             qa,
             worst,
         )
-    return qa
 
 
 def check_samples_assembled(mech: Mechanism, q: np.ndarray, t: np.ndarray) -> None:
@@ -299,15 +310,25 @@ def check_finite_model(mech: Mechanism) -> None:
     A centre of mass at 1e300 m has a finite lever but an infinite :math:`m c^2`; the forces
     computed from it are NaN, infinite, or 1e300 N that mean nothing.
 
+    The verdict is kept, with a copy of the model it was given for, in the calling thread's
+    scratch of ``mech`` (not pickled): a later call costs one comparison of the models in
+    Pinocchio, and an edit of ``mech.model`` after the check (an inertia changed in place)
+    makes them differ, so the model is scanned again.
+
     Raises:
         DescriptionError: naming the bodies.
     """
+    model = mech.model
+    checked = getattr(mech._local, "finite_model", None)
+    if checked is not None and checked == model:  # a model with a NaN never equals its copy
+        return
     bodies = non_finite_bodies(mech)
     if bodies:
         raise DescriptionError(
             f"{mech.name}: the spatial inertia of bodies {bodies} is not finite (a mass or centre "
             "of mass too large for floating point); fix their <inertial> in the description"
         )
+    mech._local.finite_model = pin.Model(model)
 
 
 def check_finite_result(mech: Mechanism, what: str, **arrays: np.ndarray) -> None:

@@ -203,6 +203,26 @@ def test_a_centre_of_mass_that_overflows_is_refused(joint, com, call):
         call(mech)
 
 
+@pytest.mark.parametrize("edit", ["replaced", "in place"])
+def test_a_body_that_overflows_after_a_passing_check_is_refused(edit):
+    """The finiteness verdict is kept per mechanism, yet an inertia edited after a passing call is refused."""
+    mech = preset("fourbar")
+    mech = Mechanism(pin.Model(mech.model), mech.sidecar, name="fourbar")  # not the shared preset
+    static_forces(mech, mech.q_ref)  # passes: the verdict is kept
+    static_forces(mech, mech.q_ref)
+    if edit == "replaced":
+        inertia = mech.model.inertias[2]
+        mech.model.inertias[2] = pin.Inertia(inertia.mass, np.array([0.0, 1e300, 0.0]), inertia.inertia)
+    else:
+        mech.model.inertias[2].lever[1] = 1e300
+    with pytest.raises(
+        DescriptionError, match=rf"^fourbar: the spatial inertia of bodies \['{mech.body_names[1]}'\]"
+    ):
+        static_forces(mech, mech.q_ref)
+    with pytest.raises(DescriptionError, match=r"is not finite"):  # refused again: no verdict kept for it
+        static_forces(mech, mech.q_ref)
+
+
 # ------------------------------------------------------------------ body groups
 
 

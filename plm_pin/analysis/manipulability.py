@@ -116,11 +116,15 @@ def _manipulability_values(
     if singular.any():  # NaN blocks: SVD of zeros there, then NaN
         s = np.linalg.svd(np.where(singular[..., None, None], 0.0, J_ce), compute_uv=False)
         s[singular] = np.nan
+        w = np.where(singular, np.inf, s.prod(axis=-1))
     else:
         s = np.linalg.svd(J_ce, compute_uv=False)
-    w = np.where(singular, np.inf, s.prod(axis=-1))
+        w = s.prod(axis=-1)
     s_min = s[..., -1]
-    cond = np.divide(s[..., 0], s_min, out=np.full(np.shape(s_min), np.inf), where=s_min > 0.0)
+    if s_min.min() > 0.0:  # False on NaN
+        cond = s[..., 0] / s_min
+    else:  # inf where J_ce is singular or undefined
+        cond = np.divide(s[..., 0], s_min, out=np.full(s_min.shape, np.inf), where=s_min > 0.0)
     return J_ce, s, w, cond, singular
 
 

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .._checks import check_assembled
+from .._checks import check_closed
 from ..exceptions import InvalidInput, SingularConfiguration
 from . import closures as _closures
 from .task import Task
@@ -103,7 +103,7 @@ def feasible_motions(
     batch = J_phi.shape[:-2]
     if J_phi.shape[-2]:
         _, s, Vt = np.linalg.svd(J_phi)
-        N = np.swapaxes(Vt[..., nv - mobility :, :], -1, -2)
+        N = Vt[..., nv - mobility :, :].swapaxes(-1, -2)
     else:
         s = np.zeros((*batch, 0))
         N = np.broadcast_to(np.eye(nv), (*batch, nv, nv))
@@ -115,6 +115,10 @@ def times_T_inverse(M: np.ndarray, T: np.ndarray, J_x: np.ndarray) -> tuple[np.n
 
     :math:`T` counts as singular (an inverse-kinematics, type 1, singularity) when
     :math:`\sigma_{min}(T) \le` :data:`INVERSE_RTOL` :math:`\sigma_{max}(J_x)`; the product is NaN there.
+    The test costs no SVD away from singularities: :math:`\sigma_{min}(T) \ge 1 / |T^{-1}|_F`
+    and :math:`\sigma_{max}(J_x) \le |J_x|_F`, so :math:`T` is regular wherever
+    :math:`|J_x|_F |T^{-1}|_F` is below half of 1 / INVERSE_RTOL (the half covers the
+    round-off of the computed inverse); the singular values decide only elsewhere.
 
     Args:
         M: shape (..., r, k).
@@ -124,12 +128,20 @@ def times_T_inverse(M: np.ndarray, T: np.ndarray, J_x: np.ndarray) -> tuple[np.n
     Returns:
         :math:`M T^{-1}` (..., r, k), and the singular mask (...).
     """
+    try:
+        T_inv = np.linalg.inv(T)
+    except np.linalg.LinAlgError:  # an exactly singular T: the singular values decide
+        T_inv = None
+    if T_inv is not None:
+        bound = (J_x * J_x).sum(axis=(-2, -1)) * (T_inv * T_inv).sum(axis=(-2, -1))  # squared
+        if bound.max() < (0.5 / INVERSE_RTOL) ** 2:  # False on NaN
+            return M @ T_inv, np.zeros(bound.shape, dtype=bool)
     sT = np.linalg.svd(T, compute_uv=False)
     singular = sT[..., -1] <= INVERSE_RTOL * np.linalg.norm(J_x, ord=2, axis=(-2, -1))
     any_singular = bool(singular.any())
-    if any_singular:  # solve with the identity in their place, then blank them
+    if any_singular:  # invert the identity in their place, then blank them
         T = np.where(singular[..., None, None], np.eye(T.shape[-1]), T)
-    out = np.swapaxes(np.linalg.solve(np.swapaxes(T, -1, -2), np.swapaxes(M, -1, -2)), -1, -2)
+    out = M @ np.linalg.inv(T)
     if any_singular:
         out[singular] = np.nan
     return out, singular
@@ -147,11 +159,12 @@ def closed_chain_jacobians(mech: Mechanism, q: Any) -> ClosedChainJacobians:
         ClosureNotSatisfied: ``q`` is off the closure manifold (residual above
             :data:`plm_pin._checks.CLOSURE_TOL`); assemble it first, ``mech.assemble(q).q``.
     """
-    qa = check_assembled(mech, q)
-    task = require_task(mech)
+    qa = mech.check_q(q)
     model, data = mech.model, mech.data
-    pin.computeJointJacobians(model, data, qa)
+    pin.computeJointJacobians(model, data, qa)  # the placements of this pass give the closure check
     pin.updateFramePlacements(model, data)
+    check_closed(mech, qa, _closures.residual_from_placements(data, mech.closures))
+    task = require_task(mech)
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
     J_x = task.jacobian_from_data(model, data)
     N, s, T, C = feasible_motions(J_phi, J_x, mech.actuated_v_indices, mech.mobility)

@@ -16,7 +16,7 @@ from scipy.linalg import null_space
 
 from plm_pin import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, task_pose, working_modes
-from plm_pin.kinematics.jacobians import feasible_motions, times_T_inverse
+from plm_pin.kinematics.jacobians import INVERSE_RTOL, feasible_motions, times_T_inverse
 from plm_pin.models import (
     ZHAO2011_GUIDE_DIRECTIONS,
     ZHAO2011_GUIDE_POINTS,
@@ -259,6 +259,52 @@ def test_times_T_inverse_scales_a_1x1_T_by_the_task_jacobian():
     out, singular = times_T_inverse(np.ones((2, 1, 1)), T, J_x)
     assert singular.tolist() == [True, False]
     assert np.isnan(out[0, 0, 0]) and out[1, 0, 0] == pytest.approx(5.0, rel=1e-15)
+
+
+def _svd_singular(T: np.ndarray, J_x: np.ndarray) -> bool:
+    """The singularity criterion of INVERSE_RTOL, from the singular values (the reference)."""
+    return bool(np.linalg.svd(T, compute_uv=False)[-1] <= INVERSE_RTOL * np.linalg.norm(J_x, 2))
+
+
+def _3d4m_rod2_vertical(d: float) -> np.ndarray:
+    """The 3D4M (Harada 2011 eqs. (2)-(3)), plate lowered by d from rod 2 vertical (eq. (9))."""
+    mech = preset("harada2011_3d4m")
+    theta = -0.3
+    y = 0.14 + RT * math.sin(theta) - d  # L_2y = y - r_t sin(theta) = l - d
+    return prrrp_paper_configuration(mech, (0.0, y, theta), (0.14,) * 4, RT, (-1, 1, -1, 1))
+
+
+@pytest.mark.parametrize("d", [0.0, 1e-15, 1e-12, 1e-9, 1e-6, 1e-3])
+def test_singular_T_detection_agrees_with_the_svd_criterion_near_an_inverse_singularity(d):
+    """Nearing the 3D4M's rod-2-vertical singularity, T is flagged exactly where the SVD criterion says."""
+    mech = preset("harada2011_3d4m")
+    jac = closed_chain_jacobians(mech, _3d4m_rod2_vertical(d))
+    _, singular = times_T_inverse(jac.C, jac.T, jac.J_x)
+    assert bool(singular) == _svd_singular(jac.T, jac.J_x)
+    assert bool(singular) == (d == 0.0)  # sigma_min(T) grows like sqrt(d): 3e-8 already at d = 1e-15
+
+
+def test_singular_T_detection_agrees_with_the_svd_criterion_around_its_threshold():
+    """T of the singular 3D4M with sigma_min = f INVERSE_RTOL |J_x|: flagged iff f <= 1, single or batched."""
+    mech = preset("harada2011_3d4m")
+    jac = closed_chain_jacobians(mech, _3d4m_rod2_vertical(0.0))
+    U, s, Vt = np.linalg.svd(jac.T)
+    factors = [0.0, 1e-3, 0.5, 0.99, 1.01, 2.0, 10.0, 1e3, 1e6, 1e9]
+    Ts = []
+    for f in factors:
+        s_f = s.copy()
+        s_f[-1] = f * INVERSE_RTOL * np.linalg.norm(jac.J_x, 2)
+        Ts.append(U @ np.diag(s_f) @ Vt)
+    expected = [_svd_singular(T, jac.J_x) for T in Ts]
+    assert expected == [f <= 1.0 for f in factors]  # the construction is exact to round-off
+    for T, flag in zip(Ts, expected, strict=True):
+        out, singular = times_T_inverse(jac.C, T, jac.J_x)
+        assert bool(singular) == flag
+        if not flag:  # the product is C T^-1 to the round-off of T's conditioning
+            np.testing.assert_allclose(out @ T, jac.C, atol=1e-13 * np.linalg.cond(T))
+    out, singular = times_T_inverse(np.stack([jac.C] * len(Ts)), np.stack(Ts), np.stack([jac.J_x] * len(Ts)))
+    assert singular.tolist() == expected
+    assert np.isnan(out[singular]).all() and np.isfinite(out[~singular]).all()
 
 
 def test_feasible_motions_of_a_batch_span_each_null_space(rng):
