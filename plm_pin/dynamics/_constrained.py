@@ -177,6 +177,10 @@ class ClosedChainDynamics:
         self.load = load
         self._name = mech.name
         self._all_columns = np.arange(mech.nv)
+        # point closures only: residual and Jacobian straight from the two frames of each
+        points = all(c.spec.type == "point" for c in mech.closures)
+        self._point_frames = tuple(c.frame_ids for c in mech.closures) if points else None
+        self._K = np.zeros((2 * mech.nv, 2 * mech.nv))  # saddle-point matrix, its top-left (nv + r) block
         if self.solver == "pinocchio":
             self._pin_data = model.createData()
             self._cms = pin.StdVec_RigidConstraintModel()
@@ -202,7 +206,7 @@ class ClosedChainDynamics:
         mass matrix, armature on the diagonal (Pinocchio 4.1).
         """
         pin.updateFramePlacements(self.model, self.data)
-        return self.data.M.copy(), _closures.jacobian_from_data(self.model, self.data, self.closures)
+        return self.data.M.copy(), self._jacobian_from_data()
 
     def _wrench_force(self, data: pin.Data) -> np.ndarray | None:
         """Generalized force of the wrench from joint Jacobians and placements in ``data``, (nv,)."""
@@ -228,21 +232,38 @@ class ClosedChainDynamics:
     def _saddle(self, M: np.ndarray, W: np.ndarray, top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
         """Solve ``[[M, -W^T], [W, 0]] [x; mu] = [top; bottom]``, returning ``(x, mu)`` stacked."""
         nv, r = M.shape[0], W.shape[0]
-        K = np.zeros((nv + r, nv + r))
+        K = self._K[: nv + r, : nv + r]
         K[:nv, :nv] = M
         K[:nv, nv:] = -W.T
         K[nv:, :nv] = W
         return np.linalg.solve(K, np.concatenate([top, bottom]))
 
+    def residual_from_data(self) -> np.ndarray:
+        """Closure residual (m,) from the frame placements in ``self.data``."""
+        if self._point_frames is None:
+            return _closures.residual_from_placements(self.data, self.closures)
+        oMf = self.data.oMf
+        if len(self._point_frames) == 1:
+            a, b = self._point_frames[0]
+            return oMf[b].translation - oMf[a].translation
+        return np.concatenate([oMf[b].translation - oMf[a].translation for a, b in self._point_frames])
+
+    def _jacobian_from_data(self) -> np.ndarray:
+        """Closure Jacobian (m, nv) from the joint Jacobians and placements in ``self.data``."""
+        model, data = self.model, self.data
+        if self._point_frames is None:
+            return _closures.jacobian_from_data(model, data, self.closures)
+        rows = [
+            pin.getFrameJacobian(model, data, b, _LWA)[:3] - pin.getFrameJacobian(model, data, a, _LWA)[:3]
+            for a, b in self._point_frames
+        ]
+        return rows[0] if len(rows) == 1 else np.concatenate(rows)
+
     def _closure_terms(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closure residual (m,) and Jacobian (m, nv) at ``q``; leaves placements and Jacobians in data."""
-        model, data = self.model, self.data
-        pin.computeJointJacobians(model, data, q)  # placements too
-        pin.updateFramePlacements(model, data)
-        return (
-            _closures.residual_from_placements(data, self.closures),
-            _closures.jacobian_from_data(model, data, self.closures),
-        )
+        pin.computeJointJacobians(self.model, self.data, q)  # placements too
+        pin.updateFramePlacements(self.model, self.data)
+        return self.residual_from_data(), self._jacobian_from_data()
 
     # ------------------------------------------------------------ public
     def kkt(

@@ -71,7 +71,6 @@ from scipy.integrate import DOP853
 
 from .._checks import as_vector, optional_name, positive, real_numbers, sample_count
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
-from ..kinematics import closures as _closures
 from ..statics.balance import load_on_frame
 from ._constrained import ClosedChainDynamics, Projection, ReducedRows
 
@@ -427,7 +426,8 @@ class _Run:
     # --------------------------------------------------------- projection
     def distance(self, q: np.ndarray) -> float:
         """Closure distance at ``q`` [m, rad]; leaves the placements in the data."""
-        return self.dyn.distance(_closures.residual(self.model, self.data, self.mech.closures, q))
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.dyn.distance(self.dyn.residual_from_data())
 
     def project(self, q: np.ndarray, v: np.ndarray, h: float) -> Projection:
         """Project the state after a step of ``h`` [s] (with the closure distances before and after).
