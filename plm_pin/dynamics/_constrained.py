@@ -45,7 +45,7 @@ adds energy and removes only the part of :math:`v` that violates the closures.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -310,6 +310,24 @@ class ClosedChainDynamics:
             if a is not None:
                 return a
         return self.kkt(q, v, tau)[0]
+
+    def accelerator(self) -> Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
+        """:meth:`acceleration` as a function ``(q, v, tau) -> a`` with the fewest Python calls.
+
+        Without a wrench, Pinocchio's path calls ``pin.constraintDynamics`` directly (the
+        inner loop of an integrator, where each call layer costs a noticeable share).
+        """
+        if self.solver != "pinocchio" or self.load is not None:
+            return self.acceleration
+        model, data, cms, cds, settings = self.model, self._pin_data, self._cms, self._cds, self._settings
+        constraint_dynamics, kkt = pin.constraintDynamics, self.kkt
+
+        def direct(q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+            a = constraint_dynamics(model, data, q, v, tau, cms, cds, settings)
+            # not converged (ill-conditioned closures): as in _pinocchio_acceleration
+            return a if settings.iter < settings.max_iter else kkt(q, v, tau)[0]
+
+        return direct
 
     def solve(
         self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, rows: ReducedRows | None = None

@@ -338,7 +338,7 @@ class _Run:
         at the same place stops the run.
         """
         nv, model, times, euclidean = self.mech.nv, self.model, self.times, self.euclidean
-        accel, tau, rate, tau_c = self.dyn.acceleration, self.tau, self._delta_rate, self.tau_constant
+        accel, tau, rate, tau_c = self.dyn.accelerator(), self.tau, self._delta_rate, self.tau_constant
         t, k, first_step, drift = 0.0, 1, None, 0.0
         bridged = -1.0  # end of the last bridge [s]
         while k < times.size:
