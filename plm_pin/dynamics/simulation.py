@@ -54,8 +54,8 @@ inverse of a vanishing singular value; a 1 ms RK4 step took the energy from 0.14
 before its projection (which then landed on the other sheet, 6 mm away, at 0.83 J) while the
 residual after it stayed at 1e-12.
 
-Accelerations, closure forces, energy and task pose of the samples are computed once after the
-run (the energy during it only for the guard of a passive run).
+Accelerations, closure forces, energy and task pose are computed once per sample, when it is
+recorded, with the SVD of the closure Jacobian its projection computed there.
 """
 
 from __future__ import annotations
