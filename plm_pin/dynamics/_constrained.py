@@ -44,8 +44,9 @@ adds energy and removes only the part of :math:`v` that violates the closures.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import TYPE_CHECKING
+import math
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -75,6 +76,38 @@ _PROXIMAL = (1e-12, 1e-10, 20)
 """Pinocchio proximal settings: absolute accuracy, regularization mu, iteration cap."""
 
 
+class ReducedRows(NamedTuple):
+    r"""The independent closure rows at one configuration, from the SVD :math:`J_\phi = U \Sigma V^T`.
+
+    Attributes:
+        U: the first r left singular vectors, shape (m, r).
+        s: the first r singular values, shape (r,).
+        W: the first r right singular vectors as rows, :math:`V_r^T`, orthonormal, shape (r, nv).
+    """
+
+    U: np.ndarray
+    s: np.ndarray
+    W: np.ndarray
+
+
+class Projection(NamedTuple):
+    """A state projected onto the closures, with what the projection computed at the result.
+
+    Attributes:
+        q: projected configuration, shape (nq,).
+        v: projected joint velocities, shape (nv,).
+        before: closure distance before the projection [m, rad].
+        after: closure distance of ``q`` [m, rad].
+        rows: the reduced closure rows at ``q``, or None when the projection did not need them.
+    """
+
+    q: np.ndarray
+    v: np.ndarray
+    before: float
+    after: float
+    rows: ReducedRows | None
+
+
 class ClosureDistance:
     """Closure distance of a residual: the largest norm of a closure's point rows [m] or other rows [rad].
 
@@ -89,11 +122,18 @@ class ClosureDistance:
             groups += [2 * i] * min(3, n) + [2 * i + 1] * max(0, n - 3)
         self._groups = np.array(groups, dtype=int)
         self._n = 2 * len(closures)
+        # point and weld closures only: the groups are consecutive blocks of three rows
+        self._blocks = all(c.rows.stop - c.rows.start in (3, 6) for c in closures)
 
     def __call__(self, phi: np.ndarray) -> float:
         """The closure distance of ``phi`` [m, rad] (0 without closures)."""
         if not phi.size:
             return 0.0
+        if phi.size == 3 and self._blocks:
+            return math.sqrt(float(phi @ phi))
+        if self._blocks:
+            P = phi.reshape(-1, 3)
+            return math.sqrt(float(np.max(np.einsum("ij,ij->i", P, P))))
         return float(np.sqrt(np.max(np.bincount(self._groups, phi * phi, minlength=self._n))))
 
 
@@ -137,6 +177,10 @@ class ClosedChainDynamics:
         self.load = load
         self._name = mech.name
         self._all_columns = np.arange(mech.nv)
+        # point closures only: residual and Jacobian straight from the two frames of each
+        points = all(c.spec.type == "point" for c in mech.closures)
+        self._point_frames = tuple(c.frame_ids for c in mech.closures) if points else None
+        self._K = np.zeros((2 * mech.nv, 2 * mech.nv))  # saddle-point matrix, its top-left (nv + r) block
         if self.solver == "pinocchio":
             self._pin_data = model.createData()
             self._cms = pin.StdVec_RigidConstraintModel()
@@ -162,7 +206,7 @@ class ClosedChainDynamics:
         mass matrix, armature on the diagonal (Pinocchio 4.1).
         """
         pin.updateFramePlacements(self.model, self.data)
-        return self.data.M.copy(), _closures.jacobian_from_data(self.model, self.data, self.closures)
+        return self.data.M.copy(), self._jacobian_from_data()
 
     def _wrench_force(self, data: pin.Data) -> np.ndarray | None:
         """Generalized force of the wrench from joint Jacobians and placements in ``data``, (nv,)."""
@@ -170,7 +214,7 @@ class ClosedChainDynamics:
             return None
         return pin.getFrameJacobian(self.model, data, self.load.frame_id, _LWA).T @ self.load.wrench
 
-    def _reduced_rows(self, J: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _reduced_rows(self, J: np.ndarray) -> ReducedRows:
         """``U_r``, ``Sigma_r`` and ``W = V_r^T`` of the closure Jacobian's independent rows.
 
         Raises:
@@ -183,20 +227,51 @@ class ClosedChainDynamics:
                 f"{self._name}: constraint singularity: closure Jacobian singular values {s.tolist()}, "
                 f"{r} independent rows expected (mobility {self.model.nv - r})"
             )
-        return U[:, :r], s[:r], Vt[:r]
+        return ReducedRows(U[:, :r], s[:r], Vt[:r])
 
     def _saddle(self, M: np.ndarray, W: np.ndarray, top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
         """Solve ``[[M, -W^T], [W, 0]] [x; mu] = [top; bottom]``, returning ``(x, mu)`` stacked."""
         nv, r = M.shape[0], W.shape[0]
-        K = np.zeros((nv + r, nv + r))
+        K = self._K[: nv + r, : nv + r]
         K[:nv, :nv] = M
         K[:nv, nv:] = -W.T
         K[nv:, :nv] = W
         return np.linalg.solve(K, np.concatenate([top, bottom]))
 
+    def residual_from_data(self) -> np.ndarray:
+        """Closure residual (m,) from the frame placements in ``self.data``."""
+        if self._point_frames is None:
+            return _closures.residual_from_placements(self.data, self.closures)
+        oMf = self.data.oMf
+        if len(self._point_frames) == 1:
+            a, b = self._point_frames[0]
+            return oMf[b].translation - oMf[a].translation
+        return np.concatenate([oMf[b].translation - oMf[a].translation for a, b in self._point_frames])
+
+    def _jacobian_from_data(self) -> np.ndarray:
+        """Closure Jacobian (m, nv) from the joint Jacobians and placements in ``self.data``."""
+        model, data = self.model, self.data
+        if self._point_frames is None:
+            return _closures.jacobian_from_data(model, data, self.closures)
+        rows = [
+            pin.getFrameJacobian(model, data, b, _LWA)[:3] - pin.getFrameJacobian(model, data, a, _LWA)[:3]
+            for a, b in self._point_frames
+        ]
+        return rows[0] if len(rows) == 1 else np.concatenate(rows)
+
+    def _closure_terms(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Closure residual (m,) and Jacobian (m, nv) at ``q``; leaves placements and Jacobians in data."""
+        pin.computeJointJacobians(self.model, self.data, q)  # placements too
+        pin.updateFramePlacements(self.model, self.data)
+        return self.residual_from_data(), self._jacobian_from_data()
+
     # ------------------------------------------------------------ public
-    def kkt(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def kkt(
+        self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, rows: ReducedRows | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Our KKT solve: joint accelerations (nv,) and minimum-norm closure forces (m,).
+
+        ``rows``: the reduced closure rows at ``q`` when already known (from :meth:`project`).
 
         Raises:
             SingularConfiguration: at a constraint singularity.
@@ -211,53 +286,78 @@ class ClosedChainDynamics:
         if not self.closures:
             return np.linalg.solve(M, rhs), np.zeros(0)
         gamma = _closures.drift_from_data(model, data, self.closures)
-        Ur, sr, W = self._reduced_rows(J)
+        Ur, sr, W = self._reduced_rows(J) if rows is None else rows
         sol = self._saddle(M, W, rhs, -(Ur.T @ gamma) / sr)
         nv = model.nv
         return sol[:nv], Ur @ (sol[nv:] / sr)
 
-    def acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Joint accelerations [m/s^2, rad/s^2], shape (nv,), with the chosen solver."""
-        if self.solver == "kkt":
-            return self.kkt(q, v, tau)[0]
+    def _pinocchio_acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray | None:
+        """``pin.constraintDynamics``'s accelerations (nv,); None when its iterations hit their cap."""
         model, data = self.model, self._pin_data
         applied = tau
         if self.load is not None:
             applied = (
                 tau + pin.computeFrameJacobian(model, data, q, self.load.frame_id, _LWA).T @ self.load.wrench
             )
-        a = np.array(pin.constraintDynamics(model, data, q, v, applied, self._cms, self._cds, self._settings))
-        if self._settings.iter >= self._settings.max_iter:  # not converged: ill-conditioned closures
-            return self.kkt(q, v, tau)[0]
-        return a
+        a = pin.constraintDynamics(model, data, q, v, applied, self._cms, self._cds, self._settings)
+        # not converged: ill-conditioned closures
+        return None if self._settings.iter >= self._settings.max_iter else a
 
-    def solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Joint accelerations (nv,) and closure forces (m,) [N, N m] with the chosen solver."""
-        if self.solver == "kkt":
-            return self.kkt(q, v, tau)
-        a = self.acceleration(q, v, tau)
+    def acceleration(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Joint accelerations [m/s^2, rad/s^2], shape (nv,), with the chosen solver."""
+        if self.solver == "pinocchio":
+            a = self._pinocchio_acceleration(q, v, tau)
+            if a is not None:
+                return a
+        return self.kkt(q, v, tau)[0]
+
+    def accelerator(self) -> Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
+        """:meth:`acceleration` as a function ``(q, v, tau) -> a`` with the fewest Python calls.
+
+        Without a wrench, Pinocchio's path calls ``pin.constraintDynamics`` directly (the
+        inner loop of an integrator, where each call layer costs a noticeable share).
+        """
+        if self.solver != "pinocchio" or self.load is not None:
+            return self.acceleration
+        model, data, cms, cds, settings = self.model, self._pin_data, self._cms, self._cds, self._settings
+        constraint_dynamics, kkt = pin.constraintDynamics, self.kkt
+
+        def direct(q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+            a = constraint_dynamics(model, data, q, v, tau, cms, cds, settings)
+            # not converged (ill-conditioned closures): as in _pinocchio_acceleration
+            return a if settings.iter < settings.max_iter else kkt(q, v, tau)[0]
+
+        return direct
+
+    def solve(
+        self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, rows: ReducedRows | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Joint accelerations (nv,) and closure forces (m,) [N, N m] with the chosen solver.
+
+        ``rows``: the reduced closure rows at ``q`` when already known (from :meth:`project`).
+        Where Pinocchio's iterations do not converge, both come from the KKT solve.
+        """
+        a = self._pinocchio_acceleration(q, v, tau) if self.solver == "pinocchio" else None
+        if a is None:
+            return self.kkt(q, v, tau, rows)
         if not self.closures:
             return a, np.zeros(0)
         model, pdata = self.model, self._pin_data
         pin.computeJointJacobians(model, pdata, q)
         force = pin.getConstraintsJacobian(model, pdata, self._cms, self._cds).T @ pdata.lambda_c  # (nv,)
-        pin.computeJointJacobians(model, self.data, q)
-        pin.updateFramePlacements(model, self.data)
-        J = _closures.jacobian_from_data(model, self.data, self.closures)
-        Ur, sr, W = self._reduced_rows(J)
+        Ur, sr, W = self._reduced_rows(self._closure_terms(q)[1]) if rows is None else rows
         return a, Ur @ ((W @ force) / sr)
 
-    def project(
-        self, q: np.ndarray, v: np.ndarray, tol: float, velocity_tol: float = 0.0
-    ) -> tuple[np.ndarray, np.ndarray, float]:
+    def project(self, q: np.ndarray, v: np.ndarray, tol: float, velocity_tol: float = 0.0) -> Projection:
         r"""Project a state onto the closure manifold, in place of a Baumgarte correction.
 
         :math:`q` when its closure distance (:class:`ClosureDistance`) exceeds ``tol``: one minimum-norm
-        Gauss-Newton step :math:`\delta = -J_\phi^+ \phi` (with the SVD the velocity projection
-        needs anyway; from an integrator's small drift it lands at round-off), then damped
-        iterations (:func:`~plm_pin.kinematics.assembly.assemble`) if that was not enough.
-        Then :math:`v` onto :math:`J_\phi v = 0` by the least-kinetic-energy projection when
-        :math:`q` moved or :math:`|J_\phi v|` exceeds ``velocity_tol``.
+        Gauss-Newton step :math:`\delta = -J_\phi^+ \phi` (from an integrator's small drift it
+        lands at round-off), then damped iterations (:func:`~plm_pin.kinematics.assembly.assemble`)
+        if that was not enough. Then :math:`v` onto :math:`J_\phi v = 0` by the
+        least-kinetic-energy projection when :math:`q` moved or :math:`|J_\phi v|` exceeds
+        ``velocity_tol``, with the SVD of :math:`J_\phi` at the projected :math:`q`, which the
+        result keeps for the closure forces there (:meth:`solve`).
 
         Args:
             q: configuration, shape (nq,).
@@ -266,35 +366,33 @@ class ClosedChainDynamics:
             velocity_tol: largest closure rate left [m/s, rad/s].
 
         Returns:
-            The projected ``q`` (nq,) and ``v`` (nv,), and the closure distance before [m, rad].
+            The projected state, the closure distances before and after, the reduced rows at ``q``.
 
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol`` from ``q``.
             SingularConfiguration: at a constraint singularity.
         """
         if not self.closures:
-            return q, v, 0.0
+            return Projection(q, v, 0.0, 0.0, None)
         model, data, closures = self.model, self.data, self.closures
-        pin.computeJointJacobians(model, data, q)  # placements too
-        pin.updateFramePlacements(model, data)
-        phi = _closures.residual_from_placements(data, closures)
-        before = self.distance(phi)
-        J = _closures.jacobian_from_data(model, data, closures)
+        phi, J = self._closure_terms(q)
+        before = after = self.distance(phi)
         if before > tol:
             Ur, sr, W = self._reduced_rows(J)
             q = pin.integrate(model, q, -W.T @ ((Ur.T @ phi) / sr))
-            pin.framesForwardKinematics(model, data, q)
-            if self.distance(_closures.residual_from_placements(data, closures)) > tol:
+            phi, J = self._closure_terms(q)
+            after = self.distance(phi)
+            if after > tol:
                 free, cap = self._all_columns, PROJECTION_ITERATIONS
                 q = assemble(model, data, closures, q, free, tol=tol / 2, max_iterations=cap).q
-            pin.computeJointJacobians(model, data, q)
-            pin.updateFramePlacements(model, data)
-            J = _closures.jacobian_from_data(model, data, closures)
+                phi, J = self._closure_terms(q)
+                after = self.distance(phi)
         elif np.max(np.abs(J @ v)) <= velocity_tol:
-            return q, v, before
+            return Projection(q, v, before, after, None)
+        rows = self._reduced_rows(J)
         M = pin.crba(model, data, q)
-        _, _, W = self._reduced_rows(J)
-        return q, v + self._saddle(M, W, np.zeros(model.nv), -(W @ v))[: model.nv], before
+        v = v + self._saddle(M, rows.W, np.zeros(model.nv), -(rows.W @ v))[: model.nv]
+        return Projection(q, v, before, after, rows)
 
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic (armature included) plus gravitational potential energy [J]."""

@@ -54,8 +54,8 @@ inverse of a vanishing singular value; a 1 ms RK4 step took the energy from 0.14
 before its projection (which then landed on the other sheet, 6 mm away, at 0.83 J) while the
 residual after it stayed at 1e-12.
 
-Accelerations, closure forces, energy and task pose of the samples are computed once after the
-run (the energy during it only for the guard of a passive run).
+Accelerations, closure forces, energy and task pose are computed once per sample, when it is
+recorded, with the SVD of the closure Jacobian its projection computed there.
 """
 
 from __future__ import annotations
@@ -71,9 +71,8 @@ from scipy.integrate import DOP853
 
 from .._checks import as_vector, optional_name, positive, real_numbers, sample_count
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
-from ..kinematics import closures as _closures
 from ..statics.balance import load_on_frame
-from ._constrained import ClosedChainDynamics
+from ._constrained import ClosedChainDynamics, Projection, ReducedRows
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
@@ -202,6 +201,19 @@ class _StepFailed(_Stop):
     """DOP853 could not take a step (internal signal)."""
 
 
+class _DOP853(DOP853):
+    """SciPy's DOP853 calling the right-hand side directly.
+
+    SciPy wraps ``fun`` in two Python calls that count its calls and convert its value with
+    ``np.asarray``; the right-hand side here returns a new float array already, so the stages
+    call it unwrapped (``nfev`` is not counted).
+    """
+
+    def __init__(self, fun: Callable[[float, np.ndarray], np.ndarray], *args: Any, **kwargs: Any) -> None:
+        super().__init__(fun, *args, **kwargs)
+        self.fun = fun
+
+
 class _Run:
     """State of one simulation: dynamics, force law, projection and the sample buffers."""
 
@@ -234,9 +246,13 @@ class _Run:
         n = times.size
         self.q = np.empty((n, mech.nq))
         self.v = np.empty((n, mech.nv))
+        self.a = np.empty((n, mech.nv))
+        self.lam = np.empty((n, mech.n_closure_rows))
         self.residual = np.empty(n)
         self.drift = np.empty(n)
         self.energy = np.empty(n)
+        task = mech.task_compiled
+        self.x = None if task is None else np.empty((n, task.size))
 
     # ------------------------------------------------------------- forces
     def _joint_forces(self, f: np.ndarray) -> np.ndarray:
@@ -299,7 +315,8 @@ class _Run:
         if np.all(np.isfinite(q1)) and np.all(np.isfinite(v1)):
             opened = self.distance(q1)
             if opened <= STEP_DRIFT_TOL:
-                return self.project(q1, v1, h)
+                p = self.project(q1, v1, h)
+                return p.q, p.v, p.before
         else:
             opened = math.inf
         if halvings >= MAX_HALVINGS:
@@ -320,19 +337,27 @@ class _Run:
         before to :data:`BRIDGE_STEPS` steps past the place, then DOP853 resumes; a second failure
         at the same place stops the run.
         """
-        nv, model, times = self.mech.nv, self.model, self.times
+        nv, model, times, euclidean = self.mech.nv, self.model, self.times, self.euclidean
+        accel, tau, rate, tau_c = self.dyn.accelerator(), self.tau, self._delta_rate, self.tau_constant
         t, k, first_step, drift = 0.0, 1, None, 0.0
         bridged = -1.0  # end of the last bridge [s]
         while k < times.size:
             origin = q
 
             def rhs(time: float, y: np.ndarray, origin: np.ndarray = origin) -> np.ndarray:
+                out = np.empty(2 * nv)
                 delta, w = y[:nv], y[nv:]
-                qs = delta if self.euclidean else pin.integrate(model, origin, delta)
-                return np.concatenate([self._delta_rate(origin, delta, w), self._accel(time, qs, w)])
+                if euclidean:
+                    out[:nv] = w
+                    out[nv:] = accel(delta, w, tau_c if tau_c is not None else tau(time, delta, w))
+                else:
+                    out[:nv] = rate(origin, delta, w)
+                    qs = pin.integrate(model, origin, delta)
+                    out[nv:] = accel(qs, w, tau_c if tau_c is not None else tau(time, qs, w))
+                return out
 
             y0 = np.concatenate([q if self.euclidean else np.zeros(nv), v])
-            solver = DOP853(
+            solver = _DOP853(
                 rhs, t, y0, float(times[-1]), rtol=rtol, atol=atol, max_step=max_step, first_step=first_step
             )
             first_step = None
@@ -348,26 +373,27 @@ class _Run:
                         )
                     self.steps += 1
                     y = solver.y
-                    if not np.all(np.isfinite(y)):
+                    if not np.isfinite(y).all():
                         raise _NonFinite("the state became non-finite")
                     if times[k] <= solver.t:
                         dense = solver.dense_output()
                         while k < times.size and times[k] <= solver.t:
                             yk = dense(float(times[k]))
-                            qk = yk[:nv] if self.euclidean else pin.integrate(model, origin, yk[:nv])
-                            qk, vk, before = self.project(qk, yk[nv:], solver.h_abs or max_step)
-                            self.record(k, qk, vk, max(drift, before))
+                            qk = yk[:nv] if euclidean else pin.integrate(model, origin, yk[:nv])
+                            p = self.project(qk, yk[nv:], solver.h_abs or max_step)
+                            self.record(k, p.q, p.v, max(drift, p.before), p.after, p.rows)
                             k, drift = k + 1, 0.0
                     t = solver.t
-                    q = y[:nv] if self.euclidean else pin.integrate(model, origin, y[:nv])
+                    q = y[:nv] if euclidean else pin.integrate(model, origin, y[:nv])
                     v = y[nv:]
                     opened = self.distance(q)
                     drift = max(drift, opened)
-                    rechart = not self.euclidean and float(np.max(np.abs(y[:nv]))) > _CHART_SPAN
+                    rechart = not euclidean and float(np.max(np.abs(y[:nv]))) > _CHART_SPAN
                     if solver.status == "finished" and k < times.size:
                         raise _NonFinite(f"the integrator stopped at t = {solver.t:.6g} s, before the end")
                     if k < times.size and (opened > self.closure_tol or rechart):
-                        q, v, _ = self.project(q.copy(), v.copy(), solver.h_abs)
+                        p = self.project(q.copy(), v.copy(), solver.h_abs)
+                        q, v = p.q, p.v
                         first_step = min(solver.h_abs, float(times[-1]) - t)
                         break
             except (_StepFailed, SingularConfiguration) as exc:
@@ -400,15 +426,16 @@ class _Run:
     # --------------------------------------------------------- projection
     def distance(self, q: np.ndarray) -> float:
         """Closure distance at ``q`` [m, rad]; leaves the placements in the data."""
-        return self.dyn.distance(_closures.residual(self.model, self.data, self.mech.closures, q))
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.dyn.distance(self.dyn.residual_from_data())
 
-    def project(self, q: np.ndarray, v: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, float]:
-        """Project the state after a step of ``h`` [s]; also return the closure distance before [m, rad].
+    def project(self, q: np.ndarray, v: np.ndarray, h: float) -> Projection:
+        """Project the state after a step of ``h`` [s] (with the closure distances before and after).
 
         The velocity is projected when the closure rate would open the loops by more than
         ``closure_tol`` within such a step (or when the configuration was projected).
         """
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        if not (np.isfinite(q).all() and np.isfinite(v).all()):
             raise _NonFinite("the state became non-finite")
         return self.dyn.project(q, v, self.closure_tol, self.closure_tol / h)
 
@@ -425,19 +452,39 @@ class _Run:
         )
 
     # ------------------------------------------------------------ samples
-    def record(self, k: int, q: np.ndarray, v: np.ndarray, drift: float) -> None:
-        """Store sample ``k`` of the projected state; guard the energy of a passive run."""
+    def record(
+        self,
+        k: int,
+        q: np.ndarray,
+        v: np.ndarray,
+        drift: float,
+        distance: float | None = None,
+        rows: ReducedRows | None = None,
+    ) -> None:
+        """Store sample ``k`` of the projected state with its accelerations, forces, energy and pose.
+
+        ``distance`` and ``rows``: the closure distance and reduced closure rows at ``q`` when
+        the projection computed them. A passive run's energy is guarded.
+        """
         self.q[k], self.v[k] = q, v
-        self.residual[k] = self.distance(q)
+        self.residual[k] = self.distance(q) if distance is None else distance
         self.drift[k] = drift
+        self.a[k], self.lam[k] = self.dyn.solve(q, v, self.tau(float(self.times[k]), q, v), rows)
+        if not (np.isfinite(self.a[k]).all() and np.isfinite(self.lam[k]).all()):
+            raise _NonFinite("the accelerations or closure forces became non-finite")
+        if self.x is not None:
+            task = self.mech.task_compiled
+            assert task is not None
+            pin.framesForwardKinematics(self.model, self.data, q)
+            self.x[k] = task.pose_from_data(self.data)
+        self.energy[k] = self.dyn.energy(q, v)
         if self.passive:
             self._guard_energy(k)
         self.done = k + 1
 
     def _guard_energy(self, k: int) -> None:
-        """The energy of sample ``k``; stop when it strays from the initial energy past ENERGY_RTOL."""
-        q, v = self.q[k], self.v[k]
-        self.energy[k] = e = self.dyn.energy(q, v)
+        """Stop when the energy of sample ``k`` strays from the initial energy past ENERGY_RTOL."""
+        e = float(self.energy[k])
         self.peak_kinetic = max(self.peak_kinetic, e - float(self.data.potential_energy))
         allowed = ENERGY_RTOL * self.peak_kinetic + 1e-12 * max(1.0, abs(float(self.energy[0])))
         if abs(e - self.energy[0]) > allowed:  # the sample that strayed is not kept
@@ -447,44 +494,18 @@ class _Run:
                 f"{self.peak_kinetic:.3g} J){self._conditioning(self.q[k - 1])}"
             )
 
-    def result(self, n: int, partial: bool = False) -> SimulationResult:
-        """The first ``n`` samples as a result, with their accelerations, closure forces, energy and pose.
-
-        ``partial``: for a failed run, keep only the samples before the first one whose forces
-        cannot be computed (else that error propagates).
-        """
-        task, nv = self.mech.task_compiled, self.mech.nv
-        a = np.empty((n, nv))
-        lam = np.empty((n, self.mech.n_closure_rows))
-        x = None if task is None else np.empty((n, task.size))
-        for k in range(n):
-            q, v = self.q[k], self.v[k]
-            try:
-                a[k], lam[k] = self.dyn.solve(q, v, self.tau(float(self.times[k]), q, v))
-                if not (np.all(np.isfinite(a[k])) and np.all(np.isfinite(lam[k]))):
-                    raise _NonFinite("the accelerations or closure forces became non-finite")
-            except (_NonFinite, PlmError):
-                if not partial:
-                    raise
-                n, a, lam = k, a[:k], lam[:k]
-                x = None if x is None else x[:k]
-                break
-            if x is not None:
-                assert task is not None
-                pin.framesForwardKinematics(self.model, self.data, q)
-                x[k] = task.pose_from_data(self.data)
-            if not self.passive:
-                self.energy[k] = self.dyn.energy(q, v)
+    def result(self, n: int) -> SimulationResult:
+        """The first ``n`` samples as a result."""
         return SimulationResult(
             t=self.times[:n].copy(),
             q=self.q[:n].copy(),
             v=self.v[:n].copy(),
-            a=a,
-            lam=lam,
+            a=self.a[:n].copy(),
+            lam=self.lam[:n].copy(),
             closure_residual=self.residual[:n].copy(),
             closure_drift=self.drift[:n].copy(),
             energy=self.energy[:n].copy(),
-            x=x,
+            x=None if self.x is None else self.x[:n].copy(),
             method=self.method,
             solver=self.dyn.solver,
             steps=self.steps,
@@ -530,7 +551,8 @@ def _check_start(
                 f"{bound:.3g}; "
                 "choose v0 = S @ xdot with S from plm_pin.kinematics.closed_chain_jacobians(mech, q0)"
             )
-        q, v, _ = dyn.project(q, v, closure_tol)
+        p = dyn.project(q, v, closure_tol)
+        q, v = p.q, p.v
     return q, v
 
 
@@ -641,7 +663,7 @@ def simulate(
             f"{mech.name}: simulation stopped in the step from t = {run.t_now:.6g} s "
             f"({method}, {dyn.solver}): "
             f"{exc}; the {run.done} sample(s) before are in .partial",
-            run.result(run.done, partial=True),
+            run.result(run.done),
             run.t_now,
             exc if isinstance(exc, PlmError) else None,
         ) from exc

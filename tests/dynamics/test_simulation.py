@@ -661,3 +661,39 @@ def test_sixty_seconds_passive_conserve_energy(name):
     data = mech.model.createData()
     kinetic = energy - [pin.computePotentialEnergy(mech.model, data, q) for q in run.q]
     assert np.max(np.abs(energy - energy[0])) <= 1e-4 * kinetic.max() + 1e-12 * max(1.0, abs(energy[0]))
+
+
+# ---------------------------------------------------------------------------------------------
+# The per-state solver behind simulate
+
+
+@pytest.mark.parametrize("name", ["fourbar", "harada2011_3d4m", "zhao2011_6pss"])
+def test_closure_distance_is_the_largest_euclidean_gap(name):
+    """ClosureDistance equals the largest norm of a closure's point rows or rotation rows (numpy norms)."""
+    from plm_pin.dynamics._constrained import ClosureDistance
+
+    mech = preset(name)
+    phi = np.random.default_rng(3).normal(size=mech.n_closure_rows)
+    expected = max(
+        max(np.linalg.norm(phi[c.rows][:3]), np.linalg.norm(phi[c.rows][3:]) if c.spec.rows > 3 else 0.0)
+        for c in mech.closures
+    )
+    assert ClosureDistance(mech.closures)(phi) == pytest.approx(expected, rel=1e-15)
+
+
+def test_unconverged_pinocchio_solve_takes_accelerations_and_forces_from_the_kkt():
+    """Pinocchio capped at one iteration: solve returns the KKT's a and lambda; accelerator agrees."""
+    from plm_pin.dynamics._constrained import ClosedChainDynamics
+
+    mech = preset("fourbar")
+    q, v, tau = mech.q_ref, np.zeros(mech.nv), np.full(mech.nv, 0.1)
+    dyn = ClosedChainDynamics(mech, "pinocchio", None)
+    dyn._settings = pin.ProximalSettings(1e-12, 1e-10, 1)  # capped at one proximal iteration
+    a, lam = dyn.solve(q, v, tau)
+    a_kkt, lam_kkt = ClosedChainDynamics(mech, "kkt", None).solve(q, v, tau)
+    np.testing.assert_array_equal(a, a_kkt)
+    np.testing.assert_array_equal(lam, lam_kkt)
+    np.testing.assert_array_equal(dyn.accelerator()(q, v, tau), a_kkt)
+    converged = ClosedChainDynamics(mech, "pinocchio", None)
+    np.testing.assert_allclose(converged.accelerator()(q, v, tau), a_kkt, atol=1e-9)
+    np.testing.assert_allclose(converged.solve(q, v, tau)[1], lam_kkt, atol=1e-9)
