@@ -8,7 +8,13 @@ import numpy as np
 import pinocchio as pin
 
 from plm_pin.analysis import _continuation, workspace_map
-from plm_pin.analysis._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
+from plm_pin.analysis._batch import (
+    GRAM_RTOL,
+    BatchKinematics,
+    batch_modes,
+    batch_newton,
+    square_task_metrics,
+)
 from plm_pin.analysis.manipulability import batch_metrics
 from plm_pin.kinematics import closures as _closures
 from plm_pin.kinematics import task_pose
@@ -83,3 +89,28 @@ def test_row_batched_map_equals_the_point_by_point_map(monkeypatch):
     ok = serial.reachable
     assert np.abs(batched.q[ok] - serial.q[ok]).max() < 1e-11
     assert np.allclose(batched.manipulability[ok], serial.manipulability[ok], rtol=1e-10, atol=0.0)
+
+
+def test_gram_metrics_equal_the_svd_metrics_near_singularities():
+    """Over a 3D3M map reaching its workspace edge (cond up to ~4e3), the Gram-eigenvalue metrics equal SVD's.
+
+    The reference is :func:`batch_metrics` with its SVD basis of J_phi (no Newton system, no
+    Gram matrix). The bound is that of ``GRAM_RTOL``: eps / GRAM_RTOL ~ 2e-12 relative, times a
+    small constant; the poses past it (and the inverse-singular ones) take the SVD path itself.
+    """
+    mech = preset("harada2011_3d3m")
+    values = (np.linspace(-0.16, 0.16, 30), np.linspace(0.0, 0.14, 25))
+    result = workspace_map(mech, ("x", "y"), values, (0.0, 0.08, math.radians(-20.0)), workers=1)
+    q = result.q[result.reachable]
+    A = np.stack([ik_jacobian(mech, qq) for qq in q])
+    m, act = mech.n_closure_rows, mech.actuated_v_indices
+    fast = square_task_metrics(A, m, act, mech.mobility)
+    svd = batch_metrics(A[:, :m], A[:, m:], act, mech.mobility)
+    assert svd["condition_number"].max() > 1.0 / math.sqrt(GRAM_RTOL)  # some poses take the SVD path
+    for name, values in svd.items():
+        assert np.allclose(fast[name], values, rtol=1e-11, atol=0.0), name
+    near = np.argmax(svd["condition_number"])
+    for name, values in batch_metrics(
+        A[near : near + 1, :m], A[near : near + 1, m:], act, mech.mobility
+    ).items():
+        assert fast[name][near] == values[0], name  # below GRAM_RTOL: the SVD values themselves
