@@ -70,8 +70,10 @@ class _Tree(NamedTuple):
     """One-axis joints."""
     K: np.ndarray
     """Skew matrix of each one-axis joint's axis (zero for a prismatic), shape (n_one, 3, 3)."""
-    K2: np.ndarray
-    """Its square."""
+    fixed: np.ndarray
+    """What a rotation about the axis keeps: :math:`a a^T` (the identity for a prismatic)."""
+    turned: np.ndarray
+    """What it turns by the cosine: :math:`I - a a^T` (zero for a prismatic)."""
     E: np.ndarray
     """Axis of each prismatic (zero for a revolute), shape (n_one, 3)."""
     free: np.ndarray
@@ -192,19 +194,22 @@ class BatchKinematics:
             depth[j] = int(depth[self.parents[j]]) + 1
         one = np.flatnonzero((self.kind == _REVOLUTE) | (self.kind == _PRISMATIC))
         eye = np.eye(3)
-        K = np.zeros((one.size, 3, 3))  # skew of the axis of each revolute (zero for prismatics)
-        E = np.zeros((one.size, 3))  # axis of each prismatic (zero for revolutes)
+        K = np.zeros((one.size, 3, 3))
+        fixed = np.broadcast_to(eye, K.shape).copy()
+        E = np.zeros((one.size, 3))
         for n, jid in enumerate(one.tolist()):
             a = eye[self.axis[jid]]
             if self.kind[jid] == _REVOLUTE:
                 K[n] = pin.skew(a)
+                fixed[n] = np.outer(a, a)
             else:
                 E[n] = a
         return _Tree(
             [np.flatnonzero(depth == d) for d in range(1, int(depth.max()) + 1)],
             one,
             K,
-            K @ K,
+            fixed,
+            eye - fixed,
             E,
             np.flatnonzero(self.kind == _FREE_FLYER),
         )
@@ -228,7 +233,8 @@ class BatchKinematics:
         motion_p = np.empty((B, nj, 3))
         value = q[:, self.idx_q[one]]
         s, c = np.sin(value), np.cos(value)
-        motion_R[:, one] = np.eye(3) + s[..., None, None] * tree.K + (1.0 - c)[..., None, None] * tree.K2
+        # Rodrigues' formula about a principal axis, with entries exactly 1, 0, cos and +-sin
+        motion_R[:, one] = tree.fixed + c[..., None, None] * tree.turned + s[..., None, None] * tree.K
         motion_p[:, one] = tree.E * value[..., None]
         for j in free:  # translation, then the quaternion (x, y, z, w)
             iq = self.idx_q[j]
@@ -532,16 +538,17 @@ def batch_modes(
     (:meth:`BatchKinematics.turns`) orients the passive revolute columns as
     :func:`~plm_pin.kinematics.legs.working_mode_from_data` does (default: none turned).
     """
-    out = []
     square = [leg for leg in legs if leg.square]
-    for i, leg in enumerate(square):
-        M = A[:, list(leg.sign_rows)][:, :, list(leg.columns)]
+    out = np.zeros((A.shape[0], len(square)), dtype=np.int8)
+    for n in sorted({len(leg.columns) for leg in square}):  # the blocks of one size in one call
+        which = [i for i, leg in enumerate(square) if len(leg.columns) == n]
+        M = np.stack([A[:, list(square[i].sign_rows)][:, :, list(square[i].columns)] for i in which], axis=1)
         if turns is not None:
-            M = M * turns[i][:, None, :]
+            M = M * np.stack([turns[i] for i in which], axis=1)[:, :, None, :]
         det = np.linalg.det(M)
-        bound = np.prod(np.linalg.norm(M, axis=1), axis=-1)
-        out.append(np.where(np.abs(det) <= rtol * bound, 0, np.sign(det)).astype(np.int8))
-    return np.stack(out, axis=1) if out else np.zeros((A.shape[0], 0), dtype=np.int8)
+        bound = np.prod(np.linalg.norm(M, axis=2), axis=-1)
+        out[:, which] = np.where(np.abs(det) <= rtol * bound, 0, np.sign(det))
+    return out
 
 
 FACTOR_RCOND = 1e-8
@@ -571,15 +578,17 @@ def square_task_metrics(
 
     Where the task has as many rows as DOF, the velocity map :math:`S` (:math:`J_\phi S = 0`,
     :math:`J_x S = I`) solves the same normal equations as the Newton step,
-    :math:`A^T A\, S = J_x^T`. With its QR factors :math:`S = N R` (:math:`N` an orthonormal
-    basis of the feasible motions, standing in for the right singular vectors of
-    :math:`J_\phi` in :func:`plm_pin.analysis.manipulability.batch_metrics`, whose values do
-    not depend on the basis), :math:`T = J_x N = R^{-1}` and :math:`J_{ce} = C T^{-1} = S_a`
-    (the actuated rows of :math:`S`), so no inverse is formed:
+    :math:`A^T A\, S = J_x^T` (or :math:`A S = [0; I]` itself where :math:`A` is square).
+    Its QR factor :math:`N` (:math:`S = N R`) is an orthonormal basis of the feasible
+    motions, standing in for the right singular vectors of :math:`J_\phi` in
+    :func:`plm_pin.analysis.manipulability.batch_metrics` (whose values do not depend on the
+    basis). With :math:`T = J_x N` (formed again from :math:`J_x`: :math:`R^{-1}` would carry
+    the rounding of the normal equations) and :math:`C = N_a` (the actuated rows):
 
-    .. math:: w = \prod_i \sigma_i(S_a), \quad \kappa = \frac{\sigma_{max}(S_a)}{\sigma_{min}(S_a)},
-              \quad \text{inverse margin} = \frac{1}{\sigma_{max}(S)\, \sigma_{max}(J_x)},
-              \quad \text{direct margin} = \sigma_{min}(N_a).
+    .. math:: J_{ce} = C T^{-1}, \quad w = \prod_i \sigma_i(J_{ce}), \quad
+              \kappa = \frac{\sigma_{max}(J_{ce})}{\sigma_{min}(J_{ce})}, \quad
+              \text{inverse margin} = \frac{1}{\sigma_{max}(T^{-1})\, \sigma_{max}(J_x)},
+              \quad \text{direct margin} = \sigma_{min}(C).
 
     The singular values come from the eigenvalues of the small Gram matrices (``eigvalsh``,
     cheaper than an SVD of each matrix) where that is accurate (:data:`GRAM_RTOL`); poses
@@ -596,9 +605,11 @@ def square_task_metrics(
         ``{name: (B,) array}`` as :func:`~plm_pin.analysis.manipulability.batch_metrics` returns.
     """
     J_phi, J_x = A[:, :m], A[:, m:]
-    H = np.swapaxes(A, 1, 2) @ A
     try:
-        S = np.linalg.solve(H, np.swapaxes(J_x, 1, 2))  # (B, nv, k)
+        if A.shape[1] == A.shape[2]:  # as many rows as velocities: A S = [0; I], no normal matrix
+            S = np.linalg.solve(A, np.broadcast_to(np.eye(A.shape[1])[:, m:], (*A.shape[:2], mobility)))
+        else:
+            S = np.linalg.solve(np.swapaxes(A, 1, 2) @ A, np.swapaxes(J_x, 1, 2))  # (B, nv, k)
     except np.linalg.LinAlgError:
         return batch_metrics(J_phi, J_x, actuated_v, mobility)
     finite = np.isfinite(S).all(axis=(1, 2))
