@@ -1,33 +1,83 @@
 r"""Batched kinematics across poses: numpy forward kinematics from the Pinocchio model's joint placements.
 
-For trees of one-axis joints about principal axes (``JointModelPX/PY/PZ/RX/RY/RZ``: the
-planar tables), with ``point`` closures and a task of translations plus, for a planar
-chain, the yaw ``rz``, :class:`BatchKinematics` evaluates the closure-and-task residual and
-its exact Jacobian for a whole batch of configurations in a few numpy operations:
+For trees of one-axis joints about principal axes (``JointModelPX/PY/PZ/RX/RY/RZ``) and
+free-flyers (``JointModelFreeFlyer``, the floating platform of the n-PSS), with ``point``
+closures and a task of translations plus either the yaw ``rz`` of a planar chain or all
+three angles (the :math:`\log_3` rows of :class:`plm_pin.kinematics.task.TaskTarget`),
+:class:`BatchKinematics` evaluates the closure-and-task residual and its exact Jacobian for
+a whole batch of configurations in a few numpy operations:
 
 .. math:: {}^0M_j = {}^0M_{\lambda(j)}\, M_j^{place}\, M_j(q_j), \qquad
           {}^0M_f = {}^0M_{j(f)}\, M_f^{place},
 
 with the world-aligned Jacobian columns :math:`(a_k \times (p_f - p_k), a_k)` of a
-revolute joint :math:`k` supporting frame :math:`f` and :math:`(a_k, 0)` of a prismatic one.
-The same quantities as Pinocchio's ``computeJointJacobians`` + ``getFrameJacobian``
-(tested to 1e-13), without a Python call per pose: :func:`batch_newton` solves a whole grid
-row per call, which is what makes maps cost a few microseconds per pose.
+rotation :math:`k` (a revolute, or one of a free-flyer's three, about the columns of its
+world rotation) supporting frame :math:`f`, and :math:`(a_k, 0)` of a translation. The same
+quantities as Pinocchio's ``computeJointJacobians`` + ``getFrameJacobian`` and the task
+rows' :math:`J_{\log_3}` (tested to 1e-13), without a Python call per pose:
+:func:`batch_newton` solves a whole grid row per call, which is what makes maps cost a few
+microseconds per pose.
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
 
 from ..kinematics.closures import Closure
+from ..kinematics.jacobians import INVERSE_RTOL
 from ..kinematics.legs import MODE_RTOL, Leg
 from ..kinematics.task import Task, wrap_angle
 from .manipulability import batch_metrics
 
 _AXES = {"X": 0, "Y": 1, "Z": 2}
+_REVOLUTE, _PRISMATIC, _FREE_FLYER = 1, 2, 3
+_SMALL_ANGLE = 1e-4
+"""Below this rotation angle [rad], log3 and its Jacobian use their Taylor series (error < 1e-17)."""
+
+_NEAR_PI = np.pi - 1e-3
+"""Rotation errors above this angle [rad] are left to the point-by-point path (NaN residual)."""
+
+
+class Evaluation(NamedTuple):
+    """One pass of :meth:`BatchKinematics.evaluate` over a batch of configurations.
+
+    Attributes:
+        r: residual ``[phi; x - x*]``, shape (B, m + k).
+        J: its Jacobian (the Newton matrix), shape (B, m + k, nv).
+        A: the inverse-kinematics Jacobian ``[J_phi; J_x]`` (task twist rows, as
+            :func:`plm_pin.kinematics.legs.ik_jacobian`), shape (B, m + k, nv); ``J`` itself
+            unless the task holds log3 rows.
+        R: world rotation of every joint (universe first), shape (B, njoints, 3, 3).
+    """
+
+    r: np.ndarray
+    J: np.ndarray
+    A: np.ndarray
+    R: np.ndarray
+
+
+class _Tree(NamedTuple):
+    """Constant arrays of :meth:`BatchKinematics.frames`."""
+
+    levels: list[np.ndarray]
+    """Joints by depth in the tree (depth 1 first)."""
+    one: np.ndarray
+    """One-axis joints."""
+    K: np.ndarray
+    """Skew matrix of each one-axis joint's axis (zero for a prismatic), shape (n_one, 3, 3)."""
+    fixed: np.ndarray
+    """What a rotation about the axis keeps: :math:`a a^T` (the identity for a prismatic)."""
+    turned: np.ndarray
+    """What it turns by the cosine: :math:`I - a a^T` (zero for a prismatic)."""
+    E: np.ndarray
+    """Axis of each prismatic (zero for a revolute), shape (n_one, 3)."""
+    free: np.ndarray
+    """Free-flyer joints."""
 
 
 @dataclass(frozen=True)
@@ -40,24 +90,30 @@ class BatchKinematics:
         parents: parent joint of each joint (universe 0), shape (njoints,).
         place_R: joint placement rotations, shape (njoints, 3, 3).
         place_p: joint placement translations, shape (njoints, 3).
-        axis: motion axis (0, 1, 2) of each joint (-1 for the universe).
-        revolute: whether each joint is revolute (else prismatic).
+        kind: 1 revolute, 2 prismatic, 3 free-flyer (0 for the universe), shape (njoints,).
+        axis: motion axis (0, 1, 2) of each one-axis joint (-1 otherwise).
+        idx_q: first configuration index of each joint (-1 for the universe).
+        idx_v: first velocity index of each joint (-1 for the universe).
+        rotational: whether each velocity column is a rotation (else a translation), shape (nv,).
         frame_joint: parent joint of each used frame, shape (n_frames,).
         frame_R: frame placement rotations, shape (n_frames, 3, 3).
         frame_p: frame placement translations, shape (n_frames, 3).
-        support: ``support[f, k]``: joint k moves frame f, shape (n_frames, nv).
+        support: ``support[f, k]``: velocity column k moves frame f, shape (n_frames, nv).
         closure_a: index (in the used frames) of each closure's frame A.
         closure_b: index of each closure's frame B.
         task_frame: index of the task frame in the used frames.
         task_linear: selected translation rows (0..2).
-        task_yaw: whether the task holds ``rz``.
+        task_angular: ``"none"``, ``"yaw"`` (``rz`` of a planar chain) or ``"log3"`` (all three angles).
     """
 
     parents: np.ndarray
     place_R: np.ndarray
     place_p: np.ndarray
+    kind: np.ndarray
     axis: np.ndarray
-    revolute: np.ndarray
+    idx_q: np.ndarray
+    idx_v: np.ndarray
+    rotational: np.ndarray
     frame_joint: np.ndarray
     frame_R: np.ndarray
     frame_p: np.ndarray
@@ -66,7 +122,7 @@ class BatchKinematics:
     closure_b: np.ndarray
     task_frame: int
     task_linear: tuple[int, ...]
-    task_yaw: bool
+    task_angular: str
 
     @classmethod
     def from_parts(
@@ -74,148 +130,373 @@ class BatchKinematics:
     ) -> BatchKinematics | None:
         """The batched evaluator of a model, or None when a joint, closure or task row is not supported.
 
-        Supported: joints ``JointModelP{X,Y,Z}`` / ``JointModelR{X,Y,Z}`` (one velocity per joint,
-        in joint order), ``point`` closures, tasks of ``x y z`` plus ``rz`` when every
-        revolute axis is the world z (a planar chain, where the yaw rate is the z angular rate).
+        Supported: joints ``JointModelP{X,Y,Z}`` / ``JointModelR{X,Y,Z}`` and
+        ``JointModelFreeFlyer``, ``point`` closures, tasks of ``x y z`` plus either ``rz``
+        when every rotation axis is the world z (a planar chain, where the yaw rate is the
+        z angular rate) or all of ``rx ry rz``.
         """
-        axis, revolute = [-1], [False]
+        kind, axis, rotational = [0], [-1], np.zeros(model.nv, dtype=bool)
         for j in range(1, model.njoints):
-            short = model.joints[j].shortname()
-            if short[:-1] not in ("JointModelP", "JointModelR") or short[-1] not in _AXES:
+            short, iv = model.joints[j].shortname(), model.joints[j].idx_v
+            if short == "JointModelFreeFlyer":
+                kind.append(_FREE_FLYER)
+                axis.append(-1)
+                rotational[iv + 3 : iv + 6] = True
+            elif short[:-1] in ("JointModelP", "JointModelR") and short[-1] in _AXES:
+                kind.append(_REVOLUTE if short[-2] == "R" else _PRISMATIC)
+                axis.append(_AXES[short[-1]])
+                rotational[iv] = short[-2] == "R"
+            else:
                 return None
-            if model.joints[j].idx_v != j - 1:
-                return None
-            axis.append(_AXES[short[-1]])
-            revolute.append(short[-2] == "R")
         if any(c.spec.type != "point" for c in closures):
             return None
-        dofs = set(task.dofs)
-        if not dofs <= {"x", "y", "z", "rz"}:
+        angular = task.angular
+        if angular not in ((), (2,), (0, 1, 2)):
             return None
         frames = list(dict.fromkeys([f for c in closures for f in c.frame_ids] + [task.frame_id]))
+        column_joint = np.empty(model.nv, dtype=int)
+        for j in range(1, model.njoints):
+            column_joint[model.joints[j].idx_v : model.joints[j].idx_v + model.joints[j].nv] = j
         out = cls(
             parents=np.array(model.parents, dtype=int),
             place_R=np.array([M.rotation for M in model.jointPlacements]),
             place_p=np.array([M.translation for M in model.jointPlacements]),
+            kind=np.array(kind),
             axis=np.array(axis),
-            revolute=np.array(revolute),
+            idx_q=np.array([-1] + [model.joints[j].idx_q for j in range(1, model.njoints)]),
+            idx_v=np.array([-1] + [model.joints[j].idx_v for j in range(1, model.njoints)]),
+            rotational=rotational,
             frame_joint=np.array([model.frames[f].parentJoint for f in frames], dtype=int),
             frame_R=np.array([model.frames[f].placement.rotation for f in frames]),
             frame_p=np.array([model.frames[f].placement.translation for f in frames]),
             support=np.array(
-                [
-                    [k + 1 in set(model.supports[model.frames[f].parentJoint]) for k in range(model.nv)]
-                    for f in frames
-                ]
+                [np.isin(column_joint, list(model.supports[model.frames[f].parentJoint])) for f in frames]
             ),
             closure_a=np.array([frames.index(c.frame_ids[0]) for c in closures], dtype=int),
             closure_b=np.array([frames.index(c.frame_ids[1]) for c in closures], dtype=int),
             task_frame=frames.index(task.frame_id),
             task_linear=task.linear,
-            task_yaw="rz" in dofs,
+            task_angular={(): "none", (2,): "yaw", (0, 1, 2): "log3"}[angular],
         )
-        if out.task_yaw and not all(a == 2 for a, r in zip(axis, revolute, strict=True) if r):
-            return None  # the yaw row needs every rotation about z
-        if out.task_yaw and not all(np.allclose(R[:, 2], [0.0, 0.0, 1.0]) for R in out.place_R[1:]):
-            return None
+        if out.task_angular == "yaw":  # the yaw row needs every rotation about the world z
+            if any(k != _REVOLUTE or a != 2 for k, a in zip(kind, axis, strict=True) if k in (1, 3)):
+                return None
+            if not all(np.allclose(R[:, 2], [0.0, 0.0, 1.0]) for R in out.place_R[1:]):
+                return None
         return out
 
-    def frames(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Joint axes and origins, frame rotations and origins, all world, for configurations ``q`` (B, nq).
+    @functools.cached_property
+    def _tree(self) -> _Tree:
+        """Constant arrays of :meth:`frames`: joints by depth, one-axis joints and their generators."""
+        nj = self.parents.size
+        depth = np.zeros(nj, dtype=int)
+        for j in range(1, nj):
+            depth[j] = int(depth[self.parents[j]]) + 1
+        one = np.flatnonzero((self.kind == _REVOLUTE) | (self.kind == _PRISMATIC))
+        eye = np.eye(3)
+        K = np.zeros((one.size, 3, 3))
+        fixed = np.broadcast_to(eye, K.shape).copy()
+        E = np.zeros((one.size, 3))
+        for n, jid in enumerate(one.tolist()):
+            a = eye[self.axis[jid]]
+            if self.kind[jid] == _REVOLUTE:
+                K[n] = pin.skew(a)
+                fixed[n] = np.outer(a, a)
+            else:
+                E[n] = a
+        return _Tree(
+            [np.flatnonzero(depth == d) for d in range(1, int(depth.max()) + 1)],
+            one,
+            K,
+            fixed,
+            eye - fixed,
+            E,
+            np.flatnonzero(self.kind == _FREE_FLYER),
+        )
+
+    def frames(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        r"""Column axes and origins, joint and frame rotations, frame origins (world) at ``q`` (B, nq).
+
+        The joints of one depth in the tree are placed together: each joint's motion
+        :math:`M_j(q_j)` (Rodrigues' formula about its axis, a translation along it, or a
+        free-flyer's quaternion and translation), then :math:`{}^0M_{\lambda(j)} M_j^{place}
+        M_j(q_j)` for the whole depth at once.
 
         Returns:
-            axes (B, nv, 3), joint origins (B, nv, 3), frame rotations (B, n_frames, 3, 3),
-            frame origins (B, n_frames, 3).
+            axes (B, nv, 3), column origins (B, nv, 3), joint rotations (B, njoints, 3, 3),
+            frame rotations (B, n_frames, 3, 3), frame origins (B, n_frames, 3).
         """
-        B, nj = q.shape[0], self.parents.size
+        tree = self._tree
+        one, free = tree.one, tree.free
+        B, nj, nv = q.shape[0], self.parents.size, self.rotational.size
+        motion_R = np.empty((B, nj, 3, 3))
+        motion_p = np.empty((B, nj, 3))
+        value = q[:, self.idx_q[one]]
+        s, c = np.sin(value), np.cos(value)
+        # Rodrigues' formula about a principal axis, with entries exactly 1, 0, cos and +-sin
+        motion_R[:, one] = tree.fixed + c[..., None, None] * tree.turned + s[..., None, None] * tree.K
+        motion_p[:, one] = tree.E * value[..., None]
+        for j in free:  # translation, then the quaternion (x, y, z, w)
+            iq = self.idx_q[j]
+            motion_R[:, j] = quaternion_matrix(q[:, iq + 3 : iq + 7])
+            motion_p[:, j] = q[:, iq : iq + 3]
         R = np.empty((B, nj, 3, 3))
         p = np.empty((B, nj, 3))
+        placed = np.empty((B, nj, 3, 3))  # parent rotation times placement: the axes of one-axis joints
         R[:, 0] = np.eye(3)
         p[:, 0] = 0.0
-        for j in range(1, nj):
-            parent = self.parents[j]
-            Rp = R[:, parent] @ self.place_R[j]  # (B, 3, 3)
-            pj = p[:, parent] + R[:, parent] @ self.place_p[j]
-            value = q[:, j - 1]
-            a = self.axis[j]
-            if self.revolute[j]:
-                c, s = np.cos(value), np.sin(value)
-                i1, i2 = (a + 1) % 3, (a + 2) % 3
-                # rotation about the axis a: columns i1, i2 turn, column a stays
-                R[:, j, :, a] = Rp[:, :, a]
-                R[:, j, :, i1] = Rp[:, :, i1] * c[:, None] + Rp[:, :, i2] * s[:, None]
-                R[:, j, :, i2] = Rp[:, :, i2] * c[:, None] - Rp[:, :, i1] * s[:, None]
-                p[:, j] = pj
-            else:
-                R[:, j] = Rp
-                p[:, j] = pj + Rp[:, :, a] * value[:, None]
-        axes = np.stack([R[:, j, :, self.axis[j]] for j in range(1, nj)], axis=1)  # (B, nv, 3)
+        for level in tree.levels:
+            R_parent = R[:, self.parents[level]]
+            Rp = R_parent @ self.place_R[level]
+            placed[:, level] = Rp
+            R[:, level] = Rp @ motion_R[:, level]
+            p[:, level] = (
+                p[:, self.parents[level]]
+                + np.einsum("blij,lj->bli", R_parent, self.place_p[level])
+                + np.einsum("blij,blj->bli", Rp, motion_p[:, level])
+            )
+        axes = np.empty((B, nv, 3))
+        origins = np.empty((B, nv, 3))
+        columns = self.idx_v[one]
+        axes[:, columns] = np.swapaxes(placed, 2, 3)[:, one, self.axis[one]]
+        origins[:, columns] = p[:, one]
+        for j in free:
+            iv = self.idx_v[j]
+            axes[:, iv : iv + 3] = axes[:, iv + 3 : iv + 6] = np.swapaxes(R[:, j], 1, 2)
+            origins[:, iv : iv + 6] = p[:, j, None]
         Rf = R[:, self.frame_joint] @ self.frame_R  # (B, nf, 3, 3)
         pf = p[:, self.frame_joint] + np.einsum("bfij,fj->bfi", R[:, self.frame_joint], self.frame_p)
-        return axes, p[:, 1:], Rf, pf
+        return axes, origins, R, Rf, pf
 
-    def residual_and_jacobian(self, q: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Residual (B, m + n_task) and Jacobian (B, m + n_task, nv) at ``q`` (B, nq) and targets ``x``.
+    @functools.cached_property
+    def _pairs(self) -> tuple[np.ndarray, np.ndarray, tuple, tuple, tuple]:
+        """The (frame, column) pairs where a velocity column moves a frame, and where each lands in ``J``.
+
+        Returns the pairs' frames and columns, then for the closures' B frames, their A frames
+        and the task frame: that frame's pairs and their entries in the flattened Jacobian
+        (B, (m + k) * nv), three per pair (rows 3 i .. 3 i + 2 of closure i; the task's
+        translation rows), in the order of ``lin[:, pairs].reshape(B, -1)``.
+        """
+        frame, column = np.nonzero(self.support)
+        nv, m = self.rotational.size, 3 * self.closure_a.size
+
+        def placed(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            pairs = [np.flatnonzero(frame == f) for f in frames]
+            at = [((3 * i + np.arange(3)) * nv + column[k, None]).reshape(-1) for i, k in enumerate(pairs)]
+            return np.concatenate(pairs), np.concatenate(at)
+
+        task = np.flatnonzero(frame == self.task_frame)
+        rows = m + np.arange(len(self.task_linear))
+        return (
+            frame,
+            column,
+            placed(self.closure_b),
+            placed(self.closure_a),
+            (task, (rows * nv + column[task, None]).reshape(-1)),
+        )
+
+    def evaluate(self, q: np.ndarray, x: np.ndarray) -> Evaluation:
+        """Residual, Newton matrix, IK Jacobian and joint rotations at ``q`` (B, nq) and targets ``x`` (B, k).
 
         Closure rows as :func:`plm_pin.kinematics.closures.residual_from_placements` (three per
-        point closure), task rows as :class:`plm_pin.kinematics.task.TaskTarget`.
+        point closure), task rows as :class:`plm_pin.kinematics.task.TaskTarget` (NaN where a
+        log3 rotation error is within 1e-3 rad of pi).
         """
-        axes, origins, Rf, pf = self.frames(q)
-        # world-aligned linear velocity of each frame origin per joint: (B, nf, nv, 3)
-        lever = pf[:, :, None, :] - origins[:, None, :, :]
-        lin = np.where(
-            self.revolute[1:, None],
-            np.cross(axes[:, None, :, :], lever),
-            np.broadcast_to(axes[:, None], lever.shape),
-        )
-        lin = lin * self.support[None, :, :, None]
-        B, nc = q.shape[0], self.closure_a.size
-        r_phi = (pf[:, self.closure_b] - pf[:, self.closure_a]).reshape(B, 3 * nc)
-        J_phi = np.swapaxes(lin[:, self.closure_b] - lin[:, self.closure_a], -1, -2).reshape(B, 3 * nc, -1)
-        t = self.task_frame
-        r_x = [pf[:, t, list(self.task_linear)] - x[:, : len(self.task_linear)]]
-        J_x = [np.swapaxes(lin[:, t][:, :, list(self.task_linear)], -1, -2)]
-        if self.task_yaw:
+        axes, origins, R, Rf, pf = self.frames(q)
+        frame, column, (b_pair, b_at), (a_pair, a_at), (t_pair, t_at) = self._pairs
+        B, nv, m = q.shape[0], self.rotational.size, 3 * self.closure_a.size
+        t, rows, nl = self.task_frame, list(self.task_linear), len(self.task_linear)
+        k = x.shape[1]
+        # world-aligned linear velocity of a frame origin per supporting velocity column: (B, P, 3)
+        ax = axes[:, column]
+        lin = np.where(self.rotational[column, None], _cross(ax, pf[:, frame] - origins[:, column]), ax)
+        r = np.empty((B, m + k))
+        r[:, :m] = (pf[:, self.closure_b] - pf[:, self.closure_a]).reshape(B, m)
+        r[:, m : m + nl] = pf[:, t, rows] - x[:, :nl]
+        A = np.zeros((B, m + k, nv))
+        flat = A.reshape(B, -1)
+        flat[:, b_at] = lin[:, b_pair].reshape(B, -1)
+        flat[:, a_at] -= lin[:, a_pair].reshape(B, -1)
+        flat[:, t_at] = lin[:, t_pair][:, :, rows].reshape(B, -1)
+        omega = np.swapaxes(axes * (self.rotational * self.support[t])[None, :, None], 1, 2)  # (B, 3, nv)
+        if self.task_angular == "yaw":
             yaw = np.arctan2(Rf[:, t, 1, 0], Rf[:, t, 0, 0])
-            r_x.append(wrap_angle(yaw - x[:, -1])[:, None])
-            J_x.append((axes[:, :, 2] * (self.revolute[1:] * self.support[t]))[:, None, :])
-        return np.concatenate([r_phi, *r_x], axis=1), np.concatenate([J_phi, *J_x], axis=1)
+            r[:, -1] = wrap_angle(yaw - x[:, -1])
+            A[:, -1] = omega[:, 2]
+        if self.task_angular != "log3":
+            return Evaluation(r, A, A, R)
+        E = Rf[:, t] @ np.swapaxes(rpy_matrix(x[:, nl : nl + 3]), 1, 2)
+        r[:, m + nl :], J_log = log3_and_jacobian(E)
+        J = A.copy()
+        A[:, m + nl :] = omega
+        J[:, m + nl :] = J_log @ np.swapaxes(E, 1, 2) @ omega
+        return Evaluation(r, J, A, R)
+
+    def integrate(self, q: np.ndarray, dv: np.ndarray) -> np.ndarray:
+        r"""Configurations moved by velocity increments ``dv`` (B, nv), as ``pin.integrate`` to first order.
+
+        One-axis joints add their increment; a free-flyer moves its origin by :math:`R\,dv_{lin}`
+        and turns its quaternion by :math:`\exp(dv_{ang})` on the right (renormalised).
+        """
+        out = q.copy()
+        one = self.kind[1:] != _FREE_FLYER
+        out[:, self.idx_q[1:][one]] += dv[:, self.idx_v[1:][one]]
+        for j in np.flatnonzero(self.kind == _FREE_FLYER):
+            iq, iv = self.idx_q[j], self.idx_v[j]
+            quat = q[:, iq + 3 : iq + 7]
+            out[:, iq : iq + 3] += np.einsum("bij,bj->bi", quaternion_matrix(quat), dv[:, iv : iv + 3])
+            turned = _quaternion_product(quat, _quaternion_exp(dv[:, iv + 3 : iv + 6]))
+            out[:, iq + 3 : iq + 7] = turned / np.linalg.norm(turned, axis=1, keepdims=True)
+        return out
+
+    def normalized(self, q: np.ndarray) -> np.ndarray:
+        """``q`` (B, nq) with every free-flyer quaternion scaled to unit norm (extrapolated guesses)."""
+        out = q.copy()
+        for j in np.flatnonzero(self.kind == _FREE_FLYER):
+            iq = self.idx_q[j]
+            out[:, iq + 3 : iq + 7] /= np.linalg.norm(q[:, iq + 3 : iq + 7], axis=1, keepdims=True)
+        return out
+
+    def turns(self, R: np.ndarray, legs: tuple[Leg, ...]) -> list[np.ndarray]:
+        """Per square leg, signs (B, n_columns) turning each passive revolute column to its generic side.
+
+        As :func:`plm_pin.kinematics.legs.working_mode_from_data`: a column whose world axis,
+        seen from the leg's root joint (rotations ``R`` of :class:`Evaluation`), points away
+        from the leg's generic axis is negated.
+        """
+        out = []
+        for leg in legs:
+            if not leg.square:
+                continue
+            sign = np.ones((R.shape[0], len(leg.columns)))
+            for k, jid, root, generic in leg.axes:
+                world = R[:, jid, :, self.axis[jid]]
+                seen = np.einsum("bji,bj->bi", R[:, root], world)
+                sign[seen @ np.asarray(generic) < 0.0, k] = -1.0
+            out.append(sign)
+        return out
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products over the last axis (of length 3), cheaper than ``np.cross`` on small stacks."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+def quaternion_matrix(quat: np.ndarray) -> np.ndarray:
+    """Rotation matrices (B, 3, 3) of quaternions (B, 4) ``(x, y, z, w)``, normalised."""
+    x, y, z, w = quat.T
+    s = 2.0 / np.einsum("bi,bi->b", quat, quat)
+    out = np.empty((quat.shape[0], 3, 3))
+    out[:, 0, 0] = 1.0 - s * (y * y + z * z)
+    out[:, 0, 1] = s * (x * y - z * w)
+    out[:, 0, 2] = s * (x * z + y * w)
+    out[:, 1, 0] = s * (x * y + z * w)
+    out[:, 1, 1] = 1.0 - s * (x * x + z * z)
+    out[:, 1, 2] = s * (y * z - x * w)
+    out[:, 2, 0] = s * (x * z - y * w)
+    out[:, 2, 1] = s * (y * z + x * w)
+    out[:, 2, 2] = 1.0 - s * (x * x + y * y)
+    return out
+
+
+def _quaternion_exp(w: np.ndarray) -> np.ndarray:
+    """Unit quaternions (B, 4) ``(x, y, z, w)`` of rotation vectors ``w`` (B, 3) [rad]."""
+    theta = np.linalg.norm(w, axis=1)
+    half = 0.5 * np.sinc(theta / (2.0 * np.pi))  # sin(theta / 2) / theta
+    return np.concatenate([w * half[:, None], np.cos(0.5 * theta)[:, None]], axis=1)
+
+
+def _quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton products ``a b`` of quaternions (B, 4) ``(x, y, z, w)``."""
+    va, wa, vb, wb = a[:, :3], a[:, 3:], b[:, :3], b[:, 3:]
+    return np.concatenate(
+        [wa * vb + wb * va + _cross(va, vb), wa * wb - np.sum(va * vb, axis=1, keepdims=True)], 1
+    )
+
+
+def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
+    """``pin.rpy.rpyToMatrix`` of roll-pitch-yaw angles (B, 3) [rad]: :math:`R_z R_y R_x`, shape (B, 3, 3)."""
+    cr, cp, cy = np.cos(rpy).T
+    sr, sp, sy = np.sin(rpy).T
+    out = np.empty((rpy.shape[0], 3, 3))
+    out[:, 0, 0] = cy * cp
+    out[:, 0, 1] = cy * sp * sr - sy * cr
+    out[:, 0, 2] = cy * sp * cr + sy * sr
+    out[:, 1, 0] = sy * cp
+    out[:, 1, 1] = sy * sp * sr + cy * cr
+    out[:, 1, 2] = sy * sp * cr - cy * sr
+    out[:, 2, 0] = -sp
+    out[:, 2, 1] = cp * sr
+    out[:, 2, 2] = cp * cr
+    return out
+
+
+def log3_and_jacobian(E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r"""``pin.log3`` and ``pin.Jlog3`` of rotations (B, 3, 3): rotation vectors (B, 3) and (B, 3, 3).
+
+    :math:`\omega = \theta / \sin\theta\; \mathrm{vee}(E - E^T) / 2` and
+    :math:`J = I + [\omega]_\times / 2 + (1/\theta^2 - (1 + \cos\theta) / (2 \theta \sin\theta))
+    [\omega]_\times^2`, their Taylor series below :data:`_SMALL_ANGLE`; NaN above
+    :data:`_NEAR_PI`, where the axis is ill-determined from the skew part.
+    """
+    v = 0.5 * np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=1)
+    s = np.linalg.norm(v, axis=1)
+    c = 0.5 * (np.trace(E, axis1=1, axis2=2) - 1.0)
+    theta = np.arctan2(s, c)
+    small = theta < _SMALL_ANGLE
+    with np.errstate(divide="ignore", invalid="ignore"):
+        factor = np.where(small, 1.0 + theta**2 / 6.0, theta / s)
+        coef = np.where(small, 1.0 / 12.0 + theta**2 / 720.0, 1.0 / theta**2 - (1.0 + c) / (2.0 * theta * s))
+    factor[theta > _NEAR_PI] = np.nan
+    log = factor[:, None] * v
+    K = np.zeros((E.shape[0], 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -log[:, 2], log[:, 1], -log[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = log[:, 2], -log[:, 1], log[:, 0]
+    return log, np.eye(3) + 0.5 * K + coef[:, None, None] * (K @ K)
 
 
 def batch_newton(
     kin: BatchKinematics, q0: np.ndarray, x: np.ndarray, tol: float, max_iterations: int, stall: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Gauss-Newton on every configuration of a batch at once (each stops on its own).
 
     Args:
         kin: the evaluator.
-        q0: starting configurations, shape (B, nq).
+        q0: starting configurations, shape (B, nq) (free-flyer quaternions are renormalised).
         x: task targets, shape (B, n_task).
         tol: residual tolerance [m, rad].
         max_iterations: iteration cap.
         stall: a pose whose residual does not fall below ``stall`` times the previous one fails.
 
     Returns:
-        Configurations (B, nq), which converged (B,), and the stacked Jacobian at each (B, m + k, nv).
+        Configurations (B, nq), which converged (B,), the inverse-kinematics Jacobian
+        ``[J_phi; J_x]`` at each (B, m + k, nv) and the joint rotations there (B, njoints, 3, 3).
     """
-    q = q0.copy()
+    q = kin.normalized(q0)
     B = q.shape[0]
     done = np.zeros(B, dtype=bool)
     failed = np.zeros(B, dtype=bool)
     err_prev = np.full(B, np.inf)
     live = np.arange(B)
-    J_out: np.ndarray | None = None
+    A_out: np.ndarray | None = None
+    R_out: np.ndarray | None = None
     for iteration in range(max_iterations + 1):
         if live.size == 0:
             break
-        r, J = kin.residual_and_jacobian(q[live], x[live])
-        if J_out is None:
-            J_out = np.empty((B, *J.shape[1:]))
+        r, J, A, R = kin.evaluate(q[live], x[live])
+        if A_out is None or R_out is None:
+            A_out = np.empty((B, *A.shape[1:]))
+            R_out = np.empty((B, *R.shape[1:]))
         err = np.abs(r).max(axis=1)
         ok = err <= tol
-        J_out[live[ok]] = J[ok]
+        A_out[live[ok]] = A[ok]
+        R_out[live[ok]] = R[ok]
         done[live[ok]] = True
-        bad = ~ok & ((err >= stall * err_prev[live]) | (iteration == max_iterations))
+        bad = ~ok & ((err >= stall * err_prev[live]) | (iteration == max_iterations) | np.isnan(err))
         failed[live[bad]] = True
         go = ~ok & ~bad
         if not go.any():
@@ -229,13 +510,15 @@ def batch_newton(
             step = np.stack([_solve_or_nan(h, v) for h, v in zip(H, g, strict=True)])
         idx = live[go]
         err_prev[idx] = err[go]
-        q[idx] -= step
         bad_step = ~np.isfinite(step).all(axis=1)
         failed[idx[bad_step]] = True
+        q[idx[~bad_step]] = kin.integrate(q[idx[~bad_step]], -step[~bad_step])
         live = idx[~bad_step]
-    if J_out is None:
-        J_out = np.full((B, 0, q.shape[1]), np.nan)
-    return q, done & ~failed, J_out
+    nv = kin.rotational.size
+    if A_out is None or R_out is None:
+        A_out = np.full((B, 0, nv), np.nan)
+        R_out = np.full((B, kin.parents.size, 3, 3), np.nan)
+    return q, done & ~failed, A_out, R_out
 
 
 def _solve_or_nan(H: np.ndarray, g: np.ndarray) -> np.ndarray:
@@ -245,27 +528,47 @@ def _solve_or_nan(H: np.ndarray, g: np.ndarray) -> np.ndarray:
         return np.full(g.shape, np.nan)
 
 
-def batch_modes(A: np.ndarray, legs: tuple[Leg, ...], rtol: float = MODE_RTOL) -> np.ndarray:
+def batch_modes(
+    A: np.ndarray, legs: tuple[Leg, ...], turns: list[np.ndarray] | None = None, rtol: float = MODE_RTOL
+) -> np.ndarray:
     """Working modes of a batch of stacked Jacobians (B, m + k, nv): one sign per square leg, (B, n_legs).
 
     The batched :func:`plm_pin.kinematics.legs.working_mode_from_jacobian`: the sign of each
-    square leg block's determinant, 0 at or below ``rtol`` times Hadamard's bound. The passive
-    axes are not turned: in the planar chains this evaluator takes, every revolute axis stays
-    along the plane's normal.
+    square leg block's determinant, 0 at or below ``rtol`` times Hadamard's bound. ``turns``
+    (:meth:`BatchKinematics.turns`) orients the passive revolute columns as
+    :func:`~plm_pin.kinematics.legs.working_mode_from_data` does (default: none turned).
     """
-    out = []
-    for leg in legs:
-        if not leg.square:
-            continue
-        M = A[:, list(leg.sign_rows)][:, :, list(leg.columns)]
+    square = [leg for leg in legs if leg.square]
+    out = np.zeros((A.shape[0], len(square)), dtype=np.int8)
+    for n in sorted({len(leg.columns) for leg in square}):  # the blocks of one size in one call
+        which = [i for i, leg in enumerate(square) if len(leg.columns) == n]
+        M = np.stack([A[:, list(square[i].sign_rows)][:, :, list(square[i].columns)] for i in which], axis=1)
+        if turns is not None:
+            M = M * np.stack([turns[i] for i in which], axis=1)[:, :, None, :]
         det = np.linalg.det(M)
-        bound = np.prod(np.linalg.norm(M, axis=1), axis=-1)
-        out.append(np.where(np.abs(det) <= rtol * bound, 0, np.sign(det)).astype(np.int8))
-    return np.stack(out, axis=1) if out else np.zeros((A.shape[0], 0), dtype=np.int8)
+        bound = np.prod(np.linalg.norm(M, axis=2), axis=-1)
+        out[:, which] = np.where(np.abs(det) <= rtol * bound, 0, np.sign(det))
+    return out
 
 
 FACTOR_RCOND = 1e-8
 """Poses whose velocity map is worse conditioned than 1 / FACTOR_RCOND get the SVD path of the metrics."""
+
+GRAM_RTOL = 1e-4
+r"""Smallest ratio :math:`\lambda_{min} / \lambda_{max}` of a Gram matrix read for singular values.
+
+A backward-stable symmetric eigensolver perturbs each eigenvalue of :math:`G = M^T M` by
+about :math:`\epsilon \lambda_{max}`, so a singular value :math:`\sigma_i = \sqrt{\lambda_i}`
+comes out to a relative error of about :math:`\epsilon\, \sigma_{max}^2 / \sigma_i^2`: at most
+:math:`2.2 \cdot 10^{-16} / 10^{-4} \approx 2 \cdot 10^{-12}` above this ratio. Poses below it
+(near a singularity) get the singular values of the SVD."""
+
+
+def _squared_singular_values(M: np.ndarray) -> np.ndarray:
+    """Squared singular values of ``M`` (..., r, c), descending (..., min(r, c)), from its smaller Gram."""
+    G = M @ np.swapaxes(M, -1, -2) if M.shape[-2] <= M.shape[-1] else np.swapaxes(M, -1, -2) @ M
+    lam = np.linalg.eigvalsh(G)[..., ::-1][..., : min(M.shape[-2:])]
+    return np.maximum(lam, 0.0)
 
 
 def square_task_metrics(
@@ -275,11 +578,22 @@ def square_task_metrics(
 
     Where the task has as many rows as DOF, the velocity map :math:`S` (:math:`J_\phi S = 0`,
     :math:`J_x S = I`) solves the same normal equations as the Newton step,
-    :math:`A^T A\, S = J_x^T`; its QR factor :math:`N` is an orthonormal basis of the feasible
+    :math:`A^T A\, S = J_x^T` (or :math:`A S = [0; I]` itself where :math:`A` is square).
+    Its QR factor :math:`N` (:math:`S = N R`) is an orthonormal basis of the feasible
     motions, standing in for the right singular vectors of :math:`J_\phi` in
     :func:`plm_pin.analysis.manipulability.batch_metrics` (whose values do not depend on the
-    basis), so only the singular values of :math:`J_\phi` are computed, not its vectors.
-    Poses where :math:`S` is ill-conditioned (near an inverse singularity) get the SVD basis.
+    basis). With :math:`T = J_x N` (formed again from :math:`J_x`: :math:`R^{-1}` would carry
+    the rounding of the normal equations) and :math:`C = N_a` (the actuated rows):
+
+    .. math:: J_{ce} = C T^{-1}, \quad w = \prod_i \sigma_i(J_{ce}), \quad
+              \kappa = \frac{\sigma_{max}(J_{ce})}{\sigma_{min}(J_{ce})}, \quad
+              \text{inverse margin} = \frac{1}{\sigma_{max}(T^{-1})\, \sigma_{max}(J_x)},
+              \quad \text{direct margin} = \sigma_{min}(C).
+
+    The singular values come from the eigenvalues of the small Gram matrices (``eigvalsh``,
+    cheaper than an SVD of each matrix) where that is accurate (:data:`GRAM_RTOL`); poses
+    where it is not, where :math:`S` is ill-conditioned (:data:`FACTOR_RCOND`) or where
+    :math:`T` is singular get :func:`~plm_pin.analysis.manipulability.batch_metrics` (SVD).
 
     Args:
         A: stacked Jacobians, shape (B, m + k, nv).
@@ -291,15 +605,42 @@ def square_task_metrics(
         ``{name: (B,) array}`` as :func:`~plm_pin.analysis.manipulability.batch_metrics` returns.
     """
     J_phi, J_x = A[:, :m], A[:, m:]
-    H = np.swapaxes(A, 1, 2) @ A
     try:
-        S = np.linalg.solve(H, np.swapaxes(J_x, 1, 2))  # (B, nv, k)
+        if A.shape[1] == A.shape[2]:  # as many rows as velocities: A S = [0; I], no normal matrix
+            S = np.linalg.solve(A, np.broadcast_to(np.eye(A.shape[1])[:, m:], (*A.shape[:2], mobility)))
+        else:
+            S = np.linalg.solve(np.swapaxes(A, 1, 2) @ A, np.swapaxes(J_x, 1, 2))  # (B, nv, k)
     except np.linalg.LinAlgError:
         return batch_metrics(J_phi, J_x, actuated_v, mobility)
+    finite = np.isfinite(S).all(axis=(1, 2))
+    S[~finite] = 0.0
     N, Rs = np.linalg.qr(S)
     d = np.abs(np.diagonal(Rs, axis1=1, axis2=2))
-    good = np.isfinite(S).all(axis=(1, 2)) & (d.min(axis=1) > FACTOR_RCOND * d.max(axis=1))
-    out = batch_metrics(J_phi, J_x, actuated_v, mobility, basis=N)
+    good = finite & (d.min(axis=1) > FACTOR_RCOND * d.max(axis=1))
+    T_inv = np.linalg.inv(np.where(good[:, None, None], J_x @ N, np.eye(mobility)))
+    C = N[:, actuated_v]
+    rank = J_phi.shape[-1] - mobility
+    s2_ce = _squared_singular_values(C @ T_inv)
+    s2_c = _squared_singular_values(C)
+    s2_phi = _squared_singular_values(J_phi)[:, [0, rank - 1]]
+    s_T_inv = np.sqrt(_squared_singular_values(T_inv)[:, 0])
+    s_x = np.sqrt(_squared_singular_values(J_x)[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inverse = 1.0 / (s_T_inv * s_x)
+        good &= (
+            (inverse > INVERSE_RTOL)
+            & (s2_ce[:, -1] > GRAM_RTOL * s2_ce[:, 0])
+            & (s2_c[:, -1] > GRAM_RTOL * s2_c[:, 0])
+            & (s2_phi[:, 1] > GRAM_RTOL * s2_phi[:, 0])
+        )
+        s_ce = np.sqrt(s2_ce)
+        out = {
+            "manipulability": np.prod(s_ce, axis=1),
+            "condition_number": s_ce[:, 0] / s_ce[:, -1],
+            "constraint_margin": np.sqrt(s2_phi[:, 1] / s2_phi[:, 0]),
+            "inverse_margin": inverse,
+            "direct_margin": np.sqrt(s2_c[:, -1]),
+        }
     if not good.all():
         bad = ~good
         for name, v in batch_metrics(J_phi[bad], J_x[bad], actuated_v, mobility).items():

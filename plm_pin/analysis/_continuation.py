@@ -22,6 +22,7 @@ walks on from those it reaches. Points never reached are left unreachable.
 
 from __future__ import annotations
 
+import itertools
 import multiprocessing
 import os
 from collections import deque
@@ -452,8 +453,9 @@ def sweep_rows(
     """Solve a 2-D grid row by row with the batched evaluator, then fill what it missed point by point.
 
     The seed's row is walked by :func:`flood`; the rows on either side of it are then solved
-    by :func:`_walk_rows`, in this process (two processes, one per side, were slower on two
-    cores: the fork and the merge cost more than the second side saves). Whatever stays
+    by :func:`_walk_rows`, both sides in the same batches, in this process (two processes,
+    one per side, were slower on two cores: the fork and the merge cost more than the second
+    side saves). Whatever stays
     unreached next to a reached point is then tried by :func:`flood` from its neighbours.
     """
     n0, n1 = state.shape
@@ -461,8 +463,7 @@ def sweep_rows(
     row = np.zeros(state.reached.size, dtype=bool)
     row[i0 * n1 : (i0 + 1) * n1] = True
     flood(ev, state, metrics, target_mode, [seed], tol, row)
-    for direction in (1, -1):
-        _walk_rows(ev, kin, state, metrics, i0, direction, target_mode, tol)
+    _walk_rows(ev, kin, state, metrics, i0, target_mode, tol)
     grid = state.reached.reshape(n0, n1)
     edge = np.zeros_like(grid)
     edge[1:] |= ~grid[:-1]
@@ -473,48 +474,70 @@ def sweep_rows(
     flood(ev, state, metrics, target_mode, border.tolist(), tol)
 
 
+LAG = 2
+"""Batches of :func:`_walk_rows` the second side waits, so that its first rows extrapolate from
+the two rows past the seed's row on the first side (as when the sides were walked in turn)."""
+
+
 def _walk_rows(
     ev: IKEvaluator,
     kin: BatchKinematics,
     state: GridState,
     metrics: Metrics,
     i0: int,
-    direction: int,
     target_mode: tuple[int, ...],
     tol: float,
 ) -> None:
-    """Solve the rows past ``i0`` in ``direction`` (+1 or -1), each in one batched Newton.
+    """Solve the rows on both sides of row ``i0``, the next row of each side in one batched Newton.
 
-    Each row is predicted per column by polynomial extrapolation from the rows before it (as
-    :meth:`IKEvaluator.extrapolate` does along a line) and solved at once by
-    :func:`~plm_pin.analysis._batch.batch_newton`; a point is kept only when it converges to
-    ``tol`` in ``target_mode``. The walk stops at a row with no solved point before it.
+    Each row is predicted per column by polynomial extrapolation from the rows before it on
+    its side (as :meth:`IKEvaluator.extrapolate` does along a line) and solved, together
+    with the other side's next row, by :func:`~plm_pin.analysis._batch.batch_newton`; a
+    point is kept only when it converges to ``tol`` in ``target_mode``. The second side
+    starts :data:`LAG` batches late, so that every row gets the prediction it had when the
+    sides were walked in turn. A side's walk stops at the grid edge or at a row with no
+    solved point before it.
     """
     n0, n1 = state.shape
     Q = state.q.reshape(n0, n1, -1)
     reached = state.reached.reshape(n0, n1)
     poses = state.poses.reshape(n0, n1, -1)
     wanted = np.array(target_mode)
-    i = i0 + direction
-    while 0 <= i < n0:
-        back = [i - direction * k for k in (1, 2, 3) if 0 <= i - direction * k < n0]
-        have = reached[back[0]].copy()
-        if not have.any():
+    fronts = {1: i0 + 1, -1: i0 - 1}  # direction -> next row
+    for step in itertools.count():
+        if not fronts:
             break
-        pred = Q[back[0]].copy()
-        if len(back) >= 2:
-            two = have & reached[back[1]]
-            pred[two] = 2.0 * Q[back[0]][two] - Q[back[1]][two]
-            if len(back) == 3:
-                three = two & reached[back[2]]
-                pred[three] = 3.0 * Q[back[0]][three] - 3.0 * Q[back[1]][three] + Q[back[2]][three]
-        cols = np.flatnonzero(have)
-        q, ok, A = batch_newton(kin, pred[cols], poses[i, cols], tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
-        modes = batch_modes(A[ok], ev.legs)
+        rows, cols, guesses = [], [], []
+        for direction, i in list(fronts.items()):
+            if direction == -1 and step < LAG:
+                continue
+            back = [i - direction * k for k in (1, 2, 3) if 0 <= i - direction * k < n0]
+            if not 0 <= i < n0 or not reached[back[0]].any():
+                del fronts[direction]
+                continue
+            have = reached[back[0]]
+            pred = Q[back[0]].copy()
+            if len(back) >= 2:
+                two = have & reached[back[1]]
+                pred[two] = 2.0 * Q[back[0]][two] - Q[back[1]][two]
+                if len(back) == 3:
+                    three = two & reached[back[2]]
+                    pred[three] = 3.0 * Q[back[0]][three] - 3.0 * Q[back[1]][three] + Q[back[2]][three]
+            c = np.flatnonzero(have)
+            rows.append(np.full(c.size, i))
+            cols.append(c)
+            guesses.append(pred[c])
+            fronts[direction] = i + direction
+        if not rows:
+            break
+        row, col = np.concatenate(rows), np.concatenate(cols)
+        q, ok, A, R = batch_newton(
+            kin, np.concatenate(guesses), poses[row, col], tol, NEWTON_MAX_ITERATIONS, STALL_RATIO
+        )
+        modes = batch_modes(A[ok], ev.legs, kin.turns(R[ok], ev.legs))
         fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
-        keep = cols[ok][fits]
-        state.accept_batch(i * n1 + keep, q[ok][fits], modes[fits], A[ok][fits], metrics)
-        i += direction
+        keep = np.flatnonzero(ok)[fits]
+        state.accept_batch(row[keep] * n1 + col[keep], q[keep], modes[fits], A[keep], metrics)
 
 
 def _seed(

@@ -6,27 +6,49 @@ import math
 
 import numpy as np
 import pinocchio as pin
+import pytest
 
 from plm_pin.analysis import _continuation, workspace_map
-from plm_pin.analysis._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
-from plm_pin.analysis.manipulability import batch_metrics
+from plm_pin.analysis._batch import (
+    GRAM_RTOL,
+    BatchKinematics,
+    batch_modes,
+    batch_newton,
+    log3_and_jacobian,
+    square_task_metrics,
+)
+from plm_pin.analysis.manipulability import METRICS, batch_metrics
 from plm_pin.kinematics import closures as _closures
 from plm_pin.kinematics import task_pose
-from plm_pin.kinematics.legs import ik_jacobian, working_mode_from_jacobian
+from plm_pin.kinematics.legs import ik_jacobian, working_mode_from_data, working_mode_from_jacobian
 from plm_pin.kinematics.task import TaskTarget
 from tests.conftest import preset
 
 
-def test_batched_residual_and_jacobian_equal_pinocchio_to_1e_13():
-    """At 40 random configurations of the 3D4M, the numpy tree gives Pinocchio's residual and Jacobian."""
-    mech = preset("harada2011_3d4m")
+def _random_configurations(mech, rng, n, scale=0.5):
+    """Configurations spread around the reference (on the manifold of a free-flyer's quaternion)."""
+    return np.stack(
+        [pin.integrate(mech.model, mech.q_ref, rng.normal(scale=scale, size=mech.nv)) for _ in range(n)]
+    )
+
+
+@pytest.mark.parametrize("name", ["harada2011_3d4m", "zhao2011_8pss"])
+def test_batched_residual_and_jacobian_equal_pinocchio_to_1e_13(name):
+    """At 40 random configurations, the numpy tree gives Pinocchio's residual, Jacobians and working modes.
+
+    The 3D4M (one-axis joints, planar yaw row) and the 8-PSS (free-flyer platform, log3 rows
+    of a 6-D task, passive revolute columns turned for the working mode).
+    """
+    mech = preset(name)
     kin = BatchKinematics.from_parts(mech.model, mech.closures, mech.task_compiled)
     assert kin is not None
     rng = np.random.default_rng(7)
-    Q = mech.q_ref + rng.normal(scale=0.5, size=(40, mech.nq))
-    X = task_pose(mech, mech.q_ref) + rng.normal(scale=0.02, size=(40, 3))
-    r, J = kin.residual_and_jacobian(Q, X)
+    Q = _random_configurations(mech, rng, 40, scale=1.5)
+    X = task_pose(mech, mech.q_ref) + rng.normal(scale=0.05, size=(40, mech.task_compiled.size))
+    e = kin.evaluate(Q, X)
+    turns = kin.turns(e.R, mech.legs)
     data = mech.model.createData()
+    modes = set()
     for b in range(40):
         pin.computeJointJacobians(mech.model, data, Q[b])
         pin.updateFramePlacements(mech.model, data)
@@ -37,8 +59,55 @@ def test_batched_residual_and_jacobian_equal_pinocchio_to_1e_13():
         expected_J = np.vstack(
             [_closures.jacobian(mech.model, data, mech.closures, Q[b]), target.jacobian(mech.model, data)]
         )
-        assert np.abs(r[b] - expected_r).max() < 1e-13
-        assert np.abs(J[b] - expected_J).max() < 1e-13
+        expected_mode = working_mode_from_data(mech.model, data, mech.closures, mech.task_compiled, mech.legs)
+        assert np.abs(e.r[b] - expected_r).max() < 1e-13
+        assert np.abs(e.J[b] - expected_J).max() < 1e-13
+        assert np.abs(e.A[b] - ik_jacobian(mech, Q[b])).max() < 1e-13
+        mode = tuple(batch_modes(e.A[b : b + 1], mech.legs, [t[b : b + 1] for t in turns])[0])
+        assert mode == expected_mode
+        modes.add(mode)
+    assert len(modes) > 1  # the draws cross working modes
+    assert any((t < 0).any() for t in turns) == (name == "zhao2011_8pss")  # spatial legs turn columns
+
+
+def test_batched_log3_equals_pinocchio_at_small_and_large_angles():
+    r"""log3 gives exp3's rotation vector back, Jlog3 the inverse of its right Jacobian, 1e-9 to 3 rad.
+
+    The Jacobian's reference is :math:`J_r(\omega)^{-1}`, :math:`J_r = I - (1 - \cos\theta)/\theta^2
+    [\omega]_\times + (\theta - \sin\theta)/\theta^3 [\omega]_\times^2` with its series below
+    0.01 rad (pin.Jlog3 itself loses about 4e-10 near 5e-4 rad, where its closed form cancels;
+    pin.log3 about 1.5e-14 at 3 rad).
+    """
+    rng = np.random.default_rng(3)
+    axes = rng.normal(size=(12, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    angles = np.array([1e-9, 1e-6, 5e-5, 9.9e-5, 1.01e-4, 5e-4, 1e-3, 0.1, 0.5, 1.0, 2.0, 3.0])
+    E = np.stack([pin.exp3(a * u) for a, u in zip(angles, axes, strict=True)])
+    log, J = log3_and_jacobian(E)
+    for b, (th, u) in enumerate(zip(angles, axes, strict=True)):
+        K = pin.skew(th * u)
+        if th > 1e-2:
+            c1, c2 = (1.0 - np.cos(th)) / th**2, (th - np.sin(th)) / th**3
+        else:
+            c1, c2 = 0.5 - th**2 / 24.0 + th**4 / 720.0, 1.0 / 6.0 - th**2 / 120.0 + th**4 / 5040.0
+        J_right = np.eye(3) - c1 * K + c2 * K @ K
+        assert np.abs(log[b] - th * u).max() < 1e-14
+        assert np.abs(log[b] - pin.log3(E[b])).max() < 1e-13
+        assert np.abs(J[b] - np.linalg.inv(J_right)).max() < 1e-14
+
+
+def test_batched_integrate_is_pinocchio_to_first_order():
+    """The free-flyer retraction of batched Newton is pin.integrate to O(|dv|^2), with unit quaternions."""
+    mech = preset("zhao2011_8pss")
+    kin = BatchKinematics.from_parts(mech.model, mech.closures, mech.task_compiled)
+    rng = np.random.default_rng(5)
+    Q = _random_configurations(mech, rng, 10)
+    for h in (1e-3, 1e-5):
+        dv = h * rng.normal(size=(10, mech.nv))
+        moved = kin.integrate(Q, dv)
+        expected = np.stack([pin.integrate(mech.model, q, v) for q, v in zip(Q, dv, strict=True)])
+        assert np.abs(moved - expected).max() < 10 * h**2
+        assert np.allclose(np.linalg.norm(moved[:, 3:7], axis=1), 1.0, atol=1e-15, rtol=0.0)
 
 
 def test_batched_newton_modes_and_metrics_match_the_serial_ones():
@@ -48,7 +117,7 @@ def test_batched_newton_modes_and_metrics_match_the_serial_ones():
     assert kin is not None
     x0 = task_pose(mech, mech.q_ref)
     X = x0 + np.column_stack([np.linspace(-2e-3, 2e-3, 9), np.linspace(1e-3, -1e-3, 9), np.zeros(9)])
-    q, ok, A = batch_newton(kin, np.tile(mech.q_ref, (9, 1)), X, 1e-12, 12, 0.9)
+    q, ok, A, _ = batch_newton(kin, np.tile(mech.q_ref, (9, 1)), X, 1e-12, 12, 0.9)
     assert ok.all()
     m = mech.n_closure_rows
     for b in range(9):
@@ -64,9 +133,42 @@ def test_batched_newton_modes_and_metrics_match_the_serial_ones():
 
 
 def test_unsupported_models_fall_back_to_the_generic_path():
-    """The 8-PSS (free-flyer platform, 6-D task) has no batched evaluator."""
-    mech = preset("zhao2011_8pss")
+    """The star-triangle (a closure the point rows do not take) has no batched evaluator."""
+    mech = preset("enferadi2017_star_triangle")
     assert BatchKinematics.from_parts(mech.model, mech.closures, mech.task_compiled) is None
+
+
+@pytest.mark.parametrize(
+    ("axes", "span", "shape"),
+    [(("x", "y"), (0.05, 0.05), (9, 8)), (("z", "ry"), (0.8, 0.8), (11, 9))],  # the second crosses the edge
+)
+def test_row_batched_8pss_map_equals_the_point_by_point_map(monkeypatch, axes, span, shape):
+    """An 8-PSS map (free-flyer, 6-D task) solved in row batches equals the point-by-point one.
+
+    Inside the workspace the metrics agree to 1e-12; on the grid crossing its edge (poses near
+    the boundary, worse conditioned) to 1e-10, the reachable mask and the modes exactly.
+    """
+    mech = preset("zhao2011_8pss")
+    x0 = task_pose(mech, mech.q_ref)
+    dofs = mech.task_compiled.dofs
+    values = tuple(
+        x0[dofs.index(a)] + np.linspace(-h, h, n) for a, h, n in zip(axes, span, shape, strict=True)
+    )
+    calls = []
+    monkeypatch.setattr(_continuation, "batch_newton", lambda *a: calls.append(1) or batch_newton(*a))
+    batched = workspace_map(mech, axes, values, workers=1)
+    assert calls  # the rows went through the batch
+    monkeypatch.setattr(_continuation.BatchKinematics, "from_parts", classmethod(lambda cls, *a: None))
+    serial = workspace_map(mech, axes, values, workers=1)
+    inside = serial.reachable.all()
+    assert inside == (axes == ("x", "y")) and serial.reachable.any()
+    assert np.array_equal(batched.reachable, serial.reachable)
+    assert np.array_equal(batched.mode, serial.mode)
+    ok = serial.reachable
+    assert np.abs(batched.q[ok] - serial.q[ok]).max() < 1e-11
+    for name in METRICS:
+        rtol = 1e-12 if inside else 1e-10
+        assert np.allclose(batched.metric(name)[ok], serial.metric(name)[ok], rtol=rtol, atol=0.0), name
 
 
 def test_row_batched_map_equals_the_point_by_point_map(monkeypatch):
@@ -83,3 +185,28 @@ def test_row_batched_map_equals_the_point_by_point_map(monkeypatch):
     ok = serial.reachable
     assert np.abs(batched.q[ok] - serial.q[ok]).max() < 1e-11
     assert np.allclose(batched.manipulability[ok], serial.manipulability[ok], rtol=1e-10, atol=0.0)
+
+
+def test_gram_metrics_equal_the_svd_metrics_near_singularities():
+    """Over a 3D3M map reaching its workspace edge (cond up to ~4e3), the Gram-eigenvalue metrics equal SVD's.
+
+    The reference is :func:`batch_metrics` with its SVD basis of J_phi (no Newton system, no
+    Gram matrix). The bound is that of ``GRAM_RTOL``: eps / GRAM_RTOL ~ 2e-12 relative, times a
+    small constant; the poses past it (and the inverse-singular ones) take the SVD path itself.
+    """
+    mech = preset("harada2011_3d3m")
+    values = (np.linspace(-0.16, 0.16, 30), np.linspace(0.0, 0.14, 25))
+    result = workspace_map(mech, ("x", "y"), values, (0.0, 0.08, math.radians(-20.0)), workers=1)
+    q = result.q[result.reachable]
+    A = np.stack([ik_jacobian(mech, qq) for qq in q])
+    m, act = mech.n_closure_rows, mech.actuated_v_indices
+    fast = square_task_metrics(A, m, act, mech.mobility)
+    svd = batch_metrics(A[:, :m], A[:, m:], act, mech.mobility)
+    assert svd["condition_number"].max() > 1.0 / math.sqrt(GRAM_RTOL)  # some poses take the SVD path
+    for name, values in svd.items():
+        assert np.allclose(fast[name], values, rtol=1e-11, atol=0.0), name
+    near = np.argmax(svd["condition_number"])
+    for name, values in batch_metrics(
+        A[near : near + 1, :m], A[near : near + 1, m:], act, mech.mobility
+    ).items():
+        assert fast[name][near] == values[0], name  # below GRAM_RTOL: the SVD values themselves

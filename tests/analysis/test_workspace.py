@@ -12,6 +12,7 @@ import pytest
 
 from analyses import _harada2011_paper as paper
 from plm_pin.analysis import manipulability, workspace_grid, workspace_map, workspace_sweep
+from plm_pin.analysis._batch import BatchKinematics
 from plm_pin.analysis._continuation import IKEvaluator
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import classify, inverse_kinematics, task_pose, working_mode
@@ -232,10 +233,11 @@ def test_continuation_evaluator_pickles_for_worker_processes():
 
 
 def test_parallel_bands_of_a_map_the_batched_rows_do_not_take_give_the_same_map():
-    """An 8-PSS map (floating platform: solved point by point, not by planar row batches) in two processes."""
-    mech = preset("zhao2011_8pss")
+    """A star-triangle map (a closure the row batches do not take: solved point by point) in two processes."""
+    mech = preset("enferadi2017_star_triangle")
+    assert BatchKinematics.from_parts(mech.model, mech.closures, mech.task_compiled) is None
     x0 = task_pose(mech, mech.q_ref)
-    values = (x0[0] + np.linspace(-0.05, 0.05, 8), x0[1] + np.linspace(-0.05, 0.05, 5))
+    values = (x0[0] + np.linspace(-0.02, 0.02, 8), x0[1] + np.linspace(-0.02, 0.02, 5))
     one = workspace_map(mech, ("x", "y"), values, pose=x0, workers=1)
     two = workspace_map(mech, ("x", "y"), values, pose=x0, workers=2)
     assert one.reachable.all()
