@@ -25,7 +25,6 @@ the difference to the forces actually chosen (``split_exact`` is False).
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -33,7 +32,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .._checks import check_finite_model, check_samples_assembled, checked_trajectory, load_arguments
+from .._checks import (
+    CLOSURE_TOL,
+    check_finite_model,
+    check_samples_assembled,
+    checked_trajectory,
+    load_arguments,
+)
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
 from ..kinematics import closures as _closures
 from ..statics import AllocationRule, load_on_frame, solve_balance
@@ -321,16 +326,62 @@ def inverse_dynamics(
             f"the trajectory has q of width {trajectory.q.shape[1]} and v of width {trajectory.v.shape[1]}; "
             f"{mech.name} has nq = {mech.nq}, nv = {mech.nv}"
         )
-    check_samples_assembled(mech, trajectory.q, trajectory.t)
+    kinematics = _Kinematics.of(mech, trajectory, wrench is not None, frame)
     check_finite_model(mech)
     load_at = _load_function(mech, wrench, frame)
     body = _body_groups(mech, groups)
-    return _run(mech, trajectory, rule, load_at, body, gravity, singular_rtol, wrench is None)
+    return _run(mech, trajectory, kinematics, rule, load_at, body, gravity, singular_rtol, wrench is None)
+
+
+@dataclass(frozen=True)
+class _Kinematics:
+    """The Jacobians of every sample, from one Pinocchio pass each (the closure check's pass)."""
+
+    J_phi: np.ndarray  # (n, m, nv)
+    J_load: np.ndarray | None  # (n, 6, nv): the load frame's, world-aligned
+    J_task: np.ndarray | None  # (n, n_task, nv): for the direct-singularity watch of a square task
+
+    @classmethod
+    def of(cls, mech: Mechanism, trajectory: JointTrajectory, loaded: bool, frame: str | None) -> _Kinematics:
+        """Run the pass over the trajectory and refuse it if a sample is off the closure manifold.
+
+        Raises:
+            ClosureNotSatisfied: as :func:`plm_pin._checks.check_samples_assembled` (its message).
+        """
+        model, closures = mech.model, mech.closures
+        data = model.createData()
+        task = mech.task_compiled
+        n, m = trajectory.t.shape[0], mech.n_closure_rows
+        frame_id = None
+        if loaded and frame is None:
+            frame_id = task.frame_id if task is not None else None
+        elif loaded and model.existFrame(frame):
+            frame_id = model.getFrameId(frame)
+        square = task is not None and task.size == mech.mobility == mech.n_actuators
+        J_phi = np.empty((n, m, model.nv))
+        J_load = np.empty((n, 6, model.nv)) if frame_id is not None else None
+        J_task = np.empty((n, task.size, model.nv)) if square and task is not None else None
+        worst = np.zeros(n)  # largest closure residual of each sample
+        for i, q in enumerate(trajectory.q):
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacements(model, data)
+            if closures:
+                phi = _closures.residual_from_placements(data, closures)
+                worst[i] = np.max(np.abs(phi))
+                _closures.jacobian_from_data(model, data, closures, J_phi[i])
+            if J_load is not None:
+                J_load[i] = pin.getFrameJacobian(model, data, frame_id, _LWA)
+            if J_task is not None and task is not None:
+                task.jacobian_from_data(model, data, J_task[i])
+        if not np.all(worst <= CLOSURE_TOL):  # NaN refused too
+            check_samples_assembled(mech, trajectory.q, trajectory.t)  # raises, naming the first open sample
+        return cls(J_phi, J_load, J_task)
 
 
 def _run(
     mech: Mechanism,
     trajectory: JointTrajectory,
+    kinematics: _Kinematics,
     rule: AllocationRule,
     load_at: Callable[[float], Load | None],
     body: _BodyGroups,
@@ -338,31 +389,29 @@ def _run(
     singular_rtol: float,
     unloaded: bool,
 ) -> InverseDynamics:
-    """The trajectory loop: one factorisation of the balance per sample, on a data of its own."""
-    model, closures, act_v = mech.model, mech.closures, mech.actuated_v_indices
+    """The trajectory loop: RNEA and one factorisation of the balance per sample, on a data of its own."""
+    model, act_v = mech.model, mech.actuated_v_indices
     data = model.createData()
     n, n_act, nv = trajectory.t.shape[0], mech.n_actuators, mech.nv
     missing = {"rotor": not body.rotor.any(), "screw": not body.screw.any(), "external": unloaded}
     absent = tuple(name for name, gone in missing.items() if gone)
     out = _Buffers(n, n_act, nv, mech.n_closure_rows, absent)
-    task = mech.task_compiled
-    square = task is not None and task.size == mech.mobility == n_act
     linear = rule.is_linear
     previous_sign = 0.0
+    parts = np.zeros((nv, len(TERMS)))  # the terms of tau, columns in the order of TERMS
     for i in range(n):
         q, v, a = trajectory.q[i], trajectory.v[i], trajectory.a[i]
         load = load_at(float(trajectory.t[i]))
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        J_phi = _closures.jacobian_from_data(model, data, closures)
-        ext = np.zeros(nv)
-        if load is not None:
-            ext = -(pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench)
-        J_task = task.jacobian_from_data(model, data) if square and task is not None else None
+        J_phi = kinematics.J_phi[i]
         tau_full = pin.rnea(model, data, q, v, a).copy()
         nle = pin.nonLinearEffects(model, data, q, v).copy()
-        g_full = pin.computeGeneralizedGravity(model, data, q).copy()
-        tau = (tau_full if gravity else tau_full - g_full) + ext
+        g_full = pin.computeGeneralizedGravity(model, data, q)
+        parts[:, 0] = tau_full - nle
+        parts[:, 1] = nle - g_full
+        parts[:, 2] = g_full if gravity else 0.0
+        if load is not None and kinematics.J_load is not None:
+            parts[:, 3] = -(kinematics.J_load[i].T @ load.wrench)
+        tau = parts.sum(axis=1)
         try:
             if linear:  # weighted minimum norm: the forces are F tau, one factorisation
                 factors = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
@@ -375,15 +424,17 @@ def _run(
                 out.internal.append(factors.G.T @ f_c)
                 N, C = factors.N, factors.C
             else:
-                balance = _balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol)
-                sol = solve_balance(mech, dataclasses.replace(balance, v=v, a=a), rule)
+                balance = _balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol, v, a)
+                sol = solve_balance(mech, balance, rule)
                 F = rule.linear_map(balance)
                 f_c, lam = sol.f_c, sol.lam
                 out.residual[i] = sol.residual
                 out.internal.append(sol.internal)
                 N, C = balance.N, balance.C
-            if J_task is not None:  # a sign change of det J_ce between samples: a direct singularity
-                sign = float(np.sign(np.linalg.det(C)) * np.sign(np.linalg.det(J_task @ N)))
+            if (
+                kinematics.J_task is not None
+            ):  # a sign change of det J_ce between samples: a direct singularity
+                sign = float(np.sign(np.linalg.det(C)) * np.sign(np.linalg.det(kinematics.J_task[i] @ N)))
                 if sign * previous_sign < 0:
                     raise SingularConfiguration(
                         f"det J_ce changed sign after t = {trajectory.t[i - 1]:.9g} s: the trajectory "
@@ -401,12 +452,13 @@ def _run(
                 float(trajectory.t[i]),
                 exc,
             ) from exc
-        parts = np.column_stack([tau_full - nle, nle - g_full, g_full if gravity else np.zeros(nv), ext])
         shares = F @ parts  # (n_act, 4), in the order of TERMS
         for k, name in enumerate(TERMS):
             out.terms[name][i] = shares[:, k]
-        out.fixed["rotor"][i] = F @ (body.rotor * a)
-        out.fixed["screw"][i] = F @ (body.screw * a)
+        if "rotor" not in absent:
+            out.fixed["rotor"][i] = F @ (body.rotor * a)
+        if "screw" not in absent:
+            out.fixed["screw"][i] = F @ (body.screw * a)
         out.fixed["external"][i] = shares[:, 3]
         out.F[i] = F
         out.f_c[i], out.lam[i] = f_c, lam

@@ -18,7 +18,7 @@ import numpy as np
 from .._checks import check_finite_result, load_arguments
 from ..exceptions import InvalidInput
 from . import reactions as _reactions
-from .allocation import OBJECTIVES, Inequalities, allocate, check_weights
+from .allocation import OBJECTIVES, Allocation, Inequalities, allocate, check_weights, min_norm
 from .balance import SINGULAR_RTOL, StaticBalance, static_balance
 
 if TYPE_CHECKING:
@@ -246,6 +246,26 @@ def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule)
         InvalidInput: malformed preload names or values.
     """
     f_p, G = balance.f_particular, balance.internal_basis
+    result = min_norm(f_p, G, rule.weights) if rule.is_linear else _allocated(mech, balance, rule)
+    lam = balance.closure_forces(result.f_c)
+    check_finite_result(mech, "static forces", f_c=result.f_c, lam=lam)
+    for a in (result.f_c, lam, result.y):
+        a.setflags(write=False)
+    return StaticForces(
+        mech,
+        balance,
+        result.f_c,
+        lam,
+        result.y,
+        balance.residual(result.f_c, lam),
+        result.active,
+        rule.objective,
+    )
+
+
+def _allocated(mech: Mechanism, balance: StaticBalance, rule: AllocationRule) -> Allocation:
+    """The allocation of a rule with inequalities, a prescribed internal force or the min-peak objective."""
+    f_p, G = balance.f_particular, balance.internal_basis
     bounds = rule.limits
     names = tuple(a.joint for a in mech.actuators)
     finite = np.flatnonzero(np.isfinite(bounds).any(axis=1))
@@ -264,22 +284,8 @@ def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule)
     internal = rule.internal
     if isinstance(internal, Mapping):
         internal = _internal_from_links(mech, balance, internal)
-    result = allocate(
+    return allocate(
         f_p, G, ineq, weights=rule.weights, objective=rule.objective, internal=internal, actuator_names=names
-    )
-    lam = balance.closure_forces(result.f_c)
-    check_finite_result(mech, "static forces", f_c=result.f_c, lam=lam)
-    for a in (result.f_c, lam, result.y):
-        a.setflags(write=False)
-    return StaticForces(
-        mech,
-        balance,
-        result.f_c,
-        lam,
-        result.y,
-        balance.residual(result.f_c, lam),
-        result.active,
-        rule.objective,
     )
 
 
