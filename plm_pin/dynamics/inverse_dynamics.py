@@ -159,10 +159,21 @@ class _BodyGroups:
     """Which bodies each group holds, for the body split of one RNEA pass."""
 
     names: tuple[str, ...]
-    members: np.ndarray  # (n_groups, njoints): 1 where the group holds the joint's body
-    support: np.ndarray  # (njoints, nv): 1 on the velocities that move the joint's body
+    joints: tuple[tuple[int, ...], ...]  # per group, the joints whose bodies it holds
     rotor: np.ndarray  # reflected rotor inertia per velocity index
     screw: np.ndarray  # reflected screw inertia per velocity index
+
+    def matrices(self, model: pin.Model) -> tuple[np.ndarray, np.ndarray]:
+        """Membership (n_groups, njoints) and support (njoints, nv): 1 on the velocities moving a body."""
+        members = np.zeros((len(self.names), model.njoints))
+        for g, joints in enumerate(self.joints):
+            members[g, list(joints)] = 1.0
+        support = np.zeros((model.njoints, model.nv))
+        for j in range(1, model.njoints):
+            for k in model.supports[j][1:]:
+                joint = model.joints[k]
+                support[j, joint.idx_v : joint.idx_v + joint.nv] = 1.0
+        return members, support
 
 
 def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) -> _BodyGroups:
@@ -185,21 +196,14 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
         rest = [b for b in bodies if b not in listed]
         if rest:
             chosen["other"] = rest
-    members = np.zeros((len(chosen), model.njoints))
-    for g, names in enumerate(chosen.values()):
-        members[g, [bodies[b] for b in names]] = 1.0
-    support = np.zeros((model.njoints, model.nv))
-    for j in range(1, model.njoints):
-        for k in model.supports[j][1:]:
-            joint = model.joints[k]
-            support[j, joint.idx_v : joint.idx_v + joint.nv] = 1.0
+    joints = tuple(tuple(bodies[b] for b in names) for names in chosen.values())
     rotor = np.zeros(model.nv)
     screw = np.zeros(model.nv)
     for act, spec in zip(mech.actuators, mech.sidecar.actuation, strict=True):
         factor = (2.0 * np.pi / spec.lead) ** 2 if spec.lead else 1.0
         rotor[act.idx_v] = spec.rotor_inertia * factor
         screw[act.idx_v] = spec.screw_inertia * factor
-    return _BodyGroups(tuple(chosen), members, support, rotor, screw)
+    return _BodyGroups(tuple(chosen), joints, rotor, screw)
 
 
 def _body_forces(model: pin.Model, data: pin.Data, gravity: bool, support: np.ndarray) -> np.ndarray:
@@ -472,10 +476,11 @@ def _body_shares(
     model = mech.model
     data = model.createData()
     out = np.zeros((len(body.names), F.shape[0], F.shape[1]))
+    members, support = body.matrices(model)
     for i in range(F.shape[0]):
         pin.computeJointJacobians(model, data, traj.q[i])
         pin.rnea(model, data, traj.q[i], traj.v[i], traj.a[i])
-        per_group = body.members @ _body_forces(model, data, gravity, body.support)  # (n_groups, nv)
+        per_group = members @ _body_forces(model, data, gravity, support)  # (n_groups, nv)
         out[:, i] = per_group @ F[i].T
     return dict(zip(body.names, out, strict=True))
 

@@ -210,6 +210,11 @@ class AllocationRule:
         bounds = actuator_limits(mech, limits)
         return cls(objective, W, bounds, internal, min_compression, link_limits)
 
+    @functools.cached_property
+    def _unweighted(self) -> bool:
+        """Whether the weights are the identity (the plain minimum norm)."""
+        return bool(np.array_equal(self.weights, np.eye(self.weights.shape[0])))
+
     @property
     def is_linear(self) -> bool:
         """Whether the chosen forces are linear in the load: weighted minimum norm, nothing else."""
@@ -230,8 +235,8 @@ class AllocationRule:
 
     def weighted_map(self, P: np.ndarray, G: np.ndarray) -> np.ndarray:
         """:meth:`linear_map` from the minimum-norm map ``P`` (n_act, nv) and the internal basis ``G``."""
-        if G.shape[1] == 0:
-            return P
+        if G.shape[1] == 0 or self._unweighted:
+            return P  # W = I: P is that minimum norm (G^T P = 0)
         WG = self.weights @ G
         if G.shape[1] == 1:  # one internal force (3D4M): a scalar
             return P - G @ ((WG.T @ P) / float(G[:, 0] @ WG[:, 0]))
