@@ -424,7 +424,7 @@ def _run(
                 applied = tau.copy()
                 applied[act_v] -= f_c
                 lam = factors.lambda_map @ applied
-                out.residual[i] = float(np.max(np.abs(J_phi.T @ lam - applied), initial=0.0))
+                out.residual[i] = float(abs(J_phi.T @ lam - applied).max(initial=0.0))
                 out.internal.append(factors.G.T @ f_c)
                 N, C = factors.N, factors.C
             else:

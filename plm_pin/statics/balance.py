@@ -339,18 +339,14 @@ def closure_factors(J_phi: np.ndarray, singular_rtol: float = SINGULAR_RTOL) -> 
     """
     m, nv = J_phi.shape
     lambda_map = np.zeros((m, nv))
-    rows = np.flatnonzero(np.any(J_phi != 0.0, axis=1))
+    rows = np.flatnonzero(J_phi.any(axis=1))  # ndarray methods: numpy's function wrappers cost more
     r = rows.size
     if r == 0:
         return np.eye(nv), lambda_map
     if r <= nv:
         qr, tau, _, info = _lapack.dgeqrf(J_phi[rows].T, overwrite_a=1)  # J_phi^T = Q R, (nv, r)
         R = qr[:r]
-        if (
-            info == 0
-            and np.all(np.diagonal(R) != 0.0)
-            and _lapack.dtrcon(R, norm="1")[0] > 1e3 * singular_rtol
-        ):
+        if info == 0 and R.diagonal().all() and _lapack.dtrcon(R, norm="1")[0] > 1e3 * singular_rtol:
             full = np.zeros((nv, nv), order="F")
             full[:, :r] = qr
             Q = _lapack.dorgqr(full, tau, overwrite_a=1)[0]  # (nv, nv)
@@ -381,16 +377,16 @@ def oriented_internal_basis(G: np.ndarray) -> np.ndarray:
     """
     k = G.shape[1]
     if k == 1:  # one internal force (3D4M): its sign only
-        g = np.abs(G[:, 0])
-        pivot = int(np.argmax(g >= (1.0 - _TIE_RTOL) * g.max()))
+        g = abs(G[:, 0])
+        pivot = int((g >= (1.0 - _TIE_RTOL) * g.max()).argmax())
         return G if G[pivot, 0] > 0.0 else -G
     A = G.T  # (k, n_act): column i holds the projection of actuator i's unit vector, in G
     shares = np.einsum("ij,ij->j", A, A)  # squared norms of what remains of each projection
     Q = np.zeros((k, k))
     for j in range(k):
-        pivot = int(np.argmax(shares >= (1.0 - _TIE_RTOL) ** 2 * shares.max()))
+        pivot = int((shares >= (1.0 - _TIE_RTOL) ** 2 * shares.max()).argmax())
         w = A[:, pivot] - Q @ (Q.T @ A[:, pivot])  # Q's columns past j are still zero
-        Q[:, j] = w / np.linalg.norm(w)
+        Q[:, j] = w / np.sqrt(w @ w)
         shares = shares - (Q[:, j] @ A) ** 2
     return G @ Q
 
@@ -433,7 +429,7 @@ def balance_factors(
         U, s, Vt = np.linalg.svd(C)
     r = int(np.count_nonzero(s > singular_rtol * (s[0] if s.size else 1.0)))
     unresisted = Vt[r:] @ b  # load on feasible motions the actuators do not hold
-    if np.max(np.abs(unresisted), initial=0.0) > EQUILIBRIUM_RTOL * max(np.max(np.abs(tau)), 1e-300):
+    if unresisted.size and abs(unresisted).max() > EQUILIBRIUM_RTOL * max(abs(tau).max(initial=0.0), 1e-300):
         kind = "constraint" if N.shape[1] > mech.mobility else "direct"
         s_phi = np.linalg.svd(J_phi, compute_uv=False)
         raise SingularConfiguration(
