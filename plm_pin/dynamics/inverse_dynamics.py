@@ -286,6 +286,10 @@ def inverse_dynamics(
 ) -> InverseDynamics:
     """Actuator forces driving ``trajectory``, split by term and by body.
 
+    By default (minimum norm, no load) it computes per sample the forces, the cut-joint forces,
+    the internal coordinates, the residual and the split by term; the split by body is
+    computed when :attr:`InverseDynamics.bodies` is first read.
+
     Args:
         mech: the mechanism.
         trajectory: consistent samples (``task_trajectory`` or ``actuator_trajectory``).

@@ -311,6 +311,10 @@ def static_forces(
 ) -> StaticForces:
     r"""Actuator and cut-joint forces holding the mechanism at ``q`` under gravity and a wrench.
 
+    By default (gravity, minimum norm, the description's limits) it computes the actuator
+    forces, the cut-joint forces, the internal coordinates and the residual; reactions, link
+    forces and internal modes are computed when asked for.
+
     Args:
         mech: the mechanism.
         q: an assembled configuration, shape (nq,).
