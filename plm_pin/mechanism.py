@@ -31,10 +31,16 @@ ASSEMBLY_TOL = 1e-12
 
 def body_name(model: pin.Model, j: int) -> str:
     """Name of the body joint ``j`` carries (its first BODY frame), else the joint name."""
+    return body_names(model)[j - 1]
+
+
+def body_names(model: pin.Model) -> tuple[str, ...]:
+    """:func:`body_name` of every tree joint, in joint order, from one scan of the frames."""
+    first: dict[int, str] = {}
     for f in model.frames:
-        if f.parentJoint == j and f.type == pin.FrameType.BODY:
-            return str(f.name)
-    return str(model.names[j])
+        if f.type == pin.FrameType.BODY:
+            first.setdefault(f.parentJoint, str(f.name))
+    return tuple(first.get(j, str(model.names[j])) for j in range(1, model.njoints))
 
 
 @dataclass(frozen=True)
@@ -270,7 +276,7 @@ class Mechanism:
 
         A body is named by its joint's first body frame (the URDF link), else by the joint.
         """
-        return tuple(body_name(self.model, j) for j in range(1, self.model.njoints))
+        return body_names(self.model)
 
     # ------------------------------------------------------------ checking
     def check_q(self, q: Any, name: str = "q") -> np.ndarray:

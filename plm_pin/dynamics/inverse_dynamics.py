@@ -25,7 +25,6 @@ the difference to the forces actually chosen (``split_exact`` is False).
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -33,7 +32,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pinocchio as pin
 
-from .._checks import check_finite_model, check_samples_assembled, checked_trajectory, load_arguments
+from .._checks import (
+    CLOSURE_TOL,
+    check_finite_model,
+    check_samples_assembled,
+    checked_trajectory,
+    load_arguments,
+)
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
 from ..kinematics import closures as _closures
 from ..statics import AllocationRule, load_on_frame, solve_balance
@@ -154,10 +159,21 @@ class _BodyGroups:
     """Which bodies each group holds, for the body split of one RNEA pass."""
 
     names: tuple[str, ...]
-    members: np.ndarray  # (n_groups, njoints): 1 where the group holds the joint's body
-    support: np.ndarray  # (njoints, nv): 1 on the velocities that move the joint's body
+    joints: tuple[tuple[int, ...], ...]  # per group, the joints whose bodies it holds
     rotor: np.ndarray  # reflected rotor inertia per velocity index
     screw: np.ndarray  # reflected screw inertia per velocity index
+
+    def matrices(self, model: pin.Model) -> tuple[np.ndarray, np.ndarray]:
+        """Membership (n_groups, njoints) and support (njoints, nv): 1 on the velocities moving a body."""
+        members = np.zeros((len(self.names), model.njoints))
+        for g, joints in enumerate(self.joints):
+            members[g, list(joints)] = 1.0
+        support = np.zeros((model.njoints, model.nv))
+        for j in range(1, model.njoints):
+            for k in model.supports[j][1:]:
+                joint = model.joints[k]
+                support[j, joint.idx_v : joint.idx_v + joint.nv] = 1.0
+        return members, support
 
 
 def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) -> _BodyGroups:
@@ -180,21 +196,14 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
         rest = [b for b in bodies if b not in listed]
         if rest:
             chosen["other"] = rest
-    members = np.zeros((len(chosen), model.njoints))
-    for g, names in enumerate(chosen.values()):
-        members[g, [bodies[b] for b in names]] = 1.0
-    support = np.zeros((model.njoints, model.nv))
-    for j in range(1, model.njoints):
-        for k in model.supports[j][1:]:
-            joint = model.joints[k]
-            support[j, joint.idx_v : joint.idx_v + joint.nv] = 1.0
+    joints = tuple(tuple(bodies[b] for b in names) for names in chosen.values())
     rotor = np.zeros(model.nv)
     screw = np.zeros(model.nv)
     for act, spec in zip(mech.actuators, mech.sidecar.actuation, strict=True):
         factor = (2.0 * np.pi / spec.lead) ** 2 if spec.lead else 1.0
         rotor[act.idx_v] = spec.rotor_inertia * factor
         screw[act.idx_v] = spec.screw_inertia * factor
-    return _BodyGroups(tuple(chosen), members, support, rotor, screw)
+    return _BodyGroups(tuple(chosen), joints, rotor, screw)
 
 
 def _body_forces(model: pin.Model, data: pin.Data, gravity: bool, support: np.ndarray) -> np.ndarray:
@@ -277,6 +286,10 @@ def inverse_dynamics(
 ) -> InverseDynamics:
     """Actuator forces driving ``trajectory``, split by term and by body.
 
+    By default (minimum norm, no load) it computes per sample the forces, the cut-joint forces,
+    the internal coordinates, the residual and the split by term; the split by body is
+    computed when :attr:`InverseDynamics.bodies` is first read.
+
     Args:
         mech: the mechanism.
         trajectory: consistent samples (``task_trajectory`` or ``actuator_trajectory``).
@@ -321,16 +334,62 @@ def inverse_dynamics(
             f"the trajectory has q of width {trajectory.q.shape[1]} and v of width {trajectory.v.shape[1]}; "
             f"{mech.name} has nq = {mech.nq}, nv = {mech.nv}"
         )
-    check_samples_assembled(mech, trajectory.q, trajectory.t)
+    kinematics = _Kinematics.of(mech, trajectory, wrench is not None, frame)
     check_finite_model(mech)
     load_at = _load_function(mech, wrench, frame)
     body = _body_groups(mech, groups)
-    return _run(mech, trajectory, rule, load_at, body, gravity, singular_rtol, wrench is None)
+    return _run(mech, trajectory, kinematics, rule, load_at, body, gravity, singular_rtol, wrench is None)
+
+
+@dataclass(frozen=True)
+class _Kinematics:
+    """The Jacobians of every sample, from one Pinocchio pass each (the closure check's pass)."""
+
+    J_phi: np.ndarray  # (n, m, nv)
+    J_load: np.ndarray | None  # (n, 6, nv): the load frame's, world-aligned
+    J_task: np.ndarray | None  # (n, n_task, nv): for the direct-singularity watch of a square task
+
+    @classmethod
+    def of(cls, mech: Mechanism, trajectory: JointTrajectory, loaded: bool, frame: str | None) -> _Kinematics:
+        """Run the pass over the trajectory and refuse it if a sample is off the closure manifold.
+
+        Raises:
+            ClosureNotSatisfied: as :func:`plm_pin._checks.check_samples_assembled` (its message).
+        """
+        model, closures = mech.model, mech.closures
+        data = model.createData()
+        task = mech.task_compiled
+        n, m = trajectory.t.shape[0], mech.n_closure_rows
+        frame_id = None
+        if loaded and frame is None:
+            frame_id = task.frame_id if task is not None else None
+        elif loaded and model.existFrame(frame):
+            frame_id = model.getFrameId(frame)
+        square = task is not None and task.size == mech.mobility == mech.n_actuators
+        J_phi = np.empty((n, m, model.nv))
+        J_load = np.empty((n, 6, model.nv)) if frame_id is not None else None
+        J_task = np.empty((n, task.size, model.nv)) if square and task is not None else None
+        worst = np.zeros(n)  # largest closure residual of each sample
+        for i, q in enumerate(trajectory.q):
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacements(model, data)
+            if closures:
+                phi = _closures.residual_from_placements(data, closures)
+                worst[i] = np.max(np.abs(phi))
+                _closures.jacobian_from_data(model, data, closures, J_phi[i])
+            if J_load is not None:
+                J_load[i] = pin.getFrameJacobian(model, data, frame_id, _LWA)
+            if J_task is not None and task is not None:
+                task.jacobian_from_data(model, data, J_task[i])
+        if not np.all(worst <= CLOSURE_TOL):  # NaN refused too
+            check_samples_assembled(mech, trajectory.q, trajectory.t)  # raises, naming the first open sample
+        return cls(J_phi, J_load, J_task)
 
 
 def _run(
     mech: Mechanism,
     trajectory: JointTrajectory,
+    kinematics: _Kinematics,
     rule: AllocationRule,
     load_at: Callable[[float], Load | None],
     body: _BodyGroups,
@@ -338,31 +397,29 @@ def _run(
     singular_rtol: float,
     unloaded: bool,
 ) -> InverseDynamics:
-    """The trajectory loop: one factorisation of the balance per sample, on a data of its own."""
-    model, closures, act_v = mech.model, mech.closures, mech.actuated_v_indices
+    """The trajectory loop: RNEA and one factorisation of the balance per sample, on a data of its own."""
+    model, act_v = mech.model, mech.actuated_v_indices
     data = model.createData()
     n, n_act, nv = trajectory.t.shape[0], mech.n_actuators, mech.nv
     missing = {"rotor": not body.rotor.any(), "screw": not body.screw.any(), "external": unloaded}
     absent = tuple(name for name, gone in missing.items() if gone)
     out = _Buffers(n, n_act, nv, mech.n_closure_rows, absent)
-    task = mech.task_compiled
-    square = task is not None and task.size == mech.mobility == n_act
     linear = rule.is_linear
     previous_sign = 0.0
+    parts = np.zeros((nv, len(TERMS)))  # the terms of tau, columns in the order of TERMS
     for i in range(n):
         q, v, a = trajectory.q[i], trajectory.v[i], trajectory.a[i]
         load = load_at(float(trajectory.t[i]))
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        J_phi = _closures.jacobian_from_data(model, data, closures)
-        ext = np.zeros(nv)
-        if load is not None:
-            ext = -(pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench)
-        J_task = task.jacobian_from_data(model, data) if square and task is not None else None
+        J_phi = kinematics.J_phi[i]
         tau_full = pin.rnea(model, data, q, v, a).copy()
         nle = pin.nonLinearEffects(model, data, q, v).copy()
-        g_full = pin.computeGeneralizedGravity(model, data, q).copy()
-        tau = (tau_full if gravity else tau_full - g_full) + ext
+        g_full = pin.computeGeneralizedGravity(model, data, q)
+        parts[:, 0] = tau_full - nle
+        parts[:, 1] = nle - g_full
+        parts[:, 2] = g_full if gravity else 0.0
+        if load is not None and kinematics.J_load is not None:
+            parts[:, 3] = -(kinematics.J_load[i].T @ load.wrench)
+        tau = parts.sum(axis=1)
         try:
             if linear:  # weighted minimum norm: the forces are F tau, one factorisation
                 factors = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
@@ -371,19 +428,21 @@ def _run(
                 applied = tau.copy()
                 applied[act_v] -= f_c
                 lam = factors.lambda_map @ applied
-                out.residual[i] = float(np.max(np.abs(J_phi.T @ lam - applied), initial=0.0))
+                out.residual[i] = float(abs(J_phi.T @ lam - applied).max(initial=0.0))
                 out.internal.append(factors.G.T @ f_c)
                 N, C = factors.N, factors.C
             else:
-                balance = _balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol)
-                sol = solve_balance(mech, dataclasses.replace(balance, v=v, a=a), rule)
+                balance = _balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol, v, a)
+                sol = solve_balance(mech, balance, rule)
                 F = rule.linear_map(balance)
                 f_c, lam = sol.f_c, sol.lam
                 out.residual[i] = sol.residual
                 out.internal.append(sol.internal)
                 N, C = balance.N, balance.C
-            if J_task is not None:  # a sign change of det J_ce between samples: a direct singularity
-                sign = float(np.sign(np.linalg.det(C)) * np.sign(np.linalg.det(J_task @ N)))
+            if (
+                kinematics.J_task is not None
+            ):  # a sign change of det J_ce between samples: a direct singularity
+                sign = float(np.sign(np.linalg.det(C)) * np.sign(np.linalg.det(kinematics.J_task[i] @ N)))
                 if sign * previous_sign < 0:
                     raise SingularConfiguration(
                         f"det J_ce changed sign after t = {trajectory.t[i - 1]:.9g} s: the trajectory "
@@ -401,12 +460,13 @@ def _run(
                 float(trajectory.t[i]),
                 exc,
             ) from exc
-        parts = np.column_stack([tau_full - nle, nle - g_full, g_full if gravity else np.zeros(nv), ext])
         shares = F @ parts  # (n_act, 4), in the order of TERMS
         for k, name in enumerate(TERMS):
             out.terms[name][i] = shares[:, k]
-        out.fixed["rotor"][i] = F @ (body.rotor * a)
-        out.fixed["screw"][i] = F @ (body.screw * a)
+        if "rotor" not in absent:
+            out.fixed["rotor"][i] = F @ (body.rotor * a)
+        if "screw" not in absent:
+            out.fixed["screw"][i] = F @ (body.screw * a)
         out.fixed["external"][i] = shares[:, 3]
         out.F[i] = F
         out.f_c[i], out.lam[i] = f_c, lam
@@ -420,10 +480,11 @@ def _body_shares(
     model = mech.model
     data = model.createData()
     out = np.zeros((len(body.names), F.shape[0], F.shape[1]))
+    members, support = body.matrices(model)
     for i in range(F.shape[0]):
         pin.computeJointJacobians(model, data, traj.q[i])
         pin.rnea(model, data, traj.q[i], traj.v[i], traj.a[i])
-        per_group = body.members @ _body_forces(model, data, gravity, body.support)  # (n_groups, nv)
+        per_group = members @ _body_forces(model, data, gravity, support)  # (n_groups, nv)
         out[:, i] = per_group @ F[i].T
     return dict(zip(body.names, out, strict=True))
 

@@ -126,8 +126,7 @@ def allocate(
         raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
     k = G.shape[1]
     if internal is None and objective == "norm" and not ineq.names:  # nothing to check: the KKT system
-        y0 = _unconstrained(f_p, G, weights) if k else np.zeros(0)
-        return Allocation(f_p + G @ y0, y0, ())
+        return min_norm(f_p, G, weights)
     names = tuple(actuator_names) or tuple(f"f_c[{i}]" for i in range(f_p.shape[0]))
     scale = max(float(np.max(np.abs(f_p), initial=0.0)), float(np.max(np.abs(ineq.offset), initial=0.0)), 1.0)
     tol = FEASIBILITY_RTOL * scale
@@ -162,9 +161,18 @@ def allocate(
     return Allocation(f_c, y, active)
 
 
+def min_norm(f_p: np.ndarray, G: np.ndarray, weights: np.ndarray) -> Allocation:
+    """The weighted minimum norm without inequalities (its KKT system): the allocation of a linear rule."""
+    y = _unconstrained(f_p, G, weights) if G.shape[1] else np.zeros(0)
+    return Allocation(f_p + G @ y, y, ())
+
+
 def _unconstrained(f_p: np.ndarray, G: np.ndarray, W: np.ndarray) -> np.ndarray:
     """Internal coordinates of the weighted minimum norm without inequalities (its KKT system)."""
-    return np.linalg.solve(G.T @ W @ G, -(G.T @ W @ f_p))
+    WG = W @ G
+    if G.shape[1] == 1:  # one internal force (3D4M): a scalar
+        return np.array([-(WG[:, 0] @ f_p) / (G[:, 0] @ WG[:, 0])])
+    return np.linalg.solve(G.T @ WG, -(WG.T @ f_p))
 
 
 def _min_norm(

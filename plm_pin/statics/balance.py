@@ -21,19 +21,34 @@ exert against each other without moving anything. :math:`\lambda` then follows f
 :math:`J_\phi^T \lambda = \tau - B f_c`, unique when the closure rows are independent.
 With a task, :math:`C^T = T^T J_{ce}^T`, so this is Harada 2011's
 :math:`J_{ce}^T f_c = f_e` (eqs. (15), (20)) with :math:`f_e = -w` at zero gravity.
+
+**Bases.** :math:`N` is an orthonormal basis of the feasible motions turned along the right
+singular vectors of :math:`C`, so that :math:`C` has orthogonal columns of decreasing norm
+(their signs are the factorisation's: only products such as :math:`C^T f = N^T \tau` are
+meaningful). The internal basis :math:`G`, in which the internal coordinates are read and
+prescribed, does not depend on the factorisation: it is the pivoted Gram-Schmidt basis of
+the internal-force space (see :func:`oriented_internal_basis`); with one internal force
+(the 3D4M), the unit internal force whose largest entry is positive.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import blas as _blas
 from scipy.linalg import lapack as _lapack
 
-from .._checks import as_vector, check_assembled, check_finite_model, check_finite_result, check_tolerance
+from .._checks import (
+    CLOSURE_TOL,
+    as_vector,
+    check_assembled,
+    check_finite_model,
+    check_finite_result,
+    check_tolerance,
+)
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
 from ..kinematics import closures as _closures
 
@@ -54,8 +69,9 @@ EQUILIBRIUM_RTOL = 1e-9
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
-_QR_MIN_SIZE = 200
-"""Closure Jacobians with fewer (nonzero rows x velocities) entries are factored by SVD alone."""
+_TIE_RTOL = 1e-9
+"""Actuator shares of the internal forces equal to this relative tolerance count as a tie (see
+:func:`oriented_internal_basis`): the first actuator in order is taken."""
 
 
 @dataclass(frozen=True)
@@ -123,10 +139,14 @@ class StaticBalance:
         load: the external wrench, or None.
         gravity: whether gravity is included in ``tau``.
         J_phi: closure Jacobian, shape (m, nv).
-        N: orthonormal basis of the feasible motions, shape (nv, mobility).
-        C: actuator rates per feasible motion :math:`B^T N`, shape (n_act, mobility).
+        N: orthonormal basis of the feasible motions, shape (nv, mobility), along the right
+            singular vectors of ``C`` (see the module docstring).
+        C: actuator rates per feasible motion :math:`B^T N`, shape (n_act, mobility),
+            orthogonal columns of decreasing norm.
         f_particular: minimum-norm actuator forces, shape (n_act,) [N, N m].
-        internal_basis: orthonormal basis :math:`G` of the internal forces, shape (n_act, k).
+        internal_basis: orthonormal basis :math:`G` of the internal forces, shape (n_act, k),
+            oriented by :func:`oriented_internal_basis` (the same at a configuration whatever
+            the factorisation).
         actuated_v: velocity index of each actuator, shape (n_act,).
         lambda_map: truncated pseudo-inverse of :math:`J_\phi^T`, shape (m, nv): the cut-joint
             forces that balance a generalized force (least squares where the closure rows are
@@ -207,12 +227,35 @@ def static_balance(
             (constraint singularity) cannot resist the load at ``q``; the message names
             the unresisted generalized-force component.
     """
-    qa = check_assembled(mech, q)
+    qa = mech.check_q(q)
+    model, data = mech.model, mech.data
+    J_phi = assembled_closure_jacobian(mech, data, qa)
     check_finite_model(mech)
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
-    model, data = mech.model, mech.data
-    tau = pin.computeGeneralizedGravity(model, data, qa).copy() if gravity else np.zeros(model.nv)
-    return generalized_balance(mech, qa, tau, load=load, gravity=gravity, singular_rtol=singular_rtol)
+    rtol = check_tolerance(singular_rtol, "singular_rtol", relative=True)
+    tau = _loaded(model, data, load, None)
+    if gravity:
+        tau += pin.computeGeneralizedGravity(model, data, qa)
+    return _checked_balance(mech, qa, tau, load, gravity, J_phi, rtol, None, None)
+
+
+def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -> np.ndarray:
+    r"""Closure Jacobian at ``q`` from one kinematics pass, which also checks that ``q`` is assembled.
+
+    ``pin.computeJointJacobians`` and ``pin.updateFramePlacements`` fill ``data`` (the frame
+    Jacobians and placements of ``q`` stay there for the caller); the closure residual read
+    from the same placements is the one :func:`~plm_pin._checks.check_assembled` takes.
+
+    Raises:
+        ClosureNotSatisfied: as :func:`~plm_pin._checks.check_assembled` (its message).
+    """
+    model, closures = mech.model, mech.closures
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    J_phi = _closures.jacobian_from_data(model, data, closures)
+    if closures and not np.max(np.abs(_closures.residual_from_placements(data, closures))) <= CLOSURE_TOL:
+        check_assembled(mech, q)  # raises, with the residual and the worst closure
+    return J_phi
 
 
 def generalized_balance(
@@ -249,52 +292,103 @@ def generalized_balance(
     model, data = mech.model, mech.data
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
-    tau = np.array(tau, dtype=float)
-    if load is not None:
-        tau -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
-    check_finite_result(mech, "the generalized forces to balance", tau=tau)
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
-    balance = _balance(mech, q, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol)
-    if v is None and a is None:
-        return balance
-    return dataclasses.replace(balance, v=v, a=a)
+    applied = _loaded(model, data, load, tau)
+    return _checked_balance(mech, q, applied, load, gravity, J_phi, rtol, v, a)
 
 
-def closure_factors(
-    J_phi: np.ndarray, singular_rtol: float = SINGULAR_RTOL
-) -> tuple[np.ndarray, np.ndarray, bool]:
+def _loaded(model: pin.Model, data: pin.Data, load: Load | None, tau: np.ndarray | None) -> np.ndarray:
+    r"""A new array :math:`\tau - J_w^T w` (``tau`` None: zero), the frame Jacobian taken from ``data``."""
+    out = np.zeros(model.nv) if tau is None else np.array(tau, dtype=float)
+    if load is not None:
+        out -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
+    return out
+
+
+def _checked_balance(
+    mech: Mechanism,
+    q: np.ndarray,
+    tau: np.ndarray,
+    load: Load | None,
+    gravity: bool,
+    J_phi: np.ndarray,
+    rtol: float,
+    v: np.ndarray | None,
+    a: np.ndarray | None,
+) -> StaticBalance:
+    check_finite_result(mech, "the generalized forces to balance", tau=tau)
+    return _balance(mech, q, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol, v, a)
+
+
+def closure_factors(J_phi: np.ndarray, singular_rtol: float = SINGULAR_RTOL) -> tuple[np.ndarray, np.ndarray]:
     r"""Orthonormal feasible motions :math:`N` (:math:`J_\phi N = 0`) and the minimum-norm closure-force map.
 
     Feasible motions come from the local rank of :math:`J_\phi`: at a constraint singularity the
     motion the closures no longer forbid joins :math:`N`, so the actuators must hold it too (or
     the load is refused). Rows that are exactly zero (the out-of-plane rows of planar point
     closures) are dropped; when the rest is clearly of full rank (a triangular condition
-    estimate above ``1e3 * singular_rtol``) one QR factorisation gives both maps, else the SVD
-    decides the rank with ``singular_rtol``. Below :data:`_QR_MIN_SIZE` entries the SVD is the
-    cheaper of the two (measured: 14 against 28 us on the 3D4M's 6 x 9 rows, 57 against 45 us
-    on the 8-PSS's 24 x 30), so it is used directly.
+    estimate above ``1e3 * singular_rtol``, far above any ratio the SVD would call singular)
+    one Householder QR of :math:`J_\phi^T` gives both maps, else the SVD decides the rank with
+    ``singular_rtol``. LAPACK is called directly: on the 3D4M's 6 x 9 rows the QR costs 3 us
+    against 9 us for the SVD (11 against 60 us on the 8-PSS's 24 x 30).
 
     Returns:
-        ``N``, shape (nv, nullity); ``lambda_map``, shape (m, nv): the minimum-norm
-        :math:`\lambda` with :math:`J_\phi^T \lambda = y` for :math:`y` in the range of
-        :math:`J_\phi^T`; and whether ``N`` is canonical (the SVD's right singular vectors)
-        rather than an arbitrary QR basis.
+        ``N``, shape (nv, nullity), in no particular orientation; ``lambda_map``, shape (m, nv):
+        the minimum-norm :math:`\lambda` with :math:`J_\phi^T \lambda = y` for :math:`y` in
+        the range of :math:`J_\phi^T`.
     """
     m, nv = J_phi.shape
     lambda_map = np.zeros((m, nv))
-    rows = np.flatnonzero(np.any(J_phi != 0.0, axis=1))
-    if rows.size == 0:
-        return np.eye(nv), lambda_map, True
-    if _QR_MIN_SIZE <= rows.size * nv and rows.size <= nv:
-        Q, R = np.linalg.qr(J_phi[rows].T, mode="complete")  # (nv, nv), (nv, r)
-        R1 = R[: rows.size]
-        rcond = _lapack.dtrcon(R1, norm="1")[0] if rows.size > 1 else 1.0
-        if np.all(np.diag(R1) != 0.0) and rcond > 1e3 * singular_rtol:
-            lambda_map[rows] = np.linalg.solve(R1, Q[:, : rows.size].T)
-            return Q[:, rows.size :], lambda_map, False
+    rows = np.flatnonzero(J_phi.any(axis=1))  # ndarray methods: numpy's function wrappers cost more
+    r = rows.size
+    if r == 0:
+        return np.eye(nv), lambda_map
+    if r <= nv:
+        qr, tau, _, info = _lapack.dgeqrf(J_phi[rows].T, overwrite_a=1)  # J_phi^T = Q R, (nv, r)
+        R = qr[:r]
+        if info == 0 and R.diagonal().all() and _lapack.dtrcon(R, norm="1")[0] > 1e3 * singular_rtol:
+            full = np.zeros((nv, nv), order="F")
+            full[:, :r] = qr
+            Q = _lapack.dorgqr(full, tau, overwrite_a=1)[0]  # (nv, nv)
+            # lambda_map = R^-1 Q1^T, as (Q1 R^-T)^T
+            lambda_map[rows] = _blas.dtrsm(1.0, R, Q[:, :r], side=1, trans_a=1).T
+            return Q[:, r:], lambda_map
     U, s, Vt = np.linalg.svd(J_phi)
     rank = int(np.count_nonzero(s > singular_rtol * s[0]))
-    return Vt[rank:].T, (U[:, :rank] / s[:rank]) @ Vt[:rank], True
+    return Vt[rank:].T, (U[:, :rank] / s[:rank]) @ Vt[:rank]
+
+
+def oriented_internal_basis(G: np.ndarray) -> np.ndarray:
+    r"""The internal basis of the space spanned by the orthonormal ``G``, whatever the orientation of ``G``.
+
+    Pivoted Gram-Schmidt on the actuators: the first column is the unit internal force with
+    the largest share on a single actuator (the projection of that actuator's unit vector on
+    the internal space, normalised), that share positive; each next column likewise in the
+    part of the internal space orthogonal to the columns before. Shares equal to
+    :data:`_TIE_RTOL` are taken in actuator order. The pivot actuators :math:`p_j` give
+    :math:`G_{p_j j} > 0` and :math:`G_{p_i j} = 0` for :math:`i < j`; with one internal force,
+    :math:`G` is the unit internal force whose largest entry is positive.
+
+    Args:
+        G: orthonormal basis of the internal forces, shape (n_act, k).
+
+    Returns:
+        The oriented basis, shape (n_act, k), spanning the same space.
+    """
+    k = G.shape[1]
+    if k == 1:  # one internal force (3D4M): its sign only
+        g = abs(G[:, 0])
+        pivot = int((g >= (1.0 - _TIE_RTOL) * g.max()).argmax())
+        return G if G[pivot, 0] > 0.0 else -G
+    A = G.T  # (k, n_act): column i holds the projection of actuator i's unit vector, in G
+    shares = np.einsum("ij,ij->j", A, A)  # squared norms of what remains of each projection
+    Q = np.zeros((k, k))
+    for j in range(k):
+        pivot = int((shares >= (1.0 - _TIE_RTOL) ** 2 * shares.max()).argmax())
+        w = A[:, pivot] - Q @ (Q.T @ A[:, pivot])  # Q's columns past j are still zero
+        Q[:, j] = w / np.sqrt(w @ w)
+        shares = shares - (Q[:, j] @ A) ** 2
+    return G @ Q
 
 
 class BalanceFactors(NamedTuple):
@@ -305,7 +399,7 @@ class BalanceFactors(NamedTuple):
         lambda_map: minimum-norm cut-joint forces per generalized force, shape (m, nv).
         C: :math:`B^T N`, shape (n_act, nullity).
         P: minimum-norm actuator forces per generalized force, shape (n_act, nv).
-        G: orthonormal internal-force basis, shape (n_act, k).
+        G: internal-force basis (:func:`oriented_internal_basis`), shape (n_act, k).
     """
 
     N: np.ndarray
@@ -318,18 +412,24 @@ class BalanceFactors(NamedTuple):
 def balance_factors(
     mech: Mechanism, J_phi: np.ndarray, act_v: np.ndarray, tau: np.ndarray, singular_rtol: float
 ) -> BalanceFactors:
-    """Factor the balance at a configuration and check that ``tau`` can be resisted there.
+    r"""Factor the balance at a configuration and check that ``tau`` can be resisted there.
+
+    The QR (or SVD) of :math:`J_\phi` (:func:`closure_factors`), then the small SVD of
+    :math:`C = B^T N`, which decides direct singularities with ``singular_rtol``.
 
     Raises:
         SingularConfiguration: as :func:`static_balance`.
     """
-    N, lambda_map, canonical = closure_factors(J_phi, singular_rtol)
+    N, lambda_map = closure_factors(J_phi, singular_rtol)
     C = N[act_v]  # (n_act, nullity)
     b = N.T @ tau  # (nullity,)
-    U, s, Vt = np.linalg.svd(C)  # C = U[:, :k] diag(s) Vt
+    if C.size:
+        U, s, Vt, info = _lapack.dgesdd(C, full_matrices=1)  # C = U[:, :k] diag(s) Vt
+    if not C.size or info != 0:
+        U, s, Vt = np.linalg.svd(C)
     r = int(np.count_nonzero(s > singular_rtol * (s[0] if s.size else 1.0)))
     unresisted = Vt[r:] @ b  # load on feasible motions the actuators do not hold
-    if np.max(np.abs(unresisted), initial=0.0) > EQUILIBRIUM_RTOL * max(np.max(np.abs(tau)), 1e-300):
+    if unresisted.size and abs(unresisted).max() > EQUILIBRIUM_RTOL * max(abs(tau).max(initial=0.0), 1e-300):
         kind = "constraint" if N.shape[1] > mech.mobility else "direct"
         s_phi = np.linalg.svd(J_phi, compute_uv=False)
         raise SingularConfiguration(
@@ -338,11 +438,10 @@ def balance_factors(
             f"closure singular values {s_phi.tolist()}); the load's component along them is "
             f"{unresisted.tolist()} [N, N m]"
         )
-    if not canonical:  # a QR basis is arbitrary: turn it along C's right singular vectors
-        N, C = N @ Vt.T, C @ Vt.T
-        Vt = np.eye(Vt.shape[0])
-    P = (U[:, :r] / s[:r]) @ (Vt[:r] @ N.T)  # (n_act, nv)
-    return BalanceFactors(N, lambda_map, C, P, U[:, r:].copy())
+    N = N @ Vt.T  # along C's right singular vectors: C = B^T N has orthogonal columns, largest first
+    P = (U[:, :r] / s[:r]) @ N[:, :r].T  # (n_act, nv)
+    G = oriented_internal_basis(U[:, r:]) if r < U.shape[1] else U[:, r:]
+    return BalanceFactors(N, lambda_map, N[act_v], P, G)
 
 
 def _balance(
@@ -354,9 +453,11 @@ def _balance(
     J_phi: np.ndarray,
     act_v: np.ndarray,
     singular_rtol: float,
+    v: np.ndarray | None = None,
+    a: np.ndarray | None = None,
 ) -> StaticBalance:
     N, lambda_map, C, P, G = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
     f_p = P @ tau
-    for a in (f_p, G, q, tau, J_phi, N, C, lambda_map, P):
-        a.setflags(write=False)
-    return StaticBalance(q, tau, load, gravity, J_phi, N, C, f_p, G, act_v, lambda_map, P)
+    for arr in (f_p, G, q, tau, J_phi, N, C, lambda_map, P):
+        arr.setflags(write=False)
+    return StaticBalance(q, tau, load, gravity, J_phi, N, C, f_p, G, act_v, lambda_map, P, v, a)

@@ -18,7 +18,7 @@ import numpy as np
 from .._checks import check_finite_result, load_arguments
 from ..exceptions import InvalidInput
 from . import reactions as _reactions
-from .allocation import OBJECTIVES, Inequalities, allocate, check_weights
+from .allocation import OBJECTIVES, Allocation, Inequalities, allocate, check_weights, min_norm
 from .balance import SINGULAR_RTOL, StaticBalance, static_balance
 
 if TYPE_CHECKING:
@@ -210,6 +210,11 @@ class AllocationRule:
         bounds = actuator_limits(mech, limits)
         return cls(objective, W, bounds, internal, min_compression, link_limits)
 
+    @functools.cached_property
+    def _unweighted(self) -> bool:
+        """Whether the weights are the identity (the plain minimum norm)."""
+        return bool(np.array_equal(self.weights, np.eye(self.weights.shape[0])))
+
     @property
     def is_linear(self) -> bool:
         """Whether the chosen forces are linear in the load: weighted minimum norm, nothing else."""
@@ -230,8 +235,8 @@ class AllocationRule:
 
     def weighted_map(self, P: np.ndarray, G: np.ndarray) -> np.ndarray:
         """:meth:`linear_map` from the minimum-norm map ``P`` (n_act, nv) and the internal basis ``G``."""
-        if G.shape[1] == 0:
-            return P
+        if G.shape[1] == 0 or self._unweighted:
+            return P  # W = I: P is that minimum norm (G^T P = 0)
         WG = self.weights @ G
         if G.shape[1] == 1:  # one internal force (3D4M): a scalar
             return P - G @ ((WG.T @ P) / float(G[:, 0] @ WG[:, 0]))
@@ -245,6 +250,26 @@ def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule)
         AllocationInfeasible: the limits and conditions cannot all be met.
         InvalidInput: malformed preload names or values.
     """
+    f_p, G = balance.f_particular, balance.internal_basis
+    result = min_norm(f_p, G, rule.weights) if rule.is_linear else _allocated(mech, balance, rule)
+    lam = balance.closure_forces(result.f_c)
+    check_finite_result(mech, "static forces", f_c=result.f_c, lam=lam)
+    for a in (result.f_c, lam, result.y):
+        a.setflags(write=False)
+    return StaticForces(
+        mech,
+        balance,
+        result.f_c,
+        lam,
+        result.y,
+        balance.residual(result.f_c, lam),
+        result.active,
+        rule.objective,
+    )
+
+
+def _allocated(mech: Mechanism, balance: StaticBalance, rule: AllocationRule) -> Allocation:
+    """The allocation of a rule with inequalities, a prescribed internal force or the min-peak objective."""
     f_p, G = balance.f_particular, balance.internal_basis
     bounds = rule.limits
     names = tuple(a.joint for a in mech.actuators)
@@ -264,22 +289,8 @@ def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule)
     internal = rule.internal
     if isinstance(internal, Mapping):
         internal = _internal_from_links(mech, balance, internal)
-    result = allocate(
+    return allocate(
         f_p, G, ineq, weights=rule.weights, objective=rule.objective, internal=internal, actuator_names=names
-    )
-    lam = balance.closure_forces(result.f_c)
-    check_finite_result(mech, "static forces", f_c=result.f_c, lam=lam)
-    for a in (result.f_c, lam, result.y):
-        a.setflags(write=False)
-    return StaticForces(
-        mech,
-        balance,
-        result.f_c,
-        lam,
-        result.y,
-        balance.residual(result.f_c, lam),
-        result.active,
-        rule.objective,
     )
 
 
@@ -299,6 +310,10 @@ def static_forces(
     singular_rtol: float = SINGULAR_RTOL,
 ) -> StaticForces:
     r"""Actuator and cut-joint forces holding the mechanism at ``q`` under gravity and a wrench.
+
+    By default (gravity, minimum norm, the description's limits) it computes the actuator
+    forces, the cut-joint forces, the internal coordinates and the residual; reactions, link
+    forces and internal modes are computed when asked for.
 
     Args:
         mech: the mechanism.
