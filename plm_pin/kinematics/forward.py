@@ -43,9 +43,9 @@ class FKSolution:
 
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
     out = q.copy()
-    joints = mech.model.joints
+    nqs = mech.model.nqs
     for a, value in zip(mech.actuators, c, strict=True):
-        if joints[a.joint_id].nq == 1:
+        if nqs[a.joint_id] == 1:
             out[a.idx_q] = value
         else:  # an unbounded revolute: (cos, sin)
             mech.set_joint(out, a.joint, value)
@@ -146,7 +146,9 @@ def forward_kinematics(
             "determine the configuration"
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    free = np.setdiff1d(np.arange(mech.nv), mech.actuated_v_indices)  # actuators are one-DOF joints
+    moving = np.ones(mech.nv, dtype=bool)
+    moving[[a.idx_v for a in mech.actuators]] = False  # actuators are one-DOF joints
+    free = np.flatnonzero(moving)
     starts_q = [_with_actuators(mech, q0, c)]
     if all_modes:
         rng = np.random.default_rng(seed)
