@@ -17,8 +17,6 @@ frame and pass.
 
 from __future__ import annotations
 
-import functools
-import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,41 +25,31 @@ import pinocchio as pin
 PlacementViews = tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]
 """Translations (3,) and rotations (3, 3) of some frames, as live views into a ``pin.Data``."""
 
-_VIEWS: dict[int, tuple[weakref.ref[pin.Data], dict[tuple[int, ...], PlacementViews]]] = {}
-"""Per Pinocchio data, by id (dropped with the data), the placement views of each frame tuple asked for.
+VIEWS_KEPT = 64
+"""Number of Pinocchio datas whose placement views are kept (the one seen first is dropped first)."""
+
+_VIEWS: dict[int, tuple[pin.Data, dict[tuple[int, ...], PlacementViews]]] = {}
+"""Per Pinocchio data (by id, with the data: the views keep it alive anyway), the views of each frame tuple.
 
 Not a ``WeakKeyDictionary``: ``pin.Data.__eq__`` compares whole contents, which a lookup would call.
 """
-
-
-def _forget(
-    key: int,
-    ref: weakref.ref[pin.Data],
-    views: dict[int, tuple[weakref.ref[pin.Data], dict[tuple[int, ...], PlacementViews]]] = _VIEWS,
-) -> None:
-    """Drop the views of a data that is being deleted (unless its id already holds another).
-
-    ``views`` is bound at definition: at interpreter exit the module's globals may be gone.
-    """
-    hit = views.get(key)
-    if hit is not None and hit[0] is ref:
-        del views[key]
 
 
 def placement_views(data: pin.Data, frames: tuple[int, ...]) -> PlacementViews:
     """Views of ``data.oMf[f].translation`` and ``.rotation`` for each frame ``f`` of ``frames``.
 
     Pinocchio 4.1 returns these arrays as views into the placements it stores (a vector
-    sized once, when the data is created): each pass of ``framesForwardKinematics`` or
-    ``updateFramePlacements`` shows in them, with no Python call per frame. The views are
-    made once per data and frame tuple and kept as long as the data lives (they hold no
-    reference to it, so they are only handed out with the data itself).
+    sized once, when the data is created), and each view keeps the data alive: each pass of
+    ``framesForwardKinematics`` or ``updateFramePlacements`` shows in them, with no Python
+    call per frame. The views are made once per data and frame tuple and kept for the last
+    :data:`VIEWS_KEPT` datas seen (older ones are dropped, with the data they hold).
     """
     key = id(data)
     hit = _VIEWS.get(key)
-    if hit is None or hit[0]() is not data:
-        ref = weakref.ref(data, functools.partial(_forget, key))
-        hit = _VIEWS[key] = (ref, {})
+    if hit is None:  # while an entry lives its data does too, so its id is not reused
+        if len(_VIEWS) >= VIEWS_KEPT:
+            _VIEWS.pop(next(iter(_VIEWS)), None)
+        hit = _VIEWS[key] = (data, {})
     per_data = hit[1]
     views = per_data.get(frames)
     if views is None:
