@@ -255,6 +255,13 @@ class Mechanism:
         """Velocity indices of the actuated joints, shape (n_act,)."""
         return np.array([a.idx_v for a in self.actuators], dtype=int)
 
+    @functools.cached_property
+    def passive_v_indices(self) -> np.ndarray:
+        """Velocity indices of the joints not actuated, ascending, shape (nv - n_act,) (read-only)."""
+        out = np.setdiff1d(np.arange(self.nv), self.actuated_v_indices)
+        out.setflags(write=False)
+        return out
+
     @property
     def actuated_q_indices(self) -> np.ndarray:
         """Configuration indices of the actuated joints, shape (n_act,)."""

@@ -11,13 +11,16 @@ import pinocchio as pin
 from scipy.linalg.lapack import dposv as _posv
 
 from ..exceptions import ClosureNotSatisfied
-from .closures import Closure, closure_rows, jacobian_from_data, residual_from_placements
+from .closures import BoundClosures, Closure, closure_rows, jacobian_from_data, residual_from_placements
 
 NEWTON_MAX_ITERATIONS = 12
 """Newton iterations allowed before :func:`newton` gives up (and the caller falls back to LM)."""
 
 STALL_RATIO = 0.9
 """A Newton iteration that does not divide the residual by at least 1 / STALL_RATIO ends the attempt."""
+
+CHORD_RATIO = 1e-2
+"""A step that divides the residual by at least 1 / CHORD_RATIO lets :func:`newton` keep its factorisation."""
 
 ROUND_OFF = 1e-15
 """Residual [m, rad] below which :func:`newton` takes no polishing step."""
@@ -56,18 +59,23 @@ def newton(
 ) -> tuple[np.ndarray, int] | None:
     r"""Gauss-Newton on the closures (and ``extra`` rows) from ``q0``, or None when it stalls.
 
-    Each iteration runs one Pinocchio pass (``computeJointJacobians`` then
-    ``updateFramePlacements``), from which the residual and the exact Jacobian are written
-    into the preallocated ``r`` and ``A``; the step solves the normal equations
-    :math:`A_f^T A_f \delta = A_f^T r` over the free columns by Cholesky (LAPACK ``posv``: the
-    zero rows of planar closures do not matter). No SVD, no damping: the caller falls back to
-    :func:`assemble` (Levenberg-Marquardt) when an iteration does not divide the residual by
-    1 / :data:`STALL_RATIO`, the normal matrix is not positive definite (the free columns
+    Each iteration runs ``framesForwardKinematics`` and writes the residual into the
+    preallocated ``r``. The step is :math:`\delta = -(A_f^T A_f)^{-1} A_f^T r` over the free
+    columns of the exact Jacobian ``A`` (normal equations solved by Cholesky, LAPACK
+    ``posv``, once per factorisation for all rows: the zero rows of planar closures do not
+    matter). The Jacobian (``computeJointJacobians``) and its factorisation are refreshed
+    only when the last step did not divide the residual by at least 1 / :data:`CHORD_RATIO`
+    (a simplified, or chord, Newton while convergence is that fast, and for the polishing
+    step). No SVD, no damping: the attempt ends (the caller falls back to :func:`assemble`,
+    Levenberg-Marquardt) when a step from a fresh factorisation does not divide the residual
+    by 1 / :data:`STALL_RATIO`, the normal matrix is not positive definite (the free columns
     are not independent), or :data:`NEWTON_MAX_ITERATIONS` pass.
 
-    Once within ``tol``, one more step is taken (``polish``), which quadratic convergence
-    takes to round-off, as :func:`assemble` does. On success ``data`` holds the joint
-    Jacobians and frame placements at the returned configuration and ``r`` its residual.
+    Once within ``tol``, one more step is taken (``polish``), which takes the residual to
+    round-off, as :func:`assemble` does. Without it every iteration refreshes the Jacobian:
+    the last, quadratic, step then leaves the residual far inside ``tol``, where a chord
+    step would leave it just inside. On success ``data`` holds the joint Jacobians and
+    frame placements at the returned configuration and ``r`` its residual.
 
     Args:
         model: Pinocchio model.
@@ -76,7 +84,7 @@ def newton(
         q0: starting configuration. # (nq,)
         free: velocity indices allowed to move (None: all).
         r: residual buffer, at least (m + extra rows,); its first m + extra rows are used.
-        A: Jacobian buffer, at least (m + extra rows, nv).
+        A: Jacobian buffer, at least (m + extra rows, nv); it holds the last Jacobian factorised.
         tol: target largest absolute residual [m, rad].
         extra: further rows solved with the closures (a task target).
         polish: take the polishing step.
@@ -89,35 +97,48 @@ def newton(
     n = m + (extra.size if extra is not None else 0)
     r, A = r[:n], A[:n]
     r_phi, A_phi, r_x, A_x = r[:m], A[:m], r[m:], A[m:]
+    bound = BoundClosures(data, closures)
+    step_map = np.zeros((model.nv, n))  # -(A_f^T A_f)^-1 A_f^T, zero rows at the fixed columns
+    factorised = fresh = False  # fresh: the last step came from a factorisation at its start
     q = q0
     err_prev = np.inf
     polished = not polish
     for iteration in range(max_iterations + 1):
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        residual_from_placements(data, closures, r_phi)
+        pin.framesForwardKinematics(model, data, q)
+        bound.residual(r_phi)
         if extra is not None:
             extra.residual(data, r_x)
         err = float(np.abs(r).max()) if n else 0.0
         if err <= tol:
             if polished or err < ROUND_OFF:
+                pin.computeJointJacobians(model, data, q)  # the joint Jacobians at q, for the caller
                 return q, iteration
             polished = True
-        elif iteration == max_iterations or not err < STALL_RATIO * err_prev:
+            refresh = not factorised
+        elif iteration == max_iterations:
             return None
-        jacobian_from_data(model, data, closures, A_phi)
-        if extra is not None:
-            extra.jacobian(model, data, A_x)
-        Af = A if free is None else A[:, free]
-        _, step, info = _posv(Af.T @ Af, Af.T @ r)
-        if info != 0:
-            return None
-        if free is None:
-            q = pin.integrate(model, q, -step)
+        elif polish and err < CHORD_RATIO * err_prev:
+            refresh = not factorised
+        elif err < STALL_RATIO * err_prev or not fresh:
+            refresh = True
         else:
-            full = np.zeros(model.nv)
-            full[free] = -step
-            q = pin.integrate(model, q, full)
+            return None
+        if refresh:
+            pin.computeJointJacobians(model, data, q)  # frame placements already at q
+            bound.jacobian(model, A_phi)
+            if extra is not None:
+                extra.jacobian(model, data, A_x)
+            Af = A if free is None else A[:, free]
+            _, solution, info = _posv(Af.T @ Af, Af.T)
+            if info != 0:
+                return None
+            if free is None:
+                np.negative(solution, out=step_map)
+            else:
+                step_map[free] = -solution
+            factorised = True
+        fresh = refresh
+        q = pin.integrate(model, q, step_map @ r)
         err_prev = err
     return None  # pragma: no cover - the loop always returns
 

@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..description.sidecar import ClosureSpec
+from .scratch import placement_views
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -98,31 +99,43 @@ def closure_rows(closures: Sequence[Closure]) -> int:
 
 @dataclass(frozen=True)
 class _Plan:
-    """Index arrays that evaluate a closure tuple in a few vectorised numpy steps.
+    """Constant maps that evaluate a closure tuple in a few vectorised numpy steps.
 
     Attributes:
         frames: distinct frame ids of the closures, in first-use order.
-        a: per closure, the index of its frame A in ``frames``.
-        b: per closure, the index of its frame B in ``frames``.
-        linear_rows: per closure, its three translation rows, shape (n_closures, 3).
-        angular: ``(closure, index of A, index of B)`` of the closures with rotation rows.
+        angular: ``(closure, index of A, index of B)`` (indices in ``frames``) of the closures
+            with rotation rows.
+        difference: maps the stacked frame positions (3 per frame) to the residual, shape
+            (m, 3 n_frames): +1 at B's and -1 at A's coordinate on each translation row
+            (exact: no other term is added), zero rows at the rotation rows.
+        frame_difference: the same on stacked frame Jacobians (6 rows per frame, of which the
+            three translation rows are taken), shape (m, 6 n_frames).
     """
 
     frames: tuple[int, ...]
-    a: np.ndarray
-    b: np.ndarray
-    linear_rows: np.ndarray
     angular: tuple[tuple[Closure, int, int], ...]
+    difference: np.ndarray
+    frame_difference: np.ndarray
 
     @classmethod
     def build(cls, closures: Sequence[Closure]) -> _Plan:
         """The plan of ``closures``."""
         frames = list(dict.fromkeys(f for c in closures for f in c.frame_ids))
-        a = np.array([frames.index(c.frame_ids[0]) for c in closures], dtype=int)
-        b = np.array([frames.index(c.frame_ids[1]) for c in closures], dtype=int)
-        rows = np.array([range(c.rows.start, c.rows.start + 3) for c in closures], dtype=int).reshape(-1, 3)
-        angular = tuple((c, int(a[k]), int(b[k])) for k, c in enumerate(closures) if c.spec.type != "point")
-        return cls(tuple(frames), a, b, rows, angular)
+        m, k = closure_rows(closures), len(frames)
+        difference = np.zeros((m, k, 3))
+        angular = []
+        for c in closures:
+            ia, ib = frames.index(c.frame_ids[0]), frames.index(c.frame_ids[1])
+            for i in range(3):
+                difference[c.rows.start + i, ib, i] += 1.0
+                difference[c.rows.start + i, ia, i] -= 1.0
+            if c.spec.type != "point":
+                angular.append((c, ia, ib))
+        frame_difference = np.zeros((m, k, 6))
+        frame_difference[:, :, :3] = difference
+        return cls(
+            tuple(frames), tuple(angular), difference.reshape(m, 3 * k), frame_difference.reshape(m, 6 * k)
+        )
 
 
 _PLANS: dict[int, tuple[Sequence[Closure], _Plan]] = {}
@@ -140,6 +153,55 @@ def _plan(closures: Sequence[Closure]) -> _Plan:
     return plan
 
 
+class BoundClosures:
+    """Closures bound to one Pinocchio data: residual and Jacobian with few Python calls.
+
+    The frame placements are read through live views (:func:`~plm_pin.kinematics.scratch.placement_views`),
+    the translation rows of every closure come from one product with a constant matrix of
+    +1 / -1. Solvers bind once per solve and evaluate at each pass; the results are those of
+    :func:`residual_from_placements` and :func:`jacobian_from_data`, which bind per call.
+    """
+
+    __slots__ = ("_R", "_data", "_plan", "_t", "closures", "rows")
+
+    def __init__(self, data: pin.Data, closures: Sequence[Closure]) -> None:
+        """Bind ``closures`` to ``data`` (the views are made once per data and closure frames)."""
+        self.closures = closures
+        self.rows = closure_rows(closures)
+        self._plan = plan = _plan(closures)
+        self._data = data  # the views point into it: keep it alive with them
+        self._t, self._R = placement_views(data, plan.frames)
+
+    def residual(self, out: np.ndarray) -> np.ndarray:
+        """Stacked residual from the placements in the bound data, written into ``out`` (m,)."""
+        if not self.rows:
+            return out
+        plan = self._plan
+        np.matmul(plan.difference, np.concatenate(self._t), out=out)
+        R = self._R
+        for c, ia, ib in plan.angular:
+            Ra, Rb = R[ia], R[ib]
+            start, stop = c.rows.start, c.rows.stop
+            if c.spec.type == "weld":
+                out[start + 3 : stop] = pin.log3(Ra.T @ Rb)
+            else:
+                assert c.axis is not None and c.normal_basis is not None
+                out[start + 3 : stop] = c.normal_basis.T @ (Ra.T @ (Rb @ c.axis))
+        return out
+
+    def jacobian(self, model: pin.Model, out: np.ndarray) -> np.ndarray:
+        """Jacobian from the joint Jacobians and placements in the bound data, into ``out`` (m, nv)."""
+        if not self.rows:
+            return out
+        plan, data = self._plan, self._data
+        Js = np.array([pin.getFrameJacobian(model, data, f, _LWA) for f in plan.frames])  # (n_frames, 6, nv)
+        np.matmul(plan.frame_difference, Js.reshape(-1, model.nv), out=out)
+        for c, ia, ib in plan.angular:
+            # rows times the world angular velocity of B relative to A
+            out[c.rows.start + 3 : c.rows.stop] = angular_rows(c, data) @ (Js[ib, 3:] - Js[ia, 3:])
+        return out
+
+
 def residual_from_placements(
     data: pin.Data, closures: Sequence[Closure], out: np.ndarray | None = None
 ) -> np.ndarray:
@@ -150,22 +212,7 @@ def residual_from_placements(
     phi = np.empty(closure_rows(closures)) if out is None else out
     if not closures:
         return phi
-    plan = _plan(closures)
-    oMf = data.oMf
-    H = np.concatenate([oMf[f].homogeneous for f in plan.frames]).reshape(
-        -1, 4, 4
-    )  # cheaper than .translation
-    P = H[:, :3, 3]
-    phi[plan.linear_rows] = P[plan.b] - P[plan.a]
-    for c, ia, ib in plan.angular:
-        Ra, Rb = H[ia, :3, :3], H[ib, :3, :3]
-        start, stop = c.rows.start, c.rows.stop
-        if c.spec.type == "weld":
-            phi[start + 3 : stop] = pin.log3(Ra.T @ Rb)
-        else:
-            assert c.axis is not None and c.normal_basis is not None
-            phi[start + 3 : stop] = c.normal_basis.T @ (Ra.T @ (Rb @ c.axis))
-    return phi
+    return BoundClosures(data, closures).residual(phi)
 
 
 def residual(model: pin.Model, data: pin.Data, closures: Sequence[Closure], q: np.ndarray) -> np.ndarray:
@@ -191,13 +238,7 @@ def jacobian_from_data(
     J = np.empty((closure_rows(closures), model.nv)) if out is None else out
     if not closures:
         return J
-    plan = _plan(closures)
-    Js = np.array([pin.getFrameJacobian(model, data, f, _LWA) for f in plan.frames])  # (n_frames, 6, nv)
-    J[plan.linear_rows] = Js[plan.b, :3] - Js[plan.a, :3]
-    for c, ia, ib in plan.angular:
-        # rows times the world angular velocity of B relative to A
-        J[c.rows.start + 3 : c.rows.stop] = angular_rows(c, data) @ (Js[ib, 3:] - Js[ia, 3:])
-    return J
+    return BoundClosures(data, closures).jacobian(model, J)
 
 
 def angular_rows(c: Closure, data: pin.Data) -> np.ndarray:

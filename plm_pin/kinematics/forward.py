@@ -43,9 +43,9 @@ class FKSolution:
 
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
     out = q.copy()
-    joints = mech.model.joints
+    nqs = mech.model.nqs
     for a, value in zip(mech.actuators, c, strict=True):
-        if joints[a.joint_id].nq == 1:
+        if nqs[a.joint_id] == 1:
             out[a.idx_q] = value
         else:  # an unbounded revolute: (cos, sin)
             mech.set_joint(out, a.joint, value)
@@ -98,7 +98,7 @@ def _close(
         q, residual_norm = asm.q, asm.residual_norm
         pin.framesForwardKinematics(mech.model, ws.data, q)
     else:
-        q, residual_norm = fast[0], float(np.max(np.abs(r_phi))) if r_phi.size else 0.0
+        q, residual_norm = fast[0], float(np.abs(r_phi).max()) if r_phi.size else 0.0
         q.setflags(write=False)
     task = mech.task_compiled
     return q, residual_norm, task.pose_from_data(ws.data) if task is not None else np.zeros(0)
@@ -146,7 +146,7 @@ def forward_kinematics(
             "determine the configuration"
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    free = np.setdiff1d(np.arange(mech.nv), mech.actuated_v_indices)  # actuators are one-DOF joints
+    free = mech.passive_v_indices  # actuators are one-DOF joints
     starts_q = [_with_actuators(mech, q0, c)]
     if all_modes:
         rng = np.random.default_rng(seed)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -18,14 +19,13 @@ from .closures import Closure, compile_closures
 from .closures import closure_rows as _closure_rows
 from .forward import same_assembly
 from .jacobians import require_task
-from .legs import working_mode_from_data
+from .legs import working_mode
 from .limits import limit_violations, wrap_into_limits
 from .starts import random_starts
 from .task import TaskTarget, check_task_vector
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
-    from .scratch import Workspace
 
 IK_TOL = 1e-12
 """Default residual tolerance of the inverse kinematics [m, rad]."""
@@ -35,11 +35,13 @@ IK_TOL = 1e-12
 class IKSolution:
     """One inverse-kinematics solution.
 
+    The actuator positions and the working mode are derived from ``q`` when first read (the
+    mode costs a Pinocchio pass and a sign per leg block, which a caller that only wants
+    ``q`` does not pay).
+
     Attributes:
         q: assembled configuration placing the task frame at ``x``, shape (nq,).
         x: the task coordinates asked for [m, rad], shape (n_task,).
-        actuators: actuator positions [m, rad], shape (n_act,).
-        mode: working mode, one sign per square leg block (0: leg at an actuator singularity).
         residual_norm: largest absolute residual of closures and task [m, rad].
         limit_violations: joints outside their position limits at ``q``, with by how much
             [m or rad] (revolute angles are first shifted by 2 pi into their limits where they fit).
@@ -47,10 +49,19 @@ class IKSolution:
 
     q: np.ndarray
     x: np.ndarray
-    actuators: np.ndarray
-    mode: tuple[int, ...]
     residual_norm: float
-    limit_violations: Mapping[str, float] = field(default_factory=dict)
+    limit_violations: Mapping[str, float]
+    _mech: Mechanism = field(repr=False, compare=False)
+
+    @functools.cached_property
+    def actuators(self) -> np.ndarray:
+        """Actuator positions [m, rad], shape (n_act,)."""
+        return self._mech.actuator_positions(self.q)
+
+    @functools.cached_property
+    def mode(self) -> tuple[int, ...]:
+        """Working mode, one sign per square leg block (0: leg at an actuator singularity)."""
+        return working_mode(self._mech, self.q)
 
     @property
     def within_limits(self) -> bool:
@@ -106,34 +117,31 @@ def _solve(
 
 
 def _solution(mech: Mechanism, target: TaskTarget, q: np.ndarray) -> IKSolution:
-    """The solution at ``q``: residual, actuators and working mode from one Pinocchio pass."""
+    """The solution at ``q``, its residual from one Pinocchio pass."""
     ws = mech._thread_workspace()
-    pin.computeJointJacobians(mech.model, ws.data, q)
-    pin.updateFramePlacements(mech.model, ws.data)
-    return _solution_from_workspace(mech, target, q, ws)
+    pin.framesForwardKinematics(mech.model, ws.data, q)
+    r_phi, _ = ws.closure_rows
+    r_x, _ = ws.task_rows
+    _closures.residual_from_placements(ws.data, mech.closures, r_phi)
+    target.residual(ws.data, r_x)
+    return _solution_from_residual(mech, target, q, ws.residual)
 
 
-def _solution_from_workspace(
-    mech: Mechanism, target: TaskTarget, q: np.ndarray, ws: Workspace, residual_ready: bool = False
-) -> IKSolution:
-    """The solution at ``q`` from the joint Jacobians and placements already in ``ws.data``.
+def _solution_from_residual(mech: Mechanism, target: TaskTarget, q: np.ndarray, r: np.ndarray) -> IKSolution:
+    """The solution at ``q`` whose stacked residual (closures, task) is ``r``.
 
-    With ``residual_ready``, ``ws.residual`` already holds the residual at ``q`` (Newton's last pass).
+    Revolute angles are shifted by 2 pi into their limits where they fit (the same
+    placements, the same mode); a configuration inside every limit is kept as it is.
     """
-    r_phi, A_phi = ws.closure_rows
-    r_x, A_x = ws.task_rows
-    if not residual_ready:
-        _closures.residual_from_placements(ws.data, mech.closures, r_phi)
-        target.residual(ws.data, r_x)
-    _closures.jacobian_from_data(mech.model, ws.data, mech.closures, A_phi)
-    target.task.jacobian_from_data(mech.model, ws.data, A_x)
-    mode = working_mode_from_data(mech.model, ws.data, mech.closures, target.task, mech.legs)
-    residual_norm = float(np.max(np.abs(ws.residual)))
-    q = wrap_into_limits(mech, np.asarray(q))  # 2 pi shifts: same placements, same mode
+    model = mech.model
+    if np.all(model.lowerPositionLimit <= q) and np.all(q <= model.upperPositionLimit):
+        q, violations = np.array(q), {}  # nothing to shift, nothing outside
+    else:
+        q = wrap_into_limits(mech, q)
+        violations = limit_violations(mech, q)
     q.setflags(write=False)
-    return IKSolution(
-        q, target.x.copy(), mech.actuator_positions(q), mode, residual_norm, limit_violations(mech, q)
-    )
+    residual_norm = float(np.max(np.abs(r))) if r.size else 0.0
+    return IKSolution(q, target.x.copy(), residual_norm, violations, mech)
 
 
 def inverse_kinematics(
@@ -223,8 +231,8 @@ def _within_limits(mech: Mechanism, sol: IKSolution, respect_limits: bool) -> IK
 def _from_guess(mech: Mechanism, target: TaskTarget, guess: Any, tol: float) -> IKSolution | None:
     """The solution in the basin of ``guess`` (default: the reference configuration), or None.
 
-    Newton first; its last Pinocchio pass gives the residual, the actuators and the working
-    mode of the solution. Levenberg-Marquardt when Newton stalls.
+    Newton first; its last pass gives the residual of the solution. Levenberg-Marquardt when
+    Newton stalls.
     """
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     ws = mech._thread_workspace()
@@ -232,7 +240,7 @@ def _from_guess(mech: Mechanism, target: TaskTarget, guess: Any, tol: float) -> 
         mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
     )
     if fast is not None:
-        return _solution_from_workspace(mech, target, fast[0], ws, residual_ready=True)
+        return _solution_from_residual(mech, target, fast[0], ws.residual)
     try:
         q = assemble(
             mech.model,

@@ -9,6 +9,10 @@ each call, so that nothing is allocated per pose and nothing is shared between t
 
 Thread safety: a Mechanism may be shared by threads (and pickled to processes); a
 Workspace may not be shared by two threads at once.
+
+:func:`placement_views` gives numpy views of frame placements inside a ``pin.Data``: they
+follow every update of the placements, so a solver reads them without a Python call per
+frame and pass.
 """
 
 from __future__ import annotations
@@ -17,6 +21,44 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
+
+PlacementViews = tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]
+"""Translations (3,) and rotations (3, 3) of some frames, as live views into a ``pin.Data``."""
+
+VIEWS_KEPT = 64
+"""Number of Pinocchio datas whose placement views are kept (the one seen first is dropped first)."""
+
+_VIEWS: dict[int, tuple[pin.Data, dict[tuple[int, ...], PlacementViews]]] = {}
+"""Per Pinocchio data (by id, with the data: the views keep it alive anyway), the views of each frame tuple.
+
+Not a ``WeakKeyDictionary``: ``pin.Data.__eq__`` compares whole contents, which a lookup would call.
+"""
+
+
+def placement_views(data: pin.Data, frames: tuple[int, ...]) -> PlacementViews:
+    """Views of ``data.oMf[f].translation`` and ``.rotation`` for each frame ``f`` of ``frames``.
+
+    Pinocchio 4.1 returns these arrays as views into the placements it stores (a vector
+    sized once, when the data is created), and each view keeps the data alive: each pass of
+    ``framesForwardKinematics`` or ``updateFramePlacements`` shows in them, with no Python
+    call per frame. The views are made once per data and frame tuple and kept for the last
+    :data:`VIEWS_KEPT` datas seen (older ones are dropped, with the data they hold).
+    """
+    key = id(data)
+    hit = _VIEWS.get(key)
+    if hit is None:  # while an entry lives its data does too, so its id is not reused
+        if len(_VIEWS) >= VIEWS_KEPT:
+            _VIEWS.pop(next(iter(_VIEWS)), None)
+        hit = _VIEWS[key] = (data, {})
+    per_data = hit[1]
+    views = per_data.get(frames)
+    if views is None:
+        oMf = data.oMf
+        views = per_data[frames] = (
+            tuple(oMf[f].translation for f in frames),
+            tuple(oMf[f].rotation for f in frames),
+        )
+    return views
 
 
 @dataclass

@@ -11,6 +11,7 @@ selected entries of the frame's world-aligned twist :math:`(v, \omega)`; for a p
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,6 +21,7 @@ from .._checks import as_vector
 from ..description.sidecar import TASK_DOFS
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+TWO_PI = 2.0 * math.pi
 
 
 def wrap_angle(a: np.ndarray | float) -> np.ndarray:
@@ -121,6 +123,8 @@ class TaskTarget:
         self._n_lin = nl = len(task.linear)
         self._x_lin, self._x_ang = self.x[:nl], self.x[nl:]
         self._R: np.ndarray | None = None  # target rotation, when all three angles are selected
+        self._angle = task.angular[0] if len(task.angular) == 1 else None  # the one angle selected
+        self._x_angle = float(self._x_ang[0]) if self._angle is not None else 0.0
         if len(task.angular) == 3:
             rpy = np.empty(3)
             rpy[self._ang] = self._x_ang
@@ -139,6 +143,9 @@ class TaskTarget:
         r[:nl] = M.translation[self._lin] - self._x_lin
         if self._R is not None:
             r[nl:] = pin.log3(M.rotation @ self._R.T)
+        elif self._angle is not None:  # wrap_angle in Python floats (the same operations)
+            a = float(pin.rpy.matrixToRpy(M.rotation)[self._angle]) - self._x_angle
+            r[nl] = math.pi - (math.pi - a) % TWO_PI
         elif nl < r.size:
             r[nl:] = wrap_angle(pin.rpy.matrixToRpy(M.rotation)[self._ang] - self._x_ang)
         return r

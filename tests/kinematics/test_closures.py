@@ -126,6 +126,32 @@ def test_residual_and_jacobian_fill_a_given_buffer(rng):
     assert np.isnan(r[[0, -1]]).all() and np.isnan(A[[0, -1]]).all()
 
 
+@pytest.mark.parametrize("name", ["harada2011_3d4m", "zhao2011_8pss"])
+def test_point_rows_are_the_frame_gaps_and_jacobian_differences_exactly(name, rng):
+    """Point rows from the constant +-1 maps equal p_B - p_A and J_B - J_A from Pinocchio, bit for bit."""
+    mech = preset(name)
+    data = mech.model.createData()
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    for _ in range(3):
+        q = _random_q(mech, rng)
+        pin.computeJointJacobians(mech.model, data, q)
+        pin.updateFramePlacements(mech.model, data)
+        gaps = [
+            data.oMf[b].translation - data.oMf[a].translation for a, b in (c.frame_ids for c in mech.closures)
+        ]
+        rows = [
+            pin.getFrameJacobian(mech.model, data, b, lwa)[:3]
+            - pin.getFrameJacobian(mech.model, data, a, lwa)[:3]
+            for a, b in (c.frame_ids for c in mech.closures)
+        ]
+        np.testing.assert_array_equal(
+            closures.residual_from_placements(data, mech.closures), np.concatenate(gaps)
+        )
+        np.testing.assert_array_equal(
+            closures.jacobian_from_data(mech.model, data, mech.closures), np.vstack(rows)
+        )
+
+
 def _drift_fd(mech, jac, q, v, eps=1e-6):
     """d/dt (J(q(t)) v) along q(t) = q (+) t v, by central differences."""
     plus = jac(pin.integrate(mech.model, q, eps * v))

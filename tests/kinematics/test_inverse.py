@@ -20,6 +20,8 @@ from hypothesis import strategies as st
 
 from plm_pin import InvalidInput, PoseUnreachable
 from plm_pin.kinematics import forward_kinematics, inverse_kinematics, same_assembly, task_pose, working_modes
+from plm_pin.kinematics.legs import working_mode
+from plm_pin.kinematics.limits import limit_violations, wrap_into_limits
 from plm_pin.models import (
     ZHAO2011_GUIDE_DIRECTIONS,
     ZHAO2011_GUIDE_POINTS,
@@ -123,6 +125,19 @@ def test_harada_working_modes_match_eq2(name, legs, lengths, n_modes, pose):
         assert len(hits) == 1, f"signs {signs}: {len(hits)} matching solutions"
         assert hits[0].mode == tuple(-s for s in signs)
         assert hits[0].residual_norm <= 1e-12
+
+
+@pytest.mark.parametrize("name", ["harada2011_3d4m", "zhao2011_8pss"])
+def test_solution_derives_actuators_mode_and_limits_as_from_q(name):
+    """Lazily read actuators and mode, and limits checked in one comparison, equal those computed at q."""
+    mech = preset(name)
+    sol = inverse_kinematics(mech, task_pose(mech, mech.q_ref) + 1e-3)
+    assert "mode" not in vars(sol) and "actuators" not in vars(sol)  # nothing derived before it is read
+    np.testing.assert_array_equal(sol.actuators, mech.actuator_positions(sol.q))
+    assert sol.mode == working_mode(mech, sol.q)
+    assert sol.limit_violations == limit_violations(mech, sol.q) == {}
+    np.testing.assert_array_equal(wrap_into_limits(mech, sol.q), sol.q)
+    assert sol.to_dict()["mode"] == list(sol.mode)
 
 
 def test_harada_reference_mode_follows_code_m5():
