@@ -49,16 +49,26 @@ class Evaluation(NamedTuple):
     Attributes:
         r: residual ``[phi; x - x*]``, shape (B, m + k).
         J: its Jacobian (the Newton matrix), shape (B, m + k, nv).
-        A: the inverse-kinematics Jacobian ``[J_phi; J_x]`` (task twist rows, as
-            :func:`plm_pin.kinematics.legs.ik_jacobian`), shape (B, m + k, nv); ``J`` itself
-            unless the task holds log3 rows.
+        omega: where the task holds log3 rows, the task body's angular velocity rows that
+            replace them in :meth:`ik_jacobian` (B, 3, nv); else None.
         R: world rotation of every joint (universe first), shape (B, njoints, 3, 3).
     """
 
     r: np.ndarray
     J: np.ndarray
-    A: np.ndarray
+    omega: np.ndarray | None
     R: np.ndarray
+
+    def ik_jacobian(self, which: np.ndarray) -> np.ndarray:
+        """The inverse-kinematics Jacobian ``[J_phi; J_x]`` at the poses ``which`` (an index or mask array).
+
+        Task twist rows, as :func:`plm_pin.kinematics.legs.ik_jacobian`: ``J`` itself unless the
+        task holds log3 rows (formed only for the poses asked, as Newton needs ``J`` at the others).
+        """
+        A = self.J[which]  # a copy (``which`` is an array)
+        if self.omega is not None:
+            A[:, -3:] = self.omega[which]
+        return A
 
 
 class _Tree(NamedTuple):
@@ -392,13 +402,11 @@ class BatchKinematics:
             r[:, -1] = wrap_angle(yaw - x[:, -1])
             A[:, -1] = omega[:, 2]
         if self.task_angular != "log3":
-            return Evaluation(r, A, A, R)
+            return Evaluation(r, A, None, R)
         E = Rf[:, t] @ np.swapaxes(rpy_matrix(x[:, nl : nl + 3]), 1, 2)
         r[:, m + nl :], J_log = log3_and_jacobian(E)
-        J = A.copy()
-        A[:, m + nl :] = omega
-        J[:, m + nl :] = J_log @ np.swapaxes(E, 1, 2) @ omega
-        return Evaluation(r, J, A, R)
+        A[:, m + nl :] = J_log @ np.swapaxes(E, 1, 2) @ omega
+        return Evaluation(r, A, omega, R)
 
     def integrate(self, q: np.ndarray, dv: np.ndarray) -> np.ndarray:
         r"""Configurations moved by velocity increments ``dv`` (B, nv), as ``pin.integrate`` to first order.
@@ -555,13 +563,14 @@ def batch_newton(
     for iteration in range(max_iterations + 1):
         if live.size == 0:
             break
-        r, J, A, R = kin.evaluate(q[live], x[live])
+        e = kin.evaluate(q[live], x[live])
+        r, J, R = e.r, e.J, e.R
         if A_out is None or R_out is None:
-            A_out = np.empty((B, *A.shape[1:]))
+            A_out = np.empty((B, *J.shape[1:]))
             R_out = np.empty((B, *R.shape[1:]))
         err = np.abs(r).max(axis=1)
         ok = err <= tol
-        A_out[live[ok]] = A[ok]
+        A_out[live[ok]] = e.ik_jacobian(ok)
         R_out[live[ok]] = R[ok]
         done[live[ok]] = True
         bad = ~ok & ((err >= stall * err_prev[live]) | (iteration == max_iterations) | np.isnan(err))
