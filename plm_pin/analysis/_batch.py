@@ -49,16 +49,26 @@ class Evaluation(NamedTuple):
     Attributes:
         r: residual ``[phi; x - x*]``, shape (B, m + k).
         J: its Jacobian (the Newton matrix), shape (B, m + k, nv).
-        A: the inverse-kinematics Jacobian ``[J_phi; J_x]`` (task twist rows, as
-            :func:`plm_pin.kinematics.legs.ik_jacobian`), shape (B, m + k, nv); ``J`` itself
-            unless the task holds log3 rows.
+        omega: where the task holds log3 rows, the task body's angular velocity rows that
+            replace them in :meth:`ik_jacobian` (B, 3, nv); else None.
         R: world rotation of every joint (universe first), shape (B, njoints, 3, 3).
     """
 
     r: np.ndarray
     J: np.ndarray
-    A: np.ndarray
+    omega: np.ndarray | None
     R: np.ndarray
+
+    def ik_jacobian(self, which: np.ndarray) -> np.ndarray:
+        """The inverse-kinematics Jacobian ``[J_phi; J_x]`` at the poses ``which`` (an index or mask array).
+
+        Task twist rows, as :func:`plm_pin.kinematics.legs.ik_jacobian`: ``J`` itself unless the
+        task holds log3 rows (formed only for the poses asked, as Newton needs ``J`` at the others).
+        """
+        A = self.J[which]  # a copy (``which`` is an array)
+        if self.omega is not None:
+            A[:, -3:] = self.omega[which]
+        return A
 
 
 class _Tree(NamedTuple):
@@ -78,6 +88,44 @@ class _Tree(NamedTuple):
     """Axis of each prismatic (zero for a revolute), shape (n_one, 3)."""
     free: np.ndarray
     """Free-flyer joints."""
+
+
+class BlockArrow(NamedTuple):
+    r"""The block structure of a square inverse-kinematics matrix whose legs each close on the task body.
+
+    With the task rows depending on the task body's (hub) columns only and each closure on the
+    hub and its own leg's columns (as many as its rows), the matrix is, rows and columns
+    permuted, :math:`\begin{bmatrix} P & L \\ E & 0 \end{bmatrix}` with :math:`L` block
+    diagonal (one square block per leg, 3 x 3 on the 8-PSS), so that :math:`M x = b` is, exactly,
+
+    .. math:: E\, x_{hub} = b_{task}, \qquad L_g\, x_g = b_g - P_g\, x_{hub} \quad \text{per leg } g,
+
+    a k x k solve and one small solve per leg instead of an LU of the whole matrix.
+
+    Attributes:
+        hub: the task body's velocity columns (k of them).
+        task_rows: the task rows (k of them).
+        blocks: per leg block size, the legs' rows and columns, each of shape (n_legs, size).
+    """
+
+    hub: np.ndarray
+    task_rows: np.ndarray
+    blocks: tuple[tuple[np.ndarray, np.ndarray], ...]
+
+    def solve(self, M: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Solutions ``x`` (B, n, r) of ``M x = b`` for matrices of this structure (B, n, n), ``b`` (B, n, r).
+
+        Raises:
+            numpy.linalg.LinAlgError: when the task block or a leg block of some pose is singular.
+        """
+        x = np.empty(b.shape)
+        x_hub = np.linalg.solve(M[:, self.task_rows[:, None], self.hub], b[:, self.task_rows])
+        x[:, self.hub] = x_hub
+        for rows, cols in self.blocks:
+            legs = M[:, rows[:, :, None], cols[:, None, :]]  # (B, n_legs, size, size)
+            rhs = b[:, rows] - M[:, rows[:, :, None], self.hub] @ x_hub[:, None]
+            x[:, cols] = np.linalg.solve(legs, rhs)
+        return x
 
 
 @dataclass(frozen=True)
@@ -269,6 +317,36 @@ class BatchKinematics:
         return axes, origins, R, Rf, pf
 
     @functools.cached_property
+    def arrow(self) -> BlockArrow | None:
+        """The :class:`BlockArrow` structure of the Newton and IK matrices, or None where they have none.
+
+        Read from :attr:`support` (which columns move which frame), so a structural zero, not
+        a value that happens to vanish: square matrices (as many task rows as the hub has
+        columns) whose closures' non-hub columns fall into disjoint square leg blocks.
+        """
+        nv, n_closures = self.rotational.size, self.closure_a.size
+        k = len(self.task_linear) + {"none": 0, "yaw": 1, "log3": 3}[self.task_angular]
+        hub = np.flatnonzero(self.support[self.task_frame])
+        if 3 * n_closures + k != nv or hub.size != k:
+            return None
+        moved = self.support[self.closure_a] | self.support[self.closure_b]
+        moved[:, hub] = False
+        legs: dict[tuple[int, ...], list[int]] = {}
+        for i, row in enumerate(moved):
+            legs.setdefault(tuple(np.flatnonzero(row).tolist()), []).append(i)
+        cols = [c for leg in legs for c in leg]
+        if len(cols) != len(set(cols)) or any(len(leg) != 3 * len(c) for leg, c in legs.items()):
+            return None
+        by_size: dict[int, list[tuple[list[int], tuple[int, ...]]]] = {}
+        for leg, closures in legs.items():
+            by_size.setdefault(len(leg), []).append(([3 * i + d for i in closures for d in range(3)], leg))
+        return BlockArrow(
+            hub,
+            3 * n_closures + np.arange(k),
+            tuple((np.array([r for r, _ in g]), np.array([c for _, c in g])) for g in by_size.values()),
+        )
+
+    @functools.cached_property
     def _pairs(self) -> tuple[np.ndarray, np.ndarray, tuple, tuple, tuple]:
         """The (frame, column) pairs where a velocity column moves a frame, and where each lands in ``J``.
 
@@ -324,13 +402,11 @@ class BatchKinematics:
             r[:, -1] = wrap_angle(yaw - x[:, -1])
             A[:, -1] = omega[:, 2]
         if self.task_angular != "log3":
-            return Evaluation(r, A, A, R)
+            return Evaluation(r, A, None, R)
         E = Rf[:, t] @ np.swapaxes(rpy_matrix(x[:, nl : nl + 3]), 1, 2)
         r[:, m + nl :], J_log = log3_and_jacobian(E)
-        J = A.copy()
-        A[:, m + nl :] = omega
-        J[:, m + nl :] = J_log @ np.swapaxes(E, 1, 2) @ omega
-        return Evaluation(r, J, A, R)
+        A[:, m + nl :] = J_log @ np.swapaxes(E, 1, 2) @ omega
+        return Evaluation(r, A, omega, R)
 
     def integrate(self, q: np.ndarray, dv: np.ndarray) -> np.ndarray:
         r"""Configurations moved by velocity increments ``dv`` (B, nv), as ``pin.integrate`` to first order.
@@ -448,7 +524,7 @@ def log3_and_jacobian(E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     c = 0.5 * (np.trace(E, axis1=1, axis2=2) - 1.0)
     theta = np.arctan2(s, c)
     small = theta < _SMALL_ANGLE
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # the branch not taken
         factor = np.where(small, 1.0 + theta**2 / 6.0, theta / s)
         coef = np.where(small, 1.0 / 12.0 + theta**2 / 720.0, 1.0 / theta**2 - (1.0 + c) / (2.0 * theta * s))
     factor[theta > _NEAR_PI] = np.nan
@@ -487,13 +563,14 @@ def batch_newton(
     for iteration in range(max_iterations + 1):
         if live.size == 0:
             break
-        r, J, A, R = kin.evaluate(q[live], x[live])
+        e = kin.evaluate(q[live], x[live])
+        r, J, R = e.r, e.J, e.R
         if A_out is None or R_out is None:
-            A_out = np.empty((B, *A.shape[1:]))
+            A_out = np.empty((B, *J.shape[1:]))
             R_out = np.empty((B, *R.shape[1:]))
         err = np.abs(r).max(axis=1)
         ok = err <= tol
-        A_out[live[ok]] = A[ok]
+        A_out[live[ok]] = e.ik_jacobian(ok)
         R_out[live[ok]] = R[ok]
         done[live[ok]] = True
         bad = ~ok & ((err >= stall * err_prev[live]) | (iteration == max_iterations) | np.isnan(err))
@@ -501,13 +578,7 @@ def batch_newton(
         go = ~ok & ~bad
         if not go.any():
             break
-        Jg, rg = J[go], r[go]
-        H = np.swapaxes(Jg, 1, 2) @ Jg
-        g = np.einsum("bij,bi->bj", Jg, rg)
-        try:
-            step = np.linalg.solve(H, g[..., None])[..., 0]
-        except np.linalg.LinAlgError:  # a singular normal matrix: these poses fail, the others go on
-            step = np.stack([_solve_or_nan(h, v) for h, v in zip(H, g, strict=True)])
+        step = _newton_steps(kin.arrow, J[go], r[go])
         idx = live[go]
         err_prev[idx] = err[go]
         bad_step = ~np.isfinite(step).all(axis=1)
@@ -519,6 +590,24 @@ def batch_newton(
         A_out = np.full((B, 0, nv), np.nan)
         R_out = np.full((B, kin.parents.size, 3, 3), np.nan)
     return q, done & ~failed, A_out, R_out
+
+
+def _newton_steps(arrow: BlockArrow | None, J: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Gauss-Newton steps ``(J^T J)^-1 J^T r`` (B, nv); ``J^-1 r`` by blocks where ``J`` has the arrow form.
+
+    A pose whose matrix is singular gets NaN (it fails; the others go on).
+    """
+    if arrow is not None:
+        try:
+            return arrow.solve(J, r[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            pass
+    H = np.swapaxes(J, 1, 2) @ J
+    g = np.einsum("bij,bi->bj", J, r)
+    try:
+        return np.linalg.solve(H, g[..., None])[..., 0]
+    except np.linalg.LinAlgError:
+        return np.stack([_solve_or_nan(h, v) for h, v in zip(H, g, strict=True)])
 
 
 def _solve_or_nan(H: np.ndarray, g: np.ndarray) -> np.ndarray:
@@ -572,7 +661,7 @@ def _squared_singular_values(M: np.ndarray) -> np.ndarray:
 
 
 def square_task_metrics(
-    A: np.ndarray, m: int, actuated_v: np.ndarray, mobility: int
+    A: np.ndarray, m: int, actuated_v: np.ndarray, mobility: int, arrow: BlockArrow | None = None
 ) -> dict[str, np.ndarray]:
     r"""The map metrics of stacked Jacobians ``A = [J_phi; J_x]`` (B, m + k, nv) from the Newton system.
 
@@ -600,6 +689,7 @@ def square_task_metrics(
         m: closure rows.
         actuated_v: velocity indices of the actuators.
         mobility: DOF (= k).
+        arrow: the block structure of ``A`` (:attr:`BatchKinematics.arrow`), solved by blocks.
 
     Returns:
         ``{name: (B,) array}`` as :func:`~plm_pin.analysis.manipulability.batch_metrics` returns.
@@ -607,7 +697,8 @@ def square_task_metrics(
     J_phi, J_x = A[:, :m], A[:, m:]
     try:
         if A.shape[1] == A.shape[2]:  # as many rows as velocities: A S = [0; I], no normal matrix
-            S = np.linalg.solve(A, np.broadcast_to(np.eye(A.shape[1])[:, m:], (*A.shape[:2], mobility)))
+            E = np.broadcast_to(np.eye(A.shape[1])[:, m:], (*A.shape[:2], mobility))
+            S = np.linalg.solve(A, E) if arrow is None else arrow.solve(A, E)
         else:
             S = np.linalg.solve(np.swapaxes(A, 1, 2) @ A, np.swapaxes(J_x, 1, 2))  # (B, nv, k)
     except np.linalg.LinAlgError:

@@ -374,10 +374,12 @@ def _init_worker(
     _WORKER.update(ev=ev, poses=poses, shape=shape, target=target, tol=tol)
 
 
-def _metrics_for(ev: IKEvaluator) -> Metrics:
+def _metrics_for(ev: IKEvaluator, kin: BatchKinematics | None = None) -> Metrics:
+    arrow = None if kin is None else kin.arrow  # the IK Jacobian's structure, as ``ev``'s has it
+
     def metrics(A: np.ndarray) -> dict[str, np.ndarray]:
         if ev.task.size == ev.mobility and ev.m:
-            return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility)
+            return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility, arrow)
         return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility)
 
     return metrics
@@ -699,10 +701,10 @@ def solve_poses(
     in_ik = all(max(leg.sign_rows) < ik_rows for leg in ev.legs if leg.square)
     kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 and in_ik else None
     if kin is not None:
-        sweep_rows(ev, kin, state, _metrics_for(ev), index, target, tol)
+        sweep_rows(ev, kin, state, _metrics_for(ev, kin), index, target, tol)
     else:
         _solve_grid(ev, state, index, target, tol, n_workers)
-    reseed(mech, ev, state, _metrics_for(ev), target, guess, tol)
+    reseed(mech, ev, state, _metrics_for(ev, kin), target, guess, tol)
     return state, target
 
 

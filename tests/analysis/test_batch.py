@@ -46,6 +46,7 @@ def test_batched_residual_and_jacobian_equal_pinocchio_to_1e_13(name):
     Q = _random_configurations(mech, rng, 40, scale=1.5)
     X = task_pose(mech, mech.q_ref) + rng.normal(scale=0.05, size=(40, mech.task_compiled.size))
     e = kin.evaluate(Q, X)
+    A = e.ik_jacobian(np.arange(40))
     turns = kin.turns(e.R, mech.legs)
     data = mech.model.createData()
     modes = set()
@@ -62,8 +63,8 @@ def test_batched_residual_and_jacobian_equal_pinocchio_to_1e_13(name):
         expected_mode = working_mode_from_data(mech.model, data, mech.closures, mech.task_compiled, mech.legs)
         assert np.abs(e.r[b] - expected_r).max() < 1e-13
         assert np.abs(e.J[b] - expected_J).max() < 1e-13
-        assert np.abs(e.A[b] - ik_jacobian(mech, Q[b])).max() < 1e-13
-        mode = tuple(batch_modes(e.A[b : b + 1], mech.legs, [t[b : b + 1] for t in turns])[0])
+        assert np.abs(A[b] - ik_jacobian(mech, Q[b])).max() < 1e-13
+        mode = tuple(batch_modes(A[b : b + 1], mech.legs, [t[b : b + 1] for t in turns])[0])
         assert mode == expected_mode
         modes.add(mode)
     assert len(modes) > 1  # the draws cross working modes
@@ -130,6 +131,32 @@ def test_batched_newton_modes_and_metrics_match_the_serial_ones():
     svd = batch_metrics(A[:, :m], A[:, m:], mech.actuated_v_indices, mech.mobility)
     for name, values in svd.items():
         assert np.allclose(fast[name], values, rtol=1e-12, atol=0.0), name
+
+
+def test_block_solve_of_the_8pss_equals_lu_on_pinocchio_jacobians():
+    """The 8-PSS IK Jacobian has the arrow structure (Pinocchio's zeros where it says), solved as by LU.
+
+    Closure rows are zero outside the platform's and their own leg's columns, task rows
+    outside the platform's; then the block solve equals ``numpy.linalg.solve`` (an LU of the
+    whole matrix) to rounding, for the metrics' six right-hand sides and a Newton residual.
+    The planar 3D4M (three task rows, the platform not a free body) has no such structure.
+    """
+    mech = preset("zhao2011_8pss")
+    arrow = BatchKinematics.from_parts(mech.model, mech.closures, mech.task_compiled).arrow
+    assert arrow is not None and [r.shape for r, _ in arrow.blocks] == [(8, 3)]
+    rng = np.random.default_rng(5)
+    A = np.stack([ik_jacobian(mech, q) for q in _random_configurations(mech, rng, 12, scale=0.2)])
+    allowed = np.zeros(A.shape[1:], dtype=bool)
+    allowed[arrow.task_rows[:, None], arrow.hub] = True
+    for rows, cols in arrow.blocks:
+        allowed[rows[:, :, None], cols[:, None, :]] = True
+        allowed[rows.reshape(-1)[:, None], arrow.hub] = True
+    assert np.abs(A[:, ~allowed]).max() == 0.0
+    b = rng.normal(size=(A.shape[0], A.shape[1], 7))
+    expected = np.linalg.solve(A, b)
+    assert np.allclose(arrow.solve(A, b), expected, rtol=0.0, atol=1e-12 * np.abs(expected).max())
+    planar = preset("harada2011_3d4m")
+    assert BatchKinematics.from_parts(planar.model, planar.closures, planar.task_compiled).arrow is None
 
 
 def test_unsupported_models_fall_back_to_the_generic_path():
