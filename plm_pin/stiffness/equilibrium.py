@@ -147,7 +147,8 @@ def hessian_terms(
     if load is not None:
         M = data.oMf[load.frame_id]
         joint = model.frames[load.frame_id].parentJoint
-        out["load"] = -tree.dead_wrench(joint, load.wrench[:3], load.wrench[3:], M.translation)
+        w = load.wrench
+        out["load"] = -tree.dead_wrenches([joint], w[None, :3], w[None, 3:], M.translation[None])
     out["closures"] = -closure_derivative(tree, data, mech.closures, lam)
     if gravity:
         out["gravity"] = np.array(pin.computeGeneralizedGravityDerivatives(model, data, q))

@@ -13,6 +13,7 @@ from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.statics import load_on_frame, static_forces
 from plm_pin.stiffness import deflection, natural_frequencies, stiffness
 from plm_pin.stiffness.equilibrium import hessian_terms
+from plm_pin.stiffness.geometric import TreeDerivatives
 from tests.conftest import ball_joint_body, fd_jacobian, preset
 
 from .mechanisms import RPR_ROD, cantilever, pendulum, rpr, rpr_points, stewart
@@ -56,6 +57,36 @@ def test_load_and_gravity_derivatives_match_finite_differences(rng):
     np.testing.assert_allclose(terms["load"], -fd_jacobian(generalized, model, q), atol=1e-6)
     g = fd_jacobian(lambda x: pin.computeGeneralizedGravity(model, data, x).copy(), model, q)
     np.testing.assert_allclose(terms["gravity"], g, atol=1e-6)
+
+
+def test_summed_dead_wrenches_match_finite_differences(rng):
+    """Fixed world wrenches on several bodies of the 8-PSS and on the world, summed in one call, are exact.
+
+    Against finite differences of the sum of their generalized forces.
+    """
+    mech = preset("zhao2011_8pss")
+    model, data = mech.model, mech.data
+    q = pin.integrate(model, mech.q_ref, rng.normal(scale=0.05, size=model.nv))
+    frames = [
+        model.getFrameId(n) for n in ("platform_p1", "carriage1", "cross2", "strut3_tip", "strut5", "base")
+    ]
+    wrenches = rng.normal(size=(len(frames), 6)) * 10.0
+
+    def generalized(x):
+        pin.computeJointJacobians(model, data, x)
+        pin.updateFramePlacements(model, data)
+        return sum(
+            pin.getFrameJacobian(model, data, f, _LWA).T @ w for f, w in zip(frames, wrenches, strict=True)
+        )
+
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    tree = TreeDerivatives(model, data)
+    joints = [model.frames[f].parentJoint for f in frames]
+    points = np.array([data.oMf[f].translation for f in frames])
+    got = tree.dead_wrenches(joints, wrenches[:, :3], wrenches[:, 3:], points)
+    assert len(set(joints)) > 3 and 0 in joints
+    np.testing.assert_allclose(got, fd_jacobian(generalized, model, q), atol=1e-6)
 
 
 def _griffis_duffy(mech, q, k: float, tensions: np.ndarray) -> np.ndarray:
