@@ -97,16 +97,16 @@ class TreeDerivatives:
         if n == 0:
             return np.zeros((nv, nv))
         Sb = self.S[None] * self._structure.moves[list(joints)][:, None, :]  # (n, 6, nv): each body's columns
-        F = _skew(f)
+        F, P = _skew(f), _skew(p)
         # W . ad(S_k) S_c = v_c.(f x w_k) + w_c.(f x v_k) + w_c.(n x w_k), for k above c; n = m + p x f
         G = np.zeros((n, 6, 6))
         G[:, :3, 3:] = F
         G[:, 3:, :3] = F
-        G[:, 3:, 3:] = _skew(m + np.cross(p, f))
+        G[:, 3:, 3:] = _skew(m + (P @ f[:, :, None])[:, :, 0])
         # + w_c . (dp_k x f), dp_k = v_k + w_k x p the point's motion, for every k moving the body
         E = np.zeros((n, 6, 6))
         E[:, 3:, :3] = -F
-        E[:, 3:, 3:] = F @ _skew(p)
+        E[:, 3:, 3:] = F @ P
         X = Sb.transpose(2, 0, 1).reshape(nv, 6 * n)  # [S_1^T ... S_n^T]
         above = X @ (G @ Sb).reshape(6 * n, nv)
         return above * self._structure.below + X @ (E @ Sb).reshape(6 * n, nv)
