@@ -32,12 +32,12 @@ from ..kinematics.closures import HLOG3_MIN_ANGLE, Closure
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
+_SKEW = np.array([pin.skew(e).ravel() for e in np.eye(3)])  # row k: the cross-product matrix of e_k
+
+
 def _skew(v: np.ndarray) -> np.ndarray:
     """Cross-product matrices of the rows of ``v``, shape (n, 3, 3)."""
-    S = np.zeros((v.shape[0], 3, 3))
-    S[:, 0, 1], S[:, 0, 2], S[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
-    S[:, 1, 0], S[:, 2, 0], S[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
-    return S
+    return (v @ _SKEW).reshape(-1, 3, 3)
 
 
 class _Structure:
