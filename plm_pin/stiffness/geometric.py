@@ -123,23 +123,20 @@ def closure_derivative(
 
     ``data`` must hold the frame placements of the configuration ``tree`` was read at.
     """
-    model = tree.model
+    model, frames, oMf = tree.model, tree.model.frames, data.oMf
     D = np.zeros((model.nv, model.nv))
-    n = len(closures)
-    joints, f, m, p = [0] * (2 * n), np.zeros((2 * n, 3)), np.zeros((2 * n, 3)), np.zeros((2 * n, 3))
+    fa, fb = [c.frame_ids[0] for c in closures], [c.frame_ids[1] for c in closures]
+    ja, jb = [frames[i].parentJoint for i in fa], [frames[i].parentJoint for i in fb]
+    p = np.array([oMf[i].translation for i in fb + fa]).reshape(-1, 3)  # on B, then on A
+    f = lam[np.array([c.rows.start for c in closures], dtype=int)[:, None] + np.arange(3)]
+    m = np.zeros_like(f)
     for i, c in enumerate(closures):
-        fa, fb = c.frame_ids
-        ja, jb = model.frames[fa].parentJoint, model.frames[fb].parentJoint
-        oMa, oMb = data.oMf[fa], data.oMf[fb]
-        lam_c = lam[c.rows]
-        joints[i], joints[n + i] = jb, ja
-        f[i] = lam_c[:3]
-        p[i], p[n + i] = oMb.translation, oMa.translation
         if c.spec.type != "point":
-            m[i], dm = _closure_moment(c, tree, ja, jb, oMa.rotation, oMb.rotation, lam_c[3:])
-            D += (tree.angular(jb) - tree.angular(ja)).T @ dm
-    f[n:], m[n:] = -f[:n], -m[:n]
-    return D + tree.dead_wrenches(joints, f, m, p)
+            m[i], dm = _closure_moment(
+                c, tree, ja[i], jb[i], oMf[fa[i]].rotation, oMf[fb[i]].rotation, lam[c.rows][3:]
+            )
+            D += (tree.angular(jb[i]) - tree.angular(ja[i])).T @ dm
+    return D + tree.dead_wrenches(jb + ja, np.vstack([f, -f]), np.vstack([m, -m]), p)
 
 
 def _closure_moment(
