@@ -195,7 +195,8 @@ def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, d
     full = hessian(state)  # leaves the kinematics of state.q in mech.data
     N = null_basis(with_locks(cm, jacobian_from_data(mech.model, mech.data, mech.closures)), mech.nv)
     T = task.jacobian_from_data(mech.model, mech.data).reshape(task.size, -1) @ N
-    H = N.T @ sum(full.values(), np.zeros((mech.nv, mech.nv))) @ N
+    stack = np.array(list(full.values()))  # (n_terms, nv_c, nv_c)
+    H = N.T @ stack.sum(axis=0) @ N
     mu, Z = np.linalg.eigh(0.5 * (H + H.T))
     scale = max(float(np.max(np.abs(mu), initial=0.0)), 1e-300)
     free = np.abs(mu) <= UNRESISTED_RTOL * scale
@@ -209,7 +210,7 @@ def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, d
             )
     Y = Z[:, ~free]
     B = N @ Y
-    terms = {k: B.T @ v @ B for k, v in full.items()}
+    terms = dict(zip(full, B.T @ stack @ B, strict=True))
     return B, T @ Y, Y.T @ H @ Y, terms, int(np.count_nonzero(free))
 
 
