@@ -33,9 +33,10 @@ import numpy as np
 from .._checks import as_vector
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
+from ..kinematics.closures import jacobian_from_data
 from ..kinematics.jacobians import require_task
 from ..statics import StaticForces
-from .equilibrium import GEOMETRIC, ElasticState, closure_and_locks, elastic_state, hessian
+from .equilibrium import GEOMETRIC, ElasticState, elastic_state, hessian, with_locks
 from .model import SOURCES
 
 if TYPE_CHECKING:
@@ -191,10 +192,11 @@ def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, d
     cm = state.compliant
     mech = cm.mech
     task = require_task(mech)
-    N = null_basis(closure_and_locks(cm, state.q), mech.nv)
-    T = task.jacobian_from_data(mech.model, mech.data).reshape(task.size, -1) @ N  # kinematics of q in data
-    terms = {k: N.T @ v @ N for k, v in hessian(state).items()}
-    H = sum(terms.values(), np.zeros((N.shape[1], N.shape[1])))
+    full = hessian(state)  # leaves the kinematics of state.q in mech.data
+    N = null_basis(with_locks(cm, jacobian_from_data(mech.model, mech.data, mech.closures)), mech.nv)
+    T = task.jacobian_from_data(mech.model, mech.data).reshape(task.size, -1) @ N
+    stack = np.array(list(full.values()))  # (n_terms, nv_c, nv_c)
+    H = N.T @ stack.sum(axis=0) @ N
     mu, Z = np.linalg.eigh(0.5 * (H + H.T))
     scale = max(float(np.max(np.abs(mu), initial=0.0)), 1e-300)
     free = np.abs(mu) <= UNRESISTED_RTOL * scale
@@ -207,7 +209,9 @@ def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, d
                 "under compliance.actuators, or the pose is singular"
             )
     Y = Z[:, ~free]
-    return N @ Y, T @ Y, Y.T @ H @ Y, {k: Y.T @ v @ Y for k, v in terms.items()}, int(np.count_nonzero(free))
+    B = N @ Y
+    terms = dict(zip(full, B.T @ stack @ B, strict=True))
+    return B, T @ Y, Y.T @ H @ Y, terms, int(np.count_nonzero(free))
 
 
 def _eigen(C: np.ndarray, idx: list[int], dofs: tuple[str, ...], unit: str) -> EigenStiffness:
@@ -260,7 +264,8 @@ def stiffness(
         mech, q, wrench, frame, gravity=gravity, internal=internal, forces=forces, compliance=compliance
     )
     B, T, H, terms, unresisted = condense(state)
-    C = T @ np.linalg.solve(H, T.T)
+    HiT = np.linalg.solve(H, T.T)
+    C = T @ HiT
     s = np.linalg.svd(C, compute_uv=False)
     if s.size == 0 or s[-1] <= 1e-12 * s[0]:
         moving = int(np.count_nonzero(s > 1e-12 * (s[0] if s.size else 1.0)))
@@ -269,7 +274,7 @@ def stiffness(
             f" of {T.shape[0]} directions; the others are rigid (give the drives or links a compliance)"
         )
     K = np.linalg.inv(C)
-    Sigma = np.linalg.solve(H, T.T) @ K  # (r, n_task): motion per task displacement
+    Sigma = HiT @ K  # (r, n_task): motion per task displacement
     contributions = {k: Sigma.T @ terms[k] @ Sigma for k in (*SOURCES, *GEOMETRIC)}
     dofs = tuple(require_task(mech).dofs)
     lin = [i for i, d in enumerate(dofs) if not d.startswith("r")]

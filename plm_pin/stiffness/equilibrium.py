@@ -111,8 +111,11 @@ def elastic_state(
     load = None
     if balance.load is not None:
         load = load_on_frame(cm.mech, balance.load.wrench, balance.load.frame)
-    tau = generalized_load(cm.mech, qc, load, balance.gravity)
-    J_phi = cm.mech.closure_jacobian(qc)
+    if cm.mech is mech and forces.mechanism is mech and balance.v is None and balance.a is None:
+        tau, J_phi = balance.tau, balance.J_phi  # rigid links: the static balance is the compliant model's
+    else:
+        tau = generalized_load(cm.mech, qc, load, balance.gravity)
+        J_phi = cm.mech.closure_jacobian(qc)
     spring = tau - J_phi.T @ forces.lam
     spring.setflags(write=False)
     qc.setflags(write=False)
@@ -136,7 +139,8 @@ def hessian_terms(
     r"""The geometric-stiffness terms of :math:`H` at ``q``, by :data:`GEOMETRIC` name, each (nv, nv).
 
     ``gravity``: :math:`\partial g / \partial q`; ``load``: :math:`-\partial (J_w^T w)/\partial q`;
-    ``closures``: :math:`-\partial (J_\phi^T \lambda) / \partial q`.
+    ``closures``: :math:`-\partial (J_\phi^T \lambda) / \partial q`. Leaves the joint Jacobians
+    and frame placements at ``q`` in ``mech.data``.
     """
     model, data = mech.model, mech.data
     nv = model.nv
@@ -147,7 +151,8 @@ def hessian_terms(
     if load is not None:
         M = data.oMf[load.frame_id]
         joint = model.frames[load.frame_id].parentJoint
-        out["load"] = -tree.dead_wrench(joint, load.wrench[:3], load.wrench[3:], M.translation)
+        w = load.wrench
+        out["load"] = -tree.dead_wrenches([joint], w[None, :3], w[None, 3:], M.translation[None])
     out["closures"] = -closure_derivative(tree, data, mech.closures, lam)
     if gravity:
         out["gravity"] = np.array(pin.computeGeneralizedGravityDerivatives(model, data, q))
@@ -158,6 +163,7 @@ def hessian(state: ElasticState) -> dict[str, np.ndarray]:
     """Every term of the Hessian :math:`H` of the compliant model at ``state``, each (nv_c, nv_c).
 
     Keys: the spring sources (:data:`~plm_pin.stiffness.model.SOURCES`) then :data:`GEOMETRIC`.
+    Leaves the joint Jacobians and frame placements at ``state.q`` in the compliant model's data.
     """
     cm = state.compliant
     terms = dict(cm.springs)
@@ -167,7 +173,11 @@ def hessian(state: ElasticState) -> dict[str, np.ndarray]:
 
 def closure_and_locks(cm: CompliantModel, q: np.ndarray) -> np.ndarray:
     """Constraint rows of the compliant model: closures then locked drives, shape (m + n_locked, nv_c)."""
-    J_phi = _closures.jacobian(cm.mech.model, cm.mech.data, cm.mech.closures, q)
+    return with_locks(cm, _closures.jacobian(cm.mech.model, cm.mech.data, cm.mech.closures, q))
+
+
+def with_locks(cm: CompliantModel, J_phi: np.ndarray) -> np.ndarray:
+    """Closure rows ``J_phi`` (m, nv_c) then the rows locking the rigid drives, shape (m + n_locked, nv_c)."""
     E = np.zeros((cm.locked.size, cm.mech.nv))
     E[np.arange(cm.locked.size), cm.locked] = 1.0
     return np.vstack([J_phi, E])

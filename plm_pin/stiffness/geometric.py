@@ -32,12 +32,18 @@ from ..kinematics.closures import HLOG3_MIN_ANGLE, Closure
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
-class _Structure:
-    """The joint ancestry of a model (it depends on the tree only), with per-body column sets."""
+_SKEW = np.array([pin.skew(e).ravel() for e in np.eye(3)])  # row k: the cross-product matrix of e_k
 
-    def __init__(
-        self, parents: tuple[int, ...], joint_of_v: tuple[int, ...], first_v: tuple[int, ...]
-    ) -> None:
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    """Cross-product matrices of the rows of ``v``, shape (n, 3, 3)."""
+    return (v @ _SKEW).reshape(-1, 3, 3)
+
+
+class _Structure:
+    """The joint ancestry of a model (it depends on the tree only), with the columns moving each body."""
+
+    def __init__(self, parents: tuple[int, ...], nvs: tuple[int, ...]) -> None:
         nj = len(parents)
         anc = np.zeros((nj, nj), dtype=bool)  # anc[a, b]: joint a is joint b or above it
         for b in range(nj):
@@ -47,26 +53,15 @@ class _Structure:
                 if a == 0:
                     break
                 a = parents[a]
-        jv = np.array(joint_of_v, dtype=int)
-        self.above = anc[np.ix_(jv, jv)]  # (nv, nv): [k, c]
-        self.first_v = first_v
-        self._bodies: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-
-    def body(self, joint: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Columns moving the body of ``joint``: mask (nv,), indices (n,), transposed ``above`` on them."""
-        if joint not in self._bodies:
-            mask = self.above[:, self.first_v[joint]] if joint else np.zeros(self.above.shape[0], dtype=bool)
-            idx = np.flatnonzero(mask)
-            self._bodies[joint] = (mask, idx, self.above[np.ix_(idx, idx)].T.astype(float))
-        return self._bodies[joint]
+        jv = np.repeat(np.arange(nj), nvs)  # the joint of each velocity column
+        above = anc[np.ix_(jv, jv)]  # (nv, nv): [k, c], column k is column c's joint or above it
+        self.below = above.T.astype(float)  # [c, k]
+        self.moves = anc[jv].T.astype(float)  # [j, c]: column c moves the body of joint j (none the world's)
 
 
 @functools.cache
-def _structure(
-    model_id: int, parents: tuple[int, ...], joint_of_v: tuple[int, ...], first_v: tuple[int, ...]
-) -> _Structure:
-    del model_id
-    return _Structure(parents, joint_of_v, first_v)
+def _structure(parents: tuple[int, ...], nvs: tuple[int, ...]) -> _Structure:
+    return _Structure(parents, nvs)
 
 
 class TreeDerivatives:
@@ -78,49 +73,43 @@ class TreeDerivatives:
 
     def __init__(self, model: pin.Model, data: pin.Data) -> None:
         """Read the world Jacobian from ``data`` (after ``pin.computeJointJacobians``)."""
-        joint_of_v = [0] * model.nv
-        first_v = [0] * model.njoints
-        for j in range(1, model.njoints):
-            jm = model.joints[j]
-            first_v[j] = jm.idx_v
-            joint_of_v[jm.idx_v : jm.idx_v + jm.nv] = [j] * jm.nv
         self.model = model
-        self._structure = _structure(id(model), tuple(model.parents), tuple(joint_of_v), tuple(first_v))
+        self._structure = _structure(tuple(model.parents), tuple(model.nvs))
         self.S = np.array(data.J)  # (6, nv)
 
     def columns(self, joint: int) -> np.ndarray:
-        """Mask of the velocity columns that move ``joint``'s body, shape (nv,)."""
-        return self._structure.body(joint)[0]
+        """Mask of the velocity columns that move ``joint``'s body (1 or 0), shape (nv,)."""
+        return self._structure.moves[joint]
 
-    def dead_wrench(
-        self, joint: int, f: np.ndarray, m: np.ndarray, p: np.ndarray, out: np.ndarray | None = None
-    ) -> np.ndarray:
-        r"""Derivative of the generalized force of a fixed world wrench on ``joint``'s body, shape (nv, nv).
+    def dead_wrenches(self, joints: Sequence[int], f: np.ndarray, m: np.ndarray, p: np.ndarray) -> np.ndarray:
+        r"""Derivative of the generalized force of fixed world wrenches on bodies, summed, shape (nv, nv).
 
         Args:
-            joint: the body's joint index.
-            f: force [N], world, shape (3,).
-            m: moment [N m], world, shape (3,).
-            p: point of application [m], world, shape (3,).
-            out: an (nv, nv) array to add the derivative to (returned), instead of a new one.
+            joints: each wrench's body, by joint index, length n.
+            f: forces [N], world, shape (n, 3).
+            m: moments [N m], world, shape (n, 3).
+            p: points of application [m], world, shape (n, 3).
 
         Returns:
-            ``D[c, k]`` = :math:`\partial Q_c / \partial q_k`.
+            ``D[c, k]`` = :math:`\sum_i \partial Q_{i,c} / \partial q_k`.
         """
-        nv = self.model.nv
-        D = np.zeros((nv, nv)) if out is None else out
-        _, idx, mask = self._structure.body(joint)
-        if idx.size == 0:
-            return D
-        V, W = self.S[:3, idx], self.S[3:, idx]  # (3, n): the columns moving the body
-        F = pin.skew(f)
-        # W . ad(S_k) S_c = v_c.(f x w_k) + w_c.(f x v_k) + w_c.(n x w_k), for k above c
-        term = V.T @ (F @ W) + W.T @ (F @ V) + W.T @ (pin.skew(m - F @ p) @ W)  # p x f = -f x p
-        term *= mask
-        # + w_c . (dp_k x f), dp_k = v_k + w_k x p the point's motion
-        term -= W.T @ (F @ (V - pin.skew(p) @ W))
-        D[np.ix_(idx, idx)] += term
-        return D
+        n, nv = len(joints), self.model.nv
+        if n == 0:
+            return np.zeros((nv, nv))
+        Sb = self.S[None] * self._structure.moves[list(joints)][:, None, :]  # (n, 6, nv): each body's columns
+        F, P = _skew(f), _skew(p)
+        # W . ad(S_k) S_c = v_c.(f x w_k) + w_c.(f x v_k) + w_c.(n x w_k), for k above c; n = m + p x f
+        G = np.zeros((n, 6, 6))
+        G[:, :3, 3:] = F
+        G[:, 3:, :3] = F
+        G[:, 3:, 3:] = _skew(m + (P @ f[:, :, None])[:, :, 0])
+        # + w_c . (dp_k x f), dp_k = v_k + w_k x p the point's motion, for every k moving the body
+        E = np.zeros((n, 6, 6))
+        E[:, 3:, :3] = -F
+        E[:, 3:, 3:] = F @ P
+        X = Sb.transpose(2, 0, 1).reshape(nv, 6 * n)  # [S_1^T ... S_n^T]
+        above = X @ (G @ Sb).reshape(6 * n, nv)
+        return above * self._structure.below + X @ (E @ Sb).reshape(6 * n, nv)
 
     def angular(self, joint: int) -> np.ndarray:
         """World angular Jacobian of ``joint``'s body, shape (3, nv)."""
@@ -134,21 +123,20 @@ def closure_derivative(
 
     ``data`` must hold the frame placements of the configuration ``tree`` was read at.
     """
-    model = tree.model
+    model, frames, oMf = tree.model, tree.model.frames, data.oMf
     D = np.zeros((model.nv, model.nv))
-    for c in closures:
-        fa, fb = c.frame_ids
-        ja, jb = model.frames[fa].parentJoint, model.frames[fb].parentJoint
-        oMa, oMb = data.oMf[fa], data.oMf[fb]
-        lam_c = lam[c.rows]
-        f = lam_c[:3]
-        m = np.zeros(3)
+    fa, fb = [c.frame_ids[0] for c in closures], [c.frame_ids[1] for c in closures]
+    ja, jb = [frames[i].parentJoint for i in fa], [frames[i].parentJoint for i in fb]
+    p = np.array([oMf[i].translation for i in fb + fa]).reshape(-1, 3)  # on B, then on A
+    f = lam[np.array([c.rows.start for c in closures], dtype=int)[:, None] + np.arange(3)]
+    m = np.zeros_like(f)
+    for i, c in enumerate(closures):
         if c.spec.type != "point":
-            m, dm = _closure_moment(c, tree, ja, jb, oMa.rotation, oMb.rotation, lam_c[3:])
-            D += (tree.angular(jb) - tree.angular(ja)).T @ dm
-        tree.dead_wrench(jb, f, m, oMb.translation, out=D)
-        tree.dead_wrench(ja, -f, -m, oMa.translation, out=D)
-    return D
+            m[i], dm = _closure_moment(
+                c, tree, ja[i], jb[i], oMf[fa[i]].rotation, oMf[fb[i]].rotation, lam[c.rows][3:]
+            )
+            D += (tree.angular(jb[i]) - tree.angular(ja[i])).T @ dm
+    return D + tree.dead_wrenches(jb + ja, np.vstack([f, -f]), np.vstack([m, -m]), p)
 
 
 def _closure_moment(

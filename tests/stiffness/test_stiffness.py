@@ -12,7 +12,8 @@ from plm_pin.description.compliance import ComplianceSpec
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.statics import load_on_frame, static_forces
 from plm_pin.stiffness import deflection, natural_frequencies, stiffness
-from plm_pin.stiffness.equilibrium import hessian_terms
+from plm_pin.stiffness.equilibrium import elastic_state, hessian_terms
+from plm_pin.stiffness.geometric import TreeDerivatives
 from tests.conftest import ball_joint_body, fd_jacobian, preset
 
 from .mechanisms import RPR_ROD, cantilever, pendulum, rpr, rpr_points, stewart
@@ -56,6 +57,53 @@ def test_load_and_gravity_derivatives_match_finite_differences(rng):
     np.testing.assert_allclose(terms["load"], -fd_jacobian(generalized, model, q), atol=1e-6)
     g = fd_jacobian(lambda x: pin.computeGeneralizedGravity(model, data, x).copy(), model, q)
     np.testing.assert_allclose(terms["gravity"], g, atol=1e-6)
+
+
+def test_summed_dead_wrenches_match_finite_differences(rng):
+    """Fixed world wrenches on several bodies of the 8-PSS and on the world, summed in one call, are exact.
+
+    Against finite differences of the sum of their generalized forces.
+    """
+    mech = preset("zhao2011_8pss")
+    model, data = mech.model, mech.data
+    q = pin.integrate(model, mech.q_ref, rng.normal(scale=0.05, size=model.nv))
+    frames = [
+        model.getFrameId(n) for n in ("platform_p1", "carriage1", "cross2", "strut3_tip", "strut5", "base")
+    ]
+    wrenches = rng.normal(size=(len(frames), 6)) * 10.0
+
+    def generalized(x):
+        pin.computeJointJacobians(model, data, x)
+        pin.updateFramePlacements(model, data)
+        return sum(
+            pin.getFrameJacobian(model, data, f, _LWA).T @ w for f, w in zip(frames, wrenches, strict=True)
+        )
+
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    tree = TreeDerivatives(model, data)
+    joints = [model.frames[f].parentJoint for f in frames]
+    points = np.array([data.oMf[f].translation for f in frames])
+    got = tree.dead_wrenches(joints, wrenches[:, :3], wrenches[:, 3:], points)
+    assert len(set(joints)) > 3 and 0 in joints
+    np.testing.assert_allclose(got, fd_jacobian(generalized, model, q), atol=1e-6)
+
+
+@pytest.mark.parametrize("name", ["harada2011_3d4m", "zhao2011_8pss"])
+def test_spring_forces_balance_the_loads_at_the_equilibrium(name, rng):
+    """The springs carry g(q) - J_w^T w - J_phi^T lambda, computed here with Pinocchio directly."""
+    mech = preset(name)
+    model, data = mech.model, mech.data
+    q = mech.q_ref
+    wrench = rng.normal(size=6)
+    state = elastic_state(mech, q, wrench)
+    load = load_on_frame(mech, wrench)
+    g = pin.computeGeneralizedGravity(model, data, q).copy()
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    J_w = pin.getFrameJacobian(model, data, load.frame_id, _LWA)
+    want = g - J_w.T @ load.wrench - mech.closure_jacobian(q).T @ state.lam
+    np.testing.assert_allclose(state.spring_forces, want, atol=1e-9 * max(1.0, np.abs(want).max()))
 
 
 def _griffis_duffy(mech, q, k: float, tensions: np.ndarray) -> np.ndarray:
