@@ -16,7 +16,7 @@ from scipy.interpolate import CubicSpline
 
 from plm_pin import Mechanism, load
 from plm_pin.dynamics import JointTrajectory, inverse_dynamics, simulate, task_trajectory
-from plm_pin.models import enferadi2017_circle, enferadi2017_line
+from plm_pin.families.star_triangle import enferadi2017_circle, enferadi2017_line
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.viz import flat, flat_note, panel_grid, shared_legend
 

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from analyses._zhao2011_paper import ZHAO2011_TABLE5_WORK, ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 from plm_pin import Mechanism, load
 from plm_pin.dynamics import (
     InverseDynamics,
@@ -22,12 +23,7 @@ from plm_pin.dynamics import (
     spline_work,
     task_trajectory,
 )
-from plm_pin.models import (
-    PRESETS,
-    ZHAO2011_TABLE5_WORK,
-    ZHAO2011_TRAJECTORY_DURATION,
-    zhao2011_trajectory,
-)
+from plm_pin.models import PRESETS
 from plm_pin.models.registry import ZHAO2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.statics import static_forces

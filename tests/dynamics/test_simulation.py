@@ -23,8 +23,8 @@ from plm_pin.exceptions import (
     SimulationFailed,
     SingularConfiguration,
 )
-from plm_pin.models import _urdf as u
-from plm_pin.models.classic import build_fourbar
+from plm_pin.families import _urdf as u
+from plm_pin.families.classic.builder import build_fourbar
 from plm_pin.models.registry import PRESETS
 from tests.conftest import ball_joint_body, preset, spatial_6r
 
