@@ -26,8 +26,8 @@ PACKAGES = {
     "planners, complex singularity.",
     "plm_pin.families.prrrp.variants": "2-PRRRP presets rebuilt in memory with other rods.",
     "plm_pin.families.pss": "The n-PSS family: builder and closed-form inverse kinematics.",
-    "plm_pin.families.star_triangle": "The 3-PRP star-triangle family: builder, closed-form inverse "
-    "kinematics and the Enferadi 2017 paths.",
+    "plm_pin.families.star_triangle": "The 3-PRP star-triangle family: builder and closed-form inverse "
+    "kinematics.",
     "plm_pin.families.classic": "The four-bar and five-bar test linkages.",
     "plm_pin.analysis": "Manipulability, workspace maps, singular loci, orientation range.",
     "plm_pin.statics": "The static balance, actuator-force allocation, reactions, link forces, "

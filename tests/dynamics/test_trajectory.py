@@ -17,6 +17,7 @@ import pinocchio as pin
 import pytest
 
 from analyses import _harada2011_paper as paper
+from analyses._enferadi2017_paper import enferadi2017_circle, enferadi2017_line
 from analyses._zhao2011_paper import (
     ZHAO2011_TRAJECTORY_A_MAX,
     ZHAO2011_TRAJECTORY_DURATION,
@@ -39,7 +40,6 @@ from plm_pin.exceptions import (
 )
 from plm_pin.families.pss import pss_inverse_kinematics
 from plm_pin.families.star_triangle import star_triangle_inverse_kinematics
-from plm_pin.families.star_triangle.builder import enferadi2017_circle, enferadi2017_line
 from plm_pin.kinematics import closures, inverse_kinematics, task_pose, working_mode, working_modes
 from plm_pin.mechanism import Mechanism
 from plm_pin.models import PRESETS
