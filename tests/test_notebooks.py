@@ -133,7 +133,7 @@ def test_the_public_api_check_catches_private_uses():
         "import plm_pin._checks\n"
         "mech._cache\n"
         "plm_pin.loading\n"
-        "plm_pin.families.prrrp.planners.PAPER_ASSEMBLY_ROUTE\n"
+        "plm_pin.kinematics.mode_graph.Mode\n"
         "from plm_pin.kinematics import classify\n"
         "plm_pin.viz.fig8, plm_pin.load, mech.__class__\n"
     )
@@ -144,7 +144,7 @@ def test_the_public_api_check_catches_private_uses():
         "import plm_pin._checks",
         "attribute _cache",
         "plm_pin.loading is not in its __all__",
-        "plm_pin.families.prrrp.planners is not in its __all__",
+        "plm_pin.kinematics.mode_graph is not in its __all__",
     ]
 
 
