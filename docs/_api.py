@@ -22,13 +22,9 @@ PACKAGES = {
     "plm_pin.models": "The registry of named presets.",
     "plm_pin.kinematics": "Closures, assembly, task pose, Jacobians, legs, inverse and forward kinematics, "
     "singularities, mode graphs and path tracking.",
-    "plm_pin.families.prrrp": "The 2-PRRRP family: builder, layout, assembly and working modes, mode-change "
-    "planners, complex singularity.",
+    "plm_pin.families": "Mechanism families: the builders, and the 2-PRRRP's layout, assembly and working "
+    "modes, mode-change planners and complex singularity.",
     "plm_pin.families.prrrp.variants": "2-PRRRP presets rebuilt in memory with other rods.",
-    "plm_pin.families.pss": "The n-PSS family: builder and closed-form inverse kinematics.",
-    "plm_pin.families.star_triangle": "The 3-PRP star-triangle family: builder and closed-form inverse "
-    "kinematics.",
-    "plm_pin.families.classic": "The four-bar and five-bar test linkages.",
     "plm_pin.analysis": "Manipulability, workspace maps, singular loci, orientation range.",
     "plm_pin.statics": "The static balance, actuator-force allocation, reactions, link forces, "
     "force capability.",

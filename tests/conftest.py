@@ -12,7 +12,7 @@ import pytest
 
 import plm_pin
 from plm_pin.description import Sidecar, write_description
-from plm_pin.families import _urdf as u
+from plm_pin.description import _urdf_build as u
 from plm_pin.mechanism import Mechanism
 
 REPO = Path(__file__).resolve().parents[1]

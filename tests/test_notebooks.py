@@ -18,6 +18,7 @@ PUBLIC_MODULES = {
     "plm_pin",
     "plm_pin.analysis",
     "plm_pin.dynamics",
+    "plm_pin.families",
     "plm_pin.families.prrrp",
     "plm_pin.families.prrrp.variants",
     "plm_pin.kinematics",

@@ -24,7 +24,7 @@ from plm_pin.description import (
     read_description,
     write_description,
 )
-from plm_pin.families import _urdf as u
+from plm_pin.description import _urdf_build as u
 from plm_pin.families.classic import build_fourbar
 from plm_pin.models import urdf_folder
 
