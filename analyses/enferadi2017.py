@@ -16,9 +16,10 @@ from scipy.interpolate import CubicSpline
 
 from plm_pin import Mechanism, load
 from plm_pin.dynamics import JointTrajectory, inverse_dynamics, simulate, task_trajectory
-from plm_pin.models import enferadi2017_circle, enferadi2017_line
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.viz import flat, flat_note, panel_grid, shared_legend
+
+from ._enferadi2017_paper import enferadi2017_circle, enferadi2017_line
 
 TITLE = "Enferadi 2017: dynamics of a star-triangle 3-PRP planar manipulator"
 SUMMARY = "Section 6: forces along a line and a circle, and the direct-dynamics round trip."

@@ -19,8 +19,8 @@ import numpy as np
 
 import plm_pin
 from plm_pin import PlmError
-from plm_pin.kinematics import complex_singularity_check
-from plm_pin.models.prrrp import CARRIAGE_SIZE
+from plm_pin.families.prrrp import complex_singularity_check
+from plm_pin.families.prrrp.builder import CARRIAGE_SIZE
 from plm_pin.report import Column, Comparison, Parameter, Section, StudyContext
 from plm_pin.viz import panel_grid, plot_sweep_heatmap, plot_sweep_lines
 

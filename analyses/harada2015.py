@@ -1,6 +1,6 @@
 """Harada 2015, "Mode changes of a planar 3 DOF redundantly actuated parallel robot".
 
-What the paper shows and plm_pin computes (:mod:`plm_pin.kinematics.prrrp_modes`): the 9
+What the paper shows and plm_pin computes (:mod:`plm_pin.families.prrrp`): the 9
 assembly modes of the 2-PRRRP and their transition graph (Sec. III, Fig. 5), the
 singularity-free assembly-mode change ``[+ +] -> [+ 0] -> [+ -] -> [0 -] -> [- -]`` (Fig. 6,
 Sec. V), the working-mode change ``(- + - +) -> (- + 0 +) -> (- + + +)`` (Fig. 7, Sec. V),
@@ -18,13 +18,11 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from plm_pin import Mechanism, load
-from plm_pin.kinematics import (
+from plm_pin.families.prrrp import (
     PAPER_ASSEMBLY_ROUTE,
     PAPER_WORKING_ROUTE,
-    SINGULARITY_TOL,
     AssemblyModeChange,
     ComplexSingularityCase,
-    ModeGraph,
     PrrrpLayout,
     WorkingModeChange,
     assembly_mode_graph,
@@ -34,9 +32,10 @@ from plm_pin.kinematics import (
     plan_working_mode_change,
     prrrp_layout,
     prrrp_state,
-    symmetric_variant,
     working_mode_label,
 )
+from plm_pin.families.prrrp.variants import symmetric_variant
+from plm_pin.kinematics import SINGULARITY_TOL, ModeGraph
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.viz import panel_grid
 

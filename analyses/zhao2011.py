@@ -22,17 +22,14 @@ from plm_pin.dynamics import (
     spline_work,
     task_trajectory,
 )
-from plm_pin.models import (
-    PRESETS,
-    ZHAO2011_TABLE5_WORK,
-    ZHAO2011_TRAJECTORY_DURATION,
-    zhao2011_trajectory,
-)
+from plm_pin.models import PRESETS
 from plm_pin.models.registry import ZHAO2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.statics import static_forces
 from plm_pin.stiffness import natural_frequencies, stiffness
 from plm_pin.viz import plot_panels
+
+from ._zhao2011_paper import ZHAO2011_TABLE5_WORK, ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 
 TITLE = "Zhao 2011: motor torque, power and work of a redundant 8-PSS"
 SUMMARY = "Figs. 4-8 and Table 5 along eq. (35); 8-PSS vs 6-PSS; why Table 5 does not reproduce."

@@ -34,10 +34,14 @@ import numpy as np
 import pinocchio as pin
 import proxsuite
 
+# run from the source checkout (make bench): the Zhao 2011 trajectory is the study's, beside it
+from analyses._zhao2011_paper import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
+
 from .analysis import manipulability, singular_points_along, workspace_map
 from .dynamics.inverse_dynamics import inverse_dynamics
 from .dynamics.simulation import SimulationResult, simulate
 from .dynamics.trajectory import task_trajectory
+from .families.classic import build_fourbar
 from .kinematics import (
     classify,
     closed_chain_jacobians,
@@ -48,8 +52,6 @@ from .kinematics import (
 from .kinematics.closures import jacobian_from_data as closure_jacobian_from_data
 from .loading import build_mechanism, load
 from .mechanism import Mechanism
-from .models.classic import build_fourbar
-from .models.pss import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 from .models.registry import PRESETS, preset_names, urdf_folder
 from .statics import AllocationRule, solve_balance, static_balance, static_forces
 
@@ -605,7 +607,7 @@ def _simulation_row(
 def fourbar_mjcf(integrator: str = "Euler", solref: float | None = None) -> str:
     """MJCF of the ``fourbar`` preset from its builder parameters, the loop closed by a site ``connect``.
 
-    Bars as in :func:`plm_pin.models.classic.build_fourbar`: mass ``density * L`` at ``L / 2``,
+    Bars as in :func:`plm_pin.families.classic.build_fourbar`: mass ``density * L`` at ``L / 2``,
     inertia ``(m r^2 / 2, m L^2 / 12, m L^2 / 12)`` with r = 5 mm; no geoms (no contacts);
     MuJoCo's default solver, ``integrator`` (default Euler) and the constraint's time constant
     ``solref`` [s] (default MuJoCo's 0.02); 1 ms steps.

@@ -229,7 +229,7 @@ def build_mechanism(
 
     Args:
         target: a preset name (its builder, with the preset's parameters overridden by
-            ``parameters``) or a builder such as :func:`plm_pin.models.build_2prrrp`, called
+            ``parameters``) or a builder such as :func:`plm_pin.families.prrrp.build_2prrrp`, called
             with ``parameters`` alone.
         parameters: builder keyword arguments [SI units]; ``name`` and ``source`` are set here.
         name: the mechanism's name (default: the preset's or builder's name with ``_variant``).

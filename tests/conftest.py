@@ -12,8 +12,8 @@ import pytest
 
 import plm_pin
 from plm_pin.description import Sidecar, write_description
+from plm_pin.description import _urdf_build as u
 from plm_pin.mechanism import Mechanism
-from plm_pin.models import _urdf as u
 
 REPO = Path(__file__).resolve().parents[1]
 INTEROP = REPO.parent / "shared" / "interop" / "example-parallel-robots"

@@ -8,8 +8,9 @@ import pytest
 import plm_pin
 from plm_pin.analysis import manipulability
 from plm_pin.description import write_description
+from plm_pin.families.prrrp import build_2prrrp
 from plm_pin.loading import build_mechanism, resolve_builder
-from plm_pin.models import PRESETS, build_2prrrp, builder_parameters
+from plm_pin.models import PRESETS, builder_parameters
 
 
 def test_variant_equals_the_description_written_and_loaded(tmp_path):
@@ -41,7 +42,7 @@ def test_builder_callable_takes_its_parameters_alone():
     mech = build_mechanism(build_2prrrp, params, name="three")
     assert mech.n_actuators == 3 and mech.redundancy == 0
     builder, base, label = resolve_builder(build_2prrrp)
-    assert builder is build_2prrrp and base == {} and label == "plm_pin.models.prrrp:build_2prrrp"
+    assert builder is build_2prrrp and base == {} and label == "plm_pin.families.prrrp.builder:build_2prrrp"
 
 
 def test_unknown_parameter_and_preset_are_refused_with_the_valid_names():

@@ -4,8 +4,8 @@ Generic: any mechanism with a task as large as its mobility (:class:`plm_pin.Mec
 
 A *profile* is a callable ``t -> (x, xd, xdd)``: positions and their first two time
 derivatives at time ``t`` [s]. Write it analytically when you can
-(:func:`plm_pin.models.zhao2011_trajectory` and
-:func:`plm_pin.models.star_triangle.enferadi2017_line` are profiles); otherwise build one with
+(the studies' ``zhao2011_trajectory`` and ``enferadi2017_line`` in ``analyses/_zhao2011_paper.py``
+and ``analyses/_enferadi2017_paper.py`` are profiles); otherwise build one with
 
 - :func:`differentiated_profile` from positions alone, ``t -> x``: five-point central
   differences (error stated there);

@@ -1,4 +1,8 @@
-"""Closed-chain kinematics: closures, assembly, task, Jacobians, legs, IK, FK, singularities, paths, modes."""
+"""Closed-chain kinematics: closures, assembly, task, Jacobians, legs, IK, FK, singularities, paths, modes.
+
+Generic: any mechanism with a sidecar. Family-specific modes and planners (the 2-PRRRP's) are in
+:mod:`plm_pin.families`.
+"""
 
 from .assembly import Assembly, assemble
 from .closures import Closure, compile_closures
@@ -8,90 +12,38 @@ from .jacobians import ClosedChainJacobians, closed_chain_jacobians
 from .legs import Leg, find_legs, working_mode
 from .mode_graph import ModeEdge, ModeGraph, ModeNode, compress_modes
 from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
-from .prrrp_modes import (
-    PAPER_ASSEMBLY_ROUTE,
-    PAPER_WORKING_ROUTE,
-    AssemblyModeChange,
-    CoincidentCircleSample,
-    ComplexSingularityCase,
-    ModeCrossing,
-    PairSolutions,
-    PrrrpLayout,
-    PrrrpLeg,
-    PrrrpState,
-    PrrrpSubMechanism,
-    WorkingModeChange,
-    assembly_mode,
-    assembly_mode_graph,
-    complex_singularity_check,
-    mode_label,
-    pair_solutions,
-    paper_working_modes,
-    plan_assembly_mode_change,
-    plan_working_mode_change,
-    prrrp_configuration,
-    prrrp_layout,
-    prrrp_state,
-    symmetric_variant,
-    working_mode_label,
-)
 from .singularity import SINGULARITY_TOL, SingularityReport, classify
 from .task import Task, TaskTarget, compile_task
 
 __all__ = [
-    "PAPER_ASSEMBLY_ROUTE",
-    "PAPER_WORKING_ROUTE",
     "SINGULARITY_TOL",
     "Assembly",
-    "AssemblyModeChange",
     "ClosedChainJacobians",
     "Closure",
-    "CoincidentCircleSample",
-    "ComplexSingularityCase",
     "FKSolution",
     "IKSolution",
     "Leg",
-    "ModeCrossing",
     "ModeEdge",
     "ModeGraph",
     "ModeNode",
-    "PairSolutions",
-    "PrrrpLayout",
-    "PrrrpLeg",
-    "PrrrpState",
-    "PrrrpSubMechanism",
     "SingularityReport",
     "Task",
     "TaskTarget",
     "TrackedPath",
-    "WorkingModeChange",
     "assemble",
-    "assembly_mode",
-    "assembly_mode_graph",
     "classify",
     "closed_chain_jacobians",
     "compile_closures",
     "compile_task",
-    "complex_singularity_check",
     "compress_modes",
     "find_legs",
     "follow_targets",
     "forward_kinematics",
     "inverse_kinematics",
-    "mode_label",
-    "pair_solutions",
-    "paper_working_modes",
-    "plan_assembly_mode_change",
-    "plan_working_mode_change",
-    "prrrp_configuration",
-    "prrrp_layout",
-    "prrrp_state",
     "redundancy_margin",
     "same_assembly",
-    "symmetric_variant",
     "task_pose",
     "track_actuator_path",
     "working_mode",
-    "working_mode_label",
     "working_modes",
 ]

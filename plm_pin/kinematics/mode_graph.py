@@ -2,7 +2,7 @@ r"""Mode-transition graphs: modes, their singularity, adjacency and singularity-
 
 Generic: the modes are sign tuples (one sign per sub-mechanism or per leg) of any
 mechanism, and the graph is built by the caller from representatives and walks between
-them (for the 2-PRRRP: :func:`plm_pin.kinematics.prrrp_modes.assembly_mode_graph`).
+them (for the 2-PRRRP: :func:`plm_pin.families.prrrp.assembly_mode_graph`).
 
 - :class:`ModeGraph`: modes, the rank of the closed-chain direct Jacobian :math:`C` at a
   representative of each, adjacency, and the shortest routes that avoid the singular modes.

@@ -12,11 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 from .._lazy import lazy_module
 from ..description.sidecar import Sidecar
-from . import pss
-from .classic import build_fivebar, build_fourbar
-from .prrrp import LAYERS, build_2prrrp, rod_scaled
-from .pss import build_pss
-from .star_triangle import build_star_triangle
+from ..families.classic import build_fivebar, build_fourbar
+from ..families.prrrp.builder import LAYERS, build_2prrrp, rod_scaled
+from ..families.pss import build_pss
+from ..families.star_triangle import build_star_triangle
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -119,23 +118,63 @@ def _harada2015() -> Mapping[str, Any]:
 # Zhao 2011, Tables 1-4 and section "Simulation" (m_p, inertias, I_L, I_C + I_M), eq. (19) (lead).
 _ZHAO2011 = dict(
     legs=(1, 2, 3, 4, 5, 6, 7, 8),
-    guide_points=pss.ZHAO2011_GUIDE_POINTS,
-    guide_directions=pss.ZHAO2011_GUIDE_DIRECTIONS,
-    platform_points=pss.ZHAO2011_PLATFORM_POINTS,
-    strut_lengths=pss.ZHAO2011_STRUT_LENGTHS,
-    strut_mass=pss.ZHAO2011_STRUT_MASS,
-    strut_inertia=pss.ZHAO2011_STRUT_INERTIA,
-    platform_mass=pss.ZHAO2011_PLATFORM_MASS,
-    platform_inertia=pss.ZHAO2011_PLATFORM_INERTIA,
-    slider_mass=pss.ZHAO2011_SLIDER_MASS,
-    lead=pss.ZHAO2011_LEAD,
-    screw_inertia=pss.ZHAO2011_SCREW_INERTIA,
-    rotor_inertia=pss.ZHAO2011_ROTOR_INERTIA,
-    home_pose=pss.ZHAO2011_HOME_POSE,
-    gravity=pss.ZHAO2011_GRAVITY,
+    # Table 1: guide points B_1 .. B_8 (slider ball centre at q = 0), world frame [m]
+    guide_points=(
+        (0.4, -0.4, 0.0),
+        (0.4, 0.4, 0.0),
+        (-0.4, 0.4, 0.0),
+        (-0.4, -0.4, 0.0),
+        (0.4, -2.0, 1.5),
+        (-0.4, -2.0, 1.5),
+        (-2.0, -0.4, 1.5),
+        (-2.0, 0.4, 1.5),
+    ),
+    # guide directions e_1 .. e_8: section "Description" and Tables 1-2 (plm_pin.families.pss.builder)
+    guide_directions=(
+        (0.0, 0.0, 1.0),
+        (0.0, 0.0, 1.0),
+        (0.0, 0.0, 1.0),
+        (0.0, 0.0, 1.0),
+        (0.0, 1.0, 0.0),
+        (0.0, 1.0, 0.0),
+        (1.0, 0.0, 0.0),
+        (1.0, 0.0, 0.0),
+    ),
+    # Table 2: platform ball joints a_1 .. a_8 in the platform frame O'-uvw (centre of mass) [m]
+    platform_points=(
+        (0.4, -0.4, -0.166),
+        (0.4, 0.4, -0.166),
+        (-0.4, 0.4, -0.166),
+        (-0.4, -0.4, -0.166),
+        (0.4, -0.681, -0.0375),
+        (-0.4, -0.681, -0.0375),
+        (-0.681, -0.4, -0.0375),
+        (-0.681, 0.4, -0.0375),
+    ),
+    strut_lengths=(1.0,) * 8,  # Table 3: l_i = |C_i A_i| [m]
+    strut_mass=20.0,  # Table 4: m_i [kg]
+    strut_inertia=(1.279, 1.279, 0.005),  # "Simulation": about its centre, z along the strut [kg m^2]
+    platform_mass=200.0,  # "Simulation": m_p [kg]
+    platform_inertia=(17.333, 17.333, 33.333),  # "Simulation": about its mass centre, O'-uvw [kg m^2]
+    slider_mass=50.0,  # Table 4: m_qi [kg]
+    lead=0.05,  # eq. (19): ball-screw lead p_i [m/rev] (printed "0.05 m^-1")
+    screw_inertia=10.5e-4,  # "Simulation": lead-screw inertia I_Li [kg m^2]
+    rotor_inertia=248e-4,  # "Simulation": coupler plus motor rotor I_Ci + I_Mi [kg m^2]
+    # ours: the midpoint of the eq. (35) trajectory; the paper names no home pose
+    home_pose=(0.0, 0.0, 1.744, 0.0, 0.0, 0.0),
+    # along -z (sliders 1-4 "vertical to the ground", the platform above them); magnitude not
+    # printed, 9.8 m/s^2 as the paper's a_max [m/s^2]
+    gravity=(0.0, 0.0, -9.8),
     stroke=(0.0, 1.5),
     actuator_stiffness=ZHAO2011_DRIVE_STIFFNESS,
 )
+
+_ZHAO2011_6PSS_LEGS: tuple[int, ...] = (2, 3, 4, 5, 6, 7)
+"""Legs kept by the 6-PSS counterpart (ours; the paper does not say): three vertical,
+both y-sliders and one x-slider. Of the 28 six-leg subsets it has the smallest worst
+condition number of J (eq. (6a)) along the eq. (35) trajectory, 4.85 (4.24 at home). Any
+set keeping all four vertical legs is singular (their rows of J span only z, rx, ry)."""
+
 _ZHAO2011_NOTES = (
     "Guides: sliders 1-4 along +z, 5-6 along +y, 7-8 along +x, q_i measured from B_i (Table 1); "
     "the text says 1-4 vertical, 5-8 horizontal and mutually orthogonal, Tables 1-2 fix which "
@@ -155,7 +194,7 @@ _ZHAO2011_NOTES = (
     "1 m, 20 kg rod gives 1.667); slider inertia that of a 0.12 x 0.12 x 0.08 m box (it never "
     "rotates); stroke 0-1.5 m ours; no force limits given; d_i = 0.244 m enters no equation, unused.",
     "Table 5 (work per motor, sum 15242.219 J) is not reproduced by the paper's printed model "
-    "(a literal re-implementation gives about 8479 J); quoted in plm_pin.models.pss only.",
+    "(a literal re-implementation gives about 8479 J); quoted in the Zhao 2011 study only.",
     "No stiffness is given by the paper: each ball-screw drive (screw, nut, bearings, servo) is "
     "assumed to hold its slider with 1e8 N/m along the guide; struts and platform rigid.",
 )
@@ -259,7 +298,7 @@ PRESETS: dict[str, Preset] = {
             Preset(
                 "zhao2011_6pss",
                 build_pss,
-                _frozen(**{**_ZHAO2011, "legs": pss.ZHAO2011_6PSS_LEGS}),
+                _frozen(**{**_ZHAO2011, "legs": _ZHAO2011_6PSS_LEGS}),
                 "Zhao 2011, Tables 1-4, section 'Simulation', eq. (19): 8-PSS without legs 1 and 8",
                 6,
                 6,

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from analyses import _harada2011_paper as paper
-from plm_pin.models import leg_inverse_kinematics
+from plm_pin.families.prrrp import leg_inverse_kinematics
 from plm_pin.report import find_study, run_study
 
 pytestmark = pytest.mark.slow

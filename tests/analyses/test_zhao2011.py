@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plm_pin.models import ZHAO2011_TABLE5_WORK
+from analyses._zhao2011_paper import ZHAO2011_TABLE5_WORK
 from plm_pin.report import find_study, run_study
 
 pytestmark = pytest.mark.slow
@@ -71,7 +71,7 @@ def test_eight_and_six_pss_hold_the_platform(result):
 
 def test_motion_is_animated(result):
     """The eq. (35) motion is a scene of increasing times from 0 over the whole trajectory."""
-    from plm_pin.models import ZHAO2011_TRAJECTORY_DURATION
+    from analyses._zhao2011_paper import ZHAO2011_TRAJECTORY_DURATION
 
     (scene,) = [b for s in result.sections for b in s.blocks if b.kind == "scene"]
     assert scene.data["times"][0] == 0.0 and np.all(np.diff(scene.data["times"]) > 0)

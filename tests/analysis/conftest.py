@@ -6,8 +6,9 @@ import pytest
 
 import plm_pin
 from plm_pin.description import write_description
+from plm_pin.families.prrrp import build_2prrrp
 from plm_pin.mechanism import Mechanism
-from plm_pin.models import PRESETS, build_2prrrp
+from plm_pin.models import PRESETS
 
 FIG6_L = 0.140
 """Rod length of the Fig. 6 tables [m] (Table 1)."""

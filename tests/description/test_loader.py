@@ -24,8 +24,9 @@ from plm_pin.description import (
     read_description,
     write_description,
 )
-from plm_pin.models import _urdf as u
-from plm_pin.models import build_fourbar, urdf_folder
+from plm_pin.description import _urdf_build as u
+from plm_pin.families.classic import build_fourbar
+from plm_pin.models import urdf_folder
 
 FOURBAR_FRAMES = [
     "universe",

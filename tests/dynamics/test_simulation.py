@@ -13,6 +13,7 @@ import yourdfpy
 from scipy.integrate import solve_ivp
 
 import plm_pin
+from plm_pin.description import _urdf_build as u
 from plm_pin.description import write_description
 from plm_pin.description.sidecar import ActuatorSpec, ClosureSpec, Sidecar
 from plm_pin.dynamics.simulation import SimulationResult, simulate
@@ -23,8 +24,7 @@ from plm_pin.exceptions import (
     SimulationFailed,
     SingularConfiguration,
 )
-from plm_pin.models import _urdf as u
-from plm_pin.models.classic import build_fourbar
+from plm_pin.families.classic.builder import build_fourbar
 from plm_pin.models.registry import PRESETS
 from tests.conftest import ball_joint_body, preset, spatial_6r
 

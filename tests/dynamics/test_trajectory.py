@@ -17,6 +17,12 @@ import pinocchio as pin
 import pytest
 
 from analyses import _harada2011_paper as paper
+from analyses._enferadi2017_paper import enferadi2017_circle, enferadi2017_line
+from analyses._zhao2011_paper import (
+    ZHAO2011_TRAJECTORY_A_MAX,
+    ZHAO2011_TRAJECTORY_DURATION,
+    zhao2011_trajectory,
+)
 from plm_pin.description.sidecar import TaskSpec
 from plm_pin.dynamics.trajectory import (
     JointTrajectory,
@@ -32,21 +38,14 @@ from plm_pin.exceptions import (
     SingularConfiguration,
     TrajectoryError,
 )
+from plm_pin.families.pss import pss_inverse_kinematics
+from plm_pin.families.star_triangle import star_triangle_inverse_kinematics
 from plm_pin.kinematics import closures, inverse_kinematics, task_pose, working_mode, working_modes
 from plm_pin.mechanism import Mechanism
-from plm_pin.models import (
-    ZHAO2011_GUIDE_DIRECTIONS,
-    ZHAO2011_GUIDE_POINTS,
-    ZHAO2011_PLATFORM_POINTS,
-    ZHAO2011_STRUT_LENGTHS,
-    ZHAO2011_TRAJECTORY_A_MAX,
-    ZHAO2011_TRAJECTORY_DURATION,
-    pss_inverse_kinematics,
-    star_triangle_inverse_kinematics,
-    zhao2011_trajectory,
-)
-from plm_pin.models.star_triangle import enferadi2017_circle, enferadi2017_line
+from plm_pin.models import PRESETS
 from tests.conftest import preset, spatial_6r
+
+ZHAO2011 = PRESETS["zhao2011_8pss"].parameters  # Zhao 2011 Tables 1-3, eq. (19): the preset's parameters
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1
 T_ZHAO = ZHAO2011_TRAJECTORY_DURATION
@@ -94,10 +93,10 @@ def zhao_sliders(pose, legs) -> np.ndarray:
     """Slider positions of the strut-length equation (closed form) [m]."""
     ik = pss_inverse_kinematics(
         pose,
-        ZHAO2011_GUIDE_POINTS,
-        ZHAO2011_GUIDE_DIRECTIONS,
-        ZHAO2011_PLATFORM_POINTS,
-        ZHAO2011_STRUT_LENGTHS,
+        ZHAO2011["guide_points"],
+        ZHAO2011["guide_directions"],
+        ZHAO2011["platform_points"],
+        ZHAO2011["strut_lengths"],
         legs,
     )
     return np.array([ik[i][0] for i in legs])

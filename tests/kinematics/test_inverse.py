@@ -22,14 +22,10 @@ from plm_pin import InvalidInput, PoseUnreachable
 from plm_pin.kinematics import forward_kinematics, inverse_kinematics, same_assembly, task_pose, working_modes
 from plm_pin.kinematics.legs import working_mode
 from plm_pin.kinematics.limits import limit_violations, wrap_into_limits
-from plm_pin.models import (
-    ZHAO2011_GUIDE_DIRECTIONS,
-    ZHAO2011_GUIDE_POINTS,
-    ZHAO2011_PLATFORM_POINTS,
-    ZHAO2011_STRUT_LENGTHS,
-    preset_names,
-)
+from plm_pin.models import PRESETS, preset_names
 from tests.conftest import preset
+
+ZHAO2011 = PRESETS["zhao2011_8pss"].parameters  # Zhao 2011 Tables 1-3, eq. (19): the preset's parameters
 
 # Offsets [lo, hi] of the random poses from each preset's reference task pose, per task
 # coordinate [m, rad]: inside the workspace and away from singular loci (the 3D3M's type-4
@@ -208,14 +204,14 @@ def test_pss_ik_matches_strut_length_equation(name):
         R = pin.rpy.rpyToMatrix(*pose[3:])
         expected = []
         for i in legs:
-            e = np.array(ZHAO2011_GUIDE_DIRECTIONS[i - 1])
+            e = np.array(ZHAO2011["guide_directions"][i - 1])
             d = (
                 np.array(pose[:3])
-                + R @ np.array(ZHAO2011_PLATFORM_POINTS[i - 1])
-                - np.array(ZHAO2011_GUIDE_POINTS[i - 1])
+                + R @ np.array(ZHAO2011["platform_points"][i - 1])
+                - np.array(ZHAO2011["guide_points"][i - 1])
             )
             ed = e @ d
-            expected.append(ed - math.sqrt(ZHAO2011_STRUT_LENGTHS[i - 1] ** 2 - d @ d + ed**2))
+            expected.append(ed - math.sqrt(ZHAO2011["strut_lengths"][i - 1] ** 2 - d @ d + ed**2))
         np.testing.assert_allclose(sol.actuators, expected, atol=1e-12)
 
 

@@ -17,14 +17,10 @@ from scipy.linalg import null_space
 from plm_pin import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, task_pose, working_modes
 from plm_pin.kinematics.jacobians import INVERSE_RTOL, feasible_motions, times_T_inverse
-from plm_pin.models import (
-    ZHAO2011_GUIDE_DIRECTIONS,
-    ZHAO2011_GUIDE_POINTS,
-    ZHAO2011_PLATFORM_POINTS,
-    ZHAO2011_STRUT_LENGTHS,
-    preset_names,
-)
+from plm_pin.models import PRESETS, preset_names
 from tests.conftest import ball_joint_body, preset, prrrp_paper_configuration
+
+ZHAO2011 = PRESETS["zhao2011_8pss"].parameters  # Zhao 2011 Tables 1-3, eq. (19): the preset's parameters
 
 EPS = 1e-6
 
@@ -198,10 +194,10 @@ def test_pss_actuator_jacobian_is_zhao_eq6a(name, pose):
     R = pin.rpy.rpyToMatrix(*pose[3:])
     rows = []
     for i in legs:
-        e = np.array(ZHAO2011_GUIDE_DIRECTIONS[i - 1])
-        B = np.array(ZHAO2011_GUIDE_POINTS[i - 1])
-        a_i = R @ np.array(ZHAO2011_PLATFORM_POINTS[i - 1])
-        l = ZHAO2011_STRUT_LENGTHS[i - 1]
+        e = np.array(ZHAO2011["guide_directions"][i - 1])
+        B = np.array(ZHAO2011["guide_points"][i - 1])
+        a_i = R @ np.array(ZHAO2011["platform_points"][i - 1])
+        l = ZHAO2011["strut_lengths"][i - 1]
         d = p + a_i - B
         q_i = e @ d - math.sqrt(l**2 - d @ d + (e @ d) ** 2)
         w = (p + a_i - (B + q_i * e)) / l

@@ -6,7 +6,7 @@ import itertools
 
 import pytest
 
-from plm_pin.kinematics.prrrp_modes import ASSEMBLY_MODES, PAPER_ASSEMBLY_ROUTE, assembly_mode_graph
+from plm_pin.families.prrrp import ASSEMBLY_MODES, PAPER_ASSEMBLY_ROUTE, assembly_mode_graph
 from tests.conftest import preset
 
 ASYM = "harada2015_asymmetric"

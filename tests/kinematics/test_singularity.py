@@ -16,6 +16,7 @@ import pytest
 import plm_pin
 from plm_pin import PoseUnreachable, SingularConfiguration
 from plm_pin.description import write_description
+from plm_pin.families.prrrp import build_2prrrp
 from plm_pin.kinematics import classify, closed_chain_jacobians, forward_kinematics, inverse_kinematics
 from plm_pin.kinematics.singularity import (
     direct_margins,
@@ -24,7 +25,7 @@ from plm_pin.kinematics.singularity import (
     normalised_margins,
 )
 from plm_pin.mechanism import Mechanism
-from plm_pin.models import build_2prrrp, preset_names
+from plm_pin.models import preset_names
 from tests.conftest import preset
 
 RT = 0.05  # r_t [m]

@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from plm_pin.models import PRESETS, build_2prrrp
+from plm_pin.families.prrrp import build_2prrrp
+from plm_pin.models import PRESETS
 
 FIG6_L = 0.140
 """Rod length of Harada 2011 Fig. 6 and Table 1 [m]."""

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from plm_pin import InvalidInput, sweep
-from plm_pin.models import build_2prrrp, builder_parameters
+from plm_pin.families.prrrp import build_2prrrp
+from plm_pin.models import builder_parameters
 from plm_pin.sweep import METRICS, OPTIONS, make_spec
 from tests.sweep.conftest import small
 

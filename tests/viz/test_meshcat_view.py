@@ -483,7 +483,7 @@ def test_view_pose_that_cannot_close_shows_the_open_loop(tmp_path):
 def test_view_animate_writes_the_studys_motion(tmp_path):
     """--animate harada2015:working: the page animates the planned path of the mode change, key by key."""
     from analyses.harada2015 import WORKING_DURATION
-    from plm_pin.kinematics import plan_working_mode_change
+    from plm_pin.families.prrrp import plan_working_mode_change
 
     out = tmp_path / "flip.html"
     result = runner.invoke(app, ["view", "--animate", "harada2015:working", "--html", str(out)])

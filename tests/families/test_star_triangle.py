@@ -163,7 +163,7 @@ def test_builder_refuses_a_reference_outside_the_triangle():
 
 def test_inverse_kinematics_refuses_the_actuator_singularity():
     """At phi = 0 the star lines are parallel to their rails: the closed form has no solution."""
-    from plm_pin.models import star_triangle_inverse_kinematics
+    from plm_pin.families.star_triangle import star_triangle_inverse_kinematics
 
     with pytest.raises(ValueError, match="sin phi = 0"):
         star_triangle_inverse_kinematics((0.25, 0.2, 0.0), A)

@@ -26,10 +26,10 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from .._lazy import lazy_module
-from ..description.compliance import assumed_drive_stiffness
-from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
-from . import _urdf as u
+from ..._lazy import lazy_module
+from ...description import _urdf_build as u
+from ...description.compliance import assumed_drive_stiffness
+from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -37,7 +37,19 @@ else:
     yourdfpy = lazy_module("yourdfpy")
 
 LEFT_LEGS = (1, 2)
+"""Legs reaching the left plate pair."""
+
 RIGHT_LEGS = (3, 4)
+"""Legs reaching the right plate pair."""
+
+LEFT_PAIR = "plate_left"
+"""Frame of the left plate pair (the rod tips of legs 1-2)."""
+
+RIGHT_PAIR = "plate_right"
+"""Frame of the right plate pair (the rod tips of legs 3-4)."""
+
+TASK_FRAME = "plate_center"
+"""Task frame, midway between the pairs (x, y, rz)."""
 
 CARRIAGE_SIZE = (0.03, 0.02, 0.01)
 """Box of each carriage (moving part of a linear motor): length along the stator, height, depth [m]."""
@@ -169,7 +181,7 @@ def build_2prrrp(
         if i != 1:
             links.append(u.link(f"rod{i}_tip"))
             joints.append(u.joint(f"rod{i}_tip_fixed", "fixed", f"rod{i}", f"rod{i}_tip", xyz=(l, 0.0, 0.0)))
-            pair = "plate_left" if i in LEFT_LEGS else "plate_right"
+            pair = LEFT_PAIR if i in LEFT_LEGS else RIGHT_PAIR
             closures.append(ClosureSpec(f"rod{i}_{pair}", (f"rod{i}_tip", pair), "point"))
     axial = plate_mass * 0.01**2 / 6.0
     links.append(
@@ -182,7 +194,7 @@ def build_2prrrp(
         )
     )
     joints.append(u.joint("plate_pivot", "revolute", "rod1", "plate", xyz=(rod_lengths[0], 0.0, 0.0)))
-    for frame, x in (("plate_left", 0.0), ("plate_center", rt), ("plate_right", 2 * rt)):
+    for frame, x in ((LEFT_PAIR, 0.0), (TASK_FRAME, rt), (RIGHT_PAIR, 2 * rt)):
         links.append(u.link(frame))
         joints.append(u.joint(f"{frame}_fixed", "fixed", "plate", frame, xyz=(x, 0.0, 0.0)))
     reference["plate_pivot"] = (reference_pose[2] - ik[1][1],)
@@ -190,7 +202,7 @@ def build_2prrrp(
     sidecar = Sidecar(
         closures=tuple(closures),
         actuation=tuple(ActuatorSpec(f"slider{i}") for i in legs),
-        task=TaskSpec("plate_center", ("x", "y", "rz")),
+        task=TaskSpec(TASK_FRAME, ("x", "y", "rz")),
         gravity=(0.0, -gravity, 0.0),
         reference={k: tuple(float(x) for x in v) for k, v in reference.items()},
         name=name,

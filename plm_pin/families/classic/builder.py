@@ -11,9 +11,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._lazy import lazy_module
-from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
-from . import _urdf as u
+from ..._lazy import lazy_module
+from ...description import _urdf_build as u
+from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 
 if TYPE_CHECKING:
     import yourdfpy

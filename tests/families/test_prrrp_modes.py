@@ -10,8 +10,10 @@ import pinocchio as pin
 import pytest
 
 from plm_pin.exceptions import InvalidInput, PoseUnreachable, SingularConfiguration
+from plm_pin.families import prrrp as pm
+from plm_pin.families.prrrp.planners import MODE_CHANGE_TOL
+from plm_pin.families.prrrp.variants import symmetric_variant
 from plm_pin.kinematics import classify, closed_chain_jacobians, working_mode
-from plm_pin.kinematics import prrrp_modes as pm
 from plm_pin.kinematics.paths import track_actuator_path
 from plm_pin.kinematics.singularity import RANK_RTOL
 from tests.conftest import preset
@@ -101,7 +103,7 @@ def flip(asym):
 
 @pytest.fixture(scope="module")
 def symmetric():
-    return pm.symmetric_variant(0.240)
+    return symmetric_variant(0.240)
 
 
 # ------------------------------------------------------------------ labels
@@ -218,14 +220,14 @@ def test_assembly_mode_change_follows_the_paper_route(asym, route):
 
 def test_assembly_mode_change_closes_loops_and_stays_nonsingular(asym, route):
     """At every sample: loops closed to 1e-10, classify's direct margin above the stated tolerance."""
-    assert route.path.tol == pm.MODE_CHANGE_TOL
+    assert route.path.tol == MODE_CHANGE_TOL
     for k in range(route.path.n_samples):
         q = route.path.q[k]
         assert np.max(np.abs(asym.closure_residual(q))) <= 1e-10
         np.testing.assert_allclose(asym.actuator_positions(q), route.path.actuators[k], atol=1e-12)
         report = classify(asym, q)
-        assert report.direct_margin > pm.MODE_CHANGE_TOL
-        assert report.constraint_margin > pm.MODE_CHANGE_TOL
+        assert report.direct_margin > MODE_CHANGE_TOL
+        assert report.constraint_margin > MODE_CHANGE_TOL
         assert report.direct_margin == pytest.approx(route.path.direct_margin[k], rel=1e-9)
         assert _rank(_paper_jx(asym, q)) == 3
     assert route.path.min_direct_margin > 0.02
@@ -249,7 +251,7 @@ def test_each_sub_mechanism_passes_its_own_zero(asym, route):
         assert gap == pytest.approx(LENGTHS_2015[a] + LENGTHS_2015[b], abs=1e-9)
         assert c.sub_direct_margin < 1e-12
         assert c.redundancy_margin < 1e-12
-        assert c.direct_margin > pm.MODE_CHANGE_TOL
+        assert c.direct_margin > MODE_CHANGE_TOL
         assert abs(c.x[2]) > math.radians(20.0)  # the plate is tilted, so the other pair holds it
 
 
@@ -288,8 +290,8 @@ def test_working_mode_change_visits_the_paper_modes(asym, flip):
         q = flip.path.q[k]
         assert np.max(np.abs(asym.closure_residual(q))) <= 1e-10
         report = classify(asym, q)
-        assert report.direct_margin > pm.MODE_CHANGE_TOL
-        assert report.constraint_margin > pm.MODE_CHANGE_TOL
+        assert report.direct_margin > MODE_CHANGE_TOL
+        assert report.constraint_margin > MODE_CHANGE_TOL
 
 
 def test_working_mode_change_crosses_the_actuator_singularity_of_leg_3(asym, flip):
@@ -329,7 +331,7 @@ def test_complex_singularity_with_equal_rods_not_with_the_asymmetric_design(asym
     case = pm.complex_singularity_check(asym, leg=3)
     assert not case.admits_complex_singularity
     report = classify(asym, case.q_fold)
-    assert report.kinds == ("inverse",) and report.constraint_margin > pm.MODE_CHANGE_TOL
+    assert report.kinds == ("inverse",) and report.constraint_margin > MODE_CHANGE_TOL
     assert _rank(asym.closure_jacobian(case.q_fold)) == asym.nv - asym.mobility
     assert case.slider_gap >= case.min_slider_gap == pytest.approx(0.070, abs=1e-12)
     assert case.circles == "two" and case.coincident == ()
@@ -343,7 +345,7 @@ def test_coincident_circles_leave_the_pair_free_with_both_sliders_locked(symmetr
     for sample in off_fold:
         assert sample.slider_gap < 1e-12 and sample.sub_rank == 1
         assert sample.sub_direct_margin < 1e-12
-        assert sample.report.direct_margin > pm.MODE_CHANGE_TOL  # the whole mechanism still holds the plate
+        assert sample.report.direct_margin > MODE_CHANGE_TOL  # the whole mechanism still holds the plate
     # rebuild the 70 deg configuration by hand and move it with sliders 3 and 4 locked
     th = math.radians(30.0)
     x_pair = pm.prrrp_state(symmetric, symmetric.q_ref).pairs[1][0]

@@ -73,7 +73,8 @@ Typos of Zhao 2011 that matter here:
   height of the trajectory midpoint above the horizontal guides, 1.744 - 1.5 m.
 - Table 5 (work per motor) is not reproduced by the paper's own printed model (a literal
   re-implementation gives a sum near 8479 J, not 15242.219 J); it is quoted here as
-  :data:`ZHAO2011_TABLE5_WORK`, not used as a reference.
+  ``ZHAO2011_TABLE5_WORK`` of the Zhao 2011 study (``analyses/_zhao2011_paper.py``),
+  not used as a reference.
 """
 
 from __future__ import annotations
@@ -85,10 +86,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from .._lazy import lazy_module
-from ..description.compliance import assumed_drive_stiffness
-from ..description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
-from . import _urdf as u
+from ..._lazy import lazy_module
+from ...description import _urdf_build as u
+from ...description.compliance import assumed_drive_stiffness
+from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -96,131 +97,6 @@ else:
     yourdfpy = lazy_module("yourdfpy")
 
 Vec3 = tuple[float, float, float]
-
-# ---------------------------------------------------------------- Zhao 2011 data
-ZHAO2011_GUIDE_POINTS: tuple[Vec3, ...] = (
-    (0.4, -0.4, 0.0),
-    (0.4, 0.4, 0.0),
-    (-0.4, 0.4, 0.0),
-    (-0.4, -0.4, 0.0),
-    (0.4, -2.0, 1.5),
-    (-0.4, -2.0, 1.5),
-    (-2.0, -0.4, 1.5),
-    (-2.0, 0.4, 1.5),
-)
-"""Table 1: guide points :math:`B_1 .. B_8` (slider ball centre at q = 0), world frame [m]."""
-
-ZHAO2011_GUIDE_DIRECTIONS: tuple[Vec3, ...] = (
-    (0.0, 0.0, 1.0),
-    (0.0, 0.0, 1.0),
-    (0.0, 0.0, 1.0),
-    (0.0, 0.0, 1.0),
-    (0.0, 1.0, 0.0),
-    (0.0, 1.0, 0.0),
-    (1.0, 0.0, 0.0),
-    (1.0, 0.0, 0.0),
-)
-"""Guide directions :math:`e_1 .. e_8`: text of section "Description" and Tables 1-2 (module docstring)."""
-
-ZHAO2011_PLATFORM_POINTS: tuple[Vec3, ...] = (
-    (0.4, -0.4, -0.166),
-    (0.4, 0.4, -0.166),
-    (-0.4, 0.4, -0.166),
-    (-0.4, -0.4, -0.166),
-    (0.4, -0.681, -0.0375),
-    (-0.4, -0.681, -0.0375),
-    (-0.681, -0.4, -0.0375),
-    (-0.681, 0.4, -0.0375),
-)
-"""Table 2: platform ball joints :math:`a_1 .. a_8` in the platform frame O'-uvw (centre of mass) [m]."""
-
-ZHAO2011_STRUT_LENGTHS: tuple[float, ...] = (1.0,) * 8
-"""Table 3: strut lengths :math:`l_i = |C_i A_i|` [m]."""
-
-ZHAO2011_STRUT_MASS = 20.0
-"""Table 4: strut mass :math:`m_i` [kg] (all eight struts)."""
-
-ZHAO2011_SLIDER_MASS = 50.0
-"""Table 4: slider mass :math:`m_{qi}` [kg] (all eight sliders)."""
-
-ZHAO2011_STRUT_INERTIA: Vec3 = (1.279, 1.279, 0.005)
-"""Section "Simulation": strut inertia :math:`{}^iI_i` about its centre, strut frame (z along it) [kg m^2]."""
-
-ZHAO2011_PLATFORM_MASS = 200.0
-"""Section "Simulation": platform mass :math:`m_p` [kg]."""
-
-ZHAO2011_PLATFORM_INERTIA: Vec3 = (17.333, 17.333, 33.333)
-"""Section "Simulation": platform inertia :math:`{}^{o'}I_p` about its mass centre, frame O'-uvw [kg m^2]."""
-
-ZHAO2011_LEAD = 0.05
-"""Eq. (19): ball-screw lead :math:`p_i` [m/rev] (printed "0.05 m^-1")."""
-
-ZHAO2011_SCREW_INERTIA = 10.5e-4
-"""Section "Simulation": lead-screw inertia :math:`I_{Li}` [kg m^2]."""
-
-ZHAO2011_ROTOR_INERTIA = 248e-4
-"""Section "Simulation": coupler plus motor-rotor inertia :math:`I_{Ci} + I_{Mi}` [kg m^2]."""
-
-ZHAO2011_GRAVITY: Vec3 = (0.0, 0.0, -9.8)
-"""Gravity [m/s^2]: along -z (sliders 1-4 are "vertical to the ground" along z, the
-platform above them); magnitude not printed, 9.8 m/s^2 as the paper's :math:`a_{max}`."""
-
-ZHAO2011_TRAJECTORY_START: tuple[float, ...] = (-0.1, -0.1, 1.644, -0.1, -0.1, -0.1)
-"""Eq. (35): pose at t = 0, :math:`[x, y, z]` [m] and :math:`[\\phi_x, \\phi_y, \\phi_z]` [rad]."""
-
-ZHAO2011_TRAJECTORY_STROKE = 0.2
-"""Eq. (35): travel S of every pose coordinate [m] or [rad]."""
-
-ZHAO2011_TRAJECTORY_A_MAX = 9.8
-"""Eq. (35): peak acceleration :math:`a_{max}` [m/s^2] or [rad/s^2]."""
-
-ZHAO2011_TRAJECTORY_DURATION = math.sqrt(
-    2.0 * math.pi * ZHAO2011_TRAJECTORY_STROKE / ZHAO2011_TRAJECTORY_A_MAX
-)
-"""Eq. (35): duration :math:`T = \\sqrt{2 \\pi S / a_{max}}` [s] (0.358090 s)."""
-
-ZHAO2011_HOME_POSE: tuple[float, ...] = (0.0, 0.0, 1.744, 0.0, 0.0, 0.0)
-"""Reference pose (ours): the midpoint of the eq. (35) trajectory; the paper names no home pose."""
-
-ZHAO2011_6PSS_LEGS: tuple[int, ...] = (2, 3, 4, 5, 6, 7)
-"""Legs kept by the 6-PSS counterpart (ours; the paper does not say): three vertical,
-both y-sliders and one x-slider. Of the 28 six-leg subsets it has the smallest worst
-condition number of J (eq. (6a)) along the eq. (35) trajectory, 4.85 (4.24 at home). Any
-set keeping all four vertical legs is singular (their rows of J span only z, rx, ry)."""
-
-ZHAO2011_TABLE5_WORK: tuple[float, ...] = (
-    99.697,
-    1544.119,
-    2819.088,
-    401.408,
-    166.805,
-    753.256,
-    6495.371,
-    2962.475,
-)
-"""Table 5: output work of motors 1-8 on the eq. (35) trajectory [J] (sum 15242.219 J).
-Quoted only: the paper's printed model does not reproduce it (see the module docstring)."""
-
-
-def zhao2011_trajectory(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    r"""Pose, pose rate and pose acceleration of Zhao 2011, eq. (35), at time ``t`` [s].
-
-    Every coordinate :math:`c` of :math:`X = [x, y, z, \phi_x, \phi_y, \phi_z]` follows
-    :math:`c(t) = c_0 + S (u - \sin(2 \pi u) / 2 \pi)`, :math:`u = t / T`, rest to rest.
-    The rate of the angles is :math:`\dot\phi`, not the angular velocity.
-
-    Returns:
-        ``X`` [m, rad], ``dX/dt`` [m/s, rad/s], ``d2X/dt2`` [m/s^2, rad/s^2], each shape (6,).
-    """
-    S, T, a_max = ZHAO2011_TRAJECTORY_STROKE, ZHAO2011_TRAJECTORY_DURATION, ZHAO2011_TRAJECTORY_A_MAX
-    s = t / T
-    ones = np.ones(6)
-    pose = np.asarray(ZHAO2011_TRAJECTORY_START, dtype=float) + S * (
-        s - math.sin(2 * math.pi * s) / (2 * math.pi)
-    )
-    rate = (S / T) * (1.0 - math.cos(2 * math.pi * s)) * ones
-    acceleration = a_max * math.sin(2 * math.pi * s) * ones
-    return pose, rate, acceleration
 
 
 # ---------------------------------------------------------------- kinematics

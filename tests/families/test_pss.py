@@ -1,4 +1,4 @@
-"""Zhao 2011 8-PSS and 6-PSS presets (plm_pin/models/pss.py) against the paper's tables and equations."""
+"""Zhao 2011 8-PSS and 6-PSS presets (plm_pin/families/pss) against the paper's tables and equations."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ import pinocchio as pin
 import pytest
 
 import plm_pin
+from analyses._zhao2011_paper import zhao2011_trajectory
 from plm_pin.description import write_description
 from plm_pin.kinematics import closed_chain_jacobians
-from plm_pin.models import PRESETS, zhao2011_trajectory
+from plm_pin.models import PRESETS
 from tests.conftest import preset
 
 # Zhao 2011, transcribed here again (not imported from plm_pin) so the model is checked

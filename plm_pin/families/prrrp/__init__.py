@@ -1,0 +1,67 @@
+"""The 2-PRRRP family (Harada 2011, 2015): builder, layout, modes and mode-change planners.
+
+- :mod:`~plm_pin.families.prrrp.builder`: :func:`build_2prrrp` and the closed-form leg IK.
+- :mod:`~plm_pin.families.prrrp.layout`: :func:`prrrp_layout`, legs and plate pairs read from a model.
+- :mod:`~plm_pin.families.prrrp.modes`: assembly and working modes, eq. (4) and eq. (6).
+- :mod:`~plm_pin.families.prrrp.planners`: the mode-transition graph and the mode-change planners.
+- :mod:`~plm_pin.families.prrrp.complex_singularity`: the complex singularity of equal rods.
+- :mod:`~plm_pin.families.prrrp.variants`: :func:`~plm_pin.families.prrrp.variants.symmetric_variant`,
+  presets rebuilt with other rods. It builds mechanisms (it imports :mod:`plm_pin.loading`, which
+  imports the preset registry and so this package), so it is imported from its module, not from here.
+"""
+
+from .builder import build_2prrrp, leg_inverse_kinematics
+from .complex_singularity import CoincidentCircleSample, ComplexSingularityCase, complex_singularity_check
+from .layout import PrrrpLayout, PrrrpLeg, PrrrpSubMechanism, prrrp_layout
+from .modes import (
+    ASSEMBLY_MODES,
+    PairSolutions,
+    PrrrpState,
+    assembly_mode,
+    mode_label,
+    pair_solutions,
+    paper_working_modes,
+    prrrp_configuration,
+    prrrp_state,
+    working_mode_label,
+)
+from .planners import (
+    PAPER_ASSEMBLY_ROUTE,
+    PAPER_WORKING_ROUTE,
+    AssemblyModeChange,
+    ModeCrossing,
+    WorkingModeChange,
+    assembly_mode_graph,
+    plan_assembly_mode_change,
+    plan_working_mode_change,
+)
+
+__all__ = [
+    "ASSEMBLY_MODES",
+    "PAPER_ASSEMBLY_ROUTE",
+    "PAPER_WORKING_ROUTE",
+    "AssemblyModeChange",
+    "CoincidentCircleSample",
+    "ComplexSingularityCase",
+    "ModeCrossing",
+    "PairSolutions",
+    "PrrrpLayout",
+    "PrrrpLeg",
+    "PrrrpState",
+    "PrrrpSubMechanism",
+    "WorkingModeChange",
+    "assembly_mode",
+    "assembly_mode_graph",
+    "build_2prrrp",
+    "complex_singularity_check",
+    "leg_inverse_kinematics",
+    "mode_label",
+    "pair_solutions",
+    "paper_working_modes",
+    "plan_assembly_mode_change",
+    "plan_working_mode_change",
+    "prrrp_configuration",
+    "prrrp_layout",
+    "prrrp_state",
+    "working_mode_label",
+]
