@@ -1,7 +1,7 @@
 """Inverse kinematics and working modes (plm_pin/kinematics/inverse.py).
 
 Oracles: Harada 2011 eq. (2) / code (M.5) (and Harada 2015 eq. (6), the same formula) for the
-2-PRRRP tables, Enferadi 2017 eq. (5) (corrected, see plm_pin/models/star_triangle.py) for the
+2-PRRRP tables, Enferadi 2017 eq. (5) (corrected, see plm_pin/families/star_triangle/builder.py) for the
 star-triangle, the strut-length equation of Zhao 2011 for the n-PSS, all written inline; and
 the forward kinematics, a different algorithm (closures with the actuators fixed, multi-start).
 """

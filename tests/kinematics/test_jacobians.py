@@ -2,7 +2,7 @@
 
 Oracles: finite differences of the inverse kinematics (re-solved from the same solution), and
 the papers' velocity equations written inline: Harada 2011 eq. (4) / (M.9), Enferadi 2017 eqs.
-(14)-(17) (corrected, see plm_pin/models/star_triangle.py), Zhao 2011 eq. (6a).
+(14)-(17) (corrected, see plm_pin/families/star_triangle/builder.py), Zhao 2011 eq. (6a).
 """
 
 from __future__ import annotations
