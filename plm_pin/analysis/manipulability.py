@@ -20,7 +20,7 @@ unit of length whenever the task mixes translations and rotations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -35,9 +35,13 @@ from ..kinematics.jacobians import (
     times_T_inverse,
 )
 from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
+from ..results import Result, unit
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
+
+W_UNIT = "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
+"""Unit of the manipulability w."""
 
 METRICS: tuple[str, ...] = (
     "manipulability",
@@ -50,7 +54,7 @@ METRICS: tuple[str, ...] = (
 
 
 @dataclass(frozen=True)
-class Manipulability:
+class Manipulability(Result):
     r"""Manipulability of a mechanism at one configuration (Harada 2011 eq. (13)).
 
     Attributes:
@@ -65,30 +69,21 @@ class Manipulability:
         inverse_singular: whether :math:`T = J_x N` is singular (J_ce undefined).
     """
 
-    w: float
-    condition_number: float
+    w: float = field(
+        metadata=unit(
+            "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
+        )
+    )
+    condition_number: float = field(metadata=unit("-"))
     singular_values: np.ndarray
     J_ce: np.ndarray | None
-    inverse_singular: bool
+    inverse_singular: bool = field(metadata=unit("-"))
+    _NONFINITE_AS_TEXT = ("w", "condition_number", "singular_values")
 
     @property
     def inverse_condition(self) -> float:
         r""":math:`1 / \kappa` in [0, 1]: 0 at a singularity, 1 when isotropic [-]."""
         return 0.0 if not np.isfinite(self.condition_number) else 1.0 / self.condition_number
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON (inf written as the string 'inf')."""
-
-        def num(v: float) -> float | str:
-            return v if np.isfinite(v) else str(v)
-
-        return {
-            "w": num(self.w),
-            "condition_number": num(self.condition_number),
-            "singular_values": [num(float(s)) for s in self.singular_values],
-            "J_ce": None if self.J_ce is None else self.J_ce.tolist(),
-            "inverse_singular": self.inverse_singular,
-        }
 
 
 def manipulability_from_jacobians(jac: ClosedChainJacobians) -> Manipulability:

@@ -41,6 +41,7 @@ from .._checks import (
 )
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
 from ..kinematics import closures as _closures
+from ..results import Result, unit
 from ..statics import AllocationRule, load_on_frame, solve_balance
 from ..statics.balance import SINGULAR_RTOL, Load, _balance, balance_factors
 from .trajectory import JointTrajectory
@@ -58,7 +59,7 @@ RESERVED_GROUPS = ("external", "other", "rotor", "screw")
 
 
 @dataclass(frozen=True)
-class InverseDynamics:
+class InverseDynamics(Result):
     """Actuator forces along a trajectory, with their splits, motor quantities and power.
 
     Attributes:
@@ -79,16 +80,16 @@ class InverseDynamics:
     """
 
     actuators: tuple[str, ...]
-    t: np.ndarray
-    f_c: np.ndarray
-    lam: np.ndarray
-    internal: np.ndarray
-    residual: np.ndarray
-    cd: np.ndarray
-    terms: dict[str, np.ndarray]
-    bodies: Mapping[str, np.ndarray]
+    t: np.ndarray = field(metadata=unit("s"))
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
+    internal: np.ndarray = field(metadata=unit("N, N m"))
+    residual: np.ndarray = field(metadata=unit("N, N m"))
+    cd: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    terms: dict[str, np.ndarray] = field(metadata=unit("N, N m"))
+    bodies: Mapping[str, np.ndarray] = field(metadata=unit("N, N m"))
     split_exact: bool
-    leads: np.ndarray = field(repr=False)
+    leads: np.ndarray = field(repr=False, metadata=unit("m/rev"))
 
     @property
     def n_samples(self) -> int:
@@ -117,20 +118,8 @@ class InverseDynamics:
         return {k: v * self.cd for k, v in getattr(self, split).items()}
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "actuators": list(self.actuators),
-            "t": self.t.tolist(),
-            "f_c": self.f_c.tolist(),
-            "lambda": self.lam.tolist(),
-            "internal": self.internal.tolist(),
-            "residual": self.residual.tolist(),
-            "cd": self.cd.tolist(),
-            "terms": {k: v.tolist() for k, v in self.terms.items()},
-            "bodies": {k: v.tolist() for k, v in self.bodies.items()},
-            "split_exact": self.split_exact,
-            "leads": [None if np.isnan(p) else float(p) for p in self.leads],
-        }
+        """JSON-ready dictionary (a missing lead written as None)."""
+        return {**super().to_dict(), "leads": [None if np.isnan(p) else float(p) for p in self.leads]}
 
 
 class InverseDynamicsFailed(PlmError):

@@ -71,6 +71,7 @@ from scipy.integrate import DOP853
 
 from .._checks import as_vector, optional_name, positive, real_numbers, sample_count
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
+from ..results import Result, unit
 from ..statics.balance import load_on_frame
 from ._constrained import ClosedChainDynamics, Projection, ReducedRows
 
@@ -112,7 +113,7 @@ ForceLaw = Callable[[float, np.ndarray, np.ndarray], Any]
 
 
 @dataclass(frozen=True)
-class SimulationResult:
+class SimulationResult(Result):
     r"""Samples of a closed-chain simulation at the output times.
 
     Attributes:
@@ -134,15 +135,15 @@ class SimulationResult:
         steps: integration steps taken.
     """
 
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
-    lam: np.ndarray
-    closure_residual: np.ndarray
-    closure_drift: np.ndarray
-    energy: np.ndarray
-    x: np.ndarray | None
+    t: np.ndarray = field(metadata=unit("s"))
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    v: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    a: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
+    closure_residual: np.ndarray = field(metadata=unit("m, rad"))
+    closure_drift: np.ndarray = field(metadata=unit("m, rad"))
+    energy: np.ndarray = field(metadata=unit("J"))
+    x: np.ndarray | None = field(metadata=unit("m, rad"))
     method: str
     solver: str
     steps: int = field(default=0)
@@ -170,23 +171,6 @@ class SimulationResult:
     def max_closure_residual(self) -> float:
         """Largest closure distance over the samples [m, rad]."""
         return float(np.max(self.closure_residual)) if len(self) else 0.0
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "t": self.t.tolist(),
-            "q": self.q.tolist(),
-            "v": self.v.tolist(),
-            "a": self.a.tolist(),
-            "lam": self.lam.tolist(),
-            "closure_residual": self.closure_residual.tolist(),
-            "closure_drift": self.closure_drift.tolist(),
-            "energy": self.energy.tolist(),
-            "x": None if self.x is None else self.x.tolist(),
-            "method": self.method,
-            "solver": self.solver,
-            "steps": self.steps,
-        }
 
 
 class _NonFinite(Exception):

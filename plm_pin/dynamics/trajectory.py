@@ -64,7 +64,7 @@ Units: time [s]; lengths [m], angles [rad] and their rates [/s], [/s^2].
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -95,6 +95,7 @@ from ..kinematics.singularity import (
     inverse_margins,
 )
 from ..kinematics.task import Task
+from ..results import Result, unit
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
@@ -267,7 +268,7 @@ _ARRAYS = ("t", "q", "v", "a", "x", "xd", "xdd", "c", "cd", "cdd", "residual")
 
 
 @dataclass(frozen=True)
-class JointTrajectory:
+class JointTrajectory(Result):
     r"""Configurations, velocities and accelerations of a closed chain along a sampled motion.
 
     Arrays are read-only; every one has one row per sample.
@@ -287,17 +288,18 @@ class JointTrajectory:
         residual: largest absolute closure residual per sample [m, rad], shape (N,).
     """
 
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
-    x: np.ndarray
-    xd: np.ndarray
-    xdd: np.ndarray
-    c: np.ndarray
-    cd: np.ndarray
-    cdd: np.ndarray
-    residual: np.ndarray
+    t: np.ndarray = field(metadata=unit("s"))
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    v: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    a: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    xd: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    xdd: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
+    c: np.ndarray = field(metadata=unit("m, rad"))
+    cd: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    cdd: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
+    residual: np.ndarray = field(metadata=unit("m, rad"))
+    _DERIVED = ("n_samples", "max_residual")
 
     def __post_init__(self) -> None:
         n = self.t.shape[0]
@@ -320,13 +322,6 @@ class JointTrajectory:
     def max_residual(self) -> float:
         """Largest closure residual over the samples [m, rad] (0 without samples)."""
         return float(np.max(self.residual)) if self.residual.size else 0.0
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        out: dict[str, object] = {name: getattr(self, name).tolist() for name in _ARRAYS}
-        out["n_samples"] = self.n_samples
-        out["max_residual"] = self.max_residual
-        return out
 
 
 class _Recorder:

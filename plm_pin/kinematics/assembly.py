@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -11,6 +11,7 @@ import pinocchio as pin
 from scipy.linalg.lapack import dposv as _posv
 
 from ..exceptions import ClosureNotSatisfied
+from ..results import Result, unit
 from .closures import BoundClosures, Closure, closure_rows, jacobian_from_data, residual_from_placements
 
 NEWTON_MAX_ITERATIONS = 12
@@ -144,7 +145,7 @@ def newton(
 
 
 @dataclass(frozen=True)
-class Assembly:
+class Assembly(Result):
     """Result of :func:`assemble`.
 
     Attributes:
@@ -153,22 +154,16 @@ class Assembly:
         iterations: Levenberg-Marquardt iterations used.
     """
 
-    q: np.ndarray
-    residual: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    residual: np.ndarray = field(metadata=unit("m, rad"))
     iterations: int
+    _SKIPPED = ("residual",)
+    _DERIVED = ("residual_norm",)
 
     @property
     def residual_norm(self) -> float:
         """Largest absolute closure residual [m or rad]."""
         return float(np.max(np.abs(self.residual))) if self.residual.size else 0.0
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "q": self.q.tolist(),
-            "residual_norm": self.residual_norm,
-            "iterations": self.iterations,
-        }
 
 
 def assemble(

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -10,6 +10,7 @@ import pinocchio as pin
 
 from .._checks import count, positive
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
+from ..results import Result, unit
 from .assembly import assemble, newton
 from .jacobians import require_task
 from .starts import random_starts
@@ -23,7 +24,7 @@ FK_TOL = 1e-12
 
 
 @dataclass(frozen=True)
-class FKSolution:
+class FKSolution(Result):
     """One forward-kinematics solution (assembly mode).
 
     Attributes:
@@ -32,13 +33,9 @@ class FKSolution:
         residual_norm: largest absolute closure residual [m, rad].
     """
 
-    q: np.ndarray
-    x: np.ndarray
-    residual_norm: float
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {"q": self.q.tolist(), "x": self.x.tolist(), "residual_norm": self.residual_norm}
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    residual_norm: float = field(metadata=unit("m, rad"))
 
 
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -13,6 +13,7 @@ import pinocchio as pin
 
 from .._checks import positive, signs
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
+from ..results import Result, unit
 from . import closures as _closures
 from .assembly import assemble, newton
 from .closures import Closure, compile_closures
@@ -32,7 +33,7 @@ IK_TOL = 1e-12
 
 
 @dataclass(frozen=True)
-class IKSolution:
+class IKSolution(Result):
     """One inverse-kinematics solution.
 
     The actuator positions and the working mode are derived from ``q`` when first read (the
@@ -47,11 +48,13 @@ class IKSolution:
             [m or rad] (revolute angles are first shifted by 2 pi into their limits where they fit).
     """
 
-    q: np.ndarray
-    x: np.ndarray
-    residual_norm: float
-    limit_violations: Mapping[str, float]
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    residual_norm: float = field(metadata=unit("m, rad"))
+    limit_violations: Mapping[str, float] = field(metadata=unit("m, rad"))
     _mech: Mechanism = field(repr=False, compare=False)
+    _DERIVED = ("actuators", "mode")
+    _SKIPPED = ("_mech",)
 
     @functools.cached_property
     def actuators(self) -> np.ndarray:
@@ -67,17 +70,6 @@ class IKSolution:
     def within_limits(self) -> bool:
         """Whether every joint respects its position limits."""
         return not self.limit_violations
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "q": self.q.tolist(),
-            "x": self.x.tolist(),
-            "actuators": self.actuators.tolist(),
-            "mode": list(self.mode),
-            "residual_norm": self.residual_norm,
-            "limit_violations": dict(self.limit_violations),
-        }
 
 
 def _solve(

@@ -19,13 +19,14 @@ Units: lengths [m], angles [rad], margins are normalised singular-value ratios [
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
+from ..results import Result, unit
 from .assembly import assemble
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians, require_task
 from .singularity import SINGULARITY_TOL, SingularityReport, direct_margins, report_from_jacobians
@@ -183,7 +184,7 @@ _TRACKED_ARRAYS = (
 
 
 @dataclass(frozen=True)
-class TrackedPath:
+class TrackedPath(Result):
     """A sampled actuator path with the configuration followed along it (forward continuation).
 
     Attributes:
@@ -201,16 +202,17 @@ class TrackedPath:
         tol: the singularity tolerance the margins are judged against [-].
     """
 
-    s: np.ndarray
-    actuators: np.ndarray
-    q: np.ndarray
-    x: np.ndarray
-    residual: np.ndarray
-    constraint_margin: np.ndarray
-    inverse_margin: np.ndarray
-    direct_margin: np.ndarray
-    redundancy_margin: np.ndarray
-    tol: float
+    s: np.ndarray = field(metadata=unit("-"))
+    actuators: np.ndarray = field(metadata=unit("m, rad"))
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    residual: np.ndarray = field(metadata=unit("m, rad"))
+    constraint_margin: np.ndarray = field(metadata=unit("-"))
+    inverse_margin: np.ndarray = field(metadata=unit("-"))
+    direct_margin: np.ndarray = field(metadata=unit("-"))
+    redundancy_margin: np.ndarray = field(metadata=unit("-"))
+    tol: float = field(metadata=unit("-"))
+    _DERIVED = ("n_samples", "max_residual", "min_direct_margin", "nonsingular")
 
     def __post_init__(self) -> None:
         n = self.s.shape[0]
@@ -257,25 +259,6 @@ class TrackedPath:
             float(self.direct_margin[k]),
             self.tol,
         )
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "s": self.s.tolist(),
-            "actuators": self.actuators.tolist(),
-            "q": self.q.tolist(),
-            "x": self.x.tolist(),
-            "residual": self.residual.tolist(),
-            "constraint_margin": self.constraint_margin.tolist(),
-            "inverse_margin": self.inverse_margin.tolist(),
-            "direct_margin": self.direct_margin.tolist(),
-            "redundancy_margin": self.redundancy_margin.tolist(),
-            "tol": self.tol,
-            "n_samples": self.n_samples,
-            "max_residual": self.max_residual,
-            "min_direct_margin": self.min_direct_margin,
-            "nonsingular": self.nonsingular,
-        }
 
 
 def track_actuator_path(

@@ -37,13 +37,14 @@ singular of a kind when its margin is at most the tolerance.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._checks import check_tolerance
 from ..exceptions import SingularConfiguration
+from ..results import Result, unit
 from .jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians, require_task
 
 if TYPE_CHECKING:
@@ -130,7 +131,7 @@ def numerical_rank(M: np.ndarray, rtol: float = RANK_RTOL, *, floor: float = 0.0
 
 
 @dataclass(frozen=True)
-class SingularityReport:
+class SingularityReport(Result):
     r"""Singularity margins of one configuration.
 
     Attributes:
@@ -141,10 +142,11 @@ class SingularityReport:
         tol: the tolerance used.
     """
 
-    constraint_margin: float
-    inverse_margin: float
-    direct_margin: float
-    tol: float
+    constraint_margin: float = field(metadata=unit("-"))
+    inverse_margin: float = field(metadata=unit("-"))
+    direct_margin: float = field(metadata=unit("-"))
+    tol: float = field(metadata=unit("-"))
+    _DERIVED = ("kinds",)
 
     @property
     def kinds(self) -> tuple[str, ...]:
@@ -156,16 +158,6 @@ class SingularityReport:
     def singular(self) -> bool:
         """Whether any kind of singularity is present."""
         return bool(self.kinds)
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "constraint_margin": self.constraint_margin,
-            "inverse_margin": self.inverse_margin,
-            "direct_margin": self.direct_margin,
-            "tol": self.tol,
-            "kinds": list(self.kinds),
-        }
 
 
 def report_from_jacobians(mech: Mechanism, jac: ClosedChainJacobians, tol: float) -> SingularityReport:

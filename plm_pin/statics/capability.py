@@ -16,13 +16,14 @@ is convex, so its boundary points along rays from the origin trace it exactly.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._checks import load_arguments
 from ..exceptions import InvalidInput, PlmError
+from ..results import Result, unit
 from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_qp
 from .balance import load_on_frame, static_balance
 from .forces import actuator_limits
@@ -32,7 +33,7 @@ if TYPE_CHECKING:
 
 
 @dataclass(frozen=True)
-class Capability:
+class Capability(Result):
     """Largest load along one direction.
 
     Attributes:
@@ -43,19 +44,10 @@ class Capability:
         saturated: actuators at a limit there.
     """
 
-    direction: np.ndarray
-    alpha: float
-    f_c: np.ndarray
+    direction: np.ndarray = field(metadata=unit("N, N m"))
+    alpha: float = field(metadata=unit("-"))
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
     saturated: tuple[str, ...]
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "direction": self.direction.tolist(),
-            "alpha": self.alpha,
-            "f_c": self.f_c.tolist(),
-            "saturated": list(self.saturated),
-        }
 
 
 def force_capability(
@@ -139,7 +131,7 @@ def _finite_limits(mech: Mechanism, limits: Any, what: str) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class InternalRange:
+class InternalRange(Result):
     r"""The internal forces the actuator limits admit under one load.
 
     The balancing forces are :math:`f_c = f_p + G y` (:math:`f_p` of minimum norm, :math:`G`
@@ -155,21 +147,11 @@ class InternalRange:
         internal_basis: the basis :math:`G` the coordinates refer to, shape (n_act, k).
     """
 
-    lower: np.ndarray
-    upper: np.ndarray
-    f_lower: np.ndarray
-    f_upper: np.ndarray
-    internal_basis: np.ndarray
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "lower": self.lower.tolist(),
-            "upper": self.upper.tolist(),
-            "f_lower": self.f_lower.tolist(),
-            "f_upper": self.f_upper.tolist(),
-            "internal_basis": self.internal_basis.tolist(),
-        }
+    lower: np.ndarray = field(metadata=unit("N, N m"))
+    upper: np.ndarray = field(metadata=unit("N, N m"))
+    f_lower: np.ndarray = field(metadata=unit("N, N m"))
+    f_upper: np.ndarray = field(metadata=unit("N, N m"))
+    internal_basis: np.ndarray = field(metadata=unit("-"))
 
 
 def internal_force_range(

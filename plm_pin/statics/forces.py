@@ -10,13 +10,14 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._checks import check_finite_result, load_arguments
 from ..exceptions import InvalidInput
+from ..results import Result, unit
 from . import reactions as _reactions
 from .allocation import OBJECTIVES, Allocation, Inequalities, allocate, check_weights, min_norm
 from .balance import SINGULAR_RTOL, StaticBalance, static_balance
@@ -26,7 +27,7 @@ if TYPE_CHECKING:
 
 
 @dataclass(frozen=True)
-class InternalMode:
+class InternalMode(Result):
     """One internal-force mode: actuator forces that balance nothing but each other, and what they load.
 
     Attributes:
@@ -36,23 +37,14 @@ class InternalMode:
         slider_normal_forces: normal forces it causes on the prismatic guides [N].
     """
 
-    f_c: np.ndarray
-    lam: np.ndarray
-    link_forces: dict[str, _reactions.LinkForce]
-    slider_normal_forces: dict[str, np.ndarray]
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "f_c": self.f_c.tolist(),
-            "lambda": self.lam.tolist(),
-            "link_forces": {k: v.to_dict() for k, v in self.link_forces.items()},
-            "slider_normal_forces": {k: v.tolist() for k, v in self.slider_normal_forces.items()},
-        }
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
+    link_forces: dict[str, _reactions.LinkForce] = field(metadata=unit("N"))
+    slider_normal_forces: dict[str, np.ndarray] = field(metadata=unit("N"))
 
 
 @dataclass(frozen=True)
-class StaticForces:
+class StaticForces(Result):
     r"""A static equilibrium: actuator forces, cut-joint forces and the balance they satisfy.
 
     Attributes:
@@ -68,10 +60,10 @@ class StaticForces:
 
     mechanism: Mechanism
     balance: StaticBalance
-    f_c: np.ndarray
-    lam: np.ndarray
-    internal: np.ndarray
-    residual: float
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
+    internal: np.ndarray = field(metadata=unit("N, N m"))
+    residual: float = field(metadata=unit("N, N m"))
     active: tuple[str, ...]
     objective: str
 
@@ -107,7 +99,7 @@ class StaticForces:
         acts = [a.joint for a in self.mechanism.actuators]
         return {
             "f_c": dict(zip(acts, self.f_c.tolist(), strict=True)),
-            "lambda": {c.name: self.lam[c.rows].tolist() for c in self.mechanism.closures},
+            "lam": {c.name: self.lam[c.rows].tolist() for c in self.mechanism.closures},
             "internal": self.internal.tolist(),
             "residual": self.residual,
             "active": list(self.active),
