@@ -335,7 +335,7 @@ class Mechanism:
 
     def assemble(
         self,
-        q_guess: Any = None,
+        guess: Any = None,
         fixed: Mapping[str, float] | Iterable[str] | None = None,
         *,
         tol: float = ASSEMBLY_TOL,
@@ -344,11 +344,11 @@ class Mechanism:
         r"""Project a configuration onto the closure manifold :math:`\phi(q) = 0`.
 
         Damped Gauss-Newton (Levenberg-Marquardt) on the closure residual with the exact
-        closure Jacobian; the minimum-norm step keeps the result close to ``q_guess``.
+        closure Jacobian; the minimum-norm step keeps the result close to ``guess``.
 
         Args:
-            q_guess: starting configuration (default: the reference configuration). # (nq,)
-            fixed: joints that must not move: names (kept at their ``q_guess`` values) or a
+            guess: starting configuration (default: the reference configuration). # (nq,)
+            fixed: joints that must not move: names (kept at their ``guess`` values) or a
                 mapping from one-DOF joint name to the value to impose [m] or [rad].
             tol: largest absolute residual accepted [m, rad].
             max_iterations: iteration cap.
@@ -359,9 +359,9 @@ class Mechanism:
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol``; the error
                 carries the best configuration and the worst closure.
-            InvalidInput: on a malformed ``q_guess`` or an unknown joint in ``fixed``.
+            InvalidInput: on a malformed ``guess`` or an unknown joint in ``fixed``.
         """
-        q0 = self.q_ref.copy() if q_guess is None else self.check_q(q_guess, "q_guess").copy()
+        q0 = self.q_ref.copy() if guess is None else self.check_q(guess, "guess").copy()
         names: list[str] = []
         if fixed is not None:
             if isinstance(fixed, Mapping):

@@ -475,7 +475,7 @@ def task_trajectory(
     profile: Profile | Any,
     times: Any,
     *,
-    q_guess: Any = None,
+    guess: Any = None,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
     singularity_tol: float = SINGULARITY_TOL,
@@ -495,9 +495,9 @@ def task_trajectory(
             (roll-pitch-yaw rates for angles), each shape (n_task,); or task coordinates sampled
             at ``times``, shape (N, n_task), interpolated by :func:`sampled_profile`.
         times: sample times [s], shape (N,), strictly increasing.
-        q_guess: configuration to solve the first sample from (default: the reference).
+        guess: configuration to solve the first sample from (default: the reference).
         mode: working mode of the first sample, one sign per square leg (see
-            :func:`plm_pin.kinematics.inverse_kinematics`); default: that of ``q_guess``'s basin.
+            :func:`plm_pin.kinematics.inverse_kinematics`); default: that of ``guess``'s basin.
         tol: largest closure and task residual accepted at each sample [m, rad].
         singularity_tol: margin at or below which a sample counts as singular [-].
 
@@ -523,7 +523,7 @@ def task_trajectory(
         x = x_all[k]
         try:
             if k == 0:
-                sol = inverse_kinematics(mech, x, q_guess, mode=mode, tol=tol)
+                sol = inverse_kinematics(mech, x, guess, mode=mode, tol=tol)
                 first_mode = sol.mode
             else:
                 sol = inverse_kinematics(mech, x, rec.predict(k), tol=tol)
@@ -552,7 +552,7 @@ def actuator_trajectory(
     profile: Profile | Any,
     times: Any,
     *,
-    q_guess: Any = None,
+    guess: Any = None,
     tol: float = IK_TOL,
     singularity_tol: float = SINGULARITY_TOL,
     consistency_tol: float = CONSISTENCY_TOL,
@@ -560,7 +560,7 @@ def actuator_trajectory(
     r"""Configurations, velocities and accelerations along an actuator profile :math:`c(t)`.
 
     At each time, the loops are closed with every actuator fixed, continued from the previous
-    sample (module docstring), so the assembly mode of ``q_guess`` is kept; then
+    sample (module docstring), so the assembly mode of ``guess`` is kept; then
     :math:`v = N s` and :math:`a = a_p + N s_2` with :math:`C s = \dot c` and
     :math:`C s_2 = \ddot c - S_a a_p` solved by least squares over all actuators. For a
     redundantly actuated chain the profile must be consistent (e.g. the actuator motion of a
@@ -577,7 +577,7 @@ def actuator_trajectory(
             each shape (n_act,), in the order of ``mech.actuators``; or positions sampled at
             ``times``, shape (N, n_act), interpolated by :func:`sampled_profile`.
         times: sample times [s], shape (N,), strictly increasing.
-        q_guess: configuration near the first sample; it picks the assembly mode (default: the reference).
+        guess: configuration near the first sample; it picks the assembly mode (default: the reference).
         tol: closure tolerance of each assembly [m, rad].
         singularity_tol: margin at or below which a sample counts as singular [-].
         consistency_tol: tolerance on the misfit of redundant actuator rates and accelerations
@@ -602,7 +602,7 @@ def actuator_trajectory(
         )
     ts = _check_times(times)
     c_all, cd_all, cdd_all = _evaluate(profile, ts, mech.n_actuators)
-    q0 = mech.q_ref if q_guess is None else mech.check_q(q_guess, "q_guess")
+    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     rec = _Recorder(mech, task, ts)
     names = [act.joint for act in mech.actuators]
     act = mech.actuated_v_indices

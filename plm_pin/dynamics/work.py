@@ -119,21 +119,21 @@ def spline_work(t: Any, power: Any) -> np.ndarray:
 
 
 def power_along(
-    mech: Mechanism, profile: Any, *, q_guess: Any = None, **options: Any
+    mech: Mechanism, profile: Any, *, guess: Any = None, **options: Any
 ) -> Callable[[np.ndarray], np.ndarray]:
     """``times -> actuator power`` along a task profile: trajectory then inverse dynamics at those times.
 
     Args:
         mech: the mechanism.
         profile: a task profile ``t -> (x, xd, xdd)`` (see :mod:`~plm_pin.dynamics.trajectory`).
-        q_guess: starting configuration for the inverse kinematics.
+        guess: starting configuration for the inverse kinematics.
         options: inverse-dynamics options (allocation, wrench, gravity); see
             :func:`~plm_pin.dynamics.inverse_dynamics.inverse_dynamics`.
     """
     id_options: Mapping[str, Any] = dict(options)
 
     def power_at(times: np.ndarray) -> np.ndarray:
-        traj = task_trajectory(mech, profile, times, q_guess=q_guess)
+        traj = task_trajectory(mech, profile, times, guess=guess)
         return inverse_dynamics(mech, traj, **id_options).power
 
     return power_at

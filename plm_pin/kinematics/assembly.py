@@ -170,7 +170,7 @@ def assemble(
     model: pin.Model,
     data: pin.Data,
     closures: Sequence[Closure],
-    q_guess: np.ndarray,
+    guess: np.ndarray,
     free_columns: np.ndarray,
     *,
     tol: float = 1e-12,
@@ -179,7 +179,7 @@ def assemble(
     on_failure: Callable[[np.ndarray, np.ndarray], Exception] | None = None,
     extra: ExtraRows | None = None,
 ) -> Assembly:
-    r"""Close the loops from ``q_guess`` by damped Gauss-Newton (Levenberg-Marquardt).
+    r"""Close the loops from ``guess`` by damped Gauss-Newton (Levenberg-Marquardt).
 
     Only the tangent directions listed in ``free_columns`` move. Each step is the
     minimum-norm damped least-squares step
@@ -195,7 +195,7 @@ def assemble(
         model: Pinocchio model.
         data: scratch data for ``model``.
         closures: compiled closures.
-        q_guess: starting configuration. # (nq,)
+        guess: starting configuration. # (nq,)
         free_columns: indices of the velocity coordinates allowed to move.
         tol: target largest absolute residual [m, rad].
         max_iterations: iteration cap.
@@ -221,7 +221,7 @@ def assemble(
         J = jacobian_from_data(model, data, closures)
         return J if extra is None else np.vstack([J, extra.jacobian(model, data)])
 
-    q = np.array(q_guess, dtype=float)
+    q = np.array(guess, dtype=float)
     phi = residual_at(q)
     cost = float(phi @ phi)
     mu0 = 1.0

@@ -82,7 +82,7 @@ def _check_path_parameter(s: Any, n: int) -> np.ndarray:
 
 def follow_targets(
     mech: Mechanism,
-    q_start: Any,
+    guess: Any,
     *,
     task_dofs: Sequence[str] = (),
     task_values: Any = None,
@@ -95,13 +95,13 @@ def follow_targets(
     At each sample, Newton (Levenberg-Marquardt) solves the closures together with the
     prescribed task coordinates of the mechanism's task frame, the ``fixed`` joints held
     at their values, from a secant prediction of the two previous solutions; so the
-    branch of ``q_start`` is followed as long as the sampled system stays regular and the
+    branch of ``guess`` is followed as long as the sampled system stays regular and the
     samples are dense. With every task coordinate prescribed this is inverse-kinematics
     continuation; with the actuators fixed, forward-kinematics continuation.
 
     Args:
         mech: the mechanism.
-        q_start: configuration near the first sample, shape (nq,).
+        guess: configuration near the first sample, shape (nq,).
         task_dofs: prescribed task coordinates among the task's (e.g. ``("x", "rz")``).
         task_values: their values [m, rad], shape (N, len(task_dofs)).
         fixed: one-DOF joint name -> values along the path [m, rad], shape (N,).
@@ -144,20 +144,20 @@ def follow_targets(
     sp = _check_path_parameter(s, n)
     sub_task = compile_task(mech.model, mech.model.frames[task.frame_id].name, dofs) if dofs else None
     free = mech.free_columns(fixed_values)
-    qs: list[np.ndarray] = [mech.check_q(q_start, "q_start")]
+    qs: list[np.ndarray] = [mech.check_q(guess, "guess")]
     for joint in fixed_values:
         nv = mech.model.joints[mech.model.getJointId(joint)].nv
         if nv != 1:
             raise InvalidInput(f"joint {joint!r} has {nv} DOF; only one-DOF joints can be prescribed")
     out: list[np.ndarray] = []
     for k in range(n):
-        guess = _predict(mech, qs, sp, k) if out else np.array(qs[0])
+        near = _predict(mech, qs, sp, k) if out else np.array(qs[0])
         for joint, arr in fixed_values.items():
-            mech.set_joint(guess, joint, float(arr[k]))
+            mech.set_joint(near, joint, float(arr[k]))
         target = TaskTarget(sub_task, values[k]) if sub_task is not None and values is not None else None
         try:
             q = assemble(
-                mech.model, mech.data, mech.closures, guess, free, tol=tol, max_iterations=60, extra=target
+                mech.model, mech.data, mech.closures, near, free, tol=tol, max_iterations=60, extra=target
             ).q
         except ClosureNotSatisfied as exc:
             raise PoseUnreachable(
@@ -264,7 +264,7 @@ class TrackedPath(Result):
 def track_actuator_path(
     mech: Mechanism,
     actuators: Any,
-    q_start: Any,
+    guess: Any,
     *,
     s: Any = None,
     tol: float = SINGULARITY_TOL,
@@ -274,14 +274,14 @@ def track_actuator_path(
 
     At each sample :meth:`Mechanism.assemble` closes the loops with every actuator fixed
     at its sampled value, warm-started from a secant prediction of the two previous
-    configurations, so the assembly mode of ``q_start`` is followed; then the singularity
+    configurations, so the assembly mode of ``guess`` is followed; then the singularity
     margins and the redundancy margin are evaluated. For a redundantly actuated chain the
     actuator values must be consistent (e.g. from :func:`follow_targets`).
 
     Args:
         mech: the mechanism.
         actuators: actuator positions [m, rad], shape (N, n_act).
-        q_start: configuration near the first sample (it picks the assembly mode), shape (nq,).
+        guess: configuration near the first sample (it picks the assembly mode), shape (nq,).
         s: path parameter, shape (N,), non-decreasing (default uniform).
         tol: singularity tolerance the margins are judged against.
         closure_tol: closure tolerance of each assembly [m, rad].
@@ -302,7 +302,7 @@ def track_actuator_path(
     sp = _check_path_parameter(s, n)
     task = require_task(mech)
     names = [a.joint for a in mech.actuators]
-    qs: list[np.ndarray] = [mech.check_q(q_start, "q_start")]
+    qs: list[np.ndarray] = [mech.check_q(guess, "guess")]
     out_q: list[np.ndarray] = []
     out_x: list[np.ndarray] = []
     res: list[float] = []
@@ -311,10 +311,10 @@ def track_actuator_path(
     dm: list[float] = []
     rm: list[float] = []
     for k in range(n):
-        guess = _predict(mech, qs, sp, k) if out_q else np.array(qs[0])
+        near = _predict(mech, qs, sp, k) if out_q else np.array(qs[0])
         try:
             asm = mech.assemble(
-                guess, fixed=dict(zip(names, c[k].tolist(), strict=True)), tol=closure_tol, max_iterations=60
+                near, fixed=dict(zip(names, c[k].tolist(), strict=True)), tol=closure_tol, max_iterations=60
             )
         except ClosureNotSatisfied as exc:
             raise ClosureNotSatisfied(
