@@ -39,7 +39,12 @@ from .._checks import (
     checked_trajectory,
     load_arguments,
 )
-from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
+from ..exceptions import (
+    AllocationInfeasible,
+    InvalidInput,
+    InverseDynamicsFailed,
+    SingularConfiguration,
+)
 from ..kinematics import closures as _closures
 from ..results import Result, unit
 from ..statics import AllocationRule, load_on_frame, solve_balance
@@ -120,27 +125,6 @@ class InverseDynamics(Result):
     def to_dict(self) -> dict[str, object]:
         """JSON-ready dictionary (a missing lead written as None)."""
         return {**super().to_dict(), "leads": [None if np.isnan(p) else float(p) for p in self.leads]}
-
-
-class InverseDynamicsFailed(PlmError):
-    """Inverse dynamics stopped at a sample: infeasible allocation or an unresisted load.
-
-    Attributes:
-        partial: the samples computed before it.
-        index: the sample that failed.
-        time: its time [s].
-        cause: the error met there (:class:`AllocationInfeasible` with the saturated actuators,
-            or :class:`SingularConfiguration`).
-    """
-
-    def __init__(
-        self, message: str, partial: InverseDynamics, index: int, time: float, cause: PlmError
-    ) -> None:
-        self.partial = partial
-        self.index = index
-        self.time = time
-        self.cause = cause
-        super().__init__(message)
 
 
 @dataclass(frozen=True)

@@ -8,9 +8,9 @@ import pytest
 from scipy.interpolate import CubicSpline
 
 from plm_pin.dynamics import simulate, task_trajectory
-from plm_pin.dynamics.inverse_dynamics import InverseDynamicsFailed, inverse_dynamics
+from plm_pin.dynamics.inverse_dynamics import inverse_dynamics
 from plm_pin.dynamics.work import adaptive_trapezoid_work, power_along, spline_work
-from plm_pin.exceptions import AllocationInfeasible, InvalidInput
+from plm_pin.exceptions import AllocationInfeasible, InvalidInput, InverseDynamicsFailed
 from plm_pin.models import (
     ZHAO2011_TRAJECTORY_DURATION,
     enferadi2017_circle,
