@@ -21,9 +21,10 @@ unit of length whenever the task mixes translations and rotations.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..exceptions import SingularConfiguration
 from ..kinematics.inverse import inverse_kinematics
@@ -123,7 +124,7 @@ def _manipulability_values(
     return J_ce, s, w, cond, singular
 
 
-def manipulability(mech: Mechanism, q: Any, *, raise_if_singular: bool = False) -> Manipulability:
+def manipulability(mech: Mechanism, q: ArrayLike, *, raise_if_singular: bool = False) -> Manipulability:
     """Yoshikawa manipulability and condition number of :math:`J_{ce}` at configuration ``q``.
 
     Args:
@@ -149,8 +150,8 @@ def manipulability(mech: Mechanism, q: Any, *, raise_if_singular: bool = False) 
 
 def manipulability_at(
     mech: Mechanism,
-    x: Any,
-    guess: Any = None,
+    x: ArrayLike,
+    guess: ArrayLike | None = None,
     *,
     mode: tuple[int, ...] | None = None,
     raise_if_singular: bool = False,

@@ -23,9 +23,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..exceptions import InvalidInput
 from ..kinematics.inverse import IK_TOL
@@ -90,11 +91,11 @@ def _ends(point: SingularPoint) -> str | None:
 def orientation_range(
     mech: Mechanism,
     axis: str,
-    values: Any,
-    pose: Any = None,
+    values: ArrayLike,
+    pose: ArrayLike | None = None,
     *,
     reference: float = 0.0,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     xtol: float = RANGE_XTOL,
     tol: float = SINGULARITY_TOL,
     near: float = NEAR,

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.optimize import brentq, minimize_scalar
 
 from ..exceptions import InvalidInput, PoseUnreachable
@@ -87,7 +88,7 @@ class SingularPoint(Result):
         return float(getattr(self.report, f"{self.kind}_margin"))
 
 
-def signed_singularity_function(mech: Mechanism, q: Any) -> float:
+def signed_singularity_function(mech: Mechanism, q: ArrayLike) -> float:
     r""":math:`\det(J_x N) \det(S_a N)`: zero at inverse and direct singularities, basis-independent.
 
     Needs as many actuators and task coordinates as DOF.
@@ -183,9 +184,9 @@ def _point(
 def singular_points(
     mech: Mechanism,
     path: Callable[[float], Any],
-    t: Any,
+    t: ArrayLike,
     *,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     xtol: float = XTOL,
     tol: float = SINGULARITY_TOL,
@@ -406,8 +407,8 @@ def _refine_boundary(
 def singular_points_along(
     mech: Mechanism,
     axis: str,
-    values: Any,
-    pose: Any = None,
+    values: ArrayLike,
+    pose: ArrayLike | None = None,
     **options: Any,
 ) -> list[SingularPoint]:
     """Singularities along one task coordinate, the others fixed (a 1-D slice).
@@ -448,10 +449,10 @@ def line_path(mech: Mechanism, axis: str, pose: Any, guess: Any) -> Callable[[fl
 def singular_loci(
     mech: Mechanism,
     axis: str,
-    values: Any,
+    values: ArrayLike,
     across: str,
     across_values: Sequence[float],
-    pose: Any = None,
+    pose: ArrayLike | None = None,
     **options: Any,
 ) -> list[SingularPoint]:
     r"""Singular curves over a 2-D slice, found line by line along ``axis``.

@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import (
     CLOSURE_TOL,
@@ -245,12 +246,12 @@ def inverse_dynamics(
     mech: Mechanism,
     trajectory: JointTrajectory,
     *,
-    wrench: Any = None,
+    wrench: Any | None = None,
     frame: str | None = None,
     gravity: bool = True,
     groups: Mapping[str, Sequence[str]] | None = None,
     objective: str = "norm",
-    weights: Any = None,
+    weights: ArrayLike | None = None,
     limits: Any = "description",
     internal: Any = None,
     min_compression: float | None = None,

@@ -67,6 +67,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.integrate import DOP853
 
 from .._checks import as_vector, optional_name, positive, real_numbers, sample_count
@@ -543,13 +544,13 @@ def _check_start(
 
 def simulate(
     mech: Mechanism,
-    q0: Any,
-    v0: Any = None,
+    q0: ArrayLike,
+    v0: ArrayLike | None = None,
     *,
     duration: float,
     dt: float,
-    actuator_forces: Any = None,
-    wrench: Any = None,
+    actuator_forces: Any | None = None,
+    wrench: ArrayLike | None = None,
     frame: str | None = None,
     method: str = "adaptive",
     step: float | None = None,

@@ -50,10 +50,11 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import as_vector, check_assembled, check_finite_model, check_finite_result
 from ..exceptions import InvalidInput
@@ -145,7 +146,7 @@ class TaskSpaceDynamics(Result):
         for name in ("q", "v", *shapes):
             getattr(self, name).setflags(write=False)
 
-    def force(self, xddot: Any) -> np.ndarray:
+    def force(self, xddot: ArrayLike) -> np.ndarray:
         r"""Task force :math:`f_x = M_x \ddot x + h_x + g_x` [N, N m] at a task acceleration, shape (n_task,).
 
         Args:
@@ -153,7 +154,7 @@ class TaskSpaceDynamics(Result):
         """
         return self.M_x @ check_task_vector(xddot, len(self.dofs), "xddot") + self.h_x + self.g_x
 
-    def acceleration(self, f_x: Any) -> np.ndarray:
+    def acceleration(self, f_x: ArrayLike) -> np.ndarray:
         r"""Task acceleration :math:`M_x^{-1} (f_x - h_x - g_x)` [m/s^2, rad/s^2], shape (n_task,).
 
         Args:
@@ -168,7 +169,9 @@ class TaskSpaceDynamics(Result):
         return {**super().to_dict(), "units": units}
 
 
-def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = None) -> TaskSpaceDynamics:
+def task_space_dynamics(
+    mech: Mechanism, q: ArrayLike, v: ArrayLike | None = None, *, xdot: ArrayLike | None = None
+) -> TaskSpaceDynamics:
     r"""Task inertia, velocity and gravity terms at an assembled state.
 
     Args:

@@ -69,6 +69,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.interpolate import BPoly, make_interp_spline
 
 from ..exceptions import (
@@ -151,7 +152,9 @@ def differentiated_profile(positions: Callable[[float], Any], step: float = FD_S
     return profile
 
 
-def sampled_profile(t: Any, x: Any, xd: Any = None, xdd: Any = None) -> Profile:
+def sampled_profile(
+    t: ArrayLike, x: ArrayLike, xd: ArrayLike | None = None, xdd: ArrayLike | None = None
+) -> Profile:
     """A profile interpolating samples with scipy: positions only, or positions, rates and accelerations.
 
     - ``x`` only: the quintic interpolating spline (``scipy.interpolate.make_interp_spline``,
@@ -201,7 +204,7 @@ def sampled_profile(t: Any, x: Any, xd: Any = None, xdd: Any = None) -> Profile:
     return profile
 
 
-def _samples(values: Any, n: int, name: str) -> np.ndarray:
+def _samples(values: ArrayLike, n: int, name: str) -> np.ndarray:
     arr = np.asarray(values, dtype=float)
     arr = arr[:, None] if arr.ndim == 1 else arr
     if arr.ndim != 2 or arr.shape[0] != n:
@@ -212,7 +215,7 @@ def _samples(values: Any, n: int, name: str) -> np.ndarray:
     return arr
 
 
-def _check_times(times: Any) -> np.ndarray:
+def _check_times(times: ArrayLike) -> np.ndarray:
     """Return ``times`` [s] as a float array of shape (N,), N >= 1, finite and strictly increasing.
 
     Raises:
@@ -473,9 +476,9 @@ class _RateRows:
 def task_trajectory(
     mech: Mechanism,
     profile: Profile | Any,
-    times: Any,
+    times: ArrayLike,
     *,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
     singularity_tol: float = SINGULARITY_TOL,
@@ -550,9 +553,9 @@ def task_trajectory(
 def actuator_trajectory(
     mech: Mechanism,
     profile: Profile | Any,
-    times: Any,
+    times: ArrayLike,
     *,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     tol: float = IK_TOL,
     singularity_tol: float = SINGULARITY_TOL,
     consistency_tol: float = CONSISTENCY_TOL,

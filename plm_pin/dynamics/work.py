@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
 from ..exceptions import InvalidInput
@@ -89,7 +90,7 @@ def adaptive_trapezoid_work(
     raise InvalidInput(f"the trapezoid rule did not converge to {tol} J with 2**{n_max} intervals{last}")
 
 
-def spline_work(t: Any, power: Any) -> np.ndarray:
+def spline_work(t: ArrayLike, power: ArrayLike) -> np.ndarray:
     r"""Exact :math:`\int |P|\,dt` of the cubic spline through power samples, per actuator [J].
 
     Args:
@@ -119,7 +120,7 @@ def spline_work(t: Any, power: Any) -> np.ndarray:
 
 
 def power_along(
-    mech: Mechanism, profile: Any, *, guess: Any = None, **options: Any
+    mech: Mechanism, profile: Any, *, guess: ArrayLike | None = None, **options: Any
 ) -> Callable[[np.ndarray], np.ndarray]:
     """``times -> actuator power`` along a task profile: trajectory then inverse dynamics at those times.
 

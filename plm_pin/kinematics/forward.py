@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import count, positive
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
@@ -68,7 +69,7 @@ def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = 
     return frame_distance(mech, q1, q2) < tol
 
 
-def task_pose(mech: Mechanism, q: Any) -> np.ndarray:
+def task_pose(mech: Mechanism, q: ArrayLike) -> np.ndarray:
     """Task coordinates of the end-effector frame at ``q`` [m, rad], shape (n_task,)."""
     task = require_task(mech)
     pin.framesForwardKinematics(mech.model, mech.data, mech.check_q(q))
@@ -103,8 +104,8 @@ def _close(
 
 def forward_kinematics(
     mech: Mechanism,
-    actuators: Any,
-    guess: Any = None,
+    actuators: ArrayLike,
+    guess: ArrayLike | None = None,
     *,
     all_modes: bool = True,
     starts: int = 48,

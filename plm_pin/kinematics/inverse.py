@@ -6,10 +6,11 @@ import functools
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import positive, signs
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
@@ -138,8 +139,8 @@ def _solution_from_residual(mech: Mechanism, target: TaskTarget, q: np.ndarray, 
 
 def inverse_kinematics(
     mech: Mechanism,
-    x: Any,
-    guess: Any = None,
+    x: ArrayLike,
+    guess: ArrayLike | None = None,
     *,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
@@ -220,7 +221,9 @@ def _within_limits(mech: Mechanism, sol: IKSolution, respect_limits: bool) -> IK
     return sol
 
 
-def _from_guess(mech: Mechanism, target: TaskTarget, guess: Any, tol: float) -> IKSolution | None:
+def _from_guess(
+    mech: Mechanism, target: TaskTarget, guess: ArrayLike | None, tol: float
+) -> IKSolution | None:
     """The solution in the basin of ``guess`` (default: the reference configuration), or None.
 
     Newton first; its last pass gives the residual of the solution. Levenberg-Marquardt when
@@ -281,8 +284,8 @@ def _solve_leg(
 
 def working_modes(
     mech: Mechanism,
-    x: Any,
-    guess: Any = None,
+    x: ArrayLike,
+    guess: ArrayLike | None = None,
     *,
     tol: float = IK_TOL,
     starts_per_leg: int = 12,

@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
@@ -39,7 +40,7 @@ TRACK_TOL = 1e-11
 """Closure tolerance of the continuations [m, rad]."""
 
 
-def redundancy_margin(mech: Mechanism, q: Any, jac: ClosedChainJacobians | None = None) -> float:
+def redundancy_margin(mech: Mechanism, q: ArrayLike, jac: ClosedChainJacobians | None = None) -> float:
     r"""Smallest direct margin left when any one actuator is removed [-].
 
     For each actuator :math:`k`, the direct margin (:mod:`plm_pin.kinematics.singularity`) of
@@ -82,12 +83,12 @@ def _check_path_parameter(s: Any, n: int) -> np.ndarray:
 
 def follow_targets(
     mech: Mechanism,
-    guess: Any,
+    guess: ArrayLike,
     *,
     task_dofs: Sequence[str] = (),
     task_values: Any = None,
     fixed: Mapping[str, Any] | None = None,
-    s: Any = None,
+    s: ArrayLike | None = None,
     tol: float = TRACK_TOL,
 ) -> np.ndarray:
     r"""Configurations along a sampled path of prescribed task coordinates and joint values.
@@ -263,10 +264,10 @@ class TrackedPath(Result):
 
 def track_actuator_path(
     mech: Mechanism,
-    actuators: Any,
-    guess: Any,
+    actuators: ArrayLike,
+    guess: ArrayLike,
     *,
-    s: Any = None,
+    s: ArrayLike | None = None,
     tol: float = SINGULARITY_TOL,
     closure_tol: float = TRACK_TOL,
 ) -> TrackedPath:

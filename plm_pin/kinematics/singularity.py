@@ -38,9 +38,10 @@ singular of a kind when its margin is at most the tolerance.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._checks import check_tolerance
 from ..exceptions import SingularConfiguration
@@ -169,7 +170,7 @@ def report_from_jacobians(mech: Mechanism, jac: ClosedChainJacobians, tol: float
 
 
 def classify(
-    mech: Mechanism, q: Any, tol: float = SINGULARITY_TOL, *, raise_if_singular: bool = False
+    mech: Mechanism, q: ArrayLike, tol: float = SINGULARITY_TOL, *, raise_if_singular: bool = False
 ) -> SingularityReport:
     """Classify the configuration ``q`` (assembled) as regular or singular, with margins.
 

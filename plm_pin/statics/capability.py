@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._checks import load_arguments
 from ..exceptions import InvalidInput, PlmError
@@ -52,8 +53,8 @@ class Capability(Result):
 
 def force_capability(
     mech: Mechanism,
-    q: Any,
-    direction: Any,
+    q: ArrayLike,
+    direction: ArrayLike,
     frame: str | None = None,
     *,
     gravity: bool = True,
@@ -118,7 +119,7 @@ def force_capability(
     return Capability(np.asarray(direction, dtype=float), alpha, f_c, saturated)
 
 
-def _finite_limits(mech: Mechanism, limits: Any, what: str) -> np.ndarray:
+def _finite_limits(mech: Mechanism, limits: ArrayLike, what: str) -> np.ndarray:
     """The actuator limits, shape (n_act, 2); refused unless every one is finite."""
     bounds = actuator_limits(mech, limits)
     if not np.isfinite(bounds).all():
@@ -156,8 +157,8 @@ class InternalRange(Result):
 
 def internal_force_range(
     mech: Mechanism,
-    q: Any,
-    wrench: Any = None,
+    q: ArrayLike,
+    wrench: ArrayLike | None = None,
     frame: str | None = None,
     *,
     gravity: bool = True,
@@ -222,7 +223,7 @@ def _check_gravity_held(f_g: np.ndarray, G: np.ndarray, bounds: np.ndarray, name
 
 def wrench_polygon(
     mech: Mechanism,
-    q: Any,
+    q: ArrayLike,
     d1: Any,
     d2: Any,
     frame: str | None = None,

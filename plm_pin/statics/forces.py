@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._checks import check_finite_result, load_arguments
 from ..exceptions import InvalidInput
@@ -127,7 +128,7 @@ def internal_modes(mech: Mechanism, balance: StaticBalance) -> tuple[InternalMod
     return tuple(out)
 
 
-def actuator_limits(mech: Mechanism, limits: Any) -> np.ndarray:
+def actuator_limits(mech: Mechanism, limits: ArrayLike) -> np.ndarray:
     """Actuator effort limits as an (n_act, 2) array with infinities where unbounded.
 
     Args:
@@ -185,7 +186,7 @@ class AllocationRule:
         mech: Mechanism,
         *,
         objective: str = "norm",
-        weights: Any = None,
+        weights: ArrayLike | None = None,
         limits: Any = "description",
         internal: Any = None,
         min_compression: float | None = None,
@@ -288,13 +289,13 @@ def _allocated(mech: Mechanism, balance: StaticBalance, rule: AllocationRule) ->
 
 def static_forces(
     mech: Mechanism,
-    q: Any,
-    wrench: Any = None,
+    q: ArrayLike,
+    wrench: ArrayLike | None = None,
     frame: str | None = None,
     *,
     gravity: bool = True,
     objective: str = "norm",
-    weights: Any = None,
+    weights: ArrayLike | None = None,
     limits: Any = "description",
     internal: Any = None,
     min_compression: float | None = None,
