@@ -119,7 +119,7 @@ def force_capability(
     return Capability(np.asarray(direction, dtype=float), alpha, f_c, saturated)
 
 
-def _finite_limits(mech: Mechanism, limits: ArrayLike, what: str) -> np.ndarray:
+def _finite_limits(mech: Mechanism, limits: ArrayLike | None, what: str) -> np.ndarray:
     """The actuator limits, shape (n_act, 2); refused unless every one is finite."""
     bounds = actuator_limits(mech, limits)
     if not np.isfinite(bounds).all():

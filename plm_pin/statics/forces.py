@@ -128,7 +128,7 @@ def internal_modes(mech: Mechanism, balance: StaticBalance) -> tuple[InternalMod
     return tuple(out)
 
 
-def actuator_limits(mech: Mechanism, limits: ArrayLike) -> np.ndarray:
+def actuator_limits(mech: Mechanism, limits: ArrayLike | None) -> np.ndarray:
     """Actuator effort limits as an (n_act, 2) array with infinities where unbounded.
 
     Args:
