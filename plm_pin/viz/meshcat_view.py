@@ -25,7 +25,7 @@ import functools
 import html
 import numbers
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from .._io import atomic_write_text
 from ..exceptions import InvalidInput
 from ..kinematics.singularity import SingularityReport, classify
+from ..results import Result, unit
 from .meshcat_server import MeshcatServer, ServerWindow, StaticWindow, require_meshcat
 
 if TYPE_CHECKING:
@@ -78,7 +79,7 @@ _VISUAL = pin.GeometryType.VISUAL
 
 
 @dataclass(frozen=True)
-class SceneStatus:
+class SceneStatus(Result):
     """What a displayed configuration shows.
 
     Attributes:
@@ -88,7 +89,7 @@ class SceneStatus:
             classified (the mechanism has no task, or a closure is open).
     """
 
-    closure_errors: Mapping[str, float]
+    closure_errors: Mapping[str, float] = field(metadata=unit("m, rad"))
     open_closures: tuple[str, ...]
     singularity: SingularityReport | None
 
@@ -96,14 +97,6 @@ class SceneStatus:
     def singular_kinds(self) -> tuple[str, ...]:
         """The singularity kinds found (empty when regular or not classified)."""
         return self.singularity.kinds if self.singularity is not None else ()
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "closure_errors": dict(self.closure_errors),
-            "open_closures": list(self.open_closures),
-            "singularity": self.singularity.to_dict() if self.singularity is not None else None,
-        }
 
 
 def scene_status(mech: Mechanism, q: ArrayLike) -> SceneStatus:
