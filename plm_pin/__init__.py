@@ -10,6 +10,8 @@ from .exceptions import (
     DescriptionError,
     FrameNotFound,
     InvalidInput,
+    InverseDynamicsFailed,
+    PartialResultError,
     PlmError,
     PoseUnreachable,
     SchedulerUnreachable,
@@ -18,6 +20,7 @@ from .exceptions import (
     StoreLocked,
     StoreMismatch,
     TrajectoryError,
+    ViewerError,
 )
 from .loading import build_mechanism, load
 from .mechanism import Mechanism
@@ -30,7 +33,9 @@ __all__ = [
     "DescriptionError",
     "FrameNotFound",
     "InvalidInput",
+    "InverseDynamicsFailed",
     "Mechanism",
+    "PartialResultError",
     "PlmError",
     "PoseUnreachable",
     "SchedulerUnreachable",
@@ -39,6 +44,7 @@ __all__ = [
     "StoreLocked",
     "StoreMismatch",
     "TrajectoryError",
+    "ViewerError",
     "__version__",
     "build_mechanism",
     "export_mjcf",

@@ -1,20 +1,36 @@
-"""Typed errors of plm_pin: one base class and one subclass per condition."""
+"""Typed errors of plm_pin: one base class and one subclass per condition.
+
+Errors that stop an operation part-way derive from :class:`PartialResultError` and keep what
+was computed before (or the best attempt) in ``partial``.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
+
+import numpy as np
 
 from ._text import short
-
-if TYPE_CHECKING:
-    from .dynamics.simulation import SimulationResult
-    from .dynamics.trajectory import JointTrajectory
+from .results import Result
 
 
 class PlmError(Exception):
     """Base class of every error plm_pin raises on purpose."""
+
+
+class PartialResultError(PlmError):
+    """An operation stopped part-way; what it computed before, or its best attempt, is kept.
+
+    Attributes:
+        partial: the partial result (see each subclass for its type).
+    """
+
+    partial: object
+
+    def __init__(self, message: str, partial: object) -> None:
+        self.partial = partial
+        super().__init__(message)
 
 
 class DescriptionError(PlmError):
@@ -83,61 +99,80 @@ class SingularConfiguration(PlmError):
     """A configuration is singular for the requested operation."""
 
 
-class AllocationInfeasible(PlmError):
+class AllocationInfeasible(PartialResultError):
     """No actuator-force allocation meets the limits and conditions.
 
     Attributes:
-        least_violating: the balancing actuator forces that violate the limits least (in the
-            sum of squared violations) [N, N m], shape (n_act,).
+        partial: the balancing actuator forces that violate the limits least (in the sum of
+            squared violations) [N, N m], shape (n_act,).
         saturated: names of the actuators at or beyond a limit in that solution.
         violation: by how much each limit or condition is exceeded there, keyed by its name [N, N m].
     """
 
+    partial: np.ndarray
+
     def __init__(
-        self, message: str, least_violating: object, saturated: Sequence[str], violation: dict[str, float]
+        self, message: str, partial: np.ndarray, saturated: Sequence[str], violation: dict[str, float]
     ) -> None:
-        self.least_violating = least_violating
         self.saturated = tuple(saturated)
         self.violation = dict(violation)
-        super().__init__(message)
+        super().__init__(message, partial)
 
 
-class TrajectoryError(PlmError):
+class TrajectoryError(PartialResultError):
     """A trajectory stopped at a sample that cannot be solved (out of the workspace, or singular).
 
     Attributes:
-        partial: the trajectory computed before that sample (``index`` samples).
+        partial: the :class:`~plm_pin.dynamics.JointTrajectory` computed before that sample
+            (``index`` samples).
         index: the sample that failed.
         time: its time [s].
         cause: the error met there (:class:`PoseUnreachable`, :class:`ClosureNotSatisfied`,
             :class:`SingularConfiguration` or :class:`InvalidInput`).
     """
 
-    def __init__(
-        self, message: str, partial: JointTrajectory, index: int, time: float, cause: PlmError
-    ) -> None:
-        self.partial = partial
+    partial: Result
+
+    def __init__(self, message: str, partial: Result, index: int, time: float, cause: PlmError) -> None:
         self.index = index
         self.time = time
         self.cause = cause
-        super().__init__(message)
+        super().__init__(message, partial)
 
 
-class SimulationFailed(PlmError):
+class SimulationFailed(PartialResultError):
     """A simulation stopped early: the state or forces became non-finite, or the loops could not stay closed.
 
     Attributes:
-        partial: the samples computed before the failure.
+        partial: the :class:`~plm_pin.dynamics.SimulationResult` of the samples computed before
+            the failure.
         time: time of the step that failed [s].
         cause: the error met there (:class:`ClosureNotSatisfied`, :class:`SingularConfiguration`),
             or None when the state or the forces became non-finite.
     """
 
-    def __init__(self, message: str, partial: SimulationResult, time: float, cause: PlmError | None) -> None:
-        self.partial = partial
+    partial: Result
+
+    def __init__(self, message: str, partial: Result, time: float, cause: PlmError | None) -> None:
         self.time = time
         self.cause = cause
-        super().__init__(message)
+        super().__init__(message, partial)
+
+
+class InverseDynamicsFailed(TrajectoryError):
+    """Inverse dynamics stopped at a sample: infeasible allocation or an unresisted load.
+
+    Attributes:
+        partial: the :class:`~plm_pin.dynamics.InverseDynamics` of the samples computed before it.
+        index: the sample that failed.
+        time: its time [s].
+        cause: the error met there (:class:`AllocationInfeasible` with the saturated actuators,
+            or :class:`SingularConfiguration`).
+    """
+
+
+class ViewerError(PlmError):
+    """The meshcat viewer cannot be used: meshcat is missing, or a server did not start or answer."""
 
 
 class StoreMismatch(InvalidInput):

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ._checks import as_vector
 from .description.sidecar import Sidecar, TaskSpec
@@ -295,19 +296,19 @@ class Mechanism:
         return as_vector(q, self.nq, name)
 
     # ---------------------------------------------------------- closures
-    def closure_residual(self, q: Any) -> np.ndarray:
+    def closure_residual(self, q: ArrayLike) -> np.ndarray:
         r"""Closure residual :math:`\phi(q)` [m, rad] (see :mod:`plm_pin.kinematics.closures`), shape (m,)."""
         return _closures.residual(self.model, self.data, self.closures, self.check_q(q))
 
-    def closure_jacobian(self, q: Any) -> np.ndarray:
+    def closure_jacobian(self, q: ArrayLike) -> np.ndarray:
         r"""Closure Jacobian :math:`J_\phi(q)` on the tangent space, shape (m, nv)."""
         return _closures.jacobian(self.model, self.data, self.closures, self.check_q(q))
 
-    def closure_rank(self, q: Any, rtol: float = RANK_RTOL) -> int:
+    def closure_rank(self, q: ArrayLike, rtol: float = RANK_RTOL) -> int:
         r"""Rank of :math:`J_\phi(q)` by SVD: singular values above ``rtol * max(s_max, 1)``."""
         return numerical_rank(self.closure_jacobian(q), rtol, floor=1.0)
 
-    def closure_errors(self, q: Any) -> dict[str, float]:
+    def closure_errors(self, q: ArrayLike) -> dict[str, float]:
         """Largest absolute residual of each closure [m, rad]."""
         phi = self.closure_residual(q)
         return {c.name: float(np.max(np.abs(phi[c.rows]))) for c in self.closures}
@@ -335,7 +336,7 @@ class Mechanism:
 
     def assemble(
         self,
-        q_guess: Any = None,
+        guess: ArrayLike | None = None,
         fixed: Mapping[str, float] | Iterable[str] | None = None,
         *,
         tol: float = ASSEMBLY_TOL,
@@ -344,11 +345,11 @@ class Mechanism:
         r"""Project a configuration onto the closure manifold :math:`\phi(q) = 0`.
 
         Damped Gauss-Newton (Levenberg-Marquardt) on the closure residual with the exact
-        closure Jacobian; the minimum-norm step keeps the result close to ``q_guess``.
+        closure Jacobian; the minimum-norm step keeps the result close to ``guess``.
 
         Args:
-            q_guess: starting configuration (default: the reference configuration). # (nq,)
-            fixed: joints that must not move: names (kept at their ``q_guess`` values) or a
+            guess: starting configuration (default: the reference configuration). # (nq,)
+            fixed: joints that must not move: names (kept at their ``guess`` values) or a
                 mapping from one-DOF joint name to the value to impose [m] or [rad].
             tol: largest absolute residual accepted [m, rad].
             max_iterations: iteration cap.
@@ -359,9 +360,9 @@ class Mechanism:
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol``; the error
                 carries the best configuration and the worst closure.
-            InvalidInput: on a malformed ``q_guess`` or an unknown joint in ``fixed``.
+            InvalidInput: on a malformed ``guess`` or an unknown joint in ``fixed``.
         """
-        q0 = self.q_ref.copy() if q_guess is None else self.check_q(q_guess, "q_guess").copy()
+        q0 = self.q_ref.copy() if guess is None else self.check_q(guess, "guess").copy()
         names: list[str] = []
         if fixed is not None:
             if isinstance(fixed, Mapping):
@@ -477,7 +478,7 @@ class Mechanism:
         return find_legs(self, self._generic_configurations()[-1])
 
     # ---------------------------------------------------------- reading
-    def actuator_positions(self, q: Any) -> np.ndarray:
+    def actuator_positions(self, q: ArrayLike) -> np.ndarray:
         """Actuated joint positions [m] or [rad] (angles of unbounded revolutes too), shape (n_act,).
 
         ``q`` may also stack configurations, shape (..., nq), for positions of shape
@@ -504,7 +505,7 @@ class Mechanism:
             return pin.GeometryModel()
         return self._visual_factory()
 
-    def show(self, q: Any = None, **kwargs: Any) -> MeshcatViewer:
+    def show(self, q: ArrayLike | None = None, **kwargs: Any) -> MeshcatViewer:
         """Display the mechanism at ``q`` (default: :attr:`q_ref`) in meshcat; needs ``plm-pin[viz]``.
 
         See :func:`plm_pin.viz.show` for the options. Returns the viewer: open its ``url``

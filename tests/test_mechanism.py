@@ -101,8 +101,8 @@ def test_assembly_failure_is_typed_and_names_the_closure():
 @pytest.mark.parametrize(
     ("bad", "message"),
     [
-        (np.zeros(3), r"q_guess must have shape \(9,\), got \(3,\)"),
-        (np.full(9, np.nan), r"q_guess has non-finite entries at indices \[0, 1"),
+        (np.zeros(3), r"guess must have shape \(9,\), got \(3,\)"),
+        (np.full(9, np.nan), r"guess has non-finite entries at indices \[0, 1"),
         (np.zeros((9, 1)), r"must have shape \(9,\)"),
     ],
 )
@@ -111,7 +111,7 @@ def test_bad_configurations_are_refused(bad, message):
     mech = preset("harada2011_3d4m")
     with pytest.raises(plm_pin.InvalidInput, match=message):
         mech.assemble(bad)
-    with pytest.raises(plm_pin.InvalidInput, match=message.replace("q_guess", "q")):
+    with pytest.raises(plm_pin.InvalidInput, match=message.replace("guess", "q")):
         mech.closure_residual(bad)
 
 

@@ -20,10 +20,11 @@ unit of length whenever the task mixes translations and rotations.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..exceptions import SingularConfiguration
 from ..kinematics.inverse import inverse_kinematics
@@ -35,9 +36,13 @@ from ..kinematics.jacobians import (
     times_T_inverse,
 )
 from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
+from ..results import Result, unit
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
+
+W_UNIT = "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
+"""Unit of the manipulability w."""
 
 METRICS: tuple[str, ...] = (
     "manipulability",
@@ -50,7 +55,7 @@ METRICS: tuple[str, ...] = (
 
 
 @dataclass(frozen=True)
-class Manipulability:
+class Manipulability(Result):
     r"""Manipulability of a mechanism at one configuration (Harada 2011 eq. (13)).
 
     Attributes:
@@ -65,30 +70,21 @@ class Manipulability:
         inverse_singular: whether :math:`T = J_x N` is singular (J_ce undefined).
     """
 
-    w: float
-    condition_number: float
+    w: float = field(
+        metadata=unit(
+            "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
+        )
+    )
+    condition_number: float = field(metadata=unit("-"))
     singular_values: np.ndarray
     J_ce: np.ndarray | None
-    inverse_singular: bool
+    inverse_singular: bool = field(metadata=unit("-"))
+    _NONFINITE_AS_TEXT = ("w", "condition_number", "singular_values")
 
     @property
     def inverse_condition(self) -> float:
         r""":math:`1 / \kappa` in [0, 1]: 0 at a singularity, 1 when isotropic [-]."""
         return 0.0 if not np.isfinite(self.condition_number) else 1.0 / self.condition_number
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON (inf written as the string 'inf')."""
-
-        def num(v: float) -> float | str:
-            return v if np.isfinite(v) else str(v)
-
-        return {
-            "w": num(self.w),
-            "condition_number": num(self.condition_number),
-            "singular_values": [num(float(s)) for s in self.singular_values],
-            "J_ce": None if self.J_ce is None else self.J_ce.tolist(),
-            "inverse_singular": self.inverse_singular,
-        }
 
 
 def manipulability_from_jacobians(jac: ClosedChainJacobians) -> Manipulability:
@@ -128,7 +124,7 @@ def _manipulability_values(
     return J_ce, s, w, cond, singular
 
 
-def manipulability(mech: Mechanism, q: Any, *, raise_if_singular: bool = False) -> Manipulability:
+def manipulability(mech: Mechanism, q: ArrayLike, *, raise_if_singular: bool = False) -> Manipulability:
     """Yoshikawa manipulability and condition number of :math:`J_{ce}` at configuration ``q``.
 
     Args:
@@ -154,8 +150,8 @@ def manipulability(mech: Mechanism, q: Any, *, raise_if_singular: bool = False) 
 
 def manipulability_at(
     mech: Mechanism,
-    x: Any,
-    guess: Any = None,
+    x: ArrayLike,
+    guess: ArrayLike | None = None,
     *,
     mode: tuple[int, ...] | None = None,
     raise_if_singular: bool = False,

@@ -22,14 +22,16 @@ The working mode kept is the guess's (the reference configuration's by default,
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..exceptions import InvalidInput
 from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import SINGULARITY_TOL
+from ..results import Result, unit
 from ._continuation import guess_mode, start_configuration
 from .singular_loci import NEAR, SingularPoint, line_path, locate_on_solved
 from .workspace import workspace_sweep
@@ -46,7 +48,7 @@ or ``"unreachable"`` (the reference angle itself is not reached: the range is Na
 
 
 @dataclass(frozen=True)
-class OrientationRange:
+class OrientationRange(Result):
     """The singularity-free interval of one task coordinate around a reference value.
 
     Attributes:
@@ -61,36 +63,20 @@ class OrientationRange:
     """
 
     axis: str
-    reference: float
-    lower: float
-    upper: float
+    reference: float = field(metadata=unit("rad"))
+    lower: float = field(metadata=unit("rad"))
+    upper: float = field(metadata=unit("rad"))
     lower_end: str
     upper_end: str
-    pose: np.ndarray
+    pose: np.ndarray = field(metadata=unit("m, rad"))
     points: tuple[SingularPoint, ...]
+    _DERIVED = ("width",)
+    _NONFINITE_AS_TEXT = ("lower", "upper", "width")
 
     @property
     def width(self) -> float:
         """``upper - lower`` [rad] (NaN when the reference is unreachable)."""
         return self.upper - self.lower
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON (NaN written as the string 'nan')."""
-
-        def num(v: float) -> float | str:
-            return v if math.isfinite(v) else str(v)
-
-        return {
-            "axis": self.axis,
-            "reference": self.reference,
-            "lower": num(self.lower),
-            "upper": num(self.upper),
-            "width": num(self.width),
-            "lower_end": self.lower_end,
-            "upper_end": self.upper_end,
-            "pose": self.pose.tolist(),
-            "points": [p.to_dict() for p in self.points],
-        }
 
 
 def _ends(point: SingularPoint) -> str | None:
@@ -105,11 +91,11 @@ def _ends(point: SingularPoint) -> str | None:
 def orientation_range(
     mech: Mechanism,
     axis: str,
-    values: Any,
-    pose: Any = None,
+    values: ArrayLike,
+    pose: ArrayLike | None = None,
     *,
     reference: float = 0.0,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     xtol: float = RANGE_XTOL,
     tol: float = SINGULARITY_TOL,
     near: float = NEAR,

@@ -28,17 +28,19 @@ A 2-D slice is handled line by line (:func:`singular_loci`).
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.optimize import brentq, minimize_scalar
 
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.inverse import IK_TOL, inverse_kinematics
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
 from ..kinematics.singularity import SINGULARITY_TOL, SingularityReport, classify
+from ..results import Result, unit
 from ._continuation import IKEvaluator, base_pose, compatible, solve_poses
 
 if TYPE_CHECKING:
@@ -54,7 +56,7 @@ METHODS: tuple[str, ...] = ("sign_change", "minimum", "boundary")
 
 
 @dataclass(frozen=True)
-class SingularPoint:
+class SingularPoint(Result):
     """A singular (or nearly singular) configuration found on a path.
 
     Attributes:
@@ -71,35 +73,22 @@ class SingularPoint:
         bracket: final bracket ``(t_lo, t_hi)`` holding the point [unit of t].
     """
 
-    parameter: float
-    x: np.ndarray
-    q: np.ndarray
+    parameter: float = field(metadata=unit("m, rad"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    q: np.ndarray = field(metadata=unit("m, rad"))
     kind: str
     method: str
     reaches_zero: bool
     report: SingularityReport
-    bracket: tuple[float, float]
+    bracket: tuple[float, float] = field(metadata=unit("m, rad"))
 
     @property
     def margin(self) -> float:
         """Margin of ``kind`` at the point [-]."""
         return float(getattr(self.report, f"{self.kind}_margin"))
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "parameter": self.parameter,
-            "x": self.x.tolist(),
-            "q": self.q.tolist(),
-            "kind": self.kind,
-            "method": self.method,
-            "reaches_zero": self.reaches_zero,
-            "report": self.report.to_dict(),
-            "bracket": list(self.bracket),
-        }
 
-
-def signed_singularity_function(mech: Mechanism, q: Any) -> float:
+def signed_singularity_function(mech: Mechanism, q: ArrayLike) -> float:
     r""":math:`\det(J_x N) \det(S_a N)`: zero at inverse and direct singularities, basis-independent.
 
     Needs as many actuators and task coordinates as DOF.
@@ -195,9 +184,9 @@ def _point(
 def singular_points(
     mech: Mechanism,
     path: Callable[[float], Any],
-    t: Any,
+    t: ArrayLike,
     *,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     xtol: float = XTOL,
     tol: float = SINGULARITY_TOL,
@@ -418,8 +407,8 @@ def _refine_boundary(
 def singular_points_along(
     mech: Mechanism,
     axis: str,
-    values: Any,
-    pose: Any = None,
+    values: ArrayLike,
+    pose: ArrayLike | None = None,
     **options: Any,
 ) -> list[SingularPoint]:
     """Singularities along one task coordinate, the others fixed (a 1-D slice).
@@ -460,10 +449,10 @@ def line_path(mech: Mechanism, axis: str, pose: Any, guess: Any) -> Callable[[fl
 def singular_loci(
     mech: Mechanism,
     axis: str,
-    values: Any,
+    values: ArrayLike,
     across: str,
     across_values: Sequence[float],
-    pose: Any = None,
+    pose: ArrayLike | None = None,
     **options: Any,
 ) -> list[SingularPoint]:
     r"""Singular curves over a 2-D slice, found line by line along ``axis``.

@@ -1,7 +1,7 @@
 """Closed-chain dynamics: trajectories on the closure manifold, inverse and forward dynamics, task space."""
 
 from .decoupling import DECOUPLING_RTOL, DecouplingReport, EntryBehaviour, decoupling_check
-from .inverse_dynamics import TERMS, InverseDynamics, InverseDynamicsFailed, inverse_dynamics
+from .inverse_dynamics import TERMS, InverseDynamics, inverse_dynamics
 from .simulation import SimulationResult, simulate
 from .task_space import TaskSpaceDynamics, task_space_dynamics
 from .trajectory import (
@@ -21,7 +21,6 @@ __all__ = [
     "DecouplingReport",
     "EntryBehaviour",
     "InverseDynamics",
-    "InverseDynamicsFailed",
     "JointTrajectory",
     "Profile",
     "SimulationResult",

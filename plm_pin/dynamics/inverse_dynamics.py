@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import (
     CLOSURE_TOL,
@@ -39,8 +40,14 @@ from .._checks import (
     checked_trajectory,
     load_arguments,
 )
-from ..exceptions import AllocationInfeasible, InvalidInput, PlmError, SingularConfiguration
+from ..exceptions import (
+    AllocationInfeasible,
+    InvalidInput,
+    InverseDynamicsFailed,
+    SingularConfiguration,
+)
 from ..kinematics import closures as _closures
+from ..results import Result, unit
 from ..statics import AllocationRule, load_on_frame, solve_balance
 from ..statics.balance import SINGULAR_RTOL, Load, _balance, balance_factors
 from .trajectory import JointTrajectory
@@ -58,7 +65,7 @@ RESERVED_GROUPS = ("external", "other", "rotor", "screw")
 
 
 @dataclass(frozen=True)
-class InverseDynamics:
+class InverseDynamics(Result):
     """Actuator forces along a trajectory, with their splits, motor quantities and power.
 
     Attributes:
@@ -79,16 +86,16 @@ class InverseDynamics:
     """
 
     actuators: tuple[str, ...]
-    t: np.ndarray
-    f_c: np.ndarray
-    lam: np.ndarray
-    internal: np.ndarray
-    residual: np.ndarray
-    cd: np.ndarray
-    terms: dict[str, np.ndarray]
-    bodies: Mapping[str, np.ndarray]
+    t: np.ndarray = field(metadata=unit("s"))
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
+    internal: np.ndarray = field(metadata=unit("N, N m"))
+    residual: np.ndarray = field(metadata=unit("N, N m"))
+    cd: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    terms: dict[str, np.ndarray] = field(metadata=unit("N, N m"))
+    bodies: Mapping[str, np.ndarray] = field(metadata=unit("N, N m"))
     split_exact: bool
-    leads: np.ndarray = field(repr=False)
+    leads: np.ndarray = field(repr=False, metadata=unit("m/rev"))
 
     @property
     def n_samples(self) -> int:
@@ -117,41 +124,8 @@ class InverseDynamics:
         return {k: v * self.cd for k, v in getattr(self, split).items()}
 
     def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "actuators": list(self.actuators),
-            "t": self.t.tolist(),
-            "f_c": self.f_c.tolist(),
-            "lambda": self.lam.tolist(),
-            "internal": self.internal.tolist(),
-            "residual": self.residual.tolist(),
-            "cd": self.cd.tolist(),
-            "terms": {k: v.tolist() for k, v in self.terms.items()},
-            "bodies": {k: v.tolist() for k, v in self.bodies.items()},
-            "split_exact": self.split_exact,
-            "leads": [None if np.isnan(p) else float(p) for p in self.leads],
-        }
-
-
-class InverseDynamicsFailed(PlmError):
-    """Inverse dynamics stopped at a sample: infeasible allocation or an unresisted load.
-
-    Attributes:
-        partial: the samples computed before it.
-        index: the sample that failed.
-        time: its time [s].
-        cause: the error met there (:class:`AllocationInfeasible` with the saturated actuators,
-            or :class:`SingularConfiguration`).
-    """
-
-    def __init__(
-        self, message: str, partial: InverseDynamics, index: int, time: float, cause: PlmError
-    ) -> None:
-        self.partial = partial
-        self.index = index
-        self.time = time
-        self.cause = cause
-        super().__init__(message)
+        """JSON-ready dictionary (a missing lead written as None)."""
+        return {**super().to_dict(), "leads": [None if np.isnan(p) else float(p) for p in self.leads]}
 
 
 @dataclass(frozen=True)
@@ -272,12 +246,12 @@ def inverse_dynamics(
     mech: Mechanism,
     trajectory: JointTrajectory,
     *,
-    wrench: Any = None,
+    wrench: Any | None = None,
     frame: str | None = None,
     gravity: bool = True,
     groups: Mapping[str, Sequence[str]] | None = None,
     objective: str = "norm",
-    weights: Any = None,
+    weights: ArrayLike | None = None,
     limits: Any = "description",
     internal: Any = None,
     min_compression: float | None = None,

@@ -67,10 +67,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.integrate import DOP853
 
 from .._checks import as_vector, optional_name, positive, real_numbers, sample_count
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
+from ..results import Result, unit
 from ..statics.balance import load_on_frame
 from ._constrained import ClosedChainDynamics, Projection, ReducedRows
 
@@ -112,7 +114,7 @@ ForceLaw = Callable[[float, np.ndarray, np.ndarray], Any]
 
 
 @dataclass(frozen=True)
-class SimulationResult:
+class SimulationResult(Result):
     r"""Samples of a closed-chain simulation at the output times.
 
     Attributes:
@@ -134,15 +136,15 @@ class SimulationResult:
         steps: integration steps taken.
     """
 
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
-    lam: np.ndarray
-    closure_residual: np.ndarray
-    closure_drift: np.ndarray
-    energy: np.ndarray
-    x: np.ndarray | None
+    t: np.ndarray = field(metadata=unit("s"))
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    v: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    a: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
+    closure_residual: np.ndarray = field(metadata=unit("m, rad"))
+    closure_drift: np.ndarray = field(metadata=unit("m, rad"))
+    energy: np.ndarray = field(metadata=unit("J"))
+    x: np.ndarray | None = field(metadata=unit("m, rad"))
     method: str
     solver: str
     steps: int = field(default=0)
@@ -167,26 +169,10 @@ class SimulationResult:
         """Largest deviation of the energy from its initial value [J] (0 without samples)."""
         return float(np.max(np.abs(self.energy - self.energy[0]))) if len(self) else 0.0
 
+    @property
     def max_closure_residual(self) -> float:
         """Largest closure distance over the samples [m, rad]."""
         return float(np.max(self.closure_residual)) if len(self) else 0.0
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "t": self.t.tolist(),
-            "q": self.q.tolist(),
-            "v": self.v.tolist(),
-            "a": self.a.tolist(),
-            "lam": self.lam.tolist(),
-            "closure_residual": self.closure_residual.tolist(),
-            "closure_drift": self.closure_drift.tolist(),
-            "energy": self.energy.tolist(),
-            "x": None if self.x is None else self.x.tolist(),
-            "method": self.method,
-            "solver": self.solver,
-            "steps": self.steps,
-        }
 
 
 class _NonFinite(Exception):
@@ -558,14 +544,14 @@ def _check_start(
 
 def simulate(
     mech: Mechanism,
-    q0: Any,
-    v0: Any = None,
+    q0: ArrayLike,
+    v0: ArrayLike | None = None,
     *,
     duration: float,
     dt: float,
-    actuator_forces: Any = None,
-    wrench: Any = None,
-    wrench_frame: str | None = None,
+    actuator_forces: Any | None = None,
+    wrench: ArrayLike | None = None,
+    frame: str | None = None,
     method: str = "adaptive",
     step: float | None = None,
     rtol: float = 1e-10,
@@ -580,7 +566,7 @@ def simulate(
         >>> from plm_pin.dynamics.simulation import simulate
         >>> mech = plm_pin.load("fourbar")
         >>> run = simulate(mech, mech.q_ref, duration=1.0, dt=0.01)
-        >>> bool(run.max_closure_residual() < 1e-10)
+        >>> bool(run.max_closure_residual < 1e-10)
         True
 
     Args:
@@ -592,10 +578,10 @@ def simulate(
         dt: output step [s]: samples at 0, dt, 2 dt, ... and ``duration``.
         actuator_forces: forces [N] or torques [N m] of the actuators, shape (n_act,), constant,
             or a function ``(t, q, v) -> forces``; default none (a passive mechanism).
-        wrench: constant external wrench on ``wrench_frame``: ``(fx, fy, fz, mx, my, mz)``
+        wrench: constant external wrench on ``frame``: ``(fx, fy, fz, mx, my, mz)``
             [N, N m] world-aligned about the frame origin, or on the task frame one value
             per task coordinate (``fx fy mz`` for ``x y rz``).
-        wrench_frame: frame the wrench acts on; default the end-effector (task) frame.
+        frame: frame the wrench acts on; default the end-effector (task) frame.
         method: ``"adaptive"`` (DOP853 over the whole run, samples from its dense output; the
             default) or ``"fixed"`` (Runge-Kutta 4, projected after every step).
         step: ``fixed``: integration step [s], default ``min(dt, 1 ms)``, shortened to divide each
@@ -615,7 +601,7 @@ def simulate(
     Raises:
         InvalidInput: a malformed or non-finite argument, an unknown method or solver
             (the message lists the choices), or ``v0`` violating the closures.
-        FrameNotFound: unknown ``wrench_frame``.
+        FrameNotFound: unknown ``frame``.
         ClosureNotSatisfied: ``q0`` is not assembled to ``closure_tol``.
         SimulationFailed: the state or the forces became non-finite, the loops could not
             be kept closed (for instance at a constraint singularity), a fixed step stayed too
@@ -624,7 +610,7 @@ def simulate(
             carries the samples computed before.
     """
     sample_count(duration, dt)
-    real_numbers(wrench, "wrench"), optional_name(wrench_frame, "wrench_frame")
+    real_numbers(wrench, "wrench"), optional_name(frame, "frame")
     if method not in METHODS:
         raise InvalidInput(f"method {method!r} is not one of {list(METHODS)}")
     duration = positive(duration, "duration")
@@ -633,9 +619,9 @@ def simulate(
     rtol, atol = positive(rtol, "rtol"), positive(atol, "atol")
     default_step = min(dt, DEFAULT_STEP) if method == "fixed" else math.inf
     h_max = default_step if step is None else positive(step, "step")
-    if wrench is None and wrench_frame is not None:
-        raise InvalidInput(f"wrench_frame {wrench_frame!r} given without a wrench")
-    load = None if wrench is None else load_on_frame(mech, wrench, wrench_frame)
+    if wrench is None and frame is not None:
+        raise InvalidInput(f"frame {frame!r} given without a wrench")
+    load = None if wrench is None else load_on_frame(mech, wrench, frame)
     forces = _check_forces(mech, actuator_forces)
     dyn = ClosedChainDynamics(mech, solver, load)
     q, v = _check_start(mech, dyn, q0, v0, closure_tol)

@@ -49,17 +49,19 @@ Units (SI): for rows :math:`i, j` linear (l) or angular (a), :math:`M_{x,ij}` is
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import as_vector, check_assembled, check_finite_model, check_finite_result
 from ..exceptions import InvalidInput
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
 from ..kinematics.singularity import inverse_margins
 from ..kinematics.task import check_task_vector
+from ..results import Result, unit
 from ..warnings import IllConditionedWarning
 from .trajectory import particular_acceleration
 
@@ -92,7 +94,7 @@ def task_units(dofs: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]
 
 
 @dataclass(frozen=True)
-class TaskSpaceDynamics:
+class TaskSpaceDynamics(Result):
     r"""Task-space terms of a closed chain at one state :math:`(q, v)`: :math:`M_x \ddot x + h_x + g_x = f_x`.
 
     Rows follow ``dofs`` (the task's coordinates); see the module docstring for their
@@ -113,16 +115,17 @@ class TaskSpaceDynamics:
     """
 
     dofs: tuple[str, ...]
-    q: np.ndarray
-    v: np.ndarray
-    xdot: np.ndarray
-    M_x: np.ndarray
-    h_x: np.ndarray
-    g_x: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    v: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    xdot: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    M_x: np.ndarray = field(metadata=unit("kg, kg m, kg m^2"))
+    h_x: np.ndarray = field(metadata=unit("N, N m"))
+    g_x: np.ndarray = field(metadata=unit("N, N m"))
     S: np.ndarray
-    M: np.ndarray
-    h: np.ndarray
-    g: np.ndarray
+    M: np.ndarray = field(metadata=unit("kg, kg m, kg m^2"))
+    h: np.ndarray = field(metadata=unit("N, N m"))
+    g: np.ndarray = field(metadata=unit("N, N m"))
+    _SKIPPED = ("S", "M", "h", "g")
 
     def __post_init__(self) -> None:
         n, nv = len(self.dofs), self.v.shape[0]
@@ -143,7 +146,7 @@ class TaskSpaceDynamics:
         for name in ("q", "v", *shapes):
             getattr(self, name).setflags(write=False)
 
-    def force(self, xddot: Any) -> np.ndarray:
+    def force(self, xddot: ArrayLike) -> np.ndarray:
         r"""Task force :math:`f_x = M_x \ddot x + h_x + g_x` [N, N m] at a task acceleration, shape (n_task,).
 
         Args:
@@ -151,7 +154,7 @@ class TaskSpaceDynamics:
         """
         return self.M_x @ check_task_vector(xddot, len(self.dofs), "xddot") + self.h_x + self.g_x
 
-    def acceleration(self, f_x: Any) -> np.ndarray:
+    def acceleration(self, f_x: ArrayLike) -> np.ndarray:
         r"""Task acceleration :math:`M_x^{-1} (f_x - h_x - g_x)` [m/s^2, rad/s^2], shape (n_task,).
 
         Args:
@@ -162,19 +165,13 @@ class TaskSpaceDynamics:
     def to_dict(self) -> dict[str, object]:
         """Plain data for JSON, with the units of ``M_x`` (row-major) and of the force rows."""
         mass_units, force_units = task_units(self.dofs)
-        return {
-            "dofs": list(self.dofs),
-            "q": self.q.tolist(),
-            "v": self.v.tolist(),
-            "xdot": self.xdot.tolist(),
-            "M_x": self.M_x.tolist(),
-            "h_x": self.h_x.tolist(),
-            "g_x": self.g_x.tolist(),
-            "units": {"M_x": list(mass_units), "h_x": list(force_units), "g_x": list(force_units)},
-        }
+        units = {"M_x": list(mass_units), "h_x": list(force_units), "g_x": list(force_units)}
+        return {**super().to_dict(), "units": units}
 
 
-def task_space_dynamics(mech: Mechanism, q: Any, v: Any = None, *, xdot: Any = None) -> TaskSpaceDynamics:
+def task_space_dynamics(
+    mech: Mechanism, q: ArrayLike, v: ArrayLike | None = None, *, xdot: ArrayLike | None = None
+) -> TaskSpaceDynamics:
     r"""Task inertia, velocity and gravity terms at an assembled state.
 
     Args:

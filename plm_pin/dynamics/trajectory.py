@@ -64,11 +64,12 @@ Units: time [s]; lengths [m], angles [rad] and their rates [/s], [/s^2].
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.interpolate import BPoly, make_interp_spline
 
 from ..exceptions import (
@@ -95,6 +96,7 @@ from ..kinematics.singularity import (
     inverse_margins,
 )
 from ..kinematics.task import Task
+from ..results import Result, unit
 
 if TYPE_CHECKING:
     from ..mechanism import Mechanism
@@ -150,7 +152,9 @@ def differentiated_profile(positions: Callable[[float], Any], step: float = FD_S
     return profile
 
 
-def sampled_profile(t: Any, x: Any, xd: Any = None, xdd: Any = None) -> Profile:
+def sampled_profile(
+    t: ArrayLike, x: ArrayLike, xd: ArrayLike | None = None, xdd: ArrayLike | None = None
+) -> Profile:
     """A profile interpolating samples with scipy: positions only, or positions, rates and accelerations.
 
     - ``x`` only: the quintic interpolating spline (``scipy.interpolate.make_interp_spline``,
@@ -200,7 +204,7 @@ def sampled_profile(t: Any, x: Any, xd: Any = None, xdd: Any = None) -> Profile:
     return profile
 
 
-def _samples(values: Any, n: int, name: str) -> np.ndarray:
+def _samples(values: ArrayLike, n: int, name: str) -> np.ndarray:
     arr = np.asarray(values, dtype=float)
     arr = arr[:, None] if arr.ndim == 1 else arr
     if arr.ndim != 2 or arr.shape[0] != n:
@@ -211,7 +215,7 @@ def _samples(values: Any, n: int, name: str) -> np.ndarray:
     return arr
 
 
-def _check_times(times: Any) -> np.ndarray:
+def _check_times(times: ArrayLike) -> np.ndarray:
     """Return ``times`` [s] as a float array of shape (N,), N >= 1, finite and strictly increasing.
 
     Raises:
@@ -267,7 +271,7 @@ _ARRAYS = ("t", "q", "v", "a", "x", "xd", "xdd", "c", "cd", "cdd", "residual")
 
 
 @dataclass(frozen=True)
-class JointTrajectory:
+class JointTrajectory(Result):
     r"""Configurations, velocities and accelerations of a closed chain along a sampled motion.
 
     Arrays are read-only; every one has one row per sample.
@@ -287,17 +291,18 @@ class JointTrajectory:
         residual: largest absolute closure residual per sample [m, rad], shape (N,).
     """
 
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    a: np.ndarray
-    x: np.ndarray
-    xd: np.ndarray
-    xdd: np.ndarray
-    c: np.ndarray
-    cd: np.ndarray
-    cdd: np.ndarray
-    residual: np.ndarray
+    t: np.ndarray = field(metadata=unit("s"))
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    v: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    a: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    xd: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    xdd: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
+    c: np.ndarray = field(metadata=unit("m, rad"))
+    cd: np.ndarray = field(metadata=unit("m/s, rad/s"))
+    cdd: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
+    residual: np.ndarray = field(metadata=unit("m, rad"))
+    _DERIVED = ("n_samples", "max_residual")
 
     def __post_init__(self) -> None:
         n = self.t.shape[0]
@@ -320,13 +325,6 @@ class JointTrajectory:
     def max_residual(self) -> float:
         """Largest closure residual over the samples [m, rad] (0 without samples)."""
         return float(np.max(self.residual)) if self.residual.size else 0.0
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        out: dict[str, object] = {name: getattr(self, name).tolist() for name in _ARRAYS}
-        out["n_samples"] = self.n_samples
-        out["max_residual"] = self.max_residual
-        return out
 
 
 class _Recorder:
@@ -478,9 +476,9 @@ class _RateRows:
 def task_trajectory(
     mech: Mechanism,
     profile: Profile | Any,
-    times: Any,
+    times: ArrayLike,
     *,
-    q_guess: Any = None,
+    guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
     singularity_tol: float = SINGULARITY_TOL,
@@ -500,9 +498,9 @@ def task_trajectory(
             (roll-pitch-yaw rates for angles), each shape (n_task,); or task coordinates sampled
             at ``times``, shape (N, n_task), interpolated by :func:`sampled_profile`.
         times: sample times [s], shape (N,), strictly increasing.
-        q_guess: configuration to solve the first sample from (default: the reference).
+        guess: configuration to solve the first sample from (default: the reference).
         mode: working mode of the first sample, one sign per square leg (see
-            :func:`plm_pin.kinematics.inverse_kinematics`); default: that of ``q_guess``'s basin.
+            :func:`plm_pin.kinematics.inverse_kinematics`); default: that of ``guess``'s basin.
         tol: largest closure and task residual accepted at each sample [m, rad].
         singularity_tol: margin at or below which a sample counts as singular [-].
 
@@ -528,7 +526,7 @@ def task_trajectory(
         x = x_all[k]
         try:
             if k == 0:
-                sol = inverse_kinematics(mech, x, q_guess, mode=mode, tol=tol)
+                sol = inverse_kinematics(mech, x, guess, mode=mode, tol=tol)
                 first_mode = sol.mode
             else:
                 sol = inverse_kinematics(mech, x, rec.predict(k), tol=tol)
@@ -555,9 +553,9 @@ def task_trajectory(
 def actuator_trajectory(
     mech: Mechanism,
     profile: Profile | Any,
-    times: Any,
+    times: ArrayLike,
     *,
-    q_guess: Any = None,
+    guess: ArrayLike | None = None,
     tol: float = IK_TOL,
     singularity_tol: float = SINGULARITY_TOL,
     consistency_tol: float = CONSISTENCY_TOL,
@@ -565,7 +563,7 @@ def actuator_trajectory(
     r"""Configurations, velocities and accelerations along an actuator profile :math:`c(t)`.
 
     At each time, the loops are closed with every actuator fixed, continued from the previous
-    sample (module docstring), so the assembly mode of ``q_guess`` is kept; then
+    sample (module docstring), so the assembly mode of ``guess`` is kept; then
     :math:`v = N s` and :math:`a = a_p + N s_2` with :math:`C s = \dot c` and
     :math:`C s_2 = \ddot c - S_a a_p` solved by least squares over all actuators. For a
     redundantly actuated chain the profile must be consistent (e.g. the actuator motion of a
@@ -582,7 +580,7 @@ def actuator_trajectory(
             each shape (n_act,), in the order of ``mech.actuators``; or positions sampled at
             ``times``, shape (N, n_act), interpolated by :func:`sampled_profile`.
         times: sample times [s], shape (N,), strictly increasing.
-        q_guess: configuration near the first sample; it picks the assembly mode (default: the reference).
+        guess: configuration near the first sample; it picks the assembly mode (default: the reference).
         tol: closure tolerance of each assembly [m, rad].
         singularity_tol: margin at or below which a sample counts as singular [-].
         consistency_tol: tolerance on the misfit of redundant actuator rates and accelerations
@@ -607,7 +605,7 @@ def actuator_trajectory(
         )
     ts = _check_times(times)
     c_all, cd_all, cdd_all = _evaluate(profile, ts, mech.n_actuators)
-    q0 = mech.q_ref if q_guess is None else mech.check_q(q_guess, "q_guess")
+    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     rec = _Recorder(mech, task, ts)
     names = [act.joint for act in mech.actuators]
     act = mech.actuated_v_indices

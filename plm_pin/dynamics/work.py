@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
 from ..exceptions import InvalidInput
@@ -89,7 +90,7 @@ def adaptive_trapezoid_work(
     raise InvalidInput(f"the trapezoid rule did not converge to {tol} J with 2**{n_max} intervals{last}")
 
 
-def spline_work(t: Any, power: Any) -> np.ndarray:
+def spline_work(t: ArrayLike, power: ArrayLike) -> np.ndarray:
     r"""Exact :math:`\int |P|\,dt` of the cubic spline through power samples, per actuator [J].
 
     Args:
@@ -119,21 +120,21 @@ def spline_work(t: Any, power: Any) -> np.ndarray:
 
 
 def power_along(
-    mech: Mechanism, profile: Any, *, q_guess: Any = None, **options: Any
+    mech: Mechanism, profile: Any, *, guess: ArrayLike | None = None, **options: Any
 ) -> Callable[[np.ndarray], np.ndarray]:
     """``times -> actuator power`` along a task profile: trajectory then inverse dynamics at those times.
 
     Args:
         mech: the mechanism.
         profile: a task profile ``t -> (x, xd, xdd)`` (see :mod:`~plm_pin.dynamics.trajectory`).
-        q_guess: starting configuration for the inverse kinematics.
+        guess: starting configuration for the inverse kinematics.
         options: inverse-dynamics options (allocation, wrench, gravity); see
             :func:`~plm_pin.dynamics.inverse_dynamics.inverse_dynamics`.
     """
     id_options: Mapping[str, Any] = dict(options)
 
     def power_at(times: np.ndarray) -> np.ndarray:
-        traj = task_trajectory(mech, profile, times, q_guess=q_guess)
+        traj = task_trajectory(mech, profile, times, guess=guess)
         return inverse_dynamics(mech, traj, **id_options).power
 
     return power_at

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
@@ -11,6 +11,7 @@ import pinocchio as pin
 from scipy.linalg.lapack import dposv as _posv
 
 from ..exceptions import ClosureNotSatisfied
+from ..results import Result, unit
 from .closures import BoundClosures, Closure, closure_rows, jacobian_from_data, residual_from_placements
 
 NEWTON_MAX_ITERATIONS = 12
@@ -144,7 +145,7 @@ def newton(
 
 
 @dataclass(frozen=True)
-class Assembly:
+class Assembly(Result):
     """Result of :func:`assemble`.
 
     Attributes:
@@ -153,29 +154,23 @@ class Assembly:
         iterations: Levenberg-Marquardt iterations used.
     """
 
-    q: np.ndarray
-    residual: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    residual: np.ndarray = field(metadata=unit("m, rad"))
     iterations: int
+    _SKIPPED = ("residual",)
+    _DERIVED = ("residual_norm",)
 
     @property
     def residual_norm(self) -> float:
         """Largest absolute closure residual [m or rad]."""
         return float(np.max(np.abs(self.residual))) if self.residual.size else 0.0
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "q": self.q.tolist(),
-            "residual_norm": self.residual_norm,
-            "iterations": self.iterations,
-        }
-
 
 def assemble(
     model: pin.Model,
     data: pin.Data,
     closures: Sequence[Closure],
-    q_guess: np.ndarray,
+    guess: np.ndarray,
     free_columns: np.ndarray,
     *,
     tol: float = 1e-12,
@@ -184,7 +179,7 @@ def assemble(
     on_failure: Callable[[np.ndarray, np.ndarray], Exception] | None = None,
     extra: ExtraRows | None = None,
 ) -> Assembly:
-    r"""Close the loops from ``q_guess`` by damped Gauss-Newton (Levenberg-Marquardt).
+    r"""Close the loops from ``guess`` by damped Gauss-Newton (Levenberg-Marquardt).
 
     Only the tangent directions listed in ``free_columns`` move. Each step is the
     minimum-norm damped least-squares step
@@ -200,7 +195,7 @@ def assemble(
         model: Pinocchio model.
         data: scratch data for ``model``.
         closures: compiled closures.
-        q_guess: starting configuration. # (nq,)
+        guess: starting configuration. # (nq,)
         free_columns: indices of the velocity coordinates allowed to move.
         tol: target largest absolute residual [m, rad].
         max_iterations: iteration cap.
@@ -226,7 +221,7 @@ def assemble(
         J = jacobian_from_data(model, data, closures)
         return J if extra is None else np.vstack([J, extra.jacobian(model, data)])
 
-    q = np.array(q_guess, dtype=float)
+    q = np.array(guess, dtype=float)
     phi = residual_at(q)
     cost = float(phi @ phi)
     mu0 = 1.0

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import count, positive
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
+from ..results import Result, unit
 from .assembly import assemble, newton
 from .jacobians import require_task
 from .starts import random_starts
@@ -23,7 +25,7 @@ FK_TOL = 1e-12
 
 
 @dataclass(frozen=True)
-class FKSolution:
+class FKSolution(Result):
     """One forward-kinematics solution (assembly mode).
 
     Attributes:
@@ -32,13 +34,9 @@ class FKSolution:
         residual_norm: largest absolute closure residual [m, rad].
     """
 
-    q: np.ndarray
-    x: np.ndarray
-    residual_norm: float
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {"q": self.q.tolist(), "x": self.x.tolist(), "residual_norm": self.residual_norm}
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    residual_norm: float = field(metadata=unit("m, rad"))
 
 
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -71,7 +69,7 @@ def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = 
     return frame_distance(mech, q1, q2) < tol
 
 
-def task_pose(mech: Mechanism, q: Any) -> np.ndarray:
+def task_pose(mech: Mechanism, q: ArrayLike) -> np.ndarray:
     """Task coordinates of the end-effector frame at ``q`` [m, rad], shape (n_task,)."""
     task = require_task(mech)
     pin.framesForwardKinematics(mech.model, mech.data, mech.check_q(q))
@@ -106,8 +104,8 @@ def _close(
 
 def forward_kinematics(
     mech: Mechanism,
-    actuators: Any,
-    guess: Any = None,
+    actuators: ArrayLike,
+    guess: ArrayLike | None = None,
     *,
     all_modes: bool = True,
     starts: int = 48,

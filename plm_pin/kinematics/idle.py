@@ -182,21 +182,21 @@ def add_gauges(model: pin.Model, q: np.ndarray, joints: Sequence[int]) -> tuple[
 def find_gauges(
     model: pin.Model,
     closures: Sequence[_closures.Closure],
-    q_guess: np.ndarray,
+    guess: np.ndarray,
     actuated_v: Sequence[int] | np.ndarray,
     task_frame: int | None,
     *,
     tol: float = 1e-12,
 ) -> tuple[tuple[IdleGauge, ...], np.ndarray | None]:
-    """Detect the idle mobilities near ``q_guess`` and hold one joint each (frames added to ``model``).
+    """Detect the idle mobilities near ``guess`` and hold one joint each (frames added to ``model``).
 
-    The loops are closed from ``q_guess``; the idle motions are counted there and at an
+    The loops are closed from ``guess``; the idle motions are counted there and at an
     assembled random perturbation of it, the smaller count being the generic one (a special
     configuration can only add idle motions). No gauge comes back when the loops cannot be
     closed (the caller reports that) or when no one-DOF joint can hold an idle motion.
 
     Returns:
-        The gauges, and the configuration assembled from ``q_guess`` (None when the loops
+        The gauges, and the configuration assembled from ``guess`` (None when the loops
         cannot be closed), at which the held joints take their values.
     """
     if not closures:
@@ -204,7 +204,7 @@ def find_gauges(
     data = model.createData()
     free = np.arange(model.nv)
     try:
-        q0 = assemble(model, data, closures, q_guess, free, tol=tol).q
+        q0 = assemble(model, data, closures, guess, free, tol=tol).q
     except ClosureNotSatisfied:
         return (), None
     configs = [q0]

@@ -6,13 +6,15 @@ import functools
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import positive, signs
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
+from ..results import Result, unit
 from . import closures as _closures
 from .assembly import assemble, newton
 from .closures import Closure, compile_closures
@@ -32,7 +34,7 @@ IK_TOL = 1e-12
 
 
 @dataclass(frozen=True)
-class IKSolution:
+class IKSolution(Result):
     """One inverse-kinematics solution.
 
     The actuator positions and the working mode are derived from ``q`` when first read (the
@@ -47,11 +49,13 @@ class IKSolution:
             [m or rad] (revolute angles are first shifted by 2 pi into their limits where they fit).
     """
 
-    q: np.ndarray
-    x: np.ndarray
-    residual_norm: float
-    limit_violations: Mapping[str, float]
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    residual_norm: float = field(metadata=unit("m, rad"))
+    limit_violations: Mapping[str, float] = field(metadata=unit("m, rad"))
     _mech: Mechanism = field(repr=False, compare=False)
+    _DERIVED = ("actuators", "mode")
+    _SKIPPED = ("_mech",)
 
     @functools.cached_property
     def actuators(self) -> np.ndarray:
@@ -67,17 +71,6 @@ class IKSolution:
     def within_limits(self) -> bool:
         """Whether every joint respects its position limits."""
         return not self.limit_violations
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "q": self.q.tolist(),
-            "x": self.x.tolist(),
-            "actuators": self.actuators.tolist(),
-            "mode": list(self.mode),
-            "residual_norm": self.residual_norm,
-            "limit_violations": dict(self.limit_violations),
-        }
 
 
 def _solve(
@@ -146,8 +139,8 @@ def _solution_from_residual(mech: Mechanism, target: TaskTarget, q: np.ndarray, 
 
 def inverse_kinematics(
     mech: Mechanism,
-    x: Any,
-    guess: Any = None,
+    x: ArrayLike,
+    guess: ArrayLike | None = None,
     *,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
@@ -228,7 +221,9 @@ def _within_limits(mech: Mechanism, sol: IKSolution, respect_limits: bool) -> IK
     return sol
 
 
-def _from_guess(mech: Mechanism, target: TaskTarget, guess: Any, tol: float) -> IKSolution | None:
+def _from_guess(
+    mech: Mechanism, target: TaskTarget, guess: ArrayLike | None, tol: float
+) -> IKSolution | None:
     """The solution in the basin of ``guess`` (default: the reference configuration), or None.
 
     Newton first; its last pass gives the residual of the solution. Levenberg-Marquardt when
@@ -289,8 +284,8 @@ def _solve_leg(
 
 def working_modes(
     mech: Mechanism,
-    x: Any,
-    guess: Any = None,
+    x: ArrayLike,
+    guess: ArrayLike | None = None,
     *,
     tol: float = IK_TOL,
     starts_per_leg: int = 12,

@@ -15,10 +15,11 @@ The singular values of :math:`T` and :math:`C` do not depend on the choice of :m
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._checks import check_closed
 from ..exceptions import InvalidInput, SingularConfiguration
@@ -147,7 +148,7 @@ def times_T_inverse(M: np.ndarray, T: np.ndarray, J_x: np.ndarray) -> tuple[np.n
     return out, singular
 
 
-def closed_chain_jacobians(mech: Mechanism, q: Any) -> ClosedChainJacobians:
+def closed_chain_jacobians(mech: Mechanism, q: ArrayLike) -> ClosedChainJacobians:
     """Compute :class:`ClosedChainJacobians` at an assembled ``q``.
 
     The null-space dimension is the mechanism's generic mobility, so at a constraint

@@ -32,11 +32,12 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
+from numpy.typing import ArrayLike
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
@@ -326,7 +327,7 @@ def _joint_names_by_velocity(mech: Mechanism) -> list[str]:
     return names
 
 
-def working_mode(mech: Mechanism, q: Any, rtol: float = MODE_RTOL) -> tuple[int, ...]:
+def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = MODE_RTOL) -> tuple[int, ...]:
     """Sign (+1, -1, or 0 when singular) of each actuated leg block's determinant at ``q``.
 
     See :func:`working_mode_from_data`.

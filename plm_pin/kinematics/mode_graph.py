@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..exceptions import InvalidInput
+from ..results import Result, unit
 
 Mode = tuple[int, ...]
 """A mode: one sign (+1, -1, or 0 at the boundary) per sub-mechanism or per leg."""
@@ -34,7 +35,7 @@ def compress_modes(modes: Sequence[Mode]) -> tuple[Mode, ...]:
 
 
 @dataclass(frozen=True)
-class ModeNode:
+class ModeNode(Result):
     """One mode of a :class:`ModeGraph`, evaluated at a representative configuration.
 
     Attributes:
@@ -50,11 +51,12 @@ class ModeNode:
 
     mode: Mode
     label: str
-    q: np.ndarray
-    rank: int
-    full_rank: int
-    direct_margin: float
-    redundancy_margin: float
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    rank: int = field(metadata=unit("-"))
+    full_rank: int = field(metadata=unit("-"))
+    direct_margin: float = field(metadata=unit("-"))
+    redundancy_margin: float = field(metadata=unit("-"))
+    _DERIVED = ("singular",)
 
     def __post_init__(self) -> None:
         self.q.setflags(write=False)
@@ -64,22 +66,9 @@ class ModeNode:
         """Whether :math:`C` loses rank in this mode (direct singularity)."""
         return self.rank < self.full_rank
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "mode": list(self.mode),
-            "label": self.label,
-            "q": self.q.tolist(),
-            "rank": self.rank,
-            "full_rank": self.full_rank,
-            "direct_margin": self.direct_margin,
-            "redundancy_margin": self.redundancy_margin,
-            "singular": self.singular,
-        }
-
 
 @dataclass(frozen=True)
-class ModeEdge:
+class ModeEdge(Result):
     """A direct transition between two modes, found by a walk between their representatives.
 
     Attributes:
@@ -91,21 +80,12 @@ class ModeEdge:
 
     a: Mode
     b: Mode
-    min_direct_margin: float
-    samples: int
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "a": list(self.a),
-            "b": list(self.b),
-            "min_direct_margin": self.min_direct_margin,
-            "samples": self.samples,
-        }
+    min_direct_margin: float = field(metadata=unit("-"))
+    samples: int = field(metadata=unit("-"))
 
 
 @dataclass(frozen=True)
-class ModeGraph:
+class ModeGraph(Result):
     """State-transition graph of modes (Harada 2015, Fig. 5, for the 2-PRRRP).
 
     Attributes:
@@ -117,6 +97,8 @@ class ModeGraph:
     nodes: tuple[ModeNode, ...]
     edges: tuple[ModeEdge, ...]
     label_of: Callable[[Mode], str] = field(default=lambda m: str(m), repr=False, compare=False)
+    _SKIPPED = ("label_of",)
+    _DERIVED = ("singular_modes",)
 
     def node(self, mode: Sequence[int]) -> ModeNode:
         """The node of ``mode``.
@@ -189,11 +171,3 @@ class ModeGraph:
             return out
 
         return sorted(back(g), key=lambda r: [order.index(m) for m in r])
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "nodes": [n.to_dict() for n in self.nodes],
-            "edges": [e.to_dict() for e in self.edges],
-            "singular_modes": [list(m) for m in self.singular_modes],
-        }

@@ -19,13 +19,15 @@ Units: lengths [m], angles [rad], margins are normalised singular-value ratios [
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
+from ..results import Result, unit
 from .assembly import assemble
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians, require_task
 from .singularity import SINGULARITY_TOL, SingularityReport, direct_margins, report_from_jacobians
@@ -38,7 +40,7 @@ TRACK_TOL = 1e-11
 """Closure tolerance of the continuations [m, rad]."""
 
 
-def redundancy_margin(mech: Mechanism, q: Any, jac: ClosedChainJacobians | None = None) -> float:
+def redundancy_margin(mech: Mechanism, q: ArrayLike, jac: ClosedChainJacobians | None = None) -> float:
     r"""Smallest direct margin left when any one actuator is removed [-].
 
     For each actuator :math:`k`, the direct margin (:mod:`plm_pin.kinematics.singularity`) of
@@ -81,12 +83,12 @@ def _check_path_parameter(s: Any, n: int) -> np.ndarray:
 
 def follow_targets(
     mech: Mechanism,
-    q_start: Any,
+    guess: ArrayLike,
     *,
     task_dofs: Sequence[str] = (),
     task_values: Any = None,
     fixed: Mapping[str, Any] | None = None,
-    s: Any = None,
+    s: ArrayLike | None = None,
     tol: float = TRACK_TOL,
 ) -> np.ndarray:
     r"""Configurations along a sampled path of prescribed task coordinates and joint values.
@@ -94,13 +96,13 @@ def follow_targets(
     At each sample, Newton (Levenberg-Marquardt) solves the closures together with the
     prescribed task coordinates of the mechanism's task frame, the ``fixed`` joints held
     at their values, from a secant prediction of the two previous solutions; so the
-    branch of ``q_start`` is followed as long as the sampled system stays regular and the
+    branch of ``guess`` is followed as long as the sampled system stays regular and the
     samples are dense. With every task coordinate prescribed this is inverse-kinematics
     continuation; with the actuators fixed, forward-kinematics continuation.
 
     Args:
         mech: the mechanism.
-        q_start: configuration near the first sample, shape (nq,).
+        guess: configuration near the first sample, shape (nq,).
         task_dofs: prescribed task coordinates among the task's (e.g. ``("x", "rz")``).
         task_values: their values [m, rad], shape (N, len(task_dofs)).
         fixed: one-DOF joint name -> values along the path [m, rad], shape (N,).
@@ -143,20 +145,20 @@ def follow_targets(
     sp = _check_path_parameter(s, n)
     sub_task = compile_task(mech.model, mech.model.frames[task.frame_id].name, dofs) if dofs else None
     free = mech.free_columns(fixed_values)
-    qs: list[np.ndarray] = [mech.check_q(q_start, "q_start")]
+    qs: list[np.ndarray] = [mech.check_q(guess, "guess")]
     for joint in fixed_values:
         nv = mech.model.joints[mech.model.getJointId(joint)].nv
         if nv != 1:
             raise InvalidInput(f"joint {joint!r} has {nv} DOF; only one-DOF joints can be prescribed")
     out: list[np.ndarray] = []
     for k in range(n):
-        guess = _predict(mech, qs, sp, k) if out else np.array(qs[0])
+        near = _predict(mech, qs, sp, k) if out else np.array(qs[0])
         for joint, arr in fixed_values.items():
-            mech.set_joint(guess, joint, float(arr[k]))
+            mech.set_joint(near, joint, float(arr[k]))
         target = TaskTarget(sub_task, values[k]) if sub_task is not None and values is not None else None
         try:
             q = assemble(
-                mech.model, mech.data, mech.closures, guess, free, tol=tol, max_iterations=60, extra=target
+                mech.model, mech.data, mech.closures, near, free, tol=tol, max_iterations=60, extra=target
             ).q
         except ClosureNotSatisfied as exc:
             raise PoseUnreachable(
@@ -183,7 +185,7 @@ _TRACKED_ARRAYS = (
 
 
 @dataclass(frozen=True)
-class TrackedPath:
+class TrackedPath(Result):
     """A sampled actuator path with the configuration followed along it (forward continuation).
 
     Attributes:
@@ -201,16 +203,17 @@ class TrackedPath:
         tol: the singularity tolerance the margins are judged against [-].
     """
 
-    s: np.ndarray
-    actuators: np.ndarray
-    q: np.ndarray
-    x: np.ndarray
-    residual: np.ndarray
-    constraint_margin: np.ndarray
-    inverse_margin: np.ndarray
-    direct_margin: np.ndarray
-    redundancy_margin: np.ndarray
-    tol: float
+    s: np.ndarray = field(metadata=unit("-"))
+    actuators: np.ndarray = field(metadata=unit("m, rad"))
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    x: np.ndarray = field(metadata=unit("m, rad"))
+    residual: np.ndarray = field(metadata=unit("m, rad"))
+    constraint_margin: np.ndarray = field(metadata=unit("-"))
+    inverse_margin: np.ndarray = field(metadata=unit("-"))
+    direct_margin: np.ndarray = field(metadata=unit("-"))
+    redundancy_margin: np.ndarray = field(metadata=unit("-"))
+    tol: float = field(metadata=unit("-"))
+    _DERIVED = ("n_samples", "max_residual", "min_direct_margin", "nonsingular")
 
     def __post_init__(self) -> None:
         n = self.s.shape[0]
@@ -258,32 +261,13 @@ class TrackedPath:
             self.tol,
         )
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "s": self.s.tolist(),
-            "actuators": self.actuators.tolist(),
-            "q": self.q.tolist(),
-            "x": self.x.tolist(),
-            "residual": self.residual.tolist(),
-            "constraint_margin": self.constraint_margin.tolist(),
-            "inverse_margin": self.inverse_margin.tolist(),
-            "direct_margin": self.direct_margin.tolist(),
-            "redundancy_margin": self.redundancy_margin.tolist(),
-            "tol": self.tol,
-            "n_samples": self.n_samples,
-            "max_residual": self.max_residual,
-            "min_direct_margin": self.min_direct_margin,
-            "nonsingular": self.nonsingular,
-        }
-
 
 def track_actuator_path(
     mech: Mechanism,
-    actuators: Any,
-    q_start: Any,
+    actuators: ArrayLike,
+    guess: ArrayLike,
     *,
-    s: Any = None,
+    s: ArrayLike | None = None,
     tol: float = SINGULARITY_TOL,
     closure_tol: float = TRACK_TOL,
 ) -> TrackedPath:
@@ -291,14 +275,14 @@ def track_actuator_path(
 
     At each sample :meth:`Mechanism.assemble` closes the loops with every actuator fixed
     at its sampled value, warm-started from a secant prediction of the two previous
-    configurations, so the assembly mode of ``q_start`` is followed; then the singularity
+    configurations, so the assembly mode of ``guess`` is followed; then the singularity
     margins and the redundancy margin are evaluated. For a redundantly actuated chain the
     actuator values must be consistent (e.g. from :func:`follow_targets`).
 
     Args:
         mech: the mechanism.
         actuators: actuator positions [m, rad], shape (N, n_act).
-        q_start: configuration near the first sample (it picks the assembly mode), shape (nq,).
+        guess: configuration near the first sample (it picks the assembly mode), shape (nq,).
         s: path parameter, shape (N,), non-decreasing (default uniform).
         tol: singularity tolerance the margins are judged against.
         closure_tol: closure tolerance of each assembly [m, rad].
@@ -319,7 +303,7 @@ def track_actuator_path(
     sp = _check_path_parameter(s, n)
     task = require_task(mech)
     names = [a.joint for a in mech.actuators]
-    qs: list[np.ndarray] = [mech.check_q(q_start, "q_start")]
+    qs: list[np.ndarray] = [mech.check_q(guess, "guess")]
     out_q: list[np.ndarray] = []
     out_x: list[np.ndarray] = []
     res: list[float] = []
@@ -328,10 +312,10 @@ def track_actuator_path(
     dm: list[float] = []
     rm: list[float] = []
     for k in range(n):
-        guess = _predict(mech, qs, sp, k) if out_q else np.array(qs[0])
+        near = _predict(mech, qs, sp, k) if out_q else np.array(qs[0])
         try:
             asm = mech.assemble(
-                guess, fixed=dict(zip(names, c[k].tolist(), strict=True)), tol=closure_tol, max_iterations=60
+                near, fixed=dict(zip(names, c[k].tolist(), strict=True)), tol=closure_tol, max_iterations=60
             )
         except ClosureNotSatisfied as exc:
             raise ClosureNotSatisfied(

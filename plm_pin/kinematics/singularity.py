@@ -37,13 +37,15 @@ singular of a kind when its margin is at most the tolerance.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._checks import check_tolerance
 from ..exceptions import SingularConfiguration
+from ..results import Result, unit
 from .jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians, require_task
 
 if TYPE_CHECKING:
@@ -130,7 +132,7 @@ def numerical_rank(M: np.ndarray, rtol: float = RANK_RTOL, *, floor: float = 0.0
 
 
 @dataclass(frozen=True)
-class SingularityReport:
+class SingularityReport(Result):
     r"""Singularity margins of one configuration.
 
     Attributes:
@@ -141,10 +143,11 @@ class SingularityReport:
         tol: the tolerance used.
     """
 
-    constraint_margin: float
-    inverse_margin: float
-    direct_margin: float
-    tol: float
+    constraint_margin: float = field(metadata=unit("-"))
+    inverse_margin: float = field(metadata=unit("-"))
+    direct_margin: float = field(metadata=unit("-"))
+    tol: float = field(metadata=unit("-"))
+    _DERIVED = ("kinds",)
 
     @property
     def kinds(self) -> tuple[str, ...]:
@@ -157,16 +160,6 @@ class SingularityReport:
         """Whether any kind of singularity is present."""
         return bool(self.kinds)
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "constraint_margin": self.constraint_margin,
-            "inverse_margin": self.inverse_margin,
-            "direct_margin": self.direct_margin,
-            "tol": self.tol,
-            "kinds": list(self.kinds),
-        }
-
 
 def report_from_jacobians(mech: Mechanism, jac: ClosedChainJacobians, tol: float) -> SingularityReport:
     """Build the report from Jacobians already computed."""
@@ -177,7 +170,7 @@ def report_from_jacobians(mech: Mechanism, jac: ClosedChainJacobians, tol: float
 
 
 def classify(
-    mech: Mechanism, q: Any, tol: float = SINGULARITY_TOL, *, raise_if_singular: bool = False
+    mech: Mechanism, q: ArrayLike, tol: float = SINGULARITY_TOL, *, raise_if_singular: bool = False
 ) -> SingularityReport:
     """Classify the configuration ``q`` (assembled) as regular or singular, with margins.
 

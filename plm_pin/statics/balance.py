@@ -34,10 +34,11 @@ the internal-force space (see :func:`oriented_internal_basis`); with one interna
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.linalg import blas as _blas
 from scipy.linalg import lapack as _lapack
 
@@ -89,7 +90,7 @@ class Load:
     wrench: np.ndarray
 
 
-def load_on_frame(mech: Mechanism, wrench: Any, frame: str | None = None) -> Load:
+def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) -> Load:
     """Check an external wrench and the frame it acts on.
 
     Args:
@@ -201,8 +202,8 @@ class StaticBalance:
 
 def static_balance(
     mech: Mechanism,
-    q: Any,
-    wrench: Any = None,
+    q: ArrayLike,
+    wrench: ArrayLike | None = None,
     frame: str | None = None,
     *,
     gravity: bool = True,

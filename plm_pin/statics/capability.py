@@ -16,13 +16,15 @@ is convex, so its boundary points along rays from the origin trace it exactly.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._checks import load_arguments
 from ..exceptions import InvalidInput, PlmError
+from ..results import Result, unit
 from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_qp
 from .balance import load_on_frame, static_balance
 from .forces import actuator_limits
@@ -32,7 +34,7 @@ if TYPE_CHECKING:
 
 
 @dataclass(frozen=True)
-class Capability:
+class Capability(Result):
     """Largest load along one direction.
 
     Attributes:
@@ -43,25 +45,16 @@ class Capability:
         saturated: actuators at a limit there.
     """
 
-    direction: np.ndarray
-    alpha: float
-    f_c: np.ndarray
+    direction: np.ndarray = field(metadata=unit("N, N m"))
+    alpha: float = field(metadata=unit("-"))
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
     saturated: tuple[str, ...]
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "direction": self.direction.tolist(),
-            "alpha": self.alpha,
-            "f_c": self.f_c.tolist(),
-            "saturated": list(self.saturated),
-        }
 
 
 def force_capability(
     mech: Mechanism,
-    q: Any,
-    direction: Any,
+    q: ArrayLike,
+    direction: ArrayLike,
     frame: str | None = None,
     *,
     gravity: bool = True,
@@ -126,7 +119,7 @@ def force_capability(
     return Capability(np.asarray(direction, dtype=float), alpha, f_c, saturated)
 
 
-def _finite_limits(mech: Mechanism, limits: Any, what: str) -> np.ndarray:
+def _finite_limits(mech: Mechanism, limits: ArrayLike | None, what: str) -> np.ndarray:
     """The actuator limits, shape (n_act, 2); refused unless every one is finite."""
     bounds = actuator_limits(mech, limits)
     if not np.isfinite(bounds).all():
@@ -139,7 +132,7 @@ def _finite_limits(mech: Mechanism, limits: Any, what: str) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class InternalRange:
+class InternalRange(Result):
     r"""The internal forces the actuator limits admit under one load.
 
     The balancing forces are :math:`f_c = f_p + G y` (:math:`f_p` of minimum norm, :math:`G`
@@ -155,27 +148,17 @@ class InternalRange:
         internal_basis: the basis :math:`G` the coordinates refer to, shape (n_act, k).
     """
 
-    lower: np.ndarray
-    upper: np.ndarray
-    f_lower: np.ndarray
-    f_upper: np.ndarray
-    internal_basis: np.ndarray
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "lower": self.lower.tolist(),
-            "upper": self.upper.tolist(),
-            "f_lower": self.f_lower.tolist(),
-            "f_upper": self.f_upper.tolist(),
-            "internal_basis": self.internal_basis.tolist(),
-        }
+    lower: np.ndarray = field(metadata=unit("N, N m"))
+    upper: np.ndarray = field(metadata=unit("N, N m"))
+    f_lower: np.ndarray = field(metadata=unit("N, N m"))
+    f_upper: np.ndarray = field(metadata=unit("N, N m"))
+    internal_basis: np.ndarray = field(metadata=unit("-"))
 
 
 def internal_force_range(
     mech: Mechanism,
-    q: Any,
-    wrench: Any = None,
+    q: ArrayLike,
+    wrench: ArrayLike | None = None,
     frame: str | None = None,
     *,
     gravity: bool = True,
@@ -240,7 +223,7 @@ def _check_gravity_held(f_g: np.ndarray, G: np.ndarray, bounds: np.ndarray, name
 
 def wrench_polygon(
     mech: Mechanism,
-    q: Any,
+    q: ArrayLike,
     d1: Any,
     d2: Any,
     frame: str | None = None,

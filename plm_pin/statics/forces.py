@@ -10,13 +10,15 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._checks import check_finite_result, load_arguments
 from ..exceptions import InvalidInput
+from ..results import Result, unit
 from . import reactions as _reactions
 from .allocation import OBJECTIVES, Allocation, Inequalities, allocate, check_weights, min_norm
 from .balance import SINGULAR_RTOL, StaticBalance, static_balance
@@ -26,7 +28,7 @@ if TYPE_CHECKING:
 
 
 @dataclass(frozen=True)
-class InternalMode:
+class InternalMode(Result):
     """One internal-force mode: actuator forces that balance nothing but each other, and what they load.
 
     Attributes:
@@ -36,23 +38,14 @@ class InternalMode:
         slider_normal_forces: normal forces it causes on the prismatic guides [N].
     """
 
-    f_c: np.ndarray
-    lam: np.ndarray
-    link_forces: dict[str, _reactions.LinkForce]
-    slider_normal_forces: dict[str, np.ndarray]
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "f_c": self.f_c.tolist(),
-            "lambda": self.lam.tolist(),
-            "link_forces": {k: v.to_dict() for k, v in self.link_forces.items()},
-            "slider_normal_forces": {k: v.tolist() for k, v in self.slider_normal_forces.items()},
-        }
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
+    link_forces: dict[str, _reactions.LinkForce] = field(metadata=unit("N"))
+    slider_normal_forces: dict[str, np.ndarray] = field(metadata=unit("N"))
 
 
 @dataclass(frozen=True)
-class StaticForces:
+class StaticForces(Result):
     r"""A static equilibrium: actuator forces, cut-joint forces and the balance they satisfy.
 
     Attributes:
@@ -68,10 +61,10 @@ class StaticForces:
 
     mechanism: Mechanism
     balance: StaticBalance
-    f_c: np.ndarray
-    lam: np.ndarray
-    internal: np.ndarray
-    residual: float
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
+    internal: np.ndarray = field(metadata=unit("N, N m"))
+    residual: float = field(metadata=unit("N, N m"))
     active: tuple[str, ...]
     objective: str
 
@@ -107,7 +100,7 @@ class StaticForces:
         acts = [a.joint for a in self.mechanism.actuators]
         return {
             "f_c": dict(zip(acts, self.f_c.tolist(), strict=True)),
-            "lambda": {c.name: self.lam[c.rows].tolist() for c in self.mechanism.closures},
+            "lam": {c.name: self.lam[c.rows].tolist() for c in self.mechanism.closures},
             "internal": self.internal.tolist(),
             "residual": self.residual,
             "active": list(self.active),
@@ -135,7 +128,7 @@ def internal_modes(mech: Mechanism, balance: StaticBalance) -> tuple[InternalMod
     return tuple(out)
 
 
-def actuator_limits(mech: Mechanism, limits: Any) -> np.ndarray:
+def actuator_limits(mech: Mechanism, limits: ArrayLike | None) -> np.ndarray:
     """Actuator effort limits as an (n_act, 2) array with infinities where unbounded.
 
     Args:
@@ -193,7 +186,7 @@ class AllocationRule:
         mech: Mechanism,
         *,
         objective: str = "norm",
-        weights: Any = None,
+        weights: ArrayLike | None = None,
         limits: Any = "description",
         internal: Any = None,
         min_compression: float | None = None,
@@ -296,13 +289,13 @@ def _allocated(mech: Mechanism, balance: StaticBalance, rule: AllocationRule) ->
 
 def static_forces(
     mech: Mechanism,
-    q: Any,
-    wrench: Any = None,
+    q: ArrayLike,
+    wrench: ArrayLike | None = None,
     frame: str | None = None,
     *,
     gravity: bool = True,
     objective: str = "norm",
-    weights: Any = None,
+    weights: ArrayLike | None = None,
     limits: Any = "description",
     internal: Any = None,
     min_compression: float | None = None,

@@ -21,7 +21,7 @@ by the same code.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -29,6 +29,7 @@ import pinocchio as pin
 
 from ..kinematics import closures as _closures
 from ..mechanism import body_name
+from ..results import Result, unit
 from .balance import Load
 
 if TYPE_CHECKING:
@@ -39,7 +40,7 @@ ATTACHMENT_ATOL = 1e-9
 
 
 @dataclass(frozen=True)
-class JointReaction:
+class JointReaction(Result):
     """Force a joint passes from its parent body to its child, world-aligned, about the joint origin.
 
     Attributes:
@@ -51,22 +52,13 @@ class JointReaction:
     """
 
     joint: str
-    force: np.ndarray
-    moment: np.ndarray
-    drive: np.ndarray
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "joint": self.joint,
-            "force": self.force.tolist(),
-            "moment": self.moment.tolist(),
-            "drive": self.drive.tolist(),
-        }
+    force: np.ndarray = field(metadata=unit("N"))
+    moment: np.ndarray = field(metadata=unit("N m"))
+    drive: np.ndarray = field(metadata=unit("N, N m"))
 
 
 @dataclass(frozen=True)
-class LinkForce:
+class LinkForce(Result):
     """Axial force of a hinged link, read at its proximal joint.
 
     Attributes:
@@ -79,19 +71,9 @@ class LinkForce:
 
     link: str
     joint: str
-    axis: np.ndarray
-    axial: float
-    shear: float
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary."""
-        return {
-            "link": self.link,
-            "joint": self.joint,
-            "axis": self.axis.tolist(),
-            "axial": self.axial,
-            "shear": self.shear,
-        }
+    axis: np.ndarray = field(metadata=unit("-"))
+    axial: float = field(metadata=unit("N"))
+    shear: float = field(metadata=unit("N"))
 
 
 @dataclass(frozen=True)

@@ -39,11 +39,13 @@ import numpy as np
 from .._text import short
 from ..analysis import workspace_grid
 from ..analysis._continuation import guess_mode
-from ..analysis.orientation import ENDS, RANGE_XTOL, orientation_range
+from ..analysis.manipulability import Manipulability
+from ..analysis.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import KINDS, SINGULARITY_TOL
+from ..results import units
 from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
 from ..stiffness import stiffness_map
@@ -57,8 +59,11 @@ if TYPE_CHECKING:
 SINGULARITY_CODES: tuple[str, ...] = ("regular", *KINDS)
 """Meaning of the ``singularity`` codes 0, 1, 2, 3 (-1: unreachable)."""
 
-W_UNIT = "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
+W_UNIT = units(Manipulability)["w"]
 """Unit of the manipulability w (see :mod:`plm_pin.analysis.manipulability`)."""
+
+RANGE_UNITS = units(OrientationRange)
+"""Units of an orientation range's ends (see :mod:`plm_pin.analysis.orientation`)."""
 
 FORCE_UNIT = "N (N m for revolute actuators)"
 
@@ -468,11 +473,21 @@ METRICS: dict[str, Metric] = {
             "largest interval of the rotation axis holding the reference angle that stays reachable and "
             "non-singular (plm_pin.analysis.orientation_range), ends located to xtol",
             (
-                Variable("orientation_lower", "rad", "lower end of the singularity-free range", axes="line"),
-                Variable("orientation_upper", "rad", "upper end of the singularity-free range", axes="line"),
+                Variable(
+                    "orientation_lower",
+                    RANGE_UNITS["lower"],
+                    "lower end of the singularity-free range",
+                    axes="line",
+                ),
+                Variable(
+                    "orientation_upper",
+                    RANGE_UNITS["upper"],
+                    "upper end of the singularity-free range",
+                    axes="line",
+                ),
                 Variable(
                     "orientation_halfwidth",
-                    "rad",
+                    RANGE_UNITS["reference"],
                     "largest symmetric turn +/- d about the reference within the range",
                     axes="line",
                 ),

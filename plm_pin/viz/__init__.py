@@ -2,7 +2,7 @@
 
 from .figures import plot_map, plot_sweep
 from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
-from .meshcat_server import MeshcatServer, ViewerError
+from .meshcat_server import MeshcatServer
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
 from .panels import Flat, flat, flat_note, panel_grid, plot_panels, shared_legend
 from .skeleton import plot_skeletons
@@ -15,7 +15,6 @@ __all__ = [
     "MeshcatServer",
     "MeshcatViewer",
     "SceneStatus",
-    "ViewerError",
     "fig8",
     "flat",
     "flat_note",

@@ -30,7 +30,7 @@ from collections.abc import Sequence
 from types import ModuleType
 from typing import IO, Any
 
-from ..exceptions import InvalidInput, PlmError
+from ..exceptions import InvalidInput, ViewerError
 
 LOCALHOST = "127.0.0.1"
 """The only address a server started here listens on."""
@@ -51,10 +51,6 @@ PARENT_CHECK_MS = 1000
 """Period at which a server checks that the process that started it is alive [ms]."""
 
 VIZ_EXTRA = "pip install 'plm-pin[viz]'"
-
-
-class ViewerError(PlmError):
-    """The meshcat viewer cannot be used: meshcat is missing, or a server did not start or answer."""
 
 
 def require_meshcat() -> ModuleType:

@@ -25,16 +25,18 @@ import functools
 import html
 import numbers
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .._io import atomic_write_text
 from ..exceptions import InvalidInput
 from ..kinematics.singularity import SingularityReport, classify
+from ..results import Result, unit
 from .meshcat_server import MeshcatServer, ServerWindow, StaticWindow, require_meshcat
 
 if TYPE_CHECKING:
@@ -77,7 +79,7 @@ _VISUAL = pin.GeometryType.VISUAL
 
 
 @dataclass(frozen=True)
-class SceneStatus:
+class SceneStatus(Result):
     """What a displayed configuration shows.
 
     Attributes:
@@ -87,7 +89,7 @@ class SceneStatus:
             classified (the mechanism has no task, or a closure is open).
     """
 
-    closure_errors: Mapping[str, float]
+    closure_errors: Mapping[str, float] = field(metadata=unit("m, rad"))
     open_closures: tuple[str, ...]
     singularity: SingularityReport | None
 
@@ -96,16 +98,8 @@ class SceneStatus:
         """The singularity kinds found (empty when regular or not classified)."""
         return self.singularity.kinds if self.singularity is not None else ()
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "closure_errors": dict(self.closure_errors),
-            "open_closures": list(self.open_closures),
-            "singularity": self.singularity.to_dict() if self.singularity is not None else None,
-        }
 
-
-def scene_status(mech: Mechanism, q: Any) -> SceneStatus:
+def scene_status(mech: Mechanism, q: ArrayLike) -> SceneStatus:
     """Closure residuals of ``q`` and, when the loops hold and there is a task, its singularity report."""
     errors = mech.closure_errors(q)
     open_closures = tuple(name for name, err in errors.items() if err > CLOSURE_TOL)
@@ -268,7 +262,7 @@ def _check_arrows(arrows: Sequence[tuple[Any, Any, str]]) -> list[tuple[np.ndarr
     return out
 
 
-def _check_motion(mech: Mechanism, qs: Any, times: Any) -> tuple[np.ndarray, np.ndarray]:
+def _check_motion(mech: Mechanism, qs: ArrayLike, times: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     q_arr = np.asarray(qs, dtype=float)
     t_arr = np.asarray(times, dtype=float)
     if q_arr.ndim != 2 or q_arr.shape[1] != mech.nq or q_arr.shape[0] == 0:
@@ -410,7 +404,7 @@ class MeshcatViewer:
         return out
 
     # ------------------------------------------------------------ drawing
-    def display(self, q: Any = None) -> SceneStatus:
+    def display(self, q: ArrayLike | None = None) -> SceneStatus:
         """Place the mechanism at ``q`` (default: the reference configuration) and mark its state.
 
         Closure markers turn magenta where a closure is open; the geometry takes the colour of
@@ -446,7 +440,7 @@ class MeshcatViewer:
                 self._viz.loadViewerGeometryObject(obj, _VISUAL, np.array(color))
                 self._shown[obj.name] = color
 
-    def show_forces(self, q: Any, arrows: Sequence[tuple[Any, Any, str]], scale: float) -> SceneStatus:
+    def show_forces(self, q: ArrayLike, arrows: Sequence[tuple[Any, Any, str]], scale: float) -> SceneStatus:
         """Display ``q`` with force arrows, e.g. the loads and actuator forces of a static case.
 
         Each arrow starts at its point and is ``scale * |vector|`` long; it is drawn under
@@ -489,7 +483,9 @@ class MeshcatViewer:
                 node[part].set_transform(pin.SE3(rotation, point + centre * u).homogeneous)
         return status
 
-    def animate(self, qs: Any, times: Any, *, play: bool = True, repetitions: int = 1) -> SceneStatus:
+    def animate(
+        self, qs: ArrayLike, times: ArrayLike, *, play: bool = True, repetitions: int = 1
+    ) -> SceneStatus:
         """Show a motion (simulated or planned) as a meshcat animation, starting at ``times[0]``.
 
         Colours (closures, singularity) are those of the first configuration.
@@ -552,7 +548,7 @@ def shared_server(port: int | None = None) -> MeshcatServer:
     return server
 
 
-def show(mech: Mechanism, q: Any = None, **kwargs: Any) -> MeshcatViewer:
+def show(mech: Mechanism, q: ArrayLike | None = None, **kwargs: Any) -> MeshcatViewer:
     """Display ``mech`` at ``q`` (default: its reference configuration) in a meshcat viewer.
 
     Args:
@@ -570,7 +566,13 @@ def show(mech: Mechanism, q: Any = None, **kwargs: Any) -> MeshcatViewer:
     return viewer
 
 
-def scene_html(mech: Mechanism, q: Any = None, *, qs: Any = None, times: Any = None) -> str:
+def scene_html(
+    mech: Mechanism,
+    q: ArrayLike | None = None,
+    *,
+    qs: ArrayLike | None = None,
+    times: ArrayLike | None = None,
+) -> str:
     """A self-contained HTML page of ``mech`` at ``q``, or of the motion ``qs`` at ``times``, no server.
 
     For reports: the reader rotates the mechanism (and plays the motion) in the page.

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..exceptions import InvalidInput
 from .figures import _pyplot
@@ -57,7 +58,7 @@ class Flat:
 
 
 def flat(
-    name: str, values: Any, unit: str = "", *, scale: float | None = None, noise: float = NOISE
+    name: str, values: ArrayLike, unit: str = "", *, scale: float | None = None, noise: float = NOISE
 ) -> Flat | None:
     """The :class:`Flat` statement of ``values`` if they are zero or constant to round-off, else None.
 
@@ -160,7 +161,7 @@ def _name(title: str) -> str:
 
 
 def plot_panels(
-    x: Any,
+    x: ArrayLike,
     curves: Mapping[str, Any],
     *,
     xlabel: str,

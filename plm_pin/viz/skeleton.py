@@ -7,10 +7,11 @@ only when drawing.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..exceptions import InvalidInput
 from .figures import _axes
@@ -58,7 +59,7 @@ def skeleton_segments(mech: Mechanism, data: pin.Data) -> list[tuple[np.ndarray,
 
 def plot_skeletons(
     mech: Mechanism,
-    qs: Any,
+    qs: ArrayLike,
     *,
     plane: str = "xy",
     ax: Axes | None = None,

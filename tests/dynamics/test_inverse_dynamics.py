@@ -10,9 +10,9 @@ from scipy.interpolate import CubicSpline
 from analyses._enferadi2017_paper import enferadi2017_circle, enferadi2017_line
 from analyses._zhao2011_paper import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 from plm_pin.dynamics import simulate, task_trajectory
-from plm_pin.dynamics.inverse_dynamics import InverseDynamicsFailed, inverse_dynamics
+from plm_pin.dynamics.inverse_dynamics import inverse_dynamics
 from plm_pin.dynamics.work import adaptive_trapezoid_work, power_along, spline_work
-from plm_pin.exceptions import AllocationInfeasible, InvalidInput
+from plm_pin.exceptions import AllocationInfeasible, InvalidInput, InverseDynamicsFailed
 from plm_pin.statics import static_forces
 from tests.conftest import preset
 

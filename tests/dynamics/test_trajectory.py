@@ -288,7 +288,7 @@ def test_actuator_trajectory_round_trip(name):
     mech, profile = reference_wave(name)
     times = np.linspace(0.0, 1.0, 31)
     tr = task_trajectory(mech, profile, times)
-    back = actuator_trajectory(mech, sampled_profile(times, tr.c, tr.cd, tr.cdd), times, q_guess=tr.q[0])
+    back = actuator_trajectory(mech, sampled_profile(times, tr.c, tr.cd, tr.cdd), times, guess=tr.q[0])
     x = np.array([profile(t)[0] for t in times])
     np.testing.assert_allclose(back.x, x, atol=1e-10)
     for k in range(tr.n_samples):
@@ -308,14 +308,14 @@ def test_inconsistent_redundant_actuators_stop_with_the_actuator_named():
     cd = tr.cd.copy()
     cd[5:, 3] += 1e-3  # slider4 (the 4th actuator) from sample 5 on
     with pytest.raises(TrajectoryError) as err:
-        actuator_trajectory(mech, sampled_profile(times, tr.c, cd, tr.cdd), times, q_guess=tr.q[0])
+        actuator_trajectory(mech, sampled_profile(times, tr.c, cd, tr.cdd), times, guess=tr.q[0])
     assert (err.value.index, err.value.partial.n_samples) == (5, 5)
     assert isinstance(err.value.cause, InvalidInput)
     assert "rates are inconsistent: slider4 misses" in str(err.value)
     c = tr.c.copy()
     c[7:, 3] += 1e-3
     with pytest.raises(TrajectoryError) as err:
-        actuator_trajectory(mech, sampled_profile(times, c, tr.cd, tr.cdd), times, q_guess=tr.q[0])
+        actuator_trajectory(mech, sampled_profile(times, c, tr.cd, tr.cdd), times, guess=tr.q[0])
     assert err.value.index == 7
     assert isinstance(err.value.cause, ClosureNotSatisfied)
 
@@ -333,7 +333,7 @@ def test_actuator_trajectory_stops_where_it_crosses_the_type4_singularity():
     theta_4 = -math.acos(math.sqrt(((L + RT) ** 2 - y**2) / (L + RT) ** 2))  # eq. (11.4)
     first_past = int(np.flatnonzero(rate * times < theta_4)[0])
     with pytest.raises(TrajectoryError) as err:
-        actuator_trajectory(mech, sampled_profile(times, tr.c, tr.cd, tr.cdd), times, q_guess=tr.q[0])
+        actuator_trajectory(mech, sampled_profile(times, tr.c, tr.cd, tr.cdd), times, guess=tr.q[0])
     assert err.value.index == first_past
     assert err.value.time == times[first_past]
     assert isinstance(err.value.cause, SingularConfiguration)

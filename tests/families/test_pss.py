@@ -319,5 +319,7 @@ def test_builder_refuses_unequal_transverse_strut_moments():
     """Dropping the idle spin is exact only for an axisymmetric strut: unequal transverse moments refused."""
     params = dict(PRESETS["zhao2011_8pss"].parameters)
     params["strut_inertia"] = (1.279, 1.0, 0.005)
-    with pytest.raises(ValueError, match=r"^strut_inertia \(1\.279, 1\.0, 0\.005\): the transverse moments"):
+    with pytest.raises(
+        plm_pin.InvalidInput, match=r"^strut_inertia \(1\.279, 1\.0, 0\.005\): the transverse moments"
+    ):
         PRESETS["zhao2011_8pss"].builder(name="zhao", **params)

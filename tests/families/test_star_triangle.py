@@ -157,7 +157,7 @@ def test_builder_refuses_a_reference_outside_the_triangle():
     """A star centre beyond side 2 (rho_2 = (sqrt(3) (a - x) - y) / 2 < 0) is refused, naming the leg."""
     params = {**PRESETS[NAME].parameters, "reference_pose": (0.6, 0.1, math.pi / 2)}
     message = r"leg 2 has q = 0.4634 m \(stroke \[0, 0.5\]\) and rho = -0.1366 m \(must be >= 0\)"
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(plm_pin.InvalidInput, match=message):
         PRESETS[NAME].builder(name="x", **params)
 
 
@@ -165,5 +165,5 @@ def test_inverse_kinematics_refuses_the_actuator_singularity():
     """At phi = 0 the star lines are parallel to their rails: the closed form has no solution."""
     from plm_pin.families.star_triangle import star_triangle_inverse_kinematics
 
-    with pytest.raises(ValueError, match="sin phi = 0"):
+    with pytest.raises(plm_pin.InvalidInput, match="sin phi = 0"):
         star_triangle_inverse_kinematics((0.25, 0.2, 0.0), A)

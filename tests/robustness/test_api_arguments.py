@@ -180,8 +180,8 @@ CASES = [
     ("simulate", {"wrench": [1j]}, "wrench must be real numbers (array-like), got complex numbers"),
     (
         "simulate",
-        {"wrench": [0.0], "wrench_frame": 1},
-        "wrench_frame must be a frame name (a string) or None, got 1",
+        {"wrench": [0.0], "frame": 1},
+        "frame must be a frame name (a string) or None, got 1",
     ),
 ]
 

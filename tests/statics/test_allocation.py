@@ -113,11 +113,11 @@ def test_infeasible_limits_report_the_least_violating_allocation():
         method="SLSQP",
         options={"ftol": 1e-16, "maxiter": 1000},
     )
-    ours = 0.5 * violation(err.least_violating) @ violation(err.least_violating)
+    ours = 0.5 * violation(err.partial) @ violation(err.partial)
     assert ours == pytest.approx(res.fun, rel=1e-6)
-    assert np.max(np.abs(A @ err.least_violating - b)) <= 1e-9 * least
+    assert np.max(np.abs(A @ err.partial - b)) <= 1e-9 * least
     assert set(err.saturated) == {
-        a.joint for a, f in zip(mech.actuators, err.least_violating, strict=True) if abs(f) >= bound - 1e-6
+        a.joint for a, f in zip(mech.actuators, err.partial, strict=True) if abs(f) >= bound - 1e-6
     }
     assert err.saturated and set(err.violation) <= {a.joint for a in mech.actuators}
 
@@ -129,7 +129,7 @@ def test_non_redundant_limits_leave_no_choice():
     bound = 0.5 * np.max(np.abs(f))
     with pytest.raises(AllocationInfeasible) as info:
         static_forces(mech, mech.q_ref, [0.0, 1.0, 0.0], gravity=False, limits=[[-bound, bound]] * 3)
-    np.testing.assert_allclose(info.value.least_violating, f, atol=1e-12)
+    np.testing.assert_allclose(info.value.partial, f, atol=1e-12)
     worst = mech.actuators[int(np.argmax(np.abs(f)))].joint
     assert worst in info.value.saturated
 

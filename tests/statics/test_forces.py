@@ -133,4 +133,4 @@ def test_to_dict_is_json_ready():
     mech = preset("harada2011_3d4m")
     d = json.loads(json.dumps(static_forces(mech, mech.q_ref).to_dict()))
     assert set(d["f_c"]) == {"slider1", "slider2", "slider3", "slider4"}
-    assert set(d["lambda"]) == {c.name for c in mech.closures}
+    assert set(d["lam"]) == {c.name for c in mech.closures}

@@ -23,9 +23,9 @@ from typer.testing import CliRunner
 
 import plm_pin
 from plm_pin.cli import app
-from plm_pin.exceptions import InvalidInput
+from plm_pin.exceptions import InvalidInput, ViewerError
 from plm_pin.mechanism import Mechanism
-from plm_pin.viz import MeshcatServer, MeshcatViewer, ViewerError, scene_html
+from plm_pin.viz import MeshcatServer, MeshcatViewer, scene_html
 from plm_pin.viz.meshcat_server import (
     LOCALHOST,
     PARENT_CHECK_MS,

@@ -30,6 +30,7 @@ from ..._lazy import lazy_module
 from ...description import _urdf_build as u
 from ...description.compliance import assumed_drive_stiffness
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
+from ...exceptions import InvalidInput
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -86,7 +87,7 @@ def leg_inverse_kinematics(
         l = rod_lengths[i - 1]
         disc = l * l - Ly * Ly
         if disc < 0.0:
-            raise ValueError(f"leg {i} cannot reach its pair: |L_y| = {abs(Ly):.4g} m > l = {l:.4g} m")
+            raise InvalidInput(f"leg {i} cannot reach its pair: |L_y| = {abs(Ly):.4g} m > l = {l:.4g} m")
         c = Lx + modes[i - 1] * math.sqrt(disc)
         out[i] = (c, math.atan2(Ly / l, (Lx - c) / l))
     return out
@@ -133,7 +134,7 @@ def build_2prrrp(
     """
     legs = tuple(sorted(legs))
     if 1 not in legs or not any(i in legs for i in RIGHT_LEGS) or 2 not in legs:
-        raise ValueError(f"legs {legs}: legs 1 and 2 and at least one right leg are needed")
+        raise InvalidInput(f"legs {legs}: legs 1 and 2 and at least one right leg are needed")
     rt = half_plate
     links: list[yourdfpy.Link] = []
     joints: list[yourdfpy.Joint] = []

@@ -122,7 +122,7 @@ class ComplexSingularityCase:
 def complex_singularity_check(
     mech: Mechanism,
     leg: int = 3,
-    q_start: Any = None,
+    guess: Any = None,
     *,
     tilt: float = math.radians(30.0),
     tol: float = SINGULARITY_TOL,
@@ -146,7 +146,7 @@ def complex_singularity_check(
         PoseUnreachable: when the partner leg is shorter than ``leg``.
     """
     lay = prrrp_layout(mech)
-    q0 = mech.q_ref if q_start is None else mech.check_q(q_start, "q_start")
+    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     g, sub, j, x_pair, side, pose, tilt_sign = fold_plan(mech, lay, leg, q0, tilt)
     if not sub.complete:
         raise InvalidInput(f"leg {leg} is alone on its pair: there is no sub-mechanism to check")

@@ -124,8 +124,8 @@ def _walk(
     return s, h, qs, sorted(crossings)
 
 
-def _start(mech: Mechanism, lay: PrrrpLayout, q_start: Any) -> tuple[np.ndarray, PrrrpState, float, float]:
-    q0 = mech.q_ref if q_start is None else mech.check_q(q_start, "q_start")
+def _start(mech: Mechanism, lay: PrrrpLayout, guess: Any) -> tuple[np.ndarray, PrrrpState, float, float]:
+    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     state = prrrp_state(mech, q0, lay)
     pin.framesForwardKinematics(mech.model, mech.data, q0)
     M = mech.data.oMf[mech.model.getFrameId(TASK_FRAME)]
@@ -136,7 +136,7 @@ def _start(mech: Mechanism, lay: PrrrpLayout, q_start: Any) -> tuple[np.ndarray,
 
 def assembly_mode_graph(
     mech: Mechanism,
-    q_start: Any = None,
+    guess: Any = None,
     *,
     height: float | None = None,
     walk_samples: int = 7,
@@ -146,8 +146,8 @@ def assembly_mode_graph(
     """Compute the state-transition graph of the 2-PRRRP assembly modes (Harada 2015, Fig. 5).
 
     Each of the 9 modes gets a representative configuration: pair heights
-    ``(sign_left * height, sign_right * height)`` at the plate x of ``q_start``, reached
-    from ``q_start`` by inverse-kinematics continuation (so the legs keep their working
+    ``(sign_left * height, sign_right * height)`` at the plate x of ``guess``, reached
+    from ``guess`` by inverse-kinematics continuation (so the legs keep their working
     modes). Its rank of :math:`C` decides whether the mode is singular. Two modes are
     adjacent when the straight walk in pair-height space from one representative to the
     other, assembled at every sample (with a sample exactly where a height changes sign)
@@ -155,7 +155,7 @@ def assembly_mode_graph(
 
     Args:
         mech: a 2-PRRRP of the :func:`plm_pin.families.prrrp.build_2prrrp` family (the 3D3M too).
-        q_start: configuration whose working modes and plate x are kept (default reference).
+        guess: configuration whose working modes and plate x are kept (default reference).
         height: magnitude of the representatives' pair heights [m] (default half the
             plate half-length, so that ``[+ -]`` tilts the plate by 30 deg).
         walk_samples: uniform samples per walk (plus the sign-change samples).
@@ -166,7 +166,7 @@ def assembly_mode_graph(
         The graph; for the 2-PRRRP with two complete sub-mechanisms only ``[0 0]`` is singular.
     """
     lay = resolve_layout(mech, layout)
-    q0, state, x0, cos_sign = _start(mech, lay, q_start)
+    q0, state, x0, cos_sign = _start(mech, lay, guess)
     m = 0.5 * lay.half_plate if height is None else float(height)
     if not (0.0 < m < lay.half_plate):
         raise InvalidInput(f"height must lie in (0, {lay.half_plate:.4g}) m, got {m!r}")
@@ -319,7 +319,7 @@ def _max_deviation(mech: Mechanism, qa: np.ndarray, qb: np.ndarray) -> float:
 
 def plan_assembly_mode_change(
     mech: Mechanism,
-    q_start: Any = None,
+    guess: Any = None,
     *,
     goal: Sequence[int] | None = None,
     route: Sequence[Sequence[int]] | None = None,
@@ -346,14 +346,14 @@ def plan_assembly_mode_change(
 
     Args:
         mech: a 2-PRRRP of the :func:`plm_pin.families.prrrp.build_2prrrp` family.
-        q_start: start configuration, both pairs off the stator (default: the reference).
+        guess: start configuration, both pairs off the stator (default: the reference).
         goal: goal assembly mode (default: the start's signs reversed).
         route: modes to follow, start to goal (default: see step 1); checked against the graph.
         tilt: plate angle at the intermediate waypoints [rad], in (0, pi/2).
         samples: uniform samples along the path (the ``[0]`` samples are added).
         tol: margin the direct and constraint margins must stay above (default
             :data:`MODE_CHANGE_TOL`).
-        graph: a graph already computed from ``q_start`` (optional).
+        graph: a graph already computed from ``guess`` (optional).
 
     Returns:
         The plan with its tracked path; check :attr:`AssemblyModeChange.ok`.
@@ -366,7 +366,7 @@ def plan_assembly_mode_change(
             start with a pair on the stator.
     """
     lay = prrrp_layout(mech)
-    q0, state, x0, cos_sign = _start(mech, lay, q_start)
+    q0, state, x0, cos_sign = _start(mech, lay, guess)
     start = state.assembly_mode
     if 0 in start:
         raise InvalidInput(
@@ -533,7 +533,7 @@ def fold_plan(
 def plan_working_mode_change(
     mech: Mechanism,
     leg: int = 3,
-    q_start: Any = None,
+    guess: Any = None,
     *,
     tilt: float = math.radians(30.0),
     samples: int = 101,
@@ -558,7 +558,7 @@ def plan_working_mode_change(
     Args:
         mech: a 2-PRRRP of the :func:`plm_pin.families.prrrp.build_2prrrp` family.
         leg: the leg to flip (3 in the paper).
-        q_start: start configuration (default: the reference).
+        guess: start configuration (default: the reference).
         tilt: plate angle added halfway [rad], in [0, pi/2).
         samples: samples along the path (made odd so that the fold is a sample).
         tol: margin the direct and constraint margins must stay above (default
@@ -573,7 +573,7 @@ def plan_working_mode_change(
         InvalidInput: malformed arguments.
     """
     lay = prrrp_layout(mech)
-    q0 = mech.q_ref if q_start is None else mech.check_q(q_start, "q_start")
+    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     g, sub, _, x_pair, _, pose, tilt_sign = fold_plan(mech, lay, leg, q0, tilt)
     for other in sub.legs:
         if other != leg and lay.leg(other).length < g.length - 1e-12:

@@ -90,6 +90,7 @@ from ..._lazy import lazy_module
 from ...description import _urdf_build as u
 from ...description.compliance import assumed_drive_stiffness
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
+from ...exceptions import InvalidInput
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -149,7 +150,7 @@ def pss_inverse_kinematics(
         s = float(e @ d)
         disc = l * l - float(d @ d) + s * s
         if disc < 0.0:
-            raise ValueError(
+            raise InvalidInput(
                 f"leg {i}: the strut (l = {l:.4g} m) cannot reach its platform joint; "
                 f"distance to the guide {math.sqrt(float(d @ d) - s * s):.4g} m"
             )
@@ -240,13 +241,13 @@ def build_pss(
     n = len(guide_points)
     legs = tuple(sorted(legs))
     if not legs or len(set(legs)) != len(legs) or not all(1 <= i <= n for i in legs):
-        raise ValueError(f"legs {legs}: give distinct leg numbers among 1..{n}")
+        raise InvalidInput(f"legs {legs}: give distinct leg numbers among 1..{n}")
     for i in legs:
         norm = float(np.linalg.norm(guide_directions[i - 1]))
         if abs(norm - 1.0) > 1e-12:
-            raise ValueError(f"guide direction of leg {i} must be a unit vector, |e| = {norm}")
+            raise InvalidInput(f"guide direction of leg {i} must be a unit vector, |e| = {norm}")
     if strut_inertia[0] != strut_inertia[1]:
-        raise ValueError(
+        raise InvalidInput(
             f"strut_inertia {tuple(strut_inertia)}: the transverse moments must be equal (an axisymmetric "
             "strut, whose idle spin the universal joint may drop)"
         )

@@ -82,6 +82,7 @@ import numpy as np
 from ..._lazy import lazy_module
 from ...description import _urdf_build as u
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
+from ...exceptions import InvalidInput
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -134,7 +135,7 @@ def star_triangle_inverse_kinematics(pose: Sequence[float], side: float) -> tupl
     """
     x, y, phi = (float(v) for v in pose)
     if abs(math.sin(phi)) < 1e-9:
-        raise ValueError(f"phi = {phi:.6g} rad: star lines parallel to their rails (sin phi = 0)")
+        raise InvalidInput(f"phi = {phi:.6g} rad: star lines parallel to their rails (sin phi = 0)")
     origins, directions = rails(side)
     q = np.empty(3)
     rho = np.empty(3)
@@ -197,7 +198,7 @@ def build_star_triangle(
     q, rho = star_triangle_inverse_kinematics(pose, a)
     for k, i in enumerate(LEGS):
         if not (0.0 <= q[k] <= a and rho[k] >= 0.0):
-            raise ValueError(
+            raise InvalidInput(
                 f"reference pose {pose}: leg {i} has q = {q[k]:.4g} m (stroke [0, {a:.4g}]) and "
                 f"rho = {rho[k]:.4g} m (must be >= 0)"
             )
