@@ -147,7 +147,12 @@ def _path(
     rows.append(
         Comparison("round trip: largest path error of the direct dynamics", 0.0, float(error), "m", atol=1e-6)
     )
-    section.comparison(f"{name}: forces and round trip", rows, note="The paper's figures give no numbers.")
+    section.comparison(
+        f"{name}: forces and round trip",
+        rows,
+        note="The paper's figures give no numbers.",
+        id=f"{name}_forces",
+    )
     section.table(
         f"{name}: extremes",
         ["actuator", Column("min f", "N"), Column("max f", "N"), Column("min q", "m"), Column("max q", "m")],

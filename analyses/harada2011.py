@@ -335,6 +335,7 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
         "and the fourth drive is what stiffens the 3D4M. With soft drives the 3D3M is unstable under "
         "gravity (K_x not positive definite, eigen-stiffnesses then meaningless). Preload's practical "
         "benefit, removing backlash, is not in this model.",
+        id="stiffness",
     )
     flexible = _flexible_rods(four, k)
     rigid = stiffness(four, four.q_ref, compliance=_drives(four, k))
@@ -355,6 +356,7 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
         f"I = {ROD_SECTION[3]:g} (out of plane), {ROD_SECTION[4]:g} (in plane) m^4, "
         f"J = {ROD_SECTION[5]:g} m^4. "
         "The pin-jointed rods add their axial compliance L/EA in series with the drives.",
+        id="flexible_rods",
     )
     data["3D4M flexible rods"] = bent.to_dict()
     rows = []
@@ -372,6 +374,7 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
         rows,
         note="'task': M_x and K_x (the plane's three motions); 'full': every motion of the compliant model, "
         "here with the rods' out-of-plane bending, which lets the plate move out of the plane.",
+        id="frequencies",
     )
     _stiffness_sweep(section, four, three, data)
 

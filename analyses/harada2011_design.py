@@ -225,6 +225,7 @@ def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
         rows,
         note="Gain: 3D4M minus 3D3M half-width at one height. 'Equal': both ranges end at the same reach "
         "limits (a rod normal to the stator, eq. (9)); 80 deg is the edge of the samples.",
+        id="redundancy",
     )
     work = ds.manipulability.where(np.abs(ds.rz) <= WORK_ANGLE + 1e-12).min("rz")
     table = []
@@ -399,6 +400,7 @@ def _collision_free_table(section: Section, half: Any, free: Any) -> list[tuple[
         note="Collision-free: the largest +/-d on the 2 deg samples over which every pose is reached without "
         "two carriages (3 cm boxes) touching, capped by the singularity-free half-width; empty when the "
         "carriages already touch at theta = 0.",
+        id="collision",
     )
     return rows
 
@@ -473,6 +475,7 @@ def _asymmetry(
         "stator; equal rods on a pair then coincide and the closure Jacobian loses rank. The least slider "
         "gap of a pair is |l3 - l4|. Collision-free: reached without two carriages (3 cm boxes on the "
         "stator) touching.",
+        id="rod_sets",
     )
     asym, sym = rows[1], rows[-1]
     longest = rows[3]

@@ -158,7 +158,9 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
             ("manipulability w", m.w, "product of J_ce column units"),
             ("condition number of J_ce", m.condition_number, "-"),
         ]
-    section.table("Sizes, ranks and margins at the reference", ["quantity", "value", "unit"], rows)
+    section.table(
+        "Sizes, ranks and margins at the reference", ["quantity", "value", "unit"], rows, id="sizes"
+    )
     if mech.task is not None:
         x = task_pose(mech, q)
         section.table(
@@ -231,6 +233,7 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
             ),
             ("singular points found", len(loci), ""),
         ],
+        id="slice_summary",
     )
     touching = self_collisions(mech, mech.q_ref)
     if touching:
@@ -287,7 +290,10 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     ]
     rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(modes.frequencies)]
     section.table(
-        "Stiffness and modes at the reference", ["quantity", Column("value", fmt=".5g"), "unit"], rows
+        "Stiffness and modes at the reference",
+        ["quantity", Column("value", fmt=".5g"), "unit"],
+        rows,
+        id="stiffness",
     )
     dofs = res.dofs
     section.table(
@@ -295,6 +301,7 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
         ["source", *(Column(d, "N/m" if not d.startswith("r") else "N m/rad", ".4g") for d in dofs)],
         [(name, *np.diag(K).tolist()) for name, K in res.contributions.items()],
         note="The shares add up to K_x; the geometric ones (gravity, load, closures) may be negative.",
+        id="stiffness_shares",
     )
     if mech.redundancy > 0:
         _preload_effect(section, mech)
@@ -335,6 +342,7 @@ def _preload_effect(section: Section, mech: Mechanism) -> None:
         rows,
         note="The internal force changes K_x only through the curvature of the constraint forces it causes "
         "(geometric stiffness); the springs are unchanged.",
+        id="preload",
     )
 
 
@@ -374,6 +382,7 @@ def _decoupling(section: Section, mech: Mechanism, grid: WorkspaceSlice) -> None
         note="Decoupled with constant inertia: "
         + (", ".join(report.decoupled()) or "none")
         + f"; poses skipped: {len(report.unreachable)} unreachable, {len(report.singular)} singular.",
+        id="decoupling",
     )
 
 
@@ -398,6 +407,7 @@ def _simulation(section: Section, mech: Mechanism) -> None:
             ("energy drift (max |E - E(0)|)", float(drift), "J"),
             ("largest joint speed", float(np.max(np.abs(run.v))), "m/s, rad/s"),
         ],
+        id="simulation",
     )
     if run.x is not None and run.t.size > 1:
         assert mech.task is not None
@@ -433,6 +443,7 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
         ["actuator", "kind", "f_c", "unit"],
         [(a.joint, a.kind, f, units.get(a.kind, "")) for a, f in zip(mech.actuators, sol.f_c, strict=True)],
         note=f"Objective: {sol.objective}; equilibrium residual {sol.residual:.2e} N (or N m).",
+        id="actuator_forces",
     )
     links = sol.link_forces()
     if links:
@@ -448,6 +459,7 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
             ["mode", *(Column(a.joint, units.get(a.kind, "")) for a in mech.actuators)],
             [(k + 1, *m.f_c) for k, m in enumerate(modes)],
             note="Any multiple of a mode can be added to f_c without moving the mechanism.",
+            id="internal_modes",
         )
         names = list(modes[0].link_forces)
         if names:
@@ -489,6 +501,7 @@ def _internal_range(section: Section, mech: Mechanism, sol: StaticForces) -> Non
         [(k + 1, span.lower[k], sol.internal[k], span.upper[k]) for k in range(span.lower.size)],
         note="Coordinates along the modes above (one linear programme per bound, the other modes free); "
         "multiply a mode's link forces by a coordinate to read the preload it stands for.",
+        id="internal_range",
     )
 
 

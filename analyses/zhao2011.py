@@ -262,7 +262,7 @@ def _work(section: Section, idr: InverseDynamics, grid: np.ndarray) -> None:
             paper_inconsistent=True,
         )
     )
-    section.comparison("Work per motor: paper vs plm_pin", rows)
+    section.comparison("Work per motor: paper vs plm_pin", rows, id="work")
     section.table(
         "Work per motor by both quadratures",
         [
@@ -287,6 +287,7 @@ def _work(section: Section, idr: InverseDynamics, grid: np.ndarray) -> None:
         "the assumptions: angular velocity = rpy rates, and the reflected inertia added after the "
         "minimum-norm projection. Searches over rotation orders, coordinate signs, guide heights and "
         "moment arms (spec, section 6.6) did not bring the model within 19 % of Table 5.",
+        id="work_quadratures",
     )
 
 
@@ -308,6 +309,7 @@ def _work_by_component(section: Section, idr: InverseDynamics, traj: JointTrajec
         f"integral of |m_r cddot_5 cdot_5| dt = {own[4]:.1f} J. Either is far above the {paper[4]:.1f} J "
         "Table 5 gives for the whole motor. Component shares do not add up to the total work: |P| of a "
         "sum is not the sum of the |P| of its parts.",
+        id="work_shares",
     )
 
 
@@ -374,6 +376,7 @@ def _compare(
         ],
         note=f"Equilibrium residuals {s8.residual:.1e} N (8-PSS) and {s6.residual:.1e} N (6-PSS). The 8-PSS "
         f"has {s8.internal.size} internal forces; the 6-PSS's forces are unique.",
+        id="holding",
     )
 
 
@@ -409,6 +412,7 @@ def _stiffness(section: Section, eight: Mechanism, six: Mechanism) -> None:
         ],
         rows,
         note="Two more drives on the 8-PSS (legs 1 and 8) add their stiffness along their guides.",
+        id="stiffness",
     )
     times = np.linspace(0.0, ZHAO2011_TRAJECTORY_DURATION, STIFFNESS_SAMPLES)
     fig, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.2), layout="constrained")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,7 @@ import plm_pin
 from plm_pin.description import Sidecar, write_description
 from plm_pin.description import _urdf_build as u
 from plm_pin.mechanism import Mechanism
+from plm_pin.report import StudyResult
 
 REPO = Path(__file__).resolve().parents[1]
 INTEROP = REPO.parent / "shared" / "interop" / "example-parallel-robots"
@@ -138,6 +140,54 @@ def spatial_6r(tmp_path: Path, closure: dict) -> Mechanism:
         yourdfpy.Robot(name="chain6r", links=links, joints=joints), sidecar, tmp_path, "chain6r"
     )
     return plm_pin.load(tmp_path / "chain6r.urdf")
+
+
+@dataclass(frozen=True)
+class ReportAll:
+    """What the one ``plm-pin report all`` of the session left.
+
+    Attributes:
+        out: its output folder.
+        exit_code: the command's exit code.
+        output: what it printed.
+        results: the result of each study it wrote, by study name.
+    """
+
+    out: Path
+    exit_code: int
+    output: str
+    results: dict[str, StudyResult]
+
+    def study(self, name: str) -> StudyResult:
+        """The result of study ``name``; fails with the command's output when the run did not write it."""
+        assert self.exit_code == 0 and name in self.results, self.output
+        return self.results[name]
+
+
+@pytest.fixture(scope="session")
+def report_all(tmp_path_factory) -> ReportAll:
+    """``plm-pin report all`` run once, through the CLI, for the CLI, browser and study tests.
+
+    Every study runs once in the session: the CLI's calls of ``run_study`` are recorded (not
+    replaced), so the study tests read the very results whose reports the command wrote.
+    """
+    from typer.testing import CliRunner
+
+    from plm_pin import cli
+
+    out = tmp_path_factory.mktemp("report_all") / "reports"
+    results: dict[str, StudyResult] = {}
+    run_study = cli.run_study
+
+    def recorded(*args, **kwargs) -> StudyResult:
+        result = run_study(*args, **kwargs)
+        results[result.study] = result
+        return result
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(cli, "run_study", recorded)
+        invoked = CliRunner().invoke(cli.app, ["report", "all", "--out", str(out)])
+    return ReportAll(out, invoked.exit_code, invoked.output, results)
 
 
 @pytest.fixture

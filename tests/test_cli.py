@@ -292,12 +292,15 @@ def test_report_never_writes_outside_out(tmp_path, fourbar):
 
 
 @pytest.mark.slow
-def test_report_all_runs_every_study_and_indexes_them(tmp_path):
-    """`report all` writes every study, each number its tables show is in its results.json, all indexed."""
-    out = tmp_path / "reports"
-    result = runner.invoke(app, ["report", "all", "--out", str(out)])
-    assert result.exit_code == 0, result.output
+def test_report_all_runs_every_study_and_indexes_them(report_all):
+    """`report all` writes every study, each number its tables show is in its results.json, all indexed.
+
+    The command is run once for the session (the ``report_all`` fixture of tests/conftest.py).
+    """
+    out = report_all.out
+    assert report_all.exit_code == 0, report_all.output
     studies = cli.study_names()
+    assert sorted(report_all.results) == studies  # each study ran once, its result kept
     folders = sorted(p.name for p in out.iterdir() if p.is_dir())
     overview = f"overview-{cli.find_study('overview').mechanism}"
     assert folders == sorted(overview if s == "overview" else s for s in studies)

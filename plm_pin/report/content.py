@@ -104,6 +104,7 @@ class Table:
         columns: the columns.
         rows: the rows, one cell per column.
         note: a line under the table.
+        id: a stable name to look the table up by (:meth:`StudyResult.block`), not shown; "" for none.
     """
 
     kind: ClassVar[str] = "table"
@@ -111,6 +112,7 @@ class Table:
     columns: tuple[Column, ...]
     rows: tuple[tuple[Cell, ...], ...]
     note: str = ""
+    id: str = ""
 
     def __post_init__(self) -> None:
         for k, row in enumerate(self.rows):
@@ -263,12 +265,20 @@ class Comparison:
 
 @dataclass(frozen=True)
 class Comparisons:
-    """A paper-vs-plm_pin table: quantity, paper value, ours, relative difference, explanation."""
+    """A paper-vs-plm_pin table: quantity, paper value, ours, relative difference, explanation.
+
+    Attributes:
+        title: caption.
+        rows: the rows.
+        note: a line under the table.
+        id: a stable name to look the table up by (:meth:`StudyResult.block`), not shown; "" for none.
+    """
 
     kind: ClassVar[str] = "comparison"
     title: str
     rows: tuple[Comparison, ...]
     note: str = ""
+    id: str = ""
 
     @property
     def n_agree(self) -> int:
@@ -439,22 +449,33 @@ class Section:
         return block
 
     def table(
-        self, title: str, columns: Sequence[Column | str], rows: Sequence[Sequence[Any]], *, note: str = ""
+        self,
+        title: str,
+        columns: Sequence[Column | str],
+        rows: Sequence[Sequence[Any]],
+        *,
+        note: str = "",
+        id: str = "",
     ) -> Table:
-        """Add a table; a column given as a string has no unit.
+        """Add a table; a column given as a string has no unit; ``id`` names it for :meth:`StudyResult.block`.
 
         Raises:
             InvalidInput: a row of the wrong length or a cell that is not text, a number, a bool or None.
         """
         cols = tuple(c if isinstance(c, Column) else Column(c) for c in columns)
         cells = tuple(tuple(_cell(v, f"table {title!r}, row {k}") for v in row) for k, row in enumerate(rows))
-        block = Table(title, cols, cells, note)
+        block = Table(title, cols, cells, note, id)
         self.blocks.append(block)
         return block
 
-    def comparison(self, title: str, rows: Sequence[Comparison], *, note: str = "") -> Comparisons:
-        """Add a paper-vs-plm_pin table; the relative differences and verdicts are computed."""
-        block = Comparisons(title, tuple(rows), note)
+    def comparison(
+        self, title: str, rows: Sequence[Comparison], *, note: str = "", id: str = ""
+    ) -> Comparisons:
+        """Add a paper-vs-plm_pin table; the relative differences and verdicts are computed.
+
+        ``id`` names it for :meth:`StudyResult.block`.
+        """
+        block = Comparisons(title, tuple(rows), note, id)
         self.blocks.append(block)
         return block
 
@@ -570,6 +591,18 @@ class StudyResult:
     def comparisons(self) -> list[Comparisons]:
         """Every paper-vs-plm_pin table."""
         return [b for s in self.sections for b in s.blocks if isinstance(b, Comparisons)]
+
+    def block(self, id: str) -> Table | Comparisons:
+        """The table or paper-vs-plm_pin table named ``id``.
+
+        Raises:
+            KeyError: no block of the report has this id.
+        """
+        for section in self.sections:
+            for b in section.blocks:
+                if isinstance(b, (Table, Comparisons)) and b.id == id:
+                    return b
+        raise KeyError(f"no table {id!r} in the report of {self.study!r}")
 
     def to_dict(self) -> dict[str, object]:
         """The content of ``results.json``: every number shown, with units, and how it was made."""

@@ -5,27 +5,24 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plm_pin.report import find_study, run_study
-
 pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def result():
-    """The study, run once."""
-    return run_study(find_study("enferadi2017"))
+def result(report_all):
+    """The study's result, from the session's one ``plm-pin report all``."""
+    return report_all.study("enferadi2017")
 
 
 def test_forces_match_the_corrected_lagrange_equations_and_the_path_is_retraced(result):
     """Both paths: forces at the spec's times to 1e-6 N, direct dynamics back on the path to 1e-6 m."""
-    tables = {t.title: t for t in result.comparisons()}
     for name in ("line", "circle"):
-        rows = tables[f"{name}: forces and round trip"].rows
+        rows = result.block(f"{name}_forces").rows
         assert all(r.agrees for r in rows), [r.quantity for r in rows if not r.agrees]
         (trip,) = [r for r in rows if r.quantity.startswith("round trip")]
         assert trip.ours <= 1e-6
-    assert len(tables["line: forces and round trip"].rows) == 2 * 3 + 1
-    assert len(tables["circle: forces and round trip"].rows) == 3 * 3 + 1
+    assert len(result.block("line_forces").rows) == 2 * 3 + 1
+    assert len(result.block("circle_forces").rows) == 3 * 3 + 1
 
 
 def test_circle_is_the_paper_s_circle(result):

@@ -8,17 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from plm_pin.report import find_study, run_study
-
 pytestmark = pytest.mark.slow
 
 M_L, M_M, M_T, L, RT = 0.026, 0.375, 0.132, 0.14, 0.05  # Table 1 [kg, kg, kg, m, m]
 
 
 @pytest.fixture(scope="module")
-def result():
-    """The study, run once."""
-    return run_study(find_study("harada2011"))
+def result(report_all):
+    """The study's result, from the session's one ``plm-pin report all``."""
+    return report_all.study("harada2011")
 
 
 def _figures(result) -> dict:
@@ -55,7 +53,7 @@ def test_simulation_snapshots_follow_the_closed_form(result):
     np.testing.assert_allclose(
         np.asarray(one["x"])[:, 0], 0.2 * np.asarray(one["t"]) ** 2 / (2 * m_xx), atol=1e-9
     )
-    assert len(data["simulation 2 (Table 4)"]["t"]) == 11
+    np.testing.assert_allclose(data["simulation 2 (Table 4)"]["t"], np.arange(11) * 0.2, atol=1e-12)
 
 
 def test_report_has_every_figure_and_the_animation(result):
@@ -69,12 +67,6 @@ def test_report_has_every_figure_and_the_animation(result):
     assert scene.data["times"][-1] == pytest.approx(2.0)
 
 
-def _table(result, start: str):
-    return next(
-        b for s in result.sections for b in s.blocks if b.kind == "table" and b.title.startswith(start)
-    )
-
-
 def test_stiffness_of_the_3d4m_is_the_drives_k_j_ce_t_j_ce_and_compression_softens_it(result):
     """f_i = 0: smallest translational eigen-stiffness of k J_ce^T J_ce (eq. (12)); falls as f_i grows.
 
@@ -82,7 +74,7 @@ def test_stiffness_of_the_3d4m_is_the_drives_k_j_ce_t_j_ce_and_compression_softe
     """
     from analyses import _harada2011_paper as paper
 
-    rows = _table(result, "Eigen-stiffness at the reference pose").rows
+    rows = result.block("stiffness").rows
     four = [r for r in rows if r[0] == "3D4M" and r[1] == 1.0e6]
     pose, legs = (0.0, 0.08, math.radians(-20.0)), (1, 2, 3, 4)
     J = paper.J_ce(pose, paper.slider_positions(pose, L, RT, legs), L, RT, legs)
@@ -100,9 +92,9 @@ def test_stiffness_of_the_3d4m_is_the_drives_k_j_ce_t_j_ce_and_compression_softe
 
 def test_flexible_rods_soften_the_3d4m_and_add_out_of_plane_modes(result):
     """Rods as beams: every eigen-stiffness drops; the full model's lowest mode is below the task model's."""
-    rods = {r[0]: r for r in _table(result, "3D4M with flexible rods").rows}
+    rods = {r[0]: r for r in result.block("flexible_rods").rows}
     assert all(f < r for f, r in zip(rods["flexible"][1:], rods["rigid"][1:], strict=True))
-    freq = {(r[0], r[1]): r[2] for r in _table(result, "Lowest natural frequencies").rows}
+    freq = {(r[0], r[1]): r[2] for r in result.block("frequencies").rows}
     assert (
         freq[("3D4M, flexible rods", "full")] < freq[("3D4M, flexible rods", "task")] < freq[("3D4M", "task")]
     )

@@ -12,7 +12,6 @@ import pytest
 
 from analyses import _harada2011_paper as paper
 from plm_pin.families.prrrp import leg_inverse_kinematics
-from plm_pin.report import find_study, run_study
 
 pytestmark = pytest.mark.slow
 
@@ -20,16 +19,9 @@ L = 0.140
 
 
 @pytest.fixture(scope="module")
-def result():
-    """The study, run once."""
-    return run_study(find_study("harada2011_design"))
-
-
-def _table(result, start: str):
-    (table,) = [
-        b for s in result.sections for b in s.blocks if b.kind == "table" and b.title.startswith(start)
-    ]
-    return table
+def result(report_all):
+    """The study's result, from the session's one ``plm-pin report all``."""
+    return report_all.study("harada2011_design")
 
 
 def test_every_paper_claim_agrees(result):
@@ -61,10 +53,10 @@ def test_reach_limited_ranges_are_eq_9(result):
 
 def test_tables_answer_the_question(result):
     """The redundancy table covers every ratio; the asymmetric rod set is free of the complex singularity."""
-    redundancy = _table(result, "Rotation half-width: the 3D3M at its best height")
+    redundancy = result.block("redundancy")
     assert [row[0] for row in redundancy.rows] == [2.0, 2.8, 4.0, 5.6, 8.0]
     assert all(row[4] >= row[2] for row in redundancy.rows)  # the 3D4M never turns less
-    rods = _table(result, "Rod sets compared")
+    rods = result.block("rod_sets")
     asym = next(row for row in rods.rows if row[0] == "l1 = l4 = 0.24, l2 = l3 = 0.17 m")
     assert asym[5] == "no" and asym[6] == pytest.approx(0.07)
     assert np.isclose(asym[1], next(row for row in rods.rows if row[0].startswith("all 0.17"))[1])
@@ -108,7 +100,7 @@ def test_collision_free_ranges_are_the_carriage_gaps(result):
             ends.append(abs(math.degrees(float(angles[k]))))
         return min(ends)
 
-    table = _table(result, "Rotation half-width without and with self-collision")
+    table = result.block("collision")
     assert len(table.rows) == 15
     wider = touching = 0
     for ratio, y, free3, kept3, free4, kept4 in table.rows:
@@ -144,7 +136,7 @@ def test_box_fractions_are_eq_2_with_the_carriage_gaps(result):
             np.linspace(-0.1, 0.1, 9), np.linspace(0.02, 0.24, 12), np.radians(np.linspace(-60.0, 60.0, 13))
         )
     )
-    rods = _table(result, "Rod sets compared")
+    rods = result.block("rod_sets")
     for row in rods.rows:
         lengths = (
             (0.17,) * 4 if row[0].startswith("all 0.17") else (0.24, *(float(row[0].split()[-2]),) * 2, 0.24)

@@ -23,12 +23,8 @@ SECTIONS = [
 
 
 def _blocks(result, kind):
-    return {
-        b.title if hasattr(b, "title") else b.caption: b
-        for s in result.sections
-        for b in s.blocks
-        if b.kind == kind
-    }
+    """The figures or scenes of ``result``, by caption."""
+    return {b.caption: b for s in result.sections for b in s.blocks if b.kind == kind}
 
 
 def _rows(table) -> dict:
@@ -55,7 +51,7 @@ def test_overview_sections_and_mobility(fivebar_overview):
     assert [s.title for s in result.sections] == SECTIONS
     assert result.folder == "overview-my_five-bar"
     assert result.mechanisms[0].name == "my five-bar"
-    rows = _rows(_blocks(result, "table")["Sizes, ranks and margins at the reference"])
+    rows = _rows(result.block("sizes"))
     # 4 revolutes, a planar point closure: 3 rows of rank 2
     assert (rows["velocity size nv"], rows["closure rows"], rows["rank of J_phi at the reference"]) == (
         4,
@@ -70,7 +66,7 @@ def test_overview_static_forces_balance_gravity(fivebar_overview):
     """The report's f_c balances Pinocchio's generalized gravity with some closure force (least squares)."""
     path, result = fivebar_overview
     mech = plm_pin.load(path)
-    table = _blocks(result, "table")["Actuator forces f_c"]
+    table = result.block("actuator_forces")
     f_c = np.array([row[2] for row in table.rows])
     assert [row[0] for row in table.rows] == ["left_motor", "right_motor"]
     q = mech.q_ref
@@ -88,9 +84,11 @@ def test_overview_map_figure_and_scene(fivebar_overview):
     _, result = fivebar_overview
     figure = next(iter(_blocks(result, "figure").values()))
     data = figure.data["slice"]
-    assert data["axes"] == ["x", "y"] and np.shape(data["manipulability"]) == (41, 41)
-    summary = _rows(_blocks(result, "table")["Slice summary"])
-    assert summary["grid points"] == 41 * 41 and 0.0 < summary["reachable fraction"] <= 1.0
+    assert data["axes"] == ["x", "y"]
+    assert np.shape(data["manipulability"]) == tuple(len(v) for v in data["values"])
+    summary = _rows(result.block("slice_summary"))
+    assert summary["grid points"] == np.size(data["manipulability"])
+    assert 0.0 < summary["reachable fraction"] <= 1.0
     # every five-bar joint spans at least a full turn: the limits never bind; collisions only remove points
     assert summary["fraction reached within the joint limits"] == summary["reachable fraction"]
     assert 0.0 <= summary["fraction reached free of self-collision"] <= summary["reachable fraction"]
@@ -111,7 +109,7 @@ def test_overview_without_task_skips_the_slice(user_fivebar):
     for index, what in ((1, "No workspace slice"), (3, "No decoupling check")):
         (text,) = result.sections[index].blocks
         assert text.text.startswith(f"{what}: it needs a task")
-    assert "Actuator forces f_c" in _blocks(result, "table")
+    assert result.block("actuator_forces").rows
 
 
 def test_overview_of_a_one_dof_mechanism_sweeps_its_task(tmp_path):
@@ -145,12 +143,12 @@ LIMIT = 1.5
 
 def test_overview_internal_range_is_the_interval_intersection(limited_3d4m_overview):
     """One internal mode g: y is admissible iff -L <= f_p,i + g_i y <= L for all i (interval intersection)."""
-    tables = _blocks(limited_3d4m_overview, "table")
-    f_p = np.array([row[2] for row in tables["Actuator forces f_c"].rows])
-    (mode,) = tables["Internal-force modes (unit vectors of the internal basis)"].rows
+    result = limited_3d4m_overview
+    f_p = np.array([row[2] for row in result.block("actuator_forces").rows])
+    (mode,) = result.block("internal_modes").rows
     g = np.array(mode[1:])
     ends = np.sort(np.stack([(-LIMIT - f_p) / g, (LIMIT - f_p) / g]), axis=0)
-    (row,) = tables["Internal-force range within the actuator limits, holding gravity"].rows
+    (row,) = result.block("internal_range").rows
     assert row[1] == pytest.approx(np.max(ends[0]), abs=1e-9)
     assert row[3] == pytest.approx(np.min(ends[1]), abs=1e-9)
     assert row[1] < 0.0 < row[3] and row[2] == pytest.approx(0.0, abs=1e-12)  # min norm: y = 0
@@ -159,7 +157,7 @@ def test_overview_internal_range_is_the_interval_intersection(limited_3d4m_overv
 def test_overview_decoupling_of_the_3d4m_is_harada_s(limited_3d4m_overview):
     """Harada 2011 eq. (26), (M.30): m_xx = 4 m_l + 4 m_m + m_t constant, m_xy = m_xθ = 0, g_x along y."""
     m_l, m_m, m_t, gravity = 0.026, 0.375, 0.132, 9.8  # Table 1 and (M.37)
-    rows = {r[0]: r for r in _blocks(limited_3d4m_overview, "table")["Decoupling table"].rows}
+    rows = {r[0]: r for r in limited_3d4m_overview.block("decoupling").rows}
     assert rows["M_xx"][1] == "constant"
     assert rows["M_xx"][2] == pytest.approx(4 * m_l + 4 * m_m + m_t, rel=1e-9)
     assert (
@@ -173,7 +171,7 @@ def test_overview_decoupling_of_the_3d4m_is_harada_s(limited_3d4m_overview):
 
 def test_overview_simulation_conserves_energy_and_closure(limited_3d4m_overview):
     """Released at rest, actuators free: 1 s simulated, loops closed to 1e-10 m, energy drift < 1e-7 J."""
-    rows = _rows(_blocks(limited_3d4m_overview, "table")["Passive simulation"])
+    rows = _rows(limited_3d4m_overview.block("simulation"))
     assert rows["time simulated"] == pytest.approx(1.0)
     assert rows["largest closure residual"] <= 1e-10
     assert rows["energy drift (max |E - E(0)|)"] < 1e-7
@@ -188,13 +186,13 @@ def test_overview_stiffness_drive_share_is_k_j_ce_t_j_ce_and_preload_changes_it(
     from analyses import _harada2011_paper as paper
     from plm_pin.models.registry import HARADA2011_DRIVE_STIFFNESS
 
-    tables = _blocks(limited_3d4m_overview, "table")
+    result = limited_3d4m_overview
     pose, legs = (0.0, 0.08, np.radians(-20.0)), (1, 2, 3, 4)
     J = paper.J_ce(pose, paper.slider_positions(pose, 0.14, 0.05, legs), 0.14, 0.05, legs)
-    share = {r[0]: r[1:] for r in tables["Share of each source in the diagonal of K_x at the reference"].rows}
+    share = {r[0]: r[1:] for r in result.block("stiffness_shares").rows}
     np.testing.assert_allclose(share["actuators"], HARADA2011_DRIVE_STIFFNESS * np.diag(J.T @ J), rtol=1e-9)
-    rows = _rows(tables["Stiffness and modes at the reference"])
-    preload = tables["Preload: stiffness at the reference along the first internal-force direction"].rows
+    rows = _rows(result.block("stiffness"))
+    preload = result.block("preload").rows
     at_zero = [r for r in preload if r[0] == 0.0]
     assert at_zero and at_zero[0][1] == pytest.approx(rows["translational eigen-stiffness 1"], rel=1e-12)
     assert max(r[1] for r in preload) - min(r[1] for r in preload) > 1e-3  # the internal force changes K_x
@@ -223,7 +221,7 @@ def test_overview_collision_free_slice_of_the_3d4m_is_the_carriage_gaps(limited_
                 }
                 c = paper.slider_positions((pose["x"], pose["y"], pose["rz"]), 0.14, 0.05, legs)
                 free += bool(np.min(np.abs(c[:, None] - c[None, :])[np.triu_indices(4, 1)]) >= 0.03)
-    summary = _rows(_blocks(limited_3d4m_overview, "table")["Slice summary"])
+    summary = _rows(limited_3d4m_overview.block("slice_summary"))
     total = np.size(data["reachable"])
     assert summary["fraction reached free of self-collision"] == pytest.approx(free / total, abs=1e-12)
     assert 0.5 * summary["reachable fraction"] < free / total < summary["reachable fraction"]

@@ -5,28 +5,21 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from analyses._zhao2011_paper import ZHAO2011_TABLE5_WORK
-from plm_pin.report import find_study, run_study
-
 pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module")
-def result():
-    """The study, run once."""
-    return run_study(find_study("zhao2011"))
-
-
-def _tables(result) -> dict:
-    return {b.title: b for s in result.sections for b in s.blocks if b.kind == "table"}
+def result(report_all):
+    """The study's result, from the session's one ``plm-pin report all``."""
+    return report_all.study("zhao2011")
 
 
 def test_table5_is_quoted_and_every_difference_explained(result):
-    """The paper column is Table 5 as printed; rows that differ carry an explanation; n1 = 12 agrees."""
-    (work,) = [t for t in result.comparisons() if t.title == "Work per motor: paper vs plm_pin"]
+    """Rows that differ from Table 5 carry an explanation; n1 = 12 agrees."""
+    work = result.block("work")
     rows = {r.quantity: r for r in work.rows}
-    assert [rows[f"W_{i}, Table 5"].paper for i in range(1, 9)] == list(ZHAO2011_TABLE5_WORK)
-    assert rows["sum of W_i"].paper == pytest.approx(sum(ZHAO2011_TABLE5_WORK))
+    table5 = [rows[f"W_{i}, Table 5"].paper for i in range(1, 9)]
+    assert rows["motor doing the most work"].paper == 1 + table5.index(max(table5))
     assert rows["n1 of eq. (34), e = 1e-3 J"].agrees and rows["n1 of eq. (34), e = 1e-3 J"].ours == 12
     for r in work.rows:
         assert r.agrees or r.explanation
@@ -41,27 +34,22 @@ def test_table5_is_quoted_and_every_difference_explained(result):
 
 def test_both_quadratures_agree(result):
     """Adaptive trapezoid (eqs. (30)-(34), tolerance 1e-3 J) and the exact spline integral agree to 0.01 J."""
-    table = (
-        _tables(result)["Work by both quadratures"] if "Work by both quadratures" in _tables(result) else None
-    )
-    table = table or _tables(result)["Work per motor by both quadratures"]
-    for row in table.rows:
+    for row in result.block("work_quadratures").rows:
         assert row[1] == pytest.approx(row[2], abs=0.01)
 
 
 def test_rotor_share_alone_exceeds_table5_on_motor_5(result):
     """The evidence row: the rotor-coupler share on motor 5 does more work than Table 5 gives the motor."""
-    table = _tables(result)[
-        "Work of each component's share of the motor force, W = integral of |f_share cdot| dt"
-    ]
+    table = result.block("work_shares")
     header = [c.name for c in table.columns]
     motor5 = table.rows[4]
-    assert motor5[header.index("rotor")] > motor5[-1] == ZHAO2011_TABLE5_WORK[4]
+    table5 = {r.quantity: r.paper for r in result.block("work").rows}["W_5, Table 5"]
+    assert motor5[header.index("rotor")] > motor5[-1] == table5
 
 
 def test_eight_and_six_pss_hold_the_platform(result):
     """At the home pose both hold the platform; the 8-PSS min-peak allocation lowers the largest force."""
-    table = _tables(result)["Holding the platform against gravity at the home pose: slider forces"]
+    table = result.block("holding")
     min_norm = np.array([r[1] for r in table.rows])
     min_peak = np.array([r[2] for r in table.rows])
     assert np.max(np.abs(min_peak)) <= np.max(np.abs(min_norm)) + 1e-9
@@ -87,12 +75,7 @@ def test_stiffness_is_the_drives_k_j_ce_t_j_ce_and_the_8pss_is_stiffer(result):
     from plm_pin.kinematics import closed_chain_jacobians
     from plm_pin.models.registry import ZHAO2011_DRIVE_STIFFNESS
 
-    rows = {
-        r[0]: r
-        for r in _tables(result)[
-            "Eigen-stiffness and lowest natural frequency at the home pose, gravity held"
-        ].rows
-    }
+    rows = {r[0]: r for r in result.block("stiffness").rows}
     for name in ("8-PSS", "6-PSS"):
         mech = plm_pin.load(f"zhao2011_{name[0]}pss")
         J = closed_chain_jacobians(mech, mech.q_ref).J_ce

@@ -18,10 +18,9 @@ from typing import Any
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 import plm_pin
-from plm_pin.cli import app
+from plm_pin.report import study_names
 from plm_pin.viz import scene_html
 
 pytestmark = pytest.mark.slow
@@ -180,17 +179,10 @@ def _check_report(driver: Any, where: str) -> int:
 
 
 @pytest.fixture(scope="module")
-def reports(tmp_path_factory) -> Path:
-    """Reports written by the CLI: Harada 2015 (animations), Zhao 2011 (wide tables) and a user's five-bar."""
-    out = tmp_path_factory.mktemp("reports")
-    user = tmp_path_factory.mktemp("user")
-    for suffix in (".urdf", ".plm.yaml"):
-        shutil.copy(plm_pin.models.urdf_folder() / f"fivebar{suffix}", user / f"fivebar{suffix}")
-    runner = CliRunner()
-    for target in ("harada2015", "zhao2011", str(user / "fivebar.urdf")):
-        result = runner.invoke(app, ["report", target, "--out", str(out)])
-        assert result.exit_code == 0, result.output
-    return out
+def reports(report_all) -> Path:
+    """The reports of the session's one ``plm-pin report all``: every study, the overview among them."""
+    assert report_all.exit_code == 0, report_all.output
+    return report_all.out
 
 
 def _load_time(driver: Any) -> float:
@@ -232,7 +224,7 @@ def test_reports_render_with_figures_and_3d_scenes(browser, reports, record_prop
     _open(browser, (reports / "index.html").as_uri())
     links = [a.get_attribute("href") for a in browser.find_elements(By.CSS_SELECTOR, "table.index a")]
     pages = [link for link in links if link.endswith("/report.html")]
-    assert len(pages) == 3
+    assert len(pages) == len(study_names())
     assert _console_errors(browser) == []
     for page in pages:
         path = Path(page.removeprefix("file://"))
