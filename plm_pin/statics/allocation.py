@@ -337,31 +337,25 @@ def _polish(
 
 def _least_violating(k: int, ineq: Inequalities, tol: float) -> np.ndarray:
     """Internal coordinates minimising the sum of squared violations of ``ineq`` (always feasible)."""
-    # variables (y, s): min 1/2 |s|^2 with lower - s <= offset + D y <= upper + s, s >= 0
+    # solved in units of the largest bound or offset (u = y / scale, the same minimiser), so that
+    # ProxSuite's absolute tolerances are relative ones (a min_compression of 1e9 N)
+    values = np.concatenate([ineq.lower, ineq.upper, ineq.offset])
+    scale = float(np.max(np.abs(values[np.isfinite(values)]), initial=1.0))
+    offset, lower, upper = ineq.offset / scale, ineq.lower / scale, ineq.upper / scale
+    # variables (u, s): min 1/2 |s|^2 with lower - s <= offset + D u <= upper + s, s >= 0
     p = ineq.D.shape[0]
-    lo_rows = Inequalities(
-        ineq.names, ineq.offset, np.hstack([ineq.D, np.eye(p)]), ineq.lower, np.full(p, np.inf)
-    )
-    hi_rows = Inequalities(
-        ineq.names, ineq.offset, np.hstack([ineq.D, -np.eye(p)]), np.full(p, -np.inf), ineq.upper
-    )
+    lo_rows = Inequalities(ineq.names, offset, np.hstack([ineq.D, np.eye(p)]), lower, np.full(p, np.inf))
+    hi_rows = Inequalities(ineq.names, offset, np.hstack([ineq.D, -np.eye(p)]), np.full(p, -np.inf), upper)
     pos = Inequalities(
         ("s",) * p, np.zeros(p), np.hstack([np.zeros((p, k)), np.eye(p)]), np.zeros(p), np.full(p, np.inf)
     )
     H = np.zeros((k + p, k + p))
     H[k:, k:] = np.eye(p)
-    H[:k, :k] = 1e-12 * np.eye(k)  # a unique y among equally violating ones
-    z = solve_qp(H, np.zeros(k + p), _stack(_stack(lo_rows, hi_rows), pos), tol)
+    H[:k, :k] = 1e-12 * np.eye(k)  # a unique u among equally violating ones
+    z = solve_qp(H, np.zeros(k + p), _stack(_stack(lo_rows, hi_rows), pos), tol / scale)
     if z is None:
-        # ProxSuite's absolute tolerances fail on huge bounds (a min_compression of 1e9 N): solve
-        # again in units of the largest bound (u = y / scale), the same minimiser
-        values = np.concatenate([ineq.lower, ineq.upper, ineq.offset])
-        scale = float(np.max(np.abs(values[np.isfinite(values)]), initial=1.0))
-        if scale <= 1.0:
-            raise PlmError("ProxSuite did not solve the least-violation problem")
-        scaled = Inequalities(ineq.names, ineq.offset / scale, ineq.D, ineq.lower / scale, ineq.upper / scale)
-        return scale * _least_violating(k, scaled, tol / scale)
-    return z[:k]
+        raise PlmError("ProxSuite did not solve the least-violation problem")
+    return scale * z[:k]
 
 
 def _raise_infeasible(
