@@ -8,9 +8,9 @@ import re
 import numpy as np
 import pytest
 
-from plm_pin import InvalidInput, sweep
+from plm_pin import InvalidInput
 from plm_pin.models import build_2prrrp, builder_parameters
-from plm_pin.sweep import METRICS, OPTIONS, make_spec
+from plm_pin.sweep import METRICS, OPTIONS, make_spec, sweep
 from tests.sweep.conftest import small
 
 PARAMS = list(builder_parameters(build_2prrrp))

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from plm_pin import StoreMismatch, sweep
-from plm_pin.sweep import make_spec
+from plm_pin import StoreMismatch
+from plm_pin.sweep import make_spec, sweep
 from plm_pin.sweep.store import MANIFEST, SweepStore, chunk_name
 from plm_pin.warnings import CorruptChunkWarning
 from tests.sweep.conftest import small
