@@ -60,7 +60,7 @@ format: $(STAMP)
 	$(VENV)/bin/ruff check --fix .
 
 bench: $(STAMP)
-	$(PY) -m plm_pin.benchmarks --out $(REPORTS)/bench
+	$(PY) -m benchmarks.harness --out $(REPORTS)/bench
 
 urdf: $(STAMP)
 	$(PY) -m plm_pin.models.generate

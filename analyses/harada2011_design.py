@@ -3,7 +3,7 @@
 Harada 2011 fixes l : 2 r_t = 2 : 1 for Fig. 6 and shows, at one height, that the 3D3M meets
 its type-4 singularity at 28.7 deg while the redundant 3D4M does not; Harada 2015 makes two
 rods shorter (l1 = l4 = 0.240 m, l2 = l3 = 0.170 m) so that assembly-mode changes avoid the
-complex singularity of equal rods. This study sweeps, with :func:`plm_pin.sweep`, the ratio
+complex singularity of equal rods. This study sweeps, with :func:`plm_pin.sweep.sweep`, the ratio
 l / r_t and the height y for both tables, and the inner rod length for the 2015 design, and
 reads off the singularity-free rotation range, the manipulability and the reachable part of
 a workspace box, each also with the carriages' self-collision excluded (sweep metric
@@ -60,7 +60,7 @@ def run(ctx: StudyContext) -> None:
     for name in ("harada2011_3d3m", "harada2011_3d4m", "harada2015_asymmetric"):
         ctx.load(name)
     ctx.step("sweep l / r_t x y for the 3D3M and the 3D4M")
-    ratio = plm_pin.sweep(
+    ratio = plm_pin.sweep.sweep(
         "harada2011_3d4m",
         {"legs": [[1, 2, 4], [1, 2, 3, 4]], "half_plate": [L / r for r in RATIOS]},
         {"y": HEIGHTS, "rz": ANGLES},
@@ -72,7 +72,7 @@ def run(ctx: StudyContext) -> None:
     _redundancy(ctx.section("Redundancy: the 3D3M and the 3D4M against l / r_t and the height"), ratio)
     ctx.step("sweep the rod lengths of the Harada 2015 design")
     samples = [{"rod_lengths": [0.24, li, li, 0.24]} for li in INNER] + [{"rod_lengths": [0.17] * 4}]
-    rods = plm_pin.sweep(
+    rods = plm_pin.sweep.sweep(
         "harada2015_asymmetric",
         samples,
         {"y": np.linspace(0.04, 0.22, 10), "rz": ANGLES},
@@ -80,7 +80,7 @@ def run(ctx: StudyContext) -> None:
         pose=(0.0, 0.10, 0.0),
         options={"over": ["rz"], "xtol": XTOL},
     )
-    box = plm_pin.sweep(
+    box = plm_pin.sweep.sweep(
         "harada2015_asymmetric",
         samples,
         {

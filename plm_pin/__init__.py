@@ -54,7 +54,7 @@ __all__ = [
 
 
 def __getattr__(name: str) -> Any:
-    """``plm_pin.sweep``: the design-sweep package, imported on first use (callable as its ``sweep``)."""
+    """``plm_pin.sweep``: the design-sweep package, imported on first use."""
     if name == "sweep":
         return importlib.import_module(".sweep", __name__)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

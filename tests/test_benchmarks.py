@@ -1,4 +1,4 @@
-"""The benchmark's floors and closed form (plm_pin/benchmarks.py) compute what the paths they time compute."""
+"""The benchmark's floors and closed form (benchmarks/harness.py) compute what the paths they time compute."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import math
 import numpy as np
 
 from analyses import _harada2011_paper as paper
+from benchmarks.harness import Floor, _timing_line, harada_closed_form_map
 from plm_pin.analysis import manipulability, workspace_map
-from plm_pin.benchmarks import Floor, _timing_line, harada_closed_form_map
 from plm_pin.kinematics import closed_chain_jacobians, forward_kinematics, inverse_kinematics, task_pose
 from plm_pin.models import PRESETS
 from tests.conftest import preset

@@ -14,7 +14,9 @@ coordinates can also be prescribed outright (Harada 2011's :math:`f_i`, eqs. (20
 
 Without inequalities the norm problem is solved in closed form (its KKT system); with them,
 ProxSuite's dense QP solves it and an active-set polish (the KKT system of the constraints
-ProxSuite found active) brings the answer to round-off. When no allocation meets the
+ProxSuite found active) brings the answer to round-off. The minimum peak is a linear
+programme, solved by HiGHS (:func:`scipy.optimize.linprog`) before its minimum-norm
+tie-break. When no allocation meets the
 inequalities, a second QP finds the least-violating one (minimum sum of squared
 violations) and :class:`~plm_pin.exceptions.AllocationInfeasible` carries it.
 """
@@ -26,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import proxsuite
+from scipy.optimize import linprog
 
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError
 
@@ -209,7 +212,7 @@ def _clipped(y0: np.ndarray, ineq: Inequalities) -> np.ndarray:
 def _min_max(
     f_p: np.ndarray, G: np.ndarray, W: np.ndarray, ineq: Inequalities, tol: float
 ) -> np.ndarray | None:
-    """Minimise t subject to |w_i f_i| <= t, then the weighted norm at that t."""
+    """Minimise t subject to |w_i f_i| <= t (a linear programme), then the weighted norm at that t."""
     n, k = G.shape
     w = np.sqrt(np.diag(W))
     # z = (y, t): rows  w_i (f_p + G y)_i - t <= 0  and  w_i (f_p + G y)_i + t >= 0
@@ -223,14 +226,12 @@ def _min_max(
         np.concatenate([np.full(n, -np.inf), np.zeros(n)]),
         np.concatenate([np.zeros(n), np.full(n, np.inf)]),
     )
-    both = _stack(rows, _extend(ineq, 1))
-    H = np.zeros((k + 1, k + 1))
-    g = np.zeros(k + 1)
-    g[-1] = 1.0
-    z = solve_qp(H, g, both, tol)
+    c = np.zeros(k + 1)
+    c[-1] = 1.0
+    z = solve_lp(c, _stack(rows, _extend(ineq, 1)), "the minimum-peak programme")
     if z is None:
         return None
-    t = float(np.max(np.abs(w * (f_p + G @ z[:k]))))  # the polished optimum
+    t = float(np.max(np.abs(w * (f_p + G @ z[:k]))))  # the peak of the LP's vertex
     capped = Inequalities(("max",) * n, w * f_p, w[:, None] * G, np.full(n, -t), np.full(n, t))
     return _min_norm(f_p, G, W, _stack(capped, ineq), tol)
 
@@ -251,11 +252,38 @@ def _stack(a: Inequalities, b: Inequalities) -> Inequalities:
     )
 
 
+def solve_lp(
+    c: np.ndarray,
+    ineq: Inequalities,
+    what: str,
+    bounds: Sequence[tuple[float | None, float | None]] | None = None,
+) -> np.ndarray | None:
+    """Solve ``min c^T z`` s.t. ``lower <= offset + D z <= upper`` (and ``bounds`` on z) with HiGHS.
+
+    ``bounds`` are (lower, upper) per variable, None where unbounded (default: all free).
+    Returns None when the programme is infeasible.
+
+    Raises:
+        PlmError: HiGHS found it unbounded or did not solve it (``what`` names it).
+    """
+    up = np.isfinite(ineq.upper)
+    lo = np.isfinite(ineq.lower)
+    A = np.vstack([ineq.D[up], -ineq.D[lo]])
+    b = np.concatenate([ineq.upper[up] - ineq.offset[up], ineq.offset[lo] - ineq.lower[lo]])
+    free = [(None, None)] * c.shape[0]
+    lp = linprog(c, A_ub=A, b_ub=b, bounds=free if bounds is None else bounds, method="highs")
+    if lp.status == 2:
+        return None
+    if lp.status != 0:
+        raise PlmError(f"HiGHS did not solve {what}: {lp.message}")
+    return np.asarray(lp.x)
+
+
 def solve_qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np.ndarray | None:
     """Solve ``min 1/2 y^T H y + g^T y`` s.t. ``lower <= offset + D y <= upper`` with ProxSuite, polished.
 
-    ``H`` may be zero (a linear programme). The answer is polished on its active set (see the
-    module docstring). Returns None when ProxSuite does not report the problem solved.
+    The answer is polished on its active set (see the module docstring). Returns None when
+    ProxSuite does not report the problem solved.
     """
     n = g.shape[0]
     p = ineq.D.shape[0]
@@ -264,8 +292,8 @@ def solve_qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np
     qp.settings.eps_rel = 0.0
     qp.settings.verbose = False
     qp.settings.max_iter = 1_000  # these problems converge in tens of iterations; never hang
-    # ProxSuite's default infeasibility thresholds (1e-4) misjudge small LPs (H = 0) as infeasible;
-    # infeasibility is decided here by the violation of the answer instead.
+    # ProxSuite's default infeasibility thresholds (1e-4) misjudge these small problems as
+    # infeasible; infeasibility is decided here by the violation of the answer instead.
     qp.settings.eps_primal_inf = 1e-12
     qp.settings.eps_dual_inf = 1e-12
     lower = np.where(np.isfinite(ineq.lower), ineq.lower - ineq.offset, -1e20)
@@ -309,31 +337,25 @@ def _polish(
 
 def _least_violating(k: int, ineq: Inequalities, tol: float) -> np.ndarray:
     """Internal coordinates minimising the sum of squared violations of ``ineq`` (always feasible)."""
-    # variables (y, s): min 1/2 |s|^2 with lower - s <= offset + D y <= upper + s, s >= 0
+    # solved in units of the largest bound or offset (u = y / scale, the same minimiser), so that
+    # ProxSuite's absolute tolerances are relative ones (a min_compression of 1e9 N)
+    values = np.concatenate([ineq.lower, ineq.upper, ineq.offset])
+    scale = float(np.max(np.abs(values[np.isfinite(values)]), initial=1.0))
+    offset, lower, upper = ineq.offset / scale, ineq.lower / scale, ineq.upper / scale
+    # variables (u, s): min 1/2 |s|^2 with lower - s <= offset + D u <= upper + s, s >= 0
     p = ineq.D.shape[0]
-    lo_rows = Inequalities(
-        ineq.names, ineq.offset, np.hstack([ineq.D, np.eye(p)]), ineq.lower, np.full(p, np.inf)
-    )
-    hi_rows = Inequalities(
-        ineq.names, ineq.offset, np.hstack([ineq.D, -np.eye(p)]), np.full(p, -np.inf), ineq.upper
-    )
+    lo_rows = Inequalities(ineq.names, offset, np.hstack([ineq.D, np.eye(p)]), lower, np.full(p, np.inf))
+    hi_rows = Inequalities(ineq.names, offset, np.hstack([ineq.D, -np.eye(p)]), np.full(p, -np.inf), upper)
     pos = Inequalities(
         ("s",) * p, np.zeros(p), np.hstack([np.zeros((p, k)), np.eye(p)]), np.zeros(p), np.full(p, np.inf)
     )
     H = np.zeros((k + p, k + p))
     H[k:, k:] = np.eye(p)
-    H[:k, :k] = 1e-12 * np.eye(k)  # a unique y among equally violating ones
-    z = solve_qp(H, np.zeros(k + p), _stack(_stack(lo_rows, hi_rows), pos), tol)
+    H[:k, :k] = 1e-12 * np.eye(k)  # a unique u among equally violating ones
+    z = solve_qp(H, np.zeros(k + p), _stack(_stack(lo_rows, hi_rows), pos), tol / scale)
     if z is None:
-        # ProxSuite's absolute tolerances fail on huge bounds (a min_compression of 1e9 N): solve
-        # again in units of the largest bound (u = y / scale), the same minimiser
-        values = np.concatenate([ineq.lower, ineq.upper, ineq.offset])
-        scale = float(np.max(np.abs(values[np.isfinite(values)]), initial=1.0))
-        if scale <= 1.0:
-            raise PlmError("ProxSuite did not solve the least-violation problem")
-        scaled = Inequalities(ineq.names, ineq.offset / scale, ineq.D, ineq.lower / scale, ineq.upper / scale)
-        return scale * _least_violating(k, scaled, tol / scale)
-    return z[:k]
+        raise PlmError("ProxSuite did not solve the least-violation problem")
+    return scale * z[:k]
 
 
 def _raise_infeasible(

@@ -7,7 +7,7 @@ internal force. The capability along :math:`d` is the linear programme
 
 .. math:: \max \alpha \quad \text{s.t.} \quad l \le f_g + \alpha f_d + G y \le u,
 
-solved by ProxSuite (as an LP) and polished on its active set. A redundant mechanism
+solved by HiGHS (:func:`scipy.optimize.linprog`). A redundant mechanism
 chooses :math:`y` to relieve the most loaded actuator, so its capability is never below that
 of the same mechanism with an actuator removed. A planar section of the capability set
 (the *wrench polygon*) is traced by one such programme per direction of the plane: the set
@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike
 from .._checks import load_arguments
 from ..exceptions import InvalidInput, PlmError
 from ..results import Result, unit
-from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_qp
+from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_lp
 from .balance import load_on_frame, static_balance
 from .forces import actuator_limits
 
@@ -91,24 +91,18 @@ def force_capability(
     scale = max(float(np.max(np.abs(bounds))), 1.0)
     tol = FEASIBILITY_RTOL * scale
     k = G.shape[1]
-    _check_gravity_held(f_g, G, bounds, names)
     # the part of f_d the internal forces cannot cancel; none left: the structure holds the load
     f_d_out = f_d - G @ (G.T @ f_d)
     if np.max(np.abs(f_d_out), initial=0.0) <= tol:
+        _check_gravity_held(f_g, G, bounds, names)
         return Capability(np.asarray(direction, dtype=float), float("inf"), np.full(len(names), np.nan), ())
     # variables (y, alpha): max alpha, bounds <= f_g + G y + alpha f_d, alpha >= 0
-    rows = Inequalities(
-        (*names, "alpha"),
-        np.concatenate([f_g, [0.0]]),
-        np.vstack([np.hstack([G, f_d[:, None]]), np.eye(k + 1)[-1:]]),
-        np.concatenate([bounds[:, 0], [0.0]]),
-        np.concatenate([bounds[:, 1], [np.inf]]),
-    )
-    g = np.zeros(k + 1)
-    g[-1] = -1.0
-    z = solve_qp(np.zeros((k + 1, k + 1)), g, rows, tol)
-    if z is None or np.max(rows.violation(z), initial=0.0) > tol:  # alpha = 0 is feasible: a solver failure
-        raise PlmError(f"{mech.name}: ProxSuite did not solve the force-capability programme")
+    rows = Inequalities(names, f_g, np.hstack([G, f_d[:, None]]), bounds[:, 0], bounds[:, 1])
+    c = np.zeros(k + 1)
+    c[-1] = -1.0
+    z = solve_lp(c, rows, "the force-capability programme", [(None, None)] * k + [(0.0, None)])
+    if z is None:  # alpha = 0 is infeasible: the limits do not hold gravity
+        raise _unheld(mech, f_g, G, bounds, "the force-capability programme")
     alpha = float(z[-1])
     f_c = f_g + G @ z[:k] + alpha * f_d
     saturated = tuple(
@@ -167,8 +161,8 @@ def internal_force_range(
     r"""How far each internal force can go while the actuators hold the load within their limits.
 
     One linear programme per bound: :math:`\min / \max\ y_k` s.t.
-    :math:`l \le f_p + G y \le u` (the other coordinates free), solved by ProxSuite and
-    polished on its active set, as in :func:`force_capability`. Multiply a mode's
+    :math:`l \le f_p + G y \le u` (the other coordinates free), solved by HiGHS as in
+    :func:`force_capability`. Multiply a mode's
     :class:`~plm_pin.statics.InternalMode` readings (link axial forces, guide forces) by a
     coordinate to read the preload it stands for.
 
@@ -200,16 +194,14 @@ def internal_force_range(
         raise InvalidInput(f"{mech.name} has no internal forces (redundancy {mech.redundancy})")
     names = tuple(a.joint for a in mech.actuators)
     f_p = balance.f_particular
-    _check_gravity_held(f_p, G, bounds, names)
     rows = Inequalities(names, f_p, G, bounds[:, 0], bounds[:, 1])
-    tol = FEASIBILITY_RTOL * max(float(np.max(np.abs(bounds))), 1.0)
     ends = np.empty((2, k))
     f_lower, f_upper = np.empty((k, len(names))), np.empty((k, len(names)))
     for side, sign in enumerate((1.0, -1.0)):  # minimise y_k, then -y_k
         for i in range(k):
-            y = solve_qp(np.zeros((k, k)), sign * np.eye(k)[i], rows, tol)
-            if y is None or np.max(rows.violation(y), initial=0.0) > tol:
-                raise PlmError(f"{mech.name}: ProxSuite did not solve the internal-force range programme")
+            y = solve_lp(sign * np.eye(k)[i], rows, "the internal-force range programme")
+            if y is None:  # no internal force holds the load within the limits
+                raise _unheld(mech, f_p, G, bounds, "the internal-force range programme")
             ends[side, i] = y[i]
             (f_lower if side == 0 else f_upper)[i] = f_p + G @ y
     return InternalRange(ends[0], ends[1], f_lower, f_upper, G.copy())
@@ -219,6 +211,15 @@ def _check_gravity_held(f_g: np.ndarray, G: np.ndarray, bounds: np.ndarray, name
     """Raise AllocationInfeasible when no internal force brings the gravity forces within the limits."""
     ineq = Inequalities(names, f_g, G, bounds[:, 0], bounds[:, 1])
     allocate(f_g, G, ineq, weights=np.eye(len(names)), actuator_names=names)
+
+
+def _unheld(mech: Mechanism, f_p: np.ndarray, G: np.ndarray, bounds: np.ndarray, what: str) -> PlmError:
+    """After HiGHS found ``what`` infeasible: raise AllocationInfeasible with the least-violating forces.
+
+    Returns the error to raise when the allocation holds the load after all (a solver disagreement).
+    """
+    _check_gravity_held(f_p, G, bounds, tuple(a.joint for a in mech.actuators))
+    return PlmError(f"{mech.name}: HiGHS found {what} infeasible, yet the limits hold the load")
 
 
 def wrench_polygon(

@@ -1,4 +1,4 @@
-"""``plm_pin.sweep(...)``: check a design sweep, resume it from its checkpoints, run the rest, label it."""
+""":func:`sweep`: check a design sweep, resume it from its checkpoints, run the rest, label it."""
 
 from __future__ import annotations
 

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import __version__
 from .._text import short
@@ -39,7 +40,7 @@ Value = Scalar | tuple[Scalar, ...]
 ParametersArg = Mapping[str, Sequence[Any]] | Sequence[Mapping[str, Any]] | None
 """Varied builder parameters as given: a grid ``{name: values}`` or samples ``[{name: value}, ...]``."""
 
-PosesArg = Mapping[str, Sequence[float]] | None
+PosesArg = Mapping[str, ArrayLike] | None
 """The pose grid as given: ``{task coordinate: values}`` [m, rad]."""
 
 RESERVED = ("sample", "failed")

@@ -489,7 +489,7 @@ def test_names_shared_by_a_joint_and_a_body(tmp_path: Path) -> None:
 
 def test_benchmark_fourbar_mjcf_is_the_preset(tmp_path: Path) -> None:
     """The benchmarks' MuJoCo four-bar (two bodies on the world) loads whole and is the fourbar preset."""
-    from plm_pin.benchmarks import fourbar_mjcf
+    from benchmarks.harness import fourbar_mjcf
     from tests.conftest import preset
 
     ref = preset("fourbar")

@@ -13,6 +13,7 @@ import pytest
 import plm_pin
 from plm_pin import InvalidInput
 from plm_pin.statics import static_forces
+from plm_pin.sweep import sweep
 from tests import textbook as tb
 
 
@@ -27,7 +28,7 @@ def stewart_path(tmp_path_factory):
 def test_sweep_of_a_description_moves_a_base_joint(stewart_path):
     """Sweeping u0a.x (base joint B_0's x) gives w = |det J| of the closed form with B_0 moved."""
     xs = [0.44, 0.5]
-    result = plm_pin.sweep(
+    result = sweep(
         str(stewart_path), parameters={"u0a.x": xs}, poses={"x": [0.01]}, pose=list(tb.STEWART_POSE)
     )
     B, _ = tb.stewart_points()
@@ -56,7 +57,7 @@ def test_mass_override_changes_statics_by_the_closed_form(stewart_path):
 def test_description_parameters_are_checked_before_any_work(stewart_path):
     """An unknown name lists the valid ones; a length on a joint at its parent's origin is refused."""
     with pytest.raises(InvalidInput, match=r"^unknown parameter 'leg0\.stroke' of .*stewart\.urdf; its "):
-        plm_pin.sweep(str(stewart_path), parameters={"leg0.stroke": [0.1]}, poses={"x": [0.01]})
+        sweep(str(stewart_path), parameters={"leg0.stroke": [0.1]}, poses={"x": [0.01]})
     with pytest.raises(
         InvalidInput,
         match=r"^parameter 'leg0\.length': joint 'leg0' sits at its parent's origin, so there is no",
@@ -65,4 +66,4 @@ def test_description_parameters_are_checked_before_any_work(stewart_path):
     with pytest.raises(InvalidInput, match=r"^parameter 'platform\.mass' must be a finite positive number"):
         plm_pin.build_mechanism(str(stewart_path), {"platform.mass": -1.0})
     with pytest.raises(InvalidInput, match=r"or give the path of a description$"):
-        plm_pin.sweep("no/such/robot.urdf", parameters={"a.mass": [1.0]}, poses={"x": [0.0]})
+        sweep("no/such/robot.urdf", parameters={"a.mass": [1.0]}, poses={"x": [0.0]})

@@ -2,7 +2,7 @@
 
 Oracles: a plain Gauss-Newton written here on Pinocchio's frame placements with a
 finite-difference Jacobian (no plm_pin residual or Jacobian code), and for the 3D4M the
-benchmark floor (:class:`plm_pin.benchmarks.Floor`, its own residual and Jacobian).
+benchmark floor (:class:`benchmarks.harness.Floor`, its own residual and Jacobian).
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from plm_pin.benchmarks import Floor
+from benchmarks.harness import Floor
 from plm_pin.kinematics import assembly, task_pose
 from plm_pin.kinematics.task import TaskTarget
 from tests.conftest import fd_jacobian, preset, spatial_6r

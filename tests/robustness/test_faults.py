@@ -13,10 +13,10 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
-from plm_pin import StoreLocked, sweep
+from plm_pin import StoreLocked
 from plm_pin.report import run_study, write_index, write_report
 from plm_pin.report.writer import recover
-from plm_pin.sweep import make_spec
+from plm_pin.sweep import make_spec, sweep
 from plm_pin.sweep.store import SweepStore, chunk_name
 from plm_pin.warnings import CorruptChunkWarning
 from tests.report.conftest import make_study

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from plm_pin import InvalidInput, SchedulerUnreachable, sweep
-from plm_pin.sweep import execution, make_spec, plan_chunks
+from plm_pin import InvalidInput, SchedulerUnreachable
+from plm_pin.sweep import execution, make_spec, plan_chunks, sweep
 from tests.sweep.conftest import THETAS, fragile_2prrrp, small
 
 

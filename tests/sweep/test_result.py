@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 
-from plm_pin import sweep
+from plm_pin.sweep import sweep
 from tests.sweep.conftest import FIG6_RT, THETAS, small
 
 

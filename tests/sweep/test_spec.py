@@ -8,10 +8,10 @@ import re
 import numpy as np
 import pytest
 
-from plm_pin import InvalidInput, sweep
+from plm_pin import InvalidInput
 from plm_pin.families.prrrp import build_2prrrp
 from plm_pin.models import builder_parameters
-from plm_pin.sweep import METRICS, OPTIONS, make_spec
+from plm_pin.sweep import METRICS, OPTIONS, make_spec, sweep
 from tests.sweep.conftest import small
 
 PARAMS = list(builder_parameters(build_2prrrp))

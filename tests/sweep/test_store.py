@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from plm_pin import StoreMismatch, sweep
-from plm_pin.sweep import make_spec
+from plm_pin import StoreMismatch
+from plm_pin.sweep import make_spec, sweep
 from plm_pin.sweep.store import MANIFEST, SweepStore, chunk_name
 from plm_pin.warnings import CorruptChunkWarning
 from tests.sweep.conftest import small
@@ -122,9 +122,9 @@ def test_killed_sweep_resumes_with_the_missing_chunks_only(tmp_path):
     """SIGKILL after a few checkpoints: finished chunks stay intact, the re-run computes only the others."""
     store = tmp_path / "s"
     code = (
-        "import json, sys, plm_pin\n"
+        "import json, sys\nfrom plm_pin.sweep import sweep\n"
         "kw = json.loads(sys.argv[1])\n"
-        "plm_pin.sweep(kw.pop('mechanism'), **kw, chunk=1, store=sys.argv[2])\n"
+        "sweep(kw.pop('mechanism'), **kw, chunk=1, store=sys.argv[2])\n"
     )
     env = {**os.environ, "PYTHONPATH": str(REPO)}
     proc = subprocess.Popen([sys.executable, "-c", code, json.dumps(SLOW_SWEEP), str(store)], env=env)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plm_pin import sweep
 from plm_pin.exceptions import InvalidInput
+from plm_pin.sweep import sweep
 from plm_pin.viz import plot_sweep_heatmap, plot_sweep_lines
 
 matplotlib = pytest.importorskip("matplotlib")

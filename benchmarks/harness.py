@@ -1,6 +1,7 @@
 """Benchmarks: cost per call of the core paths, written as a Markdown table.
 
-Run with ``make bench`` (or ``python -m plm_pin.benchmarks --out reports/bench``). A
+Run with ``make bench`` (or ``python -m benchmarks.harness --out reports/bench``); it lives
+in the checkout, not in the installed package. A
 benchmark measures; correctness is asserted by the test suite, never here. Besides the
 cost per call of loading, closures, assembly, kinematics and manipulability for every
 preset, it times the 3D4M's kinematics beside their Pinocchio floor (:class:`Floor`) and
@@ -36,24 +37,23 @@ import proxsuite
 
 # run from the source checkout (make bench): the Zhao 2011 trajectory is the study's, beside it
 from analyses._zhao2011_paper import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
-
-from .analysis import manipulability, singular_points_along, workspace_map
-from .dynamics.inverse_dynamics import inverse_dynamics
-from .dynamics.simulation import SimulationResult, simulate
-from .dynamics.trajectory import task_trajectory
-from .families.classic import build_fourbar
-from .kinematics import (
+from plm_pin.analysis import manipulability, singular_points_along, workspace_map
+from plm_pin.dynamics.inverse_dynamics import inverse_dynamics
+from plm_pin.dynamics.simulation import SimulationResult, simulate
+from plm_pin.dynamics.trajectory import task_trajectory
+from plm_pin.families.classic import build_fourbar
+from plm_pin.kinematics import (
     classify,
     closed_chain_jacobians,
     forward_kinematics,
     inverse_kinematics,
     task_pose,
 )
-from .kinematics.closures import jacobian_from_data as closure_jacobian_from_data
-from .loading import build_mechanism, load
-from .mechanism import Mechanism
-from .models.registry import PRESETS, preset_names, urdf_folder
-from .statics import AllocationRule, solve_balance, static_balance, static_forces
+from plm_pin.kinematics.closures import jacobian_from_data as closure_jacobian_from_data
+from plm_pin.loading import build_mechanism, load
+from plm_pin.mechanism import Mechanism
+from plm_pin.models.registry import PRESETS, preset_names, urdf_folder
+from plm_pin.statics import AllocationRule, solve_balance, static_balance, static_forces
 
 MAP_SHAPE = (317, 316)
 """Grid of the manipulability-map benchmark: 100,172 poses."""
@@ -260,7 +260,7 @@ def _placo_python() -> tuple[Path | None, str]:
 def placo_benchmark() -> tuple[list[dict[str, object]], str]:
     """PlaCo's IK and FK on the 3D4M from the same start and targets as :func:`kinematics_benchmark`.
 
-    Runs :mod:`plm_pin.benchmarks_placo` in PlaCo's own venv (:data:`PLACO_VENV`, created with
+    Runs :mod:`benchmarks.placo_ik_fk` in PlaCo's own venv (:data:`PLACO_VENV`, created with
     pip on first use). Returns its rows and a note (the agreement with plm_pin, or why PlaCo is absent).
     """
     python, why = _placo_python()
@@ -284,7 +284,7 @@ def placo_benchmark() -> tuple[list[dict[str, object]], str]:
         # PlaCo's hard equalities must be independent: hold as many sliders as DOF (the 4th follows)
         "actuators": {a.joint: float(ik[a.idx_q]) for a in mech.actuators[: mech.mobility]},
     }
-    script = Path(__file__).with_name("benchmarks_placo.py")
+    script = Path(__file__).with_name("placo_ik_fk.py")
     try:
         done = subprocess.run(
             [str(python), str(script), json.dumps(cfg)],
@@ -386,7 +386,7 @@ def stiffness_benchmark() -> list[dict[str, object]]:
 
     Every preset with a compliance in its sidecar, at its reference configuration under gravity.
     """
-    from .stiffness import stiffness
+    from plm_pin.stiffness import stiffness
 
     rows: list[dict[str, object]] = []
     for name in preset_names():
@@ -795,8 +795,8 @@ def sweep_benchmark(cases: dict[str, dict[str, Any]] | None = None) -> list[dict
     The cluster (2 single-threaded processes on 127.0.0.1) is started once; its start-up time
     is reported apart and the sweeps on it are timed without it. Each sweep runs once (wall time).
     """
-    from .sweep import make_spec, run_spec
-    from .sweep.execution import local_cluster
+    from plm_pin.sweep import make_spec, run_spec
+    from plm_pin.sweep.execution import local_cluster
 
     rows: list[dict[str, object]] = []
     specs = {case: make_spec(**kwargs) for case, kwargs in (cases or SWEEP_CASES).items()}
@@ -876,7 +876,7 @@ def write(
         f"Pinocchio {pin.__version__}. Best of 5 repeats.",
         "",
         "Floor: the least Python doing the same math with Pinocchio calls, in the same process "
-        "(:class:`plm_pin.benchmarks.Floor`), timed in alternation with the path.",
+        "(:class:`benchmarks.harness.Floor`), timed in alternation with the path.",
         "",
         "| mechanism | case | time per call | floor | ratio |",
         "|---|---|---|---|---|",

@@ -1,13 +1,13 @@
-"""PlaCo's closed-loop IK and FK on a planar 2-PRRRP table, run by :mod:`plm_pin.benchmarks` in PlaCo's venv.
+"""PlaCo's closed-loop IK and FK on a planar 2-PRRRP table, run by :mod:`benchmarks.harness` in PlaCo's venv.
 
 PlaCo (pip ``placo``) pins an older Pinocchio than plm_pin, so this script imports neither
-plm_pin nor anything but numpy and placo; :func:`plm_pin.benchmarks.placo_benchmark` runs it
+plm_pin nor anything but numpy and placo; :func:`benchmarks.harness.placo_benchmark` runs it
 with ``.venv-placo/bin/python`` and reads one JSON line. The loops are hard
 ``RelativePositionTask`` s masked to the plane; IK adds hard planar position and yaw tasks on
 the end-effector frame, FK a hard joints task on the sliders. Each solve starts from the
 reference configuration and takes the number of QP steps that brings every task to 1e-12.
 
-Usage: ``python benchmarks_placo.py '<json>'`` with keys ``urdf``, ``q_ref`` (joint -> value),
+Usage: ``python placo_ik_fk.py '<json>'`` with keys ``urdf``, ``q_ref`` (joint -> value),
 ``closures`` (frame pairs), ``frame``, ``x`` (x, y, theta) and ``actuators`` (joint -> value).
 """
 

@@ -1,0 +1,1 @@
+"""The benchmark harness (``make bench``): in the checkout, not in the installed package."""
