@@ -177,9 +177,7 @@ class ClosedChainDynamics:
         self.load = load
         self._name = mech.name
         self._all_columns = np.arange(mech.nv)
-        # point closures only: residual and Jacobian straight from the two frames of each
-        points = all(c.spec.type == "point" for c in mech.closures)
-        self._point_frames = tuple(c.frame_ids for c in mech.closures) if points else None
+        self._bound = _closures.BoundClosures(self.data, self.closures)  # few Python calls per pass
         self._K = np.zeros((2 * mech.nv, 2 * mech.nv))  # saddle-point matrix, its top-left (nv + r) block
         if self.solver == "pinocchio":
             self._pin_data = model.createData()
@@ -240,24 +238,11 @@ class ClosedChainDynamics:
 
     def residual_from_data(self) -> np.ndarray:
         """Closure residual (m,) from the frame placements in ``self.data``."""
-        if self._point_frames is None:
-            return _closures.residual_from_placements(self.data, self.closures)
-        oMf = self.data.oMf
-        if len(self._point_frames) == 1:
-            a, b = self._point_frames[0]
-            return oMf[b].translation - oMf[a].translation
-        return np.concatenate([oMf[b].translation - oMf[a].translation for a, b in self._point_frames])
+        return self._bound.residual(np.empty(self._bound.rows))
 
     def _jacobian_from_data(self) -> np.ndarray:
         """Closure Jacobian (m, nv) from the joint Jacobians and placements in ``self.data``."""
-        model, data = self.model, self.data
-        if self._point_frames is None:
-            return _closures.jacobian_from_data(model, data, self.closures)
-        rows = [
-            pin.getFrameJacobian(model, data, b, _LWA)[:3] - pin.getFrameJacobian(model, data, a, _LWA)[:3]
-            for a, b in self._point_frames
-        ]
-        return rows[0] if len(rows) == 1 else np.concatenate(rows)
+        return self._bound.jacobian(self.model, np.empty((self._bound.rows, self.model.nv)))
 
     def _closure_terms(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closure residual (m,) and Jacobian (m, nv) at ``q``; leaves placements and Jacobians in data."""
