@@ -17,7 +17,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from plm_pin import Mechanism, load
+from plm_pin import Mechanism, build_mechanism, load
 from plm_pin.families.prrrp import (
     PAPER_ASSEMBLY_ROUTE,
     PAPER_WORKING_ROUTE,
@@ -32,9 +32,9 @@ from plm_pin.families.prrrp import (
     plan_working_mode_change,
     prrrp_layout,
     prrrp_state,
+    symmetric_rods,
     working_mode_label,
 )
-from plm_pin.families.prrrp.variants import symmetric_variant
 from plm_pin.kinematics import SINGULARITY_TOL, ModeGraph
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.viz import panel_grid
@@ -52,6 +52,9 @@ WORKING_DURATION = 5.0
 """Duration given to the working-mode change in its animation [s]."""
 
 ARROW = " → "
+
+SYMMETRIC_ROD = 0.240
+"""Rod length of the equal-rod variant whose complex singularity is checked [m]."""
 
 
 def _route(modes: Sequence[Sequence[int]], label: Callable[[Sequence[int]], str] = mode_label) -> str:
@@ -105,7 +108,13 @@ def run(ctx: StudyContext) -> None:
     ctx.step("working-mode change")
     flip = plan_working_mode_change(mech, leg=3)
     ctx.step("complex singularity: equal and unequal rods")
-    symmetric = ctx.load(symmetric_variant(0.240))
+    symmetric = ctx.load(
+        build_mechanism(
+            "harada2015_asymmetric",
+            symmetric_rods(SYMMETRIC_ROD),
+            name="harada2015_asymmetric_symmetric_240mm",
+        )
+    )
     cases = [complex_singularity_check(symmetric, leg=3), complex_singularity_check(mech, leg=3)]
     ctx.step("non-redundant 3D3M graph")
     non_redundant = ctx.load("harada2011_3d3m")

@@ -38,6 +38,8 @@ import proxsuite
 # run from the source checkout (make bench): the Zhao 2011 trajectory is the study's, beside it
 from analyses._zhao2011_paper import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 from plm_pin.analysis import manipulability, singular_points_along, workspace_map
+from plm_pin.core.closures import jacobian_from_data as closure_jacobian_from_data
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.dynamics.inverse_dynamics import inverse_dynamics
 from plm_pin.dynamics.simulation import SimulationResult, simulate
 from plm_pin.dynamics.trajectory import task_trajectory
@@ -49,9 +51,7 @@ from plm_pin.kinematics import (
     inverse_kinematics,
     task_pose,
 )
-from plm_pin.kinematics.closures import jacobian_from_data as closure_jacobian_from_data
 from plm_pin.loading import build_mechanism, load
-from plm_pin.mechanism import Mechanism
 from plm_pin.models.registry import PRESETS, preset_names, urdf_folder
 from plm_pin.statics import AllocationRule, solve_balance, static_balance, static_forces
 

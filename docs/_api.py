@@ -18,13 +18,15 @@ from sphinx.pycode import ModuleAnalyzer
 
 PACKAGES = {
     "plm_pin": "The top level: loading and building mechanisms, the `Mechanism` object, the errors.",
-    "plm_pin.description": "Reading and writing descriptions: URDF spanning tree plus closure sidecar.",
+    "plm_pin.description": "Reading and writing descriptions: URDF spanning tree plus closure sidecar, MJCF.",
+    "plm_pin.core": "The Mechanism and what it is made of: closures, task, legs, idle gauges, assembly, "
+    "workspaces.",
+    "plm_pin.export": "A Mechanism written as a MuJoCo model (MJCF) that simulates with its loops closed.",
     "plm_pin.models": "The registry of named presets.",
-    "plm_pin.kinematics": "Closures, assembly, task pose, Jacobians, legs, inverse and forward kinematics, "
-    "singularities, mode graphs and path tracking.",
+    "plm_pin.kinematics": "Task pose, Jacobians, working modes, inverse and forward kinematics, "
+    "singularities, limits, mode graphs and path tracking.",
     "plm_pin.families": "Mechanism families: the builders, and the 2-PRRRP's layout, assembly and working "
     "modes, mode-change planners and complex singularity.",
-    "plm_pin.families.prrrp.variants": "2-PRRRP presets rebuilt in memory with other rods.",
     "plm_pin.analysis": "Manipulability, workspace maps, singular loci, orientation range.",
     "plm_pin.statics": "The static balance, actuator-force allocation, reactions, link forces, "
     "force capability.",

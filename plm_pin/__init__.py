@@ -1,9 +1,7 @@
 """plm_pin: analysis of parallel link mechanisms (closed kinematic chains) on Pinocchio."""
 
-import importlib
-from typing import Any
-
-from .description.mjcf_writer import export_mjcf
+from ._version import __version__
+from .core.mechanism import Mechanism
 from .exceptions import (
     AllocationInfeasible,
     ClosureNotSatisfied,
@@ -22,10 +20,8 @@ from .exceptions import (
     TrajectoryError,
     ViewerError,
 )
+from .export import export_mjcf
 from .loading import build_mechanism, load
-from .mechanism import Mechanism
-
-__version__ = "0.1.0"
 
 __all__ = [
     "AllocationInfeasible",
@@ -49,12 +45,4 @@ __all__ = [
     "build_mechanism",
     "export_mjcf",
     "load",
-    "sweep",
 ]
-
-
-def __getattr__(name: str) -> Any:
-    """``plm_pin.sweep``: the design-sweep package, imported on first use."""
-    if name == "sweep":
-        return importlib.import_module(".sweep", __name__)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -28,13 +28,14 @@ from rich.progress import (
 from rich.table import Table
 from typer.core import TyperGroup
 
-from . import __version__
 from ._io import atomic_path
+from ._version import __version__
+from .core.mechanism import Mechanism
 from .diagnostics import findings, mobility_text
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
+from .export import export_mjcf
 from .kinematics import inverse_kinematics, task_pose
 from .loading import load
-from .mechanism import Mechanism
 from .models.registry import PRESETS
 from .report import (
     Animation,
@@ -50,6 +51,7 @@ from .report import (
 )
 from .report.render import require_renderer
 from .report.study import studies_hint
+from .sweep import DEFAULT_CHUNK, load_config, run_spec
 from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
@@ -257,8 +259,6 @@ def export_command(
     if mjcf is None:
         raise _fail(InvalidInput("give a format to export to: --mjcf OUT.xml"))
     mech = _load(target)
-    from .description.mjcf_writer import export_mjcf
-
     with _reported():
         error = export_mjcf(mech, mjcf, timestep=timestep, integrator=integrator)
     console.print(f"wrote {mjcf}: {error.describe()}", markup=False, highlight=False, soft_wrap=True)
@@ -599,8 +599,6 @@ def sweep_command(
     sweep is refused. Failed chunks are listed with their parameters (exit code 1) and
     the rest is written. Nothing is written outside OUT.
     """
-    from .sweep import DEFAULT_CHUNK, load_config, run_spec
-
     try:
         spec, config_chunk = load_config(config)
         if out.exists() and not out.is_dir():

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ._text import short
+from .core.mechanism import Mechanism
 from .description.loader import Description, build_model, build_visual_model, read_description
 from .description.mjcf import MJCF_SUFFIX, read_mjcf
 from .description.overrides import DescriptionBuilder
@@ -17,7 +18,6 @@ from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
 from .description.urdf import read_urdf_text
 from .description.writer import urdf_text
 from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
-from .mechanism import Mechanism
 from .models.registry import PRESETS, Builder, builder_parameters, urdf_folder
 
 ERD_PREFIX = "erd:"

@@ -12,9 +12,9 @@ import pinocchio as pin
 import pytest
 
 import plm_pin
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description import Sidecar, write_description
 from plm_pin.description import _urdf_build as u
-from plm_pin.mechanism import Mechanism
 from plm_pin.report import StudyResult
 
 REPO = Path(__file__).resolve().parents[1]

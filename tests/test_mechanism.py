@@ -1,4 +1,4 @@
-"""The Mechanism model (plm_pin/mechanism.py): sizes, mobility, assembly, bad input."""
+"""The Mechanism model (plm_pin/core/mechanism.py): sizes, mobility, assembly, bad input."""
 
 from __future__ import annotations
 

@@ -20,7 +20,6 @@ PUBLIC_MODULES = {
     "plm_pin.dynamics",
     "plm_pin.families",
     "plm_pin.families.prrrp",
-    "plm_pin.families.prrrp.variants",
     "plm_pin.kinematics",
     "plm_pin.models",
     "plm_pin.statics",

@@ -25,10 +25,10 @@ import pinocchio as pin
 import yourdfpy
 
 import plm_pin
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description import _urdf_build as u
 from plm_pin.description import write_description
 from plm_pin.description.sidecar import parse_sidecar
-from plm_pin.mechanism import Mechanism
 
 # --------------------------------------------------------------------------- 3-RRR
 RRR = {"Rb": 0.5, "rp": 0.12, "l1": 0.3, "l2": 0.35}

@@ -3,7 +3,7 @@ r"""Batched kinematics across poses: numpy forward kinematics from the Pinocchio
 For trees of one-axis joints about principal axes (``JointModelPX/PY/PZ/RX/RY/RZ``) and
 free-flyers (``JointModelFreeFlyer``, the floating platform of the n-PSS), with ``point``
 closures and a task of translations plus either the yaw ``rz`` of a planar chain or all
-three angles (the :math:`\log_3` rows of :class:`plm_pin.kinematics.task.TaskTarget`),
+three angles (the :math:`\log_3` rows of :class:`plm_pin.core.task.TaskTarget`),
 :class:`BatchKinematics` evaluates the closure-and-task residual and its exact Jacobian for
 a whole batch of configurations in a few numpy operations:
 
@@ -28,10 +28,10 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from ..kinematics.closures import Closure
+from ..core.closures import Closure
+from ..core.legs import MODE_RTOL, Leg
+from ..core.task import Task, wrap_angle
 from ..kinematics.jacobians import INVERSE_RTOL
-from ..kinematics.legs import MODE_RTOL, Leg
-from ..kinematics.task import Task, wrap_angle
 from .manipulability import batch_metrics
 
 _AXES = {"X": 0, "Y": 1, "Z": 2}
@@ -62,7 +62,7 @@ class Evaluation(NamedTuple):
     def ik_jacobian(self, which: np.ndarray) -> np.ndarray:
         """The inverse-kinematics Jacobian ``[J_phi; J_x]`` at the poses ``which`` (an index or mask array).
 
-        Task twist rows, as :func:`plm_pin.kinematics.legs.ik_jacobian`: ``J`` itself unless the
+        Task twist rows, as :func:`plm_pin.kinematics.jacobians.ik_jacobian`: ``J`` itself unless the
         task holds log3 rows (formed only for the poses asked, as Newton needs ``J`` at the others).
         """
         A = self.J[which]  # a copy (``which`` is an array)
@@ -376,8 +376,8 @@ class BatchKinematics:
     def evaluate(self, q: np.ndarray, x: np.ndarray) -> Evaluation:
         """Residual, Newton matrix, IK Jacobian and joint rotations at ``q`` (B, nq) and targets ``x`` (B, k).
 
-        Closure rows as :func:`plm_pin.kinematics.closures.residual_from_placements` (three per
-        point closure), task rows as :class:`plm_pin.kinematics.task.TaskTarget` (NaN where a
+        Closure rows as :func:`plm_pin.core.closures.residual_from_placements` (three per
+        point closure), task rows as :class:`plm_pin.core.task.TaskTarget` (NaN where a
         log3 rotation error is within 1e-3 rad of pi).
         """
         axes, origins, R, Rf, pf = self.frames(q)
@@ -436,7 +436,7 @@ class BatchKinematics:
     def turns(self, R: np.ndarray, legs: tuple[Leg, ...]) -> list[np.ndarray]:
         """Per square leg, signs (B, n_columns) turning each passive revolute column to its generic side.
 
-        As :func:`plm_pin.kinematics.legs.working_mode_from_data`: a column whose world axis,
+        As :func:`plm_pin.core.legs.working_mode_from_data`: a column whose world axis,
         seen from the leg's root joint (rotations ``R`` of :class:`Evaluation`), points away
         from the leg's generic axis is negated.
         """
@@ -622,10 +622,10 @@ def batch_modes(
 ) -> np.ndarray:
     """Working modes of a batch of stacked Jacobians (B, m + k, nv): one sign per square leg, (B, n_legs).
 
-    The batched :func:`plm_pin.kinematics.legs.working_mode_from_jacobian`: the sign of each
+    The batched :func:`plm_pin.core.legs.working_mode_from_jacobian`: the sign of each
     square leg block's determinant, 0 at or below ``rtol`` times Hadamard's bound. ``turns``
     (:meth:`BatchKinematics.turns`) orients the passive revolute columns as
-    :func:`~plm_pin.kinematics.legs.working_mode_from_data` does (default: none turned).
+    :func:`~plm_pin.core.legs.working_mode_from_data` does (default: none turned).
     """
     square = [leg for leg in legs if leg.square]
     out = np.zeros((A.shape[0], len(square)), dtype=np.int8)

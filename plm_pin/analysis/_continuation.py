@@ -1,8 +1,8 @@
 r"""Inverse-kinematics continuation over grids of task poses (private helpers of the analysis).
 
 :class:`IKEvaluator` solves the inverse kinematics at one pose by Newton's method on the
-closure rows (:mod:`plm_pin.kinematics.closures`) and the task rows
-(:class:`plm_pin.kinematics.task.TaskTarget`), from a predicted configuration, and leaves
+closure rows (:mod:`plm_pin.core.closures`) and the task rows
+(:class:`plm_pin.core.task.TaskTarget`), from a predicted configuration, and leaves
 the exact Jacobians at the solution for the working mode and the metrics. It skips what
 the general solver :func:`plm_pin.kinematics.assemble` does for robustness from far away
 (SVD of every step, step rejection with damping): continuation starts within a grid step
@@ -13,7 +13,7 @@ quadratically. Every accepted point still satisfies the closures and the task to
 predicting each configuration by polynomial extrapolation along the line it is reached
 on, so that one Newton step usually suffices, and keeping the working mode: a point whose
 solution changes the sign of a leg block
-(:func:`plm_pin.kinematics.legs.working_mode_from_jacobian`) is not taken from that
+(:func:`plm_pin.core.legs.working_mode_from_jacobian`) is not taken from that
 neighbour. When the walk ends with unreached stretches left (a leg out of reach between
 two reachable arcs, such as the flipped plate of a planar table), :func:`reseed` solves the
 inverse kinematics afresh, in the working mode kept, at a few points of each stretch, and
@@ -29,25 +29,23 @@ from collections import deque
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from scipy.ndimage import label as _label
 
+from ..core import closures as _closures
+from ..core.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
+from ..core.legs import Leg, ik_jacobian_from_data, working_mode_from_data
+from ..core.mechanism import Mechanism, require_task
+from ..core.task import Task, TaskTarget
 from ..exceptions import InvalidInput, PoseUnreachable
-from ..kinematics import closures as _closures
-from ..kinematics.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import inverse_kinematics
-from ..kinematics.jacobians import require_task
-from ..kinematics.legs import Leg, ik_jacobian_from_data, working_mode, working_mode_from_data
-from ..kinematics.task import Task, TaskTarget
+from ..kinematics.working_mode import working_mode
 from ._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
 from .manipulability import batch_metrics
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 
 @dataclass
@@ -111,10 +109,10 @@ class IKEvaluator:
     def solve(self, x: np.ndarray, q0: np.ndarray, tol: float) -> np.ndarray | None:
         """Configuration at task coordinates ``x`` by Newton from ``q0``, or None.
 
-        :func:`plm_pin.kinematics.assembly.newton` without its polishing step: the attempt
+        :func:`plm_pin.core.assembly.newton` without its polishing step: the attempt
         ends when an iteration does not reduce the residual by the factor
-        :data:`~plm_pin.kinematics.assembly.STALL_RATIO`, or after
-        :data:`~plm_pin.kinematics.assembly.NEWTON_MAX_ITERATIONS`. On success the data holds
+        :data:`~plm_pin.core.assembly.STALL_RATIO`, or after
+        :data:`~plm_pin.core.assembly.NEWTON_MAX_ITERATIONS`. On success the data holds
         the joint Jacobians and frame placements at the returned configuration (read them
         with :meth:`jacobian`).
         """
@@ -134,7 +132,7 @@ class IKEvaluator:
         return None if found is None else found[0]
 
     def jacobian(self, out: np.ndarray | None = None) -> np.ndarray:
-        """Stacked ``[J_phi; J_x]`` (:func:`plm_pin.kinematics.legs.ik_jacobian`) left by :meth:`solve`.
+        """Stacked ``[J_phi; J_x]`` (:func:`plm_pin.kinematics.jacobians.ik_jacobian`) left by :meth:`solve`.
 
         Shape (m + n_task, nv); written into ``out`` when given.
         """

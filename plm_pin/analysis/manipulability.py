@@ -21,11 +21,11 @@ unit of length whenever the task mixes translations and rotations.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..core.mechanism import Mechanism
 from ..exceptions import SingularConfiguration
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import (
@@ -37,9 +37,6 @@ from ..kinematics.jacobians import (
 )
 from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 W_UNIT = "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
 """Unit of the manipulability w."""

@@ -23,11 +23,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import SINGULARITY_TOL
@@ -35,9 +35,6 @@ from ..results import Result, unit
 from ._continuation import guess_mode, start_configuration
 from .singular_loci import NEAR, SingularPoint, line_path, locate_on_solved
 from .workspace import workspace_sweep
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 RANGE_XTOL = 1e-9
 """Default tolerance on the located ends of an orientation range [rad]."""

@@ -29,22 +29,20 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy.optimize import brentq, minimize_scalar
 
+from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.inverse import IK_TOL, inverse_kinematics
-from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
+from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import SINGULARITY_TOL, SingularityReport, classify
 from ..results import Result, unit
 from ._continuation import IKEvaluator, base_pose, compatible, solve_poses
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 XTOL = 1e-12
 """Default tolerance on the path parameter of a located singularity [unit of t]."""

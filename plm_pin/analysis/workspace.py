@@ -27,20 +27,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput
 from ..kinematics.collisions import collision_free
 from ..kinematics.inverse import IK_TOL
-from ..kinematics.jacobians import check_square_task, require_task
+from ..kinematics.jacobians import check_square_task
 from ..kinematics.limits import within_limits
 from ._continuation import base_pose, solve_poses
 from .manipulability import METRICS
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 
 @dataclass(frozen=True)

@@ -1,16 +1,17 @@
-"""Closed-chain descriptions: URDF spanning tree plus closure sidecar, or MJCF, read and written."""
+"""Closed-chain descriptions: URDF spanning tree plus closure sidecar, or MJCF, read; URDF written.
+
+A built Mechanism is written as MJCF by :mod:`plm_pin.export`.
+"""
 
 from .interop import parse_epr_sidecar
 from .loader import Description, build_model, build_visual_model, description_from_text, read_description
 from .mjcf import MjcfDescription, StateMap, read_mjcf
-from .mjcf_writer import ClosureError, export_mjcf, mjcf_text
 from .sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec, parse_sidecar
 from .urdf import UrdfSource, read_urdf, read_urdf_text
 from .writer import urdf_text, write_description
 
 __all__ = [
     "ActuatorSpec",
-    "ClosureError",
     "ClosureSpec",
     "Description",
     "MjcfDescription",
@@ -21,8 +22,6 @@ __all__ = [
     "build_model",
     "build_visual_model",
     "description_from_text",
-    "export_mjcf",
-    "mjcf_text",
     "parse_epr_sidecar",
     "parse_sidecar",
     "read_description",

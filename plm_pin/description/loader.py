@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -13,7 +14,7 @@ from lxml import etree
 from .._text import short
 from .._yaml import read_head
 from ..exceptions import DescriptionError, FrameNotFound
-from ..kinematics.limits import open_missing_limits
+from ..warnings import MissingLimitsWarning
 from .interop import corpus_task, parse_epr_sidecar
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar, parse_sidecar, read_yaml
 from .urdf import UrdfSource, read_urdf, read_urdf_text
@@ -133,7 +134,7 @@ def build_model(description: Description) -> pin.Model:
 
     Gravity comes from the sidecar; the reflected inertia of each drive is added to its
     joint's armature. Joints without position limits in the URDF are made unlimited, with
-    one :class:`~plm_pin.warnings.MissingLimitsWarning` (see :mod:`plm_pin.kinematics.limits`).
+    one :class:`~plm_pin.warnings.MissingLimitsWarning` (see :func:`open_missing_limits`).
 
     Raises:
         DescriptionError: when Pinocchio rejects the URDF.
@@ -197,3 +198,34 @@ def build_visual_model(model: pin.Model, description: Description) -> pin.Geomet
         return pin.buildGeomFromUrdfString(model, description.urdf.xml, pin.GeometryType.VISUAL)
     except (RuntimeError, ValueError) as exc:
         raise DescriptionError(f"cannot build the visual geometry: {exc}") from None
+
+
+def open_missing_limits(model: pin.Model, label: str = "") -> list[str]:
+    """Make every one-DOF joint with a zero-width position range unlimited, warning once.
+
+    Args:
+        model: the model, changed in place.
+        label: where the joints come from (a file), to start the warning with.
+
+    Returns:
+        The names of the joints changed, in model order.
+    """
+    changed = []
+    for j in range(1, model.njoints):
+        joint = model.joints[j]
+        if joint.nq != 1:
+            continue
+        k = joint.idx_q
+        if model.lowerPositionLimit[k] == model.upperPositionLimit[k]:
+            model.lowerPositionLimit[k] = -np.inf
+            model.upperPositionLimit[k] = np.inf
+            changed.append(str(model.names[j]))
+    if changed:
+        prefix = f"{label}: " if label else ""
+        warnings.warn(
+            f"{prefix}{len(changed)} joint(s) have no position limits (lower = upper = 0 in the URDF) "
+            f"and are treated as unlimited (continuous): {changed}",
+            MissingLimitsWarning,
+            stacklevel=2,
+        )
+    return changed

@@ -8,7 +8,7 @@ The tree's equations of motion with the closures as constraints (index-1 form):
 :math:`M` the joint-space mass matrix with the armature (reflected rotor inertia) on its
 diagonal, :math:`h` the Coriolis, centrifugal and gravity terms (gravity from
 ``model.gravity``), :math:`\tau` the applied generalized forces, :math:`\lambda` the closure
-forces in the rows of :mod:`plm_pin.kinematics.closures` (force on the second frame of a
+forces in the rows of :mod:`plm_pin.core.closures` (force on the second frame of a
 closure, its opposite on the first: the convention of :mod:`plm_pin.statics`).
 
 Two solvers give the same :math:`a`:
@@ -46,20 +46,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
 
+from ..core import closures as _closures
+from ..core.assembly import assemble
+from ..core.closures import Closure
+from ..core.mechanism import Mechanism
+from ..core.rank import RANK_RTOL
 from ..exceptions import InvalidInput, SingularConfiguration
-from ..kinematics import closures as _closures
-from ..kinematics.assembly import assemble
-from ..kinematics.closures import Closure
-from ..kinematics.singularity import RANK_RTOL
 from ..statics.balance import Load
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 SOLVERS = ("auto", "kkt", "pinocchio")
 """Solver choices; ``auto`` is ``pinocchio`` when every closure is a point or a weld, else ``kkt``."""
@@ -338,7 +336,7 @@ class ClosedChainDynamics:
 
         :math:`q` when its closure distance (:class:`ClosureDistance`) exceeds ``tol``: one minimum-norm
         Gauss-Newton step :math:`\delta = -J_\phi^+ \phi` (from an integrator's small drift it
-        lands at round-off), then damped iterations (:func:`~plm_pin.kinematics.assembly.assemble`)
+        lands at round-off), then damped iterations (:func:`~plm_pin.core.assembly.assemble`)
         if that was not enough. Then :math:`v` onto :math:`J_\phi v = 0` by the
         least-kinetic-energy projection when :math:`q` moved or :math:`|J_\phi v|` exceeds
         ``velocity_tol``, with the SVD of :math:`J_\phi` at the projected :math:`q`, which the

@@ -44,20 +44,18 @@ raises, and so does a sample of which no pose can be evaluated.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..analysis.workspace import WorkspaceSlice
+from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.inverse import inverse_kinematics
-from ..kinematics.jacobians import check_square_task, require_task
-from ..kinematics.legs import working_mode
+from ..kinematics.jacobians import check_square_task
 from ..kinematics.singularity import SINGULARITY_TOL, classify
+from ..kinematics.working_mode import working_mode
 from .task_space import TaskSpaceDynamics, task_space_dynamics, task_units
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 DECOUPLING_RTOL = 1e-9
 """Default cancellation ratio below which an entry counts as zero or constant [-]."""

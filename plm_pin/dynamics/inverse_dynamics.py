@@ -27,33 +27,26 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import (
-    CLOSURE_TOL,
-    check_finite_model,
-    check_samples_assembled,
-    checked_trajectory,
-    load_arguments,
-)
+from .._checks import load_arguments
+from ..core import closures as _closures
+from ..core.checks import CLOSURE_TOL, check_finite_model, check_samples_assembled
+from ..core.mechanism import Mechanism
 from ..exceptions import (
     AllocationInfeasible,
     InvalidInput,
     InverseDynamicsFailed,
     SingularConfiguration,
 )
-from ..kinematics import closures as _closures
 from ..results import Result, unit
 from ..statics import AllocationRule, load_on_frame, solve_balance
 from ..statics.balance import SINGULAR_RTOL, Load, _balance, balance_factors
-from .trajectory import JointTrajectory
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
+from .trajectory import JointTrajectory, checked_trajectory
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 

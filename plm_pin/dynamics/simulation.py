@@ -13,7 +13,7 @@ passes ``closure_tol``:
 
 - :math:`q` by one minimum-norm Gauss-Newton step :math:`-J_\phi^+ \phi` (from an
   integrator's small drift it lands at round-off), damped iterations
-  (:func:`plm_pin.kinematics.assembly.assemble`) if that is not enough;
+  (:func:`plm_pin.core.assembly.assemble`) if that is not enough;
 - :math:`v` onto :math:`J_\phi v = 0` by the mass-weighted projection
   :math:`\min \|v^+ - v\|_M`, which removes only the closure-violating part of the motion
   and never adds kinetic energy.
@@ -63,7 +63,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -71,13 +71,11 @@ from numpy.typing import ArrayLike
 from scipy.integrate import DOP853
 
 from .._checks import as_vector, optional_name, positive, real_numbers, sample_count
+from ..core.mechanism import Mechanism
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
 from ..results import Result, unit
 from ..statics.balance import load_on_frame
 from ._constrained import ClosedChainDynamics, Projection, ReducedRows
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 METHODS = ("fixed", "adaptive")
 """Integration methods of :func:`simulate`."""

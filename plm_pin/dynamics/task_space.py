@@ -28,7 +28,7 @@ inertia) on its diagonal (``pin.crba``) and :math:`g` uses the model's gravity:
 tables, gravity along -y, :math:`g_y = (2 m_l + m_t) g > 0`).
 
 Meaning of the rows. Task velocities are the world-aligned twist rows of the end-effector
-frame (:mod:`plm_pin.kinematics.task`): the velocity of the frame origin and the angular
+frame (:mod:`plm_pin.core.task`): the velocity of the frame origin and the angular
 velocity :math:`\omega`, both in world axes. So :math:`\ddot x` is the classical
 acceleration of the origin and the angular acceleration :math:`\dot\omega`, and the rows of
 :math:`f_x` are the force on the origin and the moment about it (world axes) whose power
@@ -50,23 +50,21 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import as_vector, check_assembled, check_finite_model, check_finite_result
+from .._checks import as_vector
+from ..core.checks import check_assembled, check_finite_model, check_finite_result
+from ..core.mechanism import Mechanism, require_task
+from ..core.task import check_task_vector
 from ..exceptions import InvalidInput
-from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, require_task
+from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import inverse_margins
-from ..kinematics.task import check_task_vector
 from ..results import Result, unit
 from ..warnings import IllConditionedWarning
 from .trajectory import particular_acceleration
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 ILL_CONDITIONED_MARGIN = 1e-3
 """Inverse margin (:func:`plm_pin.kinematics.classify`) below which :func:`task_space_dynamics` warns.

@@ -26,11 +26,11 @@ solved as :math:`v = N T_r^{-1} \dot x` (:math:`S \dot x`) and :math:`a = a_p + 
 (\ddot x - \dot J_r v - J_r a_p)`, with :math:`N` the feasible motions
 (:mod:`plm_pin.kinematics.jacobians`), :math:`T_r = J_r N` and :math:`a_p` the minimum-norm
 solution of the closure rows; :math:`\dot J_\phi v` and :math:`\dot J_x v` are
-:func:`plm_pin.kinematics.closures.drift_from_data` and :meth:`plm_pin.kinematics.task.Task.drift_from_data`.
+:func:`plm_pin.core.closures.drift_from_data` and :meth:`plm_pin.core.task.Task.drift_from_data`.
 
 Rotation rates. A profile gives time derivatives of the task coordinates, so for angles
 the roll-pitch-yaw rates :math:`\dot r`, while plm_pin's task velocities are the frame's
-world-aligned twist rows :math:`(v, \omega)` (:mod:`plm_pin.kinematics.task`). With
+world-aligned twist rows :math:`(v, \omega)` (:mod:`plm_pin.core.task`). With
 :math:`\omega = E(r) \dot r` (``pin.rpy.computeRpyJacobian``, world frame),
 
 .. math::
@@ -65,13 +65,18 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy.interpolate import BPoly, make_interp_spline
 
+from .._text import short
+from ..core import closures as _closures
+from ..core.mechanism import Mechanism, require_task
+from ..core.rank import RANK_RTOL
+from ..core.task import Task
 from ..exceptions import (
     ClosureNotSatisfied,
     InvalidInput,
@@ -80,26 +85,10 @@ from ..exceptions import (
     SingularConfiguration,
     TrajectoryError,
 )
-from ..kinematics import closures as _closures
 from ..kinematics.inverse import IK_TOL, inverse_kinematics
-from ..kinematics.jacobians import (
-    ClosedChainJacobians,
-    check_square_task,
-    closed_chain_jacobians,
-    require_task,
-)
-from ..kinematics.singularity import (
-    RANK_RTOL,
-    SINGULARITY_TOL,
-    constraint_margins,
-    direct_margins,
-    inverse_margins,
-)
-from ..kinematics.task import Task
+from ..kinematics.jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians
+from ..kinematics.singularity import SINGULARITY_TOL, constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 Profile = Callable[[float], Any]
 """A profile: ``t`` [s] -> ``(x, xd, xdd)``, each shape (n,) (or three numbers when n = 1)."""
@@ -658,3 +647,22 @@ def _fit(C: np.ndarray, rhs: np.ndarray, tol: float, what: str, names: list[str]
             f"all actuators by {abs(misfit[worst]):.3g} (tolerance {tol:.3g} x max(1, max |{what}|))"
         )
     return s
+
+
+def checked_trajectory(trajectory: object, name: str) -> JointTrajectory:
+    """``trajectory`` if it is a :class:`~plm_pin.dynamics.trajectory.JointTrajectory` with finite samples.
+
+    Raises:
+        InvalidInput: naming ``name``: another type (e.g. None), or the first sample holding NaN or inf.
+    """
+    if not isinstance(trajectory, JointTrajectory):
+        raise InvalidInput(
+            f"{name} must be a JointTrajectory (see plm_pin.dynamics.trajectory), got {short(trajectory)}"
+        )
+    for attr in ("t", "q", "v", "a"):
+        values = np.asarray(getattr(trajectory, attr))
+        bad = ~np.isfinite(values)
+        if bad.any():
+            index = int(np.argwhere(bad)[0][0])
+            raise InvalidInput(f"{name}.{attr} holds NaN or inf at sample {index}")
+    return trajectory

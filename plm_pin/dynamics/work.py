@@ -15,18 +15,16 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from .inverse_dynamics import inverse_dynamics
 from .trajectory import task_trajectory
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 PAPER_TOL = 1e-3
 """Zhao 2011's convergence tolerance e of eq. (34) [J]."""

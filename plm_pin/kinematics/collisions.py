@@ -18,15 +18,12 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 
 class SelfCollision:

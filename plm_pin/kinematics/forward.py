@@ -3,22 +3,18 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._checks import count, positive
+from ..core.assembly import assemble, newton
+from ..core.mechanism import Mechanism, require_task
+from ..core.task import check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
-from .assembly import assemble, newton
-from .jacobians import require_task
 from .starts import random_starts
-from .task import check_task_vector
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 FK_TOL = 1e-12
 """Default closure tolerance of the forward kinematics [m, rad]."""

@@ -6,28 +6,24 @@ import functools
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._checks import positive, signs
+from ..core import closures as _closures
+from ..core.assembly import assemble, newton
+from ..core.closures import Closure, compile_closures
+from ..core.closures import closure_rows as _closure_rows
+from ..core.mechanism import Mechanism, require_task
+from ..core.task import TaskTarget, check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
 from ..results import Result, unit
-from . import closures as _closures
-from .assembly import assemble, newton
-from .closures import Closure, compile_closures
-from .closures import closure_rows as _closure_rows
 from .forward import same_assembly
-from .jacobians import require_task
-from .legs import working_mode
 from .limits import limit_violations, wrap_into_limits
 from .starts import random_starts
-from .task import TaskTarget, check_task_vector
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
+from .working_mode import working_mode
 
 IK_TOL = 1e-12
 """Default residual tolerance of the inverse kinematics [m, rad]."""
@@ -81,7 +77,7 @@ def _solve(
     tol: float,
     closures: tuple[Closure, ...] | None = None,
 ) -> np.ndarray:
-    """Newton from ``guess`` (:func:`plm_pin.kinematics.assembly.newton`), LM when it stalls.
+    """Newton from ``guess`` (:func:`plm_pin.core.assembly.newton`), LM when it stalls.
 
     Raises:
         ClosureNotSatisfied: when neither reaches ``tol``.
@@ -293,7 +289,7 @@ def working_modes(
 ) -> list[IKSolution]:
     """Every inverse-kinematics solution (working mode) at task coordinates ``x``.
 
-    The legs are independent once the task frame is placed (:mod:`plm_pin.kinematics.legs`):
+    The legs are independent once the task frame is placed (:mod:`plm_pin.core.legs`):
     each leg's branches are found by Newton from random starts on that leg's joints alone,
     and the working modes are all their combinations.
 

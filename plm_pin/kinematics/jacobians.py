@@ -15,19 +15,16 @@ The singular values of :math:`T` and :math:`C` do not depend on the choice of :m
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import check_closed
+from ..core import closures as _closures
+from ..core.checks import check_closed
+from ..core.legs import ik_jacobian_from_data
+from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, SingularConfiguration
-from . import closures as _closures
-from .task import Task
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 INVERSE_RTOL = 1e-12
 r""":math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x :math:`|J_x|`.
@@ -172,13 +169,6 @@ def closed_chain_jacobians(mech: Mechanism, q: ArrayLike) -> ClosedChainJacobian
     return ClosedChainJacobians(J_phi, J_x, N, s, T, C)
 
 
-def require_task(mech: Mechanism) -> Task:
-    """The mechanism's compiled task, or a clear error when it has none."""
-    if mech.task_compiled is None:
-        raise InvalidInput(f"{mech.name} has no end-effector task; add 'end_effector' to its sidecar")
-    return mech.task_compiled
-
-
 def check_square_task(n_task: int, dof: int, needed_by: str, name: str = "") -> None:
     """Refuse a task whose size differs from the DOF.
 
@@ -197,3 +187,11 @@ def check_square_task(n_task: int, dof: int, needed_by: str, name: str = "") -> 
             f"{prefix}the task has {n_task} coordinates but the mechanism has {dof} DOF; "
             f"{needed_by} as many task coordinates as DOF"
         )
+
+
+def ik_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
+    """Stacked Jacobian ``[J_phi; J_x]`` of the inverse-kinematics equations, shape (m + n_task, nv)."""
+    task = require_task(mech)
+    pin.computeJointJacobians(mech.model, mech.data, q)
+    pin.updateFramePlacements(mech.model, mech.data)
+    return ik_jacobian_from_data(mech.model, mech.data, mech.closures, task)

@@ -1,65 +1,27 @@
-"""Position limits of the tree joints: missing ones, and whether a configuration respects them.
+"""Position limits of the tree joints: whether a configuration respects them.
 
-URDF revolute and prismatic joints without ``lower``/``upper`` are read by Pinocchio as the
-zero-width box [0, 0]; :func:`open_missing_limits` makes them unlimited (with one warning
-per description), which is how solvers then sample their starting configurations.
-
-A revolute angle respects limits ``[lo, hi]`` when some ``angle + 2 k pi`` lies in them
-(the same pose of the body); :func:`wrap_into_limits` moves it there. Limits are a
-reachability condition of their own: a pose where the loops close only with a joint outside
-its range is reported as such (:func:`limit_violations`), apart from the poses where the
-loops cannot close at all.
+Joints the description leaves without limits are unlimited (see
+:func:`plm_pin.description.loader.open_missing_limits`). A revolute angle respects limits
+``[lo, hi]`` when some ``angle + 2 k pi`` lies in them (the same pose of the body);
+:func:`wrap_into_limits` moves it there. Limits are a reachability condition of their own:
+a pose where the loops close only with a joint outside its range is reported as such
+(:func:`limit_violations`), apart from the poses where the loops cannot close at all.
 """
 
 from __future__ import annotations
 
-import warnings
 import weakref
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
 
-from ..warnings import MissingLimitsWarning
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
+from ..core.mechanism import Mechanism
 
 LIMIT_TOL = 1e-9
 """A joint within this distance of its range [m or rad] respects it."""
 
 TWO_PI = 2.0 * np.pi
-
-
-def open_missing_limits(model: pin.Model, label: str = "") -> list[str]:
-    """Make every one-DOF joint with a zero-width position range unlimited, warning once.
-
-    Args:
-        model: the model, changed in place.
-        label: where the joints come from (a file), to start the warning with.
-
-    Returns:
-        The names of the joints changed, in model order.
-    """
-    changed = []
-    for j in range(1, model.njoints):
-        joint = model.joints[j]
-        if joint.nq != 1:
-            continue
-        k = joint.idx_q
-        if model.lowerPositionLimit[k] == model.upperPositionLimit[k]:
-            model.lowerPositionLimit[k] = -np.inf
-            model.upperPositionLimit[k] = np.inf
-            changed.append(str(model.names[j]))
-    if changed:
-        prefix = f"{label}: " if label else ""
-        warnings.warn(
-            f"{prefix}{len(changed)} joint(s) have no position limits (lower = upper = 0 in the URDF) "
-            f"and are treated as unlimited (continuous): {changed}",
-            MissingLimitsWarning,
-            stacklevel=2,
-        )
-    return changed
 
 
 _ONE_DOF: weakref.WeakKeyDictionary[pin.Model, tuple[tuple[str, int, bool], ...]] = (

@@ -20,21 +20,19 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from ..core.assembly import assemble
+from ..core.mechanism import Mechanism, require_task
+from ..core.task import TaskTarget, compile_task
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
-from .assembly import assemble
-from .jacobians import ClosedChainJacobians, closed_chain_jacobians, require_task
+from .jacobians import ClosedChainJacobians, closed_chain_jacobians
 from .singularity import SINGULARITY_TOL, SingularityReport, direct_margins, report_from_jacobians
-from .task import TaskTarget, compile_task
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 TRACK_TOL = 1e-11
 """Closure tolerance of the continuations [m, rad]."""

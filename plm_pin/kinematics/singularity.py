@@ -38,27 +38,20 @@ singular of a kind when its margin is at most the tolerance.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import check_tolerance
+from ..core.mechanism import Mechanism, require_task
 from ..exceptions import SingularConfiguration
 from ..results import Result, unit
-from .jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians, require_task
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
+from .jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians
 
 SINGULARITY_TOL = 1e-6
 """Default margin at or below which a configuration counts as singular."""
 
 KINDS: tuple[str, ...] = ("constraint", "inverse", "direct")
-
-
-RANK_RTOL = 1e-9
-"""Relative tolerance of every rank decision: singular values below ``RANK_RTOL * s_max`` count as zero."""
 
 
 def inverse_margins(T: np.ndarray, J_x: np.ndarray) -> np.ndarray:
@@ -114,21 +107,6 @@ def constraint_margins(s: np.ndarray, rank: int) -> np.ndarray:
 def _ratio(s_k: np.ndarray, s_1: np.ndarray, at_zero: float) -> np.ndarray:
     """``s_k / s_1`` where ``s_1 > 0``, else ``at_zero``."""
     return np.divide(s_k, s_1, out=np.full(np.shape(s_k), at_zero), where=s_1 > 0.0)
-
-
-def numerical_rank(M: np.ndarray, rtol: float = RANK_RTOL, *, floor: float = 0.0) -> int:
-    """Rank of ``M`` by SVD: the singular values above ``rtol * max(s_max, floor)``.
-
-    Args:
-        M: the matrix.
-        rtol: relative tolerance.
-        floor: smallest reference scale, so that a matrix of tiny entries has rank 0
-            (1 for closure Jacobians, whose entries are lever arms [m] and unit axes).
-    """
-    if M.size == 0:
-        return 0
-    s = np.linalg.svd(M, compute_uv=False)
-    return int(np.sum(s > rtol * max(s[0], floor)))
 
 
 @dataclass(frozen=True)

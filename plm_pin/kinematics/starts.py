@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
+from ..core.mechanism import Mechanism
 
 
 def random_starts(

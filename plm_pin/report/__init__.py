@@ -1,6 +1,6 @@
 """Study reports: self-contained HTML pages with results.json, written atomically, and their index."""
 
-from .animation import Animation, compute_animation, parse_case
+from .animation import Animation, parse_case
 from .content import (
     Column,
     Comparison,
@@ -10,7 +10,7 @@ from .content import (
     StudyResult,
 )
 from .render import render_index, render_report
-from .study import STUDY_PACKAGE, Study, StudyContext, find_study, run_study, study_names
+from .study import STUDY_PACKAGE, Study, StudyContext, compute_animation, find_study, run_study, study_names
 from .writer import output_folder, write_index, write_report
 
 __all__ = [

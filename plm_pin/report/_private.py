@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._version import __version__
 from ..exceptions import InvalidInput
 
 _SLUG = re.compile(r"[^A-Za-z0-9_-]+")
@@ -84,8 +85,6 @@ def git_commit() -> str | None:
 
 def software_versions() -> dict[str, str]:
     """Versions of plm_pin (and its git commit in a checkout), its numerical stack, libraries and Python."""
-    from .. import __version__
-
     commit = git_commit()
     return {
         "plm_pin": __version__,

@@ -10,15 +10,11 @@ exactly what the report shows.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
-from ..mechanism import Mechanism
-
-if TYPE_CHECKING:
-    from .study import Study
 
 
 @dataclass(frozen=True)
@@ -71,30 +67,3 @@ def parse_case(spec: str) -> tuple[str, str]:
     if not sep or not study or not case or ":" in case:
         raise InvalidInput(f"--animate {spec!r}: give STUDY:CASE, e.g. harada2015:assembly")
     return study, case
-
-
-def compute_animation(study: Study, case: str, mechanism: str | None = None) -> Animation:
-    """Compute the animation ``case`` of ``study``.
-
-    Args:
-        study: the study.
-        case: one of its ``ANIMATIONS``.
-        mechanism: for a study that takes a mechanism, the one to move (default: its own).
-
-    Raises:
-        InvalidInput: an unknown case (the message lists them), or a mechanism given to a
-            study that studies fixed mechanisms.
-        PlmError: the motion cannot be computed (the library's message).
-    """
-    if case not in study.animations:
-        known = sorted(study.animations)
-        raise InvalidInput(
-            f"study {study.name!r} has no animation {case!r}; "
-            + (f"its animations are {known}" if known else "it defines no animations")
-        )
-    make = study.animations[case]
-    if study.mechanism is None:
-        if mechanism is not None:
-            raise InvalidInput(f"study {study.name!r} animates its own mechanisms: give no mechanism")
-        return make()
-    return make(study.mechanism if mechanism is None else mechanism)

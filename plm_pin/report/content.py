@@ -18,12 +18,12 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from ..exceptions import InvalidInput
+from ..viz import scene_html
 from ._private import plain
+from .animation import Animation
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure as MplFigure
-
-    from .animation import Animation
 
 FORMAT = "plm-pin-report/1"
 """Format tag of ``results.json``."""
@@ -502,8 +502,6 @@ class Section:
 
     def animation(self, animation: Animation, frames: int = 120) -> Scene:
         """Add a motion as a scene the reader plays in the page (at most ``frames`` configurations)."""
-        from ..viz import scene_html
-
         shown = animation.thinned(frames)
         html = scene_html(shown.mechanism, qs=shown.qs, times=shown.times)
         return self.scene(html, animation.caption, {"qs": shown.qs, "times": shown.times})

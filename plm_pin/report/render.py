@@ -12,12 +12,10 @@ import functools
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
-from .content import format_cell
+from .content import StudyResult, format_cell
 
 if TYPE_CHECKING:
     import jinja2
-
-    from .content import StudyResult
 
 
 @functools.cache

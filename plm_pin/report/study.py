@@ -29,9 +29,9 @@ from datetime import datetime, timezone
 from pathlib import Path
 from types import ModuleType
 
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, PlmError
 from ..loading import load
-from ..mechanism import Mechanism
 from ..models.registry import PRESETS
 from ..warnings import PlmWarning
 from ._private import FOLDER, slug, software_versions
@@ -246,3 +246,30 @@ def run_study(
         generated=generated,
         elapsed=time.perf_counter() - start,
     )
+
+
+def compute_animation(study: Study, case: str, mechanism: str | None = None) -> Animation:
+    """Compute the animation ``case`` of ``study``.
+
+    Args:
+        study: the study.
+        case: one of its ``ANIMATIONS``.
+        mechanism: for a study that takes a mechanism, the one to move (default: its own).
+
+    Raises:
+        InvalidInput: an unknown case (the message lists them), or a mechanism given to a
+            study that studies fixed mechanisms.
+        PlmError: the motion cannot be computed (the library's message).
+    """
+    if case not in study.animations:
+        known = sorted(study.animations)
+        raise InvalidInput(
+            f"study {study.name!r} has no animation {case!r}; "
+            + (f"its animations are {known}" if known else "it defines no animations")
+        )
+    make = study.animations[case]
+    if study.mechanism is None:
+        if mechanism is not None:
+            raise InvalidInput(f"study {study.name!r} animates its own mechanisms: give no mechanism")
+        return make()
+    return make(study.mechanism if mechanism is None else mechanism)

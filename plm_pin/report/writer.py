@@ -26,6 +26,7 @@ from typing import Any
 
 from .._io import atomic_write_text
 from ..exceptions import InvalidInput
+from ..viz.meshcat_view import meshcat_bundle, share_bundle
 from ._private import FOLDER, software_versions
 from .content import FORMAT, Scene, StudyResult
 from .render import render_index, render_report
@@ -162,15 +163,11 @@ def _exchange(a: Path, b: Path) -> bool:
 
 def _scene_page(scene: Scene) -> str:
     """A scene's page as written beside its report: meshcat's bundle loaded from :data:`BUNDLE`."""
-    from ..viz.meshcat_view import share_bundle
-
     return share_bundle(scene.html, f"../{BUNDLE}")
 
 
 def _write_bundle(path: Path) -> None:
     """Write meshcat's bundle at ``path`` (atomically), unless the same bundle is there already."""
-    from ..viz.meshcat_view import meshcat_bundle
-
     bundle = meshcat_bundle()
     if path.is_symlink() or not path.is_file() or path.read_text(encoding="utf-8") != bundle:
         if path.is_symlink():

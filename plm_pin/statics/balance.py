@@ -6,7 +6,7 @@ At rest the tree's generalized forces balance:
 
 with :math:`f_c` the actuator forces [N] or torques [N m], :math:`B` the selection of the
 actuated velocities, :math:`\lambda` the forces of the cut joints (closure rows, in the
-convention of :mod:`plm_pin.kinematics.closures`: force on frame B, its opposite on frame A),
+convention of :mod:`plm_pin.core.closures`: force on frame B, its opposite on frame A),
 :math:`g` the generalized gravity and :math:`w` an external wrench applied to a frame.
 
 Projecting on the feasible motions :math:`N` (:math:`J_\phi N = 0`) removes :math:`\lambda`:
@@ -34,7 +34,7 @@ the internal-force space (see :func:`oriented_internal_basis`); with one interna
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -42,19 +42,11 @@ from numpy.typing import ArrayLike
 from scipy.linalg import blas as _blas
 from scipy.linalg import lapack as _lapack
 
-from .._checks import (
-    CLOSURE_TOL,
-    as_vector,
-    check_assembled,
-    check_finite_model,
-    check_finite_result,
-    check_tolerance,
-)
+from .._checks import as_vector, check_tolerance
+from ..core import closures as _closures
+from ..core.checks import CLOSURE_TOL, check_assembled, check_finite_model, check_finite_result
+from ..core.mechanism import Mechanism
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
-from ..kinematics import closures as _closures
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 SINGULAR_RTOL = 1e-8
 r"""A direction counts as unresisted when its singular value is below SINGULAR_RTOL x the largest.

@@ -17,20 +17,18 @@ is convex, so its boundary points along rays from the origin trace it exactly.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from .._checks import load_arguments
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, PlmError
 from ..results import Result, unit
 from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_lp
 from .balance import load_on_frame, static_balance
 from .forces import actuator_limits
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 
 @dataclass(frozen=True)

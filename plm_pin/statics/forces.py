@@ -11,20 +11,19 @@ from __future__ import annotations
 import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import check_finite_result, load_arguments
+from .._checks import load_arguments
+from ..core.checks import check_finite_result
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..results import Result, unit
 from . import reactions as _reactions
 from .allocation import OBJECTIVES, Allocation, Inequalities, allocate, check_weights, min_norm
 from .balance import SINGULAR_RTOL, StaticBalance, static_balance
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 
 @dataclass(frozen=True)

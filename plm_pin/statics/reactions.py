@@ -22,18 +22,14 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
-from ..kinematics import closures as _closures
-from ..mechanism import body_name
+from ..core import closures as _closures
+from ..core.mechanism import Mechanism, body_name
 from ..results import Result, unit
 from .balance import Load
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 ATTACHMENT_ATOL = 1e-9
 """Attachment points closer than this [m] are the same point."""

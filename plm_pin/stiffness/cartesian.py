@@ -9,7 +9,7 @@ with :math:`T = J_x N`, so that the task compliance and stiffness are
 .. math:: C_x = T H_N^{-1} T^T, \qquad K_x = C_x^{-1}.
 
 The idle mobilities of the mechanism (the spin of an S-S strut about its axis) are held by
-its gauge closures (:mod:`plm_pin.kinematics.idle`), so :math:`N` does not contain them.
+its gauge closures (:mod:`plm_pin.core.idle`), so :math:`N` does not contain them.
 Other motions no spring resists and the task does not see (an unsprung passive mobility
 away from the task, without gravity) are left out; a task motion no spring resists is
 refused. With rigid links and
@@ -26,21 +26,18 @@ that units do not mix: :math:`1/\mathrm{eig}(C_{tt})` [N/m] under pure forces, a
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from .._checks import as_vector
+from ..core.closures import jacobian_from_data
+from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
-from ..kinematics.closures import jacobian_from_data
-from ..kinematics.jacobians import require_task
 from ..statics import StaticForces
 from .equilibrium import GEOMETRIC, ElasticState, elastic_state, hessian, with_locks
 from .model import SOURCES
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 RANK_RTOL = 1e-10
 """Singular values of the constraint rows below this fraction of the largest count as zero."""
@@ -109,7 +106,7 @@ class StiffnessResult:
         H: Hessian of the potential on them, shape (r, r).
         T: task rates per motion, shape (n_task, r).
         idle: idle mobilities of the mechanism, held by its gauges (left out; see
-            :attr:`plm_pin.mechanism.Mechanism.idle_mobility`).
+            :attr:`plm_pin.core.mechanism.Mechanism.idle_mobility`).
         unresisted: other motions no spring resists and the task does not see (left out).
         state: the equilibrium.
     """

@@ -18,20 +18,17 @@ cut-joint and rigid-drive forces. The loads are fixed in the world (dead loads).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
-from ..kinematics.jacobians import require_task
 from ..statics import Load, StaticForces, load_on_frame
 from .cartesian import condense
 from .equilibrium import closure_and_locks, elastic_state, generalized_load, hessian_terms
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 NEWTON_TOL = 1e-10
 """Largest residual accepted, relative to the largest generalized force in the balance."""

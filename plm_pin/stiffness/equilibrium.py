@@ -24,20 +24,18 @@ symmetric for conservative loads (no external moment in 3-D).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from ..core import closures as _closures
+from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput
-from ..kinematics import closures as _closures
 from ..statics import Load, StaticForces, load_on_frame, static_forces
 from .geometric import TreeDerivatives, closure_derivative
 from .model import SOURCES, CompliantModel, compliant_model
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 GEOMETRIC: tuple[str, ...] = ("gravity", "load", "closures")
 """The geometric-stiffness terms, in the order results list them."""

@@ -27,7 +27,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..kinematics.closures import HLOG3_MIN_ANGLE, Closure
+from ..core.closures import HLOG3_MIN_ANGLE, Closure
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 

@@ -3,18 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from ..analysis import WorkspaceSlice
+from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
 from .cartesian import stiffness
 from .modes import natural_frequencies
-
-if TYPE_CHECKING:
-    from ..analysis import WorkspaceSlice
-    from ..mechanism import Mechanism
 
 VARIABLES: dict[str, tuple[str, str]] = {
     "min_translational_stiffness": ("N/m", "smallest eigen-stiffness under a pure force"),

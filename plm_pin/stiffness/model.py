@@ -8,7 +8,7 @@ stiffness :math:`K_v = C^{-1}` of the beam's tip compliance
 (:meth:`~plm_pin.description.compliance.BeamSpec.tip_compliance`). At zero deflection the
 compliant model coincides with the rigid one. The virtual bodies are massless.
 
-The compliant model holds the mechanism's idle gauges (:mod:`plm_pin.kinematics.idle`):
+The compliant model holds the mechanism's idle gauges (:mod:`plm_pin.core.idle`):
 its closures, and so the cut-joint forces of a static solution, are the mechanism's.
 
 A drive with a stiffness :math:`k` is a spring along its joint; a drive without one is
@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..core.mechanism import Mechanism
 from ..description.compliance import BeamSpec, ComplianceSpec
 from ..exceptions import FrameNotFound, InvalidInput
-from ..mechanism import Mechanism
 
 SOURCES: tuple[str, ...] = ("actuators", "joints", "links")
 """The kinds of springs, in the order results list them."""

@@ -16,17 +16,16 @@ the symmetric part of the Hessian.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
 
+from ..core.mechanism import Mechanism
+from ..dynamics.task_space import task_space_dynamics
 from ..exceptions import InvalidInput, SingularConfiguration
 from .cartesian import StiffnessResult, stiffness
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 MODELS: tuple[str, ...] = ("task", "full")
 """The vibration models of :func:`natural_frequencies`."""
@@ -99,8 +98,6 @@ def natural_frequencies(
         raise InvalidInput(f"model {model!r} is not one of {list(MODELS)}")
     res = result if result is not None else stiffness(mech, q, **stiffness_options)
     if model == "task":
-        from ..dynamics.task_space import task_space_dynamics
-
         M = task_space_dynamics(mech, res.q).M_x
         K = 0.5 * (res.K_x + res.K_x.T)
         basis, T = np.eye(K.shape[0]), np.eye(K.shape[0])

@@ -48,17 +48,15 @@ import uuid
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..exceptions import InvalidInput, PlmError, SchedulerUnreachable
 from ._deps import require
 from .metrics import METRICS, PointEvaluation
-
-if TYPE_CHECKING:
-    from .spec import SweepSpec
+from .spec import SweepSpec
 
 DEFAULT_CHUNK = 4096
 """Poses per chunk (task) by default; a chunk holds whole parameter points."""
@@ -111,7 +109,7 @@ class ChunkValues:
 
 def evaluate_point(spec: SweepSpec, index: int) -> dict[str, np.ndarray]:
     """Every variable of the sweep at one parameter point: build the mechanism, run the metrics."""
-    ev = PointEvaluation(spec, spec.build(index))
+    ev = PointEvaluation(spec.pose_grid(), spec.build(index))
     out: dict[str, np.ndarray] = {}
     for name in spec.metrics:
         out.update(METRICS[name].compute(ev))

@@ -32,15 +32,16 @@ import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from .._text import short
-from ..analysis import workspace_grid
+from ..analysis import WorkspaceSlice, workspace_grid
 from ..analysis._continuation import guess_mode
 from ..analysis.manipulability import Manipulability
 from ..analysis.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
+from ..core.mechanism import Mechanism
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import IK_TOL
@@ -50,11 +51,6 @@ from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
 from ..stiffness import stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
-
-if TYPE_CHECKING:
-    from ..analysis import WorkspaceSlice
-    from ..mechanism import Mechanism
-    from .spec import SweepSpec
 
 SINGULARITY_CODES: tuple[str, ...] = ("regular", *KINDS)
 """Meaning of the ``singularity`` codes 0, 1, 2, 3 (-1: unreachable)."""
@@ -260,18 +256,38 @@ class Metric:
     compute: Callable[[PointEvaluation], dict[str, np.ndarray]]
 
 
+@dataclass(frozen=True)
+class PoseGrid:
+    """What every parameter point's metrics share: the pose grid and the metrics' options.
+
+    Attributes:
+        axes: the pose grid's task coordinates, in order.
+        values: their values [m or rad], one array per axis.
+        pose: task pose giving the other coordinates [m, rad], or None (each variant's
+            reference pose).
+        reduced_over: pose axes the reduced metrics run over.
+        options: every option of the metrics, defaults filled in.
+    """
+
+    axes: tuple[str, ...]
+    values: tuple[np.ndarray, ...]
+    pose: tuple[float, ...] | None
+    reduced_over: tuple[str, ...]
+    options: Mapping[str, Any]
+
+
 class PointEvaluation:
     """One parameter point: its mechanism and the analyses its metrics share, each computed once.
 
     Attributes:
-        spec: the sweep.
+        spec: the pose grid and options of the sweep (:meth:`plm_pin.sweep.SweepSpec.pose_grid`).
         mech: the mechanism built at this point.
         mode: the reference configuration's working mode, kept by every analysis (None if
             a leg is singular there: the continuation's seed decides).
     """
 
-    def __init__(self, spec: SweepSpec, mech: Mechanism) -> None:
-        """Prepare the evaluation of ``spec``'s metrics on ``mech``."""
+    def __init__(self, spec: PoseGrid, mech: Mechanism) -> None:
+        """Prepare the evaluation of the metrics on ``mech`` over ``spec``'s grid."""
         self.spec = spec
         self.mech = mech
         self.mode = guess_mode(mech, None)

@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
-from ..mechanism import Mechanism
 from ..models.registry import Builder
 from ._deps import require
 from .execution import DEFAULT_CHUNK, ChunkValues, check_execution, plan_chunks, points_per_chunk, run_chunks

@@ -24,14 +24,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .. import __version__
 from .._text import short
+from .._version import __version__
+from ..core.mechanism import Mechanism
 from ..description.sidecar import TASK_DOFS
 from ..exceptions import InvalidInput, PlmError
 from ..loading import build_mechanism, resolve_builder
-from ..mechanism import Mechanism
 from ..models.registry import Builder, builder_parameters
-from .metrics import METRICS, Variable, check_options
+from .metrics import METRICS, PoseGrid, Variable, check_options
 
 Scalar = float | int | str
 Value = Scalar | tuple[Scalar, ...]
@@ -283,6 +283,10 @@ class SweepSpec:
         """Pose axes the reduced metrics run over (the option ``over``, default all)."""
         over = self.options.get("over")
         return self.axes if over is None else tuple(over)
+
+    def pose_grid(self) -> PoseGrid:
+        """The pose grid and options every parameter point's metrics share."""
+        return PoseGrid(self.axes, self.values, self.pose, self.reduced_over, self.options)
 
     def variables(self) -> tuple[Variable, ...]:
         """The result variables of the metrics, in order."""

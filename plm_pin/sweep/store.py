@@ -30,7 +30,7 @@ import os
 import socket
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -39,11 +39,8 @@ from .._text import short
 from ..exceptions import InvalidInput, StoreLocked, StoreMismatch
 from ..warnings import CorruptChunkWarning
 from ._deps import require
-from .spec import FORMAT
-
-if TYPE_CHECKING:
-    from .execution import ChunkValues
-    from .spec import SweepSpec
+from .execution import ChunkValues
+from .spec import FORMAT, SweepSpec
 
 MANIFEST = "manifest.json"
 CHUNKS = "chunks"
@@ -177,8 +174,6 @@ class SweepStore:
 
     def load(self) -> list[ChunkValues]:
         """Every finished chunk of this sweep (files that do not belong are skipped with a warning)."""
-        from .execution import ChunkValues
-
         pq = require("pyarrow.parquet")
         variables = self.spec.variables()
         out = []

@@ -25,14 +25,13 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..exceptions import InvalidInput
+from ..statics import StaticForces, static_forces
 from .figures import _axes
 from .panels import panel_grid, shared_legend
 from .skeleton import plane_axes, skeleton_segments
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
-
-    from ..statics import StaticForces
 
 COLOURS = {"f_c": "tab:red", "f_n": "tab:green", "f_l": "tab:blue", "load": "black"}
 
@@ -155,8 +154,6 @@ def fig8(mech: Any, q: ArrayLike, f_e: ArrayLike, f_i: float = 1.0) -> tuple[Axe
     Returns:
         The two axes (a) and (b).
     """
-    from ..statics import static_forces
-
     load = -np.asarray(f_e, dtype=float)
     preload = {"plate": -float(f_i)}
     a = static_forces(mech, q, load, gravity=False)

@@ -27,20 +27,18 @@ import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._io import atomic_write_text
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
 from .meshcat_server import MeshcatServer, ServerWindow, StaticWindow, require_meshcat
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 CLOSURE_TOL = 1e-6
 """Closure residual above which its markers show it open [m, rad]."""

@@ -13,13 +13,12 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from .figures import _axes
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
-
-    from ..mechanism import Mechanism
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 """World planes a skeleton is projected on, with the indices of their axes."""

@@ -7,14 +7,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..exceptions import InvalidInput
+from ..stiffness import StiffnessMap
 from ..stiffness.maps import VARIABLES
 from .figures import _axes, _display, _pyplot
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
-
-    from ..stiffness import StiffnessMap
 
 
 def plot_stiffness_map(

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 import plm_pin
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description import write_description
 from plm_pin.families.prrrp import build_2prrrp
-from plm_pin.mechanism import Mechanism
 from plm_pin.models import PRESETS
 
 FIG6_L = 0.140

@@ -18,10 +18,11 @@ from plm_pin.analysis._batch import (
     square_task_metrics,
 )
 from plm_pin.analysis.manipulability import METRICS, batch_metrics
-from plm_pin.kinematics import closures as _closures
+from plm_pin.core import closures as _closures
+from plm_pin.core.legs import working_mode_from_data, working_mode_from_jacobian
+from plm_pin.core.task import TaskTarget
 from plm_pin.kinematics import task_pose
-from plm_pin.kinematics.legs import ik_jacobian, working_mode_from_data, working_mode_from_jacobian
-from plm_pin.kinematics.task import TaskTarget
+from plm_pin.kinematics.jacobians import ik_jacobian
 from tests.conftest import preset
 
 

@@ -17,7 +17,8 @@ from plm_pin.analysis import (
     workspace_sweep,
 )
 from plm_pin.exceptions import InvalidInput
-from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, working_mode
+from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics
+from plm_pin.kinematics.working_mode import working_mode
 from tests.analysis.conftest import FIG6_L, FIG6_RT
 from tests.conftest import preset, with_rotated_null_basis
 

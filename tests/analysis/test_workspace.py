@@ -15,7 +15,8 @@ from plm_pin.analysis import manipulability, workspace_grid, workspace_map, work
 from plm_pin.analysis._batch import BatchKinematics
 from plm_pin.analysis._continuation import IKEvaluator
 from plm_pin.exceptions import InvalidInput
-from plm_pin.kinematics import classify, inverse_kinematics, task_pose, working_mode
+from plm_pin.kinematics import classify, inverse_kinematics, task_pose
+from plm_pin.kinematics.working_mode import working_mode
 from tests.conftest import preset
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1

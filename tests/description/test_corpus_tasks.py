@@ -18,9 +18,9 @@ import pytest
 import yaml
 
 from plm_pin import kinematics as kin
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description.interop import CORPUS_TASKS
 from plm_pin.exceptions import DescriptionError
-from plm_pin.mechanism import Mechanism
 from plm_pin.report import find_study, run_study
 from plm_pin.statics import static_forces
 from tests.conftest import INTEROP, load_corpus

@@ -10,9 +10,9 @@ import pinocchio as pin
 import pytest
 
 import plm_pin
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description.mjcf import read_mjcf
 from plm_pin.exceptions import DescriptionError, FrameNotFound
-from plm_pin.mechanism import Mechanism
 from plm_pin.warnings import IgnoredElementWarning
 
 mujoco = pytest.importorskip("mujoco")

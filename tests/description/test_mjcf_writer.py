@@ -11,9 +11,9 @@ import pytest
 
 import plm_pin
 from plm_pin.description.mjcf import StateMap
-from plm_pin.description.mjcf_writer import REVOLUTE_PAIR_SPACING, mjcf_text
 from plm_pin.dynamics.simulation import simulate
 from plm_pin.exceptions import InvalidInput
+from plm_pin.export import REVOLUTE_PAIR_SPACING, mjcf_text
 from plm_pin.models.registry import PRESETS
 from plm_pin.warnings import SimulationUnstableWarning
 from tests.conftest import INTEROP, ball_joint_body, preset

@@ -17,11 +17,11 @@ import pinocchio as pin
 import pytest
 
 from plm_pin import ClosureNotSatisfied, InvalidInput, SingularConfiguration
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description.sidecar import TaskSpec
 from plm_pin.dynamics import inverse_dynamics, task_trajectory
 from plm_pin.dynamics.task_space import task_space_dynamics, task_units
 from plm_pin.kinematics import closed_chain_jacobians
-from plm_pin.mechanism import Mechanism
 from plm_pin.models import PRESETS
 from tests.conftest import preset, prrrp_paper_configuration
 

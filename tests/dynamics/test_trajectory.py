@@ -23,6 +23,8 @@ from analyses._zhao2011_paper import (
     ZHAO2011_TRAJECTORY_DURATION,
     zhao2011_trajectory,
 )
+from plm_pin.core import closures
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description.sidecar import TaskSpec
 from plm_pin.dynamics.trajectory import (
     JointTrajectory,
@@ -40,8 +42,8 @@ from plm_pin.exceptions import (
 )
 from plm_pin.families.pss import pss_inverse_kinematics
 from plm_pin.families.star_triangle import star_triangle_inverse_kinematics
-from plm_pin.kinematics import closures, inverse_kinematics, task_pose, working_mode, working_modes
-from plm_pin.mechanism import Mechanism
+from plm_pin.kinematics import inverse_kinematics, task_pose, working_modes
+from plm_pin.kinematics.working_mode import working_mode
 from plm_pin.models import PRESETS
 from tests.conftest import preset, spatial_6r
 

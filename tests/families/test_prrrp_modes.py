@@ -9,13 +9,14 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+import plm_pin
+from plm_pin.core.rank import RANK_RTOL
 from plm_pin.exceptions import InvalidInput, PoseUnreachable, SingularConfiguration
 from plm_pin.families import prrrp as pm
 from plm_pin.families.prrrp.planners import MODE_CHANGE_TOL
-from plm_pin.families.prrrp.variants import symmetric_variant
-from plm_pin.kinematics import classify, closed_chain_jacobians, working_mode
+from plm_pin.kinematics import classify, closed_chain_jacobians
 from plm_pin.kinematics.paths import track_actuator_path
-from plm_pin.kinematics.singularity import RANK_RTOL
+from plm_pin.kinematics.working_mode import working_mode
 from tests.conftest import preset
 
 ASYM = "harada2015_asymmetric"
@@ -103,7 +104,7 @@ def flip(asym):
 
 @pytest.fixture(scope="module")
 def symmetric():
-    return symmetric_variant(0.240)
+    return plm_pin.build_mechanism("harada2015_asymmetric", pm.symmetric_rods(0.240))
 
 
 # ------------------------------------------------------------------ labels

@@ -1,4 +1,4 @@
-"""Newton and Levenberg-Marquardt assembly (plm_pin/kinematics/assembly.py): the chord iterations.
+"""Newton and Levenberg-Marquardt assembly (plm_pin/core/assembly.py): the chord iterations.
 
 Oracles: a plain Gauss-Newton written here on Pinocchio's frame placements with a
 finite-difference Jacobian (no plm_pin residual or Jacobian code), and for the 3D4M the
@@ -12,8 +12,9 @@ import pinocchio as pin
 import pytest
 
 from benchmarks.harness import Floor
-from plm_pin.kinematics import assembly, task_pose
-from plm_pin.kinematics.task import TaskTarget
+from plm_pin.core import assembly
+from plm_pin.core.task import TaskTarget
+from plm_pin.kinematics import task_pose
 from tests.conftest import fd_jacobian, preset, spatial_6r
 
 NON_PLANAR_AND_PLANAR = ["harada2011_3d4m", "zhao2011_8pss"]

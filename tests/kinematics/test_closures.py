@@ -1,4 +1,4 @@
-"""Closure residuals and Jacobians (plm_pin/kinematics/closures.py)."""
+"""Closure residuals and Jacobians (plm_pin/core/closures.py)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from plm_pin.kinematics import closures
+from plm_pin.core import closures
 from plm_pin.models import preset_names
 from tests.conftest import INTEROP, ball_joint_body, fd_jacobian, preset, spatial_6r
 

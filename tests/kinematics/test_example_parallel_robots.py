@@ -14,7 +14,7 @@ with the cut joint (``closedloop<k>_A`` and ``closedloop<k>_B``), so those two r
 together, in series, about one axis: the two small closure bodies (the ``sphere`` links) spin
 about the cut joint's axis while every other body stays still. That motion keeps the loops
 closed and moves neither the motors nor any link that matters: one idle DOF per weld, which
-plm_pin detects and fixes by holding one half-joint of each pair (:mod:`plm_pin.kinematics.idle`).
+plm_pin detects and fixes by holding one half-joint of each pair (:mod:`plm_pin.core.idle`).
 So ``5bar_linkage`` has mobility 2 with 1 idle (one weld) and ``robot_delta`` 2 with 3 idle
 (three welds); the ``point`` closure of ``5bar_linkage_iso3d`` leaves no idle DOF (its
 out-of-plane ``freeortho`` revolute is held by the closure's normal row). Tested here: the idle
@@ -32,6 +32,9 @@ import pinocchio as pin
 import pytest
 import yaml
 
+from plm_pin.core.closures import compile_closures
+from plm_pin.core.closures import jacobian as closure_jacobian
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.kinematics import (
     closed_chain_jacobians,
     forward_kinematics,
@@ -39,9 +42,6 @@ from plm_pin.kinematics import (
     same_assembly,
     task_pose,
 )
-from plm_pin.kinematics.closures import compile_closures
-from plm_pin.kinematics.closures import jacobian as closure_jacobian
-from plm_pin.mechanism import Mechanism
 from tests.conftest import INTEROP, fd_jacobian, load_corpus
 
 if not INTEROP.is_dir():

@@ -1,4 +1,4 @@
-"""Idle mobilities (plm_pin/kinematics/idle.py) on textbook robots built in the tests.
+"""Idle mobilities (plm_pin/core/idle.py) on textbook robots built in the tests.
 
 A 6-SPS Stewart platform (ball joints at the base: three revolutes, the last along the strut)
 lets each strut spin about its own axis: 12 DOF of which 6 idle. Held, every analysis runs on
@@ -14,6 +14,8 @@ from typer.testing import CliRunner
 from plm_pin import InvalidInput
 from plm_pin.analysis import manipulability
 from plm_pin.cli import app
+from plm_pin.core.closures import compile_closures
+from plm_pin.core.closures import jacobian as closure_jacobian
 from plm_pin.kinematics import (
     classify,
     closed_chain_jacobians,
@@ -21,8 +23,6 @@ from plm_pin.kinematics import (
     inverse_kinematics,
     same_assembly,
 )
-from plm_pin.kinematics.closures import compile_closures
-from plm_pin.kinematics.closures import jacobian as closure_jacobian
 from tests import textbook as tb
 from tests.conftest import ball_joint_body
 

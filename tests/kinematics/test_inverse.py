@@ -20,8 +20,8 @@ from hypothesis import strategies as st
 
 from plm_pin import InvalidInput, PoseUnreachable
 from plm_pin.kinematics import forward_kinematics, inverse_kinematics, same_assembly, task_pose, working_modes
-from plm_pin.kinematics.legs import working_mode
 from plm_pin.kinematics.limits import limit_violations, wrap_into_limits
+from plm_pin.kinematics.working_mode import working_mode
 from plm_pin.models import PRESETS, preset_names
 from tests.conftest import preset
 

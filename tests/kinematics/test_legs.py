@@ -1,4 +1,4 @@
-"""Legs as diagonal blocks of the IK Jacobian, and working modes (plm_pin/kinematics/legs.py).
+"""Legs as diagonal blocks of the IK Jacobian, and working modes (plm_pin/core/legs.py).
 
 Oracles: the mechanisms' structure (which joints form which leg, known from the papers'
 figures), the product rule for determinants of block-triangular matrices, and the sign of
@@ -13,8 +13,10 @@ import math
 import numpy as np
 import pytest
 
-from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, working_mode, working_modes
-from plm_pin.kinematics.legs import Leg, ik_jacobian, working_mode_from_jacobian
+from plm_pin.core.legs import Leg, working_mode_from_jacobian
+from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, working_modes
+from plm_pin.kinematics.jacobians import ik_jacobian
+from plm_pin.kinematics.working_mode import working_mode
 from plm_pin.models import preset_names
 from tests import textbook as tb
 from tests.conftest import preset, prrrp_paper_configuration

@@ -1,4 +1,4 @@
-"""Workspaces and live views of frame placements (plm_pin/kinematics/scratch.py)."""
+"""Workspaces and live views of frame placements (plm_pin/core/scratch.py)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import weakref
 import numpy as np
 import pinocchio as pin
 
-from plm_pin.kinematics import scratch
+from plm_pin.core import scratch
 from tests.conftest import preset
 
 

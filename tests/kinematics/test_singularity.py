@@ -15,6 +15,7 @@ import pytest
 
 import plm_pin
 from plm_pin import PoseUnreachable, SingularConfiguration
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description import write_description
 from plm_pin.families.prrrp import build_2prrrp
 from plm_pin.kinematics import classify, closed_chain_jacobians, forward_kinematics, inverse_kinematics
@@ -24,7 +25,6 @@ from plm_pin.kinematics.singularity import (
     normalised_margin,
     normalised_margins,
 )
-from plm_pin.mechanism import Mechanism
 from plm_pin.models import preset_names
 from tests.conftest import preset
 

@@ -1,4 +1,4 @@
-"""Task coordinates, their Jacobian and task targets (plm_pin/kinematics/task.py).
+"""Task coordinates, their Jacobian and task targets (plm_pin/core/task.py).
 
 Oracles: the presets' reference poses (their builders' parameters), finite differences, and
 the fixed-axis angle-rate relation omega = [R_z R_y x, R_z y, z] rpy_dot written inline.
@@ -13,8 +13,8 @@ import pinocchio as pin
 import pytest
 
 from plm_pin import InvalidInput
-from plm_pin.kinematics import TaskTarget, compile_task, task_pose
-from plm_pin.kinematics.task import check_task_vector, rpy_rates, wrap_angle
+from plm_pin.core.task import TaskTarget, check_task_vector, compile_task, rpy_rates, wrap_angle
+from plm_pin.kinematics import task_pose
 from plm_pin.models import PRESETS, preset_names
 from tests.conftest import fd_jacobian, preset
 

@@ -10,10 +10,10 @@ import pinocchio as pin
 import yourdfpy
 
 import plm_pin
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.description import _urdf_build as u
 from plm_pin.description import write_description
 from plm_pin.description.sidecar import parse_sidecar
-from plm_pin.mechanism import Mechanism
 
 BASE_RADIUS, PLATFORM_RADIUS, HEIGHT = 0.5, 0.3, 0.6
 

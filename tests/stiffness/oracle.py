@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import minimize, root
 
-from plm_pin.mechanism import Mechanism
+from plm_pin.core.mechanism import Mechanism
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 

@@ -21,7 +21,7 @@ import xarray as xr
 
 import plm_pin
 from plm_pin import InvalidInput, StoreMismatch
-from plm_pin.mechanism import Mechanism
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.sweep import make_spec, mechanism_digest, sweep
 from plm_pin.sweep.store import MANIFEST
 from tests import textbook as tb

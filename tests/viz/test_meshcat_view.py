@@ -23,9 +23,9 @@ from typer.testing import CliRunner
 
 import plm_pin
 from plm_pin.cli import app
+from plm_pin.core.mechanism import Mechanism
 from plm_pin.exceptions import InvalidInput, ViewerError
-from plm_pin.mechanism import Mechanism
-from plm_pin.viz import MeshcatServer, MeshcatViewer, scene_html
+from plm_pin.viz import MeshcatServer, MeshcatViewer, scene_html, show
 from plm_pin.viz.meshcat_server import (
     LOCALHOST,
     PARENT_CHECK_MS,
@@ -288,9 +288,9 @@ def test_bad_motions_are_refused_by_text(kwargs, message):
         scene_html(preset("fivebar"), **kwargs)
 
 
-def test_mech_show_returns_the_viewer_and_renders_inline_in_a_notebook():
-    """mech.show(static=True): a viewer without URL whose notebook HTML embeds the escaped static page."""
-    viewer = preset("fourbar").show(static=True)
+def test_show_returns_the_viewer_and_renders_inline_in_a_notebook():
+    """show(mech, static=True): a viewer without URL whose notebook HTML embeds the escaped static page."""
+    viewer = show(preset("fourbar"), static=True)
     assert isinstance(viewer, MeshcatViewer)
     assert viewer.url is None
     assert repr(viewer) == "MeshcatViewer('fourbar', 'static')"
@@ -321,7 +321,7 @@ def test_server_listens_on_localhost_only_serves_the_scene_and_stops():
         zmq_port = int(server.zmq_url.rsplit(":", 1)[1])
         assert listening_addresses(server.port) == {LOCALHOST}
         assert listening_addresses(zmq_port) == {LOCALHOST}
-        viewer = mech.show()  # on the shared server
+        viewer = show(mech)  # on the shared server
         assert viewer.server is server and viewer.url == server.web_url
         served = Scene(viewer.static_html())  # asked to the server
         assert len(served.under(f"{root(mech)}/visuals/closures")) == 2
@@ -421,7 +421,7 @@ def test_missing_meshcat_names_the_extra(monkeypatch, tmp_path):
     with pytest.raises(ViewerError, match=re.escape("pip install 'plm-pin[viz]'")):
         require_meshcat()
     with pytest.raises(ViewerError, match="the meshcat viewer needs meshcat"):
-        preset("fourbar").show(static=True)
+        show(preset("fourbar"), static=True)
     result = runner.invoke(app, ["view", "fourbar", "--html", str(tmp_path / "scene.html")])
     assert result.exit_code == 1
     assert result.stderr.startswith("error: the meshcat viewer needs meshcat")

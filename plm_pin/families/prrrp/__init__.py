@@ -5,12 +5,12 @@
 - :mod:`~plm_pin.families.prrrp.modes`: assembly and working modes, eq. (4) and eq. (6).
 - :mod:`~plm_pin.families.prrrp.planners`: the mode-transition graph and the mode-change planners.
 - :mod:`~plm_pin.families.prrrp.complex_singularity`: the complex singularity of equal rods.
-- :mod:`~plm_pin.families.prrrp.variants`: :func:`~plm_pin.families.prrrp.variants.symmetric_variant`,
-  presets rebuilt with other rods. It builds mechanisms (it imports :mod:`plm_pin.loading`, which
-  imports the preset registry and so this package), so it is imported from its module, not from here.
+
+A preset rebuilt with four equal rods: ``plm_pin.build_mechanism("harada2015_asymmetric",
+symmetric_rods(0.240))``.
 """
 
-from .builder import build_2prrrp, leg_inverse_kinematics
+from .builder import build_2prrrp, leg_inverse_kinematics, symmetric_rods
 from .complex_singularity import CoincidentCircleSample, ComplexSingularityCase, complex_singularity_check
 from .layout import PrrrpLayout, PrrrpLeg, PrrrpSubMechanism, prrrp_layout
 from .modes import (
@@ -63,5 +63,6 @@ __all__ = [
     "prrrp_configuration",
     "prrrp_layout",
     "prrrp_state",
+    "symmetric_rods",
     "working_mode_label",
 ]

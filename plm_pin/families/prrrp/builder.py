@@ -232,3 +232,19 @@ def rod_scaled(length: float, ref_length: float, ref_mass: float, ref_inertia: f
     """
     k = length / ref_length
     return ref_mass * k, ref_inertia * k**3
+
+
+def symmetric_rods(rod_length: float) -> dict[str, tuple[float, ...]]:
+    """Builder parameters of four equal rods ``rod_length`` [m] long, for :func:`build_2prrrp`.
+
+    Masses and inertias scale from the Harada 2011 rod (140 mm, 0.026 kg, 9.84e-5 kg m^2,
+    Table 1) by :func:`rod_scaled`, as in the 2015 preset. Give them to
+    :func:`plm_pin.build_mechanism` with a 2-PRRRP preset to rebuild it with equal rods.
+
+    Raises:
+        InvalidInput: a rod length that is not a positive finite number.
+    """
+    if not (isinstance(rod_length, (int, float)) and math.isfinite(rod_length) and rod_length > 0.0):
+        raise InvalidInput(f"rod_length must be a positive length [m], got {rod_length!r}")
+    mass, inertia = rod_scaled(float(rod_length), 0.140, 0.026, 9.84e-5)
+    return {"rod_lengths": (rod_length,) * 4, "rod_masses": (mass,) * 4, "rod_inertias": (inertia,) * 4}

@@ -13,24 +13,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from ...core.mechanism import Mechanism
+from ...core.rank import numerical_rank
 from ...exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ...kinematics.jacobians import closed_chain_jacobians
-from ...kinematics.singularity import (
-    SINGULARITY_TOL,
-    SingularityReport,
-    numerical_rank,
-    report_from_jacobians,
-)
+from ...kinematics.singularity import SINGULARITY_TOL, SingularityReport, report_from_jacobians
 from .layout import prrrp_layout
 from .modes import pair_solutions, prrrp_configuration, prrrp_state
 from .planners import fold_plan
-
-if TYPE_CHECKING:
-    from ...mechanism import Mechanism
 
 
 @dataclass(frozen=True)

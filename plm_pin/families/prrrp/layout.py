@@ -11,16 +11,13 @@ Units: lengths [m].
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
+from ...core.mechanism import Mechanism
 from ...exceptions import InvalidInput
 from .builder import LEFT_LEGS, LEFT_PAIR, RIGHT_LEGS, RIGHT_PAIR, TASK_FRAME
-
-if TYPE_CHECKING:
-    from ...mechanism import Mechanism
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 

@@ -13,7 +13,7 @@ r"""Assembly and working modes of a 2-PRRRP configuration (Harada 2015), and its
   stator direction :math:`a`, ``(-)`` before it, ``(0)`` with the rod perpendicular to the
   stator (actuator singularity). It is **minus** the sign of :math:`z_i^T a` (:math:`z_i`
   the unit rod vector from slider to pair), which is the leg-block sign returned by
-  :func:`plm_pin.kinematics.legs.working_mode` (0 when :math:`z_i^T a = 0`).
+  :func:`plm_pin.kinematics.working_mode.working_mode` (0 when :math:`z_i^T a = 0`).
 
 Units: lengths [m], angles [rad], margins are normalised singular-value ratios [-].
 """
@@ -23,19 +23,17 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from ...core.mechanism import Mechanism
 from ...exceptions import InvalidInput, PoseUnreachable
 from ...kinematics.mode_graph import Mode
 from ...kinematics.singularity import normalised_margin
 from .builder import LEFT_PAIR
 from .layout import PrrrpLayout, resolve_layout
-
-if TYPE_CHECKING:
-    from ...mechanism import Mechanism
 
 MODE_TOL = 1e-9
 """Pair heights [m] and rod cosines :math:`|z_i^T a|` [-] at or below which a mode sign is 0."""

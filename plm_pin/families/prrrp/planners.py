@@ -25,23 +25,22 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from ...core.mechanism import Mechanism, require_task
+from ...core.rank import numerical_rank
 from ...exceptions import InvalidInput, PoseUnreachable, SingularConfiguration
 from ...kinematics.forward import frame_distance
-from ...kinematics.jacobians import closed_chain_jacobians, require_task
+from ...kinematics.jacobians import closed_chain_jacobians
 from ...kinematics.mode_graph import Mode, ModeEdge, ModeGraph, ModeNode, compress_modes
 from ...kinematics.paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
-from ...kinematics.singularity import SINGULARITY_TOL, numerical_rank, report_from_jacobians
+from ...kinematics.singularity import SINGULARITY_TOL, report_from_jacobians
 from .builder import TASK_FRAME
 from .layout import PrrrpLayout, PrrrpLeg, PrrrpSubMechanism, prrrp_layout, resolve_layout
 from .modes import ASSEMBLY_MODES, MODE_TOL, PrrrpState, mode_label, prrrp_state, working_mode_label
-
-if TYPE_CHECKING:
-    from ...mechanism import Mechanism
 
 MODE_CHANGE_TOL = 1e-3
 """Direct and constraint margin the mode-change planners require at every sample [-].

@@ -16,7 +16,7 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   re-import reads them as two point closures: 6 rows of rank 5). Every equality gets
   ``solref = (2 timestep, 1)``, the stiffest MuJoCo allows at that step, and
   ``solimp = (0.99, 0.999, 0.001)``.
-- **Idle gauges** (:mod:`plm_pin.kinematics.idle`) are a plm_pin analysis device, not part
+- **Idle gauges** (:mod:`plm_pin.core.idle`) are a plm_pin analysis device, not part
   of the mechanism: neither their welds nor their frames are written. MuJoCo simulates the
   idle spins as the motions they are, and a re-import detects and holds them again.
 - **Actuation**: a ``motor`` per driven joint (gear 1), ``ctrlrange`` and ``forcerange`` the
@@ -42,20 +42,20 @@ import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from lxml import etree
 
-from .._io import atomic_write_text
-from ..exceptions import DescriptionError, InvalidInput
-from ..warnings import IgnoredElementWarning, SimulationUnstableWarning
-from .mjcf import DRIVE_FIELDS, StateMap, require_mujoco, rotation_to_quat_wxyz
-from .sidecar import Sidecar
+from ._io import atomic_write_text
+from .core.mechanism import Mechanism, body_name
+from .description.mjcf import DRIVE_FIELDS, StateMap, require_mujoco, rotation_to_quat_wxyz
+from .description.sidecar import Sidecar
+from .exceptions import DescriptionError, InvalidInput
+from .warnings import IgnoredElementWarning, SimulationUnstableWarning
 
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
+__all__ = ["ClosureError", "export_mjcf", "mjcf_text"]
 
 REVOLUTE_PAIR_SPACING = 0.05
 """Distance along the axis between the two ``connect``\\ s of an exported revolute closure [m]."""
@@ -182,8 +182,6 @@ class _Writer:
         self.gauge_frames = {fid for c in mech.closures if c.name in gauges for fid in c.frame_ids}
 
     def _body_name(self, j: int) -> str:
-        from ..mechanism import body_name
-
         name = body_name(self.model, j)
         if name in self.body_names:
             name = str(self.model.names[j])
@@ -273,8 +271,6 @@ class _Writer:
 
     def frames(self, world: etree._Element) -> None:
         """Sites: body and operational frames but the gauges', closure frames (own body frames too)."""
-        from ..mechanism import body_name
-
         model = self.model
         plain = (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
         own = {

@@ -6,25 +6,22 @@ import functools
 import threading
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ._checks import as_vector
-from .description.sidecar import Sidecar, TaskSpec
-from .exceptions import ClosureNotSatisfied, InvalidInput
-from .kinematics import closures as _closures
-from .kinematics.assembly import Assembly, assemble
-from .kinematics.idle import IdleGauge, find_gauges
-from .kinematics.legs import Leg, find_legs
-from .kinematics.scratch import Workspace
-from .kinematics.singularity import RANK_RTOL, numerical_rank
-from .kinematics.task import Task, compile_task
-
-if TYPE_CHECKING:
-    from .viz.meshcat_view import MeshcatViewer
+from .._checks import as_vector
+from ..description.sidecar import Sidecar, TaskSpec
+from ..exceptions import ClosureNotSatisfied, InvalidInput
+from . import closures as _closures
+from .assembly import Assembly, assemble
+from .idle import IdleGauge, find_gauges
+from .legs import Leg, find_legs
+from .rank import RANK_RTOL, numerical_rank
+from .scratch import Workspace
+from .task import Task, compile_task
 
 ASSEMBLY_TOL = 1e-12
 """Default closure tolerance of :meth:`Mechanism.assemble` [m, rad]."""
@@ -85,7 +82,7 @@ class Mechanism:
 
     A Mechanism is not changed by any analysis: its cached properties (``q_ref``,
     ``mobility``, ``legs``) depend on the mechanism alone, and what a computation writes
-    lives in a :class:`~plm_pin.kinematics.scratch.Workspace` (:meth:`workspace`) or in a
+    lives in a :class:`~plm_pin.core.scratch.Workspace` (:meth:`workspace`) or in a
     per-thread scratch data, so one Mechanism may be shared by threads. It pickles (with
     ``pickle`` or ``cloudpickle``), to be sent to worker processes as it is.
 
@@ -195,7 +192,7 @@ class Mechanism:
         return self._thread_data("own")
 
     def workspace(self) -> Workspace:
-        """A new :class:`~plm_pin.kinematics.scratch.Workspace`: Pinocchio data and Newton buffers.
+        """A new :class:`~plm_pin.core.scratch.Workspace`: Pinocchio data and Newton buffers.
 
         Create one per thread (or per loop) and pass it to the calls of a hot loop.
         """
@@ -223,7 +220,7 @@ class Mechanism:
 
     @functools.cached_property
     def idle_gauges(self) -> tuple[IdleGauge, ...]:
-        """Gauges of the idle mobilities: one joint held per idle motion (see :mod:`plm_pin.kinematics.idle`).
+        """Gauges of the idle mobilities: one joint held per idle motion (see :mod:`plm_pin.core.idle`).
 
         Found at first use near the reference guess; the model gains two frames per gauge.
         """
@@ -297,7 +294,7 @@ class Mechanism:
 
     # ---------------------------------------------------------- closures
     def closure_residual(self, q: ArrayLike) -> np.ndarray:
-        r"""Closure residual :math:`\phi(q)` [m, rad] (see :mod:`plm_pin.kinematics.closures`), shape (m,)."""
+        r"""Closure residual :math:`\phi(q)` [m, rad] (see :mod:`plm_pin.core.closures`), shape (m,)."""
         return _closures.residual(self.model, self.data, self.closures, self.check_q(q))
 
     def closure_jacobian(self, q: ArrayLike) -> np.ndarray:
@@ -474,8 +471,10 @@ class Mechanism:
 
     @functools.cached_property
     def legs(self) -> tuple[Leg, ...]:
-        """Legs: diagonal blocks of the inverse-kinematics Jacobian (see :mod:`plm_pin.kinematics.legs`)."""
-        return find_legs(self, self._generic_configurations()[-1])
+        """Legs: diagonal blocks of the inverse-kinematics Jacobian (see :mod:`plm_pin.core.legs`)."""
+        actuated = {a.idx_v: a.joint for a in self.actuators}
+        q = self._generic_configurations()[-1]
+        return find_legs(self.model, self._data, self.closures, require_task(self), actuated, q)
 
     # ---------------------------------------------------------- reading
     def actuator_positions(self, q: ArrayLike) -> np.ndarray:
@@ -504,16 +503,6 @@ class Mechanism:
         if self._visual_factory is None:
             return pin.GeometryModel()
         return self._visual_factory()
-
-    def show(self, q: ArrayLike | None = None, **kwargs: Any) -> MeshcatViewer:
-        """Display the mechanism at ``q`` (default: :attr:`q_ref`) in meshcat; needs ``plm-pin[viz]``.
-
-        See :func:`plm_pin.viz.show` for the options. Returns the viewer: open its ``url``
-        (a server on 127.0.0.1), or let a notebook show it inline.
-        """
-        from .viz.meshcat_view import show
-
-        return show(self, q, **kwargs)
 
     def summary(self) -> dict[str, Any]:
         """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""
@@ -547,3 +536,10 @@ class Mechanism:
             f"Mechanism({self.name!r}, nv={self.nv}, closures={len(self.closures)}, "
             f"actuators={self.n_actuators})"
         )
+
+
+def require_task(mech: Mechanism) -> Task:
+    """The mechanism's compiled task, or a clear error when it has none."""
+    if mech.task_compiled is None:
+        raise InvalidInput(f"{mech.name} has no end-effector task; add 'end_effector' to its sidecar")
+    return mech.task_compiled

@@ -156,7 +156,7 @@ def _plan(closures: Sequence[Closure]) -> _Plan:
 class BoundClosures:
     """Closures bound to one Pinocchio data: residual and Jacobian with few Python calls.
 
-    The frame placements are read through live views (:func:`~plm_pin.kinematics.scratch.placement_views`),
+    The frame placements are read through live views (:func:`~plm_pin.core.scratch.placement_views`),
     the translation rows of every closure come from one product with a constant matrix of
     +1 / -1. Solvers bind once per solve and evaluate at each pass; the results are those of
     :func:`residual_from_placements` and :func:`jacobian_from_data`, which bind per call.

@@ -38,7 +38,7 @@ from ..description.sidecar import ClosureSpec
 from ..exceptions import ClosureNotSatisfied
 from . import closures as _closures
 from .assembly import assemble
-from .singularity import RANK_RTOL, numerical_rank
+from .rank import RANK_RTOL, numerical_rank
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 

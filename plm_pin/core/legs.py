@@ -30,24 +30,18 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
-from numpy.typing import ArrayLike
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
 from . import closures as _closures
-from .jacobians import require_task
-from .singularity import RANK_RTOL, numerical_rank
+from .rank import RANK_RTOL, numerical_rank
 from .task import Task
-
-if TYPE_CHECKING:
-    from ..mechanism import Mechanism
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -109,14 +103,6 @@ class Leg:
         return np.ix_(self.sign_rows, self.columns)
 
 
-def ik_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
-    """Stacked Jacobian ``[J_phi; J_x]`` of the inverse-kinematics equations, shape (m + n_task, nv)."""
-    task = require_task(mech)
-    pin.computeJointJacobians(mech.model, mech.data, q)
-    pin.updateFramePlacements(mech.model, mech.data)
-    return ik_jacobian_from_data(mech.model, mech.data, mech.closures, task)
-
-
 def ik_jacobian_from_data(
     model: pin.Model,
     data: pin.Data,
@@ -124,7 +110,10 @@ def ik_jacobian_from_data(
     task: Task,
     out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """:func:`ik_jacobian` from joint Jacobians and placements already in ``data`` (into ``out`` if given)."""
+    """The stacked inverse-kinematics Jacobian ``[J_phi; J_x]``, shape (m + n_task, nv).
+
+    From the joint Jacobians and placements already in ``data``; into ``out`` if given.
+    """
     m = _closures.closure_rows(closures)
     A = np.empty((m + task.size, model.nv)) if out is None else out
     _closures.jacobian_from_data(model, data, closures, A[:m])
@@ -153,18 +142,29 @@ def structure_jacobian_from_data(
     return A
 
 
-def structure_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
-    """:func:`structure_jacobian_from_data` at ``q``, shape (m + 6, nv)."""
-    task = require_task(mech)
-    pin.computeJointJacobians(mech.model, mech.data, q)
-    pin.updateFramePlacements(mech.model, mech.data)
-    return structure_jacobian_from_data(mech.model, mech.data, mech.closures, task)
+def find_legs(
+    model: pin.Model,
+    data: pin.Data,
+    closures: Sequence[_closures.Closure],
+    task: Task,
+    actuated: Mapping[int, str],
+    q_generic: np.ndarray,
+) -> tuple[Leg, ...]:
+    """Split the structure Jacobian at ``q_generic`` into its diagonal blocks (the legs).
 
-
-def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
-    """Split the structure Jacobian (:func:`structure_jacobian`) at ``q_generic`` into its diagonal blocks."""
-    A = structure_jacobian(mech, q_generic)
-    _drop_moving_platform_rows(A, mech)
+    Args:
+        model: the spanning tree.
+        data: its scratch data (overwritten).
+        closures: the compiled closures.
+        task: the compiled end-effector task.
+        actuated: joint name of each actuated velocity index.
+        q_generic: an assembled configuration away from singularities.
+    """
+    pin.computeJointJacobians(model, data, q_generic)
+    pin.updateFramePlacements(model, data)
+    A = structure_jacobian_from_data(model, data, closures, task)
+    n_closure = _closures.closure_rows(closures)
+    _drop_moving_platform_rows(A, n_closure, task.size)
     scale = np.max(np.abs(A), axis=1, keepdims=True)
     rows_kept = np.flatnonzero(scale[:, 0] > 0.0)
     pattern = np.abs(A[rows_kept]) > PATTERN_RTOL * scale[rows_kept]
@@ -172,7 +172,7 @@ def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
     rows_kept = rows_kept[pattern.any(axis=1)]
     pattern = pattern[pattern.any(axis=1)]
     nc = pattern.shape[1]
-    col_of_row = _platform_first_matching(pattern, rows_kept >= mech.n_closure_rows)
+    col_of_row = _platform_first_matching(pattern, rows_kept >= n_closure)
     row_of_col = {c: r for r, c in col_of_row.items()}
     # directed graph on columns: c -> c' when the row matched to c also depends on c'
     src, dst = [], []
@@ -183,7 +183,6 @@ def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
     graph = csr_matrix((np.ones(len(src)), (src, dst)), shape=(nc, nc))
     _, component = connected_components(graph, directed=True, connection="strong")
     # blocks that hold task rows form the end-effector chain: merge them into one leg
-    n_closure = mech.n_closure_rows
     task_columns = {c for c, r in row_of_col.items() if rows_kept[r] >= n_closure}
     task_components = {component[c] for c in task_columns}
     leg_of_column = np.where(np.isin(component, list(task_components)), -1, component)
@@ -198,8 +197,7 @@ def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
     _, weak = connected_components(undirected, directed=False)
     for c in others:
         leg_of_column[c] = weak[c]
-    joint_of_v = _joint_names_by_velocity(mech)
-    actuated = {a.idx_v: a.joint for a in mech.actuators}
+    joint_of_v = _joint_names_by_velocity(model)
     row_group = {int(rows_kept[r]): leg_of_column[c] for c, r in row_of_col.items()}
     for r, row in enumerate(pattern):  # unmatched rows (redundant ones) join the block they touch
         groups = {leg_of_column[c] for c in np.flatnonzero(row)}
@@ -213,8 +211,8 @@ def find_legs(mech: Mechanism, q_generic: np.ndarray) -> tuple[Leg, ...]:
         acts = tuple(actuated[c] for c in cols if c in actuated)
         all_rows = tuple(sorted(r for r, g in row_group.items() if g == group))
         mode_rows = _independent_rows(A, all_rows, cols) if acts else ()
-        legs.append(Leg(rows, cols, joints, acts, mode_rows, _passive_axes(mech, cols, set(actuated))))
-    return tuple(sorted(_with_followers(legs, A, mech.n_closure_rows), key=lambda leg: leg.columns[0]))
+        legs.append(Leg(rows, cols, joints, acts, mode_rows, _passive_axes(model, data, cols, set(actuated))))
+    return tuple(sorted(_with_followers(legs, A, n_closure), key=lambda leg: leg.columns[0]))
 
 
 def _with_followers(legs: list[Leg], A: np.ndarray, m: int) -> list[Leg]:
@@ -231,17 +229,16 @@ def _with_followers(legs: list[Leg], A: np.ndarray, m: int) -> list[Leg]:
     return out
 
 
-def _drop_moving_platform_rows(A: np.ndarray, mech: Mechanism) -> None:
+def _drop_moving_platform_rows(A: np.ndarray, m: int, n_task: int) -> None:
     """Zero the platform rows outside the task that some feasible motion moves (in place).
 
     The platform is pinned along the directions no motion moves (a translational Delta's
     rotations); along the others the task frame's body differs between branches (the rod
     carrying a single-rod Delta's tip), which pinning it would hide.
     """
-    m, n_task = mech.n_closure_rows, require_task(mech).size
     J_phi = A[:m]
     rank = numerical_rank(J_phi, RANK_RTOL, floor=1.0) if m else 0
-    N = np.linalg.svd(J_phi)[2][rank:].T if m else np.eye(mech.nv)  # (nv, raw mobility)
+    N = np.linalg.svd(J_phi)[2][rank:].T if m else np.eye(A.shape[1])  # (nv, raw mobility)
     extra = A[m + n_task :]
     moved = np.abs(extra @ N).max(axis=1, initial=0.0) > PATTERN_RTOL * max(float(np.abs(A).max()), 1.0)
     extra[moved] = 0.0
@@ -279,15 +276,14 @@ def _independent_rows(A: np.ndarray, rows: tuple[int, ...], cols: tuple[int, ...
 
 
 def _passive_axes(
-    mech: Mechanism, cols: tuple[int, ...], actuated: set[int]
+    model: pin.Model, data: pin.Data, cols: tuple[int, ...], actuated: set[int]
 ) -> tuple[tuple[int, int, int, tuple[float, float, float]], ...]:
     """(column in the block, joint id, root joint id, axis in the root's frame) of passive revolutes.
 
     The root is the nearest ancestor that is not a passive joint of this block (the body the
     passive chain hangs from). Read from the placements and joint Jacobians left in
-    ``mech.data`` by :func:`structure_jacobian`.
+    ``data`` by :func:`structure_jacobian_from_data`.
     """
-    model = mech.model
     passive = {c for c in cols if c not in actuated}
     out = []
     for k, c in enumerate(cols):
@@ -299,7 +295,7 @@ def _passive_axes(
             root = int(model.parents[jid])
             while root > 0 and model.joints[root].idx_v in passive:
                 root = int(model.parents[root])
-            axis = _axis_in(model, mech.data, jid, root)
+            axis = _axis_in(model, data, jid, root)
             out.append((k, jid, root, (float(axis[0]), float(axis[1]), float(axis[2]))))
     return tuple(out)
 
@@ -318,22 +314,13 @@ def _joint_of_column(model: pin.Model, c: int) -> int:
     raise IndexError(c)  # pragma: no cover - every column belongs to a joint
 
 
-def _joint_names_by_velocity(mech: Mechanism) -> list[str]:
-    names = [""] * mech.nv
-    for jid in range(1, mech.model.njoints):
-        j = mech.model.joints[jid]
+def _joint_names_by_velocity(model: pin.Model) -> list[str]:
+    names = [""] * model.nv
+    for jid in range(1, model.njoints):
+        j = model.joints[jid]
         for k in range(j.idx_v, j.idx_v + j.nv):
-            names[k] = mech.model.names[jid]
+            names[k] = model.names[jid]
     return names
-
-
-def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = MODE_RTOL) -> tuple[int, ...]:
-    """Sign (+1, -1, or 0 when singular) of each actuated leg block's determinant at ``q``.
-
-    See :func:`working_mode_from_data`.
-    """
-    structure_jacobian(mech, mech.check_q(q))
-    return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), mech.legs, rtol)
 
 
 def working_mode_from_data(
@@ -366,7 +353,7 @@ def working_mode_from_data(
 def working_mode_from_jacobian(
     A: np.ndarray, legs: Sequence[Leg], rtol: float = MODE_RTOL
 ) -> tuple[int, ...]:
-    """Working mode from a stacked Jacobian ``A`` (:func:`structure_jacobian`): one sign per square leg.
+    """Working mode from a stacked Jacobian ``A`` (:func:`structure_jacobian_from_data`), one sign per leg.
 
     The sign of each square leg block's determinant, 0 when it is at most ``rtol`` times the
     product of the block's column norms (Hadamard's bound), so the test is scale-free. The

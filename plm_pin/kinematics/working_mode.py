@@ -1,0 +1,31 @@
+"""A mechanism's working mode at a configuration: the sign of each actuated leg's block.
+
+The legs and the signs are defined in :mod:`plm_pin.core.legs`; this evaluates them on a
+:class:`~plm_pin.Mechanism` at ``q``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike
+
+from ..core.legs import MODE_RTOL, structure_jacobian_from_data, working_mode_from_data
+from ..core.mechanism import Mechanism, require_task
+
+
+def structure_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
+    """:func:`~plm_pin.core.legs.structure_jacobian_from_data` at ``q``, shape (m + 6, nv)."""
+    task = require_task(mech)
+    pin.computeJointJacobians(mech.model, mech.data, q)
+    pin.updateFramePlacements(mech.model, mech.data)
+    return structure_jacobian_from_data(mech.model, mech.data, mech.closures, task)
+
+
+def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = MODE_RTOL) -> tuple[int, ...]:
+    """Sign (+1, -1, or 0 when singular) of each actuated leg block's determinant at ``q``.
+
+    See :func:`~plm_pin.core.legs.working_mode_from_data`.
+    """
+    structure_jacobian(mech, mech.check_q(q))
+    return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), mech.legs, rtol)
