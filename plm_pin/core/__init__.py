@@ -12,9 +12,9 @@ from .assembly import Assembly
 from .closures import Closure
 from .idle import IdleGauge
 from .legs import Leg
-from .mechanism import Actuator, Mechanism
+from .mechanism import Actuator
 from .scratch import Workspace
-from .task import Task, TaskTarget
+from .task import Task
 
 __all__ = [
     "Actuator",
@@ -22,8 +22,8 @@ __all__ = [
     "Closure",
     "IdleGauge",
     "Leg",
-    "Mechanism",
     "Task",
-    "TaskTarget",
     "Workspace",
 ]
+"""The parts. The Mechanism itself is public as :class:`plm_pin.Mechanism`; task targets in
+:mod:`plm_pin.kinematics`."""
