@@ -120,6 +120,6 @@ def test_installed_wheel_runs_the_command_line_and_the_overview(wheel_venv, tmp_
 def test_the_wheel_ships_no_benchmark_harness(wheel_venv):
     """The installed wheel holds plm_pin/ without the benchmark harness (benchmarks/ stays in the repo)."""
     (site,) = wheel_venv.parent.glob("lib/python*/site-packages")
-    assert (site / "plm_pin" / "mechanism.py").is_file()
+    assert (site / "plm_pin" / "core" / "mechanism.py").is_file()
     assert not (site / "benchmarks").exists()
     assert [p.name for p in (site / "plm_pin").rglob("*bench*")] == []
