@@ -285,7 +285,7 @@ def inverse_dynamics(
             singularity (a sign change of det J_ce), with the samples before it.
     """
     trajectory = checked_trajectory(trajectory, "trajectory")
-    load_arguments(wrench, frame, limits, mech.n_actuators)
+    load_arguments(None if callable(wrench) else wrench, frame, limits, mech.n_actuators)
     rule = AllocationRule.checked(
         mech,
         objective=objective,
