@@ -13,7 +13,7 @@ a workspace box, each also with the carriages' self-collision excluded (sweep me
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,6 +23,9 @@ from plm_pin.families.prrrp import complex_singularity_check
 from plm_pin.families.prrrp.builder import CARRIAGE_SIZE
 from plm_pin.report import Column, Comparison, Parameter, Section, StudyContext
 from plm_pin.viz import panel_grid, plot_sweep_heatmap, plot_sweep_lines
+
+if TYPE_CHECKING:
+    import xarray as xr
 
 TITLE = "Design sweeps of the Harada tables: rotation range and manipulability against l / r_t, y and rods"
 SUMMARY = (
@@ -367,7 +370,7 @@ def _collision_free(free: np.ndarray) -> float | None:
     return min(ends)
 
 
-def _collision_free_table(section: Section, half: Any, free: Any) -> list[tuple[Any, ...]]:
+def _collision_free_table(section: Section, half: xr.DataArray, free: xr.DataArray) -> list[tuple[Any, ...]]:
     """Add the table of half-widths free of self-collision and return its rows."""
     rows: list[tuple[Any, ...]] = []
     for r in RATIOS:

@@ -9,7 +9,8 @@ reconstruction of the paper's model is in ``analyses/specs/zhao2011.md``.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -30,6 +31,9 @@ from plm_pin.stiffness import natural_frequencies, stiffness
 from plm_pin.viz import plot_panels
 
 from ._zhao2011_paper import ZHAO2011_TABLE5_WORK, ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 TITLE = "Zhao 2011: motor torque, power and work of a redundant 8-PSS"
 SUMMARY = "Figs. 4-8 and Table 5 along eq. (35); 8-PSS vs 6-PSS; why Table 5 does not reproduce."
@@ -126,7 +130,9 @@ def _assumptions(section: Section) -> None:
     )
 
 
-def _time_figure(t: np.ndarray, curves: dict[str, np.ndarray], ylabel: str, unit: str) -> tuple[Any, str]:
+def _time_figure(
+    t: np.ndarray, curves: dict[str, np.ndarray], ylabel: str, unit: str
+) -> tuple[Figure | None, str]:
     """Panels of per-motor curves against time; returns the figure and the sentence on flat panels."""
     n = next(iter(curves.values())).shape[1]
     labels = [f"{i + 1}" for i in range(n)]
@@ -213,7 +219,7 @@ def _powers(section: Section, idr: InverseDynamics, shown: slice) -> None:
     section.figure(fig, "Fig. 8: motor power by component." + quiet, {"t": idr.t[shown], **bodies})
 
 
-def _dyadic(grid: np.ndarray, values: np.ndarray) -> Any:
+def _dyadic(grid: np.ndarray, values: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     """``times -> values`` for times on the dyadic sub-grids of ``grid`` (no re-evaluation)."""
     step = grid[1] - grid[0]
 

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 from scipy.ndimage import label as _label
 
 from ..core import closures as _closures
@@ -547,7 +548,7 @@ def _seed(
     x_guess: np.ndarray,
     scale: np.ndarray,
     guess: np.ndarray,
-    mode: Any,
+    mode: tuple[int, ...] | None,
     tol: float,
 ) -> tuple[int, np.ndarray] | None:
     """The grid point nearest to the guess's pose that the inverse kinematics reaches.
@@ -572,7 +573,9 @@ def _seed(
     return None
 
 
-def _seed_solution(mech: Mechanism, x: np.ndarray, guess: Any, mode: tuple[int, ...] | None) -> np.ndarray:
+def _seed_solution(
+    mech: Mechanism, x: np.ndarray, guess: np.ndarray, mode: tuple[int, ...] | None
+) -> np.ndarray:
     """Inverse kinematics at a seed candidate: Newton from the guess, re-solved in ``mode`` if elsewhere.
 
     A candidate that Newton from the guess cannot reach is skipped (with or without a mode);
@@ -629,12 +632,12 @@ def _reseed_solution(
         return None
 
 
-def start_configuration(mech: Mechanism, guess: Any) -> np.ndarray:
+def start_configuration(mech: Mechanism, guess: ArrayLike | None) -> np.ndarray:
     """The configuration an analysis starts from: ``guess`` (checked), or the reference one."""
     return mech.q_ref if guess is None else mech.check_q(guess, "guess")
 
 
-def guess_mode(mech: Mechanism, guess: Any) -> tuple[int, ...] | None:
+def guess_mode(mech: Mechanism, guess: ArrayLike | None) -> tuple[int, ...] | None:
     """Working mode of ``guess`` (default: the reference configuration); None if a leg is singular there.
 
     Passed as ``mode`` it keeps an analysis in the guess's working mode wherever its seed is.
@@ -643,7 +646,7 @@ def guess_mode(mech: Mechanism, guess: Any) -> tuple[int, ...] | None:
     return None if 0 in mode else mode
 
 
-def base_pose(mech: Mechanism, pose: Any, guess: Any) -> np.ndarray:
+def base_pose(mech: Mechanism, pose: ArrayLike | None, guess: ArrayLike | None) -> np.ndarray:
     """The task pose giving a slice's fixed coordinates [m, rad]: ``pose`` (checked), else the guess's."""
     task = require_task(mech)
     if pose is None:
@@ -659,7 +662,7 @@ def base_pose(mech: Mechanism, pose: Any, guess: Any) -> np.ndarray:
 def solve_poses(
     mech: Mechanism,
     poses: np.ndarray,
-    guess: Any,
+    guess: ArrayLike | None,
     *,
     mode: tuple[int, ...] | None,
     tol: float,

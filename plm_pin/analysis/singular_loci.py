@@ -181,7 +181,7 @@ def _point(
 
 def singular_points(
     mech: Mechanism,
-    path: Callable[[float], Any],
+    path: Callable[[float], ArrayLike],
     t: ArrayLike,
     *,
     guess: ArrayLike | None = None,
@@ -424,7 +424,9 @@ def singular_points_along(
     return singular_points(mech, line_path(mech, axis, pose, options.get("guess")), values, **options)
 
 
-def line_path(mech: Mechanism, axis: str, pose: Any, guess: Any) -> Callable[[float], np.ndarray]:
+def line_path(
+    mech: Mechanism, axis: str, pose: ArrayLike | None, guess: ArrayLike | None
+) -> Callable[[float], np.ndarray]:
     """The path ``s -> pose with axis = s`` of a 1-D slice (``pose`` default: the guess's).
 
     Raises:

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput
@@ -161,7 +161,9 @@ def _grid_poses(
     return out
 
 
-def _check_axes(mech: Mechanism, axes: Sequence[str], values: Sequence[Any]) -> tuple:
+def _check_axes(
+    mech: Mechanism, axes: Sequence[str], values: Sequence[ArrayLike]
+) -> tuple[tuple[str, ...], tuple[np.ndarray, ...]]:
     task = require_task(mech)
     dofs = tuple(task.dofs)
     check_square_task(task.size, mech.mobility, "manipulability maps need", mech.name)
@@ -184,9 +186,9 @@ def _check_axes(mech: Mechanism, axes: Sequence[str], values: Sequence[Any]) -> 
 def _slice(
     mech: Mechanism,
     axes: tuple[str, ...],
-    values: Sequence[Any],
-    pose: Any,
-    guess: Any,
+    values: Sequence[ArrayLike],
+    pose: ArrayLike | None,
+    guess: ArrayLike | None,
     mode: tuple[int, ...] | None,
     tol: float,
     workers: int | None,
@@ -222,10 +224,10 @@ def _slice(
 def workspace_map(
     mech: Mechanism,
     axes: tuple[str, str],
-    values: tuple[Any, Any],
-    pose: Any = None,
+    values: tuple[ArrayLike, ArrayLike],
+    pose: ArrayLike | None = None,
     *,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
     workers: int | None = None,
@@ -258,10 +260,10 @@ def workspace_map(
 def workspace_grid(
     mech: Mechanism,
     axes: Sequence[str],
-    values: Sequence[Any],
-    pose: Any = None,
+    values: Sequence[ArrayLike],
+    pose: ArrayLike | None = None,
     *,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
 ) -> WorkspaceSlice:
@@ -294,10 +296,10 @@ def workspace_grid(
 def workspace_sweep(
     mech: Mechanism,
     axis: str,
-    values: Any,
-    pose: Any = None,
+    values: ArrayLike,
+    pose: ArrayLike | None = None,
     *,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     tol: float = IK_TOL,
 ) -> WorkspaceSlice:

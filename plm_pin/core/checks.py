@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
 from .mechanism import Mechanism, body_name
@@ -16,7 +17,7 @@ closes the loops to about 1e-12; 1e-8 leaves room for configurations read back f
 while refusing ones whose loops are visibly open (``q_ref + 0.05`` opens them by centimetres)."""
 
 
-def check_assembled(mech: Mechanism, q: object, name: str = "q") -> np.ndarray:
+def check_assembled(mech: Mechanism, q: ArrayLike, name: str = "q") -> np.ndarray:
     """Return ``q`` checked (see :meth:`Mechanism.check_q`) and refuse it off the closure manifold.
 
     One residual evaluation, no Jacobian: cheap enough for the entry of every public analysis.

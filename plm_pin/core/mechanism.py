@@ -284,7 +284,7 @@ class Mechanism:
         return body_names(self.model)
 
     # ------------------------------------------------------------ checking
-    def check_q(self, q: Any, name: str = "q") -> np.ndarray:
+    def check_q(self, q: ArrayLike, name: str = "q") -> np.ndarray:
         """Return ``q`` as a float array after checking its shape and finiteness.
 
         Raises:
@@ -396,7 +396,7 @@ class Mechanism:
             on_failure=failure,
         )
 
-    def set_joint(self, q: np.ndarray, joint: str, value: Any) -> None:
+    def set_joint(self, q: np.ndarray, joint: str, value: ArrayLike) -> None:
         """Write the value of one joint into ``q`` in place.
 
         Args:

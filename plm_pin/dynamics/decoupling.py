@@ -44,9 +44,9 @@ raises, and so does a sample of which no pose can be evaluated.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..analysis.workspace import WorkspaceSlice
 from ..core.mechanism import Mechanism, require_task
@@ -324,7 +324,7 @@ class DecouplingReport:
 
 
 def _sample(
-    mech: Mechanism, sample: Any, mode: tuple[int, ...] | None, n_task: int
+    mech: Mechanism, sample: WorkspaceSlice | ArrayLike, mode: tuple[int, ...] | None, n_task: int
 ) -> tuple[np.ndarray, list[np.ndarray | None]]:
     """Poses (k, n_task) and their configurations (None: unreachable in the working mode)."""
     if isinstance(sample, WorkspaceSlice):
@@ -371,7 +371,7 @@ def _solve(mech: Mechanism, x: np.ndarray, mode: tuple[int, ...]) -> np.ndarray 
 
 def decoupling_check(
     mech: Mechanism,
-    sample: Any,
+    sample: WorkspaceSlice | ArrayLike,
     *,
     mode: tuple[int, ...] | None = None,
     rtol: float = DECOUPLING_RTOL,

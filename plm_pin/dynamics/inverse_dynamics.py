@@ -27,7 +27,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -239,14 +238,14 @@ def inverse_dynamics(
     mech: Mechanism,
     trajectory: JointTrajectory,
     *,
-    wrench: Any | None = None,
+    wrench: ArrayLike | Callable[[float], ArrayLike] | None = None,
     frame: str | None = None,
     gravity: bool = True,
     groups: Mapping[str, Sequence[str]] | None = None,
     objective: str = "norm",
     weights: ArrayLike | None = None,
-    limits: Any = "description",
-    internal: Any = None,
+    limits: str | ArrayLike | None = "description",
+    internal: ArrayLike | Mapping[str, float] | None = None,
     min_compression: float | None = None,
     link_limits: Mapping[str, tuple[float, float]] | None = None,
     singular_rtol: float = SINGULAR_RTOL,
@@ -286,7 +285,7 @@ def inverse_dynamics(
             singularity (a sign change of det J_ce), with the samples before it.
     """
     trajectory = checked_trajectory(trajectory, "trajectory")
-    load_arguments(wrench, frame, limits, mech.n_actuators)
+    load_arguments(None if callable(wrench) else wrench, frame, limits, mech.n_actuators)
     rule = AllocationRule.checked(
         mech,
         objective=objective,
@@ -456,7 +455,9 @@ def _body_shares(
     return dict(zip(body.names, out, strict=True))
 
 
-def _load_function(mech: Mechanism, wrench: Any, frame: str | None) -> Callable[[float], Load | None]:
+def _load_function(
+    mech: Mechanism, wrench: ArrayLike | Callable[[float], ArrayLike] | None, frame: str | None
+) -> Callable[[float], Load | None]:
     """``t -> Load`` for a constant or time-varying wrench, checked on first use."""
     if wrench is None:
         return lambda t: None

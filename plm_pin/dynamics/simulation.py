@@ -107,7 +107,7 @@ _CHART_SPAN = 0.5
 V0_TOL = 1e-9
 r"""Largest :math:`|J_\phi v_0|` accepted, relative to :math:`\max(1, |v_0|)` [m/s, rad/s]."""
 
-ForceLaw = Callable[[float, np.ndarray, np.ndarray], Any]
+ForceLaw = Callable[[float, np.ndarray, np.ndarray], ArrayLike]
 """Actuator forces as a function of time [s], configuration and velocity."""
 
 
@@ -502,7 +502,7 @@ def _output_times(duration: float, dt: float) -> np.ndarray:
     return np.minimum(np.arange(n + 1) * dt, duration)
 
 
-def _check_forces(mech: Mechanism, actuator_forces: Any) -> np.ndarray | ForceLaw:
+def _check_forces(mech: Mechanism, actuator_forces: ArrayLike | ForceLaw | None) -> np.ndarray | ForceLaw:
     if actuator_forces is None:
         return np.zeros(mech.n_actuators)
     if callable(actuator_forces):
@@ -511,7 +511,7 @@ def _check_forces(mech: Mechanism, actuator_forces: Any) -> np.ndarray | ForceLa
 
 
 def _check_start(
-    mech: Mechanism, dyn: ClosedChainDynamics, q0: Any, v0: Any, closure_tol: float
+    mech: Mechanism, dyn: ClosedChainDynamics, q0: ArrayLike, v0: ArrayLike | None, closure_tol: float
 ) -> tuple[np.ndarray, np.ndarray]:
     q = mech.check_q(q0, "q0").copy()
     v = np.zeros(mech.nv) if v0 is None else as_vector(v0, mech.nv, "v0").copy()
@@ -547,7 +547,7 @@ def simulate(
     *,
     duration: float,
     dt: float,
-    actuator_forces: Any | None = None,
+    actuator_forces: ArrayLike | ForceLaw | None = None,
     wrench: ArrayLike | None = None,
     frame: str | None = None,
     method: str = "adaptive",

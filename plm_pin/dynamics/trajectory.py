@@ -65,7 +65,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -90,7 +89,7 @@ from ..kinematics.jacobians import ClosedChainJacobians, check_square_task, clos
 from ..kinematics.singularity import SINGULARITY_TOL, constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
 
-Profile = Callable[[float], Any]
+Profile = Callable[[float], ArrayLike]
 """A profile: ``t`` [s] -> ``(x, xd, xdd)``, each shape (n,) (or three numbers when n = 1)."""
 
 FD_STEP = 1e-3
@@ -104,7 +103,7 @@ _WORLD = pin.ReferenceFrame.WORLD
 
 
 # ---------------------------------------------------------------- profiles
-def differentiated_profile(positions: Callable[[float], Any], step: float = FD_STEP) -> Profile:
+def differentiated_profile(positions: Callable[[float], ArrayLike], step: float = FD_STEP) -> Profile:
     r"""A profile from positions alone, its derivatives by five-point central differences.
 
     .. math::
@@ -227,7 +226,9 @@ def _check_times(times: ArrayLike) -> np.ndarray:
     return ts
 
 
-def _evaluate(profile: Any, times: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _evaluate(
+    profile: Profile | ArrayLike, times: np.ndarray, size: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Profile values at every time: positions, rates and accelerations, each shape (N, size).
 
     ``profile`` may also be positions sampled at ``times``, shape (N, size), interpolated by
@@ -464,7 +465,7 @@ class _RateRows:
 # ---------------------------------------------------------------- task trajectories
 def task_trajectory(
     mech: Mechanism,
-    profile: Profile | Any,
+    profile: Profile | ArrayLike,
     times: ArrayLike,
     *,
     guess: ArrayLike | None = None,
@@ -541,7 +542,7 @@ def task_trajectory(
 # ---------------------------------------------------------------- actuator trajectories
 def actuator_trajectory(
     mech: Mechanism,
-    profile: Profile | Any,
+    profile: Profile | ArrayLike,
     times: ArrayLike,
     *,
     guess: ArrayLike | None = None,

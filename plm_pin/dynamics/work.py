@@ -24,7 +24,7 @@ from scipy.interpolate import CubicSpline
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from .inverse_dynamics import inverse_dynamics
-from .trajectory import task_trajectory
+from .trajectory import Profile, task_trajectory
 
 PAPER_TOL = 1e-3
 """Zhao 2011's convergence tolerance e of eq. (34) [J]."""
@@ -118,7 +118,7 @@ def spline_work(t: ArrayLike, power: ArrayLike) -> np.ndarray:
 
 
 def power_along(
-    mech: Mechanism, profile: Any, *, guess: ArrayLike | None = None, **options: Any
+    mech: Mechanism, profile: Profile | ArrayLike, *, guess: ArrayLike | None = None, **options: Any
 ) -> Callable[[np.ndarray], np.ndarray]:
     """``times -> actuator power`` along a task profile: trajectory then inverse dynamics at those times.
 

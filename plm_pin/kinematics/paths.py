@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -70,7 +69,7 @@ def _predict(mech: Mechanism, qs: Sequence[np.ndarray], s: np.ndarray, k: int) -
     return np.asarray(pin.integrate(mech.model, qs[-1], dq))
 
 
-def _check_path_parameter(s: Any, n: int) -> np.ndarray:
+def _check_path_parameter(s: ArrayLike | None, n: int) -> np.ndarray:
     arr = np.arange(n, dtype=float) / max(n - 1, 1) if s is None else np.asarray(s, dtype=float)
     if arr.shape != (n,) or not np.all(np.isfinite(arr)):
         raise InvalidInput(f"s must be {n} finite numbers, got shape {arr.shape}")
@@ -84,8 +83,8 @@ def follow_targets(
     guess: ArrayLike,
     *,
     task_dofs: Sequence[str] = (),
-    task_values: Any = None,
-    fixed: Mapping[str, Any] | None = None,
+    task_values: ArrayLike | None = None,
+    fixed: Mapping[str, ArrayLike] | None = None,
     s: ArrayLike | None = None,
     tol: float = TRACK_TOL,
 ) -> np.ndarray:
@@ -126,9 +125,7 @@ def follow_targets(
     if dofs:
         values = np.asarray(task_values, dtype=float)
         if values.ndim != 2 or values.shape[1] != len(dofs) or not np.all(np.isfinite(values)):
-            raise InvalidInput(
-                f"task_values must be finite with shape (N, {len(dofs)}), got {np.shape(task_values)}"
-            )
+            raise InvalidInput(f"task_values must be finite with shape (N, {len(dofs)}), got {values.shape}")
         sizes.append(values.shape[0])
     fixed_values = {}
     for joint, vals in fixed.items():

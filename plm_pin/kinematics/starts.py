@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Iterable
 
 import numpy as np
 import pinocchio as pin
@@ -11,7 +11,7 @@ from ..core.mechanism import Mechanism
 
 
 def random_starts(
-    mech: Mechanism, rng: np.random.Generator, q: np.ndarray, columns: Any, n: int
+    mech: Mechanism, rng: np.random.Generator, q: np.ndarray, columns: Iterable[int], n: int
 ) -> list[np.ndarray]:
     """``n`` configurations that redraw the one-DOF joints of ``columns`` within their limits.
 

@@ -11,12 +11,11 @@ from __future__ import annotations
 import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import load_arguments
+from .._checks import load_arguments, real_numbers
 from ..core.checks import check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
@@ -175,7 +174,7 @@ class AllocationRule:
     objective: str
     weights: np.ndarray
     limits: np.ndarray
-    internal: Any = None
+    internal: np.ndarray | Mapping[str, float] | None = None
     min_compression: float | None = None
     link_limits: Mapping[str, tuple[float, float]] | None = None
 
@@ -186,8 +185,8 @@ class AllocationRule:
         *,
         objective: str = "norm",
         weights: ArrayLike | None = None,
-        limits: Any = "description",
-        internal: Any = None,
+        limits: str | ArrayLike | None = "description",
+        internal: ArrayLike | Mapping[str, float] | None = None,
         min_compression: float | None = None,
         link_limits: Mapping[str, tuple[float, float]] | None = None,
     ) -> AllocationRule:
@@ -200,6 +199,8 @@ class AllocationRule:
             raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
         W = check_weights(weights, mech.n_actuators)
         bounds = actuator_limits(mech, limits)
+        if internal is not None and not isinstance(internal, Mapping):
+            internal = np.asarray(real_numbers(internal, "internal"), dtype=float)
         return cls(objective, W, bounds, internal, min_compression, link_limits)
 
     @functools.cached_property
@@ -295,8 +296,8 @@ def static_forces(
     gravity: bool = True,
     objective: str = "norm",
     weights: ArrayLike | None = None,
-    limits: Any = "description",
-    internal: Any = None,
+    limits: str | ArrayLike | None = "description",
+    internal: ArrayLike | Mapping[str, float] | None = None,
     min_compression: float | None = None,
     link_limits: Mapping[str, tuple[float, float]] | None = None,
     singular_rtol: float = SINGULAR_RTOL,

@@ -25,10 +25,11 @@ that units do not mix: :math:`1/\mathrm{eig}(C_{tt})` [N/m] under pure forces, a
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._checks import as_vector
 from ..core.closures import jacobian_from_data
@@ -133,7 +134,7 @@ class StiffnessResult:
         v = self.translational.values
         return float(v[0]) if v.size else float("nan")
 
-    def compliance_along(self, direction: Any) -> float:
+    def compliance_along(self, direction: ArrayLike) -> float:
         """Displacement per unit force along a unit task-translation direction [m/N].
 
         Args:
@@ -225,12 +226,12 @@ def _eigen(C: np.ndarray, idx: list[int], dofs: tuple[str, ...], unit: str) -> E
 
 def stiffness(
     mech: Mechanism,
-    q: Any,
-    wrench: Any = None,
+    q: ArrayLike,
+    wrench: ArrayLike | None = None,
     frame: str | None = None,
     *,
     gravity: bool = True,
-    internal: Any = None,
+    internal: ArrayLike | Mapping[str, float] | None = None,
     forces: StaticForces | None = None,
     compliance: ComplianceSpec | None = None,
 ) -> StiffnessResult:

@@ -17,11 +17,12 @@ cut-joint and rigid-drive forces. The loads are fixed in the world (dead loads).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec
@@ -92,12 +93,12 @@ def _add(load: Load | None, extra: Load, mech: Mechanism) -> Load:
 
 def deflection(
     mech: Mechanism,
-    q: Any,
-    wrench: Any,
+    q: ArrayLike,
+    wrench: ArrayLike,
     frame: str | None = None,
     *,
     gravity: bool = True,
-    internal: Any = None,
+    internal: ArrayLike | Mapping[str, float] | None = None,
     forces: StaticForces | None = None,
     compliance: ComplianceSpec | None = None,
     max_iterations: int = 30,

@@ -23,11 +23,12 @@ symmetric for conservative loads (no external moment in 3-D).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism
@@ -71,12 +72,12 @@ class ElasticState:
 
 def elastic_state(
     mech: Mechanism,
-    q: Any,
-    wrench: Any = None,
+    q: ArrayLike,
+    wrench: ArrayLike | None = None,
     frame: str | None = None,
     *,
     gravity: bool = True,
-    internal: Any = None,
+    internal: ArrayLike | Mapping[str, float] | None = None,
     forces: StaticForces | None = None,
     compliance: ComplianceSpec | None = None,
 ) -> ElasticState:

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..analysis import WorkspaceSlice
 from ..core.mechanism import Mechanism
@@ -69,9 +70,9 @@ def stiffness_map(
     mech: Mechanism,
     grid: WorkspaceSlice,
     *,
-    direction: Any = None,
+    direction: ArrayLike | None = None,
     gravity: bool = True,
-    internal: Any = None,
+    internal: ArrayLike | Mapping[str, float] | None = None,
     compliance: ComplianceSpec | None = None,
 ) -> StiffnessMap:
     """Stiffness metrics at the configurations of a workspace slice.

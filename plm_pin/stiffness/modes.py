@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 import scipy.linalg
+from numpy.typing import ArrayLike
 
 from ..core.mechanism import Mechanism
 from ..dynamics.task_space import task_space_dynamics
@@ -71,7 +72,7 @@ class Modes:
 
 def natural_frequencies(
     mech: Mechanism,
-    q: Any,
+    q: ArrayLike,
     *,
     model: str = "task",
     count: int | None = None,

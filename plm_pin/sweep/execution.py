@@ -48,7 +48,7 @@ import uuid
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -57,6 +57,9 @@ from ..exceptions import InvalidInput, PlmError, SchedulerUnreachable
 from ._deps import require
 from .metrics import METRICS, PointEvaluation
 from .spec import SweepSpec
+
+if TYPE_CHECKING:
+    from distributed import Client
 
 DEFAULT_CHUNK = 4096
 """Poses per chunk (task) by default; a chunk holds whole parameter points."""
@@ -180,7 +183,7 @@ def _plm_pin_version() -> str:
     return __version__
 
 
-def on_dask(client: Any, spec: SweepSpec, chunks: Sequence[Chunk]) -> Iterator[Outcome]:
+def on_dask(client: Client, spec: SweepSpec, chunks: Sequence[Chunk]) -> Iterator[Outcome]:
     """Run the chunks as tasks of a Dask client, yielding each as it finishes."""
     distributed = require("distributed")
     shared = client.scatter(spec, broadcast=True, hash=False)
@@ -203,7 +206,9 @@ def on_dask(client: Any, spec: SweepSpec, chunks: Sequence[Chunk]) -> Iterator[O
         client.cancel(list(futures))
 
 
-def connect(address: str, connect_timeout: float | None = None, worker_timeout: float | None = None) -> Any:
+def connect(
+    address: str, connect_timeout: float | None = None, worker_timeout: float | None = None
+) -> Client:
     """A client of the Dask scheduler at ``address`` with at least one worker running plm_pin.
 
     Args:
@@ -255,7 +260,7 @@ def connect(address: str, connect_timeout: float | None = None, worker_timeout: 
 
 
 @contextlib.contextmanager
-def local_cluster(workers: int, local_directory: Path | None) -> Iterator[Any]:
+def local_cluster(workers: int, local_directory: Path | None) -> Iterator[Client]:
     """A client of a LocalCluster of ``workers`` single-threaded processes on 127.0.0.1, closed on exit."""
     distributed = require("distributed")
     scratch = None if local_directory is None else local_directory / "dask-scratch"
@@ -277,7 +282,7 @@ def local_cluster(workers: int, local_directory: Path | None) -> Iterator[Any]:
             shutil.rmtree(scratch, ignore_errors=True)
 
 
-def check_execution(scheduler: Any, workers: int | None) -> None:
+def check_execution(scheduler: str | Client | None, workers: int | None) -> None:
     """Check where a sweep is asked to run, before any work.
 
     Raises:
@@ -300,7 +305,7 @@ def run_chunks(
     spec: SweepSpec,
     chunks: Sequence[Chunk],
     *,
-    scheduler: Any = None,
+    scheduler: str | Client | None = None,
     workers: int | None = None,
     local_directory: Path | None = None,
 ) -> Iterator[Outcome]:

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._text import short
 from ..analysis import WorkspaceSlice, workspace_grid
@@ -315,7 +316,7 @@ class PointEvaluation:
         """Positions of the pose axes a reduction runs over."""
         return tuple(self.spec.axes.index(a) for a in self.spec.reduced_over)
 
-    def static_peak(self, solve: Callable[[np.ndarray, Any], float]) -> np.ndarray:
+    def static_peak(self, solve: Callable[[np.ndarray, ArrayLike | None], float]) -> np.ndarray:
         """``max over the wrench set of solve(q, wrench)`` at every reached pose (NaN elsewhere)."""
         grid = self.grid
         out = np.full(grid.shape, np.nan)
@@ -386,7 +387,7 @@ def _orientation_range(ev: PointEvaluation) -> dict[str, np.ndarray]:
 
 
 def _peak_force(ev: PointEvaluation) -> dict[str, np.ndarray]:
-    def peak(q: np.ndarray, wrench: Any) -> float:
+    def peak(q: np.ndarray, wrench: ArrayLike | None) -> float:
         try:
             options = {"gravity": ev.option("gravity"), "objective": ev.option("objective")}
             sol = static_forces(ev.mech, q, wrench, limits=None, **options)
@@ -404,7 +405,7 @@ def _preload(ev: PointEvaluation) -> dict[str, np.ndarray]:
         {"min_compression": c} if links is None else {"link_limits": {n: (-math.inf, -c) for n in links}}
     )
 
-    def needed(q: np.ndarray, wrench: Any) -> float:
+    def needed(q: np.ndarray, wrench: ArrayLike | None) -> float:
         try:
             sol = static_forces(ev.mech, q, wrench, gravity=ev.option("gravity"), limits=None, **conditions)
         except (SingularConfiguration, AllocationInfeasible):

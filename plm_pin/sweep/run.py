@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,6 +17,9 @@ from .execution import DEFAULT_CHUNK, ChunkValues, check_execution, plan_chunks,
 from .result import ChunkFailure, PointFailure, SweepResult, build_dataset
 from .spec import ParametersArg, PosesArg, SweepSpec, make_spec
 from .store import SweepStore
+
+if TYPE_CHECKING:
+    from distributed import Client
 
 Progress = Callable[[int, int], None]
 """Called with (parameter points done, parameter points in all) at the start and after each chunk."""
@@ -34,7 +37,7 @@ def run_spec(
     spec: SweepSpec,
     *,
     store: str | Path | None = None,
-    scheduler: Any = None,
+    scheduler: str | Client | None = None,
     workers: int | None = None,
     chunk: int = DEFAULT_CHUNK,
     progress: Progress | None = None,
@@ -55,7 +58,7 @@ def run_spec(
 def _run(
     spec: SweepSpec,
     checkpoints: SweepStore | None,
-    scheduler: Any,
+    scheduler: str | Client | None,
     workers: int | None,
     per_chunk: int,
     progress: Progress | None,
@@ -133,7 +136,7 @@ def sweep(
     pose: Sequence[float] | None = None,
     options: Mapping[str, Any] | None = None,
     store: str | Path | None = None,
-    scheduler: Any = None,
+    scheduler: str | Client | None = None,
     workers: int | None = None,
     chunk: int = DEFAULT_CHUNK,
     progress: Progress | None = None,

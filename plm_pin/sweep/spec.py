@@ -148,7 +148,7 @@ class ParameterSpace:
         return {"grid": {n: [plain(v) for v in vs] for n, vs in zip(self.names, self.values, strict=True)}}
 
 
-def _parameter_space(parameters: Any, valid: tuple[str, ...], label: str) -> ParameterSpace:
+def _parameter_space(parameters: ParametersArg, valid: tuple[str, ...], label: str) -> ParameterSpace:
     def check_name(name: Any) -> str:
         if name not in valid:
             raise InvalidInput(
@@ -194,7 +194,7 @@ def _parameter_space(parameters: Any, valid: tuple[str, ...], label: str) -> Par
     )
 
 
-def _pose_axes(poses: Any) -> tuple[tuple[str, ...], tuple[np.ndarray, ...]]:
+def _pose_axes(poses: PosesArg) -> tuple[tuple[str, ...], tuple[np.ndarray, ...]]:
     if not isinstance(poses, Mapping) or not poses:
         raise InvalidInput(
             f"poses must map task coordinates among {list(TASK_DOFS)} to their values, got {short(poses)}"

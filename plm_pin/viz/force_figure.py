@@ -18,12 +18,13 @@ imported only when drawing.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..statics import StaticForces, static_forces
 from .figures import _axes
@@ -141,7 +142,7 @@ def plot_static_forces(
     return axes
 
 
-def fig8(mech: Any, q: ArrayLike, f_e: ArrayLike, f_i: float = 1.0) -> tuple[Axes, Axes]:
+def fig8(mech: Mechanism, q: ArrayLike, f_e: ArrayLike, f_i: float = 1.0) -> tuple[Axes, Axes]:
     """Harada 2011 Fig. 8 on a 3D4M-like mechanism: (a) a load, no preload; (b) with plate preload ``f_i``.
 
     Args:

@@ -238,7 +238,9 @@ def _closure_markers(mech: Mechanism, size: float) -> dict[str, tuple[str, pin.G
     return markers
 
 
-def _check_arrows(arrows: Sequence[tuple[Any, Any, str]]) -> list[tuple[np.ndarray, np.ndarray, str]]:
+def _check_arrows(
+    arrows: Sequence[tuple[ArrayLike, ArrayLike, str]],
+) -> list[tuple[np.ndarray, np.ndarray, str]]:
     out = []
     labels: set[str] = set()
     for k, arrow in enumerate(arrows):
@@ -438,7 +440,9 @@ class MeshcatViewer:
                 self._viz.loadViewerGeometryObject(obj, _VISUAL, np.array(color))
                 self._shown[obj.name] = color
 
-    def show_forces(self, q: ArrayLike, arrows: Sequence[tuple[Any, Any, str]], scale: float) -> SceneStatus:
+    def show_forces(
+        self, q: ArrayLike, arrows: Sequence[tuple[ArrayLike, ArrayLike, str]], scale: float
+    ) -> SceneStatus:
         """Display ``q`` with force arrows, e.g. the loads and actuator forces of a static case.
 
         Each arrow starts at its point and is ``scale * |vector|`` long; it is drawn under

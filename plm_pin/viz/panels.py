@@ -162,7 +162,7 @@ def _name(title: str) -> str:
 
 def plot_panels(
     x: ArrayLike,
-    curves: Mapping[str, Any],
+    curves: Mapping[str, ArrayLike],
     *,
     xlabel: str,
     ylabel: str | None = None,

@@ -11,7 +11,7 @@ objects only.
 from __future__ import annotations
 
 import textwrap
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -19,11 +19,12 @@ from ..exceptions import InvalidInput
 from .figures import _axes, _pyplot
 
 if TYPE_CHECKING:
+    import xarray as xr
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
 
-def _values(data: Any) -> tuple[np.ndarray, str]:
+def _values(data: xr.DataArray) -> tuple[np.ndarray, str]:
     """Display values of a DataArray and their unit text (degrees for radians)."""
     units = str(data.attrs.get("units", ""))
     values = np.asarray(data.values)
@@ -32,7 +33,7 @@ def _values(data: Any) -> tuple[np.ndarray, str]:
     return values, units
 
 
-def _coordinate(data: Any, dim: str) -> tuple[np.ndarray, str, list[str] | None]:
+def _coordinate(data: xr.DataArray, dim: str) -> tuple[np.ndarray, str, list[str] | None]:
     """Positions along ``dim``, its axis label, and tick labels for text coordinates."""
     if dim not in data.dims:
         raise InvalidInput(f"{data.name!r} has no dimension {dim!r}; its dimensions are {list(data.dims)}")
@@ -48,14 +49,14 @@ LABEL_WIDTH = 40
 """Characters per line of an axis label; longer labels (long units) are wrapped."""
 
 
-def _label(data: Any) -> str:
+def _label(data: xr.DataArray) -> str:
     _, units = _values(data)
     label = f"{data.name} [{units}]" if units else str(data.name)
     return textwrap.fill(label, LABEL_WIDTH)
 
 
 def plot_sweep_heatmap(
-    data: Any,
+    data: xr.DataArray,
     x: str,
     y: str,
     *,
@@ -112,7 +113,7 @@ def plot_sweep_heatmap(
 
 
 def plot_sweep_lines(
-    data: Any,
+    data: xr.DataArray,
     x: str,
     hue: str | None = None,
     *,

@@ -256,6 +256,23 @@ def test_body_shares_match_rnea_on_a_model_holding_that_body_alone(gravity):
             np.testing.assert_allclose(idr.bodies[name][i], expected, atol=1e-10 * np.abs(expected).max())
 
 
+def test_a_time_varying_wrench_adds_its_static_allocation_at_each_sample():
+    """wrench=t -> w(t): the forces minus the unloaded ones are static_forces' allocation of w(t_i) at q_i."""
+    mech = preset("harada2011_3d4m")
+    t = np.linspace(0.0, 1.0, 11)
+    traj = task_trajectory(mech, _harada_profile, t)
+
+    def wrench(s):
+        return [2.0 * s, -1.0, 0.1 * s]  # fx [N], fy [N], mz [N m] on the task frame
+
+    loaded = inverse_dynamics(mech, traj, wrench=wrench, limits=None)
+    unloaded = inverse_dynamics(mech, traj, limits=None)
+    for i in (0, 5, 10):
+        alone = static_forces(mech, traj.q[i], wrench(t[i]), gravity=False, limits=None).f_c
+        assert np.abs(alone).max() > 0.1  # the wrench does load the actuators
+        np.testing.assert_allclose(loaded.f_c[i] - unloaded.f_c[i], alone, atol=1e-9 * np.abs(alone).max())
+
+
 def test_result_pickles_with_its_body_split():
     """An InverseDynamics pickles; the lazily computed body split travels as a plain dictionary."""
     import pickle

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ...core.mechanism import Mechanism
 from ...core.rank import numerical_rank
@@ -116,7 +116,7 @@ class ComplexSingularityCase:
 def complex_singularity_check(
     mech: Mechanism,
     leg: int = 3,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     *,
     tilt: float = math.radians(30.0),
     tol: float = SINGULARITY_TOL,

@@ -23,10 +23,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ...core.mechanism import Mechanism
 from ...exceptions import InvalidInput, PoseUnreachable
@@ -112,7 +112,7 @@ def _sign(value: float, tol: float) -> int:
 
 
 def prrrp_state(
-    mech: Mechanism, q: Any, layout: PrrrpLayout | None = None, tol: float = MODE_TOL
+    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = MODE_TOL
 ) -> PrrrpState:
     """Pair heights, rod directions, assembly and working modes of a 2-PRRRP configuration.
 
@@ -154,13 +154,15 @@ def prrrp_state(
     )
 
 
-def assembly_mode(mech: Mechanism, q: Any, layout: PrrrpLayout | None = None, tol: float = MODE_TOL) -> Mode:
+def assembly_mode(
+    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = MODE_TOL
+) -> Mode:
     """Assembly mode ``(left, right)`` of a 2-PRRRP configuration: the side of the stator of each pair."""
     return prrrp_state(mech, q, layout, tol).assembly_mode
 
 
 def paper_working_modes(
-    mech: Mechanism, q: Any, layout: PrrrpLayout | None = None, tol: float = MODE_TOL
+    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = MODE_TOL
 ) -> Mode:
     r"""Working mode of each leg (Harada 2015, eq. (6)): :math:`-\mathrm{sign}(z_i^T a)`, 0 at 90 deg."""
     return prrrp_state(mech, q, layout, tol).working_mode

@@ -25,10 +25,10 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from ...core.mechanism import Mechanism, require_task
 from ...core.rank import numerical_rank
@@ -123,7 +123,9 @@ def _walk(
     return s, h, qs, sorted(crossings)
 
 
-def _start(mech: Mechanism, lay: PrrrpLayout, guess: Any) -> tuple[np.ndarray, PrrrpState, float, float]:
+def _start(
+    mech: Mechanism, lay: PrrrpLayout, guess: ArrayLike | None
+) -> tuple[np.ndarray, PrrrpState, float, float]:
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     state = prrrp_state(mech, q0, lay)
     pin.framesForwardKinematics(mech.model, mech.data, q0)
@@ -135,7 +137,7 @@ def _start(mech: Mechanism, lay: PrrrpLayout, guess: Any) -> tuple[np.ndarray, P
 
 def assembly_mode_graph(
     mech: Mechanism,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     *,
     height: float | None = None,
     walk_samples: int = 7,
@@ -318,7 +320,7 @@ def _max_deviation(mech: Mechanism, qa: np.ndarray, qb: np.ndarray) -> float:
 
 def plan_assembly_mode_change(
     mech: Mechanism,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     *,
     goal: Sequence[int] | None = None,
     route: Sequence[Sequence[int]] | None = None,
@@ -532,7 +534,7 @@ def fold_plan(
 def plan_working_mode_change(
     mech: Mechanism,
     leg: int = 3,
-    guess: Any = None,
+    guess: ArrayLike | None = None,
     *,
     tilt: float = math.radians(30.0),
     samples: int = 101,
