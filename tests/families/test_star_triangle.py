@@ -11,14 +11,11 @@ import pytest
 import plm_pin
 from plm_pin.models import PRESETS
 from tests.conftest import preset
+from tests.families.conftest import body_inertia
 
 NAME = "enferadi2017_star_triangle"
 A = 0.5  # side of the base, section 6 [m]
 SQ3 = math.sqrt(3.0)
-
-
-def _body(mech, joint):
-    return mech.model.inertias[mech.model.getJointId(joint)]
 
 
 def _star_pose(mech, q):
@@ -51,14 +48,14 @@ def test_masses_and_inertias_match_section_6():
     """Sliders m_a = 2 kg, intermediate links m_il = 3 kg and I_il = 37.5, star m_p = 2 kg and I_p = 25."""
     mech = preset(NAME)
     for i in (1, 2, 3):
-        assert _body(mech, f"slider{i}").mass == pytest.approx(2.0, abs=1e-15)
+        assert body_inertia(mech, f"slider{i}").mass == pytest.approx(2.0, abs=1e-15)
     # il1 hangs on pivot1, il2 and il3 on arm2 and arm3; the star on arm1
     for joint in ("pivot1", "arm2", "arm3"):
-        il = _body(mech, joint)
+        il = body_inertia(mech, joint)
         assert il.mass == pytest.approx(3.0, abs=1e-15)
         assert il.inertia[2, 2] == pytest.approx(37.5, rel=1e-14)
         np.testing.assert_allclose(il.lever, 0.0, atol=1e-15)
-    star = _body(mech, "arm1")
+    star = body_inertia(mech, "arm1")
     assert star.mass == pytest.approx(2.0, abs=1e-15)
     assert star.inertia[2, 2] == pytest.approx(25.0, rel=1e-14)
     np.testing.assert_allclose(star.lever, 0.0, atol=1e-15)
