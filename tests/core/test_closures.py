@@ -11,6 +11,9 @@ from plm_pin.models import preset_names
 from tests.conftest import INTEROP, ball_joint_body, fd_jacobian, preset, spatial_6r
 from tests.core.conftest import random_q
 
+CLOSURE_KINDS = [{"type": "point"}, {"type": "weld"}, {"type": "revolute", "axis": [0, 0.6, 0.8]}]
+"""One closure of each type (a revolute about an oblique axis) on :func:`ball_joint_body`."""
+
 
 @pytest.mark.parametrize("name", preset_names())
 def test_jacobian_matches_finite_differences_on_presets(name, rng):
@@ -23,9 +26,7 @@ def test_jacobian_matches_finite_differences_on_presets(name, rng):
         np.testing.assert_allclose(J, J_fd, atol=1e-8)
 
 
-@pytest.mark.parametrize(
-    "kind", [{"type": "point"}, {"type": "weld"}, {"type": "revolute", "axis": [0, 0.6, 0.8]}]
-)
+@pytest.mark.parametrize("kind", CLOSURE_KINDS)
 def test_jacobian_matches_finite_differences_for_every_closure_type(tmp_path, rng, kind):
     """Point, weld and revolute residuals have exact Jacobians, away from closure too."""
     mech = ball_joint_body(tmp_path, kind)
@@ -156,9 +157,7 @@ def _drift_fd(mech, jac, q, v, eps=1e-6):
     return (plus - minus) @ v / (2 * eps)
 
 
-@pytest.mark.parametrize(
-    "kind", [{"type": "point"}, {"type": "weld"}, {"type": "revolute", "axis": [0, 0.6, 0.8]}]
-)
+@pytest.mark.parametrize("kind", CLOSURE_KINDS)
 def test_drift_matches_finite_differences_of_the_jacobian(tmp_path, rng, kind):
     """The acceleration drift equals d/dt(J_phi) v for every closure type, off closure too."""
     mech = ball_joint_body(tmp_path, kind)
