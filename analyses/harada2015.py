@@ -357,18 +357,7 @@ def _assembly_section(
         [mode_label(change.assembly_modes[k]) for k in order],
         "Snapshots of the assembly-mode change (cf. Fig. 8): sliders (squares) on the stator, rods, plate.",
     )
-    section.table(
-        "Assembly-mode change",
-        ["quantity", "value", "unit"],
-        [
-            ("samples", path.n_samples, ""),
-            ("smallest direct margin", path.min_direct_margin, "-"),
-            ("smallest constraint margin", path.min_constraint_margin, "-"),
-            ("largest closure residual", path.max_residual, "m, rad"),
-            ("largest planned-to-tracked frame distance", change.max_deviation, "m"),
-            ("route followed, non-singular", change.ok, ""),
-        ],
-    )
+    section.table("Assembly-mode change", ["quantity", "value", "unit"], _change_rows(change, []))
     section.table(
         "Where each pair crosses the stator ([0])",
         [
@@ -451,20 +440,33 @@ def _working_section(section: Section, mech: Mechanism, layout: PrrrpLayout, fli
     section.table(
         "Working-mode change",
         ["quantity", "value", "unit"],
-        [
-            ("samples", path.n_samples, ""),
-            ("sample at the fold", flip.fold_index, ""),
-            ("inverse margin at the fold", fold.inverse_margin, "-"),
-            ("direct margin at the fold", fold.direct_margin, "-"),
-            ("smallest direct margin", path.min_direct_margin, "-"),
-            ("smallest constraint margin", path.min_constraint_margin, "-"),
-            ("smallest gap between sliders 3 and 4", float(np.min(flip.slider_gap)), "m"),
-            ("largest closure residual", path.max_residual, "m, rad"),
-            ("largest planned-to-tracked frame distance", flip.max_deviation, "m"),
-            ("route followed, non-singular", flip.ok, ""),
-        ],
+        _change_rows(
+            flip,
+            [
+                ("sample at the fold", flip.fold_index, ""),
+                ("inverse margin at the fold", fold.inverse_margin, "-"),
+                ("direct margin at the fold", fold.direct_margin, "-"),
+                ("smallest gap between sliders 3 and 4", float(np.min(flip.slider_gap)), "m"),
+            ],
+        ),
     )
     section.animation(working_animation(mech, flip))
+
+
+def _change_rows(
+    change: AssemblyModeChange | WorkingModeChange, own: Sequence[tuple[str, object, str]]
+) -> list[tuple[str, object, str]]:
+    """The summary rows of a mode change: its sample count, ``own`` rows, then margins, residual, route."""
+    path = change.path
+    return [
+        ("samples", path.n_samples, ""),
+        *own,
+        ("smallest direct margin", path.min_direct_margin, "-"),
+        ("smallest constraint margin", path.min_constraint_margin, "-"),
+        ("largest closure residual", path.max_residual, "m, rad"),
+        ("largest planned-to-tracked frame distance", change.max_deviation, "m"),
+        ("route followed, non-singular", change.ok, ""),
+    ]
 
 
 def _complex_section(section: Section, cases: Sequence[ComplexSingularityCase]) -> None:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping, Sequence
+from collections import Counter
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 
@@ -154,6 +155,11 @@ def sample_count(duration: object, dt: object) -> int:
             "shorten the duration"
         )
     return math.floor(n + 1e-9) + 1
+
+
+def repeated(names: Iterable[str]) -> list[str]:
+    """The names that occur more than once in ``names``, sorted (empty when all are distinct)."""
+    return sorted(name for name, n in Counter(names).items() if n > 1)
 
 
 def load_arguments(

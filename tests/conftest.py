@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,6 +16,7 @@ import plm_pin
 from plm_pin.core.mechanism import Mechanism
 from plm_pin.description import Sidecar, write_description
 from plm_pin.description import _urdf_build as u
+from plm_pin.models import urdf_folder
 from plm_pin.report import StudyResult
 
 REPO = Path(__file__).resolve().parents[1]
@@ -191,6 +193,14 @@ def report_all(tmp_path_factory) -> ReportAll:
 
 
 @pytest.fixture
+def fourbar(tmp_path) -> Path:
+    """A copy of the fourbar preset (URDF + sidecar) in a temporary folder; returns the URDF."""
+    for suffix in (".urdf", ".plm.yaml"):
+        shutil.copy(urdf_folder() / f"fourbar{suffix}", tmp_path / f"fourbar{suffix}")
+    return tmp_path / "fourbar.urdf"
+
+
+@pytest.fixture
 def rng() -> np.random.Generator:
     """A seeded random generator."""
     return np.random.default_rng(1234)
@@ -222,6 +232,38 @@ def prrrp_paper_configuration(
         if i == 1:
             q[mech.model.joints[mech.model.getJointId("plate_pivot")].idx_q] = theta - phi
     return q
+
+
+STAR_E = np.array([[0.0, -1.0], [1.0, 0.0]])
+"""E of Enferadi 2017 eqs. (4)-(5): the rotation by +90 degrees."""
+
+
+def star_triangle_legs(pose, side: float = 0.5) -> tuple[np.ndarray, list[tuple[np.ndarray, ...]]]:
+    """Enferadi 2017's 3-PRP at ``pose = (x, y, phi)``, apart from plm_pin: ``c`` and legs (P_i, a_i, s_i).
+
+    Rails V1 -> V2, V2 -> V3, V3 -> V1 of the equilateral base V1 = (0, 0), V2 = (a/2, a sqrt(3)/2),
+    V3 = (a, 0) (``side`` a [m]): P_i the rail's start, a_i its direction; s_i = -u_i with u_i the
+    star line from A_i toward C, at psi_i = phi - 2 pi/3, phi + 2 pi/3, phi.
+    """
+    x, y, phi = pose
+    P = [np.zeros(2), np.array([side / 2, side * math.sqrt(3) / 2]), np.array([side, 0.0])]
+    a = [np.array([0.5, math.sqrt(3) / 2]), np.array([0.5, -math.sqrt(3) / 2]), np.array([-1.0, 0.0])]
+    psi = [phi - 2 * math.pi / 3, phi + 2 * math.pi / 3, phi]
+    s = [-np.array([math.cos(p), math.sin(p)]) for p in psi]
+    return np.array([x, y]), list(zip(P, a, s, strict=True))
+
+
+def star_triangle_eq5(pose, side: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
+    """Enferadi 2017 eqs. (4)-(5) (corrected (5)): slider positions q_i and arm lengths rho_i.
+
+    rho_i = -a_i^T E (c - P_i) / (a_i^T E s_i), q_i = s_i^T E (c - P_i) / (s_i^T E a_i), with
+    the legs of :func:`star_triangle_legs`.
+    """
+    c, legs = star_triangle_legs(pose, side)
+    E = STAR_E
+    q = np.array([s @ E @ (c - P) / (s @ E @ a) for P, a, s in legs])
+    rho = np.array([-(a @ E @ (c - P)) / (a @ E @ s) for P, a, s in legs])
+    return q, rho
 
 
 def with_rotated_null_basis(mech: Mechanism, jac, rng: np.random.Generator):

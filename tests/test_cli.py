@@ -5,7 +5,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -18,18 +17,10 @@ import plm_pin
 from plm_pin import cli
 from plm_pin.cli import app
 from plm_pin.exceptions import PlmError
-from plm_pin.models import PRESETS, urdf_folder
+from plm_pin.models import PRESETS
 from tests.report.numbers import unlisted_numbers
 
 runner = CliRunner()
-
-
-@pytest.fixture
-def fourbar(tmp_path) -> Path:
-    """A copy of the fourbar preset in a temporary folder; returns the URDF path."""
-    for suffix in (".urdf", ".plm.yaml"):
-        shutil.copy(urdf_folder() / f"fourbar{suffix}", tmp_path / f"fourbar{suffix}")
-    return tmp_path / "fourbar.urdf"
 
 
 def _break_closure_type(urdf: Path, bad: str) -> Path:

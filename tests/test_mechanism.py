@@ -12,6 +12,7 @@ import yaml
 
 import plm_pin
 import plm_pin.models
+from analyses import _harada2011_paper as paper
 from plm_pin.models import PRESETS, preset_names
 from tests.conftest import preset
 
@@ -53,23 +54,11 @@ def _plate_pose(mech, q):
     return np.array([M.translation[0], M.translation[1], math.atan2(M.rotation[1, 0], M.rotation[0, 0])])
 
 
-def _paper_ik(pose, l, rt, signs):
-    """Harada 2011 eq. (2) with the signs of (M.5): c_i = L_i.a + s_i sqrt((L_i.a)^2 - L_i.L_i + l_i^2)."""
-    x, y, th = pose
-    R = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
-    out = []
-    for i, s in enumerate(signs):
-        s_i = np.array([-rt, 0.0]) if i < 2 else np.array([rt, 0.0])
-        L = np.array([x, y]) + R @ s_i
-        out.append(L[0] + s * math.sqrt(L[0] ** 2 - L @ L + l**2))
-    return np.array(out)
-
-
 @pytest.mark.parametrize("pose", [(0.0, 0.08, -0.35), (0.03, 0.1, 0.2), (-0.05, 0.06, 0.5)])
 def test_assembly_with_fixed_sliders_reaches_the_paper_pose(pose):
     """Fixing the 3D4M sliders at eq. (2)'s values and assembling yields the commanded plate pose."""
     mech = preset("harada2011_3d4m")
-    c = _paper_ik(pose, 0.140, 0.05, (-1, 1, -1, 1))
+    c = paper.slider_positions(pose, 0.140, 0.05, (1, 2, 3, 4))  # the signs of (M.5)
     fixed = {f"slider{i + 1}": c[i] for i in range(4)}
     start = pin.integrate(mech.model, mech.q_ref, np.full(mech.nv, 0.01))
     asm = mech.assemble(start, fixed=fixed)

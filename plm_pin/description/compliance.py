@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import repeated
 from .._text import short
 from ..exceptions import DescriptionError
 from ._numbers import positive_number
@@ -235,8 +236,7 @@ def parse_compliance(data: Any, path: str | None = None) -> ComplianceSpec | Non
     if not isinstance(links_raw, list):
         raise DescriptionError("compliance.links must be a list", path)
     links = tuple(_beam(b, i, path) for i, b in enumerate(links_raw))
-    seen = [b.link for b in links]
-    dup = sorted({n for n in seen if seen.count(n) > 1})
+    dup = repeated(b.link for b in links)
     if dup:
         raise DescriptionError(f"compliance.links: link(s) {dup} given twice", path)
     source = data.get("source")

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from .._checks import repeated
 from .._text import short
 from ..exceptions import DescriptionError
 from .sidecar import FORMAT, ActuatorSpec, ClosureSpec, Sidecar, TaskSpec, parse_sidecar
@@ -76,7 +77,7 @@ def parse_epr_sidecar(data: Any, path: str | None = None, name: str | None = Non
         if not isinstance(motor, str):
             raise DescriptionError(f"name_mot[{i}] must be a joint name, got {short(motor)}", path)
         actuation.append(ActuatorSpec(joint=motor))
-    dup = sorted({m for m in motors if motors.count(m) > 1})
+    dup = repeated(motors)
     if dup:
         raise DescriptionError(f"name_mot: joint(s) {short(dup)} actuated twice", path)
     task = None

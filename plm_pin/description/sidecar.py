@@ -35,6 +35,7 @@ from typing import Any, Literal
 
 import yaml
 
+from .._checks import repeated
 from .._text import short
 from .._yaml import YamlRefused, load_yaml
 from ..exceptions import DescriptionError
@@ -343,13 +344,11 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
     if not isinstance(actuation_raw, list):
         raise DescriptionError("'actuation' must be a list", path)
     closures = tuple(_closure(c, i, path) for i, c in enumerate(closures_raw))
-    names = [c.name for c in closures]
-    dup = sorted({n for n in names if names.count(n) > 1})
+    dup = repeated(c.name for c in closures)
     if dup:
         raise DescriptionError(f"duplicate closure name(s) {short(dup)}", path)
     actuation = tuple(_actuator(a, i, path) for i, a in enumerate(actuation_raw))
-    joints = [a.joint for a in actuation]
-    dup = sorted({n for n in joints if joints.count(n) > 1})
+    dup = repeated(a.joint for a in actuation)
     if dup:
         raise DescriptionError(f"joint(s) {short(dup)} actuated twice", path)
     task = None

@@ -10,6 +10,7 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 from lxml import etree
 
+from .._checks import repeated
 from .._text import short
 from ..exceptions import DescriptionError, FrameNotFound
 from ..warnings import DescriptionWarning, MissingMeshWarning
@@ -262,7 +263,7 @@ def check_tree(root: etree._Element, label: str) -> None:
     for kind, names in (("link", links), ("joint", [j.get("name", "") for j in root.findall("joint")])):
         if "" in names:
             raise DescriptionError(f"a <{kind}> has no name", label)
-        dup = sorted({n for n in names if names.count(n) > 1})
+        dup = repeated(names)
         if dup:
             raise DescriptionError(f"duplicate {kind} name(s) {short(dup)}", label)
     known = set(links)

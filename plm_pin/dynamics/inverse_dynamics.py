@@ -32,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import load_arguments
+from .._checks import load_arguments, repeated
 from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL, check_finite_model, check_samples_assembled
 from ..core.mechanism import Mechanism
@@ -156,7 +156,7 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
         unknown = sorted(set(listed) - set(bodies))
         if unknown:
             raise InvalidInput(f"bodies {unknown} are not in {mech.name}; bodies are {sorted(bodies)}")
-        doubled = sorted({b for b in listed if listed.count(b) > 1})
+        doubled = repeated(listed)
         if doubled:
             raise InvalidInput(f"bodies {doubled} are in more than one group")
         rest = [b for b in bodies if b not in listed]

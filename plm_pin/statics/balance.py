@@ -229,7 +229,7 @@ def static_balance(
     tau = _loaded(model, data, load, None)
     if gravity:
         tau += pin.computeGeneralizedGravity(model, data, qa)
-    return _checked_balance(mech, qa, tau, load, gravity, J_phi, rtol, None, None)
+    return _balance(mech, qa, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol)
 
 
 def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -> np.ndarray:
@@ -287,7 +287,7 @@ def generalized_balance(
     pin.updateFramePlacements(model, data)
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
     applied = _loaded(model, data, load, tau)
-    return _checked_balance(mech, q, applied, load, gravity, J_phi, rtol, v, a)
+    return _balance(mech, q, applied, load, gravity, J_phi, mech.actuated_v_indices, rtol, v, a)
 
 
 def _loaded(model: pin.Model, data: pin.Data, load: Load | None, tau: np.ndarray | None) -> np.ndarray:
@@ -296,21 +296,6 @@ def _loaded(model: pin.Model, data: pin.Data, load: Load | None, tau: np.ndarray
     if load is not None:
         out -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
     return out
-
-
-def _checked_balance(
-    mech: Mechanism,
-    q: np.ndarray,
-    tau: np.ndarray,
-    load: Load | None,
-    gravity: bool,
-    J_phi: np.ndarray,
-    rtol: float,
-    v: np.ndarray | None,
-    a: np.ndarray | None,
-) -> StaticBalance:
-    check_finite_result(mech, "the generalized forces to balance", tau=tau)
-    return _balance(mech, q, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol, v, a)
 
 
 def closure_factors(J_phi: np.ndarray, singular_rtol: float = SINGULAR_RTOL) -> tuple[np.ndarray, np.ndarray]:
@@ -449,6 +434,13 @@ def _balance(
     v: np.ndarray | None = None,
     a: np.ndarray | None = None,
 ) -> StaticBalance:
+    """The :class:`StaticBalance` of ``tau`` at ``q``: ``tau`` checked finite, then :func:`balance_factors`.
+
+    Raises:
+        InvalidInput: ``tau`` is not finite (DescriptionError when a body's inertia overflows).
+        SingularConfiguration: as :func:`static_balance`.
+    """
+    check_finite_result(mech, "the generalized forces to balance", tau=tau)
     N, lambda_map, C, P, G = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
     f_p = P @ tau
     for arr in (f_p, G, q, tau, J_phi, N, C, lambda_map, P):

@@ -148,13 +148,18 @@ def _objective(name: str, value: Any) -> str:
     return str(value)
 
 
+def _float_array(value: Any) -> np.ndarray:
+    """``value`` as an array of floats; an empty one when it is not numbers (the caller refuses it)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return np.empty(0)
+
+
 def _wrenches(name: str, value: Any) -> tuple[tuple[float, ...], ...] | None:
     if value is None:
         return None
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        arr = np.empty(0)
+    arr = _float_array(value)
     if arr.ndim != 2 or arr.shape[0] == 0 or not np.all(np.isfinite(arr)):
         raise InvalidInput(
             f"option {name!r} must be a non-empty list of wrenches (each 6 values, or one per task "
@@ -179,10 +184,7 @@ def _internal(name: str, value: Any) -> tuple[float, ...] | dict[str, float] | N
 def _direction(name: str, value: Any) -> tuple[float, ...] | None:
     if value is None:
         return None
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        arr = np.empty(0)
+    arr = _float_array(value)
     if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or not np.any(arr):
         raise InvalidInput(f"option {name!r} must be a non-zero list of numbers, got {short(value)}")
     return tuple(float(v) for v in arr)

@@ -9,10 +9,10 @@ import pytest
 from plm_pin.core import closures
 from plm_pin.models import preset_names
 from tests.conftest import INTEROP, ball_joint_body, fd_jacobian, preset, spatial_6r
+from tests.core.conftest import random_q
 
-
-def _random_q(mech, rng, scale=0.3):
-    return pin.integrate(mech.model, mech.q_ref, rng.normal(scale=scale, size=mech.nv))
+CLOSURE_KINDS = [{"type": "point"}, {"type": "weld"}, {"type": "revolute", "axis": [0, 0.6, 0.8]}]
+"""One closure of each type (a revolute about an oblique axis) on :func:`ball_joint_body`."""
 
 
 @pytest.mark.parametrize("name", preset_names())
@@ -20,20 +20,18 @@ def test_jacobian_matches_finite_differences_on_presets(name, rng):
     """J_phi equals central finite differences of phi at open-loop random configurations."""
     mech = preset(name)
     for _ in range(3):
-        q = _random_q(mech, rng)
+        q = random_q(mech, rng)
         J = mech.closure_jacobian(q)
         J_fd = fd_jacobian(mech.closure_residual, mech.model, q)
         np.testing.assert_allclose(J, J_fd, atol=1e-8)
 
 
-@pytest.mark.parametrize(
-    "kind", [{"type": "point"}, {"type": "weld"}, {"type": "revolute", "axis": [0, 0.6, 0.8]}]
-)
+@pytest.mark.parametrize("kind", CLOSURE_KINDS)
 def test_jacobian_matches_finite_differences_for_every_closure_type(tmp_path, rng, kind):
     """Point, weld and revolute residuals have exact Jacobians, away from closure too."""
     mech = ball_joint_body(tmp_path, kind)
     for _ in range(5):
-        q = _random_q(mech, rng, scale=1.0)
+        q = random_q(mech, rng, scale=1.0)
         np.testing.assert_allclose(
             mech.closure_jacobian(q), fd_jacobian(mech.closure_residual, mech.model, q), atol=1e-8
         )
@@ -90,7 +88,7 @@ def test_interop_fivebar_jacobian_matches_finite_differences(rng):
 
     with pytest.warns(MissingLimitsWarning):  # its URDF gives no position limits
         mech = plm_pin.load(INTEROP / "5bar_linkage")
-    q = _random_q(mech, rng)
+    q = random_q(mech, rng)
     np.testing.assert_allclose(
         mech.closure_jacobian(q), fd_jacobian(mech.closure_residual, mech.model, q), atol=1e-8
     )
@@ -105,7 +103,7 @@ def test_spatial_closures_constrain_3_5_6_rows(tmp_path, rng, kind, rank):
     mech = spatial_6r(tmp_path, kind)
     assert mech.closure_rank(mech.q_ref) == rank
     assert mech.mobility == 6 - rank
-    q = _random_q(mech, rng)
+    q = random_q(mech, rng)
     np.testing.assert_allclose(
         mech.closure_jacobian(q), fd_jacobian(mech.closure_residual, mech.model, q), atol=1e-8
     )
@@ -133,7 +131,7 @@ def test_point_rows_are_the_frame_gaps_and_jacobian_differences_exactly(name, rn
     data = mech.model.createData()
     lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     for _ in range(3):
-        q = _random_q(mech, rng)
+        q = random_q(mech, rng)
         pin.computeJointJacobians(mech.model, data, q)
         pin.updateFramePlacements(mech.model, data)
         gaps = [
@@ -159,14 +157,12 @@ def _drift_fd(mech, jac, q, v, eps=1e-6):
     return (plus - minus) @ v / (2 * eps)
 
 
-@pytest.mark.parametrize(
-    "kind", [{"type": "point"}, {"type": "weld"}, {"type": "revolute", "axis": [0, 0.6, 0.8]}]
-)
+@pytest.mark.parametrize("kind", CLOSURE_KINDS)
 def test_drift_matches_finite_differences_of_the_jacobian(tmp_path, rng, kind):
     """The acceleration drift equals d/dt(J_phi) v for every closure type, off closure too."""
     mech = ball_joint_body(tmp_path, kind)
     for _ in range(5):
-        q = _random_q(mech, rng, scale=1.0)
+        q = random_q(mech, rng, scale=1.0)
         v = rng.normal(size=mech.nv)
         gamma = closures.drift(mech.model, mech.data, mech.closures, q, v)
         np.testing.assert_allclose(gamma, _drift_fd(mech, mech.closure_jacobian, q, v), atol=1e-7)
@@ -192,7 +188,7 @@ def test_task_drift_matches_finite_differences(rng):
         pin.updateFramePlacements(mech.model, mech.data)
         return task.jacobian_from_data(mech.model, mech.data).copy()
 
-    q = _random_q(mech, rng, scale=0.3)
+    q = random_q(mech, rng, scale=0.3)
     v = rng.normal(size=mech.nv)
     pin.forwardKinematics(mech.model, mech.data, q, v, np.zeros(mech.nv))
     pin.updateFramePlacements(mech.model, mech.data)

@@ -17,10 +17,7 @@ from plm_pin.core.task import TaskTarget, check_task_vector, compile_task, rpy_r
 from plm_pin.kinematics import task_pose
 from plm_pin.models import PRESETS, preset_names
 from tests.conftest import fd_jacobian, preset
-
-
-def _random_q(mech, rng, scale=0.3):
-    return pin.integrate(mech.model, mech.q_ref, rng.normal(scale=scale, size=mech.nv))
+from tests.core.conftest import random_q
 
 
 @pytest.mark.parametrize(
@@ -62,7 +59,7 @@ def test_task_jacobian_matches_finite_differences(name, rng):
         return data.oMf[fid].translation.copy(), data.oMf[fid].rotation.copy()
 
     for _ in range(2):
-        q = _random_q(mech, rng)
+        q = random_q(mech, rng)
         pin.computeJointJacobians(mech.model, data, q)
         pin.updateFramePlacements(mech.model, data)
         J = task.jacobian_from_data(mech.model, data)
@@ -80,7 +77,7 @@ def test_task_jacobian_matches_finite_differences(name, rng):
 def test_planar_task_coordinates_differentiate_to_the_task_jacobian(name, rng):
     """For planar tasks the Jacobian is the derivative of the task coordinates (rz rate = omega_z)."""
     mech = preset(name)
-    q = _random_q(mech, rng, 0.2)
+    q = random_q(mech, rng, 0.2)
     data = mech.model.createData()
     pin.computeJointJacobians(mech.model, data, q)
     pin.updateFramePlacements(mech.model, data)
@@ -102,7 +99,7 @@ def test_task_target_jacobian_matches_finite_differences(name, rng):
         return target.residual(data)
 
     for _ in range(2):
-        q = _random_q(mech, rng, 0.2)
+        q = random_q(mech, rng, 0.2)
         pin.computeJointJacobians(mech.model, data, q)
         pin.updateFramePlacements(mech.model, data)
         np.testing.assert_allclose(
@@ -188,7 +185,7 @@ def test_task_target_on_unordered_rows_fills_a_given_buffer(rng):
         mech.model, mech.model.frames[mech.task_compiled.frame_id].name, ("z", "x", "rz", "rx")
     )
     data = mech.model.createData()
-    q = _random_q(mech, rng, 0.05)
+    q = random_q(mech, rng, 0.05)
     pin.framesForwardKinematics(mech.model, data, q)
     M = data.oMf[task.frame_id]
     rpy = pin.rpy.matrixToRpy(M.rotation)

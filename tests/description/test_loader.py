@@ -26,7 +26,6 @@ from plm_pin.description import (
 )
 from plm_pin.description import _urdf_build as u
 from plm_pin.families.classic import build_fourbar
-from plm_pin.models import urdf_folder
 
 FOURBAR_FRAMES = [
     "universe",
@@ -42,14 +41,6 @@ FOURBAR_FRAMES = [
     "rocker_tip_fixed",
     "rocker_tip",
 ]
-
-
-@pytest.fixture
-def fourbar(tmp_path) -> Path:
-    """A copy of the fourbar preset (URDF + sidecar) in a temporary folder; returns the URDF."""
-    for suffix in (".urdf", ".plm.yaml"):
-        shutil.copy(urdf_folder() / f"fourbar{suffix}", tmp_path / f"fourbar{suffix}")
-    return tmp_path / "fourbar.urdf"
 
 
 def _edit_sidecar(urdf: Path, **changes: Any) -> Path:

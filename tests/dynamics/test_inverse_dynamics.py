@@ -15,6 +15,7 @@ from plm_pin.dynamics.work import adaptive_trapezoid_work, power_along, spline_w
 from plm_pin.exceptions import AllocationInfeasible, InvalidInput, InverseDynamicsFailed
 from plm_pin.statics import static_forces
 from tests.conftest import preset
+from tests.dynamics.conftest import direct_crossing
 
 
 def _harada_profile(t):
@@ -214,16 +215,7 @@ def test_enferadi_forces_match_the_corrected_lagrange_equations(profile, times, 
 
 def test_crossing_a_direct_singularity_stops_at_the_first_sample_past_it():
     """3D3M, theta 0 -> -50 deg at y = 0.08 m: stops past eq. (11.4)'s angle, keeping the samples before."""
-    mech = preset("harada2011_3d3m")
-    y, rate = 0.08, -np.radians(50.0)
-
-    def profile(t):
-        return np.array([0.0, y, rate * t]), np.array([0.0, 0.0, rate]), np.zeros(3)
-
-    times = np.linspace(0.0, 1.0, 101)
-    traj = task_trajectory(mech, profile, times)  # the task map itself is regular there
-    theta_4 = -np.arccos(np.sqrt((0.19**2 - y**2) / 0.19**2))  # eq. (11.4), l + r_t = 0.19 m
-    first_past = int(np.flatnonzero(rate * times < theta_4)[0])
+    mech, _, traj, first_past = direct_crossing()
     with pytest.raises(InverseDynamicsFailed, match="direct \\(type 2\\) singularity") as info:
         inverse_dynamics(mech, traj)
     assert info.value.index == first_past and info.value.partial.n_samples == first_past

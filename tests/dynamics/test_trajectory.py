@@ -46,6 +46,7 @@ from plm_pin.kinematics import inverse_kinematics, task_pose, working_modes
 from plm_pin.kinematics.working_mode import working_mode
 from plm_pin.models import PRESETS
 from tests.conftest import preset, spatial_6r
+from tests.dynamics.conftest import direct_crossing
 
 ZHAO2011 = PRESETS["zhao2011_8pss"].parameters  # Zhao 2011 Tables 1-3, eq. (19): the preset's parameters
 
@@ -324,16 +325,7 @@ def test_inconsistent_redundant_actuators_stop_with_the_actuator_named():
 
 def test_actuator_trajectory_stops_where_it_crosses_the_type4_singularity():
     """3D3M, x = 0, y = 0.08 m, theta 0 -> -50 deg: stops at the first sample past eq. (11.4)'s -24.9 deg."""
-    mech = preset("harada2011_3d3m")
-    y, rate = 0.08, -math.radians(50.0)
-
-    def profile(t):
-        return np.array([0.0, y, rate * t]), np.array([0.0, 0.0, rate]), np.zeros(3)
-
-    times = np.linspace(0.0, 1.0, 101)
-    tr = task_trajectory(mech, profile, times)  # a direct singularity does not stop the task map
-    theta_4 = -math.acos(math.sqrt(((L + RT) ** 2 - y**2) / (L + RT) ** 2))  # eq. (11.4)
-    first_past = int(np.flatnonzero(rate * times < theta_4)[0])
+    mech, times, tr, first_past = direct_crossing()  # a direct singularity does not stop the task map
     with pytest.raises(TrajectoryError) as err:
         actuator_trajectory(mech, sampled_profile(times, tr.c, tr.cd, tr.cdd), times, guess=tr.q[0])
     assert err.value.index == first_past

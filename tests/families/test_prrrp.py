@@ -6,10 +6,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import preset
-
-
-def _body(mech, joint):
-    return mech.model.inertias[mech.model.getJointId(joint)]
+from tests.families.conftest import body_inertia
 
 
 def _frame_offset(mech, frame):
@@ -22,8 +19,8 @@ def test_harada2011_masses_inertias_and_lengths_match_table_1(name):
     mech = preset(name)
     legs = (1, 2, 3, 4) if name.endswith("3d4m") else (1, 2, 4)
     for i in legs:
-        assert _body(mech, f"slider{i}").mass == pytest.approx(0.375, abs=1e-15)
-        rod = _body(mech, f"rod{i}_pivot")
+        assert body_inertia(mech, f"slider{i}").mass == pytest.approx(0.375, abs=1e-15)
+        rod = body_inertia(mech, f"rod{i}_pivot")
         assert rod.mass == pytest.approx(0.026, abs=1e-15)
         assert rod.inertia[2, 2] == pytest.approx(9.84e-5, rel=1e-12)
         np.testing.assert_allclose(rod.lever, [0.070, 0.0, 0.0], atol=1e-15)

@@ -17,7 +17,7 @@ from plm_pin.families.prrrp.planners import MODE_CHANGE_TOL
 from plm_pin.kinematics import classify, closed_chain_jacobians
 from plm_pin.kinematics.paths import track_actuator_path
 from plm_pin.kinematics.working_mode import working_mode
-from tests.conftest import preset
+from tests.conftest import preset, prrrp_paper_configuration
 
 ASYM = "harada2015_asymmetric"
 RT = 0.05
@@ -29,19 +29,8 @@ LEFT = (1, 2)
 
 
 def _eq6_config(mech, pose, sigmas, lengths):
-    """Configuration from Harada 2015 eqs. (1), (6) by hand: slider, rod angle, plate pivot."""
-    x, y, th = pose
-    q = mech.neutral()
-    phi1 = 0.0
-    for i, (sigma, length) in enumerate(zip(sigmas, lengths, strict=True), start=1):
-        s = -RT if i in LEFT else RT
-        Lx, Ly = x + s * math.cos(th), y + s * math.sin(th)
-        c = Lx + sigma * math.sqrt(max(length**2 - Ly**2, 0.0))
-        phi = math.atan2(Ly, Lx - c)
-        q[mech.model.joints[mech.model.getJointId(f"slider{i}")].idx_q] = c
-        q[mech.model.joints[mech.model.getJointId(f"rod{i}_pivot")].idx_q] = phi
-        phi1 = phi if i == 1 else phi1
-    q[mech.model.joints[mech.model.getJointId("plate_pivot")].idx_q] = th - phi1
+    """Configuration from Harada 2015 eqs. (1), (6): :func:`tests.conftest.prrrp_paper_configuration`."""
+    q = prrrp_paper_configuration(mech, pose, lengths, RT, sigmas)
     assert np.max(np.abs(mech.closure_residual(q))) < 1e-12
     return q
 

@@ -14,6 +14,7 @@ from plm_pin.description import write_description
 from plm_pin.kinematics import closed_chain_jacobians
 from plm_pin.models import PRESETS
 from tests.conftest import preset
+from tests.families.conftest import body_inertia
 
 # Zhao 2011, transcribed here again (not imported from plm_pin) so the model is checked
 # against the paper rather than against itself.
@@ -86,10 +87,6 @@ def _jacobian_eq6a(pose, legs):
     return np.array(rows)  # (n_legs, 6)
 
 
-def _body(mech, joint):
-    return mech.model.inertias[mech.model.getJointId(joint)]
-
-
 def _placements(mech, q):
     data = mech.model.createData()
     pin.framesForwardKinematics(mech.model, data, q)
@@ -101,13 +98,13 @@ def test_masses_and_inertias_match_tables_3_4_and_the_text(name):
     """Sliders 50 kg; struts 20 kg, 1.279 transverse, 0 axial (idle spin) at l/2; platform 200 kg, 17.333.."""
     mech = preset(name)
     for i in LEGS[name]:
-        assert _body(mech, f"slider{i}").mass == pytest.approx(TABLE4_SLIDER, abs=1e-15)
-        assert _body(mech, f"u{i}a").mass == 0.0  # the universal joint's cross is massless
-        strut = _body(mech, f"u{i}b")
+        assert body_inertia(mech, f"slider{i}").mass == pytest.approx(TABLE4_SLIDER, abs=1e-15)
+        assert body_inertia(mech, f"u{i}a").mass == 0.0  # the universal joint's cross is massless
+        strut = body_inertia(mech, f"u{i}b")
         assert strut.mass == pytest.approx(TABLE4_STRUT, abs=1e-15)
         np.testing.assert_allclose(strut.lever, [0.0, 0.0, TABLE3_L / 2], atol=1e-15)
         np.testing.assert_allclose(strut.inertia, TREE_STRUT_I, atol=1e-15)
-    platform = _body(mech, "platform_floating")
+    platform = body_inertia(mech, "platform_floating")
     assert platform.mass == pytest.approx(PLATFORM_MASS, abs=1e-15)
     np.testing.assert_allclose(platform.lever, 0.0, atol=1e-15)
     np.testing.assert_allclose(platform.inertia, PLATFORM_I, atol=1e-15)

@@ -10,15 +10,12 @@ import pytest
 
 import plm_pin
 from plm_pin.models import PRESETS
-from tests.conftest import preset
+from tests.conftest import preset, star_triangle_eq5
+from tests.families.conftest import body_inertia
 
 NAME = "enferadi2017_star_triangle"
 A = 0.5  # side of the base, section 6 [m]
 SQ3 = math.sqrt(3.0)
-
-
-def _body(mech, joint):
-    return mech.model.inertias[mech.model.getJointId(joint)]
 
 
 def _star_pose(mech, q):
@@ -28,37 +25,18 @@ def _star_pose(mech, q):
     return np.array([M.translation[0], M.translation[1], math.atan2(M.rotation[1, 0], M.rotation[0, 0])])
 
 
-def _paper_ik(x, y, phi):
-    """Corrected eq. (5), q_i = s_i^T E (c - P_i) / (s_i^T E a_i), with the vertices written by hand.
-
-    Rails V1 -> V2, V2 -> V3, V3 -> V1 of the triangle V1 = (0, 0), V2 = (a/2, a sqrt(3)/2),
-    V3 = (a, 0); s_i points from C outward along star line i: psi_i + pi with
-    psi = (phi - 2 pi/3, phi + 2 pi/3, phi).
-    """
-    E = np.array([[0.0, -1.0], [1.0, 0.0]])
-    P = [np.array([0.0, 0.0]), np.array([A / 2, A * SQ3 / 2]), np.array([A, 0.0])]
-    a = [np.array([0.5, SQ3 / 2]), np.array([0.5, -SQ3 / 2]), np.array([-1.0, 0.0])]
-    psi = [phi - 2 * math.pi / 3, phi + 2 * math.pi / 3, phi]
-    c = np.array([x, y])
-    q = []
-    for i in range(3):
-        s = -np.array([math.cos(psi[i]), math.sin(psi[i])])
-        q.append(s @ E @ (c - P[i]) / (s @ E @ a[i]))
-    return np.array(q)
-
-
 def test_masses_and_inertias_match_section_6():
     """Sliders m_a = 2 kg, intermediate links m_il = 3 kg and I_il = 37.5, star m_p = 2 kg and I_p = 25."""
     mech = preset(NAME)
     for i in (1, 2, 3):
-        assert _body(mech, f"slider{i}").mass == pytest.approx(2.0, abs=1e-15)
+        assert body_inertia(mech, f"slider{i}").mass == pytest.approx(2.0, abs=1e-15)
     # il1 hangs on pivot1, il2 and il3 on arm2 and arm3; the star on arm1
     for joint in ("pivot1", "arm2", "arm3"):
-        il = _body(mech, joint)
+        il = body_inertia(mech, joint)
         assert il.mass == pytest.approx(3.0, abs=1e-15)
         assert il.inertia[2, 2] == pytest.approx(37.5, rel=1e-14)
         np.testing.assert_allclose(il.lever, 0.0, atol=1e-15)
-    star = _body(mech, "arm1")
+    star = body_inertia(mech, "arm1")
     assert star.mass == pytest.approx(2.0, abs=1e-15)
     assert star.inertia[2, 2] == pytest.approx(25.0, rel=1e-14)
     np.testing.assert_allclose(star.lever, 0.0, atol=1e-15)
@@ -144,7 +122,7 @@ def test_reference_is_the_line_start_and_closes():
 def test_assembly_with_fixed_sliders_reaches_the_paper_pose(pose):
     """Fixing the sliders at the corrected eq. (5)'s values and assembling yields the commanded star pose."""
     mech = preset(NAME)
-    q = _paper_ik(*pose)
+    q, _ = star_triangle_eq5(pose, A)  # corrected eq. (5)
     fixed = {f"slider{i + 1}": q[i] for i in range(3)}
     start = pin.integrate(mech.model, mech.q_ref, np.full(mech.nv, 0.01))
     asm = mech.assemble(start, fixed=fixed)

@@ -23,7 +23,7 @@ from plm_pin.kinematics import forward_kinematics, inverse_kinematics, same_asse
 from plm_pin.kinematics.limits import limit_violations, wrap_into_limits
 from plm_pin.kinematics.working_mode import working_mode
 from plm_pin.models import PRESETS, preset_names
-from tests.conftest import preset
+from tests.conftest import preset, star_triangle_eq5
 
 ZHAO2011 = PRESETS["zhao2011_8pss"].parameters  # Zhao 2011 Tables 1-3, eq. (19): the preset's parameters
 
@@ -158,28 +158,6 @@ def test_ik_with_a_mode_returns_that_mode():
         np.testing.assert_allclose(sol.actuators, expected, atol=1e-12)
 
 
-def star_eq5(pose, side=0.5) -> tuple[np.ndarray, np.ndarray]:
-    """Enferadi 2017 eqs. (4)-(5) (q_i, rho_i).
-
-    rho_i = -a_i^T E (c - P_i) / (a_i^T E s_i), q_i = s_i^T E (c - P_i) / (s_i^T E a_i).
-
-    Rails V1 -> V2 -> V3 -> V1 of the equilateral base (origin V1, x along V1 V3), s_i = -u_i
-    with u_i the star line from A_i toward C at psi_i = phi - 2 pi/3, phi + 2 pi/3, phi.
-    """
-    x, y, phi = pose
-    E = np.array([[0.0, -1.0], [1.0, 0.0]])
-    P = [np.zeros(2), np.array([side / 2, side * math.sqrt(3) / 2]), np.array([side, 0.0])]
-    a = [np.array([0.5, math.sqrt(3) / 2]), np.array([0.5, -math.sqrt(3) / 2]), np.array([-1.0, 0.0])]
-    psi = [phi - 2 * math.pi / 3, phi + 2 * math.pi / 3, phi]
-    c = np.array([x, y])
-    q, rho = np.empty(3), np.empty(3)
-    for k in range(3):
-        s = -np.array([math.cos(psi[k]), math.sin(psi[k])])
-        q[k] = s @ E @ (c - P[k]) / (s @ E @ a[k])
-        rho[k] = -(a[k] @ E @ (c - P[k])) / (a[k] @ E @ s)
-    return q, rho
-
-
 @pytest.mark.parametrize(
     "pose", [(0.25, 0.35, math.pi / 2), (0.2, 0.2, 1.2), (0.3, 0.25, 2.0), (0.28, 0.12, 1.9)]
 )
@@ -188,7 +166,7 @@ def test_star_triangle_ik_matches_eq5(pose):
     mech = preset("enferadi2017_star_triangle")
     solutions = working_modes(mech, pose)
     assert len(solutions) == 1
-    q, rho = star_eq5(pose)
+    q, rho = star_triangle_eq5(pose)
     np.testing.assert_allclose(solutions[0].actuators, q, atol=1e-12)
     arms = [solutions[0].q[mech.model.joints[mech.model.getJointId(f"arm{i}")].idx_q] for i in (1, 2, 3)]
     np.testing.assert_allclose(arms, rho, atol=1e-12)

@@ -18,7 +18,14 @@ from plm_pin import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, task_pose, working_modes
 from plm_pin.kinematics.jacobians import INVERSE_RTOL, feasible_motions, times_T_inverse
 from plm_pin.models import PRESETS, preset_names
-from tests.conftest import ball_joint_body, preset, prrrp_paper_configuration
+from tests.conftest import (
+    STAR_E,
+    ball_joint_body,
+    preset,
+    prrrp_paper_configuration,
+    star_triangle_eq5,
+    star_triangle_legs,
+)
 
 ZHAO2011 = PRESETS["zhao2011_8pss"].parameters  # Zhao 2011 Tables 1-3, eq. (19): the preset's parameters
 
@@ -142,20 +149,14 @@ def test_prrrp_actuator_jacobian_is_harada_eq4(name, legs, lengths, pose):
 def test_star_triangle_jacobian_is_enferadi_eqs_15_16(pose):
     """Eq. (17) q_dot = -J^{-1} K X_dot, K of (15), J of (16), X = [phi, x, y], is J_ce up to column order."""
     mech = preset("enferadi2017_star_triangle")
-    x, y, phi = pose
-    side = 0.5
-    E = np.array([[0.0, -1.0], [1.0, 0.0]])
-    P = [np.zeros(2), np.array([side / 2, side * math.sqrt(3) / 2]), np.array([side, 0.0])]
-    a = [np.array([0.5, math.sqrt(3) / 2]), np.array([0.5, -math.sqrt(3) / 2]), np.array([-1.0, 0.0])]
-    psi = [phi - 2 * math.pi / 3, phi + 2 * math.pi / 3, phi]
-    c = np.array([x, y])
+    phi = pose[2]
+    _, legs = star_triangle_legs(pose)
+    _, rho = star_triangle_eq5(pose)  # eq. (4)
     K = np.empty((3, 3))
     J = np.zeros((3, 3))
-    for k in range(3):
-        s = -np.array([math.cos(psi[k]), math.sin(psi[k])])  # s_i = -u_i
-        rho = -(a[k] @ E @ (c - P[k])) / (a[k] @ E @ s)  # eq. (4)
-        K[k] = [rho, *(-(s @ E))]  # eq. (15), columns (phi, x, y)
-        J[k, k] = s @ E @ a[k]  # eq. (16)
+    for k, (_, a, s) in enumerate(legs):
+        K[k] = [rho[k], *(-(s @ STAR_E))]  # eq. (15), columns (phi, x, y)
+        J[k, k] = s @ STAR_E @ a  # eq. (16)
     H = -np.linalg.solve(J, K)  # eq. (17), columns (phi, x, y)
     assert np.allclose(np.diag(J), math.sin(phi))  # J_ii = sin(phi): the spec's closed form
     sol = inverse_kinematics(mech, pose)

@@ -26,7 +26,7 @@ from plm_pin.kinematics.singularity import (
     normalised_margins,
 )
 from plm_pin.models import preset_names
-from tests.conftest import preset
+from tests.conftest import preset, prrrp_paper_configuration
 
 RT = 0.05  # r_t [m]
 
@@ -34,25 +34,10 @@ RT = 0.05  # r_t [m]
 def prrrp_configuration(mech: Mechanism, pose, lengths, signs: dict[int, int]) -> np.ndarray:
     """Configuration of a 2-PRRRP at ``pose`` from eqs. (2)-(3), square-root sign ``signs[i]`` per leg.
 
-    A negative discriminant is clipped to zero (the rod then points straight at its pair's
-    height, which must then equal l_i: the caller checks the closure).
+    :func:`tests.conftest.prrrp_paper_configuration` (a negative discriminant clipped to zero, the
+    rod then pointing straight at its pair's height); the closure is checked here.
     """
-    x, y, theta = pose
-    q = mech.q_ref.copy()
-
-    def put(joint: str, value: float) -> None:
-        q[mech.model.joints[mech.model.getJointId(joint)].idx_q] = value
-
-    for i, sign in signs.items():
-        s = -RT if i in (1, 2) else RT
-        Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
-        l = lengths[i - 1]
-        c = Lx + sign * math.sqrt(max(Lx**2 - (Lx**2 + Ly**2) + l**2, 0.0))
-        phi = math.atan2((Ly - 0.0) / l, (Lx - c) / l)  # eq. (3)
-        put(f"slider{i}", c)
-        put(f"rod{i}_pivot", phi)
-        if i == 1:
-            put("plate_pivot", theta - phi)
+    q = prrrp_paper_configuration(mech, pose, lengths, RT, tuple(signs.get(i, 0) for i in (1, 2, 3, 4)))
     assert np.max(np.abs(mech.closure_residual(q))) < 1e-15
     return q
 

@@ -26,6 +26,19 @@ def _z_to(d: np.ndarray) -> np.ndarray:
     return pin.rpy.matrixToRpy(np.column_stack([x, np.cross(z, x), z]))
 
 
+def _platform_frames(links: list, joints: list, b: np.ndarray) -> None:
+    """Append the platform's anchor frames ``platform_b2`` ... (leg 1 carries it at b_1) and its centre."""
+    for i in range(1, len(b)):
+        links.append(u.link(f"platform_b{i + 1}"))
+        joints.append(
+            u.joint(
+                f"platform_b{i + 1}_fixed", "fixed", "platform", f"platform_b{i + 1}", xyz=tuple(b[i] - b[0])
+            )
+        )
+    links.append(u.link("platform_center"))
+    joints.append(u.joint("platform_center_fixed", "fixed", "platform", "platform_center", xyz=tuple(-b[0])))
+
+
 def stewart_points() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Base anchors a_i (world), platform anchors b_i (platform frame), platform centre (world)."""
     ta = np.deg2rad([0, 100, 120, 220, 240, 340]) + 0.1
@@ -87,15 +100,7 @@ def stewart(tmp_path: Path, platform_mass: float = 0.0, spin: bool = False) -> M
     links.append(u.link("platform", platform_mass, inertia, com=tuple(-b[0])))
     joints.append(u.joint("ball_z", "revolute", "ball2", "platform", rpy=tuple(pin.rpy.matrixToRpy(R1.T))))
     reference.update({"ball_x": 0.0, "ball_y": 0.0, "ball_z": 0.0})
-    for i in range(1, 6):
-        links.append(u.link(f"platform_b{i + 1}"))
-        joints.append(
-            u.joint(
-                f"platform_b{i + 1}_fixed", "fixed", "platform", f"platform_b{i + 1}", xyz=tuple(b[i] - b[0])
-            )
-        )
-    links.append(u.link("platform_center"))
-    joints.append(u.joint("platform_center_fixed", "fixed", "platform", "platform_center", xyz=tuple(-b[0])))
+    _platform_frames(links, joints, b)
     sidecar = parse_sidecar(
         {
             "format": "plm-pin/1",
@@ -214,15 +219,7 @@ def rpr(tmp_path: Path, compliance: dict) -> Mechanism:
         )
     )
     reference["platform_pivot"] = 0.0
-    for i in (1, 2):
-        links.append(u.link(f"platform_b{i + 1}"))
-        joints.append(
-            u.joint(
-                f"platform_b{i + 1}_fixed", "fixed", "platform", f"platform_b{i + 1}", xyz=tuple(b[i] - b[0])
-            )
-        )
-    links.append(u.link("platform_center"))
-    joints.append(u.joint("platform_center_fixed", "fixed", "platform", "platform_center", xyz=tuple(-b[0])))
+    _platform_frames(links, joints, b)
     sidecar = parse_sidecar(
         {
             "format": "plm-pin/1",

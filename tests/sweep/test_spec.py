@@ -17,7 +17,8 @@ from tests.sweep.conftest import small
 PARAMS = list(builder_parameters(build_2prrrp))
 
 
-def _refused(message: str, **changes) -> None:
+def _refusal(**changes) -> str:
+    """The message of the InvalidInput that make_spec raises for the small sweep with ``changes``."""
     kwargs = small(**changes)
     with pytest.raises(InvalidInput) as err:
         make_spec(
@@ -27,7 +28,11 @@ def _refused(message: str, **changes) -> None:
             kwargs.pop("metrics"),
             **kwargs,
         )
-    assert str(err.value) == message
+    return str(err.value)
+
+
+def _refused(message: str, **changes) -> None:
+    assert _refusal(**changes) == message
 
 
 def test_unknown_parameter_lists_the_builders_parameters():
@@ -172,15 +177,6 @@ def test_samples_and_grids_enumerate_points_row_major():
 
 def test_a_huge_option_value_is_quoted_short():
     """An option's bad value is quoted cut short: a million-entry list does not fill the message."""
-    kwargs = small(options={"ik_tol": ["x"] * 1_000_000})
-    with pytest.raises(InvalidInput) as err:
-        make_spec(
-            kwargs.pop("mechanism"),
-            kwargs.pop("parameters"),
-            kwargs.pop("poses"),
-            kwargs.pop("metrics"),
-            **kwargs,
-        )
-    message = str(err.value)
+    message = _refusal(options={"ik_tol": ["x"] * 1_000_000})
     assert message.startswith("option 'ik_tol' must be a positive finite number, got ['x', 'x', ")
     assert len(message) < 200

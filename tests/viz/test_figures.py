@@ -21,15 +21,6 @@ from matplotlib.collections import PathCollection, QuadMesh  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 
-@pytest.fixture
-def close_figures():
-    """Close the figures a test opens."""
-    import matplotlib.pyplot as plt
-
-    yield
-    plt.close("all")
-
-
 def test_plot_map_has_mesh_colorbar_loci_and_degree_labels(close_figures):
     """A y-theta map: one QuadMesh over the grid, a colour bar, loci markers, theta in degrees."""
     mech = preset("harada2011_3d3m")

@@ -26,15 +26,6 @@ def ds():
     ).dataset
 
 
-@pytest.fixture
-def close_figures():
-    """Close the figures a test opens."""
-    import matplotlib.pyplot as plt
-
-    yield
-    plt.close("all")
-
-
 def test_heatmap_shows_radians_in_degrees_and_text_coordinates_as_ticks(ds, close_figures):
     """Half-width over (legs, y): a QuadMesh in degrees, categorical legs ticks, labelled colour bar."""
     data = ds.orientation_halfwidth.sel(half_plate=0.035)
