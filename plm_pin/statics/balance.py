@@ -33,7 +33,7 @@ the internal-force space (see :func:`oriented_internal_basis`); with one interna
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -47,6 +47,7 @@ from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL, check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
+from ..results import Result, unit
 
 SINGULAR_RTOL = 1e-8
 r"""A direction counts as unresisted when its singular value is below SINGULAR_RTOL x the largest.
@@ -68,7 +69,7 @@ _TIE_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
-class Load:
+class Load(Result):
     """An external wrench applied to one frame of the mechanism.
 
     Attributes:
@@ -79,7 +80,7 @@ class Load:
 
     frame: str
     frame_id: int
-    wrench: np.ndarray
+    wrench: np.ndarray = field(metadata=unit("N, N m"))
 
 
 def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) -> Load:
