@@ -23,7 +23,7 @@ symmetric for conservative loads (no external moment in 3-D).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -33,6 +33,7 @@ from ..core import closures as _closures
 from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput
+from ..results import Result, unit
 from ..statics import Load, StaticForces, load_on_frame, static_forces
 from .geometric import TreeDerivatives, closure_derivative
 from .model import SOURCES, CompliantModel, compliant_model
@@ -44,7 +45,7 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 @dataclass(frozen=True)
-class ElasticState:
+class ElasticState(Result):
     """A loaded equilibrium of the compliant model.
 
     Attributes:
@@ -57,11 +58,12 @@ class ElasticState:
     """
 
     compliant: CompliantModel
-    q: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
     forces: StaticForces
     load: Load | None
     gravity: bool
-    spring_forces: np.ndarray
+    spring_forces: np.ndarray = field(metadata=unit("N, N m"))
+    _SKIPPED = ("compliant",)
 
     @property
     def lam(self) -> np.ndarray:
