@@ -407,6 +407,17 @@ def test_results_serialise_to_strict_json(asym, graph, route, flip, symmetric):
     assert data["admits_complex_singularity"] == case.admits_complex_singularity
     assert [c["sub_rank"] for c in data["coincident"]] == [c.sub_rank for c in case.coincident]
     assert pm.pair_solutions(0.0, 0.3, 0.24, 0.17).to_dict()["kind"] == "two"
+    layout = pm.prrrp_layout(asym)
+    data = layout.to_dict()
+    assert data["legs"][0] == {
+        "index": layout.legs[0].index,
+        "slider": layout.legs[0].slider,
+        "rod": layout.legs[0].rod,
+        "pair": layout.legs[0].pair,
+        "length": layout.legs[0].length,
+        "actuator": layout.legs[0].actuator,
+    }
+    assert data["subs"][0]["legs"] == list(layout.subs[0].legs) and data["half_plate"] == layout.half_plate
 
 
 def test_bad_input_is_refused_with_clear_messages(asym, graph):
