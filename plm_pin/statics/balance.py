@@ -123,7 +123,7 @@ def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) 
 
 
 @dataclass(frozen=True)
-class StaticBalance:
+class StaticBalance(Result):
     r"""The balance :math:`B f_c + J_\phi^T \lambda = \tau` at one configuration, ready to solve.
 
     Attributes:
@@ -151,20 +151,20 @@ class StaticBalance:
         a: joint accelerations when ``tau`` comes from inverse dynamics (None: at rest).
     """
 
-    q: np.ndarray
-    tau: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    tau: np.ndarray = field(metadata=unit("N, N m"))
     load: Load | None
     gravity: bool
     J_phi: np.ndarray
     N: np.ndarray
     C: np.ndarray
-    f_particular: np.ndarray
-    internal_basis: np.ndarray
+    f_particular: np.ndarray = field(metadata=unit("N, N m"))
+    internal_basis: np.ndarray = field(metadata=unit("-"))
     actuated_v: np.ndarray
     lambda_map: np.ndarray
     force_map: np.ndarray
-    v: np.ndarray | None = None
-    a: np.ndarray | None = None
+    v: np.ndarray | None = field(default=None, metadata=unit("m/s, rad/s"))
+    a: np.ndarray | None = field(default=None, metadata=unit("m/s^2, rad/s^2"))
 
     @property
     def n_internal(self) -> int:

@@ -137,8 +137,8 @@ def test_to_dict_is_json_ready():
     assert set(d["lam"]) == {c.name for c in mech.closures}
 
 
-def test_load_and_allocation_write_their_fields():
-    """A load and an allocation are results: to_dict writes their fields as plain JSON."""
+def test_load_balance_and_allocation_write_their_fields():
+    """A load, a balance and an allocation are results: to_dict writes their fields as plain JSON."""
     import json
 
     mech = preset("harada2011_3d4m")
@@ -148,6 +148,10 @@ def test_load_and_allocation_write_their_fields():
         "frame_id": load.frame_id,
         "wrench": [1.0, 2.0, 0.0, 0.0, 0.0, 0.1],
     }
+    balance = static_forces(mech, mech.q_ref, [1.0, 2.0, 0.1]).balance
+    data = json.loads(json.dumps(balance.to_dict(), allow_nan=False))
+    assert data["load"] == balance.load.to_dict() and data["tau"] == balance.tau.tolist()
+    assert data["v"] is None and data["internal_basis"] == balance.internal_basis.tolist()
     alloc = min_norm(np.array([1.0, -1.0]), np.array([[1.0], [1.0]]), np.eye(2))
     assert json.loads(json.dumps(alloc.to_dict(), allow_nan=False)) == {
         "f_c": [1.0, -1.0],
