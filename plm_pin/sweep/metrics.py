@@ -61,6 +61,9 @@ W_UNIT = units(Manipulability)["w"]
 RANGE_UNITS = units(OrientationRange)
 """Units of an orientation range's ends (see :mod:`plm_pin.analysis.orientation`)."""
 
+SLICE_UNITS = units(WorkspaceSlice)
+"""Units of the per-pose metrics of a workspace slice (see :mod:`plm_pin.analysis.workspace`)."""
+
 STIFFNESS_UNITS = units(StiffnessMap)
 """Units of the stiffness-map variables (see :mod:`plm_pin.stiffness.maps`)."""
 
@@ -450,7 +453,7 @@ METRICS: dict[str, Metric] = {
         Metric(
             "condition_number",
             "sigma_max / sigma_min of J_ce; inf at a singularity",
-            (Variable("condition_number", "-", "condition number of J_ce"),),
+            (Variable("condition_number", SLICE_UNITS["condition_number"], "condition number of J_ce"),),
             (),
             _grid_values("condition_number"),
         ),
