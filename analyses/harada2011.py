@@ -21,14 +21,18 @@ from plm_pin.dynamics import DecouplingReport, SimulationResult, decoupling_chec
 from plm_pin.models import PRESETS
 from plm_pin.models.registry import HARADA2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
+from plm_pin.results import units
 from plm_pin.statics import force_capability, static_forces, wrench_polygon
-from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
+from plm_pin.stiffness import Modes, StiffnessResult, natural_frequencies, stiffness, stiffness_map
 from plm_pin.viz import fig8, panel_grid, plot_panels, plot_skeletons, plot_sweep, shared_legend
 
 from . import _harada2011_paper as paper
 
 TITLE = "Harada 2011: kinetostatics and dynamics of a redundantly actuated planar PLM"
 SUMMARY = "Fig. 6, statics eqs. (14)-(22) and Fig. 8, eq. (23) decoupling, simulations 1-2; force capability."
+
+_K = units(StiffnessResult)
+"""Units of the stiffness results' fields (eigen-stiffnesses: ``translational``, ``rotational``)."""
 
 LIMIT = 10.0
 """Actuator force limit assumed for the capability section [N] (the paper gives none)."""
@@ -324,8 +328,8 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
             "table",
             Column("drive stiffness", "N/m", ".3g"),
             Column("f_i", "N", ".3g"),
-            Column("smallest translational", "N/m", ".7g"),
-            Column("rotational", "N m/rad", ".7g"),
+            Column("smallest translational", _K["translational"], ".7g"),
+            Column("rotational", _K["rotational"], ".7g"),
             Column("translational / 3D3M", "-", ".5g"),
             "stable",
         ],
@@ -344,9 +348,9 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
         "3D4M with flexible rods (aluminium 8 x 4 mm beams, an assumption; virtual joints)",
         [
             "rods",
-            Column("smallest translational", "N/m", ".7g"),
-            Column("largest translational", "N/m", ".7g"),
-            Column("rotational", "N m/rad", ".7g"),
+            Column("smallest translational", _K["translational"], ".7g"),
+            Column("largest translational", _K["translational"], ".7g"),
+            Column("rotational", _K["rotational"], ".7g"),
         ],
         [
             (label, r.translational.values[0], r.translational.values[-1], r.rotational.values[0])
@@ -370,7 +374,7 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
         rows.append((name, model, *m.frequencies[:3].tolist()))
     section.table(
         f"Lowest natural frequencies at the reference pose (drives {k:g} N/m)",
-        ["table", "model", *(Column(f"mode {i + 1}", "Hz", ".5g") for i in range(3))],
+        ["table", "model", *(Column(f"mode {i + 1}", units(Modes)["frequencies"], ".5g") for i in range(3))],
         rows,
         note="'task': M_x and K_x (the plane's three motions); 'full': every motion of the compliant model, "
         "here with the rods' out-of-plane bending, which lets the plate move out of the plane.",

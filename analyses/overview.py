@@ -18,8 +18,9 @@ from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
 from plm_pin.kinematics import classify, task_pose
 from plm_pin.kinematics.collisions import self_collisions
 from plm_pin.report import Animation, Column, Section, StudyContext
+from plm_pin.results import units
 from plm_pin.statics import StaticForces, actuator_limits, internal_force_range, static_forces
-from plm_pin.stiffness import natural_frequencies, stiffness, stiffness_map
+from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
 from plm_pin.viz import (
     MeshcatViewer,
     force_arrows,
@@ -36,6 +37,9 @@ SUMMARY = (
     "a short simulation and a 3D view."
 )
 MECHANISM = "harada2011_3d4m"
+
+_K = units(StiffnessResult)
+"""Units of the stiffness results' fields (eigen-stiffnesses: ``translational``, ``rotational``)."""
 
 ANGLE_SPAN = np.radians(30.0)
 """Half-width of the slice along an angle [rad]."""
@@ -336,8 +340,8 @@ def _preload_effect(section: Section, mech: Mechanism) -> None:
         "Preload: stiffness at the reference along the first internal-force direction",
         [
             Column("internal force coordinate", "N", ".4g"),
-            Column("smallest translational eigen-stiffness", "N/m", ".6g"),
-            Column("smallest rotational eigen-stiffness", "N m/rad", ".6g"),
+            Column("smallest translational eigen-stiffness", _K["translational"], ".6g"),
+            Column("smallest rotational eigen-stiffness", _K["rotational"], ".6g"),
         ],
         rows,
         note="The internal force changes K_x only through the curvature of the constraint forces it causes "

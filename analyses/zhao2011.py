@@ -26,8 +26,9 @@ from plm_pin.dynamics import (
 from plm_pin.models import PRESETS
 from plm_pin.models.registry import ZHAO2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
+from plm_pin.results import units
 from plm_pin.statics import static_forces
-from plm_pin.stiffness import natural_frequencies, stiffness
+from plm_pin.stiffness import Modes, StiffnessResult, natural_frequencies, stiffness
 from plm_pin.viz import plot_panels
 
 from ._zhao2011_paper import ZHAO2011_TABLE5_WORK, ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
@@ -37,6 +38,9 @@ if TYPE_CHECKING:
 
 TITLE = "Zhao 2011: motor torque, power and work of a redundant 8-PSS"
 SUMMARY = "Figs. 4-8 and Table 5 along eq. (35); 8-PSS vs 6-PSS; why Table 5 does not reproduce."
+
+_K = units(StiffnessResult)
+"""Units of the stiffness results' fields (eigen-stiffnesses: ``translational``, ``rotational``)."""
 
 N1_MAX = 12
 """Finest trapezoid rule evaluated, 2**N1_MAX intervals (the paper converged at n1 = 12)."""
@@ -412,9 +416,9 @@ def _stiffness(section: Section, eight: Mechanism, six: Mechanism) -> None:
         "Eigen-stiffness and lowest natural frequency at the home pose, gravity held",
         [
             "platform",
-            *(Column(f"translational {i + 1}", "N/m", ".4g") for i in range(3)),
-            *(Column(f"rotational {i + 1}", "N m/rad", ".4g") for i in range(3)),
-            Column("lowest frequency", "Hz", ".4g"),
+            *(Column(f"translational {i + 1}", _K["translational"], ".4g") for i in range(3)),
+            *(Column(f"rotational {i + 1}", _K["rotational"], ".4g") for i in range(3)),
+            Column("lowest frequency", units(Modes)["frequencies"], ".4g"),
         ],
         rows,
         note="Two more drives on the 8-PSS (legs 1 and 8) add their stiffness along their guides.",

@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -53,6 +53,7 @@ from .core.mechanism import Mechanism, body_name
 from .description.mjcf import DRIVE_FIELDS, StateMap, require_mujoco, rotation_to_quat_wxyz
 from .description.sidecar import Sidecar
 from .exceptions import DescriptionError, InvalidInput
+from .results import Result, unit
 from .warnings import IgnoredElementWarning, SimulationUnstableWarning
 
 __all__ = ["ClosureError", "export_mjcf", "mjcf_text"]
@@ -76,7 +77,7 @@ _MESH_SUFFIXES = (".stl", ".obj")
 
 
 @dataclass(frozen=True)
-class ClosureError:
+class ClosureError(Result):
     """Largest closure error MuJoCo reached in the measuring simulation.
 
     Attributes:
@@ -88,11 +89,11 @@ class ClosureError:
             or None; the errors above are those before it.
     """
 
-    position: float
-    rotation: float
-    duration: float
-    timestep: float
-    diverged_at: float | None = None
+    position: float = field(metadata=unit("m"))
+    rotation: float = field(metadata=unit("rad"))
+    duration: float = field(metadata=unit("s"))
+    timestep: float = field(metadata=unit("s"))
+    diverged_at: float | None = field(default=None, metadata=unit("s"))
 
     def describe(self) -> str:
         """One line for the XML comment."""
@@ -384,11 +385,11 @@ class _Writer:
             if spec.limits is not None:
                 attrs["ctrlrange"] = attrs["forcerange"] = _fmt(spec.limits)
             etree.SubElement(actuator, "motor", **attrs)
-            for field in DRIVE_FIELDS:
-                value = getattr(spec, field)
+            for drive_field in DRIVE_FIELDS:
+                value = getattr(spec, drive_field)
                 if value:
                     etree.SubElement(
-                        custom, "numeric", name=f"plm_pin:{spec.joint}:{field}", data=repr(float(value))
+                        custom, "numeric", name=f"plm_pin:{spec.joint}:{drive_field}", data=repr(float(value))
                     )
 
     def document(self) -> etree._Element:

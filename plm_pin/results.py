@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -50,17 +51,23 @@ def units(result: Any) -> dict[str, str]:
 
 
 def plain(value: object, nonfinite_as_text: bool = False) -> object:
-    """``value`` as JSON-ready data: arrays as lists, results as their ``to_dict()``, containers element-wise.
+    """``value`` as JSON-ready data: arrays as lists, results as their ``to_dict()``, paths as text.
+
+    Containers are converted element-wise.
 
     Args:
         value: the value to convert.
-        nonfinite_as_text: write non-finite floats as the strings ``'inf'``, ``'-inf'``, ``'nan'``.
+        nonfinite_as_text: write non-finite floats as the strings ``'inf'``, ``'-inf'``, ``'nan'``
+            (in what ``to_dict()`` returns too).
 
     Returns:
         Plain Python data (dict, list, str, int, float, bool, None).
     """
     if hasattr(value, "to_dict"):
-        return value.to_dict()
+        data = value.to_dict()
+        return plain(data, nonfinite_as_text) if nonfinite_as_text else data
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
     if isinstance(value, np.ndarray):
         if not nonfinite_as_text:
             return value.tolist()

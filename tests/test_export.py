@@ -88,6 +88,13 @@ def test_comment_solver_settings_and_timestep(tmp_path: Path) -> None:
     assert 'solref="0.001 1.0"' in text
     assert 'integrator="RK4"' in text and 'contact="disable"' in text
     assert 0.0 < error.position < 1e-5
+    assert error.to_dict() == {
+        "position": error.position,
+        "rotation": error.rotation,
+        "duration": 1.0,
+        "timestep": 5e-4,
+        "diverged_at": None,
+    }
     with pytest.raises(InvalidInput, match="unknown integrator 'euler'; valid are"):
         mjcf_text(preset("fourbar"), integrator="euler")
     with pytest.raises(InvalidInput, match=r"must end in \.xml"):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -55,6 +56,14 @@ def test_plain_converts_nonfinite_inside_arrays_only_when_asked():
     values = np.array([1.0, math.nan, -math.inf])
     assert plain(values)[0] == 1.0 and math.isnan(plain(values)[1])
     assert plain(values, nonfinite_as_text=True) == [1.0, "nan", "-inf"]
+
+
+def test_plain_writes_paths_as_text_and_nonfinite_inside_nested_to_dicts():
+    """A path becomes its text; asked for text, non-finite floats of a nested to_dict() become text too."""
+    assert plain(Path("a") / "b") == str(Path("a") / "b")
+    inner = _Inner(math.nan)
+    assert math.isnan(plain(inner)["value"])
+    assert plain([inner], nonfinite_as_text=True) == [{"value": "nan"}]
 
 
 def test_units_come_from_field_metadata():

@@ -67,11 +67,7 @@ class Manipulability(Result):
         inverse_singular: whether :math:`T = J_x N` is singular (J_ce undefined).
     """
 
-    w: float = field(
-        metadata=unit(
-            "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
-        )
-    )
+    w: float = field(metadata=unit(W_UNIT))
     condition_number: float = field(metadata=unit("-"))
     singular_values: np.ndarray
     J_ce: np.ndarray | None

@@ -26,7 +26,7 @@ default all CPUs), then joined across the band borders.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -37,12 +37,13 @@ from ..kinematics.collisions import collision_free
 from ..kinematics.inverse import IK_TOL
 from ..kinematics.jacobians import check_square_task
 from ..kinematics.limits import within_limits
+from ..results import Result, unit
 from ._continuation import base_pose, solve_poses
-from .manipulability import METRICS
+from .manipulability import METRICS, W_UNIT
 
 
 @dataclass(frozen=True)
-class WorkspaceSlice:
+class WorkspaceSlice(Result):
     r"""Metrics over a 1-D sweep or a 2-D map of task poses (``ij`` indexing).
 
     ``a[i, j]`` belongs to the pose whose coordinate ``axes[0]`` is ``values[0][i]`` and
@@ -69,19 +70,21 @@ class WorkspaceSlice:
     """
 
     axes: tuple[str, ...]
-    values: tuple[np.ndarray, ...]
-    pose: np.ndarray
+    values: tuple[np.ndarray, ...] = field(metadata=unit("m, rad"))
+    pose: np.ndarray = field(metadata=unit("m, rad"))
     dofs: tuple[str, ...]
     reachable: np.ndarray
-    manipulability: np.ndarray
-    condition_number: np.ndarray
-    constraint_margin: np.ndarray
-    inverse_margin: np.ndarray
-    direct_margin: np.ndarray
-    actuators: np.ndarray
-    q: np.ndarray
+    manipulability: np.ndarray = field(metadata=unit(W_UNIT))
+    condition_number: np.ndarray = field(metadata=unit("-"))
+    constraint_margin: np.ndarray = field(metadata=unit("-"))
+    inverse_margin: np.ndarray = field(metadata=unit("-"))
+    direct_margin: np.ndarray = field(metadata=unit("-"))
+    actuators: np.ndarray = field(metadata=unit("m, rad"))
+    q: np.ndarray = field(metadata=unit("m, rad"))
     mode: np.ndarray
     working_mode: tuple[int, ...] | None
+    _SKIPPED = ("q",)
+    _NONFINITE_AS_TEXT = (*METRICS, "actuators")
 
     def __post_init__(self) -> None:
         shape = tuple(len(v) for v in self.values)
@@ -127,27 +130,6 @@ class WorkspaceSlice:
         if name not in METRICS:
             raise InvalidInput(f"unknown metric {name!r}; metrics are {list(METRICS)}")
         return np.asarray(getattr(self, name))
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON (NaN and inf written as strings)."""
-
-        def text(a: np.ndarray) -> object:
-            out = np.asarray(a, dtype=object)
-            bad = ~np.isfinite(np.asarray(a, dtype=float))
-            out[bad] = np.asarray(a, dtype=float)[bad].astype(str)
-            return out.tolist()
-
-        return {
-            "axes": list(self.axes),
-            "values": [v.tolist() for v in self.values],
-            "pose": self.pose.tolist(),
-            "dofs": list(self.dofs),
-            "reachable": self.reachable.tolist(),
-            **{name: text(getattr(self, name)) for name in METRICS},
-            "actuators": text(self.actuators),
-            "mode": self.mode.tolist(),
-            "working_mode": None if self.working_mode is None else list(self.working_mode),
-        }
 
 
 def _grid_poses(

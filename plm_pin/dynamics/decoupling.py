@@ -43,7 +43,7 @@ raises, and so does a sample of which no pose can be evaluated.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -55,6 +55,7 @@ from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import check_square_task
 from ..kinematics.singularity import SINGULARITY_TOL, classify
 from ..kinematics.working_mode import working_mode
+from ..results import Result, unit
 from .task_space import TaskSpaceDynamics, task_space_dynamics, task_units
 
 DECOUPLING_RTOL = 1e-9
@@ -62,7 +63,7 @@ DECOUPLING_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
-class EntryBehaviour:
+class EntryBehaviour(Result):
     """How one task-space entry behaves over the sample.
 
     Attributes:
@@ -82,8 +83,9 @@ class EntryBehaviour:
     minimum: float
     maximum: float
     tolerance: float
-    ratio: float
+    ratio: float = field(metadata=unit("-"))
     unit: str
+    _NONFINITE_AS_TEXT = ("ratio",)
 
     @property
     def value(self) -> float:
@@ -108,17 +110,6 @@ class EntryBehaviour:
             return f"{self.value:.6g} {self.unit}"
         return f"{self.minimum:.4g} .. {self.maximum:.4g} {self.unit}"
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "kind": self.kind,
-            "min": self.minimum,
-            "max": self.maximum,
-            "tolerance": self.tolerance,
-            "ratio": self.ratio if np.isfinite(self.ratio) else str(self.ratio),
-            "unit": self.unit,
-        }
-
 
 def _behaviour(
     zero: bool, minimum: float, maximum: float, tol: float, ratio: float, unit: str, *, constant: bool = True
@@ -129,7 +120,7 @@ def _behaviour(
 
 
 @dataclass(frozen=True)
-class DecouplingReport:
+class DecouplingReport(Result):
     r"""Behaviour of :math:`M_x`, :math:`g_x` and :math:`h_x` over a sample of task poses.
 
     Arrays are read-only. Per-entry behaviours come from :meth:`inertia`, :meth:`gravity`
@@ -165,29 +156,34 @@ class DecouplingReport:
 
     mechanism: str
     dofs: tuple[str, ...]
-    poses: np.ndarray
-    configurations: np.ndarray
-    unreachable: np.ndarray
-    singular: np.ndarray
-    M_min: np.ndarray
-    M_max: np.ndarray
-    M_tol: np.ndarray
+    poses: np.ndarray = field(metadata=unit("m, rad"))
+    configurations: np.ndarray = field(metadata=unit("m, rad"))
+    unreachable: np.ndarray = field(metadata=unit("m, rad"))
+    singular: np.ndarray = field(metadata=unit("m, rad"))
+    M_min: np.ndarray = field(metadata=unit("kg, kg m, kg m^2"))
+    M_max: np.ndarray = field(metadata=unit("kg, kg m, kg m^2"))
+    M_tol: np.ndarray = field(metadata=unit("kg, kg m, kg m^2"))
     M_zero: np.ndarray
-    M_ratio: np.ndarray
-    g_min: np.ndarray
-    g_max: np.ndarray
-    g_tol: np.ndarray
+    M_ratio: np.ndarray = field(metadata=unit("-"))
+    g_min: np.ndarray = field(metadata=unit("N, N m"))
+    g_max: np.ndarray = field(metadata=unit("N, N m"))
+    g_tol: np.ndarray = field(metadata=unit("N, N m"))
     g_zero: np.ndarray
-    g_ratio: np.ndarray
-    h_min: np.ndarray
-    h_max: np.ndarray
-    h_tol: np.ndarray
+    g_ratio: np.ndarray = field(metadata=unit("-"))
+    h_min: np.ndarray = field(metadata=unit("N, N m"))
+    h_max: np.ndarray = field(metadata=unit("N, N m"))
+    h_tol: np.ndarray = field(metadata=unit("N, N m"))
     h_zero: np.ndarray
-    h_ratio: np.ndarray
-    rtol: float
+    h_ratio: np.ndarray = field(metadata=unit("-"))
+    rtol: float = field(metadata=unit("-"))
     atol: float
     n_velocities: int
-    velocity_scale: float
+    velocity_scale: float = field(metadata=unit("m/s, rad/s"))
+    _SKIPPED = (
+        "configurations",
+        *(f"{t}_{s}" for t in "Mgh" for s in ("min", "max", "tol", "zero", "ratio")),
+    )
+    _DERIVED = ("n_poses",)
 
     def __post_init__(self) -> None:
         n = len(self.dofs)
@@ -306,16 +302,7 @@ class DecouplingReport:
     def to_dict(self) -> dict[str, object]:
         """Plain data for JSON: per-entry behaviours, tolerances and the skipped poses."""
         return {
-            "mechanism": self.mechanism,
-            "dofs": list(self.dofs),
-            "n_poses": self.n_poses,
-            "poses": self.poses.tolist(),
-            "unreachable": self.unreachable.tolist(),
-            "singular": self.singular.tolist(),
-            "rtol": self.rtol,
-            "atol": self.atol,
-            "n_velocities": self.n_velocities,
-            "velocity_scale": self.velocity_scale,
+            **super().to_dict(),
             "M_x": [[self.inertia(d, e).to_dict() for e in self.dofs] for d in self.dofs],
             "g_x": [self.gravity(d).to_dict() for d in self.dofs],
             "h_x": [self.velocity(d).to_dict() for d in self.dofs],

@@ -74,7 +74,8 @@ class InverseDynamics(Result):
             reflected inertias, ``"external"`` for the load), each shape (n, n_act); computed on
             first access, from one RNEA pass per sample.
         split_exact: whether the shares add up to ``f_c`` by linearity (weighted minimum norm).
-        leads: ball-screw lead of each actuator [m/rev] (NaN without one), shape (n_act,).
+        leads: ball-screw lead of each actuator [m/rev] (NaN without one, ``'nan'`` in
+            ``to_dict``), shape (n_act,).
     """
 
     actuators: tuple[str, ...]
@@ -88,6 +89,7 @@ class InverseDynamics(Result):
     bodies: Mapping[str, np.ndarray] = field(metadata=unit("N, N m"))
     split_exact: bool
     leads: np.ndarray = field(repr=False, metadata=unit("m/rev"))
+    _NONFINITE_AS_TEXT = ("leads",)
 
     @property
     def n_samples(self) -> int:
@@ -114,10 +116,6 @@ class InverseDynamics(Result):
         if split not in ("terms", "bodies"):
             raise InvalidInput(f"split {split!r} is not 'terms' or 'bodies'")
         return {k: v * self.cd for k, v in getattr(self, split).items()}
-
-    def to_dict(self) -> dict[str, object]:
-        """JSON-ready dictionary (a missing lead written as None)."""
-        return {**super().to_dict(), "leads": [None if np.isnan(p) else float(p) for p in self.leads]}
 
 
 @dataclass(frozen=True)

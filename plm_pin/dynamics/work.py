@@ -14,7 +14,7 @@ r"""Work done by each actuator, :math:`W_i = \int |P_i|\,dt`, by two independent
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -23,6 +23,7 @@ from scipy.interpolate import CubicSpline
 
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
+from ..results import Result, unit
 from .inverse_dynamics import inverse_dynamics
 from .trajectory import Profile, task_trajectory
 
@@ -31,7 +32,7 @@ PAPER_TOL = 1e-3
 
 
 @dataclass(frozen=True)
-class AdaptiveWork:
+class AdaptiveWork(Result):
     """Result of the adaptive trapezoid rule.
 
     Attributes:
@@ -40,9 +41,10 @@ class AdaptiveWork:
         change: the last change of the work between ``2**(n1-1)`` and ``2**n1`` intervals [J].
     """
 
-    work: np.ndarray
+    work: np.ndarray = field(metadata=unit("J"))
     n1: int
-    change: np.ndarray
+    change: np.ndarray = field(metadata=unit("J"))
+    _DERIVED = ("intervals",)
 
     @property
     def intervals(self) -> int:

@@ -25,6 +25,7 @@ from ..core.checks import check_closed
 from ..core.legs import ik_jacobian_from_data
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, SingularConfiguration
+from ..results import Result
 
 INVERSE_RTOL = 1e-12
 r""":math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x :math:`|J_x|`.
@@ -34,7 +35,7 @@ itself, whose ratio is 1 for any 1 x 1 :math:`T` (see :mod:`plm_pin.kinematics.s
 
 
 @dataclass(frozen=True)
-class ClosedChainJacobians:
+class ClosedChainJacobians(Result):
     """Jacobians of a closed chain at one configuration.
 
     Attributes:

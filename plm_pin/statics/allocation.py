@@ -24,13 +24,14 @@ violations) and :class:`~plm_pin.exceptions.AllocationInfeasible` carries it.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import proxsuite
 from scipy.optimize import linprog
 
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError
+from ..results import Result, unit
 
 OBJECTIVES = ("norm", "max")
 """Allocation objectives: weighted minimum norm, or minimum largest force."""
@@ -66,7 +67,7 @@ class Inequalities:
 
 
 @dataclass(frozen=True)
-class Allocation:
+class Allocation(Result):
     """Result of an allocation.
 
     Attributes:
@@ -75,8 +76,8 @@ class Allocation:
         active: names of the inequality rows at their bounds.
     """
 
-    f_c: np.ndarray
-    y: np.ndarray
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    y: np.ndarray = field(metadata=unit("N, N m"))
     active: tuple[str, ...]
 
 

@@ -33,7 +33,7 @@ the internal-force space (see :func:`oriented_internal_basis`); with one interna
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -47,6 +47,7 @@ from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL, check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
+from ..results import Result, unit
 
 SINGULAR_RTOL = 1e-8
 r"""A direction counts as unresisted when its singular value is below SINGULAR_RTOL x the largest.
@@ -68,7 +69,7 @@ _TIE_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
-class Load:
+class Load(Result):
     """An external wrench applied to one frame of the mechanism.
 
     Attributes:
@@ -79,7 +80,7 @@ class Load:
 
     frame: str
     frame_id: int
-    wrench: np.ndarray
+    wrench: np.ndarray = field(metadata=unit("N, N m"))
 
 
 def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) -> Load:
@@ -122,7 +123,7 @@ def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) 
 
 
 @dataclass(frozen=True)
-class StaticBalance:
+class StaticBalance(Result):
     r"""The balance :math:`B f_c + J_\phi^T \lambda = \tau` at one configuration, ready to solve.
 
     Attributes:
@@ -150,20 +151,20 @@ class StaticBalance:
         a: joint accelerations when ``tau`` comes from inverse dynamics (None: at rest).
     """
 
-    q: np.ndarray
-    tau: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    tau: np.ndarray = field(metadata=unit("N, N m"))
     load: Load | None
     gravity: bool
     J_phi: np.ndarray
     N: np.ndarray
     C: np.ndarray
-    f_particular: np.ndarray
-    internal_basis: np.ndarray
+    f_particular: np.ndarray = field(metadata=unit("N, N m"))
+    internal_basis: np.ndarray = field(metadata=unit("-"))
     actuated_v: np.ndarray
     lambda_map: np.ndarray
     force_map: np.ndarray
-    v: np.ndarray | None = None
-    a: np.ndarray | None = None
+    v: np.ndarray | None = field(default=None, metadata=unit("m/s, rad/s"))
+    a: np.ndarray | None = field(default=None, metadata=unit("m/s^2, rad/s^2"))
 
     @property
     def n_internal(self) -> int:

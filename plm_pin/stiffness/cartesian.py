@@ -26,7 +26,7 @@ that units do not mix: :math:`1/\mathrm{eig}(C_{tt})` [N/m] under pure forces, a
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -36,6 +36,7 @@ from ..core.closures import jacobian_from_data
 from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
+from ..results import Result, unit
 from ..statics import StaticForces
 from .equilibrium import GEOMETRIC, ElasticState, elastic_state, hessian, with_locks
 from .model import SOURCES
@@ -48,29 +49,20 @@ UNRESISTED_RTOL = 1e-9
 
 
 @dataclass(frozen=True)
-class EigenStiffness:
+class EigenStiffness(Result):
     """Principal stiffnesses of one block of the compliance.
 
     Attributes:
-        values: eigen-stiffnesses, ascending [N/m] or [N m/rad], shape (k,).
+        values: eigen-stiffnesses, ascending [N/m] or [N m/rad] (``unit``), shape (k,).
         directions: unit directions in the block's task coordinates, one per column, shape (k, k).
         dofs: the task coordinates of the block.
         unit: unit of ``values``.
     """
 
-    values: np.ndarray
-    directions: np.ndarray
+    values: np.ndarray = field(metadata=unit("N/m, N m/rad"))
+    directions: np.ndarray = field(metadata=unit("-"))
     dofs: tuple[str, ...]
     unit: str
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "values": self.values.tolist(),
-            "directions": self.directions.T.tolist(),
-            "dofs": list(self.dofs),
-            "unit": self.unit,
-        }
 
 
 def _entry_units(dofs: tuple[str, ...], kind: str) -> list[str]:
@@ -88,7 +80,7 @@ def _entry_units(dofs: tuple[str, ...], kind: str) -> list[str]:
 
 
 @dataclass(frozen=True)
-class StiffnessResult:
+class StiffnessResult(Result):
     r"""Cartesian stiffness at an equilibrium.
 
     Attributes:
@@ -113,20 +105,21 @@ class StiffnessResult:
     """
 
     dofs: tuple[str, ...]
-    q: np.ndarray
-    K_x: np.ndarray
-    C_x: np.ndarray
-    translational: EigenStiffness
-    rotational: EigenStiffness
-    contributions: dict[str, np.ndarray]
-    f_c: np.ndarray
-    lam: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    K_x: np.ndarray = field(metadata=unit("N/m, N/rad, N, N m/rad"))
+    C_x: np.ndarray = field(metadata=unit("m/N, m/(N m), rad/N, rad/(N m)"))
+    translational: EigenStiffness = field(metadata=unit("N/m"))
+    rotational: EigenStiffness = field(metadata=unit("N m/rad"))
+    contributions: dict[str, np.ndarray] = field(metadata=unit("N/m, N/rad, N, N m/rad"))
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
     basis: np.ndarray
     H: np.ndarray
     T: np.ndarray
     idle: int
     unresisted: int
     state: ElasticState
+    _SKIPPED = ("basis", "H", "T", "state")
 
     @property
     def min_translational(self) -> float:
@@ -154,18 +147,8 @@ class StiffnessResult:
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for JSON, with the unit of every entry of ``K_x`` and ``C_x`` (row-major)."""
-        return {
-            "dofs": list(self.dofs),
-            "K_x": self.K_x.tolist(),
-            "C_x": self.C_x.tolist(),
-            "units": {"K_x": _entry_units(self.dofs, "K"), "C_x": _entry_units(self.dofs, "C")},
-            "translational": self.translational.to_dict(),
-            "rotational": self.rotational.to_dict(),
-            "contributions": {k: v.tolist() for k, v in self.contributions.items()},
-            "f_c": self.f_c.tolist(),
-            "idle_motions": self.idle,
-            "unresisted_motions": self.unresisted,
-        }
+        units = {"K_x": _entry_units(self.dofs, "K"), "C_x": _entry_units(self.dofs, "C")}
+        return {**super().to_dict(), "units": units}
 
 
 def null_basis(A: np.ndarray, nv: int, rtol: float = RANK_RTOL) -> np.ndarray:

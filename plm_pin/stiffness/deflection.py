@@ -18,7 +18,7 @@ cut-joint and rigid-drive forces. The loads are fixed in the world (dead loads).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
+from ..results import Result, unit
 from ..statics import Load, StaticForces, load_on_frame
 from .cartesian import condense
 from .equilibrium import closure_and_locks, elastic_state, generalized_load, hessian_terms
@@ -36,7 +37,7 @@ NEWTON_TOL = 1e-10
 
 
 @dataclass(frozen=True)
-class Deflection:
+class Deflection(Result):
     """The equilibrium reached under an extra load.
 
     Attributes:
@@ -45,7 +46,7 @@ class Deflection:
         q_rigid: the rigid joints' entries of ``q``, shape (nq,).
         task_displacement: displacement of the task frame, position [m] and world rotation
             vector [rad] rows of the task, shape (n_task,).
-        linear_displacement: :math:`K_x^{-1} w` (the linear prediction), shape (n_task,).
+        linear_displacement: :math:`K_x^{-1} w` (the linear prediction) [m, rad], shape (n_task,).
         actuator_deflections: change of each drive's joint [m, rad], shape (n_act,).
         joint_deflections: change of each passive spring joint [m, rad], by name.
         link_deflections: tip deflection of each flexible link in its beam frame
@@ -56,29 +57,16 @@ class Deflection:
     """
 
     dofs: tuple[str, ...]
-    q: np.ndarray
-    q_rigid: np.ndarray
-    task_displacement: np.ndarray
-    linear_displacement: np.ndarray
-    actuator_deflections: np.ndarray
-    joint_deflections: dict[str, float]
-    link_deflections: dict[str, np.ndarray]
-    f_c: np.ndarray
-    lam: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
+    q_rigid: np.ndarray = field(metadata=unit("m, rad"))
+    task_displacement: np.ndarray = field(metadata=unit("m, rad"))
+    linear_displacement: np.ndarray = field(metadata=unit("m, rad"))
+    actuator_deflections: np.ndarray = field(metadata=unit("m, rad"))
+    joint_deflections: dict[str, float] = field(metadata=unit("m, rad"))
+    link_deflections: dict[str, np.ndarray] = field(metadata=unit("m, rad"))
+    f_c: np.ndarray = field(metadata=unit("N, N m"))
+    lam: np.ndarray = field(metadata=unit("N, N m"))
     iterations: int
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "dofs": list(self.dofs),
-            "task_displacement": self.task_displacement.tolist(),
-            "linear_displacement": self.linear_displacement.tolist(),
-            "actuator_deflections": self.actuator_deflections.tolist(),
-            "joint_deflections": dict(self.joint_deflections),
-            "link_deflections": {k: v.tolist() for k, v in self.link_deflections.items()},
-            "f_c": self.f_c.tolist(),
-            "iterations": self.iterations,
-        }
 
 
 def _add(load: Load | None, extra: Load, mech: Mechanism) -> Load:

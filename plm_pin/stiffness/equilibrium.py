@@ -24,7 +24,7 @@ symmetric for conservative loads (no external moment in 3-D).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -34,6 +34,7 @@ from ..core import closures as _closures
 from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput
+from ..results import Result, unit
 from ..statics import Load, StaticForces, load_on_frame, static_forces
 from .geometric import TreeDerivatives, closure_derivative
 from .model import SOURCES, CompliantModel, compliant_model
@@ -45,7 +46,7 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 @dataclass(frozen=True)
-class ElasticState:
+class ElasticState(Result):
     """A loaded equilibrium of the compliant model.
 
     Attributes:
@@ -58,11 +59,12 @@ class ElasticState:
     """
 
     compliant: CompliantModel
-    q: np.ndarray
+    q: np.ndarray = field(metadata=unit("m, rad"))
     forces: StaticForces
     load: Load | None
     gravity: bool
-    spring_forces: np.ndarray
+    spring_forces: np.ndarray = field(metadata=unit("N, N m"))
+    _SKIPPED = ("compliant",)
 
     @property
     def lam(self) -> np.ndarray:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -12,19 +12,19 @@ from ..analysis import WorkspaceSlice
 from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
+from ..results import Result, unit, units
 from .cartesian import stiffness
 from .modes import natural_frequencies
 
-VARIABLES: dict[str, tuple[str, str]] = {
-    "min_translational_stiffness": ("N/m", "smallest eigen-stiffness under a pure force"),
-    "compliance_along": ("m/N", "displacement per unit force along the map's direction"),
-    "lowest_frequency": ("Hz", "lowest natural frequency from M_x and K_x"),
+_MEANINGS = {
+    "min_translational_stiffness": "smallest eigen-stiffness under a pure force",
+    "compliance_along": "displacement per unit force along the map's direction",
+    "lowest_frequency": "lowest natural frequency from M_x and K_x",
 }
-"""The variables of a stiffness map: unit and meaning."""
 
 
 @dataclass(frozen=True)
-class StiffnessMap:
+class StiffnessMap(Result):
     """Stiffness metrics at every reached point of a workspace slice (NaN elsewhere and where singular).
 
     Attributes:
@@ -38,12 +38,13 @@ class StiffnessMap:
     """
 
     axes: tuple[str, ...]
-    values: tuple[np.ndarray, ...]
+    values: tuple[np.ndarray, ...] = field(metadata=unit("m, rad"))
     reachable: np.ndarray
-    direction: np.ndarray
-    min_translational_stiffness: np.ndarray
-    compliance_along: np.ndarray
-    lowest_frequency: np.ndarray
+    direction: np.ndarray = field(metadata=unit("-"))
+    min_translational_stiffness: np.ndarray = field(metadata=unit("N/m"))
+    compliance_along: np.ndarray = field(metadata=unit("m/N"))
+    lowest_frequency: np.ndarray = field(metadata=unit("Hz"))
+    _NONFINITE_AS_TEXT = tuple(_MEANINGS)
 
     def variable(self, name: str) -> np.ndarray:
         """One of :data:`VARIABLES` by name.
@@ -56,14 +57,13 @@ class StiffnessMap:
         return np.asarray(getattr(self, name))
 
     def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON (NaN where unreached), with units."""
-        return {
-            "axes": list(self.axes),
-            "values": [v.tolist() for v in self.values],
-            "direction": self.direction.tolist(),
-            **{name: self.variable(name).tolist() for name in VARIABLES},
-            "units": {name: unit for name, (unit, _) in VARIABLES.items()},
-        }
+        """Plain data for JSON (``'nan'`` where unreached), with the units of the variables."""
+        return {**super().to_dict(), "units": {name: unit for name, (unit, _) in VARIABLES.items()}}
+
+
+_UNITS = units(StiffnessMap)
+VARIABLES: dict[str, tuple[str, str]] = {name: (_UNITS[name], doc) for name, doc in _MEANINGS.items()}
+"""The variables of a stiffness map: unit (from the fields of :class:`StiffnessMap`) and meaning."""
 
 
 def stiffness_map(

@@ -15,7 +15,7 @@ the symmetric part of the Hessian.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike
 from ..core.mechanism import Mechanism
 from ..dynamics.task_space import task_space_dynamics
 from ..exceptions import InvalidInput, SingularConfiguration
+from ..results import Result, unit
 from .cartesian import StiffnessResult, stiffness
 
 MODELS: tuple[str, ...] = ("task", "full")
@@ -36,7 +37,7 @@ MASSLESS_RTOL = 1e-12
 
 
 @dataclass(frozen=True)
-class Modes:
+class Modes(Result):
     """Lowest vibration modes at a pose, ascending.
 
     Attributes:
@@ -50,24 +51,16 @@ class Modes:
 
     model: str
     dofs: tuple[str, ...]
-    frequencies: np.ndarray
-    omega: np.ndarray
-    task_shapes: np.ndarray
-    joint_shapes: np.ndarray
+    frequencies: np.ndarray = field(metadata=unit("Hz"))
+    omega: np.ndarray = field(metadata=unit("rad/s"))
+    task_shapes: np.ndarray = field(metadata=unit("m, rad"))
+    joint_shapes: np.ndarray = field(metadata=unit("m, rad"))
+    _SKIPPED = ("joint_shapes",)
 
     @property
     def lowest(self) -> float:
         """Lowest natural frequency [Hz]."""
         return float(self.frequencies[0])
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "model": self.model,
-            "dofs": list(self.dofs),
-            "frequencies_hz": self.frequencies.tolist(),
-            "task_shapes": self.task_shapes.T.tolist(),
-        }
 
 
 def natural_frequencies(

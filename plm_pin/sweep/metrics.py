@@ -50,7 +50,7 @@ from ..kinematics.singularity import KINDS, SINGULARITY_TOL
 from ..results import units
 from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
-from ..stiffness import stiffness_map
+from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
 
 SINGULARITY_CODES: tuple[str, ...] = ("regular", *KINDS)
@@ -61,6 +61,12 @@ W_UNIT = units(Manipulability)["w"]
 
 RANGE_UNITS = units(OrientationRange)
 """Units of an orientation range's ends (see :mod:`plm_pin.analysis.orientation`)."""
+
+SLICE_UNITS = units(WorkspaceSlice)
+"""Units of the per-pose metrics of a workspace slice (see :mod:`plm_pin.analysis.workspace`)."""
+
+STIFFNESS_UNITS = units(StiffnessMap)
+"""Units of the stiffness-map variables (see :mod:`plm_pin.stiffness.maps`)."""
 
 FORCE_UNIT = "N (N m for revolute actuators)"
 
@@ -450,7 +456,7 @@ METRICS: dict[str, Metric] = {
         Metric(
             "condition_number",
             "sigma_max / sigma_min of J_ce; inf at a singularity",
-            (Variable("condition_number", "-", "condition number of J_ce"),),
+            (Variable("condition_number", SLICE_UNITS["condition_number"], "condition number of J_ce"),),
             (),
             _grid_values("condition_number"),
         ),
@@ -553,9 +559,21 @@ METRICS: dict[str, Metric] = {
             "(plm_pin.stiffness, the sidecar's compliance): smallest translational eigen-stiffness, "
             "compliance along a direction, lowest natural frequency (task model); NaN where singular",
             (
-                Variable("min_translational_stiffness", "N/m", "smallest eigen-stiffness under a pure force"),
-                Variable("compliance_along", "m/N", "displacement per unit force along compliance_direction"),
-                Variable("lowest_frequency", "Hz", "lowest natural frequency from M_x and K_x"),
+                Variable(
+                    "min_translational_stiffness",
+                    STIFFNESS_UNITS["min_translational_stiffness"],
+                    "smallest eigen-stiffness under a pure force",
+                ),
+                Variable(
+                    "compliance_along",
+                    STIFFNESS_UNITS["compliance_along"],
+                    "displacement per unit force along compliance_direction",
+                ),
+                Variable(
+                    "lowest_frequency",
+                    STIFFNESS_UNITS["lowest_frequency"],
+                    "lowest natural frequency from M_x and K_x",
+                ),
             ),
             ("gravity", "internal", "compliance_direction"),
             _stiffness,

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._version import __version__
+from ..results import Result, unit
 from ._deps import require
 from .spec import SweepSpec, Value, value_label
 
@@ -30,7 +31,7 @@ ANGLES = ("rx", "ry", "rz")
 
 
 @dataclass(frozen=True)
-class PointFailure:
+class PointFailure(Result):
     """A parameter point that could not be evaluated.
 
     Attributes:
@@ -48,14 +49,9 @@ class PointFailure:
         values = ", ".join(f"{k}={value_label(v)}" for k, v in self.parameters.items())
         return f"point {self.index} ({values or 'no varied parameter'}): {self.message}"
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        params = {k: list(v) if isinstance(v, tuple) else v for k, v in self.parameters.items()}
-        return {"index": self.index, "parameters": params, "message": self.message}
-
 
 @dataclass(frozen=True)
-class ChunkFailure:
+class ChunkFailure(Result):
     """A chunk that did not finish: some of its points raised, or its task was lost.
 
     Its other points' values are in the result; the chunk is not checkpointed, so a re-run
@@ -77,28 +73,9 @@ class ChunkFailure:
         head = f"chunk of points {self.first}-{self.last}: {len(self.points)} point(s) failed"
         return "\n".join([head, *(f"  {p.describe()}" for p in self.points)])
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {"first": self.first, "last": self.last, "points": [p.to_dict() for p in self.points]}
-
-
-def _plain(obj: Any) -> Any:
-    """JSON-ready copy: numpy values as Python ones, non-finite floats as strings."""
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, np.generic):
-        return _plain(obj.item())
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return str(obj)
-    return obj
-
 
 @dataclass(frozen=True)
-class SweepResult:
+class SweepResult(Result):
     """A finished sweep (possibly with failed chunks).
 
     Attributes:
@@ -111,6 +88,9 @@ class SweepResult:
         failures: the chunks that did not finish.
         store: the checkpoint folder, or None.
         elapsed: wall time of the run [s].
+
+    ``to_dict`` writes the dataset as ``xarray.Dataset.to_dict(data="list")`` does, non-finite
+    values as strings.
     """
 
     dataset: xr.Dataset
@@ -120,7 +100,8 @@ class SweepResult:
     loaded: int
     failures: tuple[ChunkFailure, ...]
     store: Path | None
-    elapsed: float
+    elapsed: float = field(metadata=unit("s"))
+    _NONFINITE_AS_TEXT = ("dataset", "elapsed")
 
     @property
     def complete(self) -> bool:
@@ -136,21 +117,6 @@ class SweepResult:
         """Poses evaluated per second of wall time by this run (finished chunks only) [1/s]."""
         n = self.computed_points * self.spec.n_poses
         return n / self.elapsed if self.elapsed > 0.0 else math.inf
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON: the run's summary and the dataset (non-finite values as strings)."""
-        return _plain(
-            {
-                "key": self.key,
-                "spec": self.spec.to_dict(),
-                "computed": [list(c) for c in self.computed],
-                "loaded": self.loaded,
-                "failures": [f.to_dict() for f in self.failures],
-                "store": None if self.store is None else str(self.store),
-                "elapsed": self.elapsed,
-                "dataset": self.dataset.to_dict(data="list"),
-            }
-        )
 
 
 def _coordinate(values: tuple[Value, ...]) -> np.ndarray:
@@ -175,8 +141,8 @@ def build_dataset(spec: SweepSpec, arrays: dict[str, np.ndarray], failed: np.nda
         for name, values in zip(space.names, space.values, strict=True):
             coords[name] = (name, _coordinate(tuple(values)), described)
     for axis, grid in zip(spec.axes, spec.values, strict=True):
-        unit = "rad" if axis in ANGLES else "m"
-        coords[axis] = (axis, np.array(grid), {"units": unit, "description": f"task coordinate {axis}"})
+        axis_unit = "rad" if axis in ANGLES else "m"
+        coords[axis] = (axis, np.array(grid), {"units": axis_unit, "description": f"task coordinate {axis}"})
     data: dict[str, Any] = {}
     for v in spec.variables():
         attrs: dict[str, Any] = {"units": v.unit, "description": v.description}

@@ -165,6 +165,8 @@ def test_nothing_reachable_gives_an_empty_map():
     result = workspace_map(mech, ("x", "y"), (np.linspace(-0.05, 0.05, 3), np.linspace(0.25, 0.3, 3)))
     assert not result.reachable.any() and result.working_mode is None
     assert np.all(np.isnan(result.manipulability))
+    data = json.loads(json.dumps(result.to_dict(), allow_nan=False))  # NaN and inf as text
+    assert data["manipulability"] == [["nan"] * 3] * 3 and data["working_mode"] is None
 
 
 def test_sweep_shapes_and_json():
@@ -175,6 +177,10 @@ def test_sweep_shapes_and_json():
     assert result.shape == (13,) and result.actuators.shape == (13, 3) and result.q.shape == (13, mech.nq)
     data = json.loads(json.dumps(result.to_dict()))
     assert data["axes"] == ["rz"] and len(data["manipulability"]) == 13
+    assert list(data) == [
+        *("axes", "values", "pose", "dofs", "reachable", "manipulability", "condition_number"),
+        *("constraint_margin", "inverse_margin", "direct_margin", "actuators", "mode", "working_mode"),
+    ]  # q left out
     with pytest.raises(ValueError):
         result.manipulability[0] = 1.0  # read-only
 

@@ -129,6 +129,16 @@ def test_table_and_dict_state_the_tolerances():
     data = json.loads(json.dumps(report.to_dict()))
     assert data["M_x"][0][1]["kind"] == "zero" and data["M_x"][0][2]["unit"] == "kg m"
     assert data["decoupled"] == ["x"] and data["rtol"] == DECOUPLING_RTOL
+    m_xx = report.inertia("x", "x")
+    assert data["M_x"][0][0] == {
+        "kind": m_xx.kind,
+        "minimum": m_xx.minimum,
+        "maximum": m_xx.maximum,
+        "tolerance": m_xx.tolerance,
+        "ratio": m_xx.ratio,
+        "unit": "kg",
+    }
+    assert data["n_poses"] == report.n_poses and "M_min" not in data and "configurations" not in data
 
 
 def test_coupling_ratio_is_the_largest_correlation_and_sets_what_rtol_neglects():

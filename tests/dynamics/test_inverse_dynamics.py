@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -56,6 +58,15 @@ def test_actuator_power_equals_the_rate_of_energy(name, profile, duration):
     scale = np.max(np.abs(idr.power).sum(axis=1))  # the actuators' powers may cancel in the sum
     np.testing.assert_allclose(total[inner], dEdt[inner], atol=2e-4 * scale)
     assert idr.residual.max() <= 1e-9 * max(np.max(np.abs(idr.f_c)), 1.0)
+
+
+def test_to_dict_is_strict_json_with_missing_leads_as_text():
+    """Actuators without a ball screw have a NaN lead, written as 'nan' (JSON has no NaN)."""
+    mech = preset("harada2011_3d4m")
+    idr = inverse_dynamics(mech, task_trajectory(mech, _harada_profile, np.linspace(0.0, 1.0, 5)))
+    assert np.isnan(idr.leads).all()
+    data = json.loads(json.dumps(idr.to_dict(), allow_nan=False))
+    assert data["leads"] == ["nan"] * 4 and data["f_c"] == idr.f_c.tolist()
 
 
 @pytest.mark.parametrize("name", ["harada2011_3d4m", "zhao2011_8pss"])
@@ -150,6 +161,12 @@ def test_spline_and_trapezoid_work_against_a_closed_form():
     assert res.work[0] == pytest.approx(6.0, abs=1e-5)
     grid = np.linspace(0.0, 3 * np.pi, 2 ** (res.n1 - 1) + 1)  # the rule stopped because this one was close
     assert abs(np.trapezoid(np.abs(np.sin(grid)), grid) - res.work[0]) <= 1e-6
+    assert res.to_dict() == {
+        "work": res.work.tolist(),
+        "n1": res.n1,
+        "change": res.change.tolist(),
+        "intervals": 2**res.n1,
+    }
     with pytest.raises(InvalidInput, match="need finite ts < te"):
         adaptive_trapezoid_work(lambda s: s[:, None], 1.0, 0.0)
 

@@ -380,6 +380,33 @@ def test_results_serialise_to_strict_json(asym, graph, route, flip, symmetric):
         pm.pair_solutions(0.0, 0.3, 0.24, 0.17),
     ):
         json.dumps(obj.to_dict(), allow_nan=False)
+    data = route.to_dict()
+    assert data["route"] == [list(m) for m in route.route] and data["ok"] == route.ok
+    assert [c["label"] for c in data["crossings"]] == [pm.mode_label(c.mode) for c in route.crossings]
+    assert data["crossings"] and data["graph"] == graph.to_dict()
+    assert flip.to_dict()["visited"] == [list(m) for m in flip.visited]
+    mech3 = preset("harada2011_3d3m")
+    state = pm.prrrp_state(mech3, mech3.q_ref)
+    data = state.to_dict()
+    assert data["assembly_mode_label"] == pm.mode_label(state.assembly_mode)
+    assert data["working_mode_label"] == pm.working_mode_label(state.working_mode)
+    assert "nan" in data["sub_direct_margin"]  # a pair held by one leg
+    case = pm.complex_singularity_check(symmetric)
+    data = case.to_dict()
+    assert data["admits_complex_singularity"] == case.admits_complex_singularity
+    assert [c["sub_rank"] for c in data["coincident"]] == [c.sub_rank for c in case.coincident]
+    assert pm.pair_solutions(0.0, 0.3, 0.24, 0.17).to_dict()["kind"] == "two"
+    layout = pm.prrrp_layout(asym)
+    data = layout.to_dict()
+    assert data["legs"][0] == {
+        "index": layout.legs[0].index,
+        "slider": layout.legs[0].slider,
+        "rod": layout.legs[0].rod,
+        "pair": layout.legs[0].pair,
+        "length": layout.legs[0].length,
+        "actuator": layout.legs[0].actuator,
+    }
+    assert data["subs"][0]["legs"] == list(layout.subs[0].legs) and data["half_plate"] == layout.half_plate
 
 
 def test_bad_input_is_refused_with_clear_messages(asym, graph):

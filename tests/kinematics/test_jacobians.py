@@ -102,6 +102,14 @@ def test_velocity_map_is_feasible_and_reproduces_the_task_rates(name):
     np.testing.assert_allclose(jac.N.T @ jac.N, np.eye(mech.mobility), atol=1e-14)
 
 
+def test_jacobians_write_their_fields():
+    """to_dict writes the six matrices as nested lists (S and J_ce, which may not exist, are left out)."""
+    jac = closed_chain_jacobians(preset("harada2011_3d4m"), preset("harada2011_3d4m").q_ref)
+    data = jac.to_dict()
+    assert list(data) == ["J_phi", "J_x", "N", "closure_singular_values", "T", "C"]
+    assert data["T"] == jac.T.tolist() and data["J_phi"] == jac.J_phi.tolist()
+
+
 RT = 0.05
 
 

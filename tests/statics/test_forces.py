@@ -10,7 +10,8 @@ import pytest
 
 from plm_pin.exceptions import FrameNotFound, InvalidInput, SingularConfiguration
 from plm_pin.kinematics import inverse_kinematics, task_pose
-from plm_pin.statics import static_forces
+from plm_pin.statics import load_on_frame, static_forces
+from plm_pin.statics.allocation import min_norm
 from tests.conftest import preset, prrrp_paper_configuration
 
 
@@ -134,3 +135,26 @@ def test_to_dict_is_json_ready():
     d = json.loads(json.dumps(static_forces(mech, mech.q_ref).to_dict()))
     assert set(d["f_c"]) == {"slider1", "slider2", "slider3", "slider4"}
     assert set(d["lam"]) == {c.name for c in mech.closures}
+
+
+def test_load_balance_and_allocation_write_their_fields():
+    """A load, a balance and an allocation are results: to_dict writes their fields as plain JSON."""
+    import json
+
+    mech = preset("harada2011_3d4m")
+    load = load_on_frame(mech, [1.0, 2.0, 0.1])
+    assert json.loads(json.dumps(load.to_dict(), allow_nan=False)) == {
+        "frame": load.frame,
+        "frame_id": load.frame_id,
+        "wrench": [1.0, 2.0, 0.0, 0.0, 0.0, 0.1],
+    }
+    balance = static_forces(mech, mech.q_ref, [1.0, 2.0, 0.1]).balance
+    data = json.loads(json.dumps(balance.to_dict(), allow_nan=False))
+    assert data["load"] == balance.load.to_dict() and data["tau"] == balance.tau.tolist()
+    assert data["v"] is None and data["internal_basis"] == balance.internal_basis.tolist()
+    alloc = min_norm(np.array([1.0, -1.0]), np.array([[1.0], [1.0]]), np.eye(2))
+    assert json.loads(json.dumps(alloc.to_dict(), allow_nan=False)) == {
+        "f_c": [1.0, -1.0],
+        "y": [0.0],
+        "active": [],
+    }

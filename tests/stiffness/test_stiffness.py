@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
+from plm_pin.analysis import workspace_map
 from plm_pin.description.compliance import ComplianceSpec
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
+from plm_pin.results import units
 from plm_pin.statics import load_on_frame, static_forces
-from plm_pin.stiffness import deflection, natural_frequencies, stiffness
+from plm_pin.stiffness import Modes, StiffnessMap, deflection, natural_frequencies, stiffness, stiffness_map
 from plm_pin.stiffness.equilibrium import elastic_state, hessian_terms
 from plm_pin.stiffness.geometric import TreeDerivatives
 from tests.conftest import ball_joint_body, fd_jacobian, preset
@@ -397,3 +400,37 @@ def test_3d4m_with_flexible_rods_is_drives_and_rods_in_series():
     full = natural_frequencies(mech, mech.q_ref, model="full", result=res)
     task = natural_frequencies(mech, mech.q_ref, result=res)
     assert full.lowest < task.lowest  # the rods' out-of-plane bending adds softer modes
+
+
+def test_results_are_strict_json_with_their_units():
+    """to_dict writes the fields (the solver's matrices left out), NaN as text; units come from the fields."""
+    mech = preset("harada2011_3d4m")
+    spec = _drives(mech, 2e4)
+    res = stiffness(mech, mech.q_ref, compliance=spec)
+    data = json.loads(json.dumps(res.to_dict(), allow_nan=False))
+    assert list(data) == [
+        *("dofs", "q", "K_x", "C_x", "translational", "rotational", "contributions", "f_c", "lam"),
+        *("idle", "unresisted", "units"),
+    ]
+    np.testing.assert_array_equal(data["K_x"], res.K_x)
+    assert data["translational"]["directions"] == res.translational.directions.tolist()
+    assert data["translational"]["unit"] == "N/m" and data["units"]["K_x"][0] == "N/m"
+    data = json.loads(json.dumps(res.state.to_dict(), allow_nan=False))
+    assert list(data) == ["q", "forces", "load", "gravity", "spring_forces"]  # the compliant model left out
+    assert list(data["forces"]["f_c"].values()) == res.f_c.tolist() and data["load"] is None
+    modes = natural_frequencies(mech, mech.q_ref, result=res)
+    data = json.loads(json.dumps(modes.to_dict(), allow_nan=False))
+    assert list(data) == ["model", "dofs", "frequencies", "omega", "task_shapes"]
+    assert data["frequencies"] == modes.frequencies.tolist() and units(Modes)["frequencies"] == "Hz"
+    d = deflection(mech, mech.q_ref, [1.0, 2.0, 0.1], compliance=spec)
+    data = json.loads(json.dumps(d.to_dict(), allow_nan=False))
+    assert data["task_displacement"] == d.task_displacement.tolist() and data["iterations"] == d.iterations
+    grid = workspace_map(mech, ("x", "y"), ([0.0], [0.08, 10.0]))  # y = 10 m is out of reach
+    smap = stiffness_map(mech, grid, compliance=spec)
+    data = json.loads(json.dumps(smap.to_dict(), allow_nan=False))
+    assert data["lowest_frequency"][0][1] == "nan"
+    assert data["lowest_frequency"][0][0] == pytest.approx(smap.lowest_frequency[0, 0], rel=0)
+    assert data["units"] == {
+        k: units(StiffnessMap)[k]
+        for k in ("min_translational_stiffness", "compliance_along", "lowest_frequency")
+    }

@@ -66,6 +66,11 @@ def test_a_failing_point_is_reported_with_its_parameters_and_the_rest_completes(
         "chunk of points 2-3: 1 point(s) failed\n  point 2 (half_plate=0.07): RuntimeError: fragile builder "
         "refuses half_plate = 0.07 m"
     )
+    assert failure.to_dict() == {
+        "first": 2,
+        "last": 3,
+        "points": [{"index": 2, "parameters": {"half_plate": 0.07}, "message": point.message}],
+    }
     ds = result.dataset
     assert ds.failed.values.tolist() == [False, False, True, False]
     assert np.isnan(ds.manipulability.values[2]).all() and np.isfinite(ds.manipulability.values[3]).any()

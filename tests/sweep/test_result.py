@@ -57,6 +57,8 @@ def test_to_dict_is_json_ready():
     result = sweep(**small(metrics=["manipulability"], options={}))
     data = json.loads(json.dumps(result.to_dict(), allow_nan=False))
     assert data["key"] == result.key and data["failures"] == [] and data["loaded"] == 0
+    assert data["spec"] == result.spec.to_dict() and data["computed"] == [list(c) for c in result.computed]
+    assert data["store"] is None and data["elapsed"] == result.elapsed
     w = data["dataset"]["data_vars"]["manipulability"]
     assert w["attrs"]["units"].startswith("product of the column units of J_ce")
     assert "nan" in json.dumps(w["data"])  # unreached poses

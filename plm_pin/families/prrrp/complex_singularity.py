@@ -12,7 +12,7 @@ Units: lengths [m], angles [rad], margins are normalised singular-value ratios [
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -22,13 +22,14 @@ from ...core.rank import numerical_rank
 from ...exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ...kinematics.jacobians import closed_chain_jacobians
 from ...kinematics.singularity import SINGULARITY_TOL, SingularityReport, report_from_jacobians
+from ...results import Result, unit
 from .layout import prrrp_layout
 from .modes import pair_solutions, prrrp_configuration, prrrp_state
 from .planners import fold_plan
 
 
 @dataclass(frozen=True)
-class CoincidentCircleSample:
+class CoincidentCircleSample(Result):
     """A configuration with the two sliders of a sub-mechanism at one position.
 
     Attributes:
@@ -41,25 +42,15 @@ class CoincidentCircleSample:
         report: the whole mechanism's singularity report.
     """
 
-    rod_angle: float
-    slider_gap: float
+    rod_angle: float = field(metadata=unit("rad"))
+    slider_gap: float = field(metadata=unit("m"))
     sub_rank: int
-    sub_direct_margin: float
+    sub_direct_margin: float = field(metadata=unit("-"))
     report: SingularityReport
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "rod_angle": self.rod_angle,
-            "slider_gap": self.slider_gap,
-            "sub_rank": self.sub_rank,
-            "sub_direct_margin": self.sub_direct_margin,
-            "report": self.report.to_dict(),
-        }
 
 
 @dataclass(frozen=True)
-class ComplexSingularityCase:
+class ComplexSingularityCase(Result):
     """One mechanism checked for the complex (constraint) singularity of a sub-mechanism.
 
     Attributes:
@@ -80,37 +71,21 @@ class ComplexSingularityCase:
 
     name: str
     leg: int
-    rod_lengths: tuple[float, float]
-    q_fold: np.ndarray
+    rod_lengths: tuple[float, float] = field(metadata=unit("m"))
+    q_fold: np.ndarray = field(metadata=unit("m, rad"))
     report: SingularityReport
-    slider_gap: float
+    slider_gap: float = field(metadata=unit("m"))
     circles: str
     closure_rank: int
     generic_closure_rank: int
-    min_slider_gap: float
+    min_slider_gap: float = field(metadata=unit("m"))
     coincident: tuple[CoincidentCircleSample, ...]
+    _DERIVED = ("admits_complex_singularity",)
 
     @property
     def admits_complex_singularity(self) -> bool:
         """Whether the closure Jacobian loses rank at the fold (``constraint`` kind)."""
         return "constraint" in self.report.kinds
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "name": self.name,
-            "leg": self.leg,
-            "rod_lengths": list(self.rod_lengths),
-            "q_fold": self.q_fold.tolist(),
-            "report": self.report.to_dict(),
-            "slider_gap": self.slider_gap,
-            "circles": self.circles,
-            "closure_rank": self.closure_rank,
-            "generic_closure_rank": self.generic_closure_rank,
-            "min_slider_gap": self.min_slider_gap,
-            "coincident": [c.to_dict() for c in self.coincident],
-            "admits_complex_singularity": self.admits_complex_singularity,
-        }
 
 
 def complex_singularity_check(

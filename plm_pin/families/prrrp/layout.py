@@ -10,13 +10,14 @@ Units: lengths [m].
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
 from ...core.mechanism import Mechanism
 from ...exceptions import InvalidInput
+from ...results import Result, unit
 from .builder import LEFT_LEGS, LEFT_PAIR, RIGHT_LEGS, RIGHT_PAIR, TASK_FRAME
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -25,7 +26,7 @@ _PAIRS = {i: LEFT_PAIR for i in LEFT_LEGS} | {i: RIGHT_PAIR for i in RIGHT_LEGS}
 
 
 @dataclass(frozen=True)
-class PrrrpLeg:
+class PrrrpLeg(Result):
     """One leg (slider + rod) of a 2-PRRRP.
 
     Attributes:
@@ -41,12 +42,12 @@ class PrrrpLeg:
     slider: str
     rod: str
     pair: str
-    length: float
+    length: float = field(metadata=unit("m"))
     actuator: int
 
 
 @dataclass(frozen=True)
-class PrrrpSubMechanism:
+class PrrrpSubMechanism(Result):
     """A plate pair with the legs that reach it (Harada 2015, Fig. 1(b)).
 
     Attributes:
@@ -66,7 +67,7 @@ class PrrrpSubMechanism:
 
 
 @dataclass(frozen=True)
-class PrrrpLayout:
+class PrrrpLayout(Result):
     r"""The 2-PRRRP structure of a mechanism, read from its model.
 
     Attributes:
@@ -81,10 +82,10 @@ class PrrrpLayout:
 
     legs: tuple[PrrrpLeg, ...]
     subs: tuple[PrrrpSubMechanism, PrrrpSubMechanism]
-    direction: np.ndarray
-    normal: np.ndarray
-    origin: np.ndarray
-    half_plate: float
+    direction: np.ndarray = field(metadata=unit("-"))
+    normal: np.ndarray = field(metadata=unit("-"))
+    origin: np.ndarray = field(metadata=unit("m"))
+    half_plate: float = field(metadata=unit("m"))
 
     def __post_init__(self) -> None:
         for arr in (self.direction, self.normal, self.origin):
@@ -107,20 +108,6 @@ class PrrrpLayout:
             if index in sub.legs:
                 return sub
         raise InvalidInput(f"no leg {index}; legs are {[leg.index for leg in self.legs]}")
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "legs": [
-                {"index": g.index, "slider": g.slider, "rod": g.rod, "pair": g.pair, "length": g.length}
-                for g in self.legs
-            ],
-            "subs": [{"name": s.name, "pair": s.pair, "legs": list(s.legs)} for s in self.subs],
-            "direction": self.direction.tolist(),
-            "normal": self.normal.tolist(),
-            "origin": self.origin.tolist(),
-            "half_plate": self.half_plate,
-        }
 
 
 def prrrp_layout(mech: Mechanism) -> PrrrpLayout:

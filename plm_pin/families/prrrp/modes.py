@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -32,6 +32,7 @@ from ...core.mechanism import Mechanism
 from ...exceptions import InvalidInput, PoseUnreachable
 from ...kinematics.mode_graph import Mode
 from ...kinematics.singularity import normalised_margin
+from ...results import Result, unit
 from .builder import LEFT_PAIR
 from .layout import PrrrpLayout, resolve_layout
 
@@ -67,7 +68,7 @@ def working_mode_label(mode: Sequence[int]) -> str:
 
 
 @dataclass(frozen=True)
-class PrrrpState:
+class PrrrpState(Result):
     r"""Geometry of a 2-PRRRP configuration: pairs, rods, modes, sub-mechanism margins.
 
     Attributes:
@@ -84,27 +85,25 @@ class PrrrpState:
             held by one leg [-], shape (2,).
     """
 
-    heights: np.ndarray
-    pairs: np.ndarray
-    rods: np.ndarray
-    cosines: np.ndarray
+    heights: np.ndarray = field(metadata=unit("m"))
+    pairs: np.ndarray = field(metadata=unit("m"))
+    rods: np.ndarray = field(metadata=unit("-"))
+    cosines: np.ndarray = field(metadata=unit("-"))
     assembly_mode: Mode
     working_mode: Mode
-    sub_direct_margin: np.ndarray
+    sub_direct_margin: np.ndarray = field(metadata=unit("-"))
+    _DERIVED = ("assembly_mode_label", "working_mode_label")
+    _NONFINITE_AS_TEXT = ("sub_direct_margin",)
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON (NaN margins as None)."""
-        return {
-            "heights": self.heights.tolist(),
-            "pairs": self.pairs.tolist(),
-            "rods": self.rods.tolist(),
-            "cosines": self.cosines.tolist(),
-            "assembly_mode": list(self.assembly_mode),
-            "assembly_mode_label": mode_label(self.assembly_mode),
-            "working_mode": list(self.working_mode),
-            "working_mode_label": working_mode_label(self.working_mode),
-            "sub_direct_margin": [None if math.isnan(m) else float(m) for m in self.sub_direct_margin],
-        }
+    @property
+    def assembly_mode_label(self) -> str:
+        """The assembly mode as the paper writes it, e.g. ``[+ 0]``."""
+        return mode_label(self.assembly_mode)
+
+    @property
+    def working_mode_label(self) -> str:
+        """The working mode as the paper writes it, e.g. ``(- + 0 +)``."""
+        return working_mode_label(self.working_mode)
 
 
 def _sign(value: float, tol: float) -> int:
@@ -169,7 +168,7 @@ def paper_working_modes(
 
 
 @dataclass(frozen=True)
-class PairSolutions:
+class PairSolutions(Result):
     """Direct kinematics of one PRRRP sub-mechanism, eq. (4): the intersections of two circles.
 
     Attributes:
@@ -180,11 +179,7 @@ class PairSolutions:
     """
 
     kind: str
-    points: np.ndarray
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {"kind": self.kind, "points": self.points.tolist()}
+    points: np.ndarray = field(metadata=unit("m"))
 
 
 def pair_solutions(c1: float, c2: float, l1: float, l2: float, tol: float = 1e-12) -> PairSolutions:

@@ -24,7 +24,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -38,9 +38,10 @@ from ...kinematics.jacobians import closed_chain_jacobians
 from ...kinematics.mode_graph import Mode, ModeEdge, ModeGraph, ModeNode, compress_modes
 from ...kinematics.paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
 from ...kinematics.singularity import SINGULARITY_TOL, report_from_jacobians
+from ...results import Result, unit
 from .builder import TASK_FRAME
 from .layout import PrrrpLayout, PrrrpLeg, PrrrpSubMechanism, prrrp_layout, resolve_layout
-from .modes import ASSEMBLY_MODES, MODE_TOL, PrrrpState, mode_label, prrrp_state, working_mode_label
+from .modes import ASSEMBLY_MODES, MODE_TOL, PrrrpState, mode_label, prrrp_state
 
 MODE_CHANGE_TOL = 1e-3
 """Direct and constraint margin the mode-change planners require at every sample [-].
@@ -219,7 +220,7 @@ def _change_ok(
 
 
 @dataclass(frozen=True)
-class ModeCrossing:
+class ModeCrossing(Result):
     """A sample where one sub-mechanism sits at ``[0]`` (circles touching).
 
     Attributes:
@@ -235,33 +236,25 @@ class ModeCrossing:
     """
 
     index: int
-    s: float
+    s: float = field(metadata=unit("-"))
     sub: str
     mode: Mode
-    x: np.ndarray
-    actuators: np.ndarray
-    direct_margin: float
-    sub_direct_margin: float
-    redundancy_margin: float
+    x: np.ndarray = field(metadata=unit("m, m, rad"))
+    actuators: np.ndarray = field(metadata=unit("m"))
+    direct_margin: float = field(metadata=unit("-"))
+    sub_direct_margin: float = field(metadata=unit("-"))
+    redundancy_margin: float = field(metadata=unit("-"))
+    _DERIVED = ("label",)
+    _NONFINITE_AS_TEXT = ("sub_direct_margin",)
 
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "index": self.index,
-            "s": self.s,
-            "sub": self.sub,
-            "mode": list(self.mode),
-            "label": mode_label(self.mode),
-            "x": self.x.tolist(),
-            "actuators": self.actuators.tolist(),
-            "direct_margin": self.direct_margin,
-            "sub_direct_margin": self.sub_direct_margin,
-            "redundancy_margin": self.redundancy_margin,
-        }
+    @property
+    def label(self) -> str:
+        """The combined assembly mode as the paper writes it, e.g. ``[+ 0]``."""
+        return mode_label(self.mode)
 
 
 @dataclass(frozen=True)
-class AssemblyModeChange:
+class AssemblyModeChange(Result):
     """A planned and tracked assembly-mode change of a 2-PRRRP.
 
     Attributes:
@@ -283,34 +276,18 @@ class AssemblyModeChange:
     path: TrackedPath
     assembly_modes: np.ndarray
     working_modes: np.ndarray
-    heights: np.ndarray
-    sub_direct_margin: np.ndarray
+    heights: np.ndarray = field(metadata=unit("m"))
+    sub_direct_margin: np.ndarray = field(metadata=unit("-"))
     crossings: tuple[ModeCrossing, ...]
-    max_deviation: float
+    max_deviation: float = field(metadata=unit("m"))
     graph: ModeGraph
+    _DERIVED = ("ok",)
+    _NONFINITE_AS_TEXT = ("sub_direct_margin",)
 
     @property
     def ok(self) -> bool:
         """Route followed, never direct- or constraint-singular, loops closed to 1e-10, no branch jump."""
         return _change_ok(self.route, self.visited, self.path, self.max_deviation)
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "route": [mode_label(m) for m in self.route],
-            "visited": [mode_label(m) for m in self.visited],
-            "path": self.path.to_dict(),
-            "assembly_modes": self.assembly_modes.tolist(),
-            "working_modes": self.working_modes.tolist(),
-            "heights": self.heights.tolist(),
-            "sub_direct_margin": [
-                [None if math.isnan(v) else float(v) for v in row] for row in self.sub_direct_margin
-            ],
-            "crossings": [c.to_dict() for c in self.crossings],
-            "max_deviation": self.max_deviation,
-            "graph": self.graph.to_dict(),
-            "ok": self.ok,
-        }
 
 
 def _max_deviation(mech: Mechanism, qa: np.ndarray, qb: np.ndarray) -> float:
@@ -457,7 +434,7 @@ def plan_assembly_mode_change(
 
 
 @dataclass(frozen=True)
-class WorkingModeChange:
+class WorkingModeChange(Result):
     """A planned and tracked working-mode change of one 2-PRRRP leg (Harada 2015, Fig. 7).
 
     Attributes:
@@ -480,28 +457,14 @@ class WorkingModeChange:
     working_modes: np.ndarray
     assembly_modes: np.ndarray
     fold_index: int
-    slider_gap: np.ndarray
-    max_deviation: float
+    slider_gap: np.ndarray = field(metadata=unit("m"))
+    max_deviation: float = field(metadata=unit("m"))
+    _DERIVED = ("ok",)
 
     @property
     def ok(self) -> bool:
         """Route followed, never direct- or constraint-singular, loops closed to 1e-10, no branch jump."""
         return _change_ok(self.route, self.visited, self.path, self.max_deviation)
-
-    def to_dict(self) -> dict[str, object]:
-        """Plain data for JSON."""
-        return {
-            "leg": self.leg,
-            "route": [working_mode_label(m) for m in self.route],
-            "visited": [working_mode_label(m) for m in self.visited],
-            "path": self.path.to_dict(),
-            "working_modes": self.working_modes.tolist(),
-            "assembly_modes": self.assembly_modes.tolist(),
-            "fold_index": self.fold_index,
-            "slider_gap": self.slider_gap.tolist(),
-            "max_deviation": self.max_deviation,
-            "ok": self.ok,
-        }
 
 
 def fold_plan(
