@@ -55,7 +55,7 @@ from .description.sidecar import Sidecar
 from .exceptions import DescriptionError, InvalidInput
 from .warnings import IgnoredElementWarning, SimulationUnstableWarning
 
-__all__ = ["ClosureError", "export_mjcf", "mjcf_text"]
+__all__ = ["ClosureError", "mjcf_text"]
 
 REVOLUTE_PAIR_SPACING = 0.05
 """Distance along the axis between the two ``connect``\\ s of an exported revolute closure [m]."""

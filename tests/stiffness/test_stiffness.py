@@ -10,7 +10,8 @@ import pytest
 
 from plm_pin.description.compliance import ComplianceSpec
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
-from plm_pin.statics import load_on_frame, static_forces
+from plm_pin.statics import static_forces
+from plm_pin.statics.balance import load_on_frame
 from plm_pin.stiffness import deflection, natural_frequencies, stiffness
 from plm_pin.stiffness.equilibrium import elastic_state, hessian_terms
 from plm_pin.stiffness.geometric import TreeDerivatives
