@@ -25,8 +25,12 @@ PACKAGES = {
     "plm_pin.models": "The registry of named presets.",
     "plm_pin.kinematics": "Task pose, Jacobians, working modes, inverse and forward kinematics, "
     "singularities, limits, mode graphs and path tracking.",
-    "plm_pin.families": "Mechanism families: the builders, and the 2-PRRRP's layout, assembly and working "
-    "modes, mode-change planners and complex singularity.",
+    "plm_pin.families": "Mechanism families, one package each, with its builder and its own analyses.",
+    "plm_pin.families.classic": "The crank-rocker four-bar and the RRRRR five-bar.",
+    "plm_pin.families.prrrp": "The 2-PRRRP (Harada 2011, 2015): builder, layout, assembly and working modes, "
+    "mode-change planners, complex singularity.",
+    "plm_pin.families.pss": "n-PSS spatial platforms (Zhao 2011's 8-PSS and its 6-PSS counterpart).",
+    "plm_pin.families.star_triangle": "The 3-PRP star-triangle (Enferadi 2017).",
     "plm_pin.analysis": "Manipulability, workspace maps, singular loci, orientation range.",
     "plm_pin.statics": "The static balance, actuator-force allocation, reactions, link forces, "
     "force capability.",
@@ -38,6 +42,8 @@ PACKAGES = {
     "plm_pin.viz": "matplotlib figures and meshcat scenes.",
     "plm_pin.report": "Studies and their reports.",
     "plm_pin.schemas": "The JSON Schemas of the sidecar and of the sweep configuration.",
+    "plm_pin.warnings": "The warnings plm_pin emits, all subclasses of `PlmWarning`, for filtering.",
+    "plm_pin.results": "The result protocol: the base of the result dataclasses, the units of their fields.",
 }
 """Public package -> one line saying what it holds."""
 

@@ -37,21 +37,13 @@ from .export import export_mjcf
 from .kinematics import inverse_kinematics, task_pose
 from .loading import load
 from .models.registry import PRESETS
-from .report import (
-    Animation,
-    Study,
-    compute_animation,
-    find_study,
-    output_folder,
-    parse_case,
-    run_study,
-    study_names,
-    write_index,
-    write_report,
-)
+from .report import Animation, Study, find_study, run_study, study_names, write_index, write_report
+from .report.animation import parse_case
 from .report.render import require_renderer
-from .report.study import studies_hint
-from .sweep import DEFAULT_CHUNK, load_config, run_spec
+from .report.study import compute_animation, studies_hint
+from .report.writer import output_folder
+from .sweep import load_config, run_spec
+from .sweep.execution import DEFAULT_CHUNK
 from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning

@@ -56,7 +56,7 @@ from .exceptions import DescriptionError, InvalidInput
 from .results import Result, unit
 from .warnings import IgnoredElementWarning, SimulationUnstableWarning
 
-__all__ = ["ClosureError", "export_mjcf", "mjcf_text"]
+__all__ = ["ClosureError", "mjcf_text"]
 
 REVOLUTE_PAIR_SPACING = 0.05
 """Distance along the axis between the two ``connect``\\ s of an exported revolute closure [m]."""

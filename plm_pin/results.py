@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-__all__ = ["Result", "plain", "unit", "units"]
+__all__ = ["Result", "unit", "units"]
 
 
 def unit(symbol: str) -> dict[str, str]:

@@ -2,6 +2,17 @@
 
 from __future__ import annotations
 
+__all__ = [
+    "CorruptChunkWarning",
+    "DescriptionWarning",
+    "IgnoredElementWarning",
+    "IllConditionedWarning",
+    "MissingLimitsWarning",
+    "MissingMeshWarning",
+    "PlmWarning",
+    "SimulationUnstableWarning",
+]
+
 
 class PlmWarning(UserWarning):
     """Base class of every warning plm_pin emits."""

@@ -26,6 +26,19 @@ def test_every_name_in_every_all_resolves():
         assert hasattr(plm_pin, name)
 
 
+def test_each_public_name_is_public_in_one_package_only():
+    """No object is listed under one name in two __all__: it is imported from one place, documented once."""
+    owners: dict[tuple[str, int], list[str]] = {}
+    modules = [
+        plm_pin,
+        *(importlib.import_module(i.name) for i in pkgutil.walk_packages(plm_pin.__path__, "plm_pin.")),
+    ]
+    for module in modules:
+        for name in getattr(module, "__all__", []):
+            owners.setdefault((name, id(getattr(module, name))), []).append(module.__name__)
+    assert {name: where for (name, _), where in owners.items() if len(where) > 1} == {}
+
+
 def test_core_import_does_not_pull_optional_dependencies():
     """`import plm_pin` loads no optional or heavy dependency: meshcat, matplotlib, yourdfpy, trimesh, ..."""
     optional = (

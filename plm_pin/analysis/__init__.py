@@ -1,20 +1,8 @@
 """Analyses over the workspace: manipulability, workspace maps and singular loci."""
 
-from .manipulability import (
-    METRICS,
-    Manipulability,
-    manipulability,
-    manipulability_at,
-    manipulability_from_jacobians,
-)
+from .manipulability import METRICS, Manipulability, manipulability, manipulability_at
 from .orientation import OrientationRange, orientation_range
-from .singular_loci import (
-    SingularPoint,
-    signed_singularity_function,
-    singular_loci,
-    singular_points,
-    singular_points_along,
-)
+from .singular_loci import SingularPoint, singular_loci, singular_points, singular_points_along
 from .workspace import WorkspaceSlice, workspace_grid, workspace_map, workspace_sweep
 
 __all__ = [
@@ -25,9 +13,7 @@ __all__ = [
     "WorkspaceSlice",
     "manipulability",
     "manipulability_at",
-    "manipulability_from_jacobians",
     "orientation_range",
-    "signed_singularity_function",
     "singular_loci",
     "singular_points",
     "singular_points_along",

@@ -13,7 +13,6 @@ from .closures import Closure
 from .idle import IdleGauge
 from .legs import Leg
 from .mechanism import Actuator
-from .scratch import Workspace
 from .task import Task
 
 __all__ = [
@@ -23,7 +22,6 @@ __all__ = [
     "IdleGauge",
     "Leg",
     "Task",
-    "Workspace",
 ]
 """The parts. The Mechanism itself is public as :class:`plm_pin.Mechanism`; task targets in
 :mod:`plm_pin.kinematics`."""

@@ -43,8 +43,8 @@ from ..exceptions import (
     SingularConfiguration,
 )
 from ..results import Result, unit
-from ..statics import AllocationRule, load_on_frame, solve_balance
-from ..statics.balance import SINGULAR_RTOL, Load, _balance, balance_factors
+from ..statics import AllocationRule, solve_balance
+from ..statics.balance import SINGULAR_RTOL, Load, _balance, balance_factors, load_on_frame
 from .trajectory import JointTrajectory, checked_trajectory
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED

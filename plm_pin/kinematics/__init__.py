@@ -9,7 +9,7 @@ from ..core.task import TaskTarget
 from .forward import FKSolution, forward_kinematics, same_assembly, task_pose
 from .inverse import IKSolution, inverse_kinematics, working_modes
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
-from .mode_graph import ModeEdge, ModeGraph, ModeNode, compress_modes
+from .mode_graph import ModeEdge, ModeGraph, ModeNode
 from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
 from .singularity import SINGULARITY_TOL, SingularityReport, classify
 from .working_mode import working_mode
@@ -27,7 +27,6 @@ __all__ = [
     "TrackedPath",
     "classify",
     "closed_chain_jacobians",
-    "compress_modes",
     "follow_targets",
     "forward_kinematics",
     "inverse_kinematics",

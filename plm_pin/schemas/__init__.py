@@ -19,11 +19,11 @@ from typing import Any
 
 from ..exceptions import InvalidInput
 
-FOLDER = Path(__file__).resolve().parent
+_FOLDER = Path(__file__).resolve().parent
 """Folder holding the schema files (shipped in the wheel)."""
 
 SCHEMAS = {"sidecar": "plm-pin-sidecar.schema.json", "sweep": "plm-pin-sweep.schema.json"}
-"""Schema name -> file name in :data:`FOLDER`."""
+"""Schema name -> file name in this package's folder."""
 
 
 def schema_path(name: str) -> Path:
@@ -34,7 +34,7 @@ def schema_path(name: str) -> Path:
     """
     if name not in SCHEMAS:
         raise InvalidInput(f"unknown schema {name!r}; schemas are {sorted(SCHEMAS)}")
-    return FOLDER / SCHEMAS[name]
+    return _FOLDER / SCHEMAS[name]
 
 
 def load_schema(name: str) -> dict[str, Any]:
@@ -47,4 +47,4 @@ def load_schema(name: str) -> dict[str, Any]:
     return data
 
 
-__all__ = ["FOLDER", "SCHEMAS", "load_schema", "schema_path"]
+__all__ = ["SCHEMAS", "load_schema", "schema_path"]

@@ -1,7 +1,7 @@
 """Statics of closed chains: balance, redundant actuator-force allocation, reactions, force capability."""
 
 from .allocation import OBJECTIVES
-from .balance import SINGULAR_RTOL, Load, StaticBalance, generalized_balance, load_on_frame, static_balance
+from .balance import SINGULAR_RTOL, Load, StaticBalance, static_balance
 from .capability import Capability, InternalRange, force_capability, internal_force_range, wrench_polygon
 from .forces import (
     AllocationRule,
@@ -28,10 +28,8 @@ __all__ = [
     "StaticForces",
     "actuator_limits",
     "force_capability",
-    "generalized_balance",
     "internal_force_range",
     "internal_modes",
-    "load_on_frame",
     "solve_balance",
     "static_balance",
     "static_forces",

@@ -28,7 +28,8 @@ from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..results import Result, unit
-from ..statics import Load, StaticForces, load_on_frame
+from ..statics import Load, StaticForces
+from ..statics.balance import load_on_frame
 from .cartesian import condense
 from .equilibrium import closure_and_locks, elastic_state, generalized_load, hessian_terms
 

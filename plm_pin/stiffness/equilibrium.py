@@ -35,7 +35,8 @@ from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput
 from ..results import Result, unit
-from ..statics import Load, StaticForces, load_on_frame, static_forces
+from ..statics import Load, StaticForces, static_forces
+from ..statics.balance import load_on_frame
 from .geometric import TreeDerivatives, closure_derivative
 from .model import SOURCES, CompliantModel, compliant_model
 

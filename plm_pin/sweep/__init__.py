@@ -9,36 +9,25 @@ pyarrow) are imported only when a sweep runs.
 
 from __future__ import annotations
 
-from .config import load_config, spec_from_config
-from .execution import DEFAULT_CHUNK, Chunk, ChunkValues, evaluate_chunk, plan_chunks
+from .config import load_config
 from .metrics import METRICS, OPTIONS, Metric, Option, Variable
-from .result import ChunkFailure, PointFailure, SweepResult, build_dataset
+from .result import ChunkFailure, PointFailure, SweepResult
 from .run import run_spec, sweep
-from .spec import ParameterSpace, SweepSpec, make_spec, mechanism_digest
-from .store import SweepStore
+from .spec import ParameterSpace, SweepSpec, make_spec
 
 __all__ = [
-    "DEFAULT_CHUNK",
     "METRICS",
     "OPTIONS",
-    "Chunk",
     "ChunkFailure",
-    "ChunkValues",
     "Metric",
     "Option",
     "ParameterSpace",
     "PointFailure",
     "SweepResult",
     "SweepSpec",
-    "SweepStore",
     "Variable",
-    "build_dataset",
-    "evaluate_chunk",
     "load_config",
     "make_spec",
-    "mechanism_digest",
-    "plan_chunks",
     "run_spec",
-    "spec_from_config",
     "sweep",
 ]

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from analyses import _harada2011_paper as paper
-from plm_pin.analysis import manipulability, manipulability_at, manipulability_from_jacobians
+from plm_pin.analysis import manipulability, manipulability_at
+from plm_pin.analysis.manipulability import manipulability_from_jacobians
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import ClosedChainJacobians, closed_chain_jacobians, inverse_kinematics
 from tests.conftest import preset, with_rotated_null_basis

@@ -10,12 +10,12 @@ import pytest
 
 from analyses import _harada2011_paper as paper
 from plm_pin.analysis import (
-    signed_singularity_function,
     singular_loci,
     singular_points,
     singular_points_along,
     workspace_sweep,
 )
+from plm_pin.analysis.singular_loci import signed_singularity_function
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics
 from plm_pin.kinematics.working_mode import working_mode

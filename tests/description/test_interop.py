@@ -14,7 +14,8 @@ import yaml
 import plm_pin
 from plm_pin import ClosureNotSatisfied, DescriptionError
 from plm_pin.core.mechanism import Mechanism
-from plm_pin.description import parse_epr_sidecar, read_description
+from plm_pin.description import read_description
+from plm_pin.description.interop import parse_epr_sidecar
 from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning
 
 CORPUS = Path(__file__).parents[2].parent / "shared/interop/example-parallel-robots"

@@ -18,13 +18,12 @@ from plm_pin import ClosureNotSatisfied, DescriptionError, FrameNotFound
 from plm_pin.description import (
     ActuatorSpec,
     Sidecar,
-    build_model,
-    description_from_text,
     parse_sidecar,
     read_description,
     write_description,
 )
 from plm_pin.description import _urdf_build as u
+from plm_pin.description.loader import build_model, description_from_text
 from plm_pin.families.classic import build_fourbar
 
 FOURBAR_FRAMES = [

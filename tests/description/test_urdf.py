@@ -10,8 +10,8 @@ import pytest
 
 import plm_pin
 from plm_pin import DescriptionError
-from plm_pin.description import read_urdf, read_urdf_text
 from plm_pin.description import urdf as urdf_module
+from plm_pin.description.urdf import read_urdf, read_urdf_text
 from plm_pin.warnings import MissingMeshWarning
 
 ROD_STL = (

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from plm_pin.description import urdf_text
+from plm_pin.description.writer import urdf_text
 from plm_pin.models import PRESETS, preset_names, urdf_folder
 
 ISSUE_PRESETS = {

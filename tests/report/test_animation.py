@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from plm_pin.exceptions import InvalidInput
-from plm_pin.report import Animation, compute_animation, find_study, parse_case
+from plm_pin.report import Animation, find_study
+from plm_pin.report.animation import parse_case
+from plm_pin.report.study import compute_animation
 from tests.conftest import preset
 from tests.report.conftest import make_study
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import base64
 from html.parser import HTMLParser
 
-from plm_pin.report import render_report, run_study
+from plm_pin.report import run_study
+from plm_pin.report.render import render_report
 from tests.report.conftest import make_study
 
 SCENE = "<!DOCTYPE html><html><body><script>var a = \"x\" && 1 < 2;</script>'quoted' &amp;</body></html>"

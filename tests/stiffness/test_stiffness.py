@@ -13,7 +13,8 @@ from plm_pin.analysis import workspace_map
 from plm_pin.description.compliance import ComplianceSpec
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.results import units
-from plm_pin.statics import load_on_frame, static_forces
+from plm_pin.statics import static_forces
+from plm_pin.statics.balance import load_on_frame
 from plm_pin.stiffness import Modes, StiffnessMap, deflection, natural_frequencies, stiffness, stiffness_map
 from plm_pin.stiffness.equilibrium import elastic_state, hessian_terms
 from plm_pin.stiffness.geometric import TreeDerivatives

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from plm_pin import InvalidInput, Mechanism
-from plm_pin.sweep import load_config, make_spec, spec_from_config
+from plm_pin.sweep import load_config, make_spec
+from plm_pin.sweep.config import spec_from_config
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLE = REPO / "analyses" / "sweeps" / "harada2011_ratio.yaml"

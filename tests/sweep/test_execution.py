@@ -9,7 +9,8 @@ import pytest
 import xarray as xr
 
 from plm_pin import InvalidInput, SchedulerUnreachable
-from plm_pin.sweep import execution, make_spec, plan_chunks, sweep
+from plm_pin.sweep import execution, make_spec, sweep
+from plm_pin.sweep.execution import plan_chunks
 from tests.sweep.conftest import THETAS, fragile_2prrrp, small
 
 

@@ -22,7 +22,8 @@ import xarray as xr
 import plm_pin
 from plm_pin import InvalidInput, StoreMismatch
 from plm_pin.core.mechanism import Mechanism
-from plm_pin.sweep import make_spec, mechanism_digest, sweep
+from plm_pin.sweep import make_spec, sweep
+from plm_pin.sweep.spec import mechanism_digest
 from plm_pin.sweep.store import MANIFEST
 from tests import textbook as tb
 from tests.sweep.conftest import THETAS, fragile_2prrrp

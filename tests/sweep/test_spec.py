@@ -10,7 +10,7 @@ import pytest
 
 from plm_pin import InvalidInput
 from plm_pin.families.prrrp import build_2prrrp
-from plm_pin.models import builder_parameters
+from plm_pin.models.registry import builder_parameters
 from plm_pin.sweep import METRICS, OPTIONS, make_spec, sweep
 from tests.sweep.conftest import small
 
