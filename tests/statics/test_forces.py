@@ -10,8 +10,9 @@ import pytest
 
 from plm_pin.exceptions import FrameNotFound, InvalidInput, SingularConfiguration
 from plm_pin.kinematics import inverse_kinematics, task_pose
-from plm_pin.statics import load_on_frame, static_forces
+from plm_pin.statics import static_forces
 from plm_pin.statics.allocation import min_norm
+from plm_pin.statics.balance import load_on_frame
 from tests.conftest import preset, prrrp_paper_configuration
 
 
