@@ -15,10 +15,10 @@ coordinates can also be prescribed outright (Harada 2011's :math:`f_i`, eqs. (20
 Without inequalities the norm problem is solved in closed form (its KKT system); with them,
 ProxSuite's dense QP solves it and an active-set polish (the KKT system of the constraints
 ProxSuite found active) brings the answer to round-off. The minimum peak is a linear
-programme, solved by HiGHS (:func:`scipy.optimize.linprog`) before its minimum-norm
-tie-break. When no allocation meets the
-inequalities, a second QP finds the least-violating one (minimum sum of squared
-violations) and :class:`~plm_pin.exceptions.AllocationInfeasible` carries it.
+programme, solved by HiGHS (:func:`solve_lp`, through its own Python package ``highspy``)
+before its minimum-norm tie-break. When no allocation meets the inequalities, a second QP
+finds the least-violating one (minimum sum of squared violations) and
+:class:`~plm_pin.exceptions.AllocationInfeasible` carries it.
 """
 
 from __future__ import annotations
