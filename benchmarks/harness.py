@@ -5,12 +5,14 @@ in the checkout, not in the installed package. A
 benchmark measures; correctness is asserted by the test suite, never here. Besides the
 cost per call of loading, closures, assembly, kinematics and manipulability for every
 preset, it times the 3D4M's kinematics beside their Pinocchio floor (:class:`Floor`) and
-PlaCo's (in its own venv), records the wall time of a 10^5-pose manipulability map of
-``harada2011_3d4m`` on one core beside Harada's vectorised closed form and of an 8-PSS
-map, the cost and accuracy of closed-chain simulation (the four-bar, 10 s passive, against
-MuJoCo's soft ``connect`` constraint on the same four-bar; Harada 2011's simulation 1), the
-throughput of a design sweep (:mod:`plm_pin.sweep`) in one process and on a 2-worker Dask
-LocalCluster and, as a reproduction note, the 3D3M's singular angle of Harada 2011 Fig. 6.
+PlaCo's (in its own venv), the force capability and internal-force range beside theirs
+(:func:`capability_floor`, :func:`internal_range_floor`), records the wall time of a
+10^5-pose manipulability map of ``harada2011_3d4m`` on one core beside Harada's vectorised
+closed form and of an 8-PSS map, the cost and accuracy of closed-chain simulation (the
+four-bar, 10 s passive, against MuJoCo's soft ``connect`` constraint on the same four-bar;
+Harada 2011's simulation 1), the throughput of a design sweep (:mod:`plm_pin.sweep`) in one
+process and on a 2-worker Dask LocalCluster and, as a reproduction note, the 3D3M's singular
+angle of Harada 2011 Fig. 6.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import highspy
 import numpy as np
 import pinocchio as pin
 import proxsuite
@@ -53,7 +56,15 @@ from plm_pin.kinematics import (
 )
 from plm_pin.loading import build_mechanism, load
 from plm_pin.models.registry import PRESETS, preset_names, urdf_folder
-from plm_pin.statics import AllocationRule, solve_balance, static_balance, static_forces
+from plm_pin.statics import (
+    AllocationRule,
+    force_capability,
+    internal_force_range,
+    load_on_frame,
+    solve_balance,
+    static_balance,
+    static_forces,
+)
 
 MAP_SHAPE = (317, 316)
 """Grid of the manipulability-map benchmark: 100,172 poses."""
@@ -379,6 +390,7 @@ def run() -> list[dict[str, object]]:
             rows.append({"mechanism": name, "case": case, "seconds_per_call": _per_call(fn)})
     rows.extend(kinematics_benchmark())
     rows.extend(allocation_benchmark())
+    rows.extend(capability_benchmark())
     rows.extend(map_throughput())
     rows.extend(stiffness_benchmark())
     return rows
@@ -503,6 +515,160 @@ def allocation_benchmark() -> list[dict[str, object]]:
                     "case": f"{case} [{ours / least:.2f}x the floor rnea + J_phi + one ProxSuite QP]",
                     "seconds_per_call": ours / per,
                     "floor_seconds_per_call": least / per,
+                }
+            )
+    return rows
+
+
+def _reduced_balance(
+    mech: Mechanism, data: pin.Data, q: np.ndarray, load: tuple[int, np.ndarray] | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    r"""The balance :math:`B f_c + J_\phi^T \lambda = g(q) - \alpha J_w^T w` reduced by one SVD.
+
+    The SVD of :math:`A = [B\ J_\phi^T]` gives the minimum-norm solutions for gravity and for
+    the unit ``load`` (frame index, wrench :math:`w`; zero without one) and the null space, whose
+    actuator parts span the internal forces. Returns their actuator parts :math:`f_g`,
+    :math:`f_d` (n_act,) and the spanning vectors (n_act, k'), :math:`k' \ge k` (the closure
+    forces' own null space adds vectors without an actuator part).
+    """
+    model = mech.model
+    g = pin.computeGeneralizedGravity(model, data, q)
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    J = closure_jacobian_from_data(model, data, mech.closures)
+    n = mech.n_actuators
+    A = np.zeros((model.nv, n + J.shape[0]))
+    A[mech.actuated_v_indices, np.arange(n)] = 1.0
+    A[:, n:] = J.T
+    tau = np.zeros((model.nv, 2))
+    tau[:, 0] = g
+    if load is not None:
+        frame_id, wrench = load
+        lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        tau[:, 1] = -pin.getFrameJacobian(model, data, frame_id, lwa).T @ wrench
+    U, s, Vt = np.linalg.svd(A)
+    r = int(np.sum(s > 1e-9 * s[0]))
+    z = Vt[:r].T @ ((U[:, :r].T @ tau) / s[:r, None])  # (n + m, 2) minimum-norm solutions
+    return z[:n, 0], z[:n, 1], Vt[r:, :n].T
+
+
+def _highs_lp(
+    highs: highspy.Highs,
+    c: np.ndarray,
+    D: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    col_lower: np.ndarray,
+) -> np.ndarray:
+    """``min c^T z`` s.t. ``lower <= D z <= upper``, ``z >= col_lower``: one HiGHS call, rows dense."""
+    m, n = D.shape
+    lp = highspy.HighsLp()
+    lp.num_col_, lp.num_row_ = n, m
+    lp.col_cost_, lp.col_lower_, lp.col_upper_ = c, col_lower, np.full(n, np.inf)
+    lp.row_lower_, lp.row_upper_ = lower, upper
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
+    lp.a_matrix_.start_ = np.arange(0, m * n + 1, n, dtype=np.int32)
+    lp.a_matrix_.index_ = np.tile(np.arange(n, dtype=np.int32), m)
+    lp.a_matrix_.value_ = D.ravel()
+    highs.passModel(lp)
+    highs.run()
+    return np.array(highs.getSolution().col_value)
+
+
+def _floor_highs() -> highspy.Highs:
+    """A silent HiGHS solver without presolve, as plm_pin's."""
+    highs = highspy.Highs()
+    highs.setOptionValue("output_flag", False)
+    highs.setOptionValue("presolve", "off")
+    return highs
+
+
+def capability_floor(
+    mech: Mechanism,
+    data: pin.Data,
+    highs: highspy.Highs,
+    q: np.ndarray,
+    frame_id: int,
+    wrench: np.ndarray,
+    limits: np.ndarray,
+) -> float:
+    r"""The floor of :func:`~plm_pin.statics.force_capability`: one SVD and one HiGHS LP.
+
+    The least Python doing its math with Pinocchio, numpy and HiGHS calls: the reduced
+    balance (:func:`_reduced_balance`), then :math:`\max \alpha` s.t. :math:`l \le f_g + G' y +
+    \alpha f_d \le u`, :math:`\alpha \ge 0` (no checks, no saturated actuators, no result
+    object). Returns :math:`\alpha`.
+    """
+    f_g, f_d, G = _reduced_balance(mech, data, q, (frame_id, wrench))
+    k = G.shape[1]
+    c = np.zeros(k + 1)
+    c[-1] = -1.0
+    D = np.hstack([G, f_d[:, None]])
+    col_lower = np.r_[np.full(k, -np.inf), 0.0]
+    return float(_highs_lp(highs, c, D, limits[:, 0] - f_g, limits[:, 1] - f_g, col_lower)[-1])
+
+
+def internal_range_floor(
+    mech: Mechanism, data: pin.Data, highs: highspy.Highs, q: np.ndarray, limits: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""The floor of :func:`~plm_pin.statics.internal_force_range` under gravity: two SVDs and 2k LPs.
+
+    The reduced balance (:func:`_reduced_balance`), a small SVD for an orthonormal basis
+    :math:`G` of the internal forces, then :math:`\min / \max y_k` s.t. :math:`l \le f_g + G y
+    \le u`, one HiGHS LP each. Returns the (2, k) extents of :math:`G^T f_c` (the coordinates
+    plus :math:`G^T f_g`) and the basis (n_act, k).
+    """
+    f_g, _, spanning = _reduced_balance(mech, data, q)
+    U, s, _ = np.linalg.svd(spanning, full_matrices=False)
+    G = U[:, s > 1e-9]  # (n_act, k)
+    k = G.shape[1]
+    ends = np.empty((2, k))
+    lower, upper, free = limits[:, 0] - f_g, limits[:, 1] - f_g, np.full(k, -np.inf)
+    for side, sign in enumerate((1.0, -1.0)):
+        for i in range(k):
+            ends[side, i] = _highs_lp(highs, sign * np.eye(k)[i], G, lower, upper, free)[i]
+    return ends + G.T @ f_g, G
+
+
+CAPABILITY_CASES: dict[str, tuple[list[float], float]] = {
+    "harada2011_3d4m": ([0.3, -1.0, 0.01], 10.0),
+    "zhao2011_8pss": ([0.0, 0.0, -1.0, 0.0, 0.1, 0.0], 6000.0),
+}
+"""Load direction (task coordinates) and symmetric actuator limit [N] of :func:`capability_benchmark`."""
+
+
+def capability_benchmark() -> list[dict[str, object]]:
+    """Force capability and internal-force range at the reference configuration, beside their floors.
+
+    :func:`capability_floor` and :func:`internal_range_floor`, timed in alternation; gravity held.
+    """
+    rows: list[dict[str, object]] = []
+    for name, (direction, bound) in CAPABILITY_CASES.items():
+        mech = load(name)
+        q = mech.q_ref
+        limits = np.array([[-bound, bound]] * mech.n_actuators)
+        data, highs = mech.model.createData(), _floor_highs()
+        task = load_on_frame(mech, direction)
+        floored: dict[str, tuple[Callable[[], object], Callable[[], object], str]] = {
+            "force_capability (gravity, limits)": (
+                functools.partial(force_capability, mech, q, direction, limits=limits),
+                functools.partial(capability_floor, mech, data, highs, q, task.frame_id, task.wrench, limits),
+                "SVD + one HiGHS LP",
+            ),
+            "internal_force_range (gravity, limits)": (
+                functools.partial(internal_force_range, mech, q, limits=limits),
+                functools.partial(internal_range_floor, mech, data, highs, q, limits),
+                "SVDs + 2k HiGHS LPs",
+            ),
+        }
+        for case, (fn, floor, what) in floored.items():
+            ours, least = _alternating(fn, floor)
+            rows.append(
+                {
+                    "mechanism": name,
+                    "case": f"{case} [{ours / least:.2f}x the floor {what}]",
+                    "seconds_per_call": ours,
+                    "floor_seconds_per_call": least,
                 }
             )
     return rows

@@ -5,12 +5,22 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from analyses import _harada2011_paper as paper
-from benchmarks.harness import Floor, _timing_line, harada_closed_form_map
+from benchmarks.harness import (
+    CAPABILITY_CASES,
+    Floor,
+    _floor_highs,
+    _timing_line,
+    capability_floor,
+    harada_closed_form_map,
+    internal_range_floor,
+)
 from plm_pin.analysis import manipulability, workspace_map
 from plm_pin.kinematics import closed_chain_jacobians, forward_kinematics, inverse_kinematics, task_pose
 from plm_pin.models import PRESETS
+from plm_pin.statics import force_capability, internal_force_range, load_on_frame
 from tests.conftest import preset
 
 
@@ -53,3 +63,23 @@ def test_timing_line_prints_the_floor_and_the_ratio():
     assert _timing_line(row) == "| m | c | 300.0 us | 200.0 us | 1.50 |"
     bare = {"mechanism": "m", "case": "c", "seconds_per_call": 2.5}
     assert _timing_line(bare) == "| m | c | 2.50 s | - | - |"
+
+
+@pytest.mark.parametrize("name", sorted(CAPABILITY_CASES))
+def test_capability_floors_compute_force_capability_and_the_internal_range(name):
+    """The floors' alpha equals force_capability's; their internal range is internal_force_range's."""
+    direction, bound = CAPABILITY_CASES[name]
+    mech = preset(name)
+    q = mech.q_ref
+    limits = np.array([[-bound, bound]] * mech.n_actuators)
+    data, highs = mech.model.createData(), _floor_highs()
+    task = load_on_frame(mech, direction)
+    alpha = capability_floor(mech, data, highs, q, task.frame_id, task.wrench, limits)
+    assert math.isclose(alpha, force_capability(mech, q, direction, limits=limits).alpha, rel_tol=1e-9)
+    ends, G = internal_range_floor(mech, data, highs, q, limits)
+    ours = internal_force_range(mech, q, limits=limits)
+    R = G.T @ ours.internal_basis  # (k, k) the floor's basis in plm_pin's: a rotation (same span)
+    np.testing.assert_allclose(R @ R.T, np.eye(mech.redundancy), atol=1e-12)
+    if mech.redundancy == 1:  # one internal force: the extent of g^T f_c (f_p is orthogonal to g), up to sign
+        lo, hi = sorted(R[0, 0] * np.array([ours.lower[0], ours.upper[0]]))
+        np.testing.assert_allclose(ends[:, 0], [lo, hi], rtol=1e-9)

@@ -91,6 +91,7 @@ def software_versions() -> dict[str, str]:
         **({"plm_pin commit": commit} if commit else {}),
         "pinocchio": _version("pin"),
         "proxsuite": _version("proxsuite"),
+        "highspy": _version("highspy"),
         "numpy": _version("numpy"),
         "scipy": _version("scipy"),
         "matplotlib": _version("matplotlib"),

@@ -15,20 +15,21 @@ coordinates can also be prescribed outright (Harada 2011's :math:`f_i`, eqs. (20
 Without inequalities the norm problem is solved in closed form (its KKT system); with them,
 ProxSuite's dense QP solves it and an active-set polish (the KKT system of the constraints
 ProxSuite found active) brings the answer to round-off. The minimum peak is a linear
-programme, solved by HiGHS (:func:`scipy.optimize.linprog`) before its minimum-norm
-tie-break. When no allocation meets the
-inequalities, a second QP finds the least-violating one (minimum sum of squared
-violations) and :class:`~plm_pin.exceptions.AllocationInfeasible` carries it.
+programme, solved by HiGHS (:func:`solve_lp`, through its own Python package ``highspy``)
+before its minimum-norm tie-break. When no allocation meets the inequalities, a second QP
+finds the least-violating one (minimum sum of squared violations) and
+:class:`~plm_pin.exceptions.AllocationInfeasible` carries it.
 """
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import highspy
 import numpy as np
 import proxsuite
-from scipy.optimize import linprog
 
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError
 from ..results import Result, unit
@@ -40,6 +41,9 @@ FEASIBILITY_RTOL = 1e-9
 """A limit or condition is met when exceeded by at most FEASIBILITY_RTOL x the force scale."""
 
 _QP_EPS = 1e-11
+
+_THREAD = threading.local()
+"""Per-thread solver state (:func:`_highs`)."""
 
 
 @dataclass(frozen=True)
@@ -262,22 +266,50 @@ def solve_lp(
     """Solve ``min c^T z`` s.t. ``lower <= offset + D z <= upper`` (and ``bounds`` on z) with HiGHS.
 
     ``bounds`` are (lower, upper) per variable, None where unbounded (default: all free).
-    Returns None when the programme is infeasible.
+    The rows go to HiGHS as they are (ranged rows, dense row-wise), through this thread's
+    solver (:func:`_highs`). Returns None when the programme is infeasible.
 
     Raises:
         PlmError: HiGHS found it unbounded or did not solve it (``what`` names it).
     """
-    up = np.isfinite(ineq.upper)
-    lo = np.isfinite(ineq.lower)
-    A = np.vstack([ineq.D[up], -ineq.D[lo]])
-    b = np.concatenate([ineq.upper[up] - ineq.offset[up], ineq.offset[lo] - ineq.lower[lo]])
-    free = [(None, None)] * c.shape[0]
-    lp = linprog(c, A_ub=A, b_ub=b, bounds=free if bounds is None else bounds, method="highs")
-    if lp.status == 2:
+    p, n = ineq.D.shape
+    lp = highspy.HighsLp()
+    lp.num_col_, lp.num_row_ = n, p
+    lp.col_cost_ = c
+    if bounds is None:
+        lp.col_lower_, lp.col_upper_ = np.full(n, -np.inf), np.full(n, np.inf)
+    else:
+        lp.col_lower_ = np.array([-np.inf if lo is None else lo for lo, _ in bounds])
+        lp.col_upper_ = np.array([np.inf if hi is None else hi for _, hi in bounds])
+    lp.row_lower_, lp.row_upper_ = ineq.lower - ineq.offset, ineq.upper - ineq.offset
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
+    lp.a_matrix_.start_ = np.arange(0, p * n + 1, n, dtype=np.int32)
+    lp.a_matrix_.index_ = np.tile(np.arange(n, dtype=np.int32), p)
+    lp.a_matrix_.value_ = ineq.D.ravel()
+    highs = _highs()
+    highs.passModel(lp)
+    highs.run()
+    status = highs.getModelStatus()
+    if status == highspy.HighsModelStatus.kInfeasible:
         return None
-    if lp.status != 0:
-        raise PlmError(f"HiGHS did not solve {what}: {lp.message}")
-    return np.asarray(lp.x)
+    if status != highspy.HighsModelStatus.kOptimal:
+        raise PlmError(f"HiGHS did not solve {what}: {highs.modelStatusToString(status)}")
+    return np.array(highs.getSolution().col_value)
+
+
+def _highs() -> highspy.Highs:
+    """This thread's HiGHS solver, silent and without presolve (made on first use).
+
+    One per thread: a sweep calls the statics from several threads, and a HiGHS instance
+    holds its model. Presolve is off: on programmes of a few columns it costs more than it saves.
+    """
+    highs: highspy.Highs | None = getattr(_THREAD, "highs", None)
+    if highs is None:
+        highs = highspy.Highs()
+        highs.setOptionValue("output_flag", False)
+        highs.setOptionValue("presolve", "off")
+        _THREAD.highs = highs
+    return highs
 
 
 def solve_qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np.ndarray | None:

@@ -7,7 +7,7 @@ internal force. The capability along :math:`d` is the linear programme
 
 .. math:: \max \alpha \quad \text{s.t.} \quad l \le f_g + \alpha f_d + G y \le u,
 
-solved by HiGHS (:func:`scipy.optimize.linprog`). A redundant mechanism
+solved by HiGHS (:func:`~plm_pin.statics.allocation.solve_lp`). A redundant mechanism
 chooses :math:`y` to relieve the most loaded actuator, so its capability is never below that
 of the same mechanism with an actuator removed. A planar section of the capability set
 (the *wrench polygon*) is traced by one such programme per direction of the plane: the set

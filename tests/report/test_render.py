@@ -70,7 +70,7 @@ def test_page_shows_the_command_and_versions():
     result = run_study(make_study(), command="plm-pin report demo --out 'my reports'")
     page = render_report(result)
     assert "plm-pin report demo --out &#39;my reports&#39;" in page
-    for name in ("plm_pin", "pinocchio", "proxsuite", "numpy", "python"):
+    for name in ("plm_pin", "pinocchio", "proxsuite", "highspy", "numpy", "python"):
         assert f"<th>{name}</th><td>{result.versions[name]}</td>" in page
 
 

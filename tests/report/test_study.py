@@ -88,7 +88,7 @@ def test_run_study_records_mechanisms_sections_and_plm_warnings():
     assert [s.title for s in result.sections] == ["one"]
     assert result.warnings == ("nearly singular here",)
     assert result.command == "plm-pin report demo --out r"
-    assert set(result.versions) >= {"plm_pin", "pinocchio", "proxsuite", "numpy", "python"}
+    assert set(result.versions) >= {"plm_pin", "pinocchio", "proxsuite", "highspy", "numpy", "python"}
     assert result.folder == "demo"
 
 
