@@ -60,11 +60,11 @@ from plm_pin.statics import (
     AllocationRule,
     force_capability,
     internal_force_range,
-    load_on_frame,
     solve_balance,
     static_balance,
     static_forces,
 )
+from plm_pin.statics.balance import load_on_frame
 
 MAP_SHAPE = (317, 316)
 """Grid of the manipulability-map benchmark: 100,172 poses."""

@@ -20,7 +20,8 @@ from benchmarks.harness import (
 from plm_pin.analysis import manipulability, workspace_map
 from plm_pin.kinematics import closed_chain_jacobians, forward_kinematics, inverse_kinematics, task_pose
 from plm_pin.models import PRESETS
-from plm_pin.statics import force_capability, internal_force_range, load_on_frame
+from plm_pin.statics import force_capability, internal_force_range
+from plm_pin.statics.balance import load_on_frame
 from tests.conftest import preset
 
 
