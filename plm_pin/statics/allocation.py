@@ -297,6 +297,17 @@ def solve_lp(
     return np.array(highs.getSolution().col_value)
 
 
+class _SilentHighs(highspy.Highs):
+    """A HiGHS solver that prints nothing, not even the banner of the first solver in a process.
+
+    ``highspy.Highs()`` prints that banner to stdout when it enables its Python callbacks, before
+    any option can be set (HiGHS issues #1702, #2749); these programmes use no callback, so they stay off.
+    """
+
+    def enableCallbacks(self) -> None:
+        """Leave HiGHS's callbacks off (nothing here subscribes to one)."""
+
+
 def _highs() -> highspy.Highs:
     """This thread's HiGHS solver, silent and without presolve (made on first use).
 
@@ -305,7 +316,7 @@ def _highs() -> highspy.Highs:
     """
     highs: highspy.Highs | None = getattr(_THREAD, "highs", None)
     if highs is None:
-        highs = highspy.Highs()
+        highs = _SilentHighs()
         highs.setOptionValue("output_flag", False)
         highs.setOptionValue("presolve", "off")
         _THREAD.highs = highs

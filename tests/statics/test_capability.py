@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.optimize import linprog
@@ -144,3 +148,22 @@ def test_internal_range_refuses_what_has_no_answer():
         internal_force_range(four, four.q_ref)
     with pytest.raises(AllocationInfeasible):
         internal_force_range(four, four.q_ref, [0.0, -50.0, 0.0], limits=[(-0.1, 0.1)] * 4)
+
+
+def test_linear_programmes_print_nothing():
+    """The first LP of a process writes nothing to stdout (no highspy banner): piped output stays clean."""
+    script = (
+        "import numpy as np\n"
+        "from plm_pin.statics import force_capability\n"
+        "from tests.conftest import preset\n"
+        "from tests.statics.test_capability import LIMITS, _q\n"
+        "mech = preset('harada2011_3d4m')\n"
+        "cap = force_capability(mech, _q(mech), [1.0, 0.0, 0.0], limits=[LIMITS] * mech.n_actuators)\n"
+        "assert np.isfinite(cap.alpha) and cap.alpha > 0\n"
+    )
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run(
+        [sys.executable, "-c", script], cwd=root, capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout == ""
