@@ -15,13 +15,18 @@ forces by eq. (18). That corrected form is what :func:`statics` uses.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 A = np.array([1.0, 0.0])  # stator direction a, eq. (1)
 N_DIR = np.array([0.0, 1.0])  # guide normal n of eq. (16)
 R_THETA = np.array([[0.0, -1.0], [1.0, 0.0]])  # eq. (4)
 PAPER_SIGNS = {1: -1, 2: 1, 3: -1, 4: 1}  # sign of the square root of eq. (2) in the code (M.5)
+
+Pose = Sequence[float] | np.ndarray
+"""A plate pose ``(x [m], y [m], theta [rad])``."""
 
 
 def rotation(theta: float) -> np.ndarray:
@@ -35,13 +40,15 @@ def pair_offset(leg: int, rt: float) -> np.ndarray:
     return np.array([-rt, 0.0]) if leg in (1, 2) else np.array([rt, 0.0])
 
 
-def pair_position(pose, leg: int, rt: float) -> np.ndarray:
+def pair_position(pose: Pose, leg: int, rt: float) -> np.ndarray:
     """L_i = p + R s_i, eq. (1)."""
     x, y, theta = pose
     return np.array([x, y]) + rotation(theta) @ pair_offset(leg, rt)
 
 
-def slider_positions(pose, l: float, rt: float, legs, signs=PAPER_SIGNS) -> np.ndarray:
+def slider_positions(
+    pose: Pose, l: float, rt: float, legs: Sequence[int], signs: Mapping[int, int] = PAPER_SIGNS
+) -> np.ndarray:
     """c_i of eq. (2) as coded in (M.5): L.a + sign sqrt((L.a)^2 - L.L + l^2)."""
     out = []
     for i in legs:
@@ -51,7 +58,7 @@ def slider_positions(pose, l: float, rt: float, legs, signs=PAPER_SIGNS) -> np.n
     return np.array(out)
 
 
-def J_ce(pose, c, l: float, rt: float, legs) -> np.ndarray:
+def J_ce(pose: Pose, c: Sequence[float] | np.ndarray, l: float, rt: float, legs: Sequence[int]) -> np.ndarray:
     """J_c^{-1} J_e of eqs. (4), (12): rows z_i^T, z_i^T R_theta R s_i over z_i^T a."""
     theta = pose[2]
     rows, diag = [], []
@@ -69,14 +76,16 @@ def reachable_sin_interval(y: float, l: float, rt: float) -> tuple[float, float]
     return lo, hi
 
 
-def leg_matrices(pose, l: float, rt: float, legs) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def leg_matrices(
+    pose: Pose, l: float, rt: float, legs: Sequence[int]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """z_i (eq. (3)), J_cm = diag(z_i^T a), J_nm = diag(z_i^T n), J_ce (eq. (12)) at ``pose``."""
     c = slider_positions(pose, l, rt, legs)
     z = np.array([(pair_position(pose, i, rt) - ci * A) / l for ci, i in zip(c, legs, strict=True)])
     return z, np.diag(z @ A), np.diag(z @ N_DIR), J_ce(pose, c, l, rt, legs)
 
 
-def internal_part(pose, z: np.ndarray, J_cm: np.ndarray, f_i: float) -> np.ndarray:
+def internal_part(pose: Pose, z: np.ndarray, J_cm: np.ndarray, f_i: float) -> np.ndarray:
     """-J_c4 J_i^-1 f_i with J_i and f_i of eq. (21): the actuator forces of a plate compression f_i [N]."""
     theta = pose[2]
     J_i = -np.block(
@@ -86,7 +95,9 @@ def internal_part(pose, z: np.ndarray, J_cm: np.ndarray, f_i: float) -> np.ndarr
     return -J_cm @ np.linalg.solve(J_i, f_vec)
 
 
-def statics(pose, f_e, l: float, rt: float, legs, f_i: float = 0.0) -> tuple[np.ndarray, ...]:
+def statics(
+    pose: Pose, f_e: ArrayLike, l: float, rt: float, legs: Sequence[int], f_i: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Actuator, rod-axial and guide-normal forces ``(f_c, f_l, f_n)`` of eqs. (15)-(22) [N].
 
     Three legs: f_c = J_ce^-T f_e (15). Four legs: f_c = (J_ce^T)^+ f_e - J_c4 J_i^-1 f_i

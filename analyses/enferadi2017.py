@@ -14,7 +14,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from plm_pin import Mechanism, load
+from plm_pin import Mechanism, PlmError, load
 from plm_pin.dynamics import JointTrajectory, inverse_dynamics, simulate, task_trajectory
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.viz import flat, flat_note, panel_grid, shared_legend
@@ -103,8 +103,11 @@ def _path(
         rtol=1e-11,
         atol=1e-13,
     )
+    if run.x is None:
+        raise PlmError(f"{mech.name}: the simulation recorded no task coordinates (no task)")
+    x = run.x
     target = np.array([profile(s)[0] for s in run.t])
-    error = np.max(np.linalg.norm((run.x - target)[:, :2], axis=1))
+    error = np.max(np.linalg.norm((x - target)[:, :2], axis=1))
     fig, axes = panel_grid(3, height=3.4)
     for i in range(3):
         axes[0].plot(t, idr.f_c[:, i], label=f"leg {i + 1}")
@@ -112,10 +115,10 @@ def _path(
     axes[0].set(xlabel="t [s]", ylabel="actuator force [N]", title="inverse dynamics")
     axes[1].set(xlabel="t [s]", ylabel="slider position [m]", title="actuators")
     # a path along y keeps x constant to round-off: y against time then, x said in the caption
-    along_y = flat("x", np.concatenate([target[:, 0], run.x[:, 0]]), "m", scale=float(np.abs(target).max()))
+    along_y = flat("x", np.concatenate([target[:, 0], x[:, 0]]), "m", scale=float(np.abs(target).max()))
     u, v = (run.t, "t [s]") if along_y else (None, "x [m]")
     axes[2].plot(target[:, 0] if u is None else u, target[:, 1], "k-", lw=4, alpha=0.3, label="path")
-    axes[2].plot(run.x[:, 0] if u is None else u, run.x[:, 1], "r--", label="direct dynamics")
+    axes[2].plot(x[:, 0] if u is None else u, x[:, 1], "r--", label="direct dynamics")
     axes[2].set(xlabel=v, ylabel="y [m]", title="round trip")
     if u is None:
         axes[2].set_aspect("equal")
@@ -126,7 +129,7 @@ def _path(
         fig,
         f"{caption}: forces, slider positions, and the path retraced by direct dynamics."
         + flat_note([along_y] if along_y else []),
-        {"t": t, "f_c": idr.f_c, "q": traj.c, "x_direct": run.x, "t_direct": run.t},
+        {"t": t, "f_c": idr.f_c, "q": traj.c, "x_direct": x, "t_direct": run.t},
     )
     rows = []
     for time, expected in REFERENCE[name].items():

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from plm_pin import Mechanism, build_mechanism, load
+from plm_pin import Mechanism, PlmError, build_mechanism, load
 from plm_pin.analysis import singular_points_along, workspace_sweep
 from plm_pin.description.compliance import BeamSpec, ComplianceSpec
 from plm_pin.dynamics import DecouplingReport, SimulationResult, decoupling_check, simulate
@@ -199,7 +199,8 @@ def _statics(section: Section, four: Mechanism, three: Mechanism) -> None:
     import matplotlib.pyplot as plt
 
     q = four.q_ref
-    pose = tuple(float(v) for v in PRESETS[four.name].parameters["reference_pose"])
+    x, y, theta = (float(v) for v in PRESETS[four.name].parameters["reference_pose"])
+    pose = (x, y, theta)
     section.text(
         "Harada's f_e = J_ce^T f_c is the force the actuators exert on the plate; plm_pin takes the load "
         "applied to the plate, so the paper's unit f_e is the load -f_e, without gravity as in the paper. "
@@ -219,8 +220,10 @@ def _statics(section: Section, four: Mechanism, three: Mechanism) -> None:
         section.comparison(f"{name}: eqs. (15)-(22) and plm_pin", comparisons)
     sol = static_forces(four, q, gravity=False)
     (mode,) = sol.internal_modes()
-    right = sum(mode.lam[c.rows] for c in four.closures if c.name.endswith("right"))
-    theta = pose[2]
+    on_right = [mode.lam[c.rows] for c in four.closures if c.name.endswith("right")]
+    if not on_right:
+        raise PlmError(f"{four.name}: no closure at the plate's right end")
+    right = sum(on_right[1:], on_right[0])
     along = abs(float(np.cross(right[:2], [math.cos(theta), math.sin(theta)]))) / float(np.linalg.norm(right))
     section.comparison(
         "Internal force (eq. (21))",
@@ -232,8 +235,11 @@ def _statics(section: Section, four: Mechanism, three: Mechanism) -> None:
         f"{along:.1e}.",
     )
     ax_a, _ = fig8(four, q, [0.0, 1.0, 0.0], f_i=1.0)
+    fig = ax_a.get_figure(root=True)
+    if fig is None:
+        raise PlmError("fig8 drew on axes outside a figure")
     section.figure(
-        ax_a.figure,
+        fig,
         "Fig. 8: (a) unit external force f_e = (0, 1, 0), no internal force; (b) with a unit internal force "
         "compressing the plate (broken: the internal force's own share).",
         {"f_e": [0.0, 1.0, 0.0], "f_i": 1.0},
@@ -298,7 +304,7 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
         "forces, which is where the internal force f_i enters. The plate compression f_i (eqs. (20)-(22)) "
         "is applied as `internal={'plate': -f_i}` on top of gravity."
     )
-    rows = []
+    rows: list[tuple[str, float, float | None, float, float, float, bool]] = []
     data: dict[str, object] = {}
     for drive in (k, SOFT_DRIVE):
         base3 = stiffness(three, three.q_ref, compliance=_drives(three, drive))
@@ -486,37 +492,46 @@ def _entries(rep: DecouplingReport) -> list[tuple[str, str]]:
     return [(name, f"{e.kind}: {e.describe()} (coupling {e.ratio:.2g})") for name, e in rep.entries()]
 
 
+def _task_path(mech: Mechanism, run: SimulationResult) -> np.ndarray:
+    """Task coordinates of ``run`` (x, y, theta), shape (n, 3); refused if the simulation recorded none."""
+    if run.x is None:
+        raise PlmError(f"{mech.name}: the simulation recorded no task coordinates (no task)")
+    return run.x
+
+
 def _simulations(section: Section, mech: Mechanism) -> None:
 
     p = PRESETS["harada2011_3d4m"].parameters
     m_l, m_m, m_t = float(p["rod_masses"][0]), float(p["slider_mass"]), float(p["plate_mass"])
     runs = {SIMULATIONS[case][0]: simulate_case(mech, case) for case in SIMULATIONS}
+    paths = {name: _task_path(mech, run) for name, run in runs.items()}
     curves = {}
-    for name, run in runs.items():
-        curves[f"{name}: x [m]"] = run.x[:, 0]
-        curves[f"{name}: y [m]"] = run.x[:, 1]
-        curves[f"{name}: theta [deg]"] = np.degrees(run.x[:, 2])
+    for name, x in paths.items():
+        curves[f"{name}: x [m]"] = x[:, 0]
+        curves[f"{name}: y [m]"] = x[:, 1]
+        curves[f"{name}: theta [deg]"] = np.degrees(x[:, 2])
     t = next(iter(runs.values())).t
     fig, flat = plot_panels(t, curves, xlabel="t [s]")
     section.figure(
         fig,
         "Figs. 10 and 12: x, y, theta under constant task forces from (0, 0.08 m, -20 deg) at rest, 2 s."
         + flat,
-        {name: {"t": r.t, "x": r.x} for name, r in runs.items()},
+        {name: {"t": r.t, "x": paths[name]} for name, r in runs.items()},
     )
     fig, axes = panel_grid(2, width=5.0, height=2.6)
     snapshots = {}
     for ax, (name, run), number in zip(axes, runs.items(), (11, 13), strict=True):
         every = slice(None, None, round(SNAPSHOT_PERIOD / SIM_DT))
         plot_skeletons(mech, run.q[every], ax=ax, title=f"Fig. {number}: {name}")
-        snapshots[name] = {"t": run.t[every], "x": run.x[every]}
+        snapshots[name] = {"t": run.t[every], "x": paths[name][every]}
     section.figure(
         fig,
         f"Figs. 11 and 13: the table every {SNAPSHOT_PERIOD:g} s (light: t = 0, black: t = 2 s), as drawn "
         "by the paper's code (M.42).",
         snapshots,
     )
-    one, two = runs.values()
+    _, two = runs.values()
+    x_one, x_two = paths.values()
     expected = SIMULATIONS["simulation1"][1] / (4 * m_l + 4 * m_m + m_t) * DURATION**2 / 2
     section.comparison(
         "Simulations (Tables 2-4)",
@@ -524,20 +539,20 @@ def _simulations(section: Section, mech: Mechanism) -> None:
             Comparison(
                 "simulation 1: x(2 s) = f_x / m_xx t^2 / 2",
                 expected,
-                float(one.x[-1, 0]),
+                float(x_one[-1, 0]),
                 "m",
                 rtol=1e-9,
                 source="closed form",
             ),
-            Comparison("simulation 1: y stays 0.08 m", 0.08, float(one.x[-1, 1]), "m", rtol=1e-9),
-            Comparison("simulation 2: x stays 0", 0.0, float(two.x[-1, 0]), "m", atol=1e-9),
+            Comparison("simulation 1: y stays 0.08 m", 0.08, float(x_one[-1, 1]), "m", rtol=1e-9),
+            Comparison("simulation 2: x stays 0", 0.0, float(x_two[-1, 0]), "m", atol=1e-9),
             Comparison(
-                "simulation 2: theta accelerates", "yes", "yes" if two.x[-1, 2] > two.x[0, 2] else "no"
+                "simulation 2: theta accelerates", "yes", "yes" if x_two[-1, 2] > x_two[0, 2] else "no"
             ),
         ],
         note=f"Largest closure residual {max(r.max_closure_residual for r in runs.values()):.1e} m; "
-        f"in simulation 2, theta reaches {np.degrees(two.x[-1, 2]):.1f} deg at 2 s and y stays within "
-        f"[{two.x[:, 1].min() * 1e3:.1f}, {two.x[:, 1].max() * 1e3:.1f}] mm: the slight motion of "
+        f"in simulation 2, theta reaches {np.degrees(x_two[-1, 2]):.1f} deg at 2 s and y stays within "
+        f"[{x_two[:, 1].min() * 1e3:.1f}, {x_two[:, 1].max() * 1e3:.1f}] mm: the slight motion of "
         "Fig. 12 (b), whose axis spans -0.1 to 0.3 m ((M.40)).",
     )
     section.animation(

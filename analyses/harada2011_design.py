@@ -22,6 +22,7 @@ from plm_pin import PlmError
 from plm_pin.families.prrrp import complex_singularity_check
 from plm_pin.families.prrrp.builder import CARRIAGE_SIZE
 from plm_pin.report import Column, Comparison, Parameter, Section, StudyContext
+from plm_pin.sweep import SweepResult, sweep
 from plm_pin.viz import panel_grid, plot_sweep_heatmap, plot_sweep_lines
 
 if TYPE_CHECKING:
@@ -63,7 +64,7 @@ def run(ctx: StudyContext) -> None:
     for name in ("harada2011_3d3m", "harada2011_3d4m", "harada2015_asymmetric"):
         ctx.load(name)
     ctx.step("sweep l / r_t x y for the 3D3M and the 3D4M")
-    ratio = plm_pin.sweep.sweep(
+    ratio = sweep(
         "harada2011_3d4m",
         {"legs": [[1, 2, 4], [1, 2, 3, 4]], "half_plate": [L / r for r in RATIOS]},
         {"y": HEIGHTS, "rz": ANGLES},
@@ -75,7 +76,7 @@ def run(ctx: StudyContext) -> None:
     _redundancy(ctx.section("Redundancy: the 3D3M and the 3D4M against l / r_t and the height"), ratio)
     ctx.step("sweep the rod lengths of the Harada 2015 design")
     samples = [{"rod_lengths": [0.24, li, li, 0.24]} for li in INNER] + [{"rod_lengths": [0.17] * 4}]
-    rods = plm_pin.sweep.sweep(
+    rods = sweep(
         "harada2015_asymmetric",
         samples,
         {"y": np.linspace(0.04, 0.22, 10), "rz": ANGLES},
@@ -83,7 +84,7 @@ def run(ctx: StudyContext) -> None:
         pose=(0.0, 0.10, 0.0),
         options={"over": ["rz"], "xtol": XTOL},
     )
-    box = plm_pin.sweep.sweep(
+    box = sweep(
         "harada2015_asymmetric",
         samples,
         {
@@ -101,7 +102,7 @@ def run(ctx: StudyContext) -> None:
     )
 
 
-def _complete(result: plm_pin.sweep.SweepResult) -> None:
+def _complete(result: SweepResult) -> None:
     if not result.complete:
         lines = "; ".join(f.describe() for f in result.failures)
         raise PlmError(f"the sweep of {result.spec.label} did not complete: {lines}")
@@ -111,7 +112,7 @@ def _deg(value: float) -> float:
     return math.degrees(value)
 
 
-def _redundancy(section: Section, result: plm_pin.sweep.SweepResult) -> None:
+def _redundancy(section: Section, result: SweepResult) -> None:
     import matplotlib.pyplot as plt
 
     ds = result.dataset.assign_coords(ratio=("half_plate", [L / r for r in result.dataset.half_plate.values]))
@@ -410,8 +411,8 @@ def _collision_free_table(section: Section, half: xr.DataArray, free: xr.DataArr
 
 def _asymmetry(
     section: Section,
-    rods: plm_pin.sweep.SweepResult,
-    box: plm_pin.sweep.SweepResult,
+    rods: SweepResult,
+    box: SweepResult,
     samples: list[dict[str, list[float]]],
 ) -> None:
     import matplotlib.pyplot as plt

@@ -238,8 +238,9 @@ def _graph_section(section: Section, graph: ModeGraph) -> None:
             zorder=1,
         )
     for n in graph.nodes:
-        ax.scatter(*n.mode, s=900, color="tab:red" if n.singular else "white", edgecolors="k", zorder=2)
-        ax.annotate(n.label, n.mode, ha="center", va="center", fontsize=9, zorder=3)
+        left, right = n.mode  # signs of the left and right pairs
+        ax.scatter(left, right, s=900, color="tab:red" if n.singular else "white", edgecolors="k", zorder=2)
+        ax.annotate(n.label, (left, right), ha="center", va="center", fontsize=9, zorder=3)
     ax.set_xlim(-1.5, 1.5)
     ax.set_ylim(-1.5, 1.5)
     ax.set_xticks([-1, 0, 1], ["-", "0", "+"])

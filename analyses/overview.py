@@ -90,6 +90,8 @@ def passive_motion(mech: Mechanism) -> tuple[SimulationResult, SimulationFailed 
     try:
         return simulate(mech, mech.q_ref, duration=SIMULATION_TIME, dt=SIMULATION_DT), None
     except SimulationFailed as exc:
+        if not isinstance(exc.partial, SimulationResult):
+            raise PlmError(f"{mech.name}: the failed simulation carries no samples ({exc})") from exc
         return exc.partial, exc
 
 
@@ -200,7 +202,7 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
         loci = []
     else:
         grid = workspace_map(mech, (axes[0], axes[1]), (values[0], values[1]), x0)
-        across = values[1][:: max(1, (GRID - 1) // (LOCI_LINES - 1))]
+        across = [float(v) for v in values[1][:: max(1, (GRID - 1) // (LOCI_LINES - 1))]]
         loci = singular_loci(mech, axes[0], values[0], axes[1], across, x0)
         import matplotlib.pyplot as plt
 
@@ -476,8 +478,11 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
     spread = np.ptp(_frame_origins(mech, mech.q_ref), axis=0)
     plane = "".join(sorted("xyz"[k] for k in np.argsort(spread)[-2:]))
     axes = plot_static_forces(sol, plane=plane, title=f"static forces in the {plane} plane")
+    fig = axes.get_figure(root=True)
+    if fig is None:
+        raise PlmError("plot_static_forces drew on axes outside a figure")
     section.figure(
-        axes.figure,
+        fig,
         f"The mechanism projected on the {plane} plane with its static forces: actuator forces f_c, "
         "guide normal forces f_n, link axial forces f_l, loads.",
         {"forces": sol.to_dict(), "arrows": force_arrows(sol)},

@@ -334,7 +334,7 @@ def _compare(
     work6 = spline_work(grid, id6.power)  # the 6-PSS needs n1 = 13 for the trapezoid: the spline is exact
     work8 = spline_work(grid, id8.power)
     legs6 = [int(name.removeprefix("slider")) for name in id6.actuators]
-    rows = []
+    rows: list[tuple[int | str, float, float | None, float, float | None]] = []
     for i in range(8):
         leg = i + 1
         k = legs6.index(leg) if leg in legs6 else None

@@ -236,7 +236,8 @@ def stiffness(
         The stiffness, compliance, eigen-stiffnesses and the share of each source.
 
     Raises:
-        InvalidInput: malformed arguments, no task or no compliance.
+        InvalidInput: malformed arguments, ``q`` not the configuration of ``forces``, no task or
+            no compliance.
         SingularConfiguration: the load cannot be held, a task motion is resisted by no spring,
             or the springs leave a task direction rigid (infinite stiffness).
     """

@@ -110,7 +110,8 @@ def deflection(
         The new equilibrium, its task displacement beside the linear :math:`K_x^{-1} w`.
 
     Raises:
-        InvalidInput: malformed arguments, no task, no compliance.
+        InvalidInput: malformed arguments, ``q`` not the configuration of ``forces``, no task,
+            no compliance.
         SingularConfiguration: Newton does not converge (the load buckles the mechanism or
             moves it too far), or the state at ``q`` cannot be held.
     """

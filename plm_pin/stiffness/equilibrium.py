@@ -31,6 +31,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..core import closures as _closures
+from ..core.checks import CLOSURE_TOL
 from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput
@@ -96,11 +97,12 @@ def elastic_state(
             (Harada 2011's :math:`f_i` on the 3D4M: ``{"plate": -f_i}``); default the
             minimum-norm forces.
         forces: a static solution at ``q`` to use instead (then ``wrench``, ``frame``,
-            ``gravity`` and ``internal`` are taken from it and must not be given).
+            ``gravity`` and ``internal`` are taken from it and must not be given; ``q`` must
+            be the configuration it was solved at).
         compliance: the springs; default the sidecar's.
 
     Raises:
-        InvalidInput: malformed arguments, no compliance.
+        InvalidInput: malformed arguments, ``q`` not the configuration of ``forces``, no compliance.
         SingularConfiguration: the load cannot be held at ``q``.
     """
     cm = compliant_model(mech, compliance)
@@ -108,6 +110,8 @@ def elastic_state(
         forces = static_forces(mech, q, wrench, frame, gravity=gravity, internal=internal, limits=None)
     elif wrench is not None or frame is not None or internal is not None:
         raise InvalidInput("give either forces= or the wrench, frame and internal preload, not both")
+    else:
+        _check_forces_at(mech, q, forces)
     balance = forces.balance
     qc = cm.lift(balance.q)
     load = None
@@ -122,6 +126,31 @@ def elastic_state(
     spring.setflags(write=False)
     qc.setflags(write=False)
     return ElasticState(cm, qc, forces, load, balance.gravity, spring)
+
+
+def _check_forces_at(mech: Mechanism, q: ArrayLike, forces: StaticForces) -> None:
+    """Refuse a static solution ``forces`` solved at another configuration than ``q``.
+
+    The two agree when they differ by at most :data:`~plm_pin.core.checks.CLOSURE_TOL` [m, rad]
+    on the tangent space (room for a ``q`` read back from a file).
+
+    Raises:
+        InvalidInput: a malformed ``q``, or ``forces`` solved at another configuration (the
+            message gives the largest difference).
+    """
+    qa = mech.check_q(q)
+    q_forces = forces.balance.q
+    if q_forces.shape != qa.shape:
+        raise InvalidInput(
+            f"{mech.name}: forces= were solved on {forces.mechanism.name} (nq = {q_forces.size}), "
+            f"not on this mechanism (nq = {qa.size})"
+        )
+    gap = float(np.max(np.abs(pin.difference(mech.model, q_forces, qa)), initial=0.0))
+    if gap > CLOSURE_TOL:
+        raise InvalidInput(
+            f"{mech.name}: q is not the configuration forces= were solved at: they differ by up to "
+            f"{gap:.3g} m/rad (tolerance {CLOSURE_TOL:.0e}); pass q=forces.balance.q or solve the forces at q"
+        )
 
 
 def generalized_load(mech: Mechanism, q: np.ndarray, load: Load | None, gravity: bool) -> np.ndarray:

@@ -314,6 +314,27 @@ def test_errors_name_the_problem():
         stiffness(mech, mech.q_ref, compliance=ComplianceSpec(actuators={"slider1": 1e5}))
 
 
+def test_forces_must_belong_to_q():
+    """forces= solved at another configuration, or on another mechanism, than q is refused by name."""
+    mech = preset("harada2011_3d4m")
+    compliance = _drives(mech, 2.0e4)
+    sol = static_forces(mech, mech.q_ref, internal={"plate": -100.0}, limits=None)
+    moved = mech.assemble(pin.integrate(mech.model, mech.q_ref, np.full(mech.nv, 0.01))).q
+    assert max(mech.closure_errors(moved).values()) < 1e-10  # assembled, only not the forces' q
+    with pytest.raises(InvalidInput, match="q is not the configuration forces= were solved at: they differ"):
+        stiffness(mech, moved, forces=sol, compliance=compliance)
+    with pytest.raises(InvalidInput, match="not the configuration forces= were solved at"):
+        elastic_state(mech, moved, forces=sol, compliance=compliance)
+    three = preset("harada2011_3d3m")
+    with pytest.raises(InvalidInput, match=r"forces= were solved on harada2011_3d3m \(nq = "):
+        elastic_state(mech, mech.q_ref, forces=static_forces(three, three.q_ref), compliance=compliance)
+    read_back = mech.q_ref + 1e-12  # a q written to a file and read back
+    np.testing.assert_array_equal(
+        stiffness(mech, read_back, forces=sol, compliance=compliance).K_x,
+        stiffness(mech, mech.q_ref, forces=sol, compliance=compliance).K_x,
+    )
+
+
 def test_planar_3rpr_with_flexible_legs_is_drives_in_series_with_rods(tmp_path):
     """3-RPR, rods as beams: K_x = sum k_eff j j^T, 1/k_eff = 1/k + L/EA (two-force legs, unloaded)."""
     k, E, A = 2.0e6, 2.0e11, 1.0e-5
