@@ -9,6 +9,7 @@ from lxml import etree
 
 from .._io import atomic_write_text
 from .._lazy import lazy_module
+from ..exceptions import InvalidInput
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar
 
 if TYPE_CHECKING:
@@ -38,9 +39,12 @@ def write_description(
 
     Returns:
         The URDF and sidecar paths.
+
+    Raises:
+        InvalidInput: ``name`` is empty or has another character than an ASCII letter, digit, ``_`` or ``-``.
     """
-    if not name or not all(ch.isalnum() or ch in "_-" for ch in name):
-        raise ValueError(f"invalid description name {name!r}: use letters, digits, '_' and '-'")
+    if not name or not all(ch.isascii() and (ch.isalnum() or ch in "_-") for ch in name):
+        raise InvalidInput(f"invalid description name {name!r}: use letters, digits, '_' and '-'")
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     urdf_path = out / f"{name}.urdf"

@@ -14,7 +14,7 @@ import yaml
 import yourdfpy
 
 import plm_pin
-from plm_pin import ClosureNotSatisfied, DescriptionError, FrameNotFound
+from plm_pin import ClosureNotSatisfied, DescriptionError, FrameNotFound, InvalidInput
 from plm_pin.description import (
     ActuatorSpec,
     Sidecar,
@@ -389,11 +389,11 @@ def test_description_from_text_matches_the_files(fourbar):
 # ------------------------------------------------------------------ writer
 
 
-@pytest.mark.parametrize("name", ["a/b", "..", "../evil", "x.y", "", "sp ace"])
+@pytest.mark.parametrize("name", ["a/b", "..", "../evil", "x.y", "", "sp ace", "m\u00e9canisme"])
 def test_writer_refuses_unsafe_names(tmp_path, name):
-    """write_description refuses a name with '/', '..' or other characters, writing nothing."""
+    """write_description refuses a name with '/', '..' or other characters, non-ASCII too, writing nothing."""
     robot, sidecar = build_fourbar()
-    with pytest.raises(ValueError) as info:
+    with pytest.raises(InvalidInput) as info:
         write_description(robot, sidecar, tmp_path / "out", name)
     assert str(info.value) == f"invalid description name {name!r}: use letters, digits, '_' and '-'"
     assert not (tmp_path / "out").exists()
