@@ -51,36 +51,46 @@ def units(result: Any) -> dict[str, str]:
 
 
 def plain(value: object, nonfinite_as_text: bool = False) -> object:
-    """``value`` as JSON-ready data: arrays as lists, results as their ``to_dict()``, paths as text.
+    """``value`` as JSON data: arrays as lists, results as their ``to_dict()``, paths as text.
 
-    Containers are converted element-wise.
+    Numpy scalars become Python numbers; mappings keep their keys (as strings), sequences and
+    arrays become lists, objects with a ``to_dict()`` method are converted by it and other
+    dataclasses field by field.
 
     Args:
         value: the value to convert.
         nonfinite_as_text: write non-finite floats as the strings ``'inf'``, ``'-inf'``, ``'nan'``
-            (in what ``to_dict()`` returns too).
+            (in what ``to_dict()`` returns too), so that strict JSON can hold them.
 
     Returns:
         Plain Python data (dict, list, str, int, float, bool, None).
+
+    Raises:
+        TypeError: for a value that has no JSON form (as :func:`json.dumps` would).
     """
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, np.generic):
+        return plain(value.item(), nonfinite_as_text)
+    if isinstance(value, int):
+        return int(value)
+    if isinstance(value, float):
+        return str(value) if nonfinite_as_text and not math.isfinite(value) else float(value)
     if hasattr(value, "to_dict"):
         data = value.to_dict()
         return plain(data, nonfinite_as_text) if nonfinite_as_text else data
     if isinstance(value, os.PathLike):
         return os.fspath(value)
     if isinstance(value, np.ndarray):
-        if not nonfinite_as_text:
-            return value.tolist()
-        value = value.tolist()
+        return plain(value.tolist(), nonfinite_as_text) if nonfinite_as_text else value.tolist()
     if isinstance(value, Mapping):
-        return {k: plain(v, nonfinite_as_text) for k, v in value.items()}
+        return {str(k): plain(v, nonfinite_as_text) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [plain(v, nonfinite_as_text) for v in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if nonfinite_as_text and isinstance(value, float) and not math.isfinite(value):
-        return str(value)
-    return value
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
+        return plain(fields, nonfinite_as_text)
+    raise TypeError(f"{value!r} ({type(value).__name__}) has no JSON form")
 
 
 class Result:

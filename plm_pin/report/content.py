@@ -17,9 +17,9 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from .. import results
 from ..exceptions import InvalidInput
 from ..viz import scene_html
-from ._private import plain
 from .animation import Animation
 
 if TYPE_CHECKING:
@@ -30,6 +30,18 @@ FORMAT = "plm-pin-report/1"
 
 Cell = str | int | float | bool | None
 """A table cell: text, a number (NaN and infinities allowed), a yes/no, or empty."""
+
+
+def strict_json(value: object) -> Any:
+    """``value`` as strict JSON for results.json: :func:`plm_pin.results.plain`, non-finite numbers as text.
+
+    Raises:
+        InvalidInput: for a value that has no JSON form.
+    """
+    try:
+        return results.plain(value, nonfinite_as_text=True)
+    except TypeError as exc:
+        raise InvalidInput(f"{exc}: it cannot be written to results.json") from None
 
 
 def _cell(value: Any, where: str) -> Cell:
@@ -142,7 +154,7 @@ class Table:
             "kind": self.kind,
             "title": self.title,
             "columns": [{"name": c.name, "unit": c.unit} for c in self.columns],
-            "rows": plain(self.rows),
+            "rows": strict_json(self.rows),
             "note": self.note,
         }
 
@@ -246,7 +258,7 @@ class Comparison:
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for results.json, with the relative difference and the verdict."""
-        return plain(
+        return strict_json(
             {
                 "quantity": self.quantity,
                 "paper": self.paper,
@@ -330,7 +342,7 @@ class Figure:
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for results.json (the image itself is in the HTML only)."""
-        return {"kind": self.kind, "caption": self.caption, "data": plain(self.data)}
+        return {"kind": self.kind, "caption": self.caption, "data": strict_json(self.data)}
 
 
 @dataclass(frozen=True)
@@ -350,7 +362,7 @@ class Scene:
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for results.json (the page itself is in the HTML only)."""
-        return {"kind": self.kind, "caption": self.caption, "data": plain(self.data)}
+        return {"kind": self.kind, "caption": self.caption, "data": strict_json(self.data)}
 
 
 @dataclass(frozen=True)
@@ -382,7 +394,7 @@ class Parameter:
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for results.json."""
-        return plain({"name": self.name, "value": self.value, "unit": self.unit, "note": self.note})
+        return strict_json({"name": self.name, "value": self.value, "unit": self.unit, "note": self.note})
 
 
 @dataclass(frozen=True)
@@ -488,14 +500,14 @@ class Section:
         Raises:
             InvalidInput: ``data`` that has no JSON form.
         """
-        plain(data)  # refuse data that results.json could not hold, before rendering
+        strict_json(data)  # refuse data that results.json could not hold, before rendering
         block = Figure(caption, "" if fig is None else figure_svg(fig), data)
         self.blocks.append(block)
         return block
 
     def scene(self, html: str, caption: str, data: Mapping[str, Any]) -> Scene:
         """Add a static meshcat page with the configurations it shows (``q``, or ``qs`` and ``times``)."""
-        plain(data)
+        strict_json(data)
         block = Scene(caption, html, data)
         self.blocks.append(block)
         return block
@@ -545,7 +557,7 @@ class MechanismInfo:
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for results.json."""
-        return plain(
+        return strict_json(
             {
                 "name": self.name,
                 "origin": self.origin,

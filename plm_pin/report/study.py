@@ -34,9 +34,10 @@ from ..exceptions import InvalidInput, PlmError
 from ..loading import load
 from ..models.registry import PRESETS
 from ..warnings import PlmWarning
-from ._private import FOLDER, slug, software_versions
 from .animation import Animation
 from .content import MechanismInfo, Parameter, Section, StudyResult
+from .folders import FOLDER, slug
+from .provenance import software_versions
 
 STUDY_PACKAGE = "analyses"
 """The package the studies are modules of (the ``analyses/`` folder of a source checkout)."""

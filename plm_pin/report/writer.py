@@ -27,8 +27,9 @@ from typing import Any
 from .._io import atomic_write_text
 from ..exceptions import InvalidInput
 from ..viz.meshcat_view import meshcat_bundle, share_bundle
-from ._private import FOLDER, software_versions
 from .content import FORMAT, Scene, StudyResult
+from .folders import FOLDER
+from .provenance import software_versions
 from .render import render_index, render_report
 
 BUNDLE = "meshcat.min.js"

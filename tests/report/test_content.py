@@ -10,8 +10,8 @@ import pytest
 
 from plm_pin.exceptions import InvalidInput
 from plm_pin.report import Column, Comparison, Section
-from plm_pin.report._private import plain, slug
-from plm_pin.report.content import format_cell
+from plm_pin.report.content import format_cell, strict_json
+from plm_pin.report.folders import slug
 
 
 def test_relative_difference_and_verdict_of_numbers():
@@ -69,13 +69,13 @@ def test_format_cell():
     assert format_cell(True) == "yes" and format_cell(None) == "—"
 
 
-def test_plain_gives_strict_json():
+def test_strict_json_of_numpy_nonfinite_tuples_and_results():
     """Numpy values, NaN, infinities, tuples and to_dict objects become strict JSON."""
-    data = plain({"a": np.array([1.0, np.nan]), "b": (np.int32(2), np.inf), "c": Comparison("x", 1, 1)})
+    data = strict_json({"a": np.array([1.0, np.nan]), "b": (np.int32(2), np.inf), "c": Comparison("x", 1, 1)})
     assert data["a"] == [1.0, "nan"] and data["b"] == [2, "inf"]
     json.dumps(data, allow_nan=False)
     with pytest.raises(InvalidInput, match=r"cannot be written to results.json"):
-        plain({"f": object()})
+        strict_json({"f": object()})
 
 
 def test_figure_keeps_svg_and_its_data():
