@@ -56,7 +56,7 @@ from .exceptions import DescriptionError, InvalidInput
 from .results import Result, unit
 from .warnings import IgnoredElementWarning, SimulationUnstableWarning
 
-__all__ = ["ClosureError", "mjcf_text"]
+__all__ = ["ClosureDrift", "mjcf_text"]
 
 REVOLUTE_PAIR_SPACING = 0.05
 """Distance along the axis between the two ``connect``\\ s of an exported revolute closure [m]."""
@@ -77,8 +77,8 @@ _MESH_SUFFIXES = (".stl", ".obj")
 
 
 @dataclass(frozen=True)
-class ClosureError(Result):
-    """Largest closure error MuJoCo reached in the measuring simulation.
+class ClosureDrift(Result):
+    """Largest closure drift MuJoCo reached in the measuring simulation (its equalities hold loops softly).
 
     Attributes:
         position: largest distance between connected or welded points [m].
@@ -423,7 +423,7 @@ class _Writer:
         return root
 
 
-def _measure(mj_model: Any, sites: list[tuple[str, str, str]], duration: float) -> ClosureError:
+def _measure(mj_model: Any, sites: list[tuple[str, str, str]], duration: float) -> ClosureDrift:
     """Largest closure error of a passive run from the keyframe, MuJoCo's own warnings kept quiet.
 
     MuJoCo reports a diverging state through its warning handler (and a ``MUJOCO_LOG.TXT`` in
@@ -442,7 +442,7 @@ def _measure(mj_model: Any, sites: list[tuple[str, str, str]], duration: float) 
         for k in range(max(1, round(duration / h))):
             mujoco.mj_step(mj_model, data)
             if any(data.warning[w].number for w in unstable):  # MuJoCo reset the state at k h
-                return ClosureError(position, rotation, duration, h, k * h)
+                return ClosureDrift(position, rotation, duration, h, k * h)
             mujoco.mj_kinematics(mj_model, data)  # mj_step leaves the poses of the step's start
             for kind, a, b in ids:
                 position = max(position, float(np.linalg.norm(data.site_xpos[a] - data.site_xpos[b])))
@@ -451,7 +451,7 @@ def _measure(mj_model: Any, sites: list[tuple[str, str, str]], duration: float) 
                     rotation = max(rotation, float(np.linalg.norm(pin.log3(relative))))
     finally:
         mujoco.set_mju_user_warning(previous)
-    return ClosureError(position, rotation, duration, h)
+    return ClosureDrift(position, rotation, duration, h)
 
 
 def mjcf_text(
@@ -460,7 +460,7 @@ def mjcf_text(
     timestep: float = 1e-3,
     integrator: str = "RK4",
     measure_duration: float = MEASURE_DURATION,
-) -> tuple[str, ClosureError]:
+) -> tuple[str, ClosureDrift]:
     """The MJCF of a mechanism, with its closure error measured by MuJoCo (see the module docstring).
 
     Args:
@@ -508,7 +508,7 @@ def export_mjcf(
     timestep: float = 1e-3,
     integrator: str = "RK4",
     sidecar: bool = True,
-) -> ClosureError:
+) -> ClosureDrift:
     """Write a mechanism as a MuJoCo model, and its task in a sidecar beside it.
 
     Args:
