@@ -17,8 +17,13 @@ $(STAMP): pyproject.toml
 
 setup: $(STAMP)
 
+# The tests run on 2 pytest-xdist workers (CI has 2 cores), each with one BLAS thread: more threads
+# only fight over the cores on the small matrices here. tests/conftest.py groups the tests so that
+# `report all` and each module fixture (docs build, wheel venv) run once, the longest first.
+PYTEST := OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -n 2
+
 test: $(STAMP) browser
-	$(PY) -m pytest
+	$(PYTEST)
 
 # The browser check (tests/report/test_browser.py) drives Debian's chromium with chromium-driver.
 # Installed here when missing, as root or with passwordless sudo; otherwise the check fails and
@@ -39,7 +44,7 @@ browser:
 	fi
 
 test-fast: $(STAMP)
-	$(PY) -m pytest -m "not slow" -x -q
+	$(PYTEST) -m "not slow" -x -q
 
 report: $(STAMP)
 	$(VENV)/bin/plm-pin report all --out $(REPORTS)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -171,12 +172,18 @@ def report_all(tmp_path_factory) -> ReportAll:
     """``plm-pin report all`` run once, through the CLI, for the CLI, browser and study tests.
 
     Every study runs once in the session: the CLI's calls of ``run_study`` are recorded (not
-    replaced), so the study tests read the very results whose reports the command wrote.
+    replaced), so the study tests read the very results whose reports the command wrote. Under
+    pytest-xdist the tests reading it share one worker (``pytest_collection_modifyitems``).
     """
     from typer.testing import CliRunner
 
     from plm_pin import cli
 
+    if os.environ.get("PYTEST_XDIST_WORKER") and "@report_all" not in os.environ["PYTEST_CURRENT_TEST"]:
+        pytest.fail(  # each worker would run it: the tests reading it must share one xdist group
+            "report_all on an xdist worker outside the report_all group: run with --dist loadgroup "
+            "(pyproject's addopts; pytest 9.2 loses the groups, pytest-xdist#1386)"
+        )
     out = tmp_path_factory.mktemp("report_all") / "reports"
     results: dict[str, StudyResult] = {}
     run_study = cli.run_study
@@ -190,6 +197,25 @@ def report_all(tmp_path_factory) -> ReportAll:
         patch.setattr(cli, "run_study", recorded)
         invoked = CliRunner().invoke(cli.app, ["report", "all", "--out", str(out)])
     return ReportAll(out, invoked.exit_code, invoked.output, results)
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Work units of pytest-xdist (``make test`` runs on 2 workers, ``--dist loadgroup``), longest first.
+
+    The tests reading the session's ``report_all`` share one unit, so ``report all`` runs once;
+    every other test shares one with its module, so a module fixture (the docs build, the wheel's
+    venv, an overview run) is built once. That unit comes first, then the modules holding slow
+    tests, so the short ones fill the end of both workers. A run without xdist ignores the groups.
+    """
+    groups = {
+        item: "report_all" if "report_all" in item.fixturenames else item.nodeid.split("::")[0]
+        for item in items
+    }
+    slow = {groups[item] for item in items if item.get_closest_marker("slow")}
+    items.sort(key=lambda item: (groups[item] != "report_all", groups[item] not in slow))
+    for item in items:
+        item.add_marker(pytest.mark.xdist_group(groups[item]))
 
 
 @pytest.fixture
