@@ -550,7 +550,7 @@ def _simulations(section: Section, mech: Mechanism) -> None:
                 "simulation 2: theta accelerates", "yes", "yes" if x_two[-1, 2] > x_two[0, 2] else "no"
             ),
         ],
-        note=f"Largest closure residual {max(r.max_closure_residual for r in runs.values()):.1e} m; "
+        note=f"Largest closure residual {max(r.max_residual for r in runs.values()):.1e} m; "
         f"in simulation 2, theta reaches {np.degrees(x_two[-1, 2]):.1f} deg at 2 s and y stays within "
         f"[{x_two[:, 1].min() * 1e3:.1f}, {x_two[:, 1].max() * 1e3:.1f}] mm: the slight motion of "
         "Fig. 12 (b), whose axis spans -0.1 to 0.3 m ((M.40)).",

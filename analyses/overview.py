@@ -409,7 +409,7 @@ def _simulation(section: Section, mech: Mechanism) -> None:
         [
             ("time simulated", float(run.t[-1]), "s"),
             ("samples", int(run.t.size), ""),
-            ("largest closure residual", run.max_closure_residual, "m, rad"),
+            ("largest closure residual", run.max_residual, "m, rad"),
             ("energy drift (max |E - E(0)|)", float(drift), "J"),
             ("largest joint speed", float(np.max(np.abs(run.v))), "m/s, rad/s"),
         ],

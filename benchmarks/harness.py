@@ -764,7 +764,7 @@ def _simulation_row(
         "engine": f"plm_pin ({run.solver})",
         "mechanism": mech.name,
         "case": case,
-        "max_closure_error": run.max_closure_residual,
+        "max_closure_error": run.max_residual,
         "max_closure_drift_before_projection": float(run.closure_drift.max()),
         "energy_drift": run.energy_drift() / _peak_kinetic(mech, run) if not kwargs.get("wrench") else None,
         "steps": run.steps,

@@ -122,7 +122,7 @@ class SimulationResult(Result):
         a: joint accelerations [m/s^2, rad/s^2], shape (n, nv).
         lam: closure forces [N, N m] in the rows of the closure residual (force on the second
             frame of each closure, world-aligned for point rows), shape (n, m).
-        closure_residual: closure distance of each sample (largest Euclidean gap of a closure's
+        residual: closure distance of each sample (largest Euclidean gap of a closure's
             point rows, or norm of its rotation rows) [m, rad], shape (n,).
         closure_drift: largest closure distance the integrator reached before a projection since
             the previous sample [m, rad], shape (n,).
@@ -139,7 +139,7 @@ class SimulationResult(Result):
     v: np.ndarray = field(metadata=unit("m/s, rad/s"))
     a: np.ndarray = field(metadata=unit("m/s^2, rad/s^2"))
     lam: np.ndarray = field(metadata=unit("N, N m"))
-    closure_residual: np.ndarray = field(metadata=unit("m, rad"))
+    residual: np.ndarray = field(metadata=unit("m, rad"))
     closure_drift: np.ndarray = field(metadata=unit("m, rad"))
     energy: np.ndarray = field(metadata=unit("J"))
     x: np.ndarray | None = field(metadata=unit("m, rad"))
@@ -151,7 +151,7 @@ class SimulationResult(Result):
         n = self.t.shape[0]
         arrays = {
             name: getattr(self, name)
-            for name in ("t", "q", "v", "a", "lam", "closure_residual", "closure_drift", "energy", "x")
+            for name in ("t", "q", "v", "a", "lam", "residual", "closure_drift", "energy", "x")
         }
         for name, arr in arrays.items():
             if arr is None:
@@ -168,9 +168,9 @@ class SimulationResult(Result):
         return float(np.max(np.abs(self.energy - self.energy[0]))) if len(self) else 0.0
 
     @property
-    def max_closure_residual(self) -> float:
+    def max_residual(self) -> float:
         """Largest closure distance over the samples [m, rad]."""
-        return float(np.max(self.closure_residual)) if len(self) else 0.0
+        return float(np.max(self.residual)) if len(self) else 0.0
 
 
 class _NonFinite(Exception):
@@ -486,7 +486,7 @@ class _Run:
             v=self.v[:n].copy(),
             a=self.a[:n].copy(),
             lam=self.lam[:n].copy(),
-            closure_residual=self.residual[:n].copy(),
+            residual=self.residual[:n].copy(),
             closure_drift=self.drift[:n].copy(),
             energy=self.energy[:n].copy(),
             x=None if self.x is None else self.x[:n].copy(),
@@ -564,7 +564,7 @@ def simulate(
         >>> from plm_pin.dynamics.simulation import simulate
         >>> mech = plm_pin.load("fourbar")
         >>> run = simulate(mech, mech.q_ref, duration=1.0, dt=0.01)
-        >>> bool(run.max_closure_residual < 1e-10)
+        >>> bool(run.max_residual < 1e-10)
         True
 
     Args:
