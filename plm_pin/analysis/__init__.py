@@ -1,12 +1,12 @@
 """Analyses over the workspace: manipulability, workspace maps and singular loci."""
 
-from .manipulability import METRICS, Manipulability, manipulability, manipulability_at
+from .manipulability import POSE_METRICS, Manipulability, manipulability, manipulability_at
 from .orientation import OrientationRange, orientation_range
 from .singular_loci import SingularPoint, singular_loci, singular_points, singular_points_along
 from .workspace import WorkspaceSlice, workspace_grid, workspace_map, workspace_sweep
 
 __all__ = [
-    "METRICS",
+    "POSE_METRICS",
     "Manipulability",
     "OrientationRange",
     "SingularPoint",

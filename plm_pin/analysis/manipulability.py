@@ -41,7 +41,7 @@ from ..results import Result, unit
 W_UNIT = "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
 """Unit of the manipulability w."""
 
-METRICS: tuple[str, ...] = (
+POSE_METRICS: tuple[str, ...] = (
     "manipulability",
     "condition_number",
     "constraint_margin",
@@ -182,7 +182,7 @@ def batch_metrics(
             mobility) (default: from the SVD of ``J_phi``); the values do not depend on it.
 
     Returns:
-        ``{name: (b,) array}`` for every name of :data:`METRICS`.
+        ``{name: (b,) array}`` for every name of :data:`POSE_METRICS`.
     """
     if basis is None:
         _, s_phi, T, C = feasible_motions(J_phi, J_x, actuated_v, mobility)

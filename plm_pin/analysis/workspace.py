@@ -39,7 +39,7 @@ from ..kinematics.jacobians import check_square_task
 from ..kinematics.limits import within_limits
 from ..results import Result, unit
 from ._continuation import base_pose, solve_poses
-from .manipulability import METRICS, W_UNIT
+from .manipulability import POSE_METRICS, W_UNIT
 
 
 @dataclass(frozen=True)
@@ -84,13 +84,13 @@ class WorkspaceSlice(Result):
     mode: np.ndarray
     working_mode: tuple[int, ...] | None
     _SKIPPED = ("q",)
-    _NONFINITE_AS_TEXT = (*METRICS, "actuators")
+    _NONFINITE_AS_TEXT = (*POSE_METRICS, "actuators")
 
     def __post_init__(self) -> None:
         shape = tuple(len(v) for v in self.values)
         if len(self.axes) != len(self.values) or self.reachable.shape != shape:
             raise InvalidInput(f"slice arrays of shape {self.reachable.shape} do not match the axes {shape}")
-        for name in (*METRICS, "reachable", "actuators", "q", "mode"):
+        for name in (*POSE_METRICS, "reachable", "actuators", "q", "mode"):
             arr = getattr(self, name)
             if arr.shape[: len(shape)] != shape:
                 raise InvalidInput(f"{name} has shape {arr.shape}, expected {shape} first")
@@ -126,9 +126,9 @@ class WorkspaceSlice(Result):
         return _grid_poses(self.pose, self.dofs, self.axes, self.values)
 
     def metric(self, name: str) -> np.ndarray:
-        """One of :data:`plm_pin.analysis.manipulability.METRICS` by name, shape ``shape``."""
-        if name not in METRICS:
-            raise InvalidInput(f"unknown metric {name!r}; metrics are {list(METRICS)}")
+        """One of :data:`plm_pin.analysis.manipulability.POSE_METRICS` by name, shape ``shape``."""
+        if name not in POSE_METRICS:
+            raise InvalidInput(f"unknown metric {name!r}; metrics are {list(POSE_METRICS)}")
         return np.asarray(getattr(self, name))
 
 
@@ -182,7 +182,8 @@ def _slice(
     state, target = solve_poses(mech, poses, guess, mode=mode, tol=tol, workers=workers)
     reached = state.reached.reshape(shape)
     metrics = {
-        name: state.metrics.get(name, np.full(state.reached.size, np.nan)).reshape(shape) for name in METRICS
+        name: state.metrics.get(name, np.full(state.reached.size, np.nan)).reshape(shape)
+        for name in POSE_METRICS
     }
     q = state.q.reshape(*shape, -1)
     return WorkspaceSlice(

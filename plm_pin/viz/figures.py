@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..analysis.manipulability import METRICS
+from ..analysis.manipulability import POSE_METRICS
 from ..analysis.singular_loci import SingularPoint
 from ..analysis.workspace import WorkspaceSlice
 from ..exceptions import InvalidInput
@@ -53,8 +53,8 @@ def _display(axis: str, values: np.ndarray) -> tuple[np.ndarray, str]:
 
 
 def _check_metric(metric: str) -> None:
-    if metric not in METRICS:
-        raise InvalidInput(f"unknown metric {metric!r}; metrics are {list(METRICS)}")
+    if metric not in POSE_METRICS:
+        raise InvalidInput(f"unknown metric {metric!r}; metrics are {list(POSE_METRICS)}")
 
 
 def _axes(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
@@ -78,7 +78,7 @@ def plot_map(
 
     Args:
         result: a map from :func:`plm_pin.analysis.workspace_map`.
-        metric: one of :data:`plm_pin.analysis.METRICS`.
+        metric: one of :data:`plm_pin.analysis.POSE_METRICS`.
         loci: singular points to mark (e.g. from :func:`plm_pin.analysis.singular_loci`),
             one marker shape per kind.
         ax: axes to draw in (default: a new figure).
@@ -144,7 +144,7 @@ def plot_sweep(
 
     Args:
         result: a sweep from :func:`plm_pin.analysis.workspace_sweep`.
-        metric: one of :data:`plm_pin.analysis.METRICS`.
+        metric: one of :data:`plm_pin.analysis.POSE_METRICS`.
         singular: singular points on the sweep (from
             :func:`plm_pin.analysis.singular_points_along`), drawn as dashed vertical lines.
         ax: axes to draw in (default: a new figure).

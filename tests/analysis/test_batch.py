@@ -17,7 +17,7 @@ from plm_pin.analysis._batch import (
     log3_and_jacobian,
     square_task_metrics,
 )
-from plm_pin.analysis.manipulability import METRICS, batch_metrics
+from plm_pin.analysis.manipulability import POSE_METRICS, batch_metrics
 from plm_pin.core import closures as _closures
 from plm_pin.core.legs import working_mode_from_data, working_mode_from_jacobian
 from plm_pin.core.task import TaskTarget
@@ -194,7 +194,7 @@ def test_row_batched_8pss_map_equals_the_point_by_point_map(monkeypatch, axes, s
     assert np.array_equal(batched.mode, serial.mode)
     ok = serial.reachable
     assert np.abs(batched.q[ok] - serial.q[ok]).max() < 1e-11
-    for name in METRICS:
+    for name in POSE_METRICS:
         rtol = 1e-12 if inside else 1e-10
         assert np.allclose(batched.metric(name)[ok], serial.metric(name)[ok], rtol=rtol, atol=0.0), name
 
