@@ -64,6 +64,7 @@ from plm_pin.statics import (
     static_balance,
     static_forces,
 )
+from plm_pin.statics.allocation import new_highs
 from plm_pin.statics.balance import load_on_frame
 
 MAP_SHAPE = (317, 316)
@@ -575,14 +576,6 @@ def _highs_lp(
     return np.array(highs.getSolution().col_value)
 
 
-def _floor_highs() -> highspy.Highs:
-    """A silent HiGHS solver without presolve, as plm_pin's."""
-    highs = highspy.Highs()
-    highs.setOptionValue("output_flag", False)
-    highs.setOptionValue("presolve", "off")
-    return highs
-
-
 def capability_floor(
     mech: Mechanism,
     data: pin.Data,
@@ -647,7 +640,7 @@ def capability_benchmark() -> list[dict[str, object]]:
         mech = load(name)
         q = mech.q_ref
         limits = np.array([[-bound, bound]] * mech.n_actuators)
-        data, highs = mech.model.createData(), _floor_highs()
+        data, highs = mech.model.createData(), new_highs()
         task = load_on_frame(mech, direction)
         floored: dict[str, tuple[Callable[[], object], Callable[[], object], str]] = {
             "force_capability (gravity, limits)": (

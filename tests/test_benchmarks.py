@@ -11,7 +11,6 @@ from analyses import _harada2011_paper as paper
 from benchmarks.harness import (
     CAPABILITY_CASES,
     Floor,
-    _floor_highs,
     _timing_line,
     capability_floor,
     harada_closed_form_map,
@@ -21,6 +20,7 @@ from plm_pin.analysis import manipulability, workspace_map
 from plm_pin.kinematics import closed_chain_jacobians, forward_kinematics, inverse_kinematics, task_pose
 from plm_pin.models import PRESETS
 from plm_pin.statics import force_capability, internal_force_range
+from plm_pin.statics.allocation import new_highs
 from plm_pin.statics.balance import load_on_frame
 from tests.conftest import preset
 
@@ -73,7 +73,7 @@ def test_capability_floors_compute_force_capability_and_the_internal_range(name)
     mech = preset(name)
     q = mech.q_ref
     limits = np.array([[-bound, bound]] * mech.n_actuators)
-    data, highs = mech.model.createData(), _floor_highs()
+    data, highs = mech.model.createData(), new_highs()
     task = load_on_frame(mech, direction)
     alpha = capability_floor(mech, data, highs, q, task.frame_id, task.wrench, limits)
     assert math.isclose(alpha, force_capability(mech, q, direction, limits=limits).alpha, rel_tol=1e-9)

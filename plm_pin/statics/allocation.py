@@ -308,18 +308,26 @@ class _SilentHighs(highspy.Highs):
         """Leave HiGHS's callbacks off (nothing here subscribes to one)."""
 
 
+def new_highs() -> highspy.Highs:
+    """A HiGHS solver as plm_pin's linear programmes use it: silent, banner included, without presolve.
+
+    Presolve is off: on programmes of a few columns it costs more than it saves.
+    """
+    highs = _SilentHighs()
+    highs.setOptionValue("output_flag", False)
+    highs.setOptionValue("presolve", "off")
+    return highs
+
+
 def _highs() -> highspy.Highs:
-    """This thread's HiGHS solver, silent and without presolve (made on first use).
+    """This thread's solver (:func:`new_highs`, made on first use).
 
     One per thread: a sweep calls the statics from several threads, and a HiGHS instance
-    holds its model. Presolve is off: on programmes of a few columns it costs more than it saves.
+    holds its model.
     """
     highs: highspy.Highs | None = getattr(_THREAD, "highs", None)
     if highs is None:
-        highs = _SilentHighs()
-        highs.setOptionValue("output_flag", False)
-        highs.setOptionValue("presolve", "off")
-        _THREAD.highs = highs
+        highs = _THREAD.highs = new_highs()
     return highs
 
 
