@@ -15,7 +15,6 @@ import math
 import numpy as np
 
 from plm_pin import Mechanism, PlmError, build_mechanism, load
-from plm_pin.analysis import singular_points_along, workspace_sweep
 from plm_pin.description.compliance import BeamSpec, ComplianceSpec
 from plm_pin.dynamics import DecouplingReport, SimulationResult, decoupling_check, simulate
 from plm_pin.models import PRESETS
@@ -25,6 +24,7 @@ from plm_pin.results import units
 from plm_pin.statics import force_capability, static_forces, wrench_polygon
 from plm_pin.stiffness import Modes, StiffnessResult, natural_frequencies, stiffness, stiffness_map
 from plm_pin.viz import fig8, panel_grid, plot_panels, plot_skeletons, plot_sweep, shared_legend
+from plm_pin.workspace import singular_points_along, workspace_sweep
 
 from . import _harada2011_paper as paper
 

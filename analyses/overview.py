@@ -13,7 +13,6 @@ import numpy as np
 import pinocchio as pin
 
 from plm_pin import Mechanism, PlmError, SimulationFailed, load
-from plm_pin.analysis import WorkspaceSlice, manipulability, singular_loci, workspace_map, workspace_sweep
 from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
 from plm_pin.kinematics import classify, task_pose
 from plm_pin.kinematics.collisions import self_collisions
@@ -30,6 +29,7 @@ from plm_pin.viz import (
     plot_stiffness_map,
     plot_sweep,
 )
+from plm_pin.workspace import WorkspaceSlice, manipulability, singular_loci, workspace_map, workspace_sweep
 
 TITLE = "Overview"
 SUMMARY = (

@@ -40,7 +40,6 @@ import proxsuite
 
 # run from the source checkout (make bench): the Zhao 2011 trajectory is the study's, beside it
 from analyses._zhao2011_paper import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
-from plm_pin.analysis import manipulability, singular_points_along, workspace_map
 from plm_pin.core.closures import jacobian_from_data as closure_jacobian_from_data
 from plm_pin.core.mechanism import Mechanism
 from plm_pin.dynamics.inverse_dynamics import inverse_dynamics
@@ -66,6 +65,7 @@ from plm_pin.statics import (
 )
 from plm_pin.statics.allocation import new_highs
 from plm_pin.statics.balance import load_on_frame
+from plm_pin.workspace import manipulability, singular_points_along, workspace_map
 
 MAP_SHAPE = (317, 316)
 """Grid of the manipulability-map benchmark: 100,172 poses."""
@@ -947,7 +947,7 @@ def fig6_note() -> str:
     """Harada 2011 Fig. 6: the 3D3M's type-4 singular angle at the y where eq. (11.4) gives 28.7 deg.
 
     The table with l : 2 r_t = 2 : 1 (r_t = l / 4) is built (:func:`plm_pin.build_mechanism`); the angle
-    is located by root finding along theta (:func:`plm_pin.analysis.singular_points_along`).
+    is located by root finding along theta (:func:`plm_pin.workspace.singular_points_along`).
     """
     l = float(PRESETS["harada2011_3d3m"].parameters["rod_lengths"][0])
     rt = l / 4.0

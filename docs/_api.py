@@ -31,7 +31,7 @@ PACKAGES = {
     "mode-change planners, complex singularity.",
     "plm_pin.families.pss": "n-PSS spatial platforms (Zhao 2011's 8-PSS and its 6-PSS counterpart).",
     "plm_pin.families.star_triangle": "The 3-PRP star-triangle (Enferadi 2017).",
-    "plm_pin.analysis": "Manipulability, workspace maps, singular loci, orientation range.",
+    "plm_pin.workspace": "Manipulability, workspace maps, singular loci, orientation range.",
     "plm_pin.statics": "The static balance, actuator-force allocation, reactions, link forces, "
     "force capability.",
     "plm_pin.dynamics": "Trajectories on the closure manifold, inverse dynamics, power and work, task-space "

@@ -30,8 +30,8 @@ from typer.core import TyperGroup
 
 from ._io import atomic_path
 from ._version import __version__
+from .core.diagnostics import findings, mobility_text
 from .core.mechanism import Mechanism
-from .diagnostics import findings, mobility_text
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .export import export_mjcf
 from .kinematics import inverse_kinematics, task_pose

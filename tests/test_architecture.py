@@ -69,7 +69,7 @@ def test_the_core_imports_no_analysis():
         "kinematics",
         "statics",
         "dynamics",
-        "analysis",
+        "workspace",
         "stiffness",
         "families",
         "models",

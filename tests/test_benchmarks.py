@@ -16,12 +16,12 @@ from benchmarks.harness import (
     harada_closed_form_map,
     internal_range_floor,
 )
-from plm_pin.analysis import manipulability, workspace_map
 from plm_pin.kinematics import closed_chain_jacobians, forward_kinematics, inverse_kinematics, task_pose
 from plm_pin.models import PRESETS
 from plm_pin.statics import force_capability, internal_force_range
 from plm_pin.statics.allocation import new_highs
 from plm_pin.statics.balance import load_on_frame
+from plm_pin.workspace import manipulability, workspace_map
 from tests.conftest import preset
 
 

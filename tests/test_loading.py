@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 import plm_pin
-from plm_pin.analysis import manipulability
 from plm_pin.description import write_description
 from plm_pin.families.prrrp import build_2prrrp
 from plm_pin.loading import build_mechanism, resolve_builder
 from plm_pin.models import PRESETS
 from plm_pin.models.registry import builder_parameters
+from plm_pin.workspace import manipulability
 
 
 def test_variant_equals_the_description_written_and_loaded(tmp_path):

@@ -16,7 +16,7 @@ NOTEBOOKS = Path(__file__).resolve().parents[1] / "notebooks"
 PAPERS = ("enferadi2017", "harada2011", "harada2015", "zhao2011")
 PUBLIC_MODULES = {
     "plm_pin",
-    "plm_pin.analysis",
+    "plm_pin.workspace",
     "plm_pin.dynamics",
     "plm_pin.families",
     "plm_pin.families.prrrp",
@@ -130,7 +130,7 @@ def test_the_public_api_check_catches_private_uses():
     source = (
         "from plm_pin.statics.reactions import body_name\n"
         "from plm_pin.kinematics import _private\n"
-        "import plm_pin._checks\n"
+        "import plm_pin._arguments\n"
         "mech._cache\n"
         "plm_pin.loading\n"
         "plm_pin.kinematics.mode_graph.Mode\n"
@@ -141,7 +141,7 @@ def test_the_public_api_check_catches_private_uses():
     assert [use.split(":")[0] for use in found] == [
         "from plm_pin.statics.reactions import ...",
         "plm_pin.kinematics._private is not in its __all__",
-        "import plm_pin._checks",
+        "import plm_pin._arguments",
         "attribute _cache",
         "plm_pin.loading is not in its __all__",
         "plm_pin.kinematics.mode_graph is not in its __all__",

@@ -15,7 +15,6 @@ import pinocchio as pin
 import pytest
 
 from plm_pin import ClosureNotSatisfied, DescriptionError, InvalidInput
-from plm_pin.analysis import manipulability
 from plm_pin.core.checks import CLOSURE_TOL
 from plm_pin.core.mechanism import Mechanism
 from plm_pin.dynamics import actuator_trajectory, inverse_dynamics, task_space_dynamics, task_trajectory
@@ -23,6 +22,7 @@ from plm_pin.kinematics import classify, closed_chain_jacobians
 from plm_pin.kinematics.paths import redundancy_margin
 from plm_pin.models import preset_names
 from plm_pin.statics import force_capability, internal_force_range, static_balance, static_forces
+from plm_pin.workspace import manipulability
 from tests.conftest import preset
 
 LIMITS = [(-100.0, 100.0)] * 4  # for the 3D4M's capability and range [N]

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from plm_pin.analysis import OrientationRange
 from plm_pin.dynamics import SimulationResult
 from plm_pin.results import Result, plain, unit, units
+from plm_pin.workspace import OrientationRange
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """The Mechanism: a Pinocchio spanning tree, its closures, actuation and task, and what they are made of.
 
 Everything else works on a :class:`Mechanism`: :mod:`plm_pin.kinematics`, :mod:`plm_pin.statics`,
-:mod:`plm_pin.dynamics`, :mod:`plm_pin.analysis`, :mod:`plm_pin.stiffness`. The modules here
+:mod:`plm_pin.dynamics`, :mod:`plm_pin.workspace`, :mod:`plm_pin.stiffness`. The modules here
 depend on the description (:mod:`plm_pin.description`) and Pinocchio only: closures (residual
 and Jacobian rows), task (the end-effector coordinates), legs (the blocks of the
 inverse-kinematics Jacobian), idle gauges, assembly (the closure solver), scratch workspaces

@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import as_vector
+from .._arguments import as_vector
 from ..description.sidecar import Sidecar, TaskSpec
 from ..exceptions import ClosureNotSatisfied, InvalidInput
 from . import closures as _closures

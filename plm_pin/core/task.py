@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .._checks import as_vector
+from .._arguments import as_vector
 from ..description.sidecar import TASK_DOFS
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED

@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import repeated
+from .._arguments import repeated
 from .._text import short
 from ..exceptions import DescriptionError
 from ._numbers import positive_number

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .._checks import repeated
+from .._arguments import repeated
 from .._text import short
 from ..exceptions import DescriptionError
 from .sidecar import FORMAT, ActuatorSpec, ClosureSpec, Sidecar, TaskSpec, parse_sidecar

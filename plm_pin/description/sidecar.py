@@ -35,7 +35,7 @@ from typing import Any, Literal
 
 import yaml
 
-from .._checks import repeated
+from .._arguments import repeated
 from .._text import short
 from .._yaml import YamlRefused, load_yaml
 from ..exceptions import DescriptionError

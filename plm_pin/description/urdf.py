@@ -10,7 +10,7 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 from lxml import etree
 
-from .._checks import repeated
+from .._arguments import repeated
 from .._text import short
 from ..exceptions import DescriptionError, FrameNotFound
 from ..warnings import DescriptionWarning, MissingMeshWarning

@@ -32,7 +32,7 @@ a term is negligible rather than absent.
 
 Sample. Either task poses, each solved by inverse kinematics
 (:func:`plm_pin.kinematics.inverse_kinematics`) in one working mode (default: the
-reference configuration's), or a :class:`plm_pin.analysis.WorkspaceSlice` whose reachable
+reference configuration's), or a :class:`plm_pin.workspace.WorkspaceSlice` whose reachable
 points are used as solved. Poses that cannot be reached in that working mode, and poses at
 or near an inverse-kinematics (type 1) or constraint singularity (margin at most
 ``singular_tol``, :func:`plm_pin.kinematics.classify`), where :math:`M_x` is undefined or
@@ -48,7 +48,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..analysis.workspace import WorkspaceSlice
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.inverse import inverse_kinematics
@@ -56,6 +55,7 @@ from ..kinematics.jacobians import check_square_task
 from ..kinematics.singularity import SINGULARITY_TOL, classify
 from ..kinematics.working_mode import working_mode
 from ..results import Result, unit
+from ..workspace.maps import WorkspaceSlice
 from .task_space import TaskSpaceDynamics, task_space_dynamics, task_units
 
 DECOUPLING_RTOL = 1e-9
@@ -373,7 +373,7 @@ def decoupling_check(
     Args:
         mech: the mechanism (its task must have as many coordinates as it has DOF).
         sample: task poses [m, rad], shape (k, n_task) (or one pose), or a
-            :class:`plm_pin.analysis.WorkspaceSlice` of this mechanism (its reachable points).
+            :class:`plm_pin.workspace.WorkspaceSlice` of this mechanism (its reachable points).
         mode: working mode the poses are solved in (default: the reference configuration's);
             a workspace slice keeps its own.
         rtol: cancellation ratio for ``zero`` and ``constant`` [-].

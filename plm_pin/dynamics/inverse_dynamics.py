@@ -32,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import load_arguments, repeated
+from .._arguments import load_arguments, repeated
 from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL, check_finite_model, check_samples_assembled
 from ..core.mechanism import Mechanism
@@ -275,9 +275,9 @@ def inverse_dynamics(
     Raises:
         InvalidInput: malformed options, a trajectory of another mechanism, or a body group
             named as one of :data:`RESERVED_GROUPS`.
-        DescriptionError: a body's inertia is not finite (see :func:`plm_pin._checks.check_finite_model`).
+        DescriptionError: a body's inertia is not finite (see :func:`plm_pin.core.checks.check_finite_model`).
         ClosureNotSatisfied: a sample of ``trajectory`` is off the closure manifold (see
-            :func:`plm_pin._checks.check_assembled`).
+            :func:`plm_pin.core.checks.check_assembled`).
         InverseDynamicsFailed: at the first sample whose allocation is infeasible, whose load
             cannot be resisted, or (non-redundant mechanisms with a square task) past a direct
             singularity (a sign change of det J_ce), with the samples before it.
@@ -318,7 +318,7 @@ class _Kinematics:
         """Run the pass over the trajectory and refuse it if a sample is off the closure manifold.
 
         Raises:
-            ClosureNotSatisfied: as :func:`plm_pin._checks.check_samples_assembled` (its message).
+            ClosureNotSatisfied: as :func:`plm_pin.core.checks.check_samples_assembled` (its message).
         """
         model, closures = mech.model, mech.closures
         data = model.createData()

@@ -70,7 +70,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy.integrate import DOP853
 
-from .._checks import as_vector, optional_name, positive, real_numbers, sample_count
+from .._arguments import as_vector, optional_name, positive, real_numbers, sample_count
 from ..core.mechanism import Mechanism
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
 from ..results import Result, unit

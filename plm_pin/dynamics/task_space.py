@@ -55,7 +55,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import as_vector
+from .._arguments import as_vector
 from ..core.checks import check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
@@ -185,8 +185,8 @@ def task_space_dynamics(
     Raises:
         InvalidInput: no task, a task size different from the DOF, malformed ``q``, ``v`` or
             ``xdot``, both ``v`` and ``xdot``, or ``v`` opening the loops.
-        DescriptionError: a body's inertia is not finite (see :func:`plm_pin._checks.check_finite_model`).
-        ClosureNotSatisfied: ``q`` is not assembled to :data:`plm_pin._checks.CLOSURE_TOL`.
+        DescriptionError: a body's inertia is not finite (see :func:`plm_pin.core.checks.check_finite_model`).
+        ClosureNotSatisfied: ``q`` is not assembled to :data:`plm_pin.core.checks.CLOSURE_TOL`.
         SingularConfiguration: at an inverse-kinematics (type 1) singularity, where :math:`S`
             is undefined.
 

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import count, positive
+from .._arguments import count, positive
 from ..core.assembly import assemble, newton
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector

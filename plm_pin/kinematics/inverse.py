@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._checks import positive, signs
+from .._arguments import positive, signs
 from ..core import closures as _closures
 from ..core.assembly import assemble, newton
 from ..core.closures import Closure, compile_closures

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import check_tolerance
+from .._arguments import check_tolerance
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import SingularConfiguration
 from ..results import Result, unit

@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 from scipy.linalg import blas as _blas
 from scipy.linalg import lapack as _lapack
 
-from .._checks import as_vector, check_tolerance
+from .._arguments import as_vector, check_tolerance
 from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL, check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism
@@ -216,7 +216,7 @@ def static_balance(
         InvalidInput: malformed ``q`` or wrench, or ``singular_rtol`` not in [0, 1).
         DescriptionError: the weight of a body is not finite (its inertia overflows).
         ClosureNotSatisfied: ``q`` is off the closure manifold (residual above
-            :data:`plm_pin._checks.CLOSURE_TOL`); assemble it first, ``mech.assemble(q).q``.
+            :data:`plm_pin.core.checks.CLOSURE_TOL`); assemble it first, ``mech.assemble(q).q``.
         SingularConfiguration: the actuators (direct singularity) or the closures
             (constraint singularity) cannot resist the load at ``q``; the message names
             the unresisted generalized-force component.
@@ -238,10 +238,10 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
 
     ``pin.computeJointJacobians`` and ``pin.updateFramePlacements`` fill ``data`` (the frame
     Jacobians and placements of ``q`` stay there for the caller); the closure residual read
-    from the same placements is the one :func:`~plm_pin._checks.check_assembled` takes.
+    from the same placements is the one :func:`~plm_pin.core.checks.check_assembled` takes.
 
     Raises:
-        ClosureNotSatisfied: as :func:`~plm_pin._checks.check_assembled` (its message).
+        ClosureNotSatisfied: as :func:`~plm_pin.core.checks.check_assembled` (its message).
     """
     model, closures = mech.model, mech.closures
     pin.computeJointJacobians(model, data, q)

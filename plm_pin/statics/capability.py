@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import load_arguments
+from .._arguments import load_arguments
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, PlmError
 from ..results import Result, unit

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import load_arguments, real_numbers
+from .._arguments import load_arguments, real_numbers
 from ..core.checks import check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput

@@ -5,7 +5,7 @@ from .deflection import Deflection, deflection
 from .equilibrium import ElasticState, elastic_state
 from .maps import StiffnessMap, stiffness_map
 from .model import CompliantModel, compliant_model
-from .modes import MODELS, Modes, natural_frequencies
+from .vibration import MODELS, Modes, natural_frequencies
 
 __all__ = [
     "MODELS",

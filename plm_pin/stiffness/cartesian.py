@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._checks import as_vector
+from .._arguments import as_vector
 from ..core.closures import jacobian_from_data
 from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec

@@ -8,13 +8,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..analysis import WorkspaceSlice
 from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
 from ..results import Result, unit, units
+from ..workspace import WorkspaceSlice
 from .cartesian import stiffness
-from .modes import natural_frequencies
+from .vibration import natural_frequencies
 
 _MEANINGS = {
     "min_translational_stiffness": "smallest eigen-stiffness under a pure force",
@@ -79,7 +79,7 @@ def stiffness_map(
 
     Args:
         mech: the mechanism the slice was computed for.
-        grid: a slice from :func:`plm_pin.analysis.workspace_map` (or ``workspace_grid``).
+        grid: a slice from :func:`plm_pin.workspace.workspace_map` (or ``workspace_grid``).
         direction: direction of ``compliance_along`` in the task's translation coordinates
             (default the first one, e.g. x).
         gravity: hold the bodies' weight (and include its geometric stiffness).

@@ -4,17 +4,17 @@ Every metric is computed by existing plm_pin analyses at one parameter point (on
 mechanism), over the sweep's pose grid; none re-derives a formula:
 
 - ``reachable``, ``manipulability``, ``condition_number`` and ``singularity`` come from
-  :func:`plm_pin.analysis.workspace_grid` (inverse-kinematics continuation over the whole
+  :func:`plm_pin.workspace.workspace_grid` (inverse-kinematics continuation over the whole
   pose grid in the working mode of the reference configuration, batched
-  :func:`~plm_pin.analysis.manipulability` and :func:`~plm_pin.kinematics.classify` margins);
+  :func:`~plm_pin.workspace.manipulability` and :func:`~plm_pin.kinematics.classify` margins);
 - ``min_manipulability`` and ``reachable_fraction`` reduce those over the pose axes
   ``over`` (default: all of them);
-- ``orientation_range`` runs :func:`plm_pin.analysis.orientation_range` along the rotation
+- ``orientation_range`` runs :func:`plm_pin.workspace.orientation_range` along the rotation
   axis for every combination of the other pose coordinates;
 - ``collision_free`` checks them for self-collision
-  (:meth:`plm_pin.analysis.WorkspaceSlice.collision_free`);
+  (:meth:`plm_pin.workspace.WorkspaceSlice.collision_free`);
 - ``within_limits`` checks the grid's configurations against the joints' position limits
-  (:meth:`plm_pin.analysis.WorkspaceSlice.within_limits`);
+  (:meth:`plm_pin.workspace.WorkspaceSlice.within_limits`);
 - ``peak_force`` and ``preload`` call :func:`plm_pin.statics.static_forces` at every reached
   pose, for every wrench of the set;
 - ``stiffness`` calls :func:`plm_pin.stiffness.stiffness` and
@@ -38,10 +38,6 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._text import short
-from ..analysis import WorkspaceSlice, workspace_grid
-from ..analysis._continuation import guess_mode
-from ..analysis.manipulability import Manipulability
-from ..analysis.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
 from ..core.mechanism import Mechanism
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
 from ..kinematics.forward import task_pose
@@ -52,18 +48,22 @@ from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
 from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
+from ..workspace import WorkspaceSlice, workspace_grid
+from ..workspace._continuation import guess_mode
+from ..workspace.manipulability import Manipulability
+from ..workspace.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
 
 SINGULARITY_CODES: tuple[str, ...] = ("regular", *KINDS)
 """Meaning of the ``singularity`` codes 0, 1, 2, 3 (-1: unreachable)."""
 
 W_UNIT = units(Manipulability)["w"]
-"""Unit of the manipulability w (see :mod:`plm_pin.analysis.manipulability`)."""
+"""Unit of the manipulability w (see :mod:`plm_pin.workspace.manipulability`)."""
 
 RANGE_UNITS = units(OrientationRange)
-"""Units of an orientation range's ends (see :mod:`plm_pin.analysis.orientation`)."""
+"""Units of an orientation range's ends (see :mod:`plm_pin.workspace.orientation`)."""
 
 SLICE_UNITS = units(WorkspaceSlice)
-"""Units of the per-pose metrics of a workspace slice (see :mod:`plm_pin.analysis.workspace`)."""
+"""Units of the per-pose metrics of a workspace slice (see :mod:`plm_pin.workspace.maps`)."""
 
 STIFFNESS_UNITS = units(StiffnessMap)
 """Units of the stiffness-map variables (see :mod:`plm_pin.stiffness.maps`)."""
@@ -314,7 +314,7 @@ class PointEvaluation:
 
     @functools.cached_property
     def grid(self) -> WorkspaceSlice:
-        """The metrics of :func:`~plm_pin.analysis.workspace_grid` over the whole pose grid."""
+        """The metrics of :func:`~plm_pin.workspace.workspace_grid` over the whole pose grid."""
         spec = self.spec
         return workspace_grid(
             self.mech, spec.axes, spec.values, self.base, mode=self.mode, tol=self.option("ik_tol")
@@ -496,7 +496,7 @@ METRICS: dict[str, Metric] = {
         Metric(
             "orientation_range",
             "largest interval of the rotation axis holding the reference angle that stays reachable and "
-            "non-singular (plm_pin.analysis.orientation_range), ends located to xtol",
+            "non-singular (plm_pin.workspace.orientation_range), ends located to xtol",
             (
                 Variable(
                     "orientation_lower",

@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..analysis.manipulability import POSE_METRICS
-from ..analysis.singular_loci import SingularPoint
-from ..analysis.workspace import WorkspaceSlice
 from ..exceptions import InvalidInput
+from ..workspace.manipulability import POSE_METRICS
+from ..workspace.maps import WorkspaceSlice
+from ..workspace.singular_loci import SingularPoint
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -77,9 +77,9 @@ def plot_map(
     """Colour map of one metric over a 2-D workspace slice, unreachable points left blank.
 
     Args:
-        result: a map from :func:`plm_pin.analysis.workspace_map`.
-        metric: one of :data:`plm_pin.analysis.POSE_METRICS`.
-        loci: singular points to mark (e.g. from :func:`plm_pin.analysis.singular_loci`),
+        result: a map from :func:`plm_pin.workspace.workspace_map`.
+        metric: one of :data:`plm_pin.workspace.POSE_METRICS`.
+        loci: singular points to mark (e.g. from :func:`plm_pin.workspace.singular_loci`),
             one marker shape per kind.
         ax: axes to draw in (default: a new figure).
         log: logarithmic colour scale.
@@ -143,10 +143,10 @@ def plot_sweep(
     Unreachable samples leave gaps. Call again with the same ``ax`` to overlay mechanisms.
 
     Args:
-        result: a sweep from :func:`plm_pin.analysis.workspace_sweep`.
-        metric: one of :data:`plm_pin.analysis.POSE_METRICS`.
+        result: a sweep from :func:`plm_pin.workspace.workspace_sweep`.
+        metric: one of :data:`plm_pin.workspace.POSE_METRICS`.
         singular: singular points on the sweep (from
-            :func:`plm_pin.analysis.singular_points_along`), drawn as dashed vertical lines.
+            :func:`plm_pin.workspace.singular_points_along`), drawn as dashed vertical lines.
         ax: axes to draw in (default: a new figure).
         label: legend label of the curve.
         log: logarithmic vertical axis.

@@ -12,7 +12,6 @@ import pytest
 from typer.testing import CliRunner
 
 from plm_pin import InvalidInput
-from plm_pin.analysis import manipulability
 from plm_pin.cli import app
 from plm_pin.core.closures import compile_closures
 from plm_pin.core.closures import jacobian as closure_jacobian
@@ -23,6 +22,7 @@ from plm_pin.kinematics import (
     inverse_kinematics,
     same_assembly,
 )
+from plm_pin.workspace import manipulability
 from tests import textbook as tb
 from tests.conftest import ball_joint_body
 

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from plm_pin import InvalidInput
-from plm_pin.analysis import workspace_map
 from plm_pin.kinematics.collisions import SelfCollision, self_collisions
+from plm_pin.workspace import workspace_map
 from tests import textbook as tb
 
 XS, YS = np.linspace(-0.06, 0.08, 8), np.linspace(-0.07, 0.06, 7)

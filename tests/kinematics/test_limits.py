@@ -10,10 +10,10 @@ import pinocchio as pin
 import pytest
 
 import plm_pin
-from plm_pin.analysis import workspace_map
 from plm_pin.exceptions import JointLimitExceeded
 from plm_pin.kinematics import forward_kinematics, inverse_kinematics
 from plm_pin.warnings import MissingLimitsWarning
+from plm_pin.workspace import workspace_map
 from tests import textbook as tb
 from tests.conftest import INTEROP
 

@@ -9,7 +9,6 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from plm_pin.analysis import workspace_map
 from plm_pin.description.compliance import ComplianceSpec
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.results import units
@@ -18,6 +17,7 @@ from plm_pin.statics.balance import load_on_frame
 from plm_pin.stiffness import Modes, StiffnessMap, deflection, natural_frequencies, stiffness, stiffness_map
 from plm_pin.stiffness.equilibrium import elastic_state, hessian_terms
 from plm_pin.stiffness.geometric import TreeDerivatives
+from plm_pin.workspace import workspace_map
 from tests.conftest import ball_joint_body, fd_jacobian, preset
 
 from .mechanisms import RPR_ROD, cantilever, pendulum, rpr, rpr_points, stewart

@@ -9,10 +9,10 @@ import pytest
 
 from analyses import _harada2011_paper as paper
 from plm_pin import build_mechanism
-from plm_pin.analysis import manipulability, orientation_range
 from plm_pin.kinematics import classify, inverse_kinematics
 from plm_pin.statics import static_forces
 from plm_pin.sweep import METRICS, sweep
+from plm_pin.workspace import manipulability, orientation_range
 from tests.sweep.conftest import FIG6_L, FIG6_RT, FIG6_Y, THETAS, small
 
 LEGS = {"(1, 2, 4)": (1, 2, 4), "(1, 2, 3, 4)": (1, 2, 3, 4)}

@@ -10,9 +10,9 @@ import sys
 import numpy as np
 import pytest
 
-from plm_pin.analysis import singular_loci, singular_points_along, workspace_map, workspace_sweep
 from plm_pin.exceptions import InvalidInput
 from plm_pin.viz import plot_map, plot_sweep
+from plm_pin.workspace import singular_loci, singular_points_along, workspace_map, workspace_sweep
 from tests.conftest import preset
 
 matplotlib = pytest.importorskip("matplotlib")

@@ -5,13 +5,13 @@ fixed, the *orientation range* is the largest interval :math:`[\theta_-, \theta_
 holds the reference angle :math:`\theta_0` and over which the mechanism stays reachable in
 its working mode and non-singular. Its ends are the singular points and reachable-set
 boundaries nearest to :math:`\theta_0` on either side, located by
-:func:`plm_pin.analysis.singular_points_along` (Brent root finding of
+:func:`plm_pin.workspace.singular_points_along` (Brent root finding of
 :math:`\det T \det C` for non-redundant mechanisms, bounded minimisation of the margins for
 redundant ones, bisection at a boundary) to ``xtol``. A redundant mechanism's margin
 minimum counts only when it reaches zero (at most ``tol``).
 
 The samples ``values`` bracket the search: two singular points between neighbouring
-samples may be missed (see :func:`~plm_pin.analysis.singular_points`), and when nothing
+samples may be missed (see :func:`~plm_pin.workspace.singular_points`), and when nothing
 ends the range before the first or last sample, that sample is the end (``lower_end`` or
 ``upper_end`` is ``"grid"``: the range is at least that wide).
 
@@ -33,8 +33,8 @@ from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import SINGULARITY_TOL
 from ..results import Result, unit
 from ._continuation import guess_mode, start_configuration
+from .maps import workspace_sweep
 from .singular_loci import NEAR, SingularPoint, line_path, locate_on_solved
-from .workspace import workspace_sweep
 
 RANGE_XTOL = 1e-9
 """Default tolerance on the located ends of an orientation range [rad]."""

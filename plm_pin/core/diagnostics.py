@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from .core.mechanism import Mechanism
+from .mechanism import Mechanism
 
 
 @dataclass(frozen=True)

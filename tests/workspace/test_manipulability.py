@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from analyses import _harada2011_paper as paper
-from plm_pin.analysis import manipulability, manipulability_at
-from plm_pin.analysis.manipulability import manipulability_from_jacobians
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import ClosedChainJacobians, closed_chain_jacobians, inverse_kinematics
+from plm_pin.workspace import manipulability, manipulability_at
+from plm_pin.workspace.manipulability import manipulability_from_jacobians
 from tests.conftest import preset, with_rotated_null_basis
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1

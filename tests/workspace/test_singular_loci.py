@@ -9,18 +9,18 @@ import numpy as np
 import pytest
 
 from analyses import _harada2011_paper as paper
-from plm_pin.analysis import (
+from plm_pin.exceptions import InvalidInput
+from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics
+from plm_pin.kinematics.working_mode import working_mode
+from plm_pin.workspace import (
     singular_loci,
     singular_points,
     singular_points_along,
     workspace_sweep,
 )
-from plm_pin.analysis.singular_loci import signed_singularity_function
-from plm_pin.exceptions import InvalidInput
-from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics
-from plm_pin.kinematics.working_mode import working_mode
-from tests.analysis.conftest import FIG6_L, FIG6_RT
+from plm_pin.workspace.singular_loci import signed_singularity_function
 from tests.conftest import preset, with_rotated_null_basis
+from tests.workspace.conftest import FIG6_L, FIG6_RT
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1
 THETAS = np.radians(np.linspace(-85.0, 85.0, 69))  # 2.5 deg samples

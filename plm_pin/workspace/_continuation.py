@@ -493,7 +493,7 @@ def _walk_rows(
 
     Each row is predicted per column by polynomial extrapolation from the rows before it on
     its side (as :meth:`IKEvaluator.extrapolate` does along a line) and solved, together
-    with the other side's next row, by :func:`~plm_pin.analysis._batch.batch_newton`; a
+    with the other side's next row, by :func:`~plm_pin.workspace._batch.batch_newton`; a
     point is kept only when it converges to ``tol`` in ``target_mode``. The second side
     starts :data:`LAG` batches late, so that every row gets the prediction it had when the
     sides were walked in turn. A side's walk stops at the grid edge or at a row with no

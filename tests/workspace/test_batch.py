@@ -1,4 +1,4 @@
-"""Batched kinematics across poses (plm_pin/analysis/_batch.py) against Pinocchio and the serial path."""
+"""Batched kinematics across poses (plm_pin/workspace/_batch.py) against Pinocchio and the serial path."""
 
 from __future__ import annotations
 
@@ -8,8 +8,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from plm_pin.analysis import _continuation, workspace_map
-from plm_pin.analysis._batch import (
+from plm_pin.core import closures as _closures
+from plm_pin.core.legs import working_mode_from_data, working_mode_from_jacobian
+from plm_pin.core.task import TaskTarget
+from plm_pin.kinematics import task_pose
+from plm_pin.kinematics.jacobians import ik_jacobian
+from plm_pin.workspace import _continuation, workspace_map
+from plm_pin.workspace._batch import (
     GRAM_RTOL,
     BatchKinematics,
     batch_modes,
@@ -17,12 +22,7 @@ from plm_pin.analysis._batch import (
     log3_and_jacobian,
     square_task_metrics,
 )
-from plm_pin.analysis.manipulability import POSE_METRICS, batch_metrics
-from plm_pin.core import closures as _closures
-from plm_pin.core.legs import working_mode_from_data, working_mode_from_jacobian
-from plm_pin.core.task import TaskTarget
-from plm_pin.kinematics import task_pose
-from plm_pin.kinematics.jacobians import ik_jacobian
+from plm_pin.workspace.manipulability import POSE_METRICS, batch_metrics
 from tests.conftest import preset
 
 

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from analyses import _harada2011_paper as paper
-from plm_pin.analysis import orientation_range
 from plm_pin.exceptions import InvalidInput
-from tests.analysis.conftest import FIG6_L, FIG6_RT
-from tests.analysis.test_singular_loci import expected_3d3m
+from plm_pin.workspace import orientation_range
 from tests.conftest import preset
+from tests.workspace.conftest import FIG6_L, FIG6_RT
+from tests.workspace.test_singular_loci import expected_3d3m
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1
 THETAS = np.radians(np.linspace(-80.0, 80.0, 65))  # 2.5 deg samples

@@ -2,7 +2,7 @@ r"""Singular configurations located along paths and over slices of the workspace
 
 Along a path :math:`x(t)` of task poses, the inverse kinematics is solved at samples by
 continuation (the working mode of the first solved sample is kept, as in
-:mod:`plm_pin.analysis.workspace`), then each singularity is refined to ``xtol`` in
+:mod:`plm_pin.workspace.maps`), then each singularity is refined to ``xtol`` in
 :math:`t`:
 
 - **non-redundant** mechanisms (as many actuators as DOF): sign changes of

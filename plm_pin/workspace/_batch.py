@@ -670,7 +670,7 @@ def square_task_metrics(
     :math:`A^T A\, S = J_x^T` (or :math:`A S = [0; I]` itself where :math:`A` is square).
     Its QR factor :math:`N` (:math:`S = N R`) is an orthonormal basis of the feasible
     motions, standing in for the right singular vectors of :math:`J_\phi` in
-    :func:`plm_pin.analysis.manipulability.batch_metrics` (whose values do not depend on the
+    :func:`plm_pin.workspace.manipulability.batch_metrics` (whose values do not depend on the
     basis). With :math:`T = J_x N` (formed again from :math:`J_x`: :math:`R^{-1}` would carry
     the rounding of the normal equations) and :math:`C = N_a` (the actuated rows):
 
@@ -682,7 +682,7 @@ def square_task_metrics(
     The singular values come from the eigenvalues of the small Gram matrices (``eigvalsh``,
     cheaper than an SVD of each matrix) where that is accurate (:data:`GRAM_RTOL`); poses
     where it is not, where :math:`S` is ill-conditioned (:data:`FACTOR_RCOND`) or where
-    :math:`T` is singular get :func:`~plm_pin.analysis.manipulability.batch_metrics` (SVD).
+    :math:`T` is singular get :func:`~plm_pin.workspace.manipulability.batch_metrics` (SVD).
 
     Args:
         A: stacked Jacobians, shape (B, m + k, nv).
@@ -692,7 +692,7 @@ def square_task_metrics(
         arrow: the block structure of ``A`` (:attr:`BatchKinematics.arrow`), solved by blocks.
 
     Returns:
-        ``{name: (B,) array}`` as :func:`~plm_pin.analysis.manipulability.batch_metrics` returns.
+        ``{name: (B,) array}`` as :func:`~plm_pin.workspace.manipulability.batch_metrics` returns.
     """
     J_phi, J_x = A[:, :m], A[:, m:]
     try:

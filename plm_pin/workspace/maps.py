@@ -9,13 +9,13 @@ solve in that working mode is marked unreachable (``reachable`` False, metrics N
 instead of raising. "Reachable" therefore means reachable in the seed's working mode
 through the grid, which is what a mechanism moving continuously can do.
 
-The metrics are those of :func:`plm_pin.analysis.manipulability` and
+The metrics are those of :func:`plm_pin.workspace.manipulability` and
 :func:`plm_pin.kinematics.classify` (the singularity margins), computed in batches.
 
 Cost (``make bench``): on trees of one-axis joints and free-flyers with point closures
 and a task of translations plus a planar yaw or all three angles (the 2-PRRRP tables, the
 n-PSS), 2-D grids are solved a row at a time by one batched Newton over the row, both
-sides of the seed's row together (:mod:`plm_pin.analysis._batch`, numpy forward kinematics
+sides of the seed's row together (:mod:`plm_pin.workspace._batch`, numpy forward kinematics
 from the model's joint placements), about 2 Pinocchio-equivalent passes per pose, in one
 process; the points the rows miss are filled point by point. Other mechanisms go point by
 point (one Newton step per pose, exact Jacobians, metrics in batches); their grids of
@@ -126,7 +126,7 @@ class WorkspaceSlice(Result):
         return _grid_poses(self.pose, self.dofs, self.axes, self.values)
 
     def metric(self, name: str) -> np.ndarray:
-        """One of :data:`plm_pin.analysis.manipulability.POSE_METRICS` by name, shape ``shape``."""
+        """One of :data:`plm_pin.workspace.manipulability.POSE_METRICS` by name, shape ``shape``."""
         if name not in POSE_METRICS:
             raise InvalidInput(f"unknown metric {name!r}; metrics are {list(POSE_METRICS)}")
         return np.asarray(getattr(self, name))

@@ -11,12 +11,12 @@ import pinocchio as pin
 import pytest
 
 from analyses import _harada2011_paper as paper
-from plm_pin.analysis import manipulability, workspace_grid, workspace_map, workspace_sweep
-from plm_pin.analysis._batch import BatchKinematics
-from plm_pin.analysis._continuation import IKEvaluator
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import classify, inverse_kinematics, task_pose
 from plm_pin.kinematics.working_mode import working_mode
+from plm_pin.workspace import manipulability, workspace_grid, workspace_map, workspace_sweep
+from plm_pin.workspace._batch import BatchKinematics
+from plm_pin.workspace._continuation import IKEvaluator
 from tests.conftest import preset
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1

@@ -1,9 +1,9 @@
 """Analyses over the workspace: manipulability, workspace maps and singular loci."""
 
 from .manipulability import POSE_METRICS, Manipulability, manipulability, manipulability_at
+from .maps import WorkspaceSlice, workspace_grid, workspace_map, workspace_sweep
 from .orientation import OrientationRange, orientation_range
 from .singular_loci import SingularPoint, singular_loci, singular_points, singular_points_along
-from .workspace import WorkspaceSlice, workspace_grid, workspace_map, workspace_sweep
 
 __all__ = [
     "POSE_METRICS",
