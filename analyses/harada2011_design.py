@@ -23,6 +23,7 @@ from plm_pin.families.prrrp import complex_singularity_check
 from plm_pin.families.prrrp.builder import CARRIAGE_SIZE
 from plm_pin.report import Column, Comparison, Parameter, Section, StudyContext
 from plm_pin.sweep import SweepResult, sweep
+from plm_pin.tolerances import RANGE_XTOL
 from plm_pin.viz import panel_grid, plot_sweep_heatmap, plot_sweep_lines
 
 if TYPE_CHECKING:
@@ -55,9 +56,6 @@ WORK_ANGLE = math.radians(20.0)
 INNER = (0.14, 0.17, 0.20, 0.24)
 """Inner rod lengths l2 = l3 swept with the outer l1 = l4 = 0.24 m of Harada 2015 [m]."""
 
-XTOL = 1e-9
-"""Tolerance of the located ends of the rotation ranges [rad]."""
-
 
 def run(ctx: StudyContext) -> None:
     """Fill the report."""
@@ -70,7 +68,7 @@ def run(ctx: StudyContext) -> None:
         {"y": HEIGHTS, "rz": ANGLES},
         ["orientation_range", "manipulability", "min_manipulability", "collision_free"],
         pose=(0.0, 0.08, 0.0),
-        options={"over": ["rz"], "xtol": XTOL},
+        options={"over": ["rz"], "xtol": RANGE_XTOL},
     )
     _complete(ratio)
     _redundancy(ctx.section("Redundancy: the 3D3M and the 3D4M against l / r_t and the height"), ratio)
@@ -82,7 +80,7 @@ def run(ctx: StudyContext) -> None:
         {"y": np.linspace(0.04, 0.22, 10), "rz": ANGLES},
         ["orientation_range", "min_manipulability"],
         pose=(0.0, 0.10, 0.0),
-        options={"over": ["rz"], "xtol": XTOL},
+        options={"over": ["rz"], "xtol": RANGE_XTOL},
     )
     box = sweep(
         "harada2015_asymmetric",
@@ -346,7 +344,7 @@ def _redundancy(section: Section, result: SweepResult) -> None:
             Parameter("l / r_t", list(RATIOS), "", "l = 0.14 m fixed"),
             Parameter("heights y", [round(float(y), 6) for y in HEIGHTS], "m"),
             Parameter("plate angles", [-80.0, 80.0, 81], "deg", "first, last, number"),
-            Parameter("root tolerance", XTOL, "rad"),
+            Parameter("root tolerance", RANGE_XTOL, "rad"),
             Parameter("poses evaluated", result.spec.n_points * result.spec.n_poses, ""),
             Parameter("throughput of this run", round(result.poses_per_second()), "poses/s", "in-process"),
         ],

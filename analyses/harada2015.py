@@ -35,8 +35,9 @@ from plm_pin.families.prrrp import (
     symmetric_rods,
     working_mode_label,
 )
-from plm_pin.kinematics import SINGULARITY_TOL, ModeGraph
+from plm_pin.kinematics import ModeGraph
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
+from plm_pin.tolerances import SINGULARITY_TOL
 from plm_pin.viz import panel_grid
 
 TITLE = "Harada 2015: mode changes of the asymmetric 2-PRRRP"

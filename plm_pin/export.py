@@ -54,6 +54,7 @@ from .description.mjcf import DRIVE_FIELDS, StateMap, require_mujoco, rotation_t
 from .description.sidecar import Sidecar
 from .exceptions import DescriptionError, InvalidInput
 from .results import Result, unit
+from .tolerances import MIN_PRINCIPAL_MOMENT
 from .warnings import IgnoredElementWarning, SimulationUnstableWarning
 
 __all__ = ["ClosureDrift", "mjcf_text"]
@@ -63,9 +64,6 @@ REVOLUTE_PAIR_SPACING = 0.05
 
 MEASURE_DURATION = 1.0
 """Passive simulation whose closure error the export measures and writes down [s]."""
-
-MIN_PRINCIPAL_MOMENT = 1e-13
-"""Smallest principal moment of inertia written [kg m^2]: MuJoCo refuses those under 1e-15."""
 
 INTEGRATORS = ("RK4", "implicitfast")
 """MuJoCo integrators :func:`export_mjcf` offers."""

@@ -15,13 +15,13 @@ import pinocchio as pin
 import pytest
 
 from plm_pin import ClosureNotSatisfied, DescriptionError, InvalidInput
-from plm_pin.core.checks import CLOSURE_TOL
 from plm_pin.core.mechanism import Mechanism
 from plm_pin.dynamics import actuator_trajectory, inverse_dynamics, task_space_dynamics, task_trajectory
 from plm_pin.kinematics import classify, closed_chain_jacobians
 from plm_pin.kinematics.paths import redundancy_margin
 from plm_pin.models import preset_names
 from plm_pin.statics import force_capability, internal_force_range, static_balance, static_forces
+from plm_pin.tolerances import ASSEMBLED_TOL
 from plm_pin.workspace import manipulability
 from tests.conftest import preset
 
@@ -58,12 +58,12 @@ def test_off_manifold_configurations_are_refused(fname, call, name, step):
     mech = preset(name)
     q = _open(mech, step)
     residual = np.abs(mech.closure_residual(q))
-    assert residual.max() > CLOSURE_TOL  # the configuration really is off the manifold
+    assert residual.max() > ASSEMBLED_TOL  # the configuration really is off the manifold
     with pytest.raises(ClosureNotSatisfied) as info:
         call(mech, q)
     exc = info.value
     assert exc.residual_norm == pytest.approx(residual.max(), rel=1e-12)
-    assert exc.tolerance == CLOSURE_TOL
+    assert exc.tolerance == ASSEMBLED_TOL
     assert re.fullmatch(
         rf"{name}: q is not assembled: closure '{exc.worst_closure}' is open by {exc.residual_norm:.3g} "
         r"\(tolerance 1e-08 m/rad\); assemble it first: mech.assemble\(q\).q",

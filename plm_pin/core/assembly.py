@@ -12,6 +12,7 @@ from scipy.linalg.lapack import dposv as _posv
 
 from ..exceptions import ClosureNotSatisfied
 from ..results import Result, unit
+from ..tolerances import ASSEMBLY_RCOND, CLOSURE_TOL, ROUND_OFF
 from .closures import BoundClosures, Closure, closure_rows, jacobian_from_data, residual_from_placements
 
 NEWTON_MAX_ITERATIONS = 12
@@ -22,9 +23,6 @@ STALL_RATIO = 0.9
 
 CHORD_RATIO = 1e-2
 """A step that divides the residual by at least 1 / CHORD_RATIO lets :func:`newton` keep its factorisation."""
-
-ROUND_OFF = 1e-15
-"""Residual [m, rad] below which :func:`newton` takes no polishing step."""
 
 
 class ExtraRows(Protocol):
@@ -173,9 +171,9 @@ def assemble(
     guess: np.ndarray,
     free_columns: np.ndarray,
     *,
-    tol: float = 1e-12,
+    tol: float = CLOSURE_TOL,
     max_iterations: int = 100,
-    rcond: float = 1e-10,
+    rcond: float = ASSEMBLY_RCOND,
     on_failure: Callable[[np.ndarray, np.ndarray], Exception] | None = None,
     extra: ExtraRows | None = None,
 ) -> Assembly:
@@ -229,7 +227,7 @@ def assemble(
     polish = 1  # one more step once within tolerance: quadratic convergence takes it to round-off
     while iterations < max_iterations and phi.size:
         if np.max(np.abs(phi)) <= tol:
-            if polish == 0 or np.max(np.abs(phi)) < 1e-15:
+            if polish == 0 or np.max(np.abs(phi)) < ROUND_OFF:
                 break
             polish -= 1
         iterations += 1

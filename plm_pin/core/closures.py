@@ -26,17 +26,10 @@ import numpy as np
 import pinocchio as pin
 
 from ..description.sidecar import ClosureSpec
+from ..tolerances import LOG3_SERIES_ANGLE
 from .scratch import placement_views
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-HLOG3_MIN_ANGLE = 1e-6
-"""Below this weld rotation residual [rad] the second-order log3 term of the drift is dropped.
-
-``pin.Hlog3`` returns NaN under about 1e-8 rad (Pinocchio 4.1); the term is bounded by the
-angle times the squared relative angular velocity, so dropping it changes the drift by
-less than 1e-6 |w|^2.
-"""
 
 
 @dataclass(frozen=True)
@@ -288,7 +281,7 @@ def drift_from_data(
             w_rel = Rb.T @ dw
             dw_rel = Rb.T @ (dalpha - np.cross(w_b, dw))
             gamma[start + 3 : stop] = pin.Jlog3(R) @ dw_rel
-            if np.linalg.norm(pin.log3(R)) > HLOG3_MIN_ANGLE:  # Hlog3 is NaN near the identity, where
+            if np.linalg.norm(pin.log3(R)) > LOG3_SERIES_ANGLE:  # Hlog3 is NaN near the identity, where
                 gamma[start + 3 : stop] += pin.Hlog3(R, w_rel) @ w_rel  # this term is O(angle |w|^2)
         else:
             # r = E^T R_A^T w with w = R_B u: r'' = E^T R_A^T (-w_a x (dw x w) + dalpha x w + dw x (w_b x w))

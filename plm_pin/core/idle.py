@@ -36,20 +36,12 @@ import pinocchio as pin
 
 from ..description.sidecar import ClosureSpec
 from ..exceptions import ClosureNotSatisfied
+from ..tolerances import CLOSURE_TOL, GAUGE_MIN_PIVOT, GAUGE_TIE_RTOL, IDLE_RTOL, RANK_RTOL
 from . import closures as _closures
 from .assembly import assemble
-from .rank import RANK_RTOL, numerical_rank
+from .rank import numerical_rank
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-IDLE_RTOL = 1e-8
-"""Singular values of :math:`O N` at most this times the largest (or 1) count as idle motions."""
-
-GAUGE_MIN_PIVOT = 1e-3
-"""Smallest share of an idle motion a held joint must carry for it to fix that motion."""
-
-GAUGE_TIE_RTOL = 1e-9
-"""Relative difference below which two joints' shares of the idle motions count as equal."""
 
 GAUGE_PREFIX = "idle:"
 """Name prefix of the gauge closures."""
@@ -186,7 +178,7 @@ def find_gauges(
     actuated_v: Sequence[int] | np.ndarray,
     task_frame: int | None,
     *,
-    tol: float = 1e-12,
+    tol: float = CLOSURE_TOL,
 ) -> tuple[tuple[IdleGauge, ...], np.ndarray | None]:
     """Detect the idle mobilities near ``guess`` and hold one joint each (frames added to ``model``).
 

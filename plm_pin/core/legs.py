@@ -39,17 +39,12 @@ import scipy.linalg
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
+from ..tolerances import LEG_SINGULAR_RTOL, PATTERN_ATOL, PATTERN_RTOL, RANK_RTOL
 from . import closures as _closures
-from .rank import RANK_RTOL, numerical_rank
+from .rank import numerical_rank
 from .task import Task
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-PATTERN_RTOL = 1e-9
-"""Entries below ``PATTERN_RTOL`` times the largest entry of their row count as structural zeros."""
-
-MODE_RTOL = 1e-9
-"""A leg block is singular when its determinant is at most ``MODE_RTOL`` times Hadamard's bound."""
 
 
 @dataclass(frozen=True)
@@ -168,7 +163,7 @@ def find_legs(
     scale = np.max(np.abs(A), axis=1, keepdims=True)
     rows_kept = np.flatnonzero(scale[:, 0] > 0.0)
     pattern = np.abs(A[rows_kept]) > PATTERN_RTOL * scale[rows_kept]
-    pattern &= np.abs(A[rows_kept]) > 1e-12
+    pattern &= np.abs(A[rows_kept]) > PATTERN_ATOL
     rows_kept = rows_kept[pattern.any(axis=1)]
     pattern = pattern[pattern.any(axis=1)]
     nc = pattern.shape[1]
@@ -329,7 +324,7 @@ def working_mode_from_data(
     closures: Sequence[_closures.Closure],
     task: Task,
     legs: Sequence[Leg],
-    rtol: float = MODE_RTOL,
+    rtol: float = LEG_SINGULAR_RTOL,
 ) -> tuple[int, ...]:
     """Working mode from joint Jacobians and placements already in ``data``.
 
@@ -351,7 +346,7 @@ def working_mode_from_data(
 
 
 def working_mode_from_jacobian(
-    A: np.ndarray, legs: Sequence[Leg], rtol: float = MODE_RTOL
+    A: np.ndarray, legs: Sequence[Leg], rtol: float = LEG_SINGULAR_RTOL
 ) -> tuple[int, ...]:
     """Working mode from a stacked Jacobian ``A`` (:func:`structure_jacobian_from_data`), one sign per leg.
 

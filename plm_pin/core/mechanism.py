@@ -15,16 +15,14 @@ from numpy.typing import ArrayLike
 from .._arguments import as_vector
 from ..description.sidecar import Sidecar, TaskSpec
 from ..exceptions import ClosureNotSatisfied, InvalidInput
+from ..tolerances import CLOSURE_TOL, RANK_RTOL
 from . import closures as _closures
 from .assembly import Assembly, assemble
 from .idle import IdleGauge, find_gauges
 from .legs import Leg, find_legs
-from .rank import RANK_RTOL, numerical_rank
+from .rank import numerical_rank
 from .scratch import Workspace
 from .task import Task, compile_task
-
-ASSEMBLY_TOL = 1e-12
-"""Default closure tolerance of :meth:`Mechanism.assemble` [m, rad]."""
 
 
 def body_name(model: pin.Model, j: int) -> str:
@@ -336,7 +334,7 @@ class Mechanism:
         guess: ArrayLike | None = None,
         fixed: Mapping[str, float] | Iterable[str] | None = None,
         *,
-        tol: float = ASSEMBLY_TOL,
+        tol: float = CLOSURE_TOL,
         max_iterations: int = 100,
     ) -> Assembly:
         r"""Project a configuration onto the closure manifold :math:`\phi(q) = 0`.

@@ -2,8 +2,7 @@
 
 import numpy as np
 
-RANK_RTOL = 1e-9
-"""Relative tolerance of every rank decision: singular values below ``RANK_RTOL * s_max`` count as zero."""
+from ..tolerances import RANK_RTOL
 
 
 def numerical_rank(M: np.ndarray, rtol: float = RANK_RTOL, *, floor: float = 0.0) -> int:

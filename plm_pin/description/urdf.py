@@ -13,6 +13,7 @@ from lxml import etree
 from .._arguments import repeated
 from .._text import short
 from ..exceptions import DescriptionError, FrameNotFound
+from ..tolerances import AXIS_MIN, INERTIA_RTOL
 from ..warnings import DescriptionWarning, MissingMeshWarning
 
 _MAX_BYTES = 64 * 1024 * 1024
@@ -94,12 +95,6 @@ _NUMERIC: dict[str, dict[str, int]] = {
     "mesh": {"scale": 3},
     "mimic": {"multiplier": 1, "offset": 1},
 }
-
-AXIS_MIN = 1e-9
-"""Smallest norm of a moving joint's axis: a shorter one would be normalised from rounding noise."""
-
-INERTIA_RTOL = 1e-9
-"""Tolerance of the inertia checks (moments >= 0, triangle inequalities), relative to the largest moment."""
 
 
 def _owner(element: etree._Element) -> str:

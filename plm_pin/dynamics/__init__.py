@@ -1,6 +1,6 @@
 """Closed-chain dynamics: trajectories on the closure manifold, inverse and forward dynamics, task space."""
 
-from .decoupling import DECOUPLING_RTOL, DecouplingReport, EntryBehaviour, decoupling_check
+from .decoupling import DecouplingReport, EntryBehaviour, decoupling_check
 from .inverse_dynamics import TERMS, InverseDynamics, inverse_dynamics
 from .simulation import SimulationResult, simulate
 from .task_space import TaskSpaceDynamics, task_space_dynamics
@@ -15,7 +15,6 @@ from .trajectory import (
 from .work import AdaptiveWork, adaptive_trapezoid_work, power_along, spline_work
 
 __all__ = [
-    "DECOUPLING_RTOL",
     "TERMS",
     "AdaptiveWork",
     "DecouplingReport",

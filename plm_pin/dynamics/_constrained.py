@@ -55,9 +55,9 @@ from ..core import closures as _closures
 from ..core.assembly import assemble
 from ..core.closures import Closure
 from ..core.mechanism import Mechanism
-from ..core.rank import RANK_RTOL
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..statics.balance import Load
+from ..tolerances import RANK_RTOL
 
 SOLVERS = ("auto", "kkt", "pinocchio")
 """Solver choices; ``auto`` is ``pinocchio`` when every closure is a point or a weld, else ``kkt``."""

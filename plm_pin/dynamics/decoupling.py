@@ -52,14 +52,12 @@ from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import check_square_task
-from ..kinematics.singularity import SINGULARITY_TOL, classify
+from ..kinematics.singularity import classify
 from ..kinematics.working_mode import working_mode
 from ..results import Result, unit
+from ..tolerances import DECOUPLING_RTOL, SINGULARITY_TOL
 from ..workspace.maps import WorkspaceSlice
 from .task_space import TaskSpaceDynamics, task_space_dynamics, task_units
-
-DECOUPLING_RTOL = 1e-9
-"""Default cancellation ratio below which an entry counts as zero or constant [-]."""
 
 
 @dataclass(frozen=True)

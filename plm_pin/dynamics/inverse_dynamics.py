@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike
 
 from .._arguments import load_arguments, repeated
 from ..core import closures as _closures
-from ..core.checks import CLOSURE_TOL, check_finite_model, check_samples_assembled
+from ..core.checks import check_finite_model, check_samples_assembled
 from ..core.mechanism import Mechanism
 from ..exceptions import (
     AllocationInfeasible,
@@ -44,7 +44,8 @@ from ..exceptions import (
 )
 from ..results import Result, unit
 from ..statics import AllocationRule, solve_balance
-from ..statics.balance import SINGULAR_RTOL, Load, _balance, balance_factors, load_on_frame
+from ..statics.balance import Load, _balance, balance_factors, load_on_frame
+from ..tolerances import ASSEMBLED_TOL, STATICS_SINGULAR_RTOL
 from .trajectory import JointTrajectory, checked_trajectory
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -246,7 +247,7 @@ def inverse_dynamics(
     internal: ArrayLike | Mapping[str, float] | None = None,
     min_compression: float | None = None,
     link_limits: Mapping[str, tuple[float, float]] | None = None,
-    singular_rtol: float = SINGULAR_RTOL,
+    singular_rtol: float = STATICS_SINGULAR_RTOL,
 ) -> InverseDynamics:
     """Actuator forces driving ``trajectory``, split by term and by body.
 
@@ -345,7 +346,7 @@ class _Kinematics:
                 J_load[i] = pin.getFrameJacobian(model, data, frame_id, _LWA)
             if J_task is not None and task is not None:
                 task.jacobian_from_data(model, data, J_task[i])
-        if not np.all(worst <= CLOSURE_TOL):  # NaN refused too
+        if not np.all(worst <= ASSEMBLED_TOL):  # NaN refused too
             check_samples_assembled(mech, trajectory.q, trajectory.t)  # raises, naming the first open sample
         return cls(J_phi, J_load, J_task)
 

@@ -75,6 +75,14 @@ from ..core.mechanism import Mechanism
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
 from ..results import Result, unit
 from ..statics.balance import load_on_frame
+from ..tolerances import (
+    CLOSURE_TOL,
+    ENERGY_RTOL,
+    FEASIBLE_VELOCITY_RTOL,
+    SIMULATION_ATOL,
+    SIMULATION_RTOL,
+    STEP_DRIFT_TOL,
+)
 from ._constrained import ClosedChainDynamics, Projection, ReducedRows
 
 METHODS = ("fixed", "adaptive")
@@ -83,17 +91,8 @@ METHODS = ("fixed", "adaptive")
 DEFAULT_STEP = 1e-3
 """Default step of the fixed-step integrator [s]."""
 
-CLOSURE_TOL = 1e-12
-"""Default largest closure distance kept during a simulation (Euclidean gap of each closure) [m, rad]."""
-
-STEP_DRIFT_TOL = 1e-6
-"""Largest closure distance one fixed step may open before its projection [m, rad]; larger: halve it."""
-
 MAX_HALVINGS = 10
 """Halvings of a fixed step allowed before the run stops."""
-
-ENERGY_RTOL = 1e-3
-"""Energy change allowed in a passive run, relative to the largest kinetic energy reached."""
 
 MIN_STEP = 1e-6
 """Adaptive step [s] below which DOP853 is taken to be stuck (at a constraint singularity): bridged."""
@@ -103,9 +102,6 @@ BRIDGE_STEPS = 10
 
 _CHART_SPAN = 0.5
 """Largest chart coordinate [m, rad] of the adaptive run before it re-centres on a non-vector-space joint."""
-
-V0_TOL = 1e-9
-r"""Largest :math:`|J_\phi v_0|` accepted, relative to :math:`\max(1, |v_0|)` [m/s, rad/s]."""
 
 ForceLaw = Callable[[float, np.ndarray, np.ndarray], ArrayLike]
 """Actuator forces as a function of time [s], configuration and velocity."""
@@ -528,7 +524,7 @@ def _check_start(
                 worst,
             )
         Jv = mech.closure_jacobian(q) @ v
-        bound = V0_TOL * max(1.0, float(np.max(np.abs(v))))
+        bound = FEASIBLE_VELOCITY_RTOL * max(1.0, float(np.max(np.abs(v))))
         if np.max(np.abs(Jv)) > bound:
             raise InvalidInput(
                 f"{mech.name}: v0 violates the closures: |J_phi v0| = {np.max(np.abs(Jv)):.3g} > "
@@ -552,8 +548,8 @@ def simulate(
     frame: str | None = None,
     method: str = "adaptive",
     step: float | None = None,
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
+    rtol: float = SIMULATION_RTOL,
+    atol: float = SIMULATION_ATOL,
     solver: str = "auto",
     closure_tol: float = CLOSURE_TOL,
 ) -> SimulationResult:

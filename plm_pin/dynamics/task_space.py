@@ -63,17 +63,9 @@ from ..exceptions import InvalidInput
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import inverse_margins
 from ..results import Result, unit
+from ..tolerances import FEASIBLE_VELOCITY_RTOL, ILL_CONDITIONED_MARGIN
 from ..warnings import IllConditionedWarning
 from .trajectory import particular_acceleration
-
-ILL_CONDITIONED_MARGIN = 1e-3
-"""Inverse margin (:func:`plm_pin.kinematics.classify`) below which :func:`task_space_dynamics` warns.
-
-:math:`S = N T^{-1}` grows as the inverse of that margin and :math:`M_x` as its square, so
-below 1e-3 the task inertia is amplified more than a million times over the joint-space one."""
-
-VELOCITY_RTOL = 1e-9
-r"""Largest :math:`|J_\phi v|` accepted, relative to :math:`\max(1, |v|)` [m/s, rad/s]."""
 
 
 def task_units(dofs: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -218,10 +210,10 @@ def task_space_dynamics(
     else:
         va = as_vector(v, mech.nv, "v")
         opening = float(np.max(np.abs(jac.J_phi @ va), initial=0.0))
-        if opening > VELOCITY_RTOL * max(1.0, float(np.max(np.abs(va)))):
+        if opening > FEASIBLE_VELOCITY_RTOL * max(1.0, float(np.max(np.abs(va)))):
             raise InvalidInput(
                 f"{mech.name}: v is not a feasible velocity: |J_phi v| = {opening:.3g} opens the loops "
-                f"(tolerance {VELOCITY_RTOL:.0e} x max(1, |v|)); pass xdot, or v = S @ xdot"
+                f"(tolerance {FEASIBLE_VELOCITY_RTOL:.0e} x max(1, |v|)); pass xdot, or v = S @ xdot"
             )
     model, data = mech.model, mech.data
     a_p = particular_acceleration(mech, qa, va, jac.J_phi)  # leaves the kinematics of (q, v, 0) in data

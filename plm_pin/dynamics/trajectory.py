@@ -74,7 +74,6 @@ from scipy.interpolate import BPoly, make_interp_spline
 from .._text import short
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism, require_task
-from ..core.rank import RANK_RTOL
 from ..core.task import Task
 from ..exceptions import (
     ClosureNotSatisfied,
@@ -84,19 +83,17 @@ from ..exceptions import (
     SingularConfiguration,
     TrajectoryError,
 )
-from ..kinematics.inverse import IK_TOL, inverse_kinematics
+from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians
-from ..kinematics.singularity import SINGULARITY_TOL, constraint_margins, direct_margins, inverse_margins
+from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
+from ..tolerances import CLOSURE_TOL, RANK_RTOL, RATE_CONSISTENCY_TOL, SINGULARITY_TOL
 
 Profile = Callable[[float], ArrayLike]
 """A profile: ``t`` [s] -> ``(x, xd, xdd)``, each shape (n,) (or three numbers when n = 1)."""
 
 FD_STEP = 1e-3
 """Default time step of :func:`differentiated_profile` [s]."""
-
-CONSISTENCY_TOL = 1e-6
-"""Default tolerance on the disagreement of redundant actuator rates (see :func:`actuator_trajectory`)."""
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _WORLD = pin.ReferenceFrame.WORLD
@@ -470,7 +467,7 @@ def task_trajectory(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    tol: float = IK_TOL,
+    tol: float = CLOSURE_TOL,
     singularity_tol: float = SINGULARITY_TOL,
 ) -> JointTrajectory:
     r"""Configurations, velocities and accelerations along a task profile :math:`x(t)`.
@@ -546,9 +543,9 @@ def actuator_trajectory(
     times: ArrayLike,
     *,
     guess: ArrayLike | None = None,
-    tol: float = IK_TOL,
+    tol: float = CLOSURE_TOL,
     singularity_tol: float = SINGULARITY_TOL,
-    consistency_tol: float = CONSISTENCY_TOL,
+    consistency_tol: float = RATE_CONSISTENCY_TOL,
 ) -> JointTrajectory:
     r"""Configurations, velocities and accelerations along an actuator profile :math:`c(t)`.
 

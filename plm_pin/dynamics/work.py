@@ -24,11 +24,9 @@ from scipy.interpolate import CubicSpline
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..results import Result, unit
+from ..tolerances import ZHAO_WORK_TOL
 from .inverse_dynamics import inverse_dynamics
 from .trajectory import Profile, task_trajectory
-
-PAPER_TOL = 1e-3
-"""Zhao 2011's convergence tolerance e of eq. (34) [J]."""
 
 
 @dataclass(frozen=True)
@@ -57,7 +55,7 @@ def adaptive_trapezoid_work(
     ts: float,
     te: float,
     *,
-    tol: float = PAPER_TOL,
+    tol: float = ZHAO_WORK_TOL,
     n_max: int = 16,
 ) -> AdaptiveWork:
     """Zhao 2011 eqs. (30)-(34): trapezoid on ``2**n`` intervals, ``n = 1, 2, ...`` until converged.

@@ -11,11 +11,10 @@ from .inverse import IKSolution, inverse_kinematics, working_modes
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
 from .mode_graph import ModeEdge, ModeGraph, ModeNode
 from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
-from .singularity import SINGULARITY_TOL, SingularityReport, classify
+from .singularity import SingularityReport, classify
 from .working_mode import working_mode
 
 __all__ = [
-    "SINGULARITY_TOL",
     "ClosedChainJacobians",
     "FKSolution",
     "IKSolution",

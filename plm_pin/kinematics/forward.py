@@ -14,10 +14,8 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
+from ..tolerances import CLOSURE_TOL, SAME_ASSEMBLY_TOL
 from .starts import random_starts
-
-FK_TOL = 1e-12
-"""Default closure tolerance of the forward kinematics [m, rad]."""
 
 
 @dataclass(frozen=True)
@@ -56,7 +54,7 @@ def frame_distance(mech: Mechanism, q1: np.ndarray, q2: np.ndarray) -> float:
     return float(np.max(np.abs(first - second)))
 
 
-def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = 1e-7) -> bool:
+def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = SAME_ASSEMBLY_TOL) -> bool:
     """Whether two configurations put every frame origin at the same place [m].
 
     Angles equal modulo 2 pi, and the two joint-angle sets of a universal joint that point
@@ -106,7 +104,7 @@ def forward_kinematics(
     all_modes: bool = True,
     starts: int = 48,
     seed: int = 0,
-    tol: float = FK_TOL,
+    tol: float = CLOSURE_TOL,
 ) -> list[FKSolution]:
     """Assemble the mechanism with its actuators at ``actuators``: every assembly mode found.
 

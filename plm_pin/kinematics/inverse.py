@@ -20,13 +20,11 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import TaskTarget, check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
 from ..results import Result, unit
+from ..tolerances import CLOSURE_TOL
 from .forward import same_assembly
 from .limits import limit_violations, wrap_into_limits
 from .starts import random_starts
 from .working_mode import working_mode
-
-IK_TOL = 1e-12
-"""Default residual tolerance of the inverse kinematics [m, rad]."""
 
 
 @dataclass(frozen=True)
@@ -139,7 +137,7 @@ def inverse_kinematics(
     guess: ArrayLike | None = None,
     *,
     mode: tuple[int, ...] | None = None,
-    tol: float = IK_TOL,
+    tol: float = CLOSURE_TOL,
     explain: bool = True,
     respect_limits: bool = False,
 ) -> IKSolution:
@@ -283,7 +281,7 @@ def working_modes(
     x: ArrayLike,
     guess: ArrayLike | None = None,
     *,
-    tol: float = IK_TOL,
+    tol: float = CLOSURE_TOL,
     starts_per_leg: int = 12,
     seed: int = 0,
 ) -> list[IKSolution]:

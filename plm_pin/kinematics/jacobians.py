@@ -26,12 +26,7 @@ from ..core.legs import ik_jacobian_from_data
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..results import Result
-
-INVERSE_RTOL = 1e-12
-r""":math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x :math:`|J_x|`.
-
-Relative to the whole task Jacobian (:math:`|J_x| = \sigma_{max}(J_x)`), not to :math:`T`
-itself, whose ratio is 1 for any 1 x 1 :math:`T` (see :mod:`plm_pin.kinematics.singularity`)."""
+from ..tolerances import INVERSE_RTOL
 
 
 @dataclass(frozen=True)

@@ -17,9 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..core.mechanism import Mechanism
-
-LIMIT_TOL = 1e-9
-"""A joint within this distance of its range [m or rad] respects it."""
+from ..tolerances import LIMIT_TOL
 
 TWO_PI = 2.0 * np.pi
 
@@ -27,6 +25,7 @@ TWO_PI = 2.0 * np.pi
 _ONE_DOF: weakref.WeakKeyDictionary[pin.Model, tuple[tuple[str, int, bool], ...]] = (
     weakref.WeakKeyDictionary()
 )
+
 """(name, idx_q, revolute) of a model's one-DOF joints: the joint types never change, limits may."""
 
 

@@ -30,11 +30,9 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import TaskTarget, compile_task
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
+from ..tolerances import SINGULARITY_TOL, TRACK_TOL
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
-from .singularity import SINGULARITY_TOL, SingularityReport, direct_margins, report_from_jacobians
-
-TRACK_TOL = 1e-11
-"""Closure tolerance of the continuations [m, rad]."""
+from .singularity import SingularityReport, direct_margins, report_from_jacobians
 
 
 def redundancy_margin(mech: Mechanism, q: ArrayLike, jac: ClosedChainJacobians | None = None) -> float:

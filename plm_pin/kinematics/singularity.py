@@ -46,10 +46,8 @@ from .._arguments import check_tolerance
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import SingularConfiguration
 from ..results import Result, unit
+from ..tolerances import SINGULARITY_TOL
 from .jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians
-
-SINGULARITY_TOL = 1e-6
-"""Default margin at or below which a configuration counts as singular."""
 
 KINDS: tuple[str, ...] = ("constraint", "inverse", "direct")
 

@@ -10,8 +10,9 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..core.legs import MODE_RTOL, structure_jacobian_from_data, working_mode_from_data
+from ..core.legs import structure_jacobian_from_data, working_mode_from_data
 from ..core.mechanism import Mechanism, require_task
+from ..tolerances import LEG_SINGULAR_RTOL
 
 
 def structure_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
@@ -22,7 +23,7 @@ def structure_jacobian(mech: Mechanism, q: np.ndarray) -> np.ndarray:
     return structure_jacobian_from_data(mech.model, mech.data, mech.closures, task)
 
 
-def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = MODE_RTOL) -> tuple[int, ...]:
+def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = LEG_SINGULAR_RTOL) -> tuple[int, ...]:
     """Sign (+1, -1, or 0 when singular) of each actuated leg block's determinant at ``q``.
 
     See :func:`~plm_pin.core.legs.working_mode_from_data`.

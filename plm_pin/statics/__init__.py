@@ -1,7 +1,7 @@
 """Statics of closed chains: balance, redundant actuator-force allocation, reactions, force capability."""
 
 from .allocation import OBJECTIVES
-from .balance import SINGULAR_RTOL, Load, StaticBalance, static_balance
+from .balance import Load, StaticBalance, static_balance
 from .capability import Capability, InternalRange, force_capability, internal_force_range, wrench_polygon
 from .forces import (
     AllocationRule,
@@ -16,7 +16,6 @@ from .reactions import JointReaction, LinkForce
 
 __all__ = [
     "OBJECTIVES",
-    "SINGULAR_RTOL",
     "AllocationRule",
     "Capability",
     "InternalMode",

@@ -33,14 +33,10 @@ import proxsuite
 
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError
 from ..results import Result, unit
+from ..tolerances import FEASIBILITY_RTOL, QP_EPS
 
 OBJECTIVES = ("norm", "max")
 """Allocation objectives: weighted minimum norm, or minimum largest force."""
-
-FEASIBILITY_RTOL = 1e-9
-"""A limit or condition is met when exceeded by at most FEASIBILITY_RTOL x the force scale."""
-
-_QP_EPS = 1e-11
 
 _THREAD = threading.local()
 """Per-thread solver state (:func:`_highs`)."""
@@ -340,7 +336,7 @@ def solve_qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np
     n = g.shape[0]
     p = ineq.D.shape[0]
     qp = proxsuite.proxqp.dense.QP(n, 0, p)
-    qp.settings.eps_abs = _QP_EPS
+    qp.settings.eps_abs = QP_EPS
     qp.settings.eps_rel = 0.0
     qp.settings.verbose = False
     qp.settings.max_iter = 1_000  # these problems converge in tens of iterations; never hang

@@ -44,28 +44,13 @@ from scipy.linalg import lapack as _lapack
 
 from .._arguments import as_vector, check_tolerance
 from ..core import closures as _closures
-from ..core.checks import CLOSURE_TOL, check_assembled, check_finite_model, check_finite_result
+from ..core.checks import check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
 from ..results import Result, unit
-
-SINGULAR_RTOL = 1e-8
-r"""A direction counts as unresisted when its singular value is below SINGULAR_RTOL x the largest.
-
-Applies to :math:`C` (the actuators do not hold a feasible motion: direct singularity) and
-to :math:`J_\phi` (the closures do not hold a motion they should: constraint singularity).
-Forces then grow like the inverse of the singular value, so below this ratio a load with a
-component along that direction is refused instead of answered with huge numbers.
-"""
-
-EQUILIBRIUM_RTOL = 1e-9
-"""Equilibrium residual allowed, relative to the largest generalized force in the balance."""
+from ..tolerances import ASSEMBLED_TOL, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL, STATICS_SINGULAR_RTOL
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-_TIE_RTOL = 1e-9
-"""Actuator shares of the internal forces equal to this relative tolerance count as a tie (see
-:func:`oriented_internal_basis`): the first actuator in order is taken."""
 
 
 @dataclass(frozen=True)
@@ -200,7 +185,7 @@ def static_balance(
     frame: str | None = None,
     *,
     gravity: bool = True,
-    singular_rtol: float = SINGULAR_RTOL,
+    singular_rtol: float = STATICS_SINGULAR_RTOL,
 ) -> StaticBalance:
     r"""Set up the static balance at ``q``: load, feasible motions, minimum-norm forces, internal basis.
 
@@ -210,7 +195,7 @@ def static_balance(
         wrench: external wrench applied to ``frame`` (see :func:`load_on_frame`), or None.
         frame: frame the wrench acts on; default the task frame.
         gravity: include the weight of the bodies (the model's gravity).
-        singular_rtol: relative singular-value threshold, see :data:`SINGULAR_RTOL`.
+        singular_rtol: relative singular-value threshold, see :data:`STATICS_SINGULAR_RTOL`.
 
     Raises:
         InvalidInput: malformed ``q`` or wrench, or ``singular_rtol`` not in [0, 1).
@@ -247,7 +232,7 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
     J_phi = _closures.jacobian_from_data(model, data, closures)
-    if closures and not np.max(np.abs(_closures.residual_from_placements(data, closures))) <= CLOSURE_TOL:
+    if closures and not np.max(np.abs(_closures.residual_from_placements(data, closures))) <= ASSEMBLED_TOL:
         check_assembled(mech, q)  # raises, with the residual and the worst closure
     return J_phi
 
@@ -261,7 +246,7 @@ def generalized_balance(
     gravity: bool = True,
     v: np.ndarray | None = None,
     a: np.ndarray | None = None,
-    singular_rtol: float = SINGULAR_RTOL,
+    singular_rtol: float = STATICS_SINGULAR_RTOL,
 ) -> StaticBalance:
     r"""The balance :math:`B f_c + J_\phi^T \lambda = \tau - J_w^T w` for a given generalized force.
 
@@ -275,7 +260,7 @@ def generalized_balance(
         gravity: whether ``tau`` includes the bodies' weight (recorded for the reactions).
         v: joint velocities, when ``tau`` is an inverse-dynamics force (recorded for the reactions).
         a: joint accelerations, likewise.
-        singular_rtol: see :data:`SINGULAR_RTOL`.
+        singular_rtol: see :data:`STATICS_SINGULAR_RTOL`.
 
     Raises:
         InvalidInput: ``singular_rtol`` not in [0, 1), or ``tau`` (load included) not finite.
@@ -299,7 +284,9 @@ def _loaded(model: pin.Model, data: pin.Data, load: Load | None, tau: np.ndarray
     return out
 
 
-def closure_factors(J_phi: np.ndarray, singular_rtol: float = SINGULAR_RTOL) -> tuple[np.ndarray, np.ndarray]:
+def closure_factors(
+    J_phi: np.ndarray, singular_rtol: float = STATICS_SINGULAR_RTOL
+) -> tuple[np.ndarray, np.ndarray]:
     r"""Orthonormal feasible motions :math:`N` (:math:`J_\phi N = 0`) and the minimum-norm closure-force map.
 
     Feasible motions come from the local rank of :math:`J_\phi`: at a constraint singularity the
@@ -344,7 +331,7 @@ def oriented_internal_basis(G: np.ndarray) -> np.ndarray:
     the largest share on a single actuator (the projection of that actuator's unit vector on
     the internal space, normalised), that share positive; each next column likewise in the
     part of the internal space orthogonal to the columns before. Shares equal to
-    :data:`_TIE_RTOL` are taken in actuator order. The pivot actuators :math:`p_j` give
+    :data:`INTERNAL_TIE_RTOL` are taken in actuator order. The pivot actuators :math:`p_j` give
     :math:`G_{p_j j} > 0` and :math:`G_{p_i j} = 0` for :math:`i < j`; with one internal force,
     :math:`G` is the unit internal force whose largest entry is positive.
 
@@ -357,13 +344,13 @@ def oriented_internal_basis(G: np.ndarray) -> np.ndarray:
     k = G.shape[1]
     if k == 1:  # one internal force (3D4M): its sign only
         g = abs(G[:, 0])
-        pivot = int((g >= (1.0 - _TIE_RTOL) * g.max()).argmax())
+        pivot = int((g >= (1.0 - INTERNAL_TIE_RTOL) * g.max()).argmax())
         return G if G[pivot, 0] > 0.0 else -G
     A = G.T  # (k, n_act): column i holds the projection of actuator i's unit vector, in G
     shares = np.einsum("ij,ij->j", A, A)  # squared norms of what remains of each projection
     Q = np.zeros((k, k))
     for j in range(k):
-        pivot = int((shares >= (1.0 - _TIE_RTOL) ** 2 * shares.max()).argmax())
+        pivot = int((shares >= (1.0 - INTERNAL_TIE_RTOL) ** 2 * shares.max()).argmax())
         w = A[:, pivot] - Q @ (Q.T @ A[:, pivot])  # Q's columns past j are still zero
         Q[:, j] = w / np.sqrt(w @ w)
         shares = shares - (Q[:, j] @ A) ** 2

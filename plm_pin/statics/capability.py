@@ -26,7 +26,8 @@ from .._arguments import load_arguments
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, PlmError
 from ..results import Result, unit
-from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_lp
+from ..tolerances import FEASIBILITY_RTOL
+from .allocation import Inequalities, allocate, solve_lp
 from .balance import load_on_frame, static_balance
 from .forces import actuator_limits
 

@@ -20,9 +20,10 @@ from ..core.checks import check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..results import Result, unit
+from ..tolerances import STATICS_SINGULAR_RTOL
 from . import reactions as _reactions
 from .allocation import OBJECTIVES, Allocation, Inequalities, allocate, check_weights, min_norm
-from .balance import SINGULAR_RTOL, StaticBalance, static_balance
+from .balance import StaticBalance, static_balance
 
 
 @dataclass(frozen=True)
@@ -300,7 +301,7 @@ def static_forces(
     internal: ArrayLike | Mapping[str, float] | None = None,
     min_compression: float | None = None,
     link_limits: Mapping[str, tuple[float, float]] | None = None,
-    singular_rtol: float = SINGULAR_RTOL,
+    singular_rtol: float = STATICS_SINGULAR_RTOL,
 ) -> StaticForces:
     r"""Actuator and cut-joint forces holding the mechanism at ``q`` under gravity and a wrench.
 

@@ -29,10 +29,8 @@ import pinocchio as pin
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism, body_name
 from ..results import Result, unit
+from ..tolerances import ATTACHMENT_ATOL
 from .balance import Load
-
-ATTACHMENT_ATOL = 1e-9
-"""Attachment points closer than this [m] are the same point."""
 
 
 @dataclass(frozen=True)

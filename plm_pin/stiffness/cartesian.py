@@ -38,14 +38,9 @@ from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..results import Result, unit
 from ..statics import StaticForces
+from ..tolerances import CONSTRAINT_NULL_RTOL, UNRESISTED_RTOL
 from .equilibrium import GEOMETRIC, ElasticState, elastic_state, hessian, with_locks
 from .model import SOURCES
-
-RANK_RTOL = 1e-10
-"""Singular values of the constraint rows below this fraction of the largest count as zero."""
-
-UNRESISTED_RTOL = 1e-9
-"""Eigenvalues of :math:`H_N` below this fraction of the largest are motions no spring resists."""
 
 
 @dataclass(frozen=True)
@@ -151,7 +146,7 @@ class StiffnessResult(Result):
         return {**super().to_dict(), "units": units}
 
 
-def null_basis(A: np.ndarray, nv: int, rtol: float = RANK_RTOL) -> np.ndarray:
+def null_basis(A: np.ndarray, nv: int, rtol: float = CONSTRAINT_NULL_RTOL) -> np.ndarray:
     """Orthonormal basis of the null space of ``A`` (rank by SVD, relative ``rtol``), shape (nv, nullity)."""
     if A.shape[0] == 0:
         return np.eye(nv)

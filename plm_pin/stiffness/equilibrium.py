@@ -31,13 +31,13 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..core import closures as _closures
-from ..core.checks import CLOSURE_TOL
 from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput
 from ..results import Result, unit
 from ..statics import Load, StaticForces, static_forces
 from ..statics.balance import load_on_frame
+from ..tolerances import ASSEMBLED_TOL
 from .geometric import TreeDerivatives, closure_derivative
 from .model import SOURCES, CompliantModel, compliant_model
 
@@ -146,10 +146,11 @@ def _check_forces_at(mech: Mechanism, q: ArrayLike, forces: StaticForces) -> Non
             f"not on this mechanism (nq = {qa.size})"
         )
     gap = float(np.max(np.abs(pin.difference(mech.model, q_forces, qa)), initial=0.0))
-    if gap > CLOSURE_TOL:
+    if gap > ASSEMBLED_TOL:
         raise InvalidInput(
             f"{mech.name}: q is not the configuration forces= were solved at: they differ by up to "
-            f"{gap:.3g} m/rad (tolerance {CLOSURE_TOL:.0e}); pass q=forces.balance.q or solve the forces at q"
+            f"{gap:.3g} m/rad (tolerance {ASSEMBLED_TOL:.0e}); pass q=forces.balance.q or solve the "
+            "forces at q"
         )
 
 

@@ -27,7 +27,8 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..core.closures import HLOG3_MIN_ANGLE, Closure
+from ..core.closures import Closure
+from ..tolerances import LOG3_SERIES_ANGLE
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -149,7 +150,7 @@ def _closure_moment(
         Jl = pin.Jlog3(R)
         moment = Rb @ Jl.T @ lam_r
         rel = Rb.T @ (wb - wa)  # (3, nv): relative rotation rates in B's coordinates
-        near = np.linalg.norm(pin.log3(R)) <= HLOG3_MIN_ANGLE
+        near = np.linalg.norm(pin.log3(R)) <= LOG3_SERIES_ANGLE
         dm = np.cross(wb.T, moment).T
         for k in range(rel.shape[1]):
             if not rel[:, k].any():

@@ -27,12 +27,10 @@ import pinocchio as pin
 from ..core.mechanism import Mechanism
 from ..description.compliance import BeamSpec, ComplianceSpec
 from ..exceptions import FrameNotFound, InvalidInput
+from ..tolerances import TIP_TOL
 
 SOURCES: tuple[str, ...] = ("actuators", "joints", "links")
 """The kinds of springs, in the order results list them."""
-
-TIP_TOL = 1e-9
-"""A child joint or frame belongs to a beam's tip when its origin is this close to the tip [m]."""
 
 _VIRTUAL_AXES = ("PX", "PY", "PZ", "RX", "RY", "RZ")
 

@@ -27,13 +27,11 @@ from ..core.mechanism import Mechanism
 from ..dynamics.task_space import task_space_dynamics
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..results import Result, unit
+from ..tolerances import MASSLESS_RTOL
 from .cartesian import StiffnessResult, stiffness
 
 MODELS: tuple[str, ...] = ("task", "full")
 """The vibration models of :func:`natural_frequencies`."""
-
-MASSLESS_RTOL = 1e-12
-"""Modes whose :math:`1/\\omega^2` is below this fraction of the largest are massless (left out)."""
 
 
 @dataclass(frozen=True)

@@ -41,13 +41,13 @@ from .._text import short
 from ..core.mechanism import Mechanism
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
 from ..kinematics.forward import task_pose
-from ..kinematics.inverse import IK_TOL
-from ..kinematics.singularity import KINDS, SINGULARITY_TOL
+from ..kinematics.singularity import KINDS
 from ..results import units
 from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
 from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
+from ..tolerances import CLOSURE_TOL, SINGULARITY_TOL
 from ..workspace import WorkspaceSlice, workspace_grid
 from ..workspace._continuation import guess_mode
 from ..workspace.manipulability import Manipulability
@@ -199,7 +199,7 @@ def _direction(name: str, value: Any) -> tuple[float, ...] | None:
 OPTIONS: dict[str, Option] = {
     o.name: o
     for o in (
-        Option("ik_tol", IK_TOL, "inverse-kinematics residual tolerance [m, rad]", _positive),
+        Option("ik_tol", CLOSURE_TOL, "inverse-kinematics residual tolerance [m, rad]", _positive),
         Option(
             "singularity_tol", SINGULARITY_TOL, "margin at or below which a pose is singular [-]", _positive
         ),

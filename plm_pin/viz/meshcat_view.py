@@ -7,7 +7,7 @@ with Pinocchio's ``MeshcatVisualizer``:
   from each joint to its frames, balls at the joints;
 - triads at the joint frames and the task frame (x red, y green, z blue);
 - a ball at both frames of every closure, green when the closure holds at the displayed
-  configuration, magenta when its residual exceeds :data:`CLOSURE_TOL`;
+  configuration, magenta when its residual exceeds :data:`VIEW_OPEN_TOL`;
 - the geometry recoloured when :func:`plm_pin.kinematics.classify` finds the configuration
   singular (one colour per kind, :data:`SINGULAR_COLORS`);
 - force arrows of a static case (:meth:`MeshcatViewer.show_forces`);
@@ -38,10 +38,8 @@ from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
+from ..tolerances import PLANE_NORMAL_TOL, VIEW_OPEN_TOL
 from .meshcat_server import MeshcatServer, ServerWindow, StaticWindow, require_meshcat
-
-CLOSURE_TOL = 1e-6
-"""Closure residual above which its markers show it open [m, rad]."""
 
 CLOSED_COLOR = (0.1, 0.7, 0.2, 1.0)
 """RGBA of the markers of a closure that holds."""
@@ -82,7 +80,7 @@ class SceneStatus(Result):
 
     Attributes:
         closure_errors: largest absolute residual of each closure [m, rad].
-        open_closures: the closures whose residual exceeds :data:`CLOSURE_TOL`, marked apart.
+        open_closures: the closures whose residual exceeds :data:`VIEW_OPEN_TOL`, marked apart.
         singularity: the classification of the configuration, or None when it was not
             classified (the mechanism has no task, or a closure is open).
     """
@@ -100,7 +98,7 @@ class SceneStatus(Result):
 def scene_status(mech: Mechanism, q: ArrayLike) -> SceneStatus:
     """Closure residuals of ``q`` and, when the loops hold and there is a task, its singularity report."""
     errors = mech.closure_errors(q)
-    open_closures = tuple(name for name, err in errors.items() if err > CLOSURE_TOL)
+    open_closures = tuple(name for name, err in errors.items() if err > VIEW_OPEN_TOL)
     report = None
     if mech.task_compiled is not None and not open_closures:
         report = classify(mech, q)
@@ -137,7 +135,7 @@ AXES_SCALE = 1.0
 """Length of meshcat's world axes, in mechanism sizes (meshcat draws them 0.5 m long) [-]."""
 
 
-def plane_normal(mech: Mechanism, tol: float = 1e-9) -> np.ndarray | None:
+def plane_normal(mech: Mechanism, tol: float = PLANE_NORMAL_TOL) -> np.ndarray | None:
     """The unit normal of the plane a planar mechanism moves in, None for a spatial one.
 
     Planar: at the reference guess, every joint turns about one common world axis n (or

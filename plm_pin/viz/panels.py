@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..exceptions import InvalidInput
+from ..tolerances import NOISE
 from .figures import _pyplot
 
 if TYPE_CHECKING:
@@ -25,13 +26,6 @@ if TYPE_CHECKING:
 
 PANELS_PER_ROW = 3
 """Most panels side by side in a figure: more would be unreadable at a report page's width."""
-
-NOISE = 1e-9
-"""Variation, relative to the quantity's scale, below which a panel is round-off and not drawn [-].
-
-Far above double-precision round-off (1e-16) and the integrators' and solvers' tolerances
-(1e-10 relative and tighter in the studies: a symmetric table's x drifts by 1e-10 of its
-height), far below anything a figure could show (a pixel is 1e-3 of a panel's height)."""
 
 
 @dataclass(frozen=True)

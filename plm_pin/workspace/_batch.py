@@ -29,16 +29,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..core.closures import Closure
-from ..core.legs import MODE_RTOL, Leg
+from ..core.legs import Leg
 from ..core.task import Task, wrap_angle
-from ..kinematics.jacobians import INVERSE_RTOL
+from ..tolerances import BATCH_LOG3_SERIES_ANGLE, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL
 from .manipulability import batch_metrics
 
 _AXES = {"X": 0, "Y": 1, "Z": 2}
 _REVOLUTE, _PRISMATIC, _FREE_FLYER = 1, 2, 3
-_SMALL_ANGLE = 1e-4
-"""Below this rotation angle [rad], log3 and its Jacobian use their Taylor series (error < 1e-17)."""
-
 _NEAR_PI = np.pi - 1e-3
 """Rotation errors above this angle [rad] are left to the point-by-point path (NaN residual)."""
 
@@ -516,14 +513,14 @@ def log3_and_jacobian(E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     :math:`\omega = \theta / \sin\theta\; \mathrm{vee}(E - E^T) / 2` and
     :math:`J = I + [\omega]_\times / 2 + (1/\theta^2 - (1 + \cos\theta) / (2 \theta \sin\theta))
-    [\omega]_\times^2`, their Taylor series below :data:`_SMALL_ANGLE`; NaN above
+    [\omega]_\times^2`, their Taylor series below :data:`BATCH_LOG3_SERIES_ANGLE`; NaN above
     :data:`_NEAR_PI`, where the axis is ill-determined from the skew part.
     """
     v = 0.5 * np.stack([E[:, 2, 1] - E[:, 1, 2], E[:, 0, 2] - E[:, 2, 0], E[:, 1, 0] - E[:, 0, 1]], axis=1)
     s = np.linalg.norm(v, axis=1)
     c = 0.5 * (np.trace(E, axis1=1, axis2=2) - 1.0)
     theta = np.arctan2(s, c)
-    small = theta < _SMALL_ANGLE
+    small = theta < BATCH_LOG3_SERIES_ANGLE
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # the branch not taken
         factor = np.where(small, 1.0 + theta**2 / 6.0, theta / s)
         coef = np.where(small, 1.0 / 12.0 + theta**2 / 720.0, 1.0 / theta**2 - (1.0 + c) / (2.0 * theta * s))
@@ -618,7 +615,10 @@ def _solve_or_nan(H: np.ndarray, g: np.ndarray) -> np.ndarray:
 
 
 def batch_modes(
-    A: np.ndarray, legs: tuple[Leg, ...], turns: list[np.ndarray] | None = None, rtol: float = MODE_RTOL
+    A: np.ndarray,
+    legs: tuple[Leg, ...],
+    turns: list[np.ndarray] | None = None,
+    rtol: float = LEG_SINGULAR_RTOL,
 ) -> np.ndarray:
     """Working modes of a batch of stacked Jacobians (B, m + k, nv): one sign per square leg, (B, n_legs).
 
@@ -638,19 +638,6 @@ def batch_modes(
         bound = np.prod(np.linalg.norm(M, axis=2), axis=-1)
         out[:, which] = np.where(np.abs(det) <= rtol * bound, 0, np.sign(det))
     return out
-
-
-FACTOR_RCOND = 1e-8
-"""Poses whose velocity map is worse conditioned than 1 / FACTOR_RCOND get the SVD path of the metrics."""
-
-GRAM_RTOL = 1e-4
-r"""Smallest ratio :math:`\lambda_{min} / \lambda_{max}` of a Gram matrix read for singular values.
-
-A backward-stable symmetric eigensolver perturbs each eigenvalue of :math:`G = M^T M` by
-about :math:`\epsilon \lambda_{max}`, so a singular value :math:`\sigma_i = \sqrt{\lambda_i}`
-comes out to a relative error of about :math:`\epsilon\, \sigma_{max}^2 / \sigma_i^2`: at most
-:math:`2.2 \cdot 10^{-16} / 10^{-4} \approx 2 \cdot 10^{-12}` above this ratio. Poses below it
-(near a singularity) get the singular values of the SVD."""
 
 
 def _squared_singular_values(M: np.ndarray) -> np.ndarray:

@@ -34,10 +34,10 @@ from numpy.typing import ArrayLike
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput
 from ..kinematics.collisions import collision_free
-from ..kinematics.inverse import IK_TOL
 from ..kinematics.jacobians import check_square_task
 from ..kinematics.limits import within_limits
 from ..results import Result, unit
+from ..tolerances import CLOSURE_TOL
 from ._continuation import base_pose, solve_poses
 from .manipulability import POSE_METRICS, W_UNIT
 
@@ -212,7 +212,7 @@ def workspace_map(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    tol: float = IK_TOL,
+    tol: float = CLOSURE_TOL,
     workers: int | None = None,
 ) -> WorkspaceSlice:
     """Manipulability, condition number, singularity margins and reachability over a 2-D grid.
@@ -248,7 +248,7 @@ def workspace_grid(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    tol: float = IK_TOL,
+    tol: float = CLOSURE_TOL,
 ) -> WorkspaceSlice:
     """The metrics of :func:`workspace_map` over a grid of any number of task coordinates.
 
@@ -284,7 +284,7 @@ def workspace_sweep(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    tol: float = IK_TOL,
+    tol: float = CLOSURE_TOL,
 ) -> WorkspaceSlice:
     """The metrics of :func:`workspace_map` along one task coordinate, the others fixed.
 

@@ -29,15 +29,11 @@ from numpy.typing import ArrayLike
 
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
-from ..kinematics.inverse import IK_TOL
-from ..kinematics.singularity import SINGULARITY_TOL
 from ..results import Result, unit
+from ..tolerances import CLOSURE_TOL, LOCUS_REFINE_MARGIN, RANGE_XTOL, SINGULARITY_TOL
 from ._continuation import guess_mode, start_configuration
 from .maps import workspace_sweep
-from .singular_loci import NEAR, SingularPoint, line_path, locate_on_solved
-
-RANGE_XTOL = 1e-9
-"""Default tolerance on the located ends of an orientation range [rad]."""
+from .singular_loci import SingularPoint, line_path, locate_on_solved
 
 ENDS: tuple[str, ...] = ("constraint", "inverse", "direct", "boundary", "grid", "unreachable")
 """What can end an orientation range: a singularity kind, the reachable-set boundary, the samples' end,
@@ -95,8 +91,8 @@ def orientation_range(
     guess: ArrayLike | None = None,
     xtol: float = RANGE_XTOL,
     tol: float = SINGULARITY_TOL,
-    near: float = NEAR,
-    ik_tol: float = IK_TOL,
+    near: float = LOCUS_REFINE_MARGIN,
+    ik_tol: float = CLOSURE_TOL,
 ) -> OrientationRange:
     r"""Largest interval of ``axis`` holding ``reference`` that stays reachable and non-singular.
 

@@ -38,17 +38,12 @@ from scipy.optimize import brentq, minimize_scalar
 
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
-from ..kinematics.inverse import IK_TOL, inverse_kinematics
+from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
-from ..kinematics.singularity import SINGULARITY_TOL, SingularityReport, classify
+from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
+from ..tolerances import CLOSURE_TOL, LOCUS_REFINE_MARGIN, LOCUS_XTOL, SINGULARITY_TOL
 from ._continuation import IKEvaluator, base_pose, compatible, solve_poses
-
-XTOL = 1e-12
-"""Default tolerance on the path parameter of a located singularity [unit of t]."""
-
-NEAR = 1e-2
-"""Default margin below which a local minimum is refined (redundant mechanisms)."""
 
 METHODS: tuple[str, ...] = ("sign_change", "minimum", "boundary")
 
@@ -186,11 +181,11 @@ def singular_points(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    xtol: float = XTOL,
+    xtol: float = LOCUS_XTOL,
     tol: float = SINGULARITY_TOL,
-    near: float = NEAR,
+    near: float = LOCUS_REFINE_MARGIN,
     boundaries: bool = True,
-    ik_tol: float = IK_TOL,
+    ik_tol: float = CLOSURE_TOL,
 ) -> list[SingularPoint]:
     """Singularities on the path ``x = path(t)``, located between the samples ``t``.
 

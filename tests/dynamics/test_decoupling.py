@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from plm_pin import InvalidInput, PoseUnreachable
-from plm_pin.dynamics.decoupling import DECOUPLING_RTOL, decoupling_check
+from plm_pin.dynamics.decoupling import decoupling_check
 from plm_pin.models import PRESETS
+from plm_pin.tolerances import DECOUPLING_RTOL
 from plm_pin.workspace import workspace_map
 from tests.conftest import preset
 from tests.dynamics.test_task_space import lagrange_inertia_and_gravity

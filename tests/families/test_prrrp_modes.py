@@ -10,13 +10,12 @@ import pinocchio as pin
 import pytest
 
 import plm_pin
-from plm_pin.core.rank import RANK_RTOL
 from plm_pin.exceptions import InvalidInput, PoseUnreachable, SingularConfiguration
 from plm_pin.families import prrrp as pm
-from plm_pin.families.prrrp.planners import MODE_CHANGE_TOL
 from plm_pin.kinematics import classify, closed_chain_jacobians
 from plm_pin.kinematics.paths import track_actuator_path
 from plm_pin.kinematics.working_mode import working_mode
+from plm_pin.tolerances import MODE_CHANGE_TOL, RANK_RTOL
 from tests.conftest import preset, prrrp_paper_configuration
 
 ASYM = "harada2015_asymmetric"

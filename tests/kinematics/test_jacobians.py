@@ -16,8 +16,9 @@ from scipy.linalg import null_space
 
 from plm_pin import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, task_pose, working_modes
-from plm_pin.kinematics.jacobians import INVERSE_RTOL, feasible_motions, times_T_inverse
+from plm_pin.kinematics.jacobians import feasible_motions, times_T_inverse
 from plm_pin.models import PRESETS, preset_names
+from plm_pin.tolerances import INVERSE_RTOL
 from tests.conftest import (
     STAR_E,
     ball_joint_body,

@@ -13,9 +13,9 @@ from plm_pin.core.legs import working_mode_from_data, working_mode_from_jacobian
 from plm_pin.core.task import TaskTarget
 from plm_pin.kinematics import task_pose
 from plm_pin.kinematics.jacobians import ik_jacobian
+from plm_pin.tolerances import GRAM_RTOL
 from plm_pin.workspace import _continuation, workspace_map
 from plm_pin.workspace._batch import (
-    GRAM_RTOL,
     BatchKinematics,
     batch_modes,
     batch_newton,

@@ -21,8 +21,9 @@ from ...core.mechanism import Mechanism
 from ...core.rank import numerical_rank
 from ...exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ...kinematics.jacobians import closed_chain_jacobians
-from ...kinematics.singularity import SINGULARITY_TOL, SingularityReport, report_from_jacobians
+from ...kinematics.singularity import SingularityReport, report_from_jacobians
 from ...results import Result, unit
+from ...tolerances import SINGULARITY_TOL
 from .layout import prrrp_layout
 from .modes import pair_solutions, prrrp_configuration, prrrp_state
 from .planners import fold_plan

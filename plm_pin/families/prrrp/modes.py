@@ -33,11 +33,9 @@ from ...exceptions import InvalidInput, PoseUnreachable
 from ...kinematics.mode_graph import Mode
 from ...kinematics.singularity import normalised_margin
 from ...results import Result, unit
+from ...tolerances import PAIR_TOL, PRRRP_MODE_TOL
 from .builder import LEFT_PAIR
 from .layout import PrrrpLayout, resolve_layout
-
-MODE_TOL = 1e-9
-"""Pair heights [m] and rod cosines :math:`|z_i^T a|` [-] at or below which a mode sign is 0."""
 
 ASSEMBLY_MODES: tuple[Mode, ...] = (
     (1, 1),
@@ -50,6 +48,7 @@ ASSEMBLY_MODES: tuple[Mode, ...] = (
     (0, -1),
     (0, 0),
 )
+
 """The 9 combined assembly modes of the 2-PRRRP (left pair, right pair), in the paper's order."""
 
 
@@ -76,9 +75,9 @@ class PrrrpState(Result):
         pairs: pair positions (left, right) in the world [m], shape (2, 3).
         rods: unit rod vectors :math:`z_i` from slider to pair, one per leg present, shape (n_legs, 3).
         cosines: :math:`z_i^T a` per leg [-], shape (n_legs,).
-        assembly_mode: sign of each pair height, 0 within :data:`MODE_TOL` (``[+ 0]`` etc.).
+        assembly_mode: sign of each pair height, 0 within :data:`PRRRP_MODE_TOL` (``[+ 0]`` etc.).
         working_mode: the paper's eq. (6) sign per leg, :math:`-\mathrm{sign}(z_i^T a)`, 0 within
-            :data:`MODE_TOL` (``(- + 0 +)`` etc.).
+            :data:`PRRRP_MODE_TOL` (``(- + 0 +)`` etc.).
         sub_direct_margin: per sub-mechanism, :math:`\sigma_{min}/\sigma_{max}` of its own
             direct Jacobian (rows :math:`z_{j1}^T, z_{j2}^T` in the plane, eq. (4)
             differentiated); zero at ``[0]`` and when its circles coincide; NaN for a pair
@@ -111,7 +110,7 @@ def _sign(value: float, tol: float) -> int:
 
 
 def prrrp_state(
-    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = MODE_TOL
+    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = PRRRP_MODE_TOL
 ) -> PrrrpState:
     """Pair heights, rod directions, assembly and working modes of a 2-PRRRP configuration.
 
@@ -154,14 +153,14 @@ def prrrp_state(
 
 
 def assembly_mode(
-    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = MODE_TOL
+    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = PRRRP_MODE_TOL
 ) -> Mode:
     """Assembly mode ``(left, right)`` of a 2-PRRRP configuration: the side of the stator of each pair."""
     return prrrp_state(mech, q, layout, tol).assembly_mode
 
 
 def paper_working_modes(
-    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = MODE_TOL
+    mech: Mechanism, q: ArrayLike, layout: PrrrpLayout | None = None, tol: float = PRRRP_MODE_TOL
 ) -> Mode:
     r"""Working mode of each leg (Harada 2015, eq. (6)): :math:`-\mathrm{sign}(z_i^T a)`, 0 at 90 deg."""
     return prrrp_state(mech, q, layout, tol).working_mode
@@ -182,7 +181,7 @@ class PairSolutions(Result):
     points: np.ndarray = field(metadata=unit("m"))
 
 
-def pair_solutions(c1: float, c2: float, l1: float, l2: float, tol: float = 1e-12) -> PairSolutions:
+def pair_solutions(c1: float, c2: float, l1: float, l2: float, tol: float = PAIR_TOL) -> PairSolutions:
     """Closed-form direct kinematics of a PRRRP sub-mechanism (Harada 2015, eq. (4)).
 
     The pair lies on the circles of radii ``l1``, ``l2`` [m] centred on the stator at the

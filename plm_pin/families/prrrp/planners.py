@@ -37,18 +37,12 @@ from ...kinematics.forward import frame_distance
 from ...kinematics.jacobians import closed_chain_jacobians
 from ...kinematics.mode_graph import Mode, ModeEdge, ModeGraph, ModeNode, compress_modes
 from ...kinematics.paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
-from ...kinematics.singularity import SINGULARITY_TOL, report_from_jacobians
+from ...kinematics.singularity import report_from_jacobians
 from ...results import Result, unit
+from ...tolerances import MODE_CHANGE_TOL, PRRRP_MODE_TOL, SINGULARITY_TOL
 from .builder import TASK_FRAME
 from .layout import PrrrpLayout, PrrrpLeg, PrrrpSubMechanism, prrrp_layout, resolve_layout
-from .modes import ASSEMBLY_MODES, MODE_TOL, PrrrpState, mode_label, prrrp_state
-
-MODE_CHANGE_TOL = 1e-3
-"""Direct and constraint margin the mode-change planners require at every sample [-].
-
-A thousandth of the largest singular value: far above round-off, so that the rank of
-:math:`C` (Harada 2015: rank :math:`J_x = 3`) is not in doubt anywhere on the path.
-"""
+from .modes import ASSEMBLY_MODES, PrrrpState, mode_label, prrrp_state
 
 PAPER_ASSEMBLY_ROUTE: tuple[Mode, ...] = ((1, 1), (1, 0), (1, -1), (0, -1), (-1, -1))
 """Harada 2015, section V: ``[+ +] -> [+ 0] -> [+ -] -> [0 -] -> [- -]``."""
@@ -552,7 +546,7 @@ def plan_working_mode_change(
     s = np.linspace(0.0, 1.0, n)
     s[n // 2] = 0.5
     c0 = float(mech.actuator_positions(q0)[g.actuator])
-    if abs(c0 - x_pair) <= MODE_TOL:
+    if abs(c0 - x_pair) <= PRRRP_MODE_TOL:
         raise InvalidInput(
             f"leg {leg} is already perpendicular to the stator at the start; start off the fold"
         )

@@ -1,0 +1,245 @@
+r"""Every tolerance of plm_pin: one name, one value, one unit and the decision it takes.
+
+A tolerance, a threshold or a margin is a decision, so each one lives here and nowhere else
+(``tests/test_tolerances.py`` refuses a tolerance constant defined in another module, and a
+literal default of a ``tol`` / ``rtol`` / ``atol`` / ``eps`` argument). Each docstring starts
+with the unit in brackets (``[-]`` for a ratio) and says what the value decides. The guide page
+``docs/guide/tolerances.md`` lists them, checked against this module by a test.
+
+A description carries its own closure tolerance (:data:`CLOSURE_TOL` by default; the sidecar's
+``closure_tolerance``, ``plm_pin.load(..., closure_tol=)`` or ``--closure-tol`` for a CAD export
+whose coordinates were rounded): :attr:`plm_pin.Mechanism.closure_tol` is the value assembly,
+kinematics, simulation and the checks then use; the constants below that depend on it say so.
+
+This module imports nothing from plm_pin.
+"""
+
+# ----------------------------------------------------------------- closures and assembly
+CLOSURE_TOL = 1e-12
+"""[m, rad] Default closure tolerance of a description (:attr:`Mechanism.closure_tol`): the largest
+closure residual the assembly, the inverse and forward kinematics, the path tracking floor and the
+simulation's projection accept. Exact descriptions close to round-off; 1e-12 is reached from any
+guess in a few Newton steps."""
+
+ASSEMBLED_TOL = 1e-8
+"""[m, rad] Largest closure residual of a configuration an analysis accepts as assembled (raised to
+the mechanism's closure tolerance when that is larger). Every configuration plm_pin computes closes
+the loops to the closure tolerance; 1e-8 leaves room for configurations read back from files while
+refusing ones whose loops are visibly open (``q_ref + 0.05`` opens them by centimetres)."""
+
+ROUND_OFF = 1e-15
+"""[m, rad] Closure residual below which the assembly takes no polishing step (round-off reached)."""
+
+ASSEMBLY_RCOND = 1e-10
+"""[-] Singular values of the closure Jacobian below this fraction of the largest take no part in a
+Levenberg-Marquardt assembly step (the redundant rows of planar closures)."""
+
+ROUNDED_DATA_RTOL = 1e-5
+"""[-] Least-squares closure residual, relative to the size of the model (the largest joint or frame
+distance from the origin), up to which loops that do not close to the closure tolerance are taken
+for rounded coordinates (a CAD export written to 6-8 significant digits closes to 1e-8...6e-8 m)
+and loaded with a warning; above it the loops are open and the load is refused."""
+
+ROUNDED_DATA_HEADROOM = 10.0
+"""[-] Factor between the least-squares residual of a rounded description and the closure tolerance
+it is loaded with (then rounded up to a power of ten): other configurations close a little worse."""
+
+SAME_ASSEMBLY_TOL = 1e-7
+"""[m] Largest distance between the frame origins of two configurations of one assembly."""
+
+# ----------------------------------------------------------------- rank and idle mobilities
+RANK_RTOL = 1e-9
+"""[-] Fixed relative tolerance of the rank decisions made at arbitrary configurations (constraint
+dynamics, trajectories, mode graphs): singular values at most ``RANK_RTOL * max(s_max, 1)`` are zero.
+Also the lowest floor of the closure rank (see :data:`RANK_CEILING_RTOL`)."""
+
+RANK_CEILING_RTOL = 1e-4
+"""[-] Closure rank by the largest gap: singular values above this fraction of ``max(s_max, 1)`` are
+independent rows, whatever their gap. Between it and the floor ``max(RANK_RTOL, 10 closure_tol)``
+the rank is cut where consecutive singular values have their largest ratio; below the floor they
+are zero (the dependent rows of a description rounded to its closure tolerance sit there)."""
+
+RANK_GAP_MIN = 1e3
+"""[-] Smallest ratio of the two singular values around the closure rank's cut for the decision to be
+clear-cut; below it :class:`plm_pin.warnings.AmbiguousRank` is warned."""
+
+IDLE_RTOL = 1e-8
+"""[-] Singular values of the observed rows on the feasible motions (:mod:`plm_pin.core.idle`) at most
+this times the largest (or 1) are idle motions."""
+
+GAUGE_MIN_PIVOT = 1e-3
+"""[-] Smallest share of an idle motion a held joint must carry for it to fix that motion."""
+
+GAUGE_TIE_RTOL = 1e-9
+"""[-] Relative difference below which two joints' shares of the idle motions count as equal."""
+
+PATTERN_RTOL = 1e-9
+"""[-] Entries of the inverse-kinematics Jacobian below this times the largest entry of their row are
+structural zeros when the legs are found."""
+
+PATTERN_ATOL = 1e-12
+"""[-] Entries of the leg rows at most this (absolute, unit axes and lever arms [m]) are structural zeros."""
+
+LEG_SINGULAR_RTOL = 1e-9
+"""[-] A leg block is singular when its determinant is at most this times Hadamard's bound."""
+
+# ----------------------------------------------------------------- descriptions
+INERTIA_RTOL = 1e-9
+"""[-] Tolerance of the inertia checks (moments >= 0, triangle inequalities), relative to the largest
+moment."""
+
+AXIS_MIN = 1e-9
+"""[-] Smallest norm of a joint axis or closure axis read from a description (a shorter one is refused)."""
+
+COMPLIANCE_SYMMETRY_RTOL = 1e-9
+"""[-] Largest asymmetry of a compliance matrix, relative to its largest entry."""
+
+MIN_PRINCIPAL_MOMENT = 1e-13
+"""[kg m^2] Smallest principal moment of inertia written to an MJCF export (MuJoCo refuses zero)."""
+
+LOG3_SERIES_ANGLE = 1e-6
+"""[rad] Rotation angle below which a closure's log3 Jacobian uses its Taylor series."""
+
+BATCH_LOG3_SERIES_ANGLE = 1e-4
+"""[rad] Rotation angle below which the batched log3 and its Jacobian use their Taylor series
+(error < 1e-17)."""
+
+# ----------------------------------------------------------------- kinematics and singularities
+SINGULARITY_TOL = 1e-6
+"""[-] Default margin at or below which a configuration counts as singular."""
+
+INVERSE_RTOL = 1e-12
+r"""[-] :math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x
+:math:`|J_x|`.
+
+Relative to the whole task Jacobian (:math:`|J_x| = \sigma_{max}(J_x)`), not to :math:`T` itself,
+whose ratio is 1 for any 1 x 1 :math:`T` (see :mod:`plm_pin.kinematics.singularity`)."""
+
+LIMIT_TOL = 1e-9
+"""[m or rad] A joint within this distance of its range respects it."""
+
+TRACK_TOL = 1e-11
+"""[m, rad] Closure tolerance of the path continuations (raised to the mechanism's closure tolerance)."""
+
+LOCUS_XTOL = 1e-12
+"""[unit of t] Default tolerance on the path parameter of a located singularity."""
+
+LOCUS_REFINE_MARGIN = 1e-2
+"""[-] Default margin below which a local minimum is refined (redundant mechanisms)."""
+
+RANGE_XTOL = 1e-9
+"""[rad] Default tolerance on the located ends of an orientation range."""
+
+GRAM_RTOL = 1e-4
+r"""[-] Smallest ratio :math:`\lambda_{min} / \lambda_{max}` of a Gram matrix read for singular values.
+
+A backward-stable symmetric eigensolver perturbs each eigenvalue of :math:`G = M^T M` by about
+:math:`\epsilon \lambda_{max}`, so a singular value :math:`\sigma_i = \sqrt{\lambda_i}` has a
+relative error of about :math:`\epsilon / (2 \lambda_i / \lambda_{max})`: 1e-12 at this ratio.
+Below it the batch takes the SVD of :math:`M` itself."""
+
+FACTOR_RCOND = 1e-8
+"""[-] Reciprocal condition number below which a batched LU factorisation is taken as singular."""
+
+PAIR_TOL = 1e-12
+"""[m] Default distance deciding touching and coincident circles in the PRRRP pair's closed-form direct
+kinematics (Harada 2015, eq. (4))."""
+
+PRRRP_MODE_TOL = 1e-9
+"""[m or -] Pair heights [m] and rod cosines :math:`|z_i^T a|` [-] at or below which a PRRRP mode
+sign is 0."""
+
+MODE_CHANGE_TOL = 1e-3
+"""[-] Direct and constraint margin the mode-change planners require at every sample.
+
+A thousandth of the largest singular value: far above round-off, so that the rank of :math:`C`
+(Harada 2015: rank :math:`J_x = 3`) is not in doubt anywhere on the path."""
+
+# ----------------------------------------------------------------- statics and allocation
+STATICS_SINGULAR_RTOL = 1e-8
+r"""[-] A direction counts as unresisted when its singular value is below this times the largest.
+
+Applies to :math:`C` (the actuators do not hold a feasible motion: direct singularity) and to
+:math:`J_\phi` (the closures do not hold a motion they should: constraint singularity)."""
+
+EQUILIBRIUM_RTOL = 1e-9
+"""[-] Equilibrium residual allowed, relative to the largest generalized force in the balance."""
+
+INTERNAL_TIE_RTOL = 1e-9
+"""[-] Actuator shares of the internal forces equal to this relative tolerance count as a tie
+(see :func:`plm_pin.statics.balance.oriented_internal_basis`): the first actuator in order is taken."""
+
+ATTACHMENT_ATOL = 1e-9
+"""[m] Attachment points closer than this are the same point."""
+
+FEASIBILITY_RTOL = 1e-9
+"""[-] A limit or condition is met when exceeded by at most this times the force scale."""
+
+QP_EPS = 1e-11
+"""[N or N m] Absolute accuracy asked of ProxSuite's allocation QP (``eps_abs``)."""
+
+# ----------------------------------------------------------------- dynamics
+SIMULATION_RTOL = 1e-10
+"""[-] Default relative error per step of the adaptive (DOP853) simulation."""
+
+SIMULATION_ATOL = 1e-12
+"""[m, rad, m/s, rad/s] Default absolute error per step of the adaptive (DOP853) simulation."""
+
+STEP_DRIFT_TOL = 1e-6
+"""[m, rad] Largest closure distance one fixed simulation step may open before its projection;
+larger: halve it."""
+
+ENERGY_RTOL = 1e-3
+"""[-] Energy change allowed in a passive run, relative to the largest kinetic energy reached."""
+
+FEASIBLE_VELOCITY_RTOL = 1e-9
+r"""[-] Largest :math:`|J_\phi v|` of a velocity accepted as feasible, relative to :math:`\max(1, |v|)`
+(an initial velocity of a simulation, the velocity of task-space dynamics)."""
+
+ILL_CONDITIONED_MARGIN = 1e-3
+"""[-] Inverse margin (:func:`plm_pin.kinematics.classify`) below which task-space dynamics warns.
+
+:math:`S = N T^{-1}` grows as the inverse of that margin and :math:`M_x` as its square, so below
+1e-3 the task inertia is amplified more than a million times over the joint-space one."""
+
+RATE_CONSISTENCY_TOL = 1e-6
+"""[m/s or rad/s] Default tolerance on the disagreement of redundant actuator rates of a trajectory."""
+
+DECOUPLING_RTOL = 1e-9
+"""[-] Default cancellation ratio below which an entry counts as zero or constant."""
+
+ZHAO_WORK_TOL = 1e-3
+"""[J] Zhao 2011's convergence tolerance e of eq. (34) (adaptive trapezoid of the work)."""
+
+# ----------------------------------------------------------------- stiffness
+TIP_TOL = 1e-9
+"""[m] A child joint or frame belongs to a beam's tip when its origin is this close to the tip."""
+
+MASSLESS_RTOL = 1e-12
+r"""[-] Vibration modes whose :math:`1/\omega^2` is below this fraction of the largest are massless
+(left out)."""
+
+DEFLECTION_RTOL = 1e-10
+"""[-] Largest residual of a deflection Newton step accepted, relative to the largest generalized force."""
+
+CONSTRAINT_NULL_RTOL = 1e-10
+"""[-] Singular values of the stiffness constraint rows below this fraction of the largest count as zero."""
+
+UNRESISTED_RTOL = 1e-9
+"""[-] Eigenvalues of the projected stiffness below this fraction of the largest are motions no
+spring resists."""
+
+# ----------------------------------------------------------------- display
+PLANE_NORMAL_TOL = 1e-9
+"""[-] Largest ratio of a second rotation axis, and of a frame velocity along the normal, to the largest,
+for a mechanism to count as planar in the viewer."""
+
+VIEW_OPEN_TOL = 1e-6
+"""[m, rad] Closure residual above which the viewer's markers show a closure open."""
+
+NOISE = 1e-9
+"""[-] Variation, relative to the quantity's scale, below which a panel is round-off and not drawn.
+
+Far above double-precision round-off (1e-16) and the integrators' and solvers' tolerances (1e-10
+relative and tighter in the studies), far below anything a figure could show (a pixel is 1e-3 of
+a panel's height)."""
