@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import functools
+import warnings
 from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 from ._text import short
+from .core.assembly import rounded_closure
+from .core.closures import compile_closures
 from .core.mechanism import Mechanism
 from .description.loader import Description, build_model, build_visual_model, read_description
 from .description.mjcf import MJCF_SUFFIX, read_mjcf
@@ -19,18 +22,31 @@ from .description.urdf import read_urdf_text
 from .description.writer import urdf_text
 from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
 from .models.registry import PRESETS, Builder, builder_parameters, urdf_folder
+from .warnings import RoundedClosureWarning
 
 ERD_PREFIX = "erd:"
 
 
-def mechanism_from_description(description: Description, name: str, *, validate: bool = True) -> Mechanism:
+def mechanism_from_description(
+    description: Description,
+    name: str,
+    *,
+    validate: bool = True,
+    closure_tol: float | None = None,
+    mobility: int | None = None,
+) -> Mechanism:
     """Build a :class:`Mechanism` from a description.
 
     Args:
         description: URDF tree and sidecar.
         name: mechanism name.
         validate: assemble the reference configuration now, so that a description whose
-            loops cannot be closed fails here with a clear message.
+            loops cannot be closed fails here with a clear message (see :func:`load` for
+            loops that close only to a rounded description's least-squares residual).
+        closure_tol: how far the loops close [m, rad] (default: the sidecar's
+            ``closure_tolerance``, else :data:`~plm_pin.tolerances.CLOSURE_TOL`).
+        mobility: fixes the mobility instead of deciding the closure rank from the singular
+            values (default: the sidecar's ``mobility``).
 
     Raises:
         DescriptionError: when the model cannot be built or names are wrong.
@@ -43,17 +59,23 @@ def mechanism_from_description(description: Description, name: str, *, validate:
         name=name,
         source=description.sidecar.source or str(description.urdf_path or ""),
         visual_factory=functools.partial(build_visual_model, model, description),  # picklable
+        closure_tol=closure_tol,
+        mobility=mobility,
     )
     guess = "sidecar reference" if description.sidecar.reference else "neutral configuration"
-    return _validated(mech, guess, validate)
+    return _validated(mech, guess, validate, stated=closure_tol is not None)
 
 
-def mechanism_from_mjcf(path: str | Path, *, validate: bool = True) -> Mechanism:
+def mechanism_from_mjcf(
+    path: str | Path, *, validate: bool = True, closure_tol: float | None = None, mobility: int | None = None
+) -> Mechanism:
     """Build a :class:`Mechanism` from a MuJoCo model (see :mod:`plm_pin.description.mjcf`).
 
     Args:
         path: the ``.xml`` file (a ``.plm.yaml`` sidecar beside it is read when present).
         validate: assemble the reference configuration now.
+        closure_tol: how far the loops close [m, rad] (see :func:`mechanism_from_description`).
+        mobility: fixes the mobility (see :func:`mechanism_from_description`).
 
     Raises:
         DescriptionError: when MuJoCo is missing or rejects the file, or an element cannot be
@@ -68,13 +90,40 @@ def mechanism_from_mjcf(path: str | Path, *, validate: bool = True) -> Mechanism
         name=name,
         source=mjcf.sidecar.source or "",
         visual_factory=mjcf.visual_model,
+        closure_tol=closure_tol,
+        mobility=mobility,
     )
-    return _validated(mech, mjcf.reference_origin, validate)
+    return _validated(mech, mjcf.reference_origin, validate, stated=closure_tol is not None)
 
 
-def _validated(mech: Mechanism, guess: str, validate: bool) -> Mechanism:
-    """``mech`` once its reference is assembled (when ``validate``) from ``guess`` (named in messages)."""
+def _validated(mech: Mechanism, guess: str, validate: bool, *, stated: bool) -> Mechanism:
+    """``mech`` once its reference is assembled (when ``validate``) from ``guess`` (named in messages).
+
+    When no closure tolerance was stated (``stated`` or the sidecar's ``closure_tolerance``)
+    and the loops close only to a least-squares residual small against the model (rounded
+    coordinates), the mechanism takes a tolerance above that residual, with a warning
+    (:func:`~plm_pin.core.assembly.rounded_closure`).
+    """
     name = mech.name
+    if validate and mech.sidecar.closures and not stated and mech.sidecar.closure_tolerance is None:
+        rounded = rounded_closure(
+            mech.model,
+            compile_closures(mech.model, mech.sidecar.closures),
+            mech.reference_guess(),
+            mech.closure_tol,
+        )
+        if rounded is not None:
+            warnings.warn(
+                f"{name}: the loops close only to {rounded.residual:.2g} m/rad at best (least squares "
+                f"from the {guess}; worst closure {rounded.worst!r}): its coordinates look rounded (a CAD "
+                f"export written to a few significant digits). Loaded with closure tolerance "
+                f"{rounded.tolerance:g} m/rad; state it (sidecar 'closure_tolerance: {rounded.tolerance:g}', "
+                f"plm_pin.load(..., closure_tol={rounded.tolerance:g}) or --closure-tol "
+                f"{rounded.tolerance:g}) to load without this warning",
+                RoundedClosureWarning,
+                stacklevel=3,
+            )
+            mech.closure_tol = rounded.tolerance
     if validate and mech.closures:
         try:
             mech.q_ref  # noqa: B018 - assembles and caches
@@ -146,7 +195,13 @@ def load_erd(name: str) -> Mechanism:
     return mechanism_from_description(Description(source, sidecar, path, None, "example-robot-data"), name)
 
 
-def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
+def load(
+    name_or_path: str | Path,
+    *,
+    validate: bool = True,
+    closure_tol: float | None = None,
+    mobility: int | None = None,
+) -> Mechanism:
     """Load a mechanism.
 
     Args:
@@ -155,7 +210,17 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
             a ``.plm.yaml``, an example-parallel-robots folder, or a MuJoCo ``.xml`` (MJCF, with
             an optional ``.plm.yaml`` beside it; needs ``plm-pin[mjcf]``).
         validate: assemble the reference configuration at once (see
-            :func:`mechanism_from_description`).
+            :func:`mechanism_from_description`). Loops that close only to a least-squares
+            residual small against the model (a CAD export rounded to a few significant
+            digits) then load with a :class:`~plm_pin.warnings.RoundedClosureWarning` and a
+            closure tolerance above that residual, unless ``closure_tol`` (or the sidecar's
+            ``closure_tolerance``) states one.
+        closure_tol: how far the description's loops close [m, rad]: the tolerance of the
+            assembly, the kinematics and the simulation (default: the sidecar's
+            ``closure_tolerance``, else :data:`~plm_pin.tolerances.CLOSURE_TOL`).
+        mobility: the mobility (idle mobilities not counted), fixing the closure rank instead
+            of deciding it at the largest gap of the singular values (default: the sidecar's
+            ``mobility``).
 
     Returns:
         The mechanism.
@@ -163,12 +228,12 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
     Raises:
         DescriptionError: unknown name, missing or malformed files, unsafe content.
         ClosureNotSatisfied: when the loops cannot be closed from the reference guess.
+        InvalidInput: a ``closure_tol`` or ``mobility`` out of range.
     """
+    extra: dict[str, Any] = {"validate": validate, "closure_tol": closure_tol, "mobility": mobility}
     text = str(name_or_path)
     if text in PRESETS:
-        return mechanism_from_description(
-            read_description(urdf_folder() / f"{text}.urdf"), text, validate=validate
-        )
+        return mechanism_from_description(read_description(urdf_folder() / f"{text}.urdf"), text, **extra)
     if text.startswith(ERD_PREFIX):
         return load_erd(text[len(ERD_PREFIX) :])
     path = Path(text)
@@ -178,16 +243,16 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
             f"example-robot-data robots load as 'erd:<name>'"
         )
     if path.suffix == MJCF_SUFFIX:
-        return mechanism_from_mjcf(path, validate=validate)
+        return mechanism_from_mjcf(path, **extra)
     mjcf = path.with_name(path.name.removesuffix(SIDECAR_SUFFIX) + MJCF_SUFFIX)
     if path.name.endswith(SIDECAR_SUFFIX) and mjcf.is_file() and not mjcf.with_suffix(".urdf").is_file():
-        return mechanism_from_mjcf(mjcf, validate=validate)
+        return mechanism_from_mjcf(mjcf, **extra)
     description = read_description(path)
     stem = path.name if path.is_dir() else path.name.split(".")[0]
     if stem == "robot":  # the example-parallel-robots file name: name the mechanism after its folder
         stem = path.resolve().parent.name
     name = description.sidecar.name or stem
-    return mechanism_from_description(description, name, validate=validate)
+    return mechanism_from_description(description, name, **extra)
 
 
 def resolve_builder(target: str | Builder) -> tuple[Builder, dict[str, Any], str]:

@@ -34,11 +34,12 @@ ASSEMBLY_RCOND = 1e-10
 """[-] Singular values of the closure Jacobian below this fraction of the largest take no part in a
 Levenberg-Marquardt assembly step (the redundant rows of planar closures)."""
 
-ROUNDED_DATA_RTOL = 1e-5
-"""[-] Least-squares closure residual, relative to the size of the model (the largest joint or frame
-distance from the origin), up to which loops that do not close to the closure tolerance are taken
-for rounded coordinates (a CAD export written to 6-8 significant digits closes to 1e-8...6e-8 m)
-and loaded with a warning; above it the loops are open and the load is refused."""
+ROUNDED_DATA_RTOL = 1e-4
+"""[-] Least-squares closure residual [m, rad], relative to the size of the model (the largest frame
+distance from the origin, at least 1 m), up to which loops that do not close to the closure tolerance
+are taken for rounded coordinates and loaded with a warning; above it the loops are open and the load
+is refused. A CAD export written to 6-8 significant digits closes to 1e-8...1e-5 m (an angle near
+pi/2 written to 6 digits is off by up to 5e-6 rad)."""
 
 ROUNDED_DATA_HEADROOM = 10.0
 """[-] Factor between the least-squares residual of a rounded description and the closure tolerance

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 __all__ = [
+    "AmbiguousRankWarning",
     "CorruptChunkWarning",
     "DescriptionWarning",
     "IgnoredElementWarning",
@@ -10,6 +11,7 @@ __all__ = [
     "MissingLimitsWarning",
     "MissingMeshWarning",
     "PlmWarning",
+    "RoundedClosureWarning",
     "SimulationUnstableWarning",
 ]
 
@@ -44,3 +46,11 @@ class SimulationUnstableWarning(PlmWarning):
 
 class MissingLimitsWarning(PlmWarning):
     """URDF joints carry no position limits (read as [0, 0]); they are treated as unlimited."""
+
+
+class RoundedClosureWarning(PlmWarning):
+    """The loops close only to a least-squares residual: the description's coordinates look rounded."""
+
+
+class AmbiguousRankWarning(PlmWarning):
+    """The singular values of the closure Jacobian have no clear-cut gap: the mobility is in doubt."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
@@ -12,7 +13,7 @@ from scipy.linalg.lapack import dposv as _posv
 
 from ..exceptions import ClosureNotSatisfied
 from ..results import Result, unit
-from ..tolerances import ASSEMBLY_RCOND, CLOSURE_TOL, ROUND_OFF
+from ..tolerances import ASSEMBLY_RCOND, CLOSURE_TOL, ROUND_OFF, ROUNDED_DATA_HEADROOM, ROUNDED_DATA_RTOL
 from .closures import BoundClosures, Closure, closure_rows, jacobian_from_data, residual_from_placements
 
 NEWTON_MAX_ITERATIONS = 12
@@ -150,11 +151,13 @@ class Assembly(Result):
         q: the assembled configuration (read-only). # (nq,)
         residual: closure residual at ``q`` [m, rad]. # (m,)
         iterations: Levenberg-Marquardt iterations used.
+        tolerance: the largest absolute residual that was accepted [m, rad].
     """
 
     q: np.ndarray = field(metadata=unit("m, rad"))
     residual: np.ndarray = field(metadata=unit("m, rad"))
     iterations: int
+    tolerance: float = field(metadata=unit("m, rad"))
     _SKIPPED = ("residual",)
     _DERIVED = ("residual_norm",)
 
@@ -266,4 +269,60 @@ def assemble(
         )
     q.setflags(write=False)
     phi.setflags(write=False)
-    return Assembly(q, phi, iterations)
+    return Assembly(q, phi, iterations, tol)
+
+
+@dataclass(frozen=True)
+class RoundedClosure:
+    """Loops that close only to a least-squares residual small against the model: rounded coordinates.
+
+    A description whose anchors were written to 6-8 significant digits (a CAD export) has
+    loops that no configuration closes exactly; the Levenberg-Marquardt assembly then stops at
+    the least-squares configuration, whose residual is of the order of the rounding.
+
+    Attributes:
+        q: the least-squares configuration. # (nq,)
+        residual: its largest absolute closure residual [m, rad].
+        worst: the closure open the most there.
+        size: the model's size, the largest distance of a frame from the origin there [m].
+        tolerance: the closure tolerance to load it with: :data:`ROUNDED_DATA_HEADROOM` times
+            ``residual``, rounded up to a power of ten [m, rad].
+    """
+
+    q: np.ndarray
+    residual: float
+    worst: str
+    size: float
+    tolerance: float
+
+
+def rounded_closure(
+    model: pin.Model, closures: Sequence[Closure], guess: np.ndarray, tol: float
+) -> RoundedClosure | None:
+    """Whether loops that do not close to ``tol`` from ``guess`` are rounded data (:class:`RoundedClosure`).
+
+    Args:
+        model: Pinocchio model.
+        closures: compiled closures.
+        guess: starting configuration. # (nq,)
+        tol: the closure tolerance tried [m, rad].
+
+    Returns:
+        None when the loops close to ``tol`` or when their least-squares residual is above
+        :data:`~plm_pin.tolerances.ROUNDED_DATA_RTOL` times the model's size (open loops, which
+        the caller's assembly reports); otherwise the least-squares closure.
+    """
+    data = model.createData()
+    try:
+        assemble(model, data, closures, guess, np.arange(model.nv), tol=tol, max_iterations=200)
+        return None
+    except ClosureNotSatisfied as exc:  # the best configuration Levenberg-Marquardt reached
+        q, residual = np.asarray(exc.q), float(exc.residual_norm)
+    pin.framesForwardKinematics(model, data, q)
+    size = max(float(np.linalg.norm(M.translation)) for M in data.oMf)
+    if not residual <= ROUNDED_DATA_RTOL * max(size, 1.0):  # rotation rows [rad] against 1 rad
+        return None
+    phi = residual_from_placements(data, closures)
+    worst = max(closures, key=lambda c: float(np.max(np.abs(phi[c.rows])))).name
+    tolerance = 10.0 ** math.ceil(math.log10(ROUNDED_DATA_HEADROOM * residual))
+    return RoundedClosure(q, residual, worst, size, tolerance)

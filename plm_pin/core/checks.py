@@ -7,7 +7,6 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from ..exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
-from ..tolerances import ASSEMBLED_TOL
 from .mechanism import Mechanism, body_name
 
 
@@ -18,7 +17,7 @@ def check_assembled(mech: Mechanism, q: ArrayLike, name: str = "q") -> np.ndarra
 
     Raises:
         InvalidInput: a malformed ``q``.
-        ClosureNotSatisfied: a closure is open by more than :data:`ASSEMBLED_TOL` (see :func:`check_closed`).
+        ClosureNotSatisfied: a closure is open by more than ``mech.assembled_tol`` (see :func:`check_closed`).
     """
     qa = mech.check_q(q, name)
     if mech.closures:
@@ -27,24 +26,25 @@ def check_assembled(mech: Mechanism, q: ArrayLike, name: str = "q") -> np.ndarra
 
 
 def check_closed(mech: Mechanism, qa: np.ndarray, phi: np.ndarray, name: str = "q") -> None:
-    """Refuse a checked ``qa`` whose closure residual ``phi`` [m, rad] is above :data:`ASSEMBLED_TOL`.
+    """Refuse a checked ``qa`` whose closure residual ``phi`` [m, rad] is above ``mech.assembled_tol``.
 
     For callers that have the residual already, from the frame placements of their own
     Pinocchio pass (the check then costs no second pass).
 
     Raises:
-        ClosureNotSatisfied: a closure is open by more than :data:`ASSEMBLED_TOL`; the error
+        ClosureNotSatisfied: a closure is open by more than :attr:`Mechanism.assembled_tol`; the error
             carries the residual, the tolerance and the worst closure. Assemble first:
             ``mech.assemble(q).q``.
     """
-    if phi.size and not np.abs(phi).max() <= ASSEMBLED_TOL:  # NaN refused too
+    tol = mech.assembled_tol
+    if phi.size and not np.abs(phi).max() <= tol:  # NaN refused too
         errors = {c.name: float(np.max(np.abs(phi[c.rows]))) for c in mech.closures}
         worst = max(errors, key=lambda k: errors[k])
         raise ClosureNotSatisfied(
             f"{mech.name}: {name} is not assembled: closure {worst!r} is open by {errors[worst]:.3g} "
-            f"(tolerance {ASSEMBLED_TOL:.0e} m/rad); assemble it first: mech.assemble({name}).q",
+            f"(tolerance {tol:.0e} m/rad); assemble it first: mech.assemble({name}).q",
             errors[worst],
-            ASSEMBLED_TOL,
+            tol,
             qa,
             worst,
         )
@@ -59,7 +59,7 @@ def check_samples_assembled(mech: Mechanism, q: np.ndarray, t: np.ndarray) -> No
         t: their times [s], shape (n,).
 
     Raises:
-        ClosureNotSatisfied: at the first sample whose residual exceeds :data:`ASSEMBLED_TOL`,
+        ClosureNotSatisfied: at the first sample whose residual exceeds :attr:`Mechanism.assembled_tol`,
             naming the sample, its time and the worst closure.
     """
     for k in range(q.shape[0]):

@@ -36,10 +36,10 @@ import pinocchio as pin
 
 from ..description.sidecar import ClosureSpec
 from ..exceptions import ClosureNotSatisfied
-from ..tolerances import CLOSURE_TOL, GAUGE_MIN_PIVOT, GAUGE_TIE_RTOL, IDLE_RTOL, RANK_RTOL
+from ..tolerances import CLOSURE_TOL, GAUGE_MIN_PIVOT, GAUGE_TIE_RTOL, IDLE_RTOL
 from . import closures as _closures
 from .assembly import assemble
-from .rank import numerical_rank
+from .rank import rank_by_gap
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -96,14 +96,22 @@ def idle_motions(
     q: np.ndarray,
     actuated_v: Sequence[int] | np.ndarray,
     task_frame: int | None,
+    tol: float = CLOSURE_TOL,
 ) -> np.ndarray:
-    """Orthonormal basis of the idle motions at an assembled ``q``, shape (nv, n_idle)."""
+    """Orthonormal basis of the idle motions at an assembled ``q``, shape (nv, n_idle).
+
+    The feasible motions are the null space of the closure Jacobian, its rank cut at the
+    largest gap above the closure tolerance ``tol`` [m, rad]
+    (:func:`~plm_pin.core.rank.rank_by_gap`); a motion is idle when the observed rows move by
+    at most ``max(IDLE_RTOL, tol)`` of their scale (the loops of a rounded description close
+    only to ``tol``, and its idle motions move the observed points by as little).
+    """
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
     nv = model.nv
     if closures:
         J_phi = _closures.jacobian_from_data(model, data, closures)
-        rank = numerical_rank(J_phi, RANK_RTOL, floor=1.0)
+        rank = rank_by_gap(J_phi, tol).rank
         N = np.linalg.svd(J_phi)[2][rank:].T  # (nv, mobility)
     else:
         N = np.eye(nv)
@@ -112,7 +120,7 @@ def idle_motions(
     ON = observed_rows(model, data, closures, actuated_v, task_frame) @ N
     _, s, Vt = np.linalg.svd(ON)
     scale = max(float(s[0]) if s.size else 0.0, 1.0)
-    moving = int(np.sum(s > IDLE_RTOL * scale))
+    moving = int(np.sum(s > max(IDLE_RTOL, tol) * scale))
     return np.asarray(N @ Vt[moving:].T)
 
 
@@ -205,7 +213,7 @@ def find_gauges(
         configs.append(assemble(model, data, closures, pin.integrate(model, q0, step), free, tol=tol).q)
     except ClosureNotSatisfied:
         pass
-    bases = [idle_motions(model, data, closures, q, actuated_v, task_frame) for q in configs]
+    bases = [idle_motions(model, data, closures, q, actuated_v, task_frame, tol) for q in configs]
     k = min(range(len(bases)), key=lambda i: bases[i].shape[1])
     if bases[k].shape[1] == 0:
         return (), q0

@@ -39,9 +39,9 @@ import scipy.linalg
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
-from ..tolerances import LEG_SINGULAR_RTOL, PATTERN_ATOL, PATTERN_RTOL, RANK_RTOL
+from ..tolerances import CLOSURE_TOL, LEG_SINGULAR_RTOL, PATTERN_ATOL, PATTERN_RTOL
 from . import closures as _closures
-from .rank import numerical_rank
+from .rank import rank_by_gap
 from .task import Task
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -144,6 +144,7 @@ def find_legs(
     task: Task,
     actuated: Mapping[int, str],
     q_generic: np.ndarray,
+    tol: float = CLOSURE_TOL,
 ) -> tuple[Leg, ...]:
     """Split the structure Jacobian at ``q_generic`` into its diagonal blocks (the legs).
 
@@ -154,12 +155,13 @@ def find_legs(
         task: the compiled end-effector task.
         actuated: joint name of each actuated velocity index.
         q_generic: an assembled configuration away from singularities.
+        tol: the closure tolerance [m, rad], floor of the closure rank.
     """
     pin.computeJointJacobians(model, data, q_generic)
     pin.updateFramePlacements(model, data)
     A = structure_jacobian_from_data(model, data, closures, task)
     n_closure = _closures.closure_rows(closures)
-    _drop_moving_platform_rows(A, n_closure, task.size)
+    _drop_moving_platform_rows(A, n_closure, task.size, tol)
     scale = np.max(np.abs(A), axis=1, keepdims=True)
     rows_kept = np.flatnonzero(scale[:, 0] > 0.0)
     pattern = np.abs(A[rows_kept]) > PATTERN_RTOL * scale[rows_kept]
@@ -224,7 +226,7 @@ def _with_followers(legs: list[Leg], A: np.ndarray, m: int) -> list[Leg]:
     return out
 
 
-def _drop_moving_platform_rows(A: np.ndarray, m: int, n_task: int) -> None:
+def _drop_moving_platform_rows(A: np.ndarray, m: int, n_task: int, tol: float) -> None:
     """Zero the platform rows outside the task that some feasible motion moves (in place).
 
     The platform is pinned along the directions no motion moves (a translational Delta's
@@ -232,7 +234,7 @@ def _drop_moving_platform_rows(A: np.ndarray, m: int, n_task: int) -> None:
     carrying a single-rod Delta's tip), which pinning it would hide.
     """
     J_phi = A[:m]
-    rank = numerical_rank(J_phi, RANK_RTOL, floor=1.0) if m else 0
+    rank = rank_by_gap(J_phi, tol).rank if m else 0
     N = np.linalg.svd(J_phi)[2][rank:].T if m else np.eye(A.shape[1])  # (nv, raw mobility)
     extra = A[m + n_task :]
     moved = np.abs(extra @ N).max(axis=1, initial=0.0) > PATTERN_RTOL * max(float(np.abs(A).max()), 1.0)

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import functools
+import math
 import threading
+import warnings
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -15,12 +17,13 @@ from numpy.typing import ArrayLike
 from .._arguments import as_vector
 from ..description.sidecar import Sidecar, TaskSpec
 from ..exceptions import ClosureNotSatisfied, InvalidInput
-from ..tolerances import CLOSURE_TOL, RANK_RTOL
+from ..tolerances import ASSEMBLED_TOL, CLOSURE_TOL
+from ..warnings import AmbiguousRankWarning
 from . import closures as _closures
 from .assembly import Assembly, assemble
 from .idle import IdleGauge, find_gauges
 from .legs import Leg, find_legs
-from .rank import numerical_rank
+from .rank import RankGap, gap_of, rank_by_gap
 from .scratch import Workspace
 from .task import Task, compile_task
 
@@ -91,6 +94,9 @@ class Mechanism:
         closures: the compiled closures, in sidecar order, then the gauges of idle mobilities.
         actuators: the driven joints, in sidecar order.
         source: provenance (paper, file).
+        closure_tol: how far the description's loops close [m, rad]: the tolerance of the
+            assembly, the kinematics and the simulation's projection, and the floor of the
+            closure rank (see :mod:`plm_pin.tolerances`).
     """
 
     def __init__(
@@ -102,12 +108,32 @@ class Mechanism:
         source: str = "",
         visual_factory: Callable[[], pin.GeometryModel] | None = None,
         idle_gauges: tuple[IdleGauge, ...] | None = None,
+        closure_tol: float | None = None,
+        mobility: int | None = None,
     ) -> None:
         """Wrap a Pinocchio model and a validated sidecar (use :func:`plm_pin.load`).
 
         ``idle_gauges`` holds these gauges (their frames already in ``model``) instead of
         detecting the idle mobilities, for a model derived from a mechanism's own.
+        ``closure_tol`` [m, rad] and ``mobility`` override the sidecar's ``closure_tolerance``
+        and ``mobility`` (default :data:`~plm_pin.tolerances.CLOSURE_TOL`, and the rank
+        decided from the singular values).
+
+        Raises:
+            InvalidInput: a ``closure_tol`` not positive and finite, a ``mobility`` not an
+                integer in [0, nv].
         """
+        tol = closure_tol if closure_tol is not None else sidecar.closure_tolerance
+        tol = CLOSURE_TOL if tol is None else tol
+        if isinstance(tol, bool) or not isinstance(tol, int | float) or not (0.0 < tol < math.inf):
+            raise InvalidInput(f"closure_tol must be a positive finite number [m, rad], got {tol!r}")
+        self.closure_tol = float(tol)
+        fixed = mobility if mobility is not None else sidecar.mobility
+        if fixed is not None and (
+            isinstance(fixed, bool) or not isinstance(fixed, int) or not 0 <= fixed <= model.nv
+        ):
+            raise InvalidInput(f"mobility must be an integer in [0, {model.nv}] (nv), got {fixed!r}")
+        self.fixed_mobility: int | None = fixed
         self.name = name
         self.model = model
         self.sidecar = sidecar
@@ -224,7 +250,12 @@ class Mechanism:
         """
         cut = _closures.compile_closures(self.model, self.sidecar.closures)
         gauges, self._assembled_guess = find_gauges(
-            self.model, cut, self.reference_guess(), self.actuated_v_indices, self._task_frame
+            self.model,
+            cut,
+            self.reference_guess(),
+            self.actuated_v_indices,
+            self._task_frame,
+            tol=self.closure_tol,
         )
         if gauges:  # the model gained frames: scratch data made before them is dropped
             self._local = threading.local()
@@ -299,9 +330,29 @@ class Mechanism:
         r"""Closure Jacobian :math:`J_\phi(q)` on the tangent space, shape (m, nv)."""
         return _closures.jacobian(self.model, self.data, self.closures, self.check_q(q))
 
-    def closure_rank(self, q: ArrayLike, rtol: float = RANK_RTOL) -> int:
-        r"""Rank of :math:`J_\phi(q)` by SVD: singular values above ``rtol * max(s_max, 1)``."""
-        return numerical_rank(self.closure_jacobian(q), rtol, floor=1.0)
+    def closure_rank(self, q: ArrayLike) -> int:
+        r"""Rank of :math:`J_\phi(q)`, cut at the largest gap of its singular values (closure_rank_gap)."""
+        return self.closure_rank_gap(q).rank
+
+    def closure_rank_gap(self, q: ArrayLike) -> RankGap:
+        r"""Rank of :math:`J_\phi(q)` and the gap it is cut at (see :func:`~plm_pin.core.rank.rank_by_gap`).
+
+        The floor is the closure tolerance :attr:`closure_tol`. With a fixed mobility (the
+        sidecar's ``mobility``), the rank is ``nv - mobility`` and the gap is only reported.
+        """
+        J = self.closure_jacobian(q)
+        if self.fixed_mobility is not None:
+            s = np.linalg.svd(J, compute_uv=False) if J.size else np.zeros(0)
+            return gap_of(s, min(self.nv - self.fixed_mobility, s.size), fixed=True)
+        return rank_by_gap(J, self.closure_tol)
+
+    @property
+    def assembled_tol(self) -> float:
+        """Largest closure residual [m, rad] of a configuration the analyses accept as assembled.
+
+        :data:`~plm_pin.tolerances.ASSEMBLED_TOL`, or the closure tolerance when that is larger.
+        """
+        return max(ASSEMBLED_TOL, self.closure_tol)
 
     def closure_errors(self, q: ArrayLike) -> dict[str, float]:
         """Largest absolute residual of each closure [m, rad]."""
@@ -334,7 +385,7 @@ class Mechanism:
         guess: ArrayLike | None = None,
         fixed: Mapping[str, float] | Iterable[str] | None = None,
         *,
-        tol: float = CLOSURE_TOL,
+        tol: float | None = None,
         max_iterations: int = 100,
     ) -> Assembly:
         r"""Project a configuration onto the closure manifold :math:`\phi(q) = 0`.
@@ -346,17 +397,21 @@ class Mechanism:
             guess: starting configuration (default: the reference configuration). # (nq,)
             fixed: joints that must not move: names (kept at their ``guess`` values) or a
                 mapping from one-DOF joint name to the value to impose [m] or [rad].
-            tol: largest absolute residual accepted [m, rad].
+            tol: largest absolute residual accepted [m, rad] (default: :attr:`closure_tol`).
             max_iterations: iteration cap.
 
         Returns:
-            The assembled configuration with its residual.
+            The assembled configuration with its residual and the tolerance used.
 
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol``; the error
                 carries the best configuration and the worst closure.
             InvalidInput: on a malformed ``guess`` or an unknown joint in ``fixed``.
         """
+        if tol is None:
+            tol = self.closure_tol
+        elif not (0.0 < tol < math.inf):
+            raise InvalidInput(f"tol must be a positive finite number [m, rad], got {tol!r}")
         q0 = self.q_ref.copy() if guess is None else self.check_q(guess, "guess").copy()
         names: list[str] = []
         if fixed is not None:
@@ -425,7 +480,7 @@ class Mechanism:
 
     @functools.cached_property
     def q_ref(self) -> np.ndarray:
-        """Reference assembled configuration, closed to 1e-12, shape (nq,).
+        """Reference assembled configuration, closed to :attr:`closure_tol`, shape (nq,).
 
         Assembled from the sidecar's reference values (or the neutral configuration), with
         the loops closed first and the idle gauges then held where that left them.
@@ -446,10 +501,32 @@ class Mechanism:
 
         The rank is the largest found at the reference configuration and at two
         assembled random perturbations of it (a special configuration can only lose rank,
-        so the maximum is the generic rank); tolerance :data:`RANK_RTOL`.
+        so the maximum is the generic rank), each cut at the largest gap of the singular
+        values (:attr:`rank_gap`); or ``nv - mobility`` with the sidecar's ``mobility``.
         """
-        ranks = [self.closure_rank(q) for q in self._generic_configurations()]
-        return self.nv - max(ranks)
+        return self.nv - self.rank_gap.rank
+
+    @functools.cached_property
+    def rank_gap(self) -> RankGap:
+        """The gap the generic closure rank (:attr:`mobility`) was cut at.
+
+        Of the configurations giving the largest rank, the one with the narrowest gap.
+        Warns :class:`~plm_pin.warnings.AmbiguousRankWarning` when the gap is not clear-cut
+        (a ratio below :data:`~plm_pin.tolerances.RANK_GAP_MIN`).
+        """
+        gaps = [self.closure_rank_gap(q) for q in self._generic_configurations()]
+        top = max(g.rank for g in gaps)
+        gap = min((g for g in gaps if g.rank == top), key=lambda g: g.ratio)
+        if not gap.clear:
+            warnings.warn(
+                f"{self.name}: no clear-cut gap in the singular values of the closure Jacobian: rank "
+                f"{gap.rank} cut between {gap.above:.3g} and {gap.below:.3g} (ratio {gap.ratio:.3g}), so "
+                f"mobility {self.nv - gap.rank} is in doubt; state the closure tolerance "
+                f"(closure_tolerance, now {self.closure_tol:.3g}) or the mobility (mobility:) in the sidecar",
+                AmbiguousRankWarning,
+                stacklevel=2,
+            )
+        return gap
 
     @property
     def redundancy(self) -> int:
@@ -472,7 +549,9 @@ class Mechanism:
         """Legs: diagonal blocks of the inverse-kinematics Jacobian (see :mod:`plm_pin.core.legs`)."""
         actuated = {a.idx_v: a.joint for a in self.actuators}
         q = self._generic_configurations()[-1]
-        return find_legs(self.model, self._data, self.closures, require_task(self), actuated, q)
+        return find_legs(
+            self.model, self._data, self.closures, require_task(self), actuated, q, self.closure_tol
+        )
 
     # ---------------------------------------------------------- reading
     def actuator_positions(self, q: ArrayLike) -> np.ndarray:
@@ -520,6 +599,8 @@ class Mechanism:
             ],
             "task": {"frame": self.task.frame, "dofs": list(self.task.dofs)} if self.task else None,
             "mobility": self.mobility,
+            "closure_tolerance": self.closure_tol,
+            "rank_gap": self.rank_gap.to_dict(),
             "idle_mobility": self.idle_mobility,
             "idle_joints": [g.joint for g in self.idle_gauges],
             "redundancy": self.redundancy,

@@ -599,5 +599,7 @@ def read_mjcf(path: str | Path) -> MjcfDescription:
         reference=reference,
         name=name,
         source=source or f"MJCF {p.name}",
+        closure_tolerance=None if extra is None else extra.closure_tolerance,
+        mobility=None if extra is None else extra.mobility,
     )
     return MjcfDescription(model, sidecar, m, p, sidecar_path, origin)

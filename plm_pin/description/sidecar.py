@@ -22,6 +22,8 @@ directions form the task. Format ``plm-pin/1``::
       task: [x, y, rz]
     reference:                         # optional guess of an assembled configuration
       slider1: -0.1                    # [m] or [rad]; multi-DOF joints take a list (Pinocchio order)
+    closure_tolerance: 1.0e-6          # optional [m, rad]: how far the loops close (rounded CAD data)
+    mobility: 2                        # optional: fixes the closure rank (see plm_pin.core.rank)
     compliance:                        # optional springs, see plm_pin.description.compliance
       actuators: {slider1: 2.0e7}      # [N/m] or [N m/rad] along the actuated joint
 """
@@ -161,6 +163,11 @@ class Sidecar:
         compliance: springs of the drives, joints and links, or None (a rigid description).
         collision_ignore: body pairs whose contact is not a self-collision (key
             ``self_collision: {ignore: [[a, b], ...]}``; see :mod:`plm_pin.kinematics.collisions`).
+        closure_tolerance: how far the description's loops close [m, rad] (a CAD export
+            rounded to a few significant digits closes only to 1e-8...1e-5), or None for an
+            exact description (:data:`plm_pin.tolerances.CLOSURE_TOL`).
+        mobility: the mobility, idle mobilities not counted, when the rank of the closure
+            Jacobian should not be decided from its singular values; or None.
     """
 
     closures: tuple[ClosureSpec, ...] = ()
@@ -172,6 +179,8 @@ class Sidecar:
     source: str | None = None
     compliance: ComplianceSpec | None = None
     collision_ignore: tuple[tuple[str, str], ...] = ()
+    closure_tolerance: float | None = None
+    mobility: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The sidecar as plain data, ready for YAML."""
@@ -211,6 +220,10 @@ class Sidecar:
             out["compliance"] = self.compliance.to_dict()
         if self.collision_ignore:
             out["self_collision"] = {"ignore": [list(p) for p in self.collision_ignore]}
+        if self.closure_tolerance is not None:
+            out["closure_tolerance"] = float(self.closure_tolerance)
+        if self.mobility is not None:
+            out["mobility"] = int(self.mobility)
         return out
 
     def to_yaml(self) -> str:
@@ -332,6 +345,8 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         "reference",
         "compliance",
         "self_collision",
+        "closure_tolerance",
+        "mobility",
     )
     _keys(data, allowed, "sidecar", path)
     if data.get("format") != FORMAT:
@@ -386,6 +401,14 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
     name = None if data.get("name") is None else _string(data["name"], "name", path)
     source = None if data.get("source") is None else _string(data["source"], "source", path)
     collision_ignore = _collision_ignore(data.get("self_collision"), path)
+    closure_tolerance = None
+    if data.get("closure_tolerance") is not None:
+        closure_tolerance = number(data["closure_tolerance"], "closure_tolerance", path)
+        if closure_tolerance <= 0.0:
+            raise DescriptionError(f"closure_tolerance must be > 0 [m, rad], got {closure_tolerance}", path)
+    mobility = data.get("mobility")
+    if mobility is not None and (isinstance(mobility, bool) or not isinstance(mobility, int) or mobility < 0):
+        raise DescriptionError(f"mobility must be an integer >= 0, got {short(mobility)}", path)
     return Sidecar(
         closures=closures,
         actuation=actuation,
@@ -396,6 +419,8 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         source=source,
         compliance=parse_compliance(data.get("compliance"), path),
         collision_ignore=collision_ignore,
+        closure_tolerance=closure_tolerance,
+        mobility=mobility,
     )
 
 

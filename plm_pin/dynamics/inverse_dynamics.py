@@ -45,7 +45,7 @@ from ..exceptions import (
 from ..results import Result, unit
 from ..statics import AllocationRule, solve_balance
 from ..statics.balance import Load, _balance, balance_factors, load_on_frame
-from ..tolerances import ASSEMBLED_TOL, STATICS_SINGULAR_RTOL
+from ..tolerances import STATICS_SINGULAR_RTOL
 from .trajectory import JointTrajectory, checked_trajectory
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -346,7 +346,7 @@ class _Kinematics:
                 J_load[i] = pin.getFrameJacobian(model, data, frame_id, _LWA)
             if J_task is not None and task is not None:
                 task.jacobian_from_data(model, data, J_task[i])
-        if not np.all(worst <= ASSEMBLED_TOL):  # NaN refused too
+        if not np.all(worst <= mech.assembled_tol):  # NaN refused too
             check_samples_assembled(mech, trajectory.q, trajectory.t)  # raises, naming the first open sample
         return cls(J_phi, J_load, J_task)
 

@@ -76,7 +76,6 @@ from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, Simulation
 from ..results import Result, unit
 from ..statics.balance import load_on_frame
 from ..tolerances import (
-    CLOSURE_TOL,
     ENERGY_RTOL,
     FEASIBLE_VELOCITY_RTOL,
     SIMULATION_ATOL,
@@ -551,7 +550,7 @@ def simulate(
     rtol: float = SIMULATION_RTOL,
     atol: float = SIMULATION_ATOL,
     solver: str = "auto",
-    closure_tol: float = CLOSURE_TOL,
+    closure_tol: float | None = None,
 ) -> SimulationResult:
     r"""Simulate the closed chain from ``(q0, v0)`` for ``duration``, keeping the loops closed.
 
@@ -587,7 +586,8 @@ def simulate(
             (``pin.constraintDynamics``, point and weld closures); ``auto`` picks ``pinocchio``
             when it applies.
         closure_tol: largest closure distance kept (Euclidean gap of each closure's point rows,
-            norm of its rotation rows) [m, rad]; ``q0`` must satisfy it.
+            norm of its rotation rows) [m, rad]; ``q0`` must satisfy it (default: the mechanism's
+            ``closure_tol``).
 
     Returns:
         The samples at the output times.
@@ -609,7 +609,7 @@ def simulate(
         raise InvalidInput(f"method {method!r} is not one of {list(METHODS)}")
     duration = positive(duration, "duration")
     dt = positive(dt, "dt")
-    closure_tol = positive(closure_tol, "closure_tol")
+    closure_tol = mech.closure_tol if closure_tol is None else positive(closure_tol, "closure_tol")
     rtol, atol = positive(rtol, "rtol"), positive(atol, "atol")
     default_step = min(dt, DEFAULT_STEP) if method == "fixed" else math.inf
     h_max = default_step if step is None else positive(step, "step")

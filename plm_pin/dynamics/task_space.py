@@ -178,7 +178,7 @@ def task_space_dynamics(
         InvalidInput: no task, a task size different from the DOF, malformed ``q``, ``v`` or
             ``xdot``, both ``v`` and ``xdot``, or ``v`` opening the loops.
         DescriptionError: a body's inertia is not finite (see :func:`plm_pin.core.checks.check_finite_model`).
-        ClosureNotSatisfied: ``q`` is not assembled to :data:`plm_pin.core.checks.CLOSURE_TOL`.
+        ClosureNotSatisfied: ``q`` is not assembled to :attr:`Mechanism.assembled_tol`.
         SingularConfiguration: at an inverse-kinematics (type 1) singularity, where :math:`S`
             is undefined.
 

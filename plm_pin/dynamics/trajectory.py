@@ -87,7 +87,7 @@ from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
-from ..tolerances import CLOSURE_TOL, RANK_RTOL, RATE_CONSISTENCY_TOL, SINGULARITY_TOL
+from ..tolerances import RANK_RTOL, RATE_CONSISTENCY_TOL, SINGULARITY_TOL
 
 Profile = Callable[[float], ArrayLike]
 """A profile: ``t`` [s] -> ``(x, xd, xdd)``, each shape (n,) (or three numbers when n = 1)."""
@@ -467,7 +467,7 @@ def task_trajectory(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    tol: float = CLOSURE_TOL,
+    tol: float | None = None,
     singularity_tol: float = SINGULARITY_TOL,
 ) -> JointTrajectory:
     r"""Configurations, velocities and accelerations along a task profile :math:`x(t)`.
@@ -488,7 +488,8 @@ def task_trajectory(
         guess: configuration to solve the first sample from (default: the reference).
         mode: working mode of the first sample, one sign per square leg (see
             :func:`plm_pin.kinematics.inverse_kinematics`); default: that of ``guess``'s basin.
-        tol: largest closure and task residual accepted at each sample [m, rad].
+        tol: largest closure and task residual accepted at each sample [m, rad] (default: the
+            mechanism's ``closure_tol``).
         singularity_tol: margin at or below which a sample counts as singular [-].
 
     Returns:
@@ -543,7 +544,7 @@ def actuator_trajectory(
     times: ArrayLike,
     *,
     guess: ArrayLike | None = None,
-    tol: float = CLOSURE_TOL,
+    tol: float | None = None,
     singularity_tol: float = SINGULARITY_TOL,
     consistency_tol: float = RATE_CONSISTENCY_TOL,
 ) -> JointTrajectory:
@@ -568,7 +569,7 @@ def actuator_trajectory(
             ``times``, shape (N, n_act), interpolated by :func:`sampled_profile`.
         times: sample times [s], shape (N,), strictly increasing.
         guess: configuration near the first sample; it picks the assembly mode (default: the reference).
-        tol: closure tolerance of each assembly [m, rad].
+        tol: closure tolerance of each assembly [m, rad] (default: the mechanism's ``closure_tol``).
         singularity_tol: margin at or below which a sample counts as singular [-].
         consistency_tol: tolerance on the misfit of redundant actuator rates and accelerations
             [m/s, rad/s, /s]: absolute below 1, relative above.

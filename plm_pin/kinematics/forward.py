@@ -14,7 +14,7 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
-from ..tolerances import CLOSURE_TOL, SAME_ASSEMBLY_TOL
+from ..tolerances import SAME_ASSEMBLY_TOL
 from .starts import random_starts
 
 
@@ -104,7 +104,7 @@ def forward_kinematics(
     all_modes: bool = True,
     starts: int = 48,
     seed: int = 0,
-    tol: float = CLOSURE_TOL,
+    tol: float | None = None,
 ) -> list[FKSolution]:
     """Assemble the mechanism with its actuators at ``actuators``: every assembly mode found.
 
@@ -120,7 +120,7 @@ def forward_kinematics(
         all_modes: look for every assembly mode (otherwise only the guess's).
         starts: random starts when ``all_modes``.
         seed: random seed.
-        tol: closure tolerance [m, rad].
+        tol: closure tolerance [m, rad] (default: the mechanism's ``closure_tol``).
 
     Returns:
         The solutions, sorted by task coordinates (the guess's first when not ``all_modes``).
@@ -130,7 +130,8 @@ def forward_kinematics(
             smallest residual reached.
         InvalidInput: malformed inputs.
     """
-    starts, seed, tol = count(starts, "starts"), count(seed, "seed"), positive(tol, "tol")
+    starts, seed = count(starts, "starts"), count(seed, "seed")
+    tol = mech.closure_tol if tol is None else positive(tol, "tol")
     c = check_task_vector(actuators, mech.n_actuators, "actuators")
     if mech.mobility > mech.n_actuators:
         raise InvalidInput(

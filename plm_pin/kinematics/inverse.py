@@ -20,7 +20,6 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import TaskTarget, check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
 from ..results import Result, unit
-from ..tolerances import CLOSURE_TOL
 from .forward import same_assembly
 from .limits import limit_violations, wrap_into_limits
 from .starts import random_starts
@@ -137,7 +136,7 @@ def inverse_kinematics(
     guess: ArrayLike | None = None,
     *,
     mode: tuple[int, ...] | None = None,
-    tol: float = CLOSURE_TOL,
+    tol: float | None = None,
     explain: bool = True,
     respect_limits: bool = False,
 ) -> IKSolution:
@@ -154,7 +153,7 @@ def inverse_kinematics(
         x: task coordinates [m, rad], shape (n_task,).
         guess: starting configuration (default: the reference configuration).
         mode: working mode to return, one sign per square leg (see :attr:`IKSolution.mode`).
-        tol: largest residual accepted [m, rad].
+        tol: largest residual accepted [m, rad] (default: the mechanism's ``closure_tol``).
         explain: on failure, find which leg misses and by how much (a leg-by-leg solve from
             random starts, about 0.2 s on a 2-PRRRP); False raises at once with a short message.
         respect_limits: raise :class:`~plm_pin.exceptions.JointLimitExceeded` when the solution
@@ -172,7 +171,8 @@ def inverse_kinematics(
         InvalidInput: malformed ``x``, ``guess`` or ``mode``, or a task with fewer coordinates
             than the mechanism has DOF (the pose would not determine the configuration).
     """
-    mode, tol = signs(mode, "mode"), positive(tol, "tol")
+    mode = signs(mode, "mode")
+    tol = mech.closure_tol if tol is None else positive(tol, "tol")
     task = require_task(mech)
     if task.size < mech.mobility:
         raise InvalidInput(
@@ -281,7 +281,7 @@ def working_modes(
     x: ArrayLike,
     guess: ArrayLike | None = None,
     *,
-    tol: float = CLOSURE_TOL,
+    tol: float | None = None,
     starts_per_leg: int = 12,
     seed: int = 0,
 ) -> list[IKSolution]:
@@ -295,7 +295,7 @@ def working_modes(
         mech: the mechanism.
         x: task coordinates [m, rad], shape (n_task,).
         guess: configuration to start from (default: reference).
-        tol: residual tolerance [m, rad].
+        tol: residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
         starts_per_leg: random starts per leg.
         seed: random seed (results are deterministic for a given seed).
 
@@ -306,6 +306,7 @@ def working_modes(
         PoseUnreachable: when some leg cannot reach.
     """
     first = inverse_kinematics(mech, x, guess, tol=tol)
+    tol = mech.closure_tol if tol is None else tol
     task = require_task(mech)
     target = TaskTarget(task, first.x)
     rng = np.random.default_rng(seed)

@@ -151,7 +151,7 @@ def closed_chain_jacobians(mech: Mechanism, q: ArrayLike) -> ClosedChainJacobian
     Raises:
         InvalidInput: on a malformed ``q`` or a mechanism without a task.
         ClosureNotSatisfied: ``q`` is off the closure manifold (residual above
-            :data:`plm_pin.core.checks.CLOSURE_TOL`); assemble it first, ``mech.assemble(q).q``.
+            ``mech.assembled_tol``); assemble it first, ``mech.assemble(q).q``.
     """
     qa = mech.check_q(q)
     model, data = mech.model, mech.data

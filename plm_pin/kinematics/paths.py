@@ -84,7 +84,7 @@ def follow_targets(
     task_values: ArrayLike | None = None,
     fixed: Mapping[str, ArrayLike] | None = None,
     s: ArrayLike | None = None,
-    tol: float = TRACK_TOL,
+    tol: float | None = None,
 ) -> np.ndarray:
     r"""Configurations along a sampled path of prescribed task coordinates and joint values.
 
@@ -103,7 +103,8 @@ def follow_targets(
         fixed: one-DOF joint name -> values along the path [m, rad], shape (N,).
         s: path parameter of the samples, shape (N,), non-decreasing (for the predictor);
             default uniform.
-        tol: closure and target tolerance [m, rad].
+        tol: closure and target tolerance [m, rad] (default: :data:`~plm_pin.tolerances.TRACK_TOL`, or
+            the mechanism's ``closure_tol`` when larger).
 
     Returns:
         The configurations, shape (N, nq).
@@ -112,6 +113,7 @@ def follow_targets(
         PoseUnreachable: when a sample cannot be solved; the message names the sample.
         InvalidInput: malformed inputs.
     """
+    tol = max(TRACK_TOL, mech.closure_tol) if tol is None else tol
     task = require_task(mech)
     dofs = tuple(task_dofs)
     unknown = [d for d in dofs if d not in task.dofs]
@@ -262,7 +264,7 @@ def track_actuator_path(
     *,
     s: ArrayLike | None = None,
     tol: float = SINGULARITY_TOL,
-    closure_tol: float = TRACK_TOL,
+    closure_tol: float | None = None,
 ) -> TrackedPath:
     """Follow the configuration along a sampled actuator path (forward-kinematics continuation).
 
@@ -278,7 +280,8 @@ def track_actuator_path(
         guess: configuration near the first sample (it picks the assembly mode), shape (nq,).
         s: path parameter, shape (N,), non-decreasing (default uniform).
         tol: singularity tolerance the margins are judged against.
-        closure_tol: closure tolerance of each assembly [m, rad].
+        closure_tol: closure tolerance of each assembly [m, rad] (default:
+            :data:`~plm_pin.tolerances.TRACK_TOL`, or the mechanism's ``closure_tol`` when larger).
 
     Returns:
         The tracked path.
@@ -287,6 +290,7 @@ def track_actuator_path(
         ClosureNotSatisfied: when a sample cannot be assembled; the message names it.
         InvalidInput: malformed inputs.
     """
+    closure_tol = max(TRACK_TOL, mech.closure_tol) if closure_tol is None else closure_tol
     c = np.asarray(actuators, dtype=float)
     if c.ndim != 2 or c.shape[1] != mech.n_actuators or not np.all(np.isfinite(c)):
         raise InvalidInput(

@@ -48,7 +48,7 @@ from ..core.checks import check_assembled, check_finite_model, check_finite_resu
 from ..core.mechanism import Mechanism
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
 from ..results import Result, unit
-from ..tolerances import ASSEMBLED_TOL, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL, STATICS_SINGULAR_RTOL
+from ..tolerances import EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL, STATICS_SINGULAR_RTOL
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -201,7 +201,7 @@ def static_balance(
         InvalidInput: malformed ``q`` or wrench, or ``singular_rtol`` not in [0, 1).
         DescriptionError: the weight of a body is not finite (its inertia overflows).
         ClosureNotSatisfied: ``q`` is off the closure manifold (residual above
-            :data:`plm_pin.core.checks.CLOSURE_TOL`); assemble it first, ``mech.assemble(q).q``.
+            ``mech.assembled_tol``); assemble it first, ``mech.assemble(q).q``.
         SingularConfiguration: the actuators (direct singularity) or the closures
             (constraint singularity) cannot resist the load at ``q``; the message names
             the unresisted generalized-force component.
@@ -232,7 +232,10 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
     J_phi = _closures.jacobian_from_data(model, data, closures)
-    if closures and not np.max(np.abs(_closures.residual_from_placements(data, closures))) <= ASSEMBLED_TOL:
+    if (
+        closures
+        and not np.max(np.abs(_closures.residual_from_placements(data, closures))) <= mech.assembled_tol
+    ):
         check_assembled(mech, q)  # raises, with the residual and the worst closure
     return J_phi
 

@@ -37,7 +37,6 @@ from ..kinematics.collisions import collision_free
 from ..kinematics.jacobians import check_square_task
 from ..kinematics.limits import within_limits
 from ..results import Result, unit
-from ..tolerances import CLOSURE_TOL
 from ._continuation import base_pose, solve_poses
 from .manipulability import POSE_METRICS, W_UNIT
 
@@ -172,13 +171,14 @@ def _slice(
     pose: ArrayLike | None,
     guess: ArrayLike | None,
     mode: tuple[int, ...] | None,
-    tol: float,
+    tol: float | None,
     workers: int | None,
 ) -> WorkspaceSlice:
     dofs, arrays = _check_axes(mech, axes, values)
     base = base_pose(mech, pose, guess)
     shape = tuple(len(a) for a in arrays)
     poses = _grid_poses(base, dofs, axes, arrays)
+    tol = mech.closure_tol if tol is None else tol
     state, target = solve_poses(mech, poses, guess, mode=mode, tol=tol, workers=workers)
     reached = state.reached.reshape(shape)
     metrics = {
@@ -212,7 +212,7 @@ def workspace_map(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    tol: float = CLOSURE_TOL,
+    tol: float | None = None,
     workers: int | None = None,
 ) -> WorkspaceSlice:
     """Manipulability, condition number, singularity margins and reachability over a 2-D grid.
@@ -224,7 +224,7 @@ def workspace_map(
         pose: task pose giving the fixed coordinates (default: the guess's pose) [m, rad].
         guess: configuration the seed is solved from (default: the reference configuration).
         mode: working mode to keep (default: the one the seed is solved in from ``guess``).
-        tol: inverse-kinematics residual tolerance [m, rad].
+        tol: inverse-kinematics residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
         workers: processes to use (default: all CPUs for grids of 20,000 poses or more, else 1);
             unused where the rows are solved in batches (one process is faster there).
 
@@ -248,7 +248,7 @@ def workspace_grid(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    tol: float = CLOSURE_TOL,
+    tol: float | None = None,
 ) -> WorkspaceSlice:
     """The metrics of :func:`workspace_map` over a grid of any number of task coordinates.
 
@@ -263,7 +263,7 @@ def workspace_grid(
         pose: task pose giving the fixed coordinates (default: the guess's pose) [m, rad].
         guess: configuration the seed is solved from (default: the reference configuration).
         mode: working mode to keep (default: the seed's).
-        tol: inverse-kinematics residual tolerance [m, rad].
+        tol: inverse-kinematics residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
 
     Returns:
         The grid, arrays of shape ``tuple(len(v) for v in values)``.
@@ -284,7 +284,7 @@ def workspace_sweep(
     *,
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
-    tol: float = CLOSURE_TOL,
+    tol: float | None = None,
 ) -> WorkspaceSlice:
     """The metrics of :func:`workspace_map` along one task coordinate, the others fixed.
 
@@ -295,7 +295,7 @@ def workspace_sweep(
         pose: task pose giving the fixed coordinates (default: the guess's pose) [m, rad].
         guess: configuration the seed is solved from (default: the reference configuration).
         mode: working mode to keep (default: the seed's).
-        tol: inverse-kinematics residual tolerance [m, rad].
+        tol: inverse-kinematics residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
 
     Returns:
         The sweep, arrays of shape ``(len(values),)``.

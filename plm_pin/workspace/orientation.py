@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..results import Result, unit
-from ..tolerances import CLOSURE_TOL, LOCUS_REFINE_MARGIN, RANGE_XTOL, SINGULARITY_TOL
+from ..tolerances import LOCUS_REFINE_MARGIN, RANGE_XTOL, SINGULARITY_TOL
 from ._continuation import guess_mode, start_configuration
 from .maps import workspace_sweep
 from .singular_loci import SingularPoint, line_path, locate_on_solved
@@ -92,7 +92,7 @@ def orientation_range(
     xtol: float = RANGE_XTOL,
     tol: float = SINGULARITY_TOL,
     near: float = LOCUS_REFINE_MARGIN,
-    ik_tol: float = CLOSURE_TOL,
+    ik_tol: float | None = None,
 ) -> OrientationRange:
     r"""Largest interval of ``axis`` holding ``reference`` that stays reachable and non-singular.
 
@@ -107,7 +107,7 @@ def orientation_range(
         xtol: tolerance on the located ends [rad].
         tol: margin at or below which a point is singular.
         near: redundant mechanisms: margin minima below it are refined.
-        ik_tol: inverse-kinematics residual tolerance [m, rad].
+        ik_tol: inverse-kinematics residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
 
     Returns:
         The range; NaN ends (``"unreachable"``) when ``reference`` is outside the samples or
@@ -126,6 +126,7 @@ def orientation_range(
         )
     q0 = start_configuration(mech, guess)
     mode = guess_mode(mech, q0)
+    ik_tol = mech.closure_tol if ik_tol is None else ik_tol
     line = workspace_sweep(mech, axis, ts, pose, guess=q0, mode=mode, tol=ik_tol)
     base = line.pose
     nan = math.nan

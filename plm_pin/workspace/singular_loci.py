@@ -42,7 +42,7 @@ from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
-from ..tolerances import CLOSURE_TOL, LOCUS_REFINE_MARGIN, LOCUS_XTOL, SINGULARITY_TOL
+from ..tolerances import LOCUS_REFINE_MARGIN, LOCUS_XTOL, SINGULARITY_TOL
 from ._continuation import IKEvaluator, base_pose, compatible, solve_poses
 
 METHODS: tuple[str, ...] = ("sign_change", "minimum", "boundary")
@@ -185,7 +185,7 @@ def singular_points(
     tol: float = SINGULARITY_TOL,
     near: float = LOCUS_REFINE_MARGIN,
     boundaries: bool = True,
-    ik_tol: float = CLOSURE_TOL,
+    ik_tol: float | None = None,
 ) -> list[SingularPoint]:
     """Singularities on the path ``x = path(t)``, located between the samples ``t``.
 
@@ -200,7 +200,7 @@ def singular_points(
         tol: margin at or below which a point counts as singular (``reaches_zero``).
         near: redundant mechanisms: local minima of a margin below ``near`` are refined.
         boundaries: also locate where the path leaves the reachable set of the working mode.
-        ik_tol: inverse-kinematics residual tolerance [m, rad].
+        ik_tol: inverse-kinematics residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
 
     Returns:
         The points, sorted by parameter.
@@ -221,6 +221,7 @@ def singular_points(
         return x
 
     poses = np.stack([pose(float(s)) for s in ts])
+    ik_tol = mech.closure_tol if ik_tol is None else ik_tol
     state, target = solve_poses(mech, poses, guess, mode=mode, tol=ik_tol, workers=1)
     if target is None:
         return []
