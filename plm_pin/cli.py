@@ -145,10 +145,17 @@ def _reported() -> Iterator[None]:
             errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
 
 
-def _load(target: str | Path) -> Mechanism:
+CLOSURE_TOL_OPTION = typer.Option(
+    "--closure-tol",
+    help="how far the description's loops close [m, rad] (a CAD export rounded to a few digits); "
+    "default: the sidecar's closure_tolerance, else 1e-12",
+)
+
+
+def _load(target: str | Path, closure_tol: float | None = None) -> Mechanism:
     """Load a mechanism, printing its warnings on stderr and turning errors into exit 1."""
     with _reported():
-        mech = load(target)
+        mech = load(target, closure_tol=closure_tol)
         mech.summary()  # computes mobility now, inside the error handling
     return mech
 
@@ -180,13 +187,23 @@ def list_presets() -> None:
     console.print(table)
 
 
+def _rank_gap_text(gap: dict[str, Any]) -> str:
+    """The closure rank and the singular values around its cut (:meth:`RankGap.to_dict` data)."""
+    if gap["fixed"]:
+        return f"rank {gap['rank']} fixed by the description's mobility"
+    above = "none" if gap["above"] is None else f"{gap['above']:.3g}"
+    ratio = "exact zeros below" if gap["ratio"] is None else f"ratio {gap['ratio']:.3g}"
+    return f"rank {gap['rank']}: singular values {above} | {gap['below']:.3g} ({ratio})"
+
+
 @app.command()
 def info(
     target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
+    closure_tol: Annotated[float | None, CLOSURE_TOL_OPTION] = None,
 ) -> None:
     """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""
-    summary = _load(target).summary()
+    summary = _load(target, closure_tol).summary()
     if as_json:
         console.print_json(json.dumps(summary))
         return
@@ -213,14 +230,19 @@ def info(
     red = summary["redundancy"]
     table.add_row("redundancy", f"{red}" + (" (under-actuated)" if red < 0 else ""))
     table.add_row("reference residual", f"{summary['reference_residual']:.3g} m/rad")
+    table.add_row("closure tolerance", f"{summary['closure_tolerance']:.3g} m/rad")
+    table.add_row("rank gap", _rank_gap_text(summary["rank_gap"]))
     table.add_row("gravity", f"{summary['gravity']} m/s^2")
     console.print(table)
 
 
 @app.command()
-def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or description folder")]) -> None:
+def check(
+    path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or description folder")],
+    closure_tol: Annotated[float | None, CLOSURE_TOL_OPTION] = None,
+) -> None:
     """Validate a description and say exactly what is wrong and where (idle DOF, task size, limits)."""
-    mech = _load(path)
+    mech = _load(path, closure_tol)
     summary = mech.summary()
     found = findings(mech)
     for finding in found:
@@ -232,7 +254,8 @@ def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or descr
     console.print(
         f"[green]ok[/]: {escape(summary['name'])}: {len(mech.sidecar.closures)} closures, "
         f"{len(summary['actuators'])} actuators, mobility {mobility_text(mech)}, redundancy "
-        f"{summary['redundancy']}, reference residual {summary['reference_residual']:.2g}",
+        f"{summary['redundancy']}, reference residual {summary['reference_residual']:.2g} "
+        f"(closure tolerance {mech.closure_tol:.2g})",
         highlight=False,
         soft_wrap=True,
     )

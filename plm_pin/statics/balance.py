@@ -288,7 +288,7 @@ def _loaded(model: pin.Model, data: pin.Data, load: Load | None, tau: np.ndarray
 
 
 def closure_factors(
-    J_phi: np.ndarray, singular_rtol: float = STATICS_SINGULAR_RTOL
+    J_phi: np.ndarray, singular_rtol: float = STATICS_SINGULAR_RTOL, closure_tol: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Orthonormal feasible motions :math:`N` (:math:`J_\phi N = 0`) and the minimum-norm closure-force map.
 
@@ -298,7 +298,9 @@ def closure_factors(
     closures) are dropped; when the rest is clearly of full rank (a triangular condition
     estimate above ``1e3 * singular_rtol``, far above any ratio the SVD would call singular)
     one Householder QR of :math:`J_\phi^T` gives both maps, else the SVD decides the rank with
-    ``singular_rtol``. LAPACK is called directly: on the 3D4M's 6 x 9 rows the QR costs 3 us
+    ``singular_rtol``, or at ``closure_tol * max(s_max, 1)`` when that is larger (the dependent
+    rows of a description whose loops close to ``closure_tol`` [m, rad], a rounded CAD export, sit
+    below it; see :mod:`plm_pin.core.rank`). LAPACK is called directly: on the 3D4M's 6 x 9 rows the QR costs 3 us
     against 9 us for the SVD (11 against 60 us on the 8-PSS's 24 x 30).
 
     Returns:
@@ -315,7 +317,11 @@ def closure_factors(
     if r <= nv:
         qr, tau, _, info = _lapack.dgeqrf(J_phi[rows].T, overwrite_a=1)  # J_phi^T = Q R, (nv, r)
         R = qr[:r]
-        if info == 0 and R.diagonal().all() and _lapack.dtrcon(R, norm="1")[0] > 1e3 * singular_rtol:
+        if (
+            info == 0
+            and R.diagonal().all()
+            and _lapack.dtrcon(R, norm="1")[0] > 1e3 * max(singular_rtol, closure_tol)
+        ):
             full = np.zeros((nv, nv), order="F")
             full[:, :r] = qr
             Q = _lapack.dorgqr(full, tau, overwrite_a=1)[0]  # (nv, nv)
@@ -323,7 +329,7 @@ def closure_factors(
             lambda_map[rows] = _blas.dtrsm(1.0, R, Q[:, :r], side=1, trans_a=1).T
             return Q[:, r:], lambda_map
     U, s, Vt = np.linalg.svd(J_phi)
-    rank = int(np.count_nonzero(s > singular_rtol * s[0]))
+    rank = int(np.count_nonzero(s > max(singular_rtol * s[0], closure_tol * max(s[0], 1.0))))
     return Vt[rank:].T, (U[:, :rank] / s[:rank]) @ Vt[:rank]
 
 
@@ -389,7 +395,7 @@ def balance_factors(
     Raises:
         SingularConfiguration: as :func:`static_balance`.
     """
-    N, lambda_map = closure_factors(J_phi, singular_rtol)
+    N, lambda_map = closure_factors(J_phi, singular_rtol, mech.closure_tol)
     C = N[act_v]  # (n_act, nullity)
     b = N.T @ tau  # (nullity,)
     if C.size:
