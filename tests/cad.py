@@ -60,7 +60,7 @@ def reframed(urdf: str, seed: int) -> str:
 
 
 def rounded(urdf: str, digits: int = 6) -> str:
-    """``urdf`` with every number of its ``xyz`` and ``rpy`` attributes rounded to ``digits`` significant digits."""
+    """``urdf`` with the ``xyz`` and ``rpy`` numbers rounded to ``digits`` significant digits."""
 
     def one(match: re.Match[str]) -> str:
         values = " ".join(f"{float(v):.{digits}g}" for v in match.group(2).split())

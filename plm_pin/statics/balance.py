@@ -300,7 +300,8 @@ def closure_factors(
     one Householder QR of :math:`J_\phi^T` gives both maps, else the SVD decides the rank with
     ``singular_rtol``, or at ``closure_tol * max(s_max, 1)`` when that is larger (the dependent
     rows of a description whose loops close to ``closure_tol`` [m, rad], a rounded CAD export, sit
-    below it; see :mod:`plm_pin.core.rank`). LAPACK is called directly: on the 3D4M's 6 x 9 rows the QR costs 3 us
+    below it; see :mod:`plm_pin.core.rank`). LAPACK is called directly: on the 3D4M's 6 x 9 rows
+    the QR costs 3 us
     against 9 us for the SVD (11 against 60 us on the 8-PSS's 24 x 30).
 
     Returns:

@@ -21,9 +21,10 @@ def _random_case(rng, m, nv, n_act, rank=None):
 
 
 class _Mech:
-    """The two attributes balance_factors reads from a mechanism."""
+    """The attributes balance_factors reads from a mechanism."""
 
     name = "random"
+    closure_tol = 1e-12  # an exact description
 
     def __init__(self, mobility):
         self.mobility = mobility
