@@ -9,6 +9,10 @@ rotations :math:`R` and world angular velocities :math:`\omega` of the two frame
   :math:`E` (3x2) an orthonormal basis of the plane normal to :math:`u`. Five rows that
   leave exactly the rotation about :math:`u` free, valid at any angle.
 - ``weld`` (6 rows): the point rows, then :math:`\log_3(R_A^T R_B)` [rad].
+- ``twist`` (1 row, the gauge of an idle spin, :mod:`plm_pin.core.idle`): with :math:`e_1, e_2`
+  orthonormal, :math:`e_1 \times e_2 = u` (the axis, in B's coordinates),
+  :math:`\phi = (R_A e_2)^T (R_B e_1)`, the sine of the rotation of B relative to A about
+  :math:`u` when the frames coincide at rest; no point rows.
 
 The Jacobians are exact derivatives of these residuals along the tangent space
 (``pin.integrate`` convention), so they can be checked by finite differences. The
@@ -34,14 +38,15 @@ _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 @dataclass(frozen=True)
 class Closure:
-    """A closure compiled against a Pinocchio model.
+    r"""A closure compiled against a Pinocchio model.
 
     Attributes:
         spec: the closure as described.
         frame_ids: Pinocchio frame indices of the two frames.
         rows: slice of this closure's rows in the stacked residual.
-        axis: unit axis in B's coordinates (revolute only).
-        normal_basis: (3, 2) orthonormal basis normal to ``axis`` (revolute only).
+        axis: unit axis in B's coordinates (revolute and twist only).
+        normal_basis: (3, 2) orthonormal basis normal to ``axis``, its columns :math:`e_1, e_2`
+            with :math:`e_1 \times e_2` = ``axis`` (revolute and twist only).
     """
 
     spec: ClosureSpec
@@ -54,6 +59,16 @@ class Closure:
     def name(self) -> str:
         """The closure's name."""
         return self.spec.name
+
+    @property
+    def point_rows(self) -> int:
+        """Number of point (translation) rows, first in :attr:`rows`: 3, or 0 for a twist."""
+        return 0 if self.spec.type == "twist" else 3
+
+    @property
+    def rotation_rows(self) -> slice:
+        """Slice of the rotation rows in the stacked residual (empty for a point closure)."""
+        return slice(self.rows.start + self.point_rows, self.rows.stop)
 
 
 def _normal_basis(u: np.ndarray) -> np.ndarray:
@@ -74,7 +89,7 @@ def compile_closures(model: pin.Model, specs: Sequence[ClosureSpec]) -> tuple[Cl
     for spec in specs:
         ids = (model.getFrameId(spec.frames[0]), model.getFrameId(spec.frames[1]))
         axis = basis = None
-        if spec.type == "revolute":
+        if spec.type in ("revolute", "twist"):
             assert spec.axis is not None
             axis = np.array(spec.axis, dtype=float)
             basis = _normal_basis(axis)
@@ -119,7 +134,7 @@ class _Plan:
         angular = []
         for c in closures:
             ia, ib = frames.index(c.frame_ids[0]), frames.index(c.frame_ids[1])
-            for i in range(3):
+            for i in range(c.point_rows):
                 difference[c.rows.start + i, ib, i] += 1.0
                 difference[c.rows.start + i, ia, i] -= 1.0
             if c.spec.type != "point":
@@ -177,6 +192,9 @@ class BoundClosures:
             start, stop = c.rows.start, c.rows.stop
             if c.spec.type == "weld":
                 out[start + 3 : stop] = pin.log3(Ra.T @ Rb)
+            elif c.spec.type == "twist":
+                assert c.normal_basis is not None
+                out[start] = (Ra @ c.normal_basis[:, 1]) @ (Rb @ c.normal_basis[:, 0])
             else:
                 assert c.axis is not None and c.normal_basis is not None
                 out[start + 3 : stop] = c.normal_basis.T @ (Ra.T @ (Rb @ c.axis))
@@ -191,7 +209,7 @@ class BoundClosures:
         np.matmul(plan.frame_difference, Js.reshape(-1, model.nv), out=out)
         for c, ia, ib in plan.angular:
             # rows times the world angular velocity of B relative to A
-            out[c.rows.start + 3 : c.rows.stop] = angular_rows(c, data) @ (Js[ib, 3:] - Js[ia, 3:])
+            out[c.rotation_rows] = angular_rows(c, data) @ (Js[ib, 3:] - Js[ia, 3:])
         return out
 
 
@@ -238,7 +256,8 @@ def angular_rows(c: Closure, data: pin.Data) -> np.ndarray:
     r"""Map :math:`G` from relative angular velocity to rotation rows of a closure.
 
     :math:`\dot\phi_{rot} = G (\omega_B - \omega_A)`, world angular velocities, frame placements
-    already in ``data``; shape (3, 3) for a weld, (2, 3) for a revolute closure. By duality,
+    already in ``data``; shape (3, 3) for a weld, (2, 3) for a revolute closure, (1, 3) for a twist
+    (:math:`(R_B e_1 \times R_A e_2)^T`). By duality,
     rotation-row forces :math:`\lambda_{rot}` are the moment :math:`G^T \lambda_{rot}` [N m] on B
     (its opposite on A).
     """
@@ -247,6 +266,8 @@ def angular_rows(c: Closure, data: pin.Data) -> np.ndarray:
     if c.spec.type == "weld":
         return pin.Jlog3(Ra.T @ Rb) @ Rb.T
     assert c.axis is not None and c.normal_basis is not None
+    if c.spec.type == "twist":
+        return np.cross(Rb @ c.normal_basis[:, 0], Ra @ c.normal_basis[:, 1])[None, :]
     return -c.normal_basis.T @ Ra.T @ pin.skew(Rb @ c.axis)
 
 
@@ -267,8 +288,9 @@ def drift_from_data(
         acc_a = pin.getFrameClassicalAcceleration(model, data, fa, _LWA)
         acc_b = pin.getFrameClassicalAcceleration(model, data, fb, _LWA)
         start, stop = c.rows.start, c.rows.stop
-        gamma[start : start + 3] = acc_b.linear - acc_a.linear
         kind = c.spec.type
+        if kind != "twist":
+            gamma[start : start + 3] = acc_b.linear - acc_a.linear
         if kind == "point":
             continue
         w_a = pin.getFrameVelocity(model, data, fa, _LWA).angular
@@ -283,6 +305,15 @@ def drift_from_data(
             gamma[start + 3 : stop] = pin.Jlog3(R) @ dw_rel
             if np.linalg.norm(pin.log3(R)) > LOG3_SERIES_ANGLE:  # Hlog3 is NaN near the identity, where
                 gamma[start + 3 : stop] += pin.Hlog3(R, w_rel) @ w_rel  # this term is O(angle |w|^2)
+        elif kind == "twist":
+            # r = x . y, x = R_A e2, y = R_B e1: r'' = x'' . y + 2 x' . y' + x . y'', with
+            # x' = w_a x x, x'' = alpha_a x x + w_a x (w_a x x) (y likewise with B)
+            assert c.normal_basis is not None
+            x, y = Ra @ c.normal_basis[:, 1], Rb @ c.normal_basis[:, 0]
+            dx, dy = np.cross(w_a, x), np.cross(w_b, y)
+            ddx = np.cross(acc_a.angular, x) + np.cross(w_a, dx)
+            ddy = np.cross(acc_b.angular, y) + np.cross(w_b, dy)
+            gamma[start] = ddx @ y + 2.0 * (dx @ dy) + x @ ddy
         else:
             # r = E^T R_A^T w with w = R_B u: r'' = E^T R_A^T (-w_a x (dw x w) + dalpha x w + dw x (w_b x w))
             assert c.axis is not None and c.normal_basis is not None

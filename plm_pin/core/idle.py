@@ -17,13 +17,16 @@ of mass move (a pendulum hanging on a ball joint is a real mobility, not an idle
 motions span the null space of :math:`O N`, :math:`O` stacking these rows and :math:`N` a
 basis of the feasible motions.
 
-Their *gauge* is fixed by holding one one-DOF joint per idle mobility at its reference
-value, chosen by a column-pivoted QR (Gram-Schmidt) of the idle basis so that the held joints block every
-idle motion. Each held joint becomes a weld closure ``idle:<joint>`` between two frames
-added to the model (``idle_gauge_<joint>_parent`` on the parent body at the joint's
-reference placement, ``idle_gauge_<joint>_child`` at the joint): its one non-zero rotation
-row is the joint's offset from its reference angle (or its translation for a prismatic
-joint). Every analysis then runs on the *effective* mobility.
+Their *gauge* is fixed by holding, per idle mobility, one one-DOF joint at its reference
+value or one ball (spherical) joint about one axis, chosen by a column-pivoted QR
+(Gram-Schmidt) of the idle basis so that the held joints block every idle motion. Each hold
+becomes a closure ``idle:<joint>`` between two frames added to the model
+(``idle_gauge_<joint>_parent`` on the parent body at the joint's reference placement,
+``idle_gauge_<joint>_child`` at the joint): a weld for a one-DOF joint, whose one non-zero
+rotation row is the joint's offset from its reference angle (or its translation for a
+prismatic joint); a one-row ``twist`` for a ball joint (the spin of a rod on a ball joint
+closed by a point at its other end), which holds the rotation about the idle axis alone and
+leaves the two others to the mechanism. Every analysis then runs on the *effective* mobility.
 """
 
 from __future__ import annotations
@@ -52,9 +55,11 @@ class IdleGauge:
     """The gauge of one idle mobility: a joint held at its reference value.
 
     Attributes:
-        joint: the held one-DOF joint.
-        value: its reference position [rad] or [m].
-        closure: the weld closure holding it, between two frames added to the model.
+        joint: the held joint.
+        value: its reference position [rad] or [m] (one-DOF joint), 0 for a ball joint held about
+            ``closure.axis`` (the rotation from its reference orientation about that axis).
+        closure: the closure holding it (weld, or twist for a ball joint), between two frames
+            added to the model.
     """
 
     joint: str
@@ -124,57 +129,87 @@ def idle_motions(
     return np.asarray(N @ Vt[moving:].T)
 
 
-def gauge_joints(model: pin.Model, K: np.ndarray) -> list[int]:
-    """Joint ids of one-DOF joints whose velocities block the idle motions ``K`` (nv, n_idle).
+_BALL_JOINTS = {"JointModelSpherical": 0, "JointModelFreeFlyer": 3}
+"""Joints held about one axis, with the index of their local angular velocity in their velocity."""
 
-    Column-pivoted Gram-Schmidt (the pivoting of a QR) on the one-DOF rows of ``K``: the
+
+def gauge_joints(model: pin.Model, K: np.ndarray) -> list[tuple[int, np.ndarray | None]]:
+    """Joints whose velocities block the idle motions ``K`` (nv, n_idle), with the axis each is held about.
+
+    Column-pivoted Gram-Schmidt (the pivoting of a QR) on the joints' shares of ``K``: the
     joint carrying the largest share of the idle motions first, then the one carrying most
-    of what is left. Shares equal to :data:`GAUGE_TIE_RTOL` (symmetric legs) go to the first
-    joint by name, and the joints come back in the order of their names, so that the
-    gauges depend on rounding no more than on the tree order (a model exported and read
-    back holds the same joints in the same order). Fewer joints than idle motions come back
-    when no more one-DOF joint takes a share above :data:`GAUGE_MIN_PIVOT`.
+    of what is left. A one-DOF joint's share is its row of ``K`` (held whole: axis None); a
+    ball joint's (spherical, or a free flyer's rotation) is the largest singular value of its
+    angular-velocity rows, held about the matching axis (in the joint's frame), a free flyer
+    only when the idle motions do not translate it. Shares equal to :data:`GAUGE_TIE_RTOL`
+    (symmetric legs) go to the first joint by name, and the joints come back in the order of
+    their names, so that the gauges depend on rounding no more than on the tree order (a
+    model exported and read back holds the same joints in the same order). Fewer joints than
+    idle motions come back when no more joint takes a share above :data:`GAUGE_MIN_PIVOT`.
     """
-    candidates = sorted(
-        (j for j in range(1, model.njoints) if model.joints[j].nv == 1), key=lambda j: str(model.names[j])
-    )
+    candidates: list[tuple[int, np.ndarray]] = []  # (joint, its rows of K)
+    for j in sorted(range(1, model.njoints), key=lambda j: str(model.names[j])):
+        joint = model.joints[j]
+        start = _BALL_JOINTS.get(joint.shortname())
+        if joint.nv == 1:
+            candidates.append((j, K[joint.idx_v : joint.idx_v + 1]))
+        elif (
+            start is not None
+            and not np.abs(K[joint.idx_v : joint.idx_v + start]).max(initial=0.0) > GAUGE_MIN_PIVOT
+        ):
+            candidates.append((j, K[joint.idx_v + start : joint.idx_v + start + 3]))
     if not candidates or K.shape[1] == 0:
         return []
-    rows = K[[model.joints[j].idx_v for j in candidates]]  # (n_cand, n_idle)
-    chosen = []
-    for _ in range(min(K.shape[1], len(candidates))):
-        share = np.linalg.norm(rows, axis=1)
-        best = float(share.max())
+    chosen: list[tuple[int, np.ndarray | None]] = []
+    for _ in range(K.shape[1]):
+        shares = [
+            float(np.linalg.norm(rows, 2)) if rows.shape[0] > 1 else float(np.linalg.norm(rows))
+            for _, rows in candidates
+        ]
+        best = max(shares)
         if best < GAUGE_MIN_PIVOT:
             break
-        k = int(np.flatnonzero(share >= best * (1.0 - GAUGE_TIE_RTOL))[0])
-        chosen.append(candidates[k])
-        u = rows[k] / share[k]
-        rows = rows - np.outer(rows @ u, u)  # what the chosen joint leaves of each share
-    return sorted(chosen, key=lambda j: str(model.names[j]))
+        k = next(i for i, share in enumerate(shares) if share >= best * (1.0 - GAUGE_TIE_RTOL))
+        j, rows = candidates[k]
+        U, _, Vt = np.linalg.svd(rows)
+        chosen.append((j, None if rows.shape[0] == 1 else U[:, 0]))
+        u = Vt[0]  # the idle motion the hold blocks, in the idle basis
+        candidates = [(i, r - np.outer(r @ u, u)) for i, r in candidates]  # what is left of each share
+    return sorted(chosen, key=lambda c: str(model.names[c[0]]))
 
 
-def add_gauges(model: pin.Model, q: np.ndarray, joints: Sequence[int]) -> tuple[IdleGauge, ...]:
-    """Add the frames holding ``joints`` at their values in ``q`` and return their gauges.
+def add_gauges(
+    model: pin.Model, q: np.ndarray, joints: Sequence[tuple[int, np.ndarray | None]]
+) -> tuple[IdleGauge, ...]:
+    """Add the frames holding ``joints`` (each with the axis of a ball joint's hold, or None) at ``q``.
 
-    The model gains two frames per joint: create the data afterwards.
+    The model gains two frames per held joint: create the data afterwards.
     """
     data = model.createData()
     pin.forwardKinematics(model, data, q)
     out = []
-    for j in joints:
+    held: dict[str, int] = {}
+    for j, axis in joints:
         name = str(model.names[j])
-        parent = int(model.parents[j])
-        joint = model.joints[j]
         parent_frame = f"idle_gauge_{name}_parent"
         child_frame = f"idle_gauge_{name}_child"
-        model.addFrame(pin.Frame(parent_frame, parent, pin.SE3(data.liMi[j]), pin.FrameType.OP_FRAME))
-        model.addFrame(pin.Frame(child_frame, j, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
+        held[name] = held.get(name, 0) + 1
+        if held[name] == 1:
+            parent = int(model.parents[j])
+            model.addFrame(pin.Frame(parent_frame, parent, pin.SE3(data.liMi[j]), pin.FrameType.OP_FRAME))
+            model.addFrame(pin.Frame(child_frame, j, pin.SE3.Identity(), pin.FrameType.OP_FRAME))
+        closure = f"{GAUGE_PREFIX}{name}" + (f":{held[name]}" if held[name] > 1 else "")
+        joint = model.joints[j]
+        if axis is not None:  # a ball joint held about one axis
+            unit = tuple(float(a) for a in axis / np.linalg.norm(axis))
+            spec = ClosureSpec(closure, (parent_frame, child_frame), "twist", unit)  # type: ignore[arg-type]
+            out.append(IdleGauge(name, 0.0, spec))
+            continue
         if joint.nq == 2:  # unbounded revolute stored as (cos, sin)
             value = float(np.arctan2(q[joint.idx_q + 1], q[joint.idx_q]))
         else:
             value = float(q[joint.idx_q])
-        spec = ClosureSpec(name=f"{GAUGE_PREFIX}{name}", frames=(parent_frame, child_frame), type="weld")
+        spec = ClosureSpec(name=closure, frames=(parent_frame, child_frame), type="weld")
         out.append(IdleGauge(name, value, spec))
     return tuple(out)
 
@@ -193,7 +228,7 @@ def find_gauges(
     The loops are closed from ``guess``; the idle motions are counted there and at an
     assembled random perturbation of it, the smaller count being the generic one (a special
     configuration can only add idle motions). No gauge comes back when the loops cannot be
-    closed (the caller reports that) or when no one-DOF joint can hold an idle motion.
+    closed (the caller reports that) or when no joint can hold an idle motion.
 
     Returns:
         The gauges, and the configuration assembled from ``guess`` (None when the loops

@@ -48,10 +48,12 @@ FORMAT = "plm-pin/1"
 SIDECAR_SUFFIX_DEFAULT = ".plm.yaml"
 CLOSURE_TYPES: tuple[str, ...] = ("point", "revolute", "weld")
 TASK_DOFS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
-CLOSURE_ROWS: dict[str, int] = {"point": 3, "revolute": 5, "weld": 6}
+CLOSURE_ROWS: dict[str, int] = {"point": 3, "revolute": 5, "weld": 6, "twist": 1}
+"""Rows of each closure type; ``twist`` holds the idle spin of a multi-DOF joint (a gauge, never read
+from a sidecar: see :mod:`plm_pin.core.idle`)."""
 DEFAULT_GRAVITY: tuple[float, float, float] = (0.0, 0.0, -9.81)
 
-ClosureType = Literal["point", "revolute", "weld"]
+ClosureType = Literal["point", "revolute", "weld", "twist"]
 
 
 @dataclass(frozen=True)
@@ -62,8 +64,9 @@ class ClosureSpec:
         name: closure name, unique in the description.
         frames: the two frame names (links, joints or URDF frames).
         type: ``point`` (positions coincide), ``revolute`` (positions coincide and
-            the frames may only turn about ``axis``) or ``weld`` (frames coincide).
-        axis: unit axis of a revolute closure, in the second frame's coordinates.
+            the frames may only turn about ``axis``), ``weld`` (frames coincide) or ``twist``
+            (an idle gauge: the frames may not turn about ``axis`` relative to each other).
+        axis: unit axis of a revolute or twist closure, in the second frame's coordinates.
     """
 
     name: str

@@ -117,7 +117,7 @@ class ClosureDistance:
         groups: list[int] = []
         for i, c in enumerate(closures):
             n = c.rows.stop - c.rows.start
-            groups += [2 * i] * min(3, n) + [2 * i + 1] * max(0, n - 3)
+            groups += [2 * i] * c.point_rows + [2 * i + 1] * (n - c.point_rows)
         self._groups = np.array(groups, dtype=int)
         self._n = 2 * len(closures)
         # point and weld closures only: the groups are consecutive blocks of three rows

@@ -103,7 +103,8 @@ def hinged_links(mech: Mechanism) -> tuple[_Hinged, ...]:
             (slice(c.rows.start, c.rows.start + 3), 1.0 if side == 1 else -1.0)
             for c in mech.closures
             for side, fid in enumerate(c.frame_ids)
-            if model.frames[fid].parentJoint == j
+            if c.point_rows
+            and model.frames[fid].parentJoint == j
             and np.linalg.norm(data.oMf[fid].translation - origin) <= ATTACHMENT_ATOL
         )
         distinct: list[tuple[np.ndarray, tuple[str, int]]] = []
@@ -153,10 +154,10 @@ def transmitted_forces(
     fext = [pin.Force.Zero() for _ in range(model.njoints)]
     for c in mech.closures:
         fa, fb = c.frame_ids
-        force = lam[c.rows.start : c.rows.start + 3]
+        force = lam[c.rows.start : c.rows.start + c.point_rows] if c.point_rows else np.zeros(3)
         moment = np.zeros(3)
         if c.spec.type != "point":
-            moment = _closures.angular_rows(c, data).T @ lam[c.rows.start + 3 : c.rows.stop]
+            moment = _closures.angular_rows(c, data).T @ lam[c.rotation_rows]
         _add_world_wrench(model, data, fext, fb, force, moment)
         _add_world_wrench(model, data, fext, fa, -force, -moment)
     if load is not None:

@@ -129,12 +129,13 @@ def closure_derivative(
     fa, fb = [c.frame_ids[0] for c in closures], [c.frame_ids[1] for c in closures]
     ja, jb = [frames[i].parentJoint for i in fa], [frames[i].parentJoint for i in fb]
     p = np.array([oMf[i].translation for i in fb + fa]).reshape(-1, 3)  # on B, then on A
-    f = lam[np.array([c.rows.start for c in closures], dtype=int)[:, None] + np.arange(3)]
+    f = np.array([lam[c.rows.start : c.rows.start + 3] if c.point_rows else np.zeros(3) for c in closures])
+    f = f.reshape(len(closures), 3)
     m = np.zeros_like(f)
     for i, c in enumerate(closures):
         if c.spec.type != "point":
             m[i], dm = _closure_moment(
-                c, tree, ja[i], jb[i], oMf[fa[i]].rotation, oMf[fb[i]].rotation, lam[c.rows][3:]
+                c, tree, ja[i], jb[i], oMf[fa[i]].rotation, oMf[fb[i]].rotation, lam[c.rotation_rows]
             )
             D += (tree.angular(jb[i]) - tree.angular(ja[i])).T @ dm
     return D + tree.dead_wrenches(jb + ja, np.vstack([f, -f]), np.vstack([m, -m]), p)
@@ -159,6 +160,10 @@ def _closure_moment(
             dm[:, k] += Rb @ dJ.T @ lam_r
         return moment, dm
     assert c.axis is not None and c.normal_basis is not None
+    if c.spec.type == "twist":  # moment lam (y x x), y = R_B e1 and x = R_A e2 turning with B and A
+        x, y = Ra @ c.normal_basis[:, 1], Rb @ c.normal_basis[:, 0]
+        dx, dy = np.cross(wa.T, x).T, np.cross(wb.T, y).T  # (3, nv)
+        return lam_r[0] * np.cross(y, x), lam_r[0] * (np.cross(dy.T, x).T + np.cross(y, dx.T).T)
     w = Rb @ c.axis
     a = Ra @ c.normal_basis @ lam_r
     moment = np.cross(w, a)

@@ -150,7 +150,12 @@ def _build(mech: Mechanism, spec: ComplianceSpec) -> CompliantModel:
     if beams:
         model, q_index, v_index, first_v = _insert_virtual_joints(mech.model, beams)
         cmech = Mechanism(
-            model, mech.sidecar, name=f"{mech.name}_compliant", source=mech.source, idle_gauges=gauges
+            model,
+            mech.sidecar,
+            name=f"{mech.name}_compliant",
+            source=mech.source,
+            idle_gauges=gauges,
+            closure_tol=mech.closure_tol,
         )
     else:
         cmech, q_index, v_index, first_v = mech, np.arange(mech.nq), np.arange(mech.nv), []
