@@ -43,6 +43,7 @@ PACKAGES = {
     "plm_pin.report": "Studies and their reports.",
     "plm_pin.schemas": "The JSON Schemas of the sidecar and of the sweep configuration.",
     "plm_pin.warnings": "The warnings plm_pin emits, all subclasses of `PlmWarning`, for filtering.",
+    "plm_pin.tolerances": "Every tolerance of the package: name, value, unit and what it decides.",
     "plm_pin.results": "The result protocol: the base of the result dataclasses, the units of their fields.",
 }
 """Public package -> one line saying what it holds."""

@@ -14,6 +14,66 @@ kinematics, simulation and the checks then use; the constants below that depend 
 This module imports nothing from plm_pin.
 """
 
+__all__ = [
+    "ASSEMBLED_TOL",
+    "ASSEMBLY_RCOND",
+    "ATTACHMENT_ATOL",
+    "AXIS_MIN",
+    "BATCH_LOG3_SERIES_ANGLE",
+    "CLOSURE_TOL",
+    "COMPLIANCE_SYMMETRY_RTOL",
+    "CONSTRAINT_NULL_RTOL",
+    "DECOUPLING_RTOL",
+    "DEFLECTION_RTOL",
+    "ENERGY_RTOL",
+    "EQUILIBRIUM_RTOL",
+    "FACTOR_RCOND",
+    "FEASIBILITY_RTOL",
+    "FEASIBLE_VELOCITY_RTOL",
+    "GAUGE_MIN_PIVOT",
+    "GAUGE_TIE_RTOL",
+    "GRAM_RTOL",
+    "IDLE_RTOL",
+    "ILL_CONDITIONED_MARGIN",
+    "INERTIA_RTOL",
+    "INTERNAL_TIE_RTOL",
+    "INVERSE_RTOL",
+    "LEG_SINGULAR_RTOL",
+    "LIMIT_TOL",
+    "LOCUS_REFINE_MARGIN",
+    "LOCUS_XTOL",
+    "LOG3_SERIES_ANGLE",
+    "MASSLESS_RTOL",
+    "MIN_PRINCIPAL_MOMENT",
+    "MODE_CHANGE_TOL",
+    "NOISE",
+    "PAIR_TOL",
+    "PATTERN_ATOL",
+    "PATTERN_RTOL",
+    "PLANE_NORMAL_TOL",
+    "PRRRP_MODE_TOL",
+    "QP_EPS",
+    "RANGE_XTOL",
+    "RANK_CEILING_RTOL",
+    "RANK_GAP_MIN",
+    "RANK_RTOL",
+    "RATE_CONSISTENCY_TOL",
+    "ROUNDED_DATA_HEADROOM",
+    "ROUNDED_DATA_RTOL",
+    "ROUND_OFF",
+    "SAME_ASSEMBLY_TOL",
+    "SIMULATION_ATOL",
+    "SIMULATION_RTOL",
+    "SINGULARITY_TOL",
+    "STATICS_SINGULAR_RTOL",
+    "STEP_DRIFT_TOL",
+    "TIP_TOL",
+    "TRACK_TOL",
+    "UNRESISTED_RTOL",
+    "VIEW_OPEN_TOL",
+    "ZHAO_WORK_TOL",
+]
+
 # ----------------------------------------------------------------- closures and assembly
 CLOSURE_TOL = 1e-12
 """[m, rad] Default closure tolerance of a description (:attr:`Mechanism.closure_tol`): the largest
@@ -52,21 +112,21 @@ SAME_ASSEMBLY_TOL = 1e-7
 RANK_RTOL = 1e-9
 """[-] Fixed relative tolerance of the rank decisions made at arbitrary configurations (constraint
 dynamics, trajectories, mode graphs): singular values at most ``RANK_RTOL * max(s_max, 1)`` are zero.
-Also the lowest floor of the closure rank (see :data:`RANK_CEILING_RTOL`)."""
+The closure rank (mobility) is decided at the largest gap instead (:data:`RANK_CEILING_RTOL`)."""
 
 RANK_CEILING_RTOL = 1e-4
 """[-] Closure rank by the largest gap: singular values above this fraction of ``max(s_max, 1)`` are
-independent rows, whatever their gap. Between it and the floor ``max(RANK_RTOL, 10 closure_tol)``
-the rank is cut where consecutive singular values have their largest ratio; below the floor they
-are zero (the dependent rows of a description rounded to its closure tolerance sit there)."""
+independent rows, whatever their gap. Between it and the floor ``closure_tol * max(s_max, 1)`` (the
+description's closure tolerance) the rank is cut where consecutive singular values have their
+largest ratio; below the floor they are zero (see :mod:`plm_pin.core.rank`)."""
 
 RANK_GAP_MIN = 1e3
 """[-] Smallest ratio of the two singular values around the closure rank's cut for the decision to be
-clear-cut; below it :class:`plm_pin.warnings.AmbiguousRank` is warned."""
+clear-cut; below it :class:`plm_pin.warnings.AmbiguousRankWarning` is warned."""
 
 IDLE_RTOL = 1e-8
 """[-] Singular values of the observed rows on the feasible motions (:mod:`plm_pin.core.idle`) at most
-this times the largest (or 1) are idle motions."""
+this (or the closure tolerance, when larger) times the largest (or 1) are idle motions."""
 
 GAUGE_MIN_PIVOT = 1e-3
 """[-] Smallest share of an idle motion a held joint must carry for it to fix that motion."""

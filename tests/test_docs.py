@@ -79,6 +79,7 @@ def test_docs_have_the_pages_the_user_needs(site):
         "guide/stiffness",
         "guide/mujoco",
         "guide/any-robot",
+        "guide/tolerances",
         "guide/reliability",
         "guide/dynamics",
         "guide/simulation",

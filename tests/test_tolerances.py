@@ -91,7 +91,7 @@ def test_every_tolerance_is_documented_with_its_unit():
     body = tree.body
     names = []
     for k, node in enumerate(body):
-        if isinstance(node, ast.Assign):
+        if isinstance(node, ast.Assign) and node.targets[0].id != "__all__":  # type: ignore[attr-defined]
             name = node.targets[0].id  # type: ignore[attr-defined]
             names.append(name)
             doc = body[k + 1] if k + 1 < len(body) else None
@@ -100,6 +100,7 @@ def test_every_tolerance_is_documented_with_its_unit():
             assert isinstance(getattr(tolerances, name), float), name
     assert len(names) == len(set(names))
     assert not [n for n in dir(tolerances) if n.isupper() and n not in names]
+    assert sorted(tolerances.__all__) == tolerances.__all__ == sorted(names)
 
 
 def test_the_guide_lists_every_tolerance_with_its_value():
