@@ -137,7 +137,8 @@ def run(ctx: StudyContext) -> None:
 def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
     section.text(
         "Mobility is the dimension of the closure Jacobian's null space at a generic assembled "
-        "configuration (`nv - rank J_phi`, SVD rank); redundancy is the number of actuators beyond it. "
+        "configuration (`nv - rank J_phi`, SVD rank cut at the largest gap of the singular values, "
+        "above the description's closure tolerance); redundancy is the number of actuators beyond it. "
         "The singularity margins are normalised smallest singular values (0 at a singularity): "
         "*constraint* for the closures, *inverse* (type 1) for `T = J_x N`, *direct* (type 2) for "
         "`C = S_a N`."
@@ -149,6 +150,12 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
         ("velocity size nv", mech.nv, ""),
         ("closure rows", mech.n_closure_rows, ""),
         ("rank of J_phi at the reference", rank, ""),
+        ("closure tolerance", mech.closure_tol, "m, rad"),
+        (
+            "singular values around the rank cut",
+            f"{mech.rank_gap.above:.3g} | {mech.rank_gap.below:.3g}" if mech.closures else "no closures",
+            "",
+        ),
         ("mobility (DOF)", mech.mobility, ""),
         ("actuators", mech.n_actuators, ""),
         ("redundancy", mech.redundancy, ""),

@@ -21,6 +21,7 @@ __all__ = [
     "AXIS_MIN",
     "BATCH_LOG3_SERIES_ANGLE",
     "CLOSURE_TOL",
+    "COMPARISON_RTOL",
     "COMPLIANCE_SYMMETRY_RTOL",
     "CONSTRAINT_NULL_RTOL",
     "DECOUPLING_RTOL",
@@ -291,6 +292,9 @@ UNRESISTED_RTOL = 1e-9
 spring resists."""
 
 # ----------------------------------------------------------------- display
+COMPARISON_RTOL = 1e-3
+"""[-] Default relative difference up to which a study's number agrees with the paper's in a report."""
+
 PLANE_NORMAL_TOL = 1e-9
 """[-] Largest ratio of a second rotation axis, and of a frame velocity along the normal, to the largest,
 for a mechanism to count as planar in the viewer."""

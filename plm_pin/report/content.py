@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import results
 from ..exceptions import InvalidInput
+from ..tolerances import COMPARISON_RTOL
 from ..viz import scene_html
 from .animation import Animation
 
@@ -196,7 +197,7 @@ class Comparison:
     ours: Cell
     unit: str = ""
     explanation: str = ""
-    rtol: float = 1e-3
+    rtol: float = COMPARISON_RTOL
     atol: float = 0.0
     fmt: str = ".4g"
     source: str = "printed"
