@@ -131,7 +131,8 @@ def _validated(mech: Mechanism, guess: str, validate: bool, *, stated: bool) -> 
             raise ClosureNotSatisfied(
                 f"{name}: the closures cannot be assembled from the reference guess "
                 f"({guess}): "
-                f"residual {exc.residual_norm:.3g} m/rad, worst closure {exc.worst_closure!r}. Give a "
+                f"residual {exc.residual_norm:.3g} m/rad above the closure tolerance {mech.closure_tol:.3g}, "
+                f"worst closure {exc.worst_closure!r}. Give a "
                 "configuration close to an assembled one in the sidecar's 'reference', or check "
                 "that the closure frames can meet.",
                 exc.residual_norm,

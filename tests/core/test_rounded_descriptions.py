@@ -13,6 +13,7 @@ modelled in 3D, close only to about 1e-7 m. The oracles are independent of the r
 
 from __future__ import annotations
 
+import json
 import shutil
 import warnings
 from pathlib import Path
@@ -193,3 +194,22 @@ def test_rounded_corpus_robots_keep_their_mobility(tmp_path, robot, mobility, id
     assert (exact.mobility, exact.idle_mobility) == (mobility, idle)
     assert (mech.mobility, mech.idle_mobility) == (mobility, idle)
     assert mech.rank_gap.clear and mech.closure_tol > 1e-8
+
+
+def test_the_cli_says_how_far_the_loops_close(tmp_path):
+    """`plm-pin check` states the residual and the tolerance to use; `info` shows tolerance and rank gap."""
+    from typer.testing import CliRunner
+
+    from plm_pin.cli import app
+
+    path = _copy("harada2011_3d4m", tmp_path)
+    checked = CliRunner().invoke(app, ["check", str(path)])
+    assert checked.exit_code == 0, checked.output
+    text = " ".join(checked.output.split())
+    assert "the loops close only to" in text and "closure_tolerance: 1e-05" in text
+    assert "mobility 3" in text and "(closure tolerance 1e-05)" in text
+    info = CliRunner().invoke(app, ["info", "--json", "--closure-tol", "1e-5", str(path)])
+    assert info.exit_code == 0 and "close only to" not in info.output
+    summary = json.loads(info.stdout)
+    assert summary["closure_tolerance"] == 1e-5 and summary["mobility"] == 3
+    assert summary["rank_gap"]["rank"] == 6 and summary["rank_gap"]["ratio"] > RANK_GAP_MIN

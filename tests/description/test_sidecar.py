@@ -29,6 +29,8 @@ FULL = Sidecar(
     reference={"slider1": (-0.1,), "ball": (0.0, 0.0, 0.0, 1.0)},
     name="demo",
     source="Harada 2011, Table 1",
+    closure_tolerance=1e-6,
+    mobility=3,
 )
 
 
@@ -289,3 +291,18 @@ def test_non_string_key_is_reported_not_crashed_on():
     """A non-string key beside string keys is named as unknown (no TypeError from sorting)."""
     msg = _error(read_yaml("format: plm-pin/1\n1: x\nfoo: y\n"))
     assert "sidecar: unknown key(s) [1, 'foo']" in msg
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "message"),
+    [
+        ("closure_tolerance", 0.0, "closure_tolerance must be > 0 [m, rad], got 0.0"),
+        ("closure_tolerance", "wide", "closure_tolerance must be a number, got 'wide'"),
+        ("mobility", -1, "mobility must be an integer >= 0, got -1"),
+        ("mobility", 2.5, "mobility must be an integer >= 0, got 2.5"),
+        ("mobility", True, "mobility must be an integer >= 0, got True"),
+    ],
+)
+def test_closure_tolerance_and_mobility_are_checked(key, value, message):
+    """A closure tolerance must be a positive number, a mobility a non-negative integer."""
+    assert message in _error({**_valid(), key: value})

@@ -170,6 +170,12 @@ SIDECARS = [
         False,
     ),
     ("self-collision: an unknown key", _fourbar(self_collision={"ignore": [], "margin": 0.01}), False),
+    ("closure tolerance stated", _fourbar(closure_tolerance=1e-6), True),
+    ("closure tolerance zero", _fourbar(closure_tolerance=0.0), False),
+    ("closure tolerance negative", _fourbar(closure_tolerance=-1e-6), False),
+    ("mobility fixed", _fourbar(mobility=1), True),
+    ("mobility negative", _fourbar(mobility=-1), False),
+    ("mobility not an integer", _fourbar(mobility=1.5), False),
 ]
 """(case, sidecar, valid): each checked by the schema, by the parser and by ``plm-pin check``."""
 
