@@ -20,17 +20,24 @@ __all__ = [
     "ATTACHMENT_ATOL",
     "AXIS_MIN",
     "BATCH_LOG3_SERIES_ANGLE",
+    "BEAM_AXIS_MIN",
+    "BEAM_MIN_LENGTH",
+    "BRANCH_TOL",
     "CLOSURE_TOL",
     "COMPARISON_RTOL",
     "COMPLIANCE_SYMMETRY_RTOL",
     "CONSTRAINT_NULL_RTOL",
     "DECOUPLING_RTOL",
+    "DEFLECTION_CLOSURE_TOL",
     "DEFLECTION_RTOL",
+    "ENERGY_ROUND_OFF_RTOL",
     "ENERGY_RTOL",
+    "EQUAL_RODS_TOL",
     "EQUILIBRIUM_RTOL",
     "FACTOR_RCOND",
     "FEASIBILITY_RTOL",
     "FEASIBLE_VELOCITY_RTOL",
+    "FOLD_PAIR_TOL",
     "GAUGE_MIN_PIVOT",
     "GAUGE_TIE_RTOL",
     "GRAM_RTOL",
@@ -39,38 +46,53 @@ __all__ = [
     "INERTIA_RTOL",
     "INTERNAL_TIE_RTOL",
     "INVERSE_RTOL",
+    "KNOT_TOL",
+    "LAYOUT_TOL",
     "LEG_SINGULAR_RTOL",
     "LIMIT_TOL",
+    "LINK_FORCE_RTOL",
     "LOCUS_REFINE_MARGIN",
     "LOCUS_XTOL",
     "LOG3_SERIES_ANGLE",
+    "MASSLESS_INERTIA_RTOL",
     "MASSLESS_RTOL",
     "MIN_PRINCIPAL_MOMENT",
+    "MODE_CHANGE_DEVIATION_TOL",
+    "MODE_CHANGE_RESIDUAL_TOL",
     "MODE_CHANGE_TOL",
     "NOISE",
+    "PAIR_DISCRIMINANT_RTOL",
     "PAIR_TOL",
     "PATTERN_ATOL",
     "PATTERN_RTOL",
     "PLANE_NORMAL_TOL",
     "PRRRP_MODE_TOL",
     "QP_EPS",
+    "QP_INFEASIBILITY_EPS",
     "RANGE_XTOL",
     "RANK_CEILING_RTOL",
     "RANK_GAP_MIN",
     "RANK_RTOL",
     "RATE_CONSISTENCY_TOL",
+    "RIGHT_ANGLE_TOL",
     "ROUNDED_DATA_HEADROOM",
     "ROUNDED_DATA_RTOL",
     "ROUND_OFF",
     "SAME_ASSEMBLY_TOL",
+    "SAMPLE_COUNT_RTOL",
     "SIMULATION_ATOL",
     "SIMULATION_RTOL",
     "SINGULARITY_TOL",
+    "STAR_SINGULAR_SIN",
     "STATICS_SINGULAR_RTOL",
     "STEP_DRIFT_TOL",
+    "TASK_COMPLIANCE_RTOL",
+    "TASK_UNRESISTED_RTOL",
     "TIP_TOL",
     "TRACK_TOL",
+    "UNIT_VECTOR_TOL",
     "UNRESISTED_RTOL",
+    "VIEW_MIN_LENGTH",
     "VIEW_OPEN_TOL",
     "ZHAO_WORK_TOL",
 ]
@@ -108,6 +130,10 @@ it is loaded with (then rounded up to a power of ten): other configurations clos
 
 SAME_ASSEMBLY_TOL = 1e-7
 """[m] Largest distance between the frame origins of two configurations of one assembly."""
+
+BRANCH_TOL = 1e-11
+"""[m, rad] Residual up to which a combination of leg branches is an inverse-kinematics solution when
+every working mode is enumerated (or the tolerance asked, when larger)."""
 
 # ----------------------------------------------------------------- rank and idle mobilities
 RANK_RTOL = 1e-9
@@ -207,6 +233,26 @@ PAIR_TOL = 1e-12
 """[m] Default distance deciding touching and coincident circles in the PRRRP pair's closed-form direct
 kinematics (Harada 2015, eq. (4))."""
 
+PAIR_DISCRIMINANT_RTOL = 1e-15
+"""[-] A PRRRP leg reaches its pair when the discriminant :math:`l^2 - L_y^2` is above minus this times
+:math:`l^2` (round-off of a pair exactly at the rod's reach)."""
+
+LAYOUT_TOL = 1e-9
+"""[m or -] Largest deviation of a 2-PRRRP's sliders from one stator line and plane, of the stator from
+the world x axis and of the plate centre from the pairs' midpoint, for the family's closed forms to apply."""
+
+EQUAL_RODS_TOL = 1e-12
+"""[m] Two PRRRP rods this close in length are equal (their pair has coincident circles)."""
+
+FOLD_PAIR_TOL = 1e-9
+"""[m] Distance deciding touching and coincident circles at a PRRRP complex-singularity fold."""
+
+RIGHT_ANGLE_TOL = 1e-15
+"""[rad] A rod angle this close to pi/2 is the perpendicular one (its working-mode sign is 0)."""
+
+KNOT_TOL = 1e-9
+"""[unit of the path parameter] Path parameters this close to a mode change's zero crossing are dropped."""
+
 PRRRP_MODE_TOL = 1e-9
 """[m or -] Pair heights [m] and rod cosines :math:`|z_i^T a|` [-] at or below which a PRRRP mode
 sign is 0."""
@@ -216,6 +262,19 @@ MODE_CHANGE_TOL = 1e-3
 
 A thousandth of the largest singular value: far above round-off, so that the rank of :math:`C`
 (Harada 2015: rank :math:`J_x = 3`) is not in doubt anywhere on the path."""
+
+MODE_CHANGE_RESIDUAL_TOL = 1e-10
+"""[m, rad] Largest closure residual along a tracked mode change for the planners to call it clean."""
+
+MODE_CHANGE_DEVIATION_TOL = 1e-7
+"""[m, rad] Largest deviation of a tracked mode change from its planned route for the planners."""
+
+STAR_SINGULAR_SIN = 1e-9
+"""[-] |sin phi| below which the star-triangle's star lines are parallel to their rails
+(actuator singularity)."""
+
+UNIT_VECTOR_TOL = 1e-12
+"""[-] Largest deviation from 1 of the norm of an n-PSS guide direction."""
 
 # ----------------------------------------------------------------- statics and allocation
 STATICS_SINGULAR_RTOL = 1e-8
@@ -240,6 +299,13 @@ FEASIBILITY_RTOL = 1e-9
 QP_EPS = 1e-11
 """[N or N m] Absolute accuracy asked of ProxSuite's allocation QP (``eps_abs``)."""
 
+QP_INFEASIBILITY_EPS = 1e-12
+"""[-] ProxSuite's primal and dual infeasibility thresholds of the allocation QP."""
+
+LINK_FORCE_RTOL = 1e-9
+"""[-] Internal forces load the named links independently when the smallest singular value of their
+link-force matrix is above this times the largest."""
+
 # ----------------------------------------------------------------- dynamics
 SIMULATION_RTOL = 1e-10
 """[-] Default relative error per step of the adaptive (DOP853) simulation."""
@@ -253,6 +319,12 @@ larger: halve it."""
 
 ENERGY_RTOL = 1e-3
 """[-] Energy change allowed in a passive run, relative to the largest kinetic energy reached."""
+
+ENERGY_ROUND_OFF_RTOL = 1e-12
+"""[-] Round-off allowance of the energy check of a passive run, relative to max(1 J, the initial energy)."""
+
+SAMPLE_COUNT_RTOL = 1e-9
+"""[-] A duration within this many steps of a whole number of output steps has that number of steps."""
 
 FEASIBLE_VELOCITY_RTOL = 1e-9
 r"""[-] Largest :math:`|J_\phi v|` of a velocity accepted as feasible, relative to :math:`\max(1, |v|)`
@@ -281,6 +353,26 @@ MASSLESS_RTOL = 1e-12
 r"""[-] Vibration modes whose :math:`1/\omega^2` is below this fraction of the largest are massless
 (left out)."""
 
+MASSLESS_INERTIA_RTOL = 1e-12
+"""[-] A compliant beam segment whose mass is below this times its largest dynamic parameter is massless."""
+
+BEAM_MIN_LENGTH = 1e-6
+"""[m] Shortest beam of a compliance description."""
+
+BEAM_AXIS_MIN = 1e-6
+"""[-] Smallest component of a beam's y_axis normal to the beam (a y_axis along the beam is refused)."""
+
+DEFLECTION_CLOSURE_TOL = 1e-13
+"""[m, rad] Largest closure and lock residual of a converged deflection (or the mechanism's closure
+tolerance, when larger)."""
+
+TASK_UNRESISTED_RTOL = 1e-8
+"""[-] A stiffness mode no spring resists moves the task when its task motion is above this times
+:math:`|T|`."""
+
+TASK_COMPLIANCE_RTOL = 1e-12
+"""[-] The task compliance is singular when its smallest singular value is at most this times the largest."""
+
 DEFLECTION_RTOL = 1e-10
 """[-] Largest residual of a deflection Newton step accepted, relative to the largest generalized force."""
 
@@ -301,6 +393,9 @@ for a mechanism to count as planar in the viewer."""
 
 VIEW_OPEN_TOL = 1e-6
 """[m, rad] Closure residual above which the viewer's markers show a closure open."""
+
+VIEW_MIN_LENGTH = 1e-9
+"""[m] Link segments shorter than this are not drawn in the viewer."""
 
 NOISE = 1e-9
 """[-] Variation, relative to the quantity's scale, below which a panel is round-off and not drawn.

@@ -49,6 +49,7 @@ import numpy as np
 from .._arguments import repeated
 from .._text import short
 from ..exceptions import DescriptionError
+from ..tolerances import AXIS_MIN, COMPLIANCE_SYMMETRY_RTOL
 from ._numbers import positive_number
 
 BEAM_KEYS: tuple[str, ...] = ("E", "G", "A", "Iy", "Iz", "J")
@@ -187,7 +188,10 @@ def _beam(item: Any, i: int, path: str | None) -> BeamSpec:
             raise DescriptionError(
                 f"{where}.compliance must be a 6x6 list of numbers, got shape {c.shape}", path
             )
-        if np.max(np.abs(c - c.T)) > 1e-9 * np.max(np.abs(c)) or np.linalg.eigvalsh(c).min() <= 0.0:
+        if (
+            np.max(np.abs(c - c.T)) > COMPLIANCE_SYMMETRY_RTOL * np.max(np.abs(c))
+            or np.linalg.eigvalsh(c).min() <= 0.0
+        ):
             raise DescriptionError(f"{where}.compliance must be symmetric positive definite", path)
         compliance = tuple(tuple(float(x) for x in row) for row in c)
     else:
@@ -210,7 +214,7 @@ def _beam(item: Any, i: int, path: str | None) -> BeamSpec:
                 f"{where}.y_axis must be a list of 3 numbers, got {short(raw)}", path
             ) from None
         norm = float(np.linalg.norm(ax))
-        if not np.isfinite(norm) or norm < 1e-9:
+        if not np.isfinite(norm) or norm < AXIS_MIN:
             raise DescriptionError(f"{where}.y_axis must be a non-zero vector, got {short(raw)}", path)
         y_axis = (float(ax[0] / norm), float(ax[1] / norm), float(ax[2] / norm))
     return BeamSpec(names[0], names[1], section, compliance, y_axis)

@@ -41,6 +41,7 @@ from .._arguments import repeated
 from .._text import short
 from .._yaml import YamlRefused, load_yaml
 from ..exceptions import DescriptionError
+from ..tolerances import AXIS_MIN
 from ._numbers import number
 from .compliance import ComplianceSpec, parse_compliance
 
@@ -51,6 +52,7 @@ TASK_DOFS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
 CLOSURE_ROWS: dict[str, int] = {"point": 3, "revolute": 5, "weld": 6, "twist": 1}
 """Rows of each closure type; ``twist`` holds the idle spin of a multi-DOF joint (a gauge, never read
 from a sidecar: see :mod:`plm_pin.core.idle`)."""
+
 DEFAULT_GRAVITY: tuple[float, float, float] = (0.0, 0.0, -9.81)
 
 ClosureType = Literal["point", "revolute", "weld", "twist"]
@@ -285,7 +287,7 @@ def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
             raise DescriptionError(f"{label}: a revolute closure needs an 'axis'", path)
         raw = _numbers(item["axis"], 3, f"{where}.axis", path)
         norm = math.sqrt(sum(a * a for a in raw))
-        if norm < 1e-9:
+        if norm < AXIS_MIN:
             raise DescriptionError(f"{where}.axis must be non-zero, got {list(raw)}", path)
         axis = (raw[0] / norm, raw[1] / norm, raw[2] / norm)
     elif "axis" in item:

@@ -76,8 +76,10 @@ from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, Simulation
 from ..results import Result, unit
 from ..statics.balance import load_on_frame
 from ..tolerances import (
+    ENERGY_ROUND_OFF_RTOL,
     ENERGY_RTOL,
     FEASIBLE_VELOCITY_RTOL,
+    SAMPLE_COUNT_RTOL,
     SIMULATION_ATOL,
     SIMULATION_RTOL,
     STEP_DRIFT_TOL,
@@ -465,7 +467,9 @@ class _Run:
         """Stop when the energy of sample ``k`` strays from the initial energy past ENERGY_RTOL."""
         e = float(self.energy[k])
         self.peak_kinetic = max(self.peak_kinetic, e - float(self.data.potential_energy))
-        allowed = ENERGY_RTOL * self.peak_kinetic + 1e-12 * max(1.0, abs(float(self.energy[0])))
+        allowed = ENERGY_RTOL * self.peak_kinetic + ENERGY_ROUND_OFF_RTOL * max(
+            1.0, abs(float(self.energy[0]))
+        )
         if abs(e - self.energy[0]) > allowed:  # the sample that strayed is not kept
             raise _Stop(
                 f"the passive energy changed from {self.energy[0]:.6g} J to {e:.6g} J by t = "
@@ -493,7 +497,7 @@ class _Run:
 
 def _output_times(duration: float, dt: float) -> np.ndarray:
     """0, dt, 2 dt, ... up to ``duration`` (the last interval shorter when dt does not divide it)."""
-    n = max(1, math.ceil(duration / dt - 1e-9))
+    n = max(1, math.ceil(duration / dt - SAMPLE_COUNT_RTOL))
     return np.minimum(np.arange(n + 1) * dt, duration)
 
 

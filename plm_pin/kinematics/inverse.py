@@ -20,6 +20,7 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import TaskTarget, check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
 from ..results import Result, unit
+from ..tolerances import BRANCH_TOL
 from .forward import same_assembly
 from .limits import limit_violations, wrap_into_limits
 from .starts import random_starts
@@ -325,7 +326,7 @@ def working_modes(
             if values is not None:
                 q[list(_q_indices(mech, leg.columns + leg.followers))] = values
         sol = _solution(mech, target, q)
-        if sol.residual_norm <= max(tol, 1e-11):
+        if sol.residual_norm <= max(tol, BRANCH_TOL):
             out.setdefault(sol.mode, sol)
     return [out[k] for k in sorted(out)]
 

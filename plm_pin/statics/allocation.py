@@ -33,7 +33,7 @@ import proxsuite
 
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError
 from ..results import Result, unit
-from ..tolerances import FEASIBILITY_RTOL, QP_EPS
+from ..tolerances import FEASIBILITY_RTOL, QP_EPS, QP_INFEASIBILITY_EPS
 
 OBJECTIVES = ("norm", "max")
 """Allocation objectives: weighted minimum norm, or minimum largest force."""
@@ -342,8 +342,8 @@ def solve_qp(H: np.ndarray, g: np.ndarray, ineq: Inequalities, tol: float) -> np
     qp.settings.max_iter = 1_000  # these problems converge in tens of iterations; never hang
     # ProxSuite's default infeasibility thresholds (1e-4) misjudge these small problems as
     # infeasible; infeasibility is decided here by the violation of the answer instead.
-    qp.settings.eps_primal_inf = 1e-12
-    qp.settings.eps_dual_inf = 1e-12
+    qp.settings.eps_primal_inf = QP_INFEASIBILITY_EPS
+    qp.settings.eps_dual_inf = QP_INFEASIBILITY_EPS
     lower = np.where(np.isfinite(ineq.lower), ineq.lower - ineq.offset, -1e20)
     upper = np.where(np.isfinite(ineq.upper), ineq.upper - ineq.offset, 1e20)
     qp.init(H, g, None, None, ineq.D, lower, upper)

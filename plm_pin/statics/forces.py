@@ -20,7 +20,7 @@ from ..core.checks import check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..results import Result, unit
-from ..tolerances import STATICS_SINGULAR_RTOL
+from ..tolerances import LINK_FORCE_RTOL, STATICS_SINGULAR_RTOL
 from . import reactions as _reactions
 from .allocation import OBJECTIVES, Allocation, Inequalities, allocate, check_weights, min_norm
 from .balance import StaticBalance, static_balance
@@ -409,7 +409,7 @@ def _internal_from_links(mech: Mechanism, balance: StaticBalance, targets: Mappi
         )
     R = np.array([[m.link_forces[name].axial for m in modes] for name in targets]).reshape(k, k)
     s = np.linalg.svd(R, compute_uv=False) if k else np.zeros(0)
-    if k and s[-1] <= 1e-9 * max(s[0], 1e-300):
+    if k and s[-1] <= LINK_FORCE_RTOL * max(s[0], 1e-300):
         raise InvalidInput(
             f"the internal forces do not load the links {list(targets)} independently; choose others"
         )

@@ -38,7 +38,7 @@ from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..results import Result, unit
 from ..statics import StaticForces
-from ..tolerances import CONSTRAINT_NULL_RTOL, UNRESISTED_RTOL
+from ..tolerances import CONSTRAINT_NULL_RTOL, TASK_COMPLIANCE_RTOL, TASK_UNRESISTED_RTOL, UNRESISTED_RTOL
 from .equilibrium import GEOMETRIC, ElasticState, elastic_state, hessian, with_locks
 from .model import SOURCES
 
@@ -178,9 +178,10 @@ def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, d
     free = np.abs(mu) <= UNRESISTED_RTOL * scale
     if free.any():
         seen = np.linalg.norm(T @ Z[:, free], axis=0)
-        if np.max(seen) > 1e-8 * max(float(np.linalg.norm(T)), 1e-300):
+        if np.max(seen) > TASK_UNRESISTED_RTOL * max(float(np.linalg.norm(T)), 1e-300):
             raise SingularConfiguration(
-                f"{cm.rigid.name}: {int(np.count_nonzero(seen > 1e-8 * np.linalg.norm(T)))} task motion(s) "
+                f"{cm.rigid.name}: {int(np.count_nonzero(seen > TASK_UNRESISTED_RTOL * np.linalg.norm(T)))} "
+                "task motion(s) "
                 "resisted by no spring (zero stiffness): every drive that holds the task needs a stiffness "
                 "under compliance.actuators, or the pose is singular"
             )
@@ -244,8 +245,8 @@ def stiffness(
     HiT = np.linalg.solve(H, T.T)
     C = T @ HiT
     s = np.linalg.svd(C, compute_uv=False)
-    if s.size == 0 or s[-1] <= 1e-12 * s[0]:
-        moving = int(np.count_nonzero(s > 1e-12 * (s[0] if s.size else 1.0)))
+    if s.size == 0 or s[-1] <= TASK_COMPLIANCE_RTOL * s[0]:
+        moving = int(np.count_nonzero(s > TASK_COMPLIANCE_RTOL * (s[0] if s.size else 1.0)))
         raise SingularConfiguration(
             f"{mech.name}: the springs let the task move in {moving}"
             f" of {T.shape[0]} directions; the others are rigid (give the drives or links a compliance)"

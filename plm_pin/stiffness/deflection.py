@@ -30,7 +30,7 @@ from ..exceptions import InvalidInput, SingularConfiguration
 from ..results import Result, unit
 from ..statics import Load, StaticForces
 from ..statics.balance import load_on_frame
-from ..tolerances import DEFLECTION_RTOL
+from ..tolerances import DEFLECTION_CLOSURE_TOL, DEFLECTION_RTOL
 from .cartesian import condense
 from .equilibrium import closure_and_locks, elastic_state, generalized_load, hessian_terms
 
@@ -140,7 +140,9 @@ def deflection(
         A = closure_and_locks(cm, qk)
         c = np.concatenate([cmech.closure_residual(qk), dq[cm.locked]])
         r = generalized_load(cmech, qk, load, state.gravity) - F_s - A.T @ mu
-        if np.max(np.abs(r)) <= DEFLECTION_RTOL * scale and np.max(np.abs(c), initial=0.0) <= 1e-13:
+        if np.max(np.abs(r)) <= DEFLECTION_RTOL * scale and np.max(np.abs(c), initial=0.0) <= max(
+            DEFLECTION_CLOSURE_TOL, cmech.closure_tol
+        ):
             break
         terms = hessian_terms(cmech, qk, load, state.gravity, mu[: mu.size - n_lock])
         Hq = K_s + sum(terms.values())

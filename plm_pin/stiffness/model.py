@@ -27,7 +27,7 @@ import pinocchio as pin
 from ..core.mechanism import Mechanism
 from ..description.compliance import BeamSpec, ComplianceSpec
 from ..exceptions import FrameNotFound, InvalidInput
-from ..tolerances import TIP_TOL
+from ..tolerances import BEAM_AXIS_MIN, BEAM_MIN_LENGTH, MASSLESS_INERTIA_RTOL, TIP_TOL
 
 SOURCES: tuple[str, ...] = ("actuators", "joints", "links")
 """The kinds of springs, in the order results list them."""
@@ -206,7 +206,7 @@ def _place_beam(mech: Mechanism, beam: BeamSpec) -> tuple[BeamSpec, float, int, 
         )
     axis = tip_position - link.placement.translation
     length = float(np.linalg.norm(axis))
-    if length < 1e-6:
+    if length < BEAM_MIN_LENGTH:
         raise InvalidInput(
             f"{mech.name}: beam {beam.link!r} has zero length (tip {beam.tip!r} at its origin)"
         )
@@ -214,7 +214,7 @@ def _place_beam(mech: Mechanism, beam: BeamSpec) -> tuple[BeamSpec, float, int, 
     if beam.y_axis is not None:
         y = link.placement.rotation @ np.array(beam.y_axis)
         y = y - x * (x @ y)
-        if np.linalg.norm(y) < 1e-6:
+        if np.linalg.norm(y) < BEAM_AXIS_MIN:
             raise InvalidInput(f"{mech.name}: beam {beam.link!r}: y_axis is along the beam")
     else:
         y = np.cross(np.eye(3)[int(np.argmin(np.abs(x)))], x)
@@ -225,7 +225,7 @@ def _place_beam(mech: Mechanism, beam: BeamSpec) -> tuple[BeamSpec, float, int, 
 
 def _inertia(pi: np.ndarray) -> pin.Inertia:
     """An inertia from its dynamic parameters (zero when massless)."""
-    if pi[0] <= 1e-12 * max(1.0, float(np.max(np.abs(pi)))):
+    if pi[0] <= MASSLESS_INERTIA_RTOL * max(1.0, float(np.max(np.abs(pi)))):
         return pin.Inertia.Zero()
     return pin.Inertia.FromDynamicParameters(pi)
 

@@ -38,7 +38,7 @@ from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
-from ..tolerances import PLANE_NORMAL_TOL, VIEW_OPEN_TOL
+from ..tolerances import PLANE_NORMAL_TOL, VIEW_MIN_LENGTH, VIEW_OPEN_TOL
 from .meshcat_server import MeshcatServer, ServerWindow, StaticWindow, require_meshcat
 
 CLOSED_COLOR = (0.1, 0.7, 0.2, 1.0)
@@ -207,7 +207,7 @@ def _skeleton(model: pin.Model, size: float) -> list[pin.GeometryObject]:
     for (parent, end), child in ends.items():
         offset = np.array(end)
         length = float(np.linalg.norm(offset))
-        if length <= 1e-9:
+        if length <= VIEW_MIN_LENGTH:
             continue
         name = f"links/{_segment(child)}"
         while name in names:  # a frame may share a joint's name

@@ -23,7 +23,7 @@ from ...exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ...kinematics.jacobians import closed_chain_jacobians
 from ...kinematics.singularity import SingularityReport, report_from_jacobians
 from ...results import Result, unit
-from ...tolerances import SINGULARITY_TOL
+from ...tolerances import EQUAL_RODS_TOL, FOLD_PAIR_TOL, RIGHT_ANGLE_TOL, SINGULARITY_TOL
 from .layout import prrrp_layout
 from .modes import pair_solutions, prrrp_configuration, prrrp_state
 from .planners import fold_plan
@@ -133,15 +133,17 @@ def complex_singularity_check(
     x = x_pair + arm * math.cos(theta)
     modes = list(modes0)
     modes[[lg.index for lg in lay.legs].index(leg)] = 0
-    if abs(partner.length - g.length) <= 1e-12:  # equal rods: the partner is perpendicular too
+    if abs(partner.length - g.length) <= EQUAL_RODS_TOL:  # equal rods: the partner is perpendicular too
         modes[[lg.index for lg in lay.legs].index(partner.index)] = 0
     q_fold = prrrp_configuration(mech, (x, y, theta), modes, lay)
     jac = closed_chain_jacobians(mech, q_fold)
     report = report_from_jacobians(mech, jac, tol)
     c = mech.actuator_positions(q_fold)
-    circles = pair_solutions(c[g.actuator], c[partner.actuator], g.length, partner.length, tol=1e-9).kind
+    circles = pair_solutions(
+        c[g.actuator], c[partner.actuator], g.length, partner.length, tol=FOLD_PAIR_TOL
+    ).kind
     coincident: list[CoincidentCircleSample] = []
-    if abs(partner.length - g.length) <= 1e-12:
+    if abs(partner.length - g.length) <= EQUAL_RODS_TOL:
         k_leg = [lg.index for lg in lay.legs].index(leg)
         k_partner = [lg.index for lg in lay.legs].index(partner.index)
         for angle in (math.radians(50.0), math.radians(70.0), math.pi / 2):
@@ -149,7 +151,7 @@ def complex_singularity_check(
             h = side * g.length * math.sin(angle)
             yy = h + arm * math.sin(theta)
             m2 = list(modes0)
-            sigma = 0 if abs(angle - math.pi / 2) < 1e-15 else modes0[k_leg]
+            sigma = 0 if abs(angle - math.pi / 2) < RIGHT_ANGLE_TOL else modes0[k_leg]
             m2[k_leg] = sigma
             m2[k_partner] = sigma
             try:

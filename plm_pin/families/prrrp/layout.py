@@ -18,6 +18,7 @@ import pinocchio as pin
 from ...core.mechanism import Mechanism
 from ...exceptions import InvalidInput
 from ...results import Result, unit
+from ...tolerances import LAYOUT_TOL
 from .builder import LEFT_LEGS, LEFT_PAIR, RIGHT_LEGS, RIGHT_PAIR, TASK_FRAME
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -166,18 +167,18 @@ def prrrp_layout(mech: Mechanism) -> PrrrpLayout:
     for a2, w2, o2 in axes[1:]:
         off = o2 - origin
         if (
-            np.linalg.norm(a2 - a) > 1e-9
-            or np.linalg.norm(w2 - w) > 1e-9
-            or np.linalg.norm(off - (off @ a) * a) > 1e-9
+            np.linalg.norm(a2 - a) > LAYOUT_TOL
+            or np.linalg.norm(w2 - w) > LAYOUT_TOL
+            or np.linalg.norm(off - (off @ a) * a) > LAYOUT_TOL
         ):
             raise InvalidInput(f"{mech.name}: the sliders do not share one stator line and one plane")
-    if np.linalg.norm(a - np.array([1.0, 0.0, 0.0])) > 1e-9 or np.linalg.norm(origin) > 1e-9:
+    if np.linalg.norm(a - np.array([1.0, 0.0, 0.0])) > LAYOUT_TOL or np.linalg.norm(origin) > LAYOUT_TOL:
         raise InvalidInput(f"{mech.name}: the stator must be the world x axis (the builder's convention)")
     normal = np.cross(w, a)
     p_left = data.oMf[model.getFrameId(LEFT_PAIR)].translation
     p_right = data.oMf[model.getFrameId(RIGHT_PAIR)].translation
     centre = data.oMf[model.getFrameId(TASK_FRAME)].translation
-    if np.linalg.norm(centre - 0.5 * (p_left + p_right)) > 1e-9:
+    if np.linalg.norm(centre - 0.5 * (p_left + p_right)) > LAYOUT_TOL:
         raise InvalidInput(f"{mech.name}: plate_center must lie midway between the pairs")
     subs = (
         PrrrpSubMechanism("left", LEFT_PAIR, tuple(g.index for g in legs if g.index in LEFT_LEGS)),

@@ -33,7 +33,7 @@ from ...exceptions import InvalidInput, PoseUnreachable
 from ...kinematics.mode_graph import Mode
 from ...kinematics.singularity import normalised_margin
 from ...results import Result, unit
-from ...tolerances import PAIR_TOL, PRRRP_MODE_TOL
+from ...tolerances import PAIR_DISCRIMINANT_RTOL, PAIR_TOL, PRRRP_MODE_TOL
 from .builder import LEFT_PAIR
 from .layout import PrrrpLayout, resolve_layout
 
@@ -237,7 +237,7 @@ def prrrp_configuration(
         arm = -rt if leg.pair == LEFT_PAIR else rt
         Lx, Ly = x + arm * math.cos(theta), y + arm * math.sin(theta)
         disc = leg.length**2 - Ly**2
-        if disc < -1e-15 * leg.length**2:
+        if disc < -PAIR_DISCRIMINANT_RTOL * leg.length**2:
             raise PoseUnreachable(
                 f"{mech.name}: leg {leg.index} cannot reach its pair: |L_y| = {abs(Ly):.6g} m > "
                 f"l = {leg.length:.6g} m"

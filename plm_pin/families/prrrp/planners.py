@@ -39,7 +39,14 @@ from ...kinematics.mode_graph import Mode, ModeEdge, ModeGraph, ModeNode, compre
 from ...kinematics.paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
 from ...kinematics.singularity import report_from_jacobians
 from ...results import Result, unit
-from ...tolerances import MODE_CHANGE_TOL, PRRRP_MODE_TOL, SINGULARITY_TOL
+from ...tolerances import (
+    KNOT_TOL,
+    MODE_CHANGE_DEVIATION_TOL,
+    MODE_CHANGE_RESIDUAL_TOL,
+    MODE_CHANGE_TOL,
+    PRRRP_MODE_TOL,
+    SINGULARITY_TOL,
+)
 from .builder import TASK_FRAME
 from .layout import PrrrpLayout, PrrrpLeg, PrrrpSubMechanism, prrrp_layout, resolve_layout
 from .modes import ASSEMBLY_MODES, PrrrpState, mode_label, prrrp_state
@@ -104,7 +111,7 @@ def _walk(
                 t = a[j] / (a[j] - b[j])
                 zero_at.append((knots[k] + t * (knots[k + 1] - knots[k]), j))
     for sz, _ in zero_at:
-        s_list = [v for v in s_list if abs(v - sz) > 1e-9]
+        s_list = [v for v in s_list if abs(v - sz) > KNOT_TOL]
     s = np.array(sorted(set(s_list) | {sz for sz, _ in zero_at}))
     h = np.column_stack([np.interp(s, knots, waypoints[:, j]) for j in range(2)])
     crossings = []
@@ -210,7 +217,12 @@ def _change_ok(
     route: tuple[Mode, ...], visited: tuple[Mode, ...], path: TrackedPath, deviation: float
 ) -> bool:
     """Whether a tracked mode change followed its route cleanly (the planners' ``ok``)."""
-    return bool(visited == route and path.nonsingular and path.max_residual <= 1e-10 and deviation <= 1e-7)
+    return bool(
+        visited == route
+        and path.nonsingular
+        and path.max_residual <= MODE_CHANGE_RESIDUAL_TOL
+        and deviation <= MODE_CHANGE_DEVIATION_TOL
+    )
 
 
 @dataclass(frozen=True)

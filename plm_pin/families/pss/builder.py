@@ -91,6 +91,7 @@ from ...description import _urdf_build as u
 from ...description.compliance import assumed_drive_stiffness
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from ...exceptions import InvalidInput
+from ...tolerances import UNIT_VECTOR_TOL
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -244,7 +245,7 @@ def build_pss(
         raise InvalidInput(f"legs {legs}: give distinct leg numbers among 1..{n}")
     for i in legs:
         norm = float(np.linalg.norm(guide_directions[i - 1]))
-        if abs(norm - 1.0) > 1e-12:
+        if abs(norm - 1.0) > UNIT_VECTOR_TOL:
             raise InvalidInput(f"guide direction of leg {i} must be a unit vector, |e| = {norm}")
     if strut_inertia[0] != strut_inertia[1]:
         raise InvalidInput(

@@ -83,6 +83,7 @@ from ..._lazy import lazy_module
 from ...description import _urdf_build as u
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from ...exceptions import InvalidInput
+from ...tolerances import STAR_SINGULAR_SIN
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -134,7 +135,7 @@ def star_triangle_inverse_kinematics(pose: Sequence[float], side: float) -> tupl
         ValueError: at an actuator singularity (:math:`\sin\varphi = 0`).
     """
     x, y, phi = (float(v) for v in pose)
-    if abs(math.sin(phi)) < 1e-9:
+    if abs(math.sin(phi)) < STAR_SINGULAR_SIN:
         raise InvalidInput(f"phi = {phi:.6g} rad: star lines parallel to their rails (sin phi = 0)")
     origins, directions = rails(side)
     q = np.empty(3)
