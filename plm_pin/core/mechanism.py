@@ -394,7 +394,9 @@ class Mechanism:
         closure Jacobian; the minimum-norm step keeps the result close to ``guess``.
 
         Args:
-            guess: starting configuration (default: the reference configuration). # (nq,)
+            guess: starting configuration (default: the reference configuration, or the sidecar's
+                reference guess when ``tol`` is looser than :attr:`closure_tol` and :attr:`q_ref`
+                is not assembled yet). # (nq,)
             fixed: joints that must not move: names (kept at their ``guess`` values) or a
                 mapping from one-DOF joint name to the value to impose [m] or [rad].
             tol: largest absolute residual accepted [m, rad] (default: :attr:`closure_tol`).
@@ -412,7 +414,12 @@ class Mechanism:
             tol = self.closure_tol
         elif not (0.0 < tol < math.inf):
             raise InvalidInput(f"tol must be a positive finite number [m, rad], got {tol!r}")
-        q0 = self.q_ref.copy() if guess is None else self.check_q(guess, "guess").copy()
+        if guess is not None:
+            q0 = self.check_q(guess, "guess").copy()
+        elif "q_ref" in self.__dict__ or tol <= self.closure_tol:
+            q0 = self.q_ref.copy()
+        else:  # a looser tolerance than the mechanism's: do not assemble q_ref to the tighter one first
+            q0 = self.reference_guess()
         names: list[str] = []
         if fixed is not None:
             if isinstance(fixed, Mapping):

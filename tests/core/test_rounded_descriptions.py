@@ -213,3 +213,14 @@ def test_the_cli_says_how_far_the_loops_close(tmp_path):
     summary = json.loads(info.stdout)
     assert summary["closure_tolerance"] == 1e-5 and summary["mobility"] == 3
     assert summary["rank_gap"]["rank"] == 6 and summary["rank_gap"]["ratio"] > RANK_GAP_MIN
+
+
+def test_an_unvalidated_load_assembles_to_the_tolerance_asked(tmp_path):
+    """``validate=False``: ``assemble(tol=1e-5)`` closes from the reference guess and reports 1e-5."""
+    mech = plm_pin.load(_copy("fourbar", tmp_path), validate=False)
+    assert mech.closure_tol == 1e-12  # nothing was checked, nothing was guessed
+    asm = mech.assemble(tol=1e-5)
+    assert asm.tolerance == 1e-5 and asm.residual_norm <= 1e-5
+    with pytest.raises(ClosureNotSatisfied) as err:
+        mech.assemble()
+    assert err.value.tolerance == 1e-12
