@@ -13,7 +13,7 @@ sys.path.insert(0, str(ROOT / "docs"))
 
 import _api  # noqa: E402
 
-_api.write_pages(ROOT / "docs" / "api")  # one page per public package, from its __all__
+_api.write_pages(ROOT / "docs" / "api")  # the index and one page per public package, from their __all__
 
 project = "plm_pin"
 author = "plm_pin developers"
@@ -25,6 +25,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",  # Google-style docstrings
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax copied into _static/mathjax: formulas render offline, no CDN
 ]
 
 source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb", ".rst": "restructuredtext"}
@@ -42,6 +43,7 @@ nb_merge_streams = True
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
+autodoc_typehints_description_target = "documented_params"  # no second, bare list of a dataclass's fields
 autodoc_typehints_format = "short"
 napoleon_google_docstring = True
 napoleon_numpy_docstring = False
@@ -52,6 +54,7 @@ napoleon_use_ivar = True  # "Attributes:" as a field list: no second description
 html_theme = "furo"
 html_title = f"plm_pin {release}"
 html_extra_path = [str(ROOT / "plm_pin" / "schemas")]  # the JSON Schemas, at the site's root
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["plm_pin.css"]  # code blocks wrap: no sideways scroll at 1280 px
 
 suppress_warnings = ["myst.header"]

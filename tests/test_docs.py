@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import html.parser
+import re
 import subprocess
 import sys
 import urllib.parse
@@ -99,6 +100,36 @@ def test_docs_have_the_pages_the_user_needs(site):
         assert (site / schema).is_file()
 
 
+class _Scripts(html.parser.HTMLParser):
+    """The src of every script and the href of every stylesheet or preload of a page."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.sources: list[str] = []
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        values = dict(attrs)
+        if tag == "script" and values.get("src"):
+            self.sources.append(values["src"] or "")
+        elif tag == "link" and values.get("rel") in ("stylesheet", "preload") and values.get("href"):
+            self.sources.append(values["href"] or "")
+
+
+@pytest.mark.slow
+def test_docs_read_offline_with_mathjax_bundled(site):
+    """No page loads a script or stylesheet over the network; MathJax is served from the site's _static."""
+    remote = []
+    for page in sorted(site.rglob("*.html")):
+        parser = _Scripts()
+        parser.feed(page.read_text(encoding="utf-8"))
+        remote += [f"{page.relative_to(site)}: {s}" for s in parser.sources if s.startswith(("http", "//"))]
+    assert remote == []
+    assert (site / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    top = (site / "api" / "plm_pin.html").read_text(encoding="utf-8")
+    assert r"\(\phi(q) = 0\)" in top  # a page with formulas, handed to MathJax as LaTeX ...
+    assert 'src="../_static/mathjax/tex-chtml.js"' in top  # ... loads the bundled copy
+
+
 def _documented_modules() -> list[str]:
     """The packages the API pages document (docs/_api.py writes one page each at build time)."""
     sys.path.insert(0, str(DOCS))
@@ -129,6 +160,70 @@ def _public_names() -> list[tuple[str, str]]:
     return [(m, name) for m in _documented_modules() for name in importlib.import_module(m).__all__]
 
 
+def _object_section(page: str, module: str, name: str) -> str:
+    """The HTML of the entry ``module.name`` of an API page, up to the next entry of the module."""
+    start = page.index(f'id="{module}.{name}"')
+    following = re.finditer(rf'id="{re.escape(module)}\.[^".]+"', page[start + 1 :])
+    end = next((start + 1 + m.start() for m in following), len(page))
+    return page[start:end]
+
+
+@pytest.mark.slow
+def test_api_reference_documents_each_dataclass_field_once(site):
+    """Each public field of each public result dataclass is described once: not again as a parameter or member."""
+    import dataclasses
+    import importlib
+
+    shown = {}
+    for module, name in _public_names():
+        value = getattr(importlib.import_module(module), name)
+        if not (isinstance(value, type) and dataclasses.is_dataclass(value)):
+            continue
+        page = (site / "api" / f"{module.replace('.', '_')}.html").read_text(encoding="utf-8")
+        section = _object_section(page, module, name)
+        for field in dataclasses.fields(value):
+            if not field.name.startswith("_"):
+                count = section.count(f"<strong>{field.name}</strong>")
+                count += section.count(f'id="{module}.{name}.{field.name}"')
+                shown[f"{module}.{name}.{field.name}"] = count
+    assert len(shown) > 100  # the result dataclasses were found
+    assert {field: count for field, count in shown.items() if count != 1} == {}
+
+
+@pytest.mark.slow
+def test_api_index_gives_each_package_and_module_its_summary(site):
+    """The API index and each package page show the first line of every public package's and module's docstring."""
+    import html as html_module
+    import importlib
+
+    quotes = str.maketrans("\u2018\u2019\u201c\u201d", "''\"\"")  # Sphinx's smart quotes, undone
+
+    def text(path: Path) -> str:
+        page = html_module.unescape(re.sub(r"<[^>]+>", "", path.read_text(encoding="utf-8")))
+        return " ".join(page.translate(quotes).split())
+
+    def first_words(module: str) -> str:  # the longest plain run of the line, between roles and literals
+        line = (importlib.import_module(module).__doc__ or "").strip().splitlines()[0]
+        return max((piece.strip() for piece in re.split(r"[`:]", line)), key=len)
+
+    index = text(site / "api" / "index.html")
+    missing = [m for m in _documented_modules() if not first_words(m) or first_words(m) not in index]
+    pages = {m: text(site / "api" / f"{m.replace('.', '_')}.html") for m in _documented_modules()}
+    modules = [(p, f"{p}.{n}") for p in pages for n in _module_names(p)]
+    missing += [m for p, m in modules if not first_words(m) or first_words(m) not in pages[p]]
+    assert missing == []
+
+
+def _module_names(package: str) -> list[str]:
+    """The public (not underscored) modules directly inside a package."""
+    import importlib
+    import pkgutil
+
+    module = importlib.import_module(package)
+    found = pkgutil.iter_modules(getattr(module, "__path__", []))
+    return [m.name for m in found if not m.ispkg and not m.name.startswith("_")]
+
+
 @pytest.mark.slow
 def test_api_reference_lists_every_public_name(site):
     """Every name in the __all__ of plm_pin and its public packages has an entry in the API pages."""
@@ -143,8 +238,6 @@ def test_api_reference_lists_every_public_name(site):
 
 def test_getting_started_examples_run():
     """The Python blocks of the getting-started page execute as written, in order, in one namespace."""
-    import re
-
     page = DOCS / "getting-started.md"
     blocks = re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S)
     assert blocks
