@@ -170,7 +170,7 @@ def _object_section(page: str, module: str, name: str) -> str:
 
 @pytest.mark.slow
 def test_api_reference_documents_each_dataclass_field_once(site):
-    """Each public field of each public result dataclass is described once: not again as a parameter or member."""
+    """Each public field of each public dataclass is described once: not again as a parameter or member."""
     import dataclasses
     import importlib
 
@@ -192,7 +192,7 @@ def test_api_reference_documents_each_dataclass_field_once(site):
 
 @pytest.mark.slow
 def test_api_index_gives_each_package_and_module_its_summary(site):
-    """The API index and each package page show the first line of every public package's and module's docstring."""
+    """The API index and the package pages show the first docstring line of each public package and module."""
     import html as html_module
     import importlib
 

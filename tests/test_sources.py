@@ -1,4 +1,4 @@
-"""Text hygiene of the checkout: no control characters in sources, docstrings or docs; a CHANGELOG that reads."""
+"""Text hygiene: no control characters in sources, docstrings or docs; a CHANGELOG that reads."""
 
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ def test_no_control_characters_in_text_files():
 
 
 def test_no_control_characters_in_docstrings():
-    """No docstring holds a control character once Python reads it (``"\\times"`` not raw is a TAB)."""
+    r"""No docstring holds a control character once Python reads it (``"\times"`` not raw is a TAB)."""
     bad = []
     for path in _text_files():
         if path.suffix != ".py":
