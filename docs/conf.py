@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import sys
-from importlib.metadata import version as _version
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -13,11 +12,13 @@ sys.path.insert(0, str(ROOT / "docs"))
 
 import _api  # noqa: E402
 
+import plm_pin  # noqa: E402
+
 _api.write_pages(ROOT / "docs" / "api")  # the index and one page per public package, from their __all__
 
 project = "plm_pin"
 author = "plm_pin developers"
-release = _version("plm-pin")
+release = plm_pin.__version__  # the source, not an installed copy's metadata
 version = release
 
 extensions = [

@@ -78,3 +78,12 @@ def test_changelog_has_one_short_line_per_change():
     assert [n for n, line in enumerate(lines, 1) if len(line) > CHANGELOG_LINE] == []
     allowed = re.compile(r"^(# .+|## .+|### .+|- \S.*|\S.*|)$")  # headings, entries, prose, blank lines
     assert [n for n, line in enumerate(lines, 1) if not allowed.match(line)] == []
+
+
+def test_changelog_releases_the_current_version():
+    """An Unreleased section on top, then the release of plm_pin.__version__ with its date."""
+    from plm_pin import __version__
+
+    headings = re.findall(r"^## (.+)$", (REPO / "CHANGELOG.md").read_text(encoding="utf-8"), flags=re.M)
+    assert headings[0] == "Unreleased"
+    assert re.fullmatch(rf"{re.escape(__version__)} \u2014 \d{{4}}-\d{{2}}-\d{{2}}", headings[1]), headings[1]
