@@ -30,7 +30,14 @@ extensions = [
 ]
 
 source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb", ".rst": "restructuredtext"}
-exclude_patterns = ["_build", "jupyter_execute", "README.md", "_api.py", "**.ipynb_checkpoints"]
+exclude_patterns = [
+    "_build",
+    "_generated",  # included by the pages that show them (benchmarks.md)
+    "jupyter_execute",
+    "README.md",
+    "_api.py",
+    "**.ipynb_checkpoints",
+]
 myst_enable_extensions = ["colon_fence", "dollarmath", "deflist"]
 myst_heading_anchors = 3
 

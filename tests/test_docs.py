@@ -88,6 +88,7 @@ def test_docs_have_the_pages_the_user_needs(site):
         "guide/viewer",
         "guide/presets",
         "studies",
+        "benchmarks",
         "api/index",
         "tutorials/first_mechanism",
         "tutorials/redundant_table",
@@ -234,6 +235,62 @@ def test_api_reference_lists_every_public_name(site):
         if f'id="{m}.{n}"' not in text and f'id="module-{m}.{n}"' not in text  # a name or a package
     ]
     assert missing == []
+
+
+MONTH = r"(?:Jan|Feb|Mar|Apr|May|Jun|Jul|Aug|Sep|Oct|Nov|Dec)[a-z]*\.?"
+WORK_NOTES = re.compile(
+    r"(?i:\bissue\s*#?\d+|\bsessions?\b|\bcProfile\b)"  # any case
+    rf"|\b\d{{1,2}} {MONTH} |\b\d{{1,2}} {MONTH}$|\b{MONTH} \d{{1,2}}(?:st|nd|rd|th)?,? \d{{4}}\b"
+    rf"|\b{MONTH} \d{{4}}\b|\b20\d\d-\d\d-\d\d\b",
+    flags=re.M,
+)
+"""Development notes a user page must not hold: issue numbers, sessions, profiles, dates of work."""
+
+DATED_PAGES = ("benchmarks.md", "_generated/benchmarks.md")
+"""The pages that state when their numbers were measured (the benchmark page and its generated tables)."""
+
+
+def test_work_notes_pattern_finds_dates_and_issues():
+    """The pattern catches issue numbers, sessions and dates, and passes a paper's year or a unit."""
+    for note in (
+        "issue 12",
+        "Issue #18",
+        "this session",
+        "on 2 Dec",
+        "1 December 2026",
+        "Dec 2026",
+        "2026-12-02",
+    ):
+        assert WORK_NOTES.search(note), note
+    for text in ("Harada 2011", "Zhao 2011, eq. (35)", "2 decoupled axes", "a 12 mm rod", "Fig. 6"):
+        assert not WORK_NOTES.search(text), text
+
+
+def test_user_pages_name_no_issues_sessions_or_dates_of_work():
+    """The guide, the front pages, the tutorials and the README name no issue number, session or work date."""
+    pages = [p for p in sorted(DOCS.rglob("*.md")) + sorted(DOCS.rglob("*.ipynb")) if "_build" not in p.parts]
+    pages = [p for p in pages if p.relative_to(DOCS).as_posix() not in DATED_PAGES and p.name != "README.md"]
+    pages.append(DOCS.parent / "README.md")  # the front page of the repository speaks to users too
+    assert len(pages) > 20
+    found = {
+        str(p.relative_to(DOCS.parent)): [
+            m.group(0) for m in WORK_NOTES.finditer(p.read_text(encoding="utf-8"))
+        ]
+        for p in pages
+    }
+    assert {page: notes for page, notes in found.items() if notes} == {}
+
+
+def test_benchmark_page_states_the_date_and_machine_of_its_numbers():
+    """The benchmark page includes the tables `make bench` wrote, which state the date and the machine."""
+    from benchmarks.harness import GENERATED
+
+    page = (DOCS / "benchmarks.md").read_text(encoding="utf-8")
+    assert "```{include} _generated/benchmarks.md" in page
+    table = (DOCS / "_generated" / "benchmarks.md").read_text(encoding="utf-8")
+    assert table.startswith(GENERATED)
+    assert re.search(r"^Measured on 20\d\d-\d\d-\d\d on .+ \(\d+ cores", table, flags=re.M)
+    assert "| mechanism | case | time per call | floor | ratio |" in table
 
 
 def test_getting_started_examples_run():
