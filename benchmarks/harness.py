@@ -1066,14 +1066,14 @@ def machine_line(info: dict[str, object]) -> str:
     return f"{line} {info['source']}" if info.get("source") else line
 
 
-def markdown(results: dict[str, Any], level: int = 1) -> str:
+def markdown(results: dict[str, Any], level: int = 1, title: str = "plm_pin benchmarks") -> str:
     """The Markdown tables of a run's ``results.json`` content, its date and machine stated first.
 
     ``level`` is the heading level of the title (1 for ``results.md``, 2 inside the docs page).
     """
     h = "#" * level
     lines = [
-        f"{h} plm_pin benchmarks",
+        f"{h} {title}",
         "",
         machine_line(results["machine"]),
         "",
@@ -1161,7 +1161,7 @@ def write(
 def write_docs(results: dict[str, Any], docs: Path = DOCS_TABLE) -> None:
     """Write a run's tables for the docs' benchmark page (title one level down, the generator named)."""
     docs.parent.mkdir(parents=True, exist_ok=True)
-    docs.write_text(GENERATED + "\n\n" + markdown(results, level=2))
+    docs.write_text(GENERATED + "\n\n" + markdown(results, level=2, title="The latest run"))
 
 
 def main() -> None:

@@ -86,7 +86,7 @@ def test_written_tables_state_the_date_and_machine_and_reach_the_docs(tmp_path):
         assert stated in text and f"Python {platform.python_version()}" in text
         assert "| m | c | 300.0 us | 200.0 us | 1.50 |" in text and "- a note" in text
     assert md.read_text().startswith("# plm_pin benchmarks")
-    assert docs.read_text().startswith(GENERATED + "\n\n## plm_pin benchmarks")
+    assert docs.read_text().startswith(GENERATED + "\n\n## The latest run")
 
 
 @pytest.mark.parametrize("name", sorted(CAPABILITY_CASES))
