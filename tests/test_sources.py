@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import os
 import re
 from pathlib import Path
 
@@ -17,14 +18,12 @@ CHANGELOG_LINE = 150
 
 
 def _text_files() -> list[Path]:
-    return sorted(
-        p
-        for p in REPO.rglob("*")
-        if p.suffix in TEXT_SUFFIXES
-        and p.is_file()
-        and not SKIPPED_FOLDERS.intersection(p.relative_to(REPO).parts)
-        and not any(part.startswith(".") and part != ".ci" for part in p.relative_to(REPO).parts[:-1])
-    )
+    """The checkout's text files, walked without entering skipped or hidden folders (.venv, .git)."""
+    found = []
+    for folder, subfolders, files in os.walk(REPO):
+        subfolders[:] = [d for d in subfolders if d not in SKIPPED_FOLDERS and (d == ".ci" or d[0] != ".")]
+        found += [Path(folder) / f for f in files if Path(f).suffix in TEXT_SUFFIXES]
+    return sorted(found)
 
 
 def _control_characters(text: str, *, tabs: bool) -> list[str]:
