@@ -378,7 +378,7 @@ class ClosedChainDynamics:
         ``rows``: the reduced closure rows at ``q`` when already known (from :meth:`project`).
 
         Raises:
-            SingularConfiguration: at a constraint singularity.
+            SingularConfiguration: at a constraint singularity where the motion is not defined.
         """
         model, data = self.model, self.data
         pin.computeAllTerms(model, data, q, v)
@@ -474,7 +474,7 @@ class ClosedChainDynamics:
 
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol`` from ``q``.
-            SingularConfiguration: at a constraint singularity.
+            SingularConfiguration: at a constraint singularity where the motion is not defined.
         """
         if not self.closures:
             return Projection(q, v, 0.0, 0.0, None)

@@ -44,15 +44,19 @@ free-flyer, spherical and unbounded revolute joints.
 **Energy guard.** A passive run (no actuator forces, no wrench) conserves the energy; when it
 strays from its initial value by more than :data:`ENERGY_RTOL` of the largest kinetic energy
 reached, the run stops with :class:`~plm_pin.exceptions.SimulationFailed` naming the time, the
-energy change and the smallest closure singular value there, keeping the samples before. The
-case that motivated it: the passive 3D4M (``harada2011_3d4m``) under gravity swings until legs
-1 and 2 reach the same slider position with both rods vertical (t = 12.54 s from ``q_ref``).
-There the sheet of the closure manifold the motion is on (mirrored legs) crosses the sheet where
-the two legs coincide; the closure Jacobian loses a rank (a constraint singularity), so the
-index-1 accelerations of the integrator's slightly off-manifold stages are amplified by the
-inverse of a vanishing singular value; a 1 ms RK4 step took the energy from 0.144 J to 1.2 J
-before its projection (which then landed on the other sheet, 6 mm away, at 0.83 J) while the
-residual after it stayed at 1e-12.
+energy change and the smallest closure singular value there, keeping the samples before.
+
+**Constraint singularities.** Where two sheets of the closure manifold cross, the closure
+Jacobian loses a rank (the passive 3D4M, ``harada2011_3d4m``, swings through such a place
+whenever the two rods of a leg pair hang straight down, about twice a second). The motion
+through it is defined when the lost row stays consistent and the velocity picks one sheet
+(:mod:`plm_pin.dynamics._constrained`); then the run passes through, else it stops. The
+index-1 accelerations of a state off the closures are off there by its error over the
+vanishing singular value, so DOP853, whose stages are such states, shrinks its step; below
+:data:`MIN_STEP` it hands over to a *bridge*: fixed RK4 steps from the sample before to
+:data:`BRIDGE_STEPS` steps past the place, each stage put on the closures before its rates are
+taken (:meth:`~plm_pin.dynamics._constrained.ClosedChainDynamics.stage_rates`), the step that
+reaches the crossing shortened so that the crossing falls a quarter step from every stage.
 
 Accelerations, closure forces, energy and task pose are computed once per sample, when it is
 recorded, with the SVD of the closure Jacobian its projection computed there.
@@ -99,7 +103,10 @@ MIN_STEP = 1e-6
 """Adaptive step [s] below which DOP853 is taken to be stuck (at a constraint singularity): bridged."""
 
 BRIDGE_STEPS = 10
-"""Fixed RK4 steps (of DEFAULT_STEP at most) past a place DOP853 cannot step, from the sample before it."""
+"""Fixed RK4 steps (of DEFAULT_STEP at most) past a place DOP853 cannot step, from the sample before it.
+
+Each bridge advances the run by at least this many steps, so repeated bridges always progress.
+"""
 
 CROSSING_MARGIN = 1e-3  # TOLERANCE -> tolerances.py
 """[1] A crossing predicted within this fraction of a bridge step is taken to be at its start (left as is)."""
@@ -641,7 +648,9 @@ def simulate(
         FrameNotFound: unknown ``frame``.
         ClosureNotSatisfied: ``q0`` is not assembled to ``closure_tol``.
         SimulationFailed: the state or the forces became non-finite, the loops could not
-            be kept closed (for instance at a constraint singularity), a fixed step stayed too
+            be kept closed, the motion is not defined at a constraint singularity reached
+            (at rest there, or a velocity on no sheet: the cause is a
+            :class:`~plm_pin.exceptions.SingularConfiguration` saying which), a fixed step stayed too
             large after :data:`MAX_HALVINGS` halvings, or a passive run's energy strayed past
             :data:`ENERGY_RTOL`; the message names the time and the reason, and the error
             carries the samples computed before.
