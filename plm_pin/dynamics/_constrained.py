@@ -338,7 +338,7 @@ class ClosedChainDynamics:
         size = float(np.linalg.norm(v))
         drift = self._drift
         grad = np.array([lost.T @ (drift(q, v + size * n) - drift(q, v - size * n)) / 2 for n in N])
-        form = np.array([lost.T @ self._drift(q, size * n) for n in N])
+        form = np.array([lost.T @ drift(q, size * n) for n in N])
         if size == 0.0 or np.max(np.abs(grad)) <= BRANCH_RTOL * 2 * np.max(np.abs(form)):
             raise SingularConfiguration(
                 f"{where}: the motion is not defined here: the velocity (|v| = {size:.3g}) lies where "
