@@ -194,10 +194,20 @@ def build_model(description: Description) -> pin.Model:
 
 def build_visual_model(model: pin.Model, description: Description) -> pin.GeometryModel:
     """Build the visual geometry (meshes already resolved and checked)."""
+    return _geometry(model, description, pin.GeometryType.VISUAL)
+
+
+def build_collision_model(model: pin.Model, description: Description) -> pin.GeometryModel:
+    """Build the collision geometry: the URDF's ``<collision>`` shapes (none when it has none)."""
+    return _geometry(model, description, pin.GeometryType.COLLISION)
+
+
+def _geometry(model: pin.Model, description: Description, kind: pin.GeometryType) -> pin.GeometryModel:
     try:
-        return pin.buildGeomFromUrdfString(model, description.urdf.xml, pin.GeometryType.VISUAL)
+        return pin.buildGeomFromUrdfString(model, description.urdf.xml, kind)
     except (RuntimeError, ValueError) as exc:
-        raise DescriptionError(f"cannot build the visual geometry: {exc}") from None
+        what = str(kind).split(".")[-1].lower()
+        raise DescriptionError(f"cannot build the {what} geometry: {exc}") from None
 
 
 def open_missing_limits(model: pin.Model, label: str = "") -> list[str]:

@@ -366,25 +366,27 @@ def test_state_map_round_trip(tmp_path: Path) -> None:
 REFUSED = {
     "tendon": (
         '<tendon><fixed name="t"><joint joint="crank_pivot" coef="1"/></fixed></tendon>',
-        "<tendon> 't': tendons cannot be represented",
+        "cannot represent: 1 <tendon> ('t'). To read the loops without them, load with ignore=('tendons',)",
     ),
     "joint equality": (
         '<equality><joint name="couple" joint1="crank_pivot" joint2="coupler_pivot" '
         'polycoef="0 2 0 0 0"/></equality>',
-        "<equality><joint> 'couple': only connect and weld equalities can be represented",
+        "cannot represent: 1 <equality><joint> ('couple'). To read the loops without them, load with "
+        "ignore=('joint_equalities',) (CLI: --ignore joint_equalities)",
     ),
     "contact pair": (
         '<worldbody><geom name="g" type="sphere" size="0.1"/></worldbody>'
         '<contact><pair name="p" geom1="g" geom2="g2"/></contact>',
-        "<contact><pair> 'p': contacts cannot close a loop",
+        "cannot represent: 1 <contact><pair> ('p'). To read the loops without them, load with "
+        "ignore=('contacts',) (CLI: --ignore contacts)",
     ),
     "site actuator": (
         '<actuator><general name="push" site="coupler_tip" gear="1 0 0 0 0 0"/></actuator>',
-        "<actuator> 'push': only actuators on one hinge or slide joint can be represented",
+        "cannot represent: 1 <actuator> not on one hinge or slide ('push')",
     ),
     "inactive equality": (
         '<equality><connect name="off" site1="coupler_tip" site2="rocker_tip" active="false"/></equality>',
-        "<equality> 'off' is inactive",
+        """1 <equality active="false"> (plm_pin closures always hold) ('off')""",
     ),
 }
 
