@@ -4,8 +4,10 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   joint's inertia (``<inertial>`` with ``fullinertia``); a chain of massless joints (the
   gimbal of a universal joint) becomes one body with several joints, as MuJoCo requires
   moving bodies to have mass. Revolute (bounded or not) -> ``hinge``, prismatic ->
-  ``slide``, spherical -> ``ball``, free flyer (on the world only) -> ``free``. Joint
-  position limits are not written: plm_pin's simulation does not enforce them either.
+  ``slide``, spherical -> ``ball``, free flyer (on the world only) -> ``free``; the
+  position limits of a revolute or prismatic joint, when it has finite ones, -> ``range``.
+  The body is placed at the frame of the body the joint carries (a URDF link, an MJCF
+  body), the joint at its anchor there, so that a re-import gives the same frames.
   MuJoCo refuses principal moments below 1e-15 kg m^2; a body with a smaller one (a
   slender strut's axial moment of 0) gets :data:`MIN_PRINCIPAL_MOMENT` about that axis.
 - **Frames**: body and operational frames become ``site``\ s of their name; the frames of
@@ -74,6 +76,7 @@ SOLIMP = (0.99, 0.999, 0.001)
 """Impedance of the exported equalities (MuJoCo ``solimp``): stiff from the first micrometre."""
 
 _MESH_SUFFIXES = (".stl", ".obj")
+_NO_LIMIT = np.finfo(float).max  # Pinocchio's position limit of a joint without one (or inf)
 
 
 @dataclass(frozen=True)
@@ -176,18 +179,52 @@ class _Writer:
         self.integrator = integrator
         self.body_of_joint: dict[int, etree._Element] = {}
         self.last_of_group: dict[int, int] = {}  # joint -> last joint of its body
+        self.body_offset: dict[int, pin.SE3] = {0: pin.SE3.Identity()}  # joint -> its body's frame there
+        self.body_frames: set[int] = set()  # frame ids that are MuJoCo bodies' own frames
         self.site_names: dict[int, str] = {}  # frame id -> site name
-        self.body_names: set[str] = set()
+        self.names: set[str] = set()  # body and site names written (one namespace on re-import)
         gauges = {g.closure.name for g in mech.idle_gauges}
         self.closures_out = tuple(c for c in mech.closures if c.name not in gauges)
         self.gauge_frames = {fid for c in mech.closures if c.name in gauges for fid in c.frame_ids}
 
-    def _body_name(self, j: int) -> str:
+    def _unique(self, name: str) -> str:
+        """``name``, or ``name_site``, ``name_site2``, ... when a body or site already has it."""
+        out, k = name, 1
+        while out in self.names:
+            out = f"{name}_site" + (str(k) if k > 1 else "")
+            k += 1
+        self.names.add(out)
+        return out
+
+    def _body_frame(self, group: list[int]) -> tuple[str, pin.SE3]:
+        """The name of the MuJoCo body of a joint group and its frame in the last joint's frame.
+
+        The body is the first body frame of the last joint (a URDF link, an MJCF body), placed
+        where that frame is, so that a re-import gives the frame back as the body's (a joint
+        whose anchor is away from its body's origin gets ``pos``). A free joint's body must be
+        its joint frame (MuJoCo's free joint moves the body frame): when its body frame sits
+        elsewhere, the body takes the joint's name and the frame becomes a site.
+        """
+        j = group[-1]
         name = body_name(self.model, j)
-        if name in self.body_names:
-            name = str(self.model.names[j])
-        self.body_names.add(name)
-        return name
+        fid = next(
+            (
+                i
+                for i, f in enumerate(self.model.frames)
+                if f.type == pin.FrameType.BODY and f.parentJoint == j and f.name == name
+            ),
+            None,
+        )
+        free = _axis(self.model.joints[j], self.model.names[j])[0] == "free"
+        if fid is None or name in self.names or (free and not self.model.frames[fid].placement.isIdentity()):
+            return self._unique(str(self.model.names[j])), pin.SE3.Identity()
+        self.names.add(name)
+        self.body_frames.add(fid)
+        return name, self.model.frames[fid].placement
+
+    def in_body(self, joint: int, placement: pin.SE3) -> pin.SE3:
+        """A placement in the frame of joint ``joint`` expressed in the frame of its MuJoCo body."""
+        return self.body_offset[self.last_of_group.get(joint, joint)].actInv(placement)
 
     def tree(self, world: etree._Element) -> None:
         model = self.model
@@ -198,13 +235,15 @@ class _Writer:
             frame = pin.SE3.Identity()
             for placement in placements:
                 frame = frame * placement
-            body = etree.SubElement(parent, "body", name=self._body_name(group[-1]))
-            body.set("pos", _fmt(frame.translation))
-            body.set("quat", _fmt(rotation_to_quat_wxyz(frame.rotation)))
-            tail = pin.SE3.Identity()  # C_i = (P_{i+1} ... P_n)^-1
+            name, offset_b = self._body_frame(group)
+            pose = self.in_body(parent_joint, frame * offset_b)
+            body = etree.SubElement(parent, "body", name=name)
+            body.set("pos", _fmt(pose.translation))
+            body.set("quat", _fmt(rotation_to_quat_wxyz(pose.rotation)))
+            tail = pin.SE3.Identity()  # C_i = (P_{i+1} ... P_n)^-1, then in the body frame B^-1 C_i
             offsets = []
             for placement in reversed(placements):
-                offsets.append(tail.inverse())
+                offsets.append(offset_b.actInv(tail.inverse()))
                 tail = placement * tail
             offsets.reverse()
             for j, offset in zip(group, offsets, strict=True):
@@ -212,11 +251,16 @@ class _Writer:
                 if kind == "free" and parent_joint != 0:
                     raise DescriptionError(f"free joint {model.names[j]!r} must hang on the world for MuJoCo")
                 element = etree.SubElement(body, "joint", name=str(model.names[j]), type=kind)
+                joint = model.joints[j]
                 if kind in ("hinge", "slide"):
                     element.set("axis", _fmt(offset.rotation @ axis))
                     if np.any(offset.translation):
                         element.set("pos", _fmt(offset.translation))
-                joint = model.joints[j]
+                    if joint.nq == 1:
+                        k = joint.idx_q
+                        limits = (model.lowerPositionLimit[k], model.upperPositionLimit[k])
+                        if np.all(np.abs(limits) < _NO_LIMIT) and limits[0] < limits[1]:
+                            element.set("range", _fmt(limits))
                 armature = model.armature[joint.idx_v : joint.idx_v + joint.nv]
                 if np.any(armature != armature[0]):
                     raise DescriptionError(f"joint {model.names[j]!r}: MuJoCo takes one armature per joint")
@@ -224,7 +268,8 @@ class _Writer:
                     element.set("armature", repr(float(armature[0])))
                 self.body_of_joint[j] = body
                 self.last_of_group[j] = group[-1]
-            inertia = model.inertias[group[-1]]
+                self.body_offset[j] = offset_b
+            inertia = offset_b.actInv(model.inertias[group[-1]])
             if inertia.mass <= 0.0:
                 raise DescriptionError(
                     f"the body of joint {model.names[group[-1]]!r} has no mass: MuJoCo refuses massless "
@@ -259,13 +304,14 @@ class _Writer:
         if frame_id in self.site_names:
             return self.site_names[frame_id]
         frame = self.model.frames[frame_id]
-        name = f"{frame.name}{suffix}"
+        name = self._unique(f"{frame.name}{suffix}")
+        placement = self.in_body(frame.parentJoint, frame.placement)
         etree.SubElement(
             self._body(world, frame_id, what),
             "site",
             name=name,
-            pos=_fmt(frame.placement.translation),
-            quat=_fmt(rotation_to_quat_wxyz(frame.placement.rotation)),
+            pos=_fmt(placement.translation),
+            quat=_fmt(rotation_to_quat_wxyz(placement.rotation)),
         )
         self.site_names[frame_id] = name
         return name
@@ -274,14 +320,7 @@ class _Writer:
         """Sites: body and operational frames but the gauges', closure frames (own body frames too)."""
         model = self.model
         plain = (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
-        own = {
-            i
-            for i, f in enumerate(model.frames)
-            if f.type == pin.FrameType.BODY
-            and f.parentJoint
-            and f.name == body_name(model, f.parentJoint)
-            and f.placement.isIdentity()
-        }
+        own = self.body_frames
         closing = {fid for c in self.closures_out for fid in c.frame_ids}
         task = self.mech.task_frame_id
         for i, f in enumerate(model.frames):
@@ -339,12 +378,13 @@ class _Writer:
                     stacklevel=4,
                 )
                 continue
+            placement = self.in_body(j, obj.placement)
             etree.SubElement(
                 body,
                 "geom",
                 name=str(obj.name),
-                pos=_fmt(obj.placement.translation),
-                quat=_fmt(rotation_to_quat_wxyz(obj.placement.rotation)),
+                pos=_fmt(placement.translation),
+                quat=_fmt(rotation_to_quat_wxyz(placement.rotation)),
                 rgba=_fmt(obj.meshColor),
                 contype="0",
                 conaffinity="0",
@@ -367,10 +407,9 @@ class _Writer:
                 ends = []
                 for fid, side in zip(c.frame_ids, "ab", strict=True):
                     frame = self.model.frames[fid]
-                    name = f"{c.name}_axis_{side}"
-                    pos = frame.placement.translation + frame.placement.rotation @ (
-                        REVOLUTE_PAIR_SPACING * c.axis
-                    )
+                    name = self._unique(f"{c.name}_axis_{side}")
+                    placement = self.in_body(frame.parentJoint, frame.placement)
+                    pos = placement.translation + placement.rotation @ (REVOLUTE_PAIR_SPACING * c.axis)
                     etree.SubElement(
                         self._body(world, fid, "closure frame"), "site", name=name, pos=_fmt(pos)
                     )

@@ -499,10 +499,11 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
                 placement = offset * anchor
             joint = _joint_model(kind, np.array(m.jnt_axis[k], dtype=float))
             current = model.addJoint(current, joint, placement, jname)
-            if kind in (_HINGE, _SLIDE) and m.jnt_limited[k]:
+            if kind in (_HINGE, _SLIDE):  # MuJoCo's range, else unlimited (as an unlimited URDF joint)
                 q0 = float(m.qpos0[m.jnt_qposadr[k]])
-                model.lowerPositionLimit[model.joints[current].idx_q] = m.jnt_range[k][0] - q0
-                model.upperPositionLimit[model.joints[current].idx_q] = m.jnt_range[k][1] - q0
+                lower, upper = (m.jnt_range[k] - q0) if m.jnt_limited[k] else (-np.inf, np.inf)
+                model.lowerPositionLimit[model.joints[current].idx_q] = lower
+                model.upperPositionLimit[model.joints[current].idx_q] = upper
             if jname not in used:  # a body or site of that name keeps the frame name
                 model.addJointFrame(current, body_frame[parent])
             offset = anchor.inverse()
