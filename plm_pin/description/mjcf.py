@@ -21,6 +21,14 @@ Mapping:
 - ``connect`` -> ``point`` closure, ``weld`` -> ``weld`` closure (a weld with
   ``torquescale = 0`` constrains no rotation: ``point``); between sites (site semantics) or
   between frames added at the body anchors (body semantics, ``<name>/1`` and ``<name>/2``).
+  An unnamed equality is named ``equality<i>``, or ``closing_<name>`` when it joins the sites
+  ``closing_<name>_1`` and ``closing_<name>_2`` of onshape-to-robot (see
+  :mod:`plm_pin.description.onshape`).
+- an unnamed joint is named after its body: ``<body>_free``, or ``<body>_<kind><i>`` for
+  the ``i``-th joint (from 0) of its body, of type ``kind`` (``hinge``, ``slide``, ``ball``);
+  see :func:`joint_names`.
+- geoms: those that take part in contacts (``contype`` or ``conaffinity`` not zero) are the
+  collision geometry, the others the visual geometry (every geom when none is visual-only).
 - actuator on a hinge or slide -> actuation of that joint, limits ``gear * forcerange`` when
   force-limited, else ``gear * gain * ctrlrange`` for a motor; joint ``armature`` -> armature;
   the ball-screw lead and inertias of :data:`DRIVE_FIELDS` from ``<custom><numeric
@@ -31,11 +39,15 @@ Mapping:
 The sidecar ``<name>.plm.yaml`` beside ``<name>.xml`` may add ``end_effector`` (a body or
 site), ``reference``, ``name`` and ``source``; closures and actuation come from the MJCF.
 
-Refused with a :class:`~plm_pin.exceptions.DescriptionError` naming the element: tendons,
-flexes, ``joint`` / ``tendon`` / ``flex`` equalities (polynomial couplings), inactive
-equalities, explicit contact pairs, mocap bodies, actuators not on one hinge or slide, two
-actuators on one joint. Joint damping, stiffness and friction loss are ignored with an
-:class:`~plm_pin.warnings.IgnoredElementWarning`.
+Refused with one :class:`~plm_pin.exceptions.DescriptionError` listing every such element
+with counts: tendons, flexes, ``joint`` / ``tendon`` / ``flex`` equalities (polynomial
+couplings), inactive equalities, explicit contact pairs, mocap bodies, actuators not on one
+hinge or slide; and two actuators on one joint. The kinds of :data:`IGNORABLE` (contact
+pairs, tendons, joint couplings, inactive equalities, other actuators) can be dropped instead
+with ``read_mjcf(path, ignore=...)`` (``plm_pin.load(..., ignore=...)``, ``--ignore``), with
+an :class:`~plm_pin.warnings.IgnoredElementWarning` listing what was dropped: contacts and
+coupling tendons do not change a linkage's kinematics. Joint damping, stiffness and
+friction loss are ignored with an :class:`~plm_pin.warnings.IgnoredElementWarning`.
 """
 
 from __future__ import annotations
@@ -51,6 +63,7 @@ import pinocchio as pin
 
 from ..exceptions import DescriptionError, FrameNotFound, InvalidInput
 from ..warnings import IgnoredElementWarning
+from .onshape import closing_name
 from .sidecar import ActuatorSpec, ClosureSpec, Sidecar, parse_sidecar, read_yaml
 
 MJCF_SUFFIX = ".xml"
@@ -543,6 +556,8 @@ def _closures(
                 _name(mujoco, m, "site", o1) or f"site{o1}",
                 _name(mujoco, m, "site", o2) or f"site{o2}",
             )
+            if not _name(mujoco, m, "equality", i):  # onshape-to-robot's: named after its frames
+                name = closing_name(*frames) or name
         else:
             if kind == _EQ_CONNECT:
                 local = ((data[0:3], np.array([1.0, 0, 0, 0])), (data[3:6], np.array([1.0, 0, 0, 0])))
