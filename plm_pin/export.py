@@ -25,9 +25,12 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   effort limits; the joint ``armature`` is the model's, reflected rotor and screw inertia
   included; lead, rotor and screw inertia kept as ``<custom><numeric>`` data
   ``plm_pin:<actuator>:<field>`` for the motor torques of a re-import.
+- **Geometry**: the visual shapes as geoms without contacts (``contype = conaffinity = 0``,
+  group 1); a mechanism's own collision shapes (a URDF's ``<collision>``) as geoms with
+  contacts (group 3), so that a re-import checks self-collision with them.
 - **Solver**: RK4 (or ``implicitfast``), the given timestep, Newton with tolerance 1e-10,
-  contacts disabled (the geoms are visuals: ``contype = conaffinity = 0``), gravity from the
-  mechanism, the reference configuration as keyframe ``reference``.
+  contacts disabled, gravity from the mechanism, the reference configuration as keyframe
+  ``reference``.
 - **Measured**: the model is compiled and simulated by MuJoCo for :data:`MEASURE_DURATION`
   passive under gravity from the reference at rest; the largest closure error (position
   [m], rotation [rad]) is written in an XML comment and returned; when MuJoCo's run
@@ -183,6 +186,7 @@ class _Writer:
         self.body_frames: set[int] = set()  # frame ids that are MuJoCo bodies' own frames
         self.site_names: dict[int, str] = {}  # frame id -> site name
         self.names: set[str] = set()  # body and site names written (one namespace on re-import)
+        self.geom_names: set[str] = set()
         gauges = {g.closure.name for g in mech.idle_gauges}
         self.closures_out = tuple(c for c in mech.closures if c.name not in gauges)
         self.gauge_frames = {fid for c in mech.closures if c.name in gauges for fid in c.frame_ids}
@@ -332,15 +336,24 @@ class _Writer:
             ):
                 self.site(world, i, "frame")
 
-    def visuals(self, world: etree._Element, asset: etree._Element) -> None:
+    def geoms(self, world: etree._Element, asset: etree._Element, collision: bool) -> None:
+        """The visual geoms (no contacts, group 1), or the collision shapes (contacts, group 3).
+
+        Collision shapes are written when the mechanism has its own (a URDF's ``<collision>``);
+        the file's contacts stay disabled, the shapes are there for a re-import's self-collision.
+        """
         import coal
 
-        for obj in self.mech.visual_model.geometryObjects:
+        mech = self.mech
+        if collision and mech.collision_model is mech.visual_model:
+            return
+        what = "collision shape" if collision else "visual"
+        for obj in (mech.collision_model if collision else mech.visual_model).geometryObjects:
             j = obj.parentJoint
             body = world if j == 0 else self.body_of_joint[j]
             if j and self.last_of_group[j] != j:
                 warnings.warn(
-                    f"visual {obj.name!r} sits on the massless joint {self.model.names[j]!r}, merged into "
+                    f"{what} {obj.name!r} sits on the massless joint {self.model.names[j]!r}, merged into "
                     "one MuJoCo body with the next joint: left out",
                     IgnoredElementWarning,
                     stacklevel=4,
@@ -373,22 +386,26 @@ class _Writer:
                 attrs = {"type": "mesh", "mesh": mesh}
             else:
                 warnings.warn(
-                    f"visual {obj.name!r} ({type(shape).__name__}) has no MuJoCo geom: left out",
+                    f"{what} {obj.name!r} ({type(shape).__name__}) has no MuJoCo geom: left out",
                     IgnoredElementWarning,
                     stacklevel=4,
                 )
                 continue
             placement = self.in_body(j, obj.placement)
+            name, k = str(obj.name), 1
+            while name in self.geom_names:  # Pinocchio names visuals and collisions alike
+                name, k = f"{obj.name}_{'collision' if collision else 'visual'}{k}", k + 1
+            self.geom_names.add(name)
             etree.SubElement(
                 body,
                 "geom",
-                name=str(obj.name),
+                name=name,
                 pos=_fmt(placement.translation),
                 quat=_fmt(rotation_to_quat_wxyz(placement.rotation)),
                 rgba=_fmt(obj.meshColor),
-                contype="0",
-                conaffinity="0",
-                group="1",
+                contype="1" if collision else "0",
+                conaffinity="1" if collision else "0",
+                group="3" if collision else "1",
                 **attrs,
             )
 
@@ -450,7 +467,8 @@ class _Writer:
         world = etree.SubElement(root, "worldbody")
         self.tree(world)
         self.frames(world)
-        self.visuals(world, asset)
+        self.geoms(world, asset, collision=False)
+        self.geoms(world, asset, collision=True)
         equality = etree.SubElement(root, "equality")
         self.closures(world, equality)
         actuator = etree.SubElement(root, "actuator")

@@ -80,7 +80,10 @@ def _round_trip(a, path: Path, configurations: list[np.ndarray]):
     mj = mujoco.MjModel.from_xml_path(str(path))
     assert (b.mobility, b.redundancy, b.n_closure_rows) == (a.mobility, a.redundancy, a.n_closure_rows)
     assert (b.idle_mobility, b.joint_names) == (a.idle_mobility, a.joint_names)
-    assert b.visual_model.ngeoms == a.visual_model.ngeoms == mj.ngeom
+    assert b.visual_model.ngeoms == a.visual_model.ngeoms
+    assert b.collision_model.ngeoms == a.collision_model.ngeoms
+    own = a.collision_model is not a.visual_model  # collision shapes of its own, written beside the visuals
+    assert mj.ngeom == a.visual_model.ngeoms + own * a.collision_model.ngeoms
     assert _limits(b) == _limits(a)
     gauges = {g.closure.name for g in a.idle_gauges}
     own_rows = np.concatenate(

@@ -715,3 +715,21 @@ def test_cli_ignore_option(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     assert "ok: many: 1 closures, 1 actuators, mobility 1" in result.output
     assert "dropped as asked by ignore" in result.output
+
+
+def test_collision_geoms_apart_from_visual_geoms(tmp_path: Path) -> None:
+    """Geoms without contacts (contype = conaffinity = 0) are the visuals, the others the collision shapes."""
+    text = FLOATING_MJCF.replace(
+        '<site name="coupler_tip"',
+        '<geom name="look" type="box" size="0.15 0.01 0.01" pos="0.15 0 0" contype="0" conaffinity="0" '
+        'group="2"/><geom name="touch" type="capsule" fromto="0 0 0 0.3 0 0" size="0.02" group="3"/>'
+        '<site name="coupler_tip"',
+    )
+    mech = plm_pin.load(_write(tmp_path, "floating", {".xml": text}))
+    assert [g.name for g in mech.visual_model.geometryObjects] == ["look"]
+    assert [g.name for g in mech.collision_model.geometryObjects] == ["touch"]
+    # without visual-only geoms every geom is drawn, and the colliding ones are the collision shapes
+    text = text.replace(' contype="0" conaffinity="0"', "")
+    mech = plm_pin.load(_write(tmp_path, "floating", {".xml": text}))
+    assert [g.name for g in mech.visual_model.geometryObjects] == ["look", "touch"]
+    assert [g.name for g in mech.collision_model.geometryObjects] == ["look", "touch"]
