@@ -514,6 +514,8 @@ def test_enum_values_are_mujocos() -> None:
     for name in ("FREE", "BALL", "SLIDE", "HINGE"):
         assert getattr(mjcf, f"_{name}") == int(getattr(mujoco.mjtJoint, f"mjJNT_{name}"))
     assert (mjcf._EQ_CONNECT, mjcf._EQ_WELD) == (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD))
+    assert (mjcf._EQ_JOINT, mjcf._EQ_TENDON) == (int(mujoco.mjtEq.mjEQ_JOINT), int(mujoco.mjtEq.mjEQ_TENDON))
+    assert mjcf._TRN_TENDON == int(mujoco.mjtTrn.mjTRN_TENDON)
     for code, name in mjcf._EQ_NAMES.items():
         assert int(getattr(mujoco.mjtEq, f"mjEQ_{name.upper()}")) == code
     assert mjcf._TRN_JOINT == int(mujoco.mjtTrn.mjTRN_JOINT) and mjcf._OBJ_SITE == int(
