@@ -26,8 +26,10 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   included; lead, rotor and screw inertia kept as ``<custom><numeric>`` data
   ``plm_pin:<actuator>:<field>`` for the motor torques of a re-import.
 - **Geometry**: the visual shapes as geoms without contacts (``contype = conaffinity = 0``,
-  group 1); a mechanism's own collision shapes (a URDF's ``<collision>``) as geoms with
-  contacts (group 3), so that a re-import checks self-collision with them.
+  group 1; meshes with ``inertia="shell"``, never used for inertia, so that MuJoCo does
+  not refuse a thin mesh's volume); a mechanism's own collision shapes (a URDF's
+  ``<collision>``) as geoms with contacts (group 3), so that a re-import checks
+  self-collision with them.
 - **Solver**: RK4 (or ``implicitfast``), the given timestep, Newton with tolerance 1e-10,
   contacts disabled, gravity from the mechanism, the reference configuration as keyframe
   ``reference``.
@@ -371,7 +373,14 @@ class _Writer:
                 attrs = {"type": "capsule", "size": _fmt([shape.radius, shape.halfLength])}
             elif obj.meshPath and Path(obj.meshPath).suffix.lower() in _MESH_SUFFIXES:
                 mesh = f"mesh{len(asset)}"
-                etree.SubElement(asset, "mesh", name=mesh, file=str(obj.meshPath), scale=_fmt(obj.meshScale))
+                etree.SubElement(
+                    asset,
+                    "mesh",
+                    name=mesh,
+                    file=str(obj.meshPath),
+                    scale=_fmt(obj.meshScale),
+                    inertia="shell",
+                )
                 attrs = {"type": "mesh", "mesh": mesh}
             elif isinstance(shape, coal.BVHModelBase) and shape.num_tris:  # a mesh read from an MJCF
                 mesh = f"mesh{len(asset)}"
@@ -382,6 +391,7 @@ class _Writer:
                     name=mesh,
                     vertex=_fmt(np.asarray(shape.vertices()).ravel()),
                     face=" ".join(str(t[i]) for t in faces for i in range(3)),
+                    inertia="shell",
                 )
                 attrs = {"type": "mesh", "mesh": mesh}
             else:
