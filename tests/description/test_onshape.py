@@ -163,3 +163,36 @@ def test_cli_info_reads_an_onshape_urdf(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["info", str(_write(tmp_path, fourbar_urdf()))])
     assert result.exit_code == 0, result.output
     assert "closing_loop_1 = closing_loop_2" in result.output and "mobility" in result.output
+
+
+def test_mjcf_weld_between_closing_sites_is_a_named_weld(tmp_path: Path) -> None:
+    """A fastened mate in onshape-to-robot's MJCF (an unnamed weld of closing sites): weld closing_<name>."""
+    pytest.importorskip("mujoco")
+    from tests.description.test_mjcf import FLOATING_MJCF
+
+    text = (
+        FLOATING_MJCF.replace("coupler_tip", "closing_fix_1")
+        .replace("rocker_tip", "closing_fix_2")
+        .replace("<connect ", "<weld ")
+    )
+    path = tmp_path / "fixed.xml"
+    path.write_text(text)
+    mech = plm_pin.load(path)
+    assert [(c.name, c.spec.type, c.spec.frames) for c in mech.closures] == [
+        ("closing_fix", "weld", ("closing_fix_1", "closing_fix_2"))
+    ]
+    # the floating base's 6, and the planar loop's 4 joints (3 hinges, 1 slide) less the weld's 3
+    # planar rows (x, y, rz): 1; a point closure would leave 2 (test_mjcf: mobility 8)
+    assert mech.mobility == 7
+
+
+def test_closing_name_pairs_only_the_two_sides_of_one_mate() -> None:
+    """closing_<name>_1 / _2 (and their _z frames) pair; other names do not."""
+    from plm_pin.description.onshape import closing_name
+
+    assert closing_name("closing_a_1", "closing_a_2") == "closing_a"
+    assert closing_name("closing_a_2_z", "closing_a_1_z") == "closing_a_z"
+    assert closing_name("closing_a_1", "closing_a_2_z") is None
+    assert closing_name("closing_a_1", "closing_b_2") is None
+    assert closing_name("closing_a_1", "closing_a_1") is None
+    assert closing_name("tip", "pin") is None
