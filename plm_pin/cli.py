@@ -513,6 +513,7 @@ def view(
             "harada2011:simulation2, enferadi2017:circle, zhao2011:8pss, overview:simulation",
         ),
     ] = None,
+    ignore: IgnoreOption = "",
 ) -> None:
     """Show a mechanism in meshcat (127.0.0.1 only): frames, closure points, singularities highlighted.
 
@@ -522,7 +523,7 @@ def view(
     if animate is None:
         if target is None:
             raise _fail(InvalidInput("give a mechanism (preset, erd:<robot>, .urdf, folder) or --animate"))
-        mech, motion = _load(target), None
+        mech, motion = _load(target, ignore), None
     else:
         if pose:
             raise _fail(InvalidInput("--animate plays a motion: it takes no --pose"))
