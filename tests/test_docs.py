@@ -79,6 +79,7 @@ def test_docs_have_the_pages_the_user_needs(site):
         "guide/statics",
         "guide/stiffness",
         "guide/mujoco",
+        "guide/cad-and-mujoco",
         "guide/any-robot",
         "guide/reliability",
         "guide/dynamics",
