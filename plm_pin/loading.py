@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -13,8 +13,14 @@ from ._text import short
 from .core.assembly import rounded_closure
 from .core.closures import compile_closures
 from .core.mechanism import Mechanism
-from .description.loader import Description, build_model, build_visual_model, read_description
-from .description.mjcf import MJCF_SUFFIX, read_mjcf
+from .description.loader import (
+    Description,
+    build_collision_model,
+    build_model,
+    build_visual_model,
+    read_description,
+)
+from .description.mjcf import MJCF_SUFFIX, check_ignore, read_mjcf
 from .description.overrides import DescriptionBuilder
 from .description.sidecar import SIDECAR_SUFFIX_DEFAULT as SIDECAR_SUFFIX
 from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
@@ -59,6 +65,7 @@ def mechanism_from_description(
         name=name,
         source=description.sidecar.source or str(description.urdf_path or ""),
         visual_factory=functools.partial(build_visual_model, model, description),  # picklable
+        collision_factory=functools.partial(build_collision_model, model, description),
         closure_tol=closure_tol,
         mobility=mobility,
     )
@@ -67,13 +74,20 @@ def mechanism_from_description(
 
 
 def mechanism_from_mjcf(
-    path: str | Path, *, validate: bool = True, closure_tol: float | None = None, mobility: int | None = None
+    path: str | Path,
+    *,
+    validate: bool = True,
+    ignore: str | Iterable[str] = (),
+    closure_tol: float | None = None,
+    mobility: int | None = None,
 ) -> Mechanism:
     """Build a :class:`Mechanism` from a MuJoCo model (see :mod:`plm_pin.description.mjcf`).
 
     Args:
         path: the ``.xml`` file (a ``.plm.yaml`` sidecar beside it is read when present).
         validate: assemble the reference configuration now.
+        ignore: kinds of MJCF elements to drop rather than refuse (see
+            :data:`~plm_pin.description.mjcf.IGNORABLE`), with a warning listing them.
         closure_tol: how far the loops close [m, rad] (see :func:`mechanism_from_description`).
         mobility: fixes the mobility (see :func:`mechanism_from_description`).
 
@@ -81,8 +95,9 @@ def mechanism_from_mjcf(
         DescriptionError: when MuJoCo is missing or rejects the file, or an element cannot be
             represented.
         ClosureNotSatisfied: when ``validate`` and the loops cannot be closed.
+        InvalidInput: when ``ignore`` names an unknown kind.
     """
-    mjcf = read_mjcf(path)
+    mjcf = read_mjcf(path, ignore)
     name = mjcf.sidecar.name or Path(path).name.split(".")[0]
     mech = Mechanism(
         mjcf.model,
@@ -90,6 +105,7 @@ def mechanism_from_mjcf(
         name=name,
         source=mjcf.sidecar.source or "",
         visual_factory=mjcf.visual_model,
+        collision_factory=mjcf.collision_model,
         closure_tol=closure_tol,
         mobility=mobility,
     )
@@ -200,6 +216,7 @@ def load(
     name_or_path: str | Path,
     *,
     validate: bool = True,
+    ignore: str | Iterable[str] = (),
     closure_tol: float | None = None,
     mobility: int | None = None,
 ) -> Mechanism:
@@ -216,6 +233,10 @@ def load(
             digits) then load with a :class:`~plm_pin.warnings.RoundedClosureWarning` and a
             closure tolerance above that residual, unless ``closure_tol`` (or the sidecar's
             ``closure_tolerance``) states one.
+        ignore: for a MuJoCo model, kinds of elements plm_pin cannot represent to drop
+            rather than refuse (``"contacts"``, ``"tendons"``, ... see
+            :data:`~plm_pin.description.mjcf.IGNORABLE`), as names or one comma-separated
+            string; a warning lists what was dropped.
         closure_tol: how far the description's loops close [m, rad]: the tolerance of the
             assembly, the kinematics and the simulation (default: the sidecar's
             ``closure_tolerance``, else :data:`~plm_pin.tolerances.CLOSURE_TOL`).
@@ -229,10 +250,13 @@ def load(
     Raises:
         DescriptionError: unknown name, missing or malformed files, unsafe content.
         ClosureNotSatisfied: when the loops cannot be closed from the reference guess.
-        InvalidInput: a ``closure_tol`` or ``mobility`` out of range.
+        InvalidInput: ``ignore`` names an unknown kind, or is given for a model that is not an
+            MJCF; a ``closure_tol`` or ``mobility`` out of range.
     """
     extra: dict[str, Any] = {"validate": validate, "closure_tol": closure_tol, "mobility": mobility}
     text = str(name_or_path)
+    if check_ignore(ignore) and not _is_mjcf(Path(text)):
+        raise InvalidInput(f"ignore={ignore!r} applies to MuJoCo models (.xml) only; {text!r} is not one")
     if text in PRESETS:
         return mechanism_from_description(read_description(urdf_folder() / f"{text}.urdf"), text, **extra)
     if text.startswith(ERD_PREFIX):
@@ -243,17 +267,28 @@ def load(
             f"{text!r} is neither a preset nor an existing path; presets are {sorted(PRESETS)}; "
             f"example-robot-data robots load as 'erd:<name>'"
         )
-    if path.suffix == MJCF_SUFFIX:
-        return mechanism_from_mjcf(path, **extra)
-    mjcf = path.with_name(path.name.removesuffix(SIDECAR_SUFFIX) + MJCF_SUFFIX)
-    if path.name.endswith(SIDECAR_SUFFIX) and mjcf.is_file() and not mjcf.with_suffix(".urdf").is_file():
-        return mechanism_from_mjcf(mjcf, **extra)
+    if _is_mjcf(path):
+        mjcf = path if path.suffix == MJCF_SUFFIX else _mjcf_of_sidecar(path)
+        return mechanism_from_mjcf(mjcf, ignore=ignore, **extra)
     description = read_description(path)
     stem = path.name if path.is_dir() else path.name.split(".")[0]
     if stem == "robot":  # the example-parallel-robots file name: name the mechanism after its folder
         stem = path.resolve().parent.name
     name = description.sidecar.name or stem
     return mechanism_from_description(description, name, **extra)
+
+
+def _mjcf_of_sidecar(path: Path) -> Path:
+    """The MJCF a ``.plm.yaml`` sits beside (same stem)."""
+    return path.with_name(path.name.removesuffix(SIDECAR_SUFFIX) + MJCF_SUFFIX)
+
+
+def _is_mjcf(path: Path) -> bool:
+    """Whether ``path`` names an MJCF: a ``.xml``, or the sidecar of one with no URDF beside it."""
+    if path.suffix == MJCF_SUFFIX:
+        return True
+    mjcf = _mjcf_of_sidecar(path)
+    return path.name.endswith(SIDECAR_SUFFIX) and mjcf.is_file() and not mjcf.with_suffix(".urdf").is_file()
 
 
 def resolve_builder(target: str | Builder) -> tuple[Builder, dict[str, Any], str]:

@@ -67,6 +67,26 @@ class Actuator:
     reflected_inertia: float
 
 
+JOINT_TYPES: tuple[tuple[str, str], ...] = (
+    ("JointModelFreeFlyer", "free"),
+    ("JointModelSpherical", "spherical"),
+    ("JointModelPlanar", "planar"),
+    ("JointModelTranslation", "translation"),
+    ("JointModelUniversal", "universal"),
+    ("JointModelRevoluteUnbounded", "continuous"),
+    ("JointModelRUB", "continuous"),
+    ("JointModelR", "revolute"),
+    ("JointModelP", "prismatic"),
+)
+"""Pinocchio joint class prefixes and the joint type :meth:`Mechanism.summary` reports, first match."""
+
+
+def joint_type(model: pin.Model, joint_id: int) -> str:
+    """The type of joint ``joint_id`` in words (``revolute``, ``free``, ...; see :data:`JOINT_TYPES`)."""
+    short = model.joints[joint_id].shortname()
+    return next((kind for prefix, kind in JOINT_TYPES if short.startswith(prefix)), short)
+
+
 def _joint_kind(model: pin.Model, joint_id: int) -> str:
     short = model.joints[joint_id].shortname()
     if short.startswith("JointModelP"):
@@ -108,6 +128,7 @@ class Mechanism:
         source: str = "",
         visual_factory: Callable[[], pin.GeometryModel] | None = None,
         idle_gauges: tuple[IdleGauge, ...] | None = None,
+        collision_factory: Callable[[], pin.GeometryModel] | None = None,
         closure_tol: float | None = None,
         mobility: int | None = None,
     ) -> None:
@@ -115,9 +136,10 @@ class Mechanism:
 
         ``idle_gauges`` holds these gauges (their frames already in ``model``) instead of
         detecting the idle mobilities, for a model derived from a mechanism's own.
-        ``closure_tol`` [m, rad] and ``mobility`` override the sidecar's ``closure_tolerance``
-        and ``mobility`` (default :data:`~plm_pin.tolerances.CLOSURE_TOL`, and the rank
-        decided from the singular values).
+        ``collision_factory`` builds the description's collision shapes (see
+        :attr:`collision_model`). ``closure_tol`` [m, rad] and ``mobility`` override the
+        sidecar's ``closure_tolerance`` and ``mobility`` (default
+        :data:`~plm_pin.tolerances.CLOSURE_TOL`, and the rank decided from the singular values).
 
         Raises:
             InvalidInput: a ``closure_tol`` not positive and finite, a ``mobility`` not an
@@ -140,6 +162,7 @@ class Mechanism:
         self.source = source
         self._local = threading.local()  # per-thread scratch data (not pickled)
         self._visual_factory = visual_factory
+        self._collision_factory = collision_factory
         self._assembled_guess: np.ndarray | None = None
         if idle_gauges is not None:
             self.__dict__["idle_gauges"] = idle_gauges  # fills the cached property
@@ -235,6 +258,7 @@ class Mechanism:
         state = dict(self.__dict__)
         state.pop("_local", None)
         state.pop("visual_model", None)  # rebuilt on first use from the factory
+        state.pop("collision_model", None)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -588,6 +612,17 @@ class Mechanism:
             return pin.GeometryModel()
         return self._visual_factory()
 
+    @functools.cached_property
+    def collision_model(self) -> pin.GeometryModel:
+        """Collision geometry: the description's collision shapes where it has any, else :attr:`visual_model`.
+
+        A URDF's ``<collision>`` elements, an MJCF's geoms that take part in contacts
+        (``contype`` or ``conaffinity`` not zero); a description without any gets its visual
+        shapes, so that self-collision can still be checked.
+        """
+        shapes = self._collision_factory() if self._collision_factory is not None else None
+        return shapes if shapes is not None and shapes.ngeoms else self.visual_model
+
     def summary(self) -> dict[str, Any]:
         """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""
         return {
@@ -595,6 +630,10 @@ class Mechanism:
             "source": self.source,
             "nq": self.nq,
             "nv": self.nv,
+            "joints": [
+                {"name": str(self.model.names[j]), "type": joint_type(self.model, j)}
+                for j in range(1, self.model.njoints)
+            ],
             "closures": [
                 {"name": c.name, "type": c.spec.type, "frames": list(c.spec.frames), "rows": c.spec.rows}
                 for c in self.closures
