@@ -27,6 +27,8 @@ __all__ = [
     "COMPARISON_RTOL",
     "COMPLIANCE_SYMMETRY_RTOL",
     "CONSTRAINT_NULL_RTOL",
+    "CROSSING_MARGIN",
+    "CROSSING_WATCH_RTOL",
     "DECOUPLING_RTOL",
     "DEFLECTION_CLOSURE_TOL",
     "DEFLECTION_RTOL",
@@ -54,6 +56,7 @@ __all__ = [
     "LOCUS_REFINE_MARGIN",
     "LOCUS_XTOL",
     "LOG3_SERIES_ANGLE",
+    "LOST_ROW_DRIFT_RTOL",
     "MASSLESS_INERTIA_RTOL",
     "MASSLESS_RTOL",
     "MIN_PRINCIPAL_MOMENT",
@@ -80,6 +83,7 @@ __all__ = [
     "ROUND_OFF",
     "SAME_ASSEMBLY_TOL",
     "SAMPLE_COUNT_RTOL",
+    "SHEET_GRADIENT_RTOL",
     "SIMULATION_ATOL",
     "SIMULATION_RTOL",
     "SINGULARITY_TOL",
@@ -307,6 +311,27 @@ LINK_FORCE_RTOL = 1e-9
 link-force matrix is above this times the largest."""
 
 # ----------------------------------------------------------------- dynamics
+CROSSING_MARGIN = 1e-3
+"""[-] A crossing predicted within this fraction of a bridge step is taken to be at its start (left as is)."""
+
+LOST_ROW_DRIFT_RTOL = 1e-6
+"""[-] Largest drift in a lost closure row at a constraint singularity, relative to the drift's norm.
+
+Decides whether the acceleration constraint stays consistent (finite closure forces) where
+the closure Jacobian loses a rank; above it the motion is not defined there.
+"""
+
+SHEET_GRADIENT_RTOL = 1e-6
+"""[-] Smallest gradient of the lost row's second-order form Q(v), relative to its scale.
+
+Decides at a constraint singularity whether the velocity lies on one sheet of the closure
+manifold (a regular point of the tangent cone Q = 0: the motion continues on it) or where
+sheets meet (Q's gradient vanishes, as at rest: the continuation is not determined).
+"""
+
+CROSSING_WATCH_RTOL = 0.1
+"""[-] Closure singular values below this fraction of the largest are watched for a crossing."""
+
 SIMULATION_RTOL = 1e-10
 """[-] Default relative error per step of the adaptive (DOP853) simulation."""
 

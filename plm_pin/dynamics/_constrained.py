@@ -83,7 +83,7 @@ from ..core.closures import Closure
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..statics.balance import Load
-from ..tolerances import RANK_RTOL
+from ..tolerances import CROSSING_WATCH_RTOL, LOST_ROW_DRIFT_RTOL, RANK_RTOL, SHEET_GRADIENT_RTOL
 
 SOLVERS = ("auto", "kkt", "pinocchio")
 """Solver choices; ``auto`` is ``pinocchio`` when every closure is a point or a weld, else ``kkt``."""
@@ -104,24 +104,6 @@ STAGE_ITERATIONS = 2
 
 From a stage error e, one step leaves e^2/sigma_r (sigma_r: the smallest kept closure singular
 value), two leave e^4/sigma_r^3: below round-off for the stages of a step near a crossing.
-"""
-
-CONSISTENCY_RTOL = 1e-6  # TOLERANCE -> tolerances.py
-"""[1] Largest drift in a lost closure row at a constraint singularity, relative to the drift's norm.
-
-Decides whether the acceleration constraint stays consistent (finite closure forces) where
-the closure Jacobian loses a rank; above it the motion is not defined there.
-"""
-
-NEAR_SINGULAR = 0.1  # TOLERANCE -> tolerances.py
-"""[1] Closure singular values below this fraction of the largest are watched for a crossing."""
-
-BRANCH_RTOL = 1e-6  # TOLERANCE -> tolerances.py
-"""[1] Smallest gradient of the lost row's second-order form Q(v), relative to its scale.
-
-Decides at a constraint singularity whether the velocity lies on one sheet of the closure
-manifold (a regular point of the tangent cone Q = 0: the motion continues on it) or where
-sheets meet (Q's gradient vanishes, as at rest: the continuation is not determined).
 """
 
 
@@ -325,11 +307,11 @@ class ClosedChainDynamics:
         where = f"{self._name}: constraint singularity (closure Jacobian singular values {s.tolist()})"
         lost_drift = float(np.max(np.abs(lost.T @ gamma)))
         scale = float(np.max(np.abs(gamma), initial=0.0))
-        if lost_drift > CONSISTENCY_RTOL * scale:
+        if lost_drift > LOST_ROW_DRIFT_RTOL * scale:
             raise SingularConfiguration(
                 f"{where}: the motion is not defined here: the acceleration constraint along the lost "
                 f"closure row is inconsistent (drift {lost_drift:.3g}, {lost_drift / scale:.3g} of the "
-                f"drift's size, more than {CONSISTENCY_RTOL:g}): no finite closure force keeps the loops "
+                f"drift's size, more than {LOST_ROW_DRIFT_RTOL:g}): no finite closure force keeps the loops "
                 "closed"
             )
         # Q(w) = lost^T gamma(q, w) is quadratic in w: its gradient at v along n is
@@ -339,7 +321,7 @@ class ClosedChainDynamics:
         drift = self._drift
         grad = np.array([lost.T @ (drift(q, v + size * n) - drift(q, v - size * n)) / 2 for n in N])
         form = np.array([lost.T @ drift(q, size * n) for n in N])
-        if size == 0.0 or np.max(np.abs(grad)) <= BRANCH_RTOL * 2 * np.max(np.abs(form)):
+        if size == 0.0 or np.max(np.abs(grad)) <= SHEET_GRADIENT_RTOL * 2 * np.max(np.abs(form)):
             raise SingularConfiguration(
                 f"{where}: the motion is not defined here: the velocity (|v| = {size:.3g}) lies where "
                 "sheets of the closure manifold meet (at rest, or moving along their intersection), so "
@@ -539,7 +521,7 @@ class ClosedChainDynamics:
         r"""Predicted time [s] until an independent closure singular value reaches zero, moving at ``v``.
 
         Each of the closure Jacobian's r independent singular values :math:`\sigma_i` below
-        :data:`NEAR_SINGULAR` of the largest changes at the rate
+        :data:`CROSSING_WATCH_RTOL` of the largest changes at the rate
         :math:`\dot\sigma_i = u_i^T \dot J_\phi v_i`, with :math:`\dot J_\phi` by a central
         difference of :math:`J_\phi` along ``v``; the earliest :math:`\sigma_i / (-\dot\sigma_i)`
         of those decreasing. A singular value passes through zero linearly at a crossing of two
@@ -549,7 +531,7 @@ class ClosedChainDynamics:
         if not r:
             return math.inf
         U, s, Vt = np.linalg.svd(self._closure_terms(q)[1], full_matrices=False)
-        near = [i for i in range(r) if s[i] < NEAR_SINGULAR * s[0]]
+        near = [i for i in range(r) if s[i] < CROSSING_WATCH_RTOL * s[0]]
         speed = float(np.linalg.norm(v))
         if not near or speed == 0.0:
             return math.inf

@@ -80,6 +80,7 @@ from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, Simulation
 from ..results import Result, unit
 from ..statics.balance import load_on_frame
 from ..tolerances import (
+    CROSSING_MARGIN,
     ENERGY_ROUND_OFF_RTOL,
     ENERGY_RTOL,
     FEASIBLE_VELOCITY_RTOL,
@@ -107,9 +108,6 @@ BRIDGE_STEPS = 10
 
 Each bridge advances the run by at least this many steps, so repeated bridges always progress.
 """
-
-CROSSING_MARGIN = 1e-3  # TOLERANCE -> tolerances.py
-"""[1] A crossing predicted within this fraction of a bridge step is taken to be at its start (left as is)."""
 
 _CHART_SPAN = 0.5
 """Largest chart coordinate [m, rad] of the adaptive run before it re-centres on a non-vector-space joint."""
