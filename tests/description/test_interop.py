@@ -126,7 +126,8 @@ def test_kangaroo_does_not_assemble_from_zero():
         "residual "
     )
     assert (
-        f"m/rad, worst closure {exc.worst_closure!r}. Give a configuration close to an assembled one" in msg
+        f"m/rad above the closure tolerance 1e-12, worst closure {exc.worst_closure!r}. Give a "
+        "configuration close to an assembled one" in msg
     )
     assert msg.endswith("in the sidecar's 'reference', or check that the closure frames can meet.")
     assert re.fullmatch(r"loop([1-9]|1[01])", exc.worst_closure)
