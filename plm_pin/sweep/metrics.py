@@ -47,7 +47,7 @@ from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
 from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
-from ..tolerances import CLOSURE_TOL, SINGULARITY_TOL
+from ..tolerances import SINGULARITY_TOL
 from ..workspace import WorkspaceSlice, workspace_grid
 from ..workspace._continuation import guess_mode
 from ..workspace.manipulability import Manipulability
@@ -199,7 +199,12 @@ def _direction(name: str, value: Any) -> tuple[float, ...] | None:
 OPTIONS: dict[str, Option] = {
     o.name: o
     for o in (
-        Option("ik_tol", CLOSURE_TOL, "inverse-kinematics residual tolerance [m, rad]", _positive),
+        Option(
+            "ik_tol",
+            None,
+            "inverse-kinematics residual tolerance [m, rad] (default: the mechanism's closure tolerance)",
+            _positive,
+        ),
         Option(
             "singularity_tol", SINGULARITY_TOL, "margin at or below which a pose is singular [-]", _positive
         ),
