@@ -200,7 +200,9 @@ def assemble(
         free_columns: indices of the velocity coordinates allowed to move.
         tol: target largest absolute residual [m, rad].
         max_iterations: iteration cap.
-        rcond: relative singular-value cut-off of the step.
+        rcond: relative singular-value cut-off of the step; singular values at most ``tol``
+            times ``max(s_max, 1)`` take no part either (below the tolerance a direction cannot be
+            told from a dependent row: the inconsistent rows of rounded data sit there).
         on_failure: builds the error raised when ``tol`` is not reached.
         extra: further residual rows (after the closure rows) to drive to zero.
 
@@ -236,7 +238,7 @@ def assemble(
         iterations += 1
         J = jacobian_at(q)[:, free_columns]
         U, s, Vt = np.linalg.svd(J, full_matrices=False)
-        keep = s > rcond * (s[0] if s.size else 0.0)
+        keep = s > max(rcond * s[0], tol * max(s[0], 1.0)) if s.size else s > 0.0
         if not np.any(keep):
             break
         accepted = False

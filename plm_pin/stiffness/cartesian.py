@@ -146,12 +146,19 @@ class StiffnessResult(Result):
         return {**super().to_dict(), "units": units}
 
 
-def null_basis(A: np.ndarray, nv: int, rtol: float = CONSTRAINT_NULL_RTOL) -> np.ndarray:
-    """Orthonormal basis of the null space of ``A`` (rank by SVD, relative ``rtol``), shape (nv, nullity)."""
+def null_basis(
+    A: np.ndarray, nv: int, rtol: float = CONSTRAINT_NULL_RTOL, closure_tol: float = 0.0
+) -> np.ndarray:
+    """Orthonormal basis of the null space of ``A``, shape (nv, nullity).
+
+    Rank by SVD: singular values above ``rtol`` times the largest and above ``closure_tol``
+    times ``max(s_max, 1)`` (the dependent rows of a description that closes only to its
+    closure tolerance [m, rad] sit below it; see :mod:`plm_pin.core.rank`).
+    """
     if A.shape[0] == 0:
         return np.eye(nv)
     _, s, Vt = np.linalg.svd(A)
-    rank = int(np.count_nonzero(s > rtol * max(s[0], 1e-300)))
+    rank = int(np.count_nonzero(s > max(rtol * max(s[0], 1e-300), closure_tol * max(s[0], 1.0))))
     return Vt[rank:].T.copy()
 
 
@@ -169,7 +176,8 @@ def condense(state: ElasticState) -> tuple[np.ndarray, np.ndarray, np.ndarray, d
     mech = cm.mech
     task = require_task(mech)
     full = hessian(state)  # leaves the kinematics of state.q in mech.data
-    N = null_basis(with_locks(cm, jacobian_from_data(mech.model, mech.data, mech.closures)), mech.nv)
+    A = with_locks(cm, jacobian_from_data(mech.model, mech.data, mech.closures))
+    N = null_basis(A, mech.nv, closure_tol=mech.closure_tol)
     T = task.jacobian_from_data(mech.model, mech.data).reshape(task.size, -1) @ N
     stack = np.array(list(full.values()))  # (n_terms, nv_c, nv_c)
     H = N.T @ stack.sum(axis=0) @ N

@@ -224,3 +224,18 @@ def test_an_unvalidated_load_assembles_to_the_tolerance_asked(tmp_path):
     with pytest.raises(ClosureNotSatisfied) as err:
         mech.assemble()
     assert err.value.tolerance == 1e-12
+
+
+def test_stiffness_and_simulation_agree_with_the_exact_description(case):
+    """Task stiffness and a passive fall of the rounded copy match the exact copy's to the rounding."""
+    from plm_pin.dynamics.simulation import simulate
+    from plm_pin.stiffness import stiffness
+
+    _, exact, mech, _, _ = case
+    if mech.sidecar.compliance is not None:
+        K, K_exact = stiffness(mech, mech.q_ref).K_x, stiffness(exact, exact.q_ref).K_x
+        assert np.abs(K - K_exact).max() <= 1e-5 * np.abs(K_exact).max()
+    run = simulate(mech, mech.q_ref, duration=0.2, dt=0.02)
+    ref = simulate(exact, exact.q_ref, duration=0.2, dt=0.02)
+    assert run.max_residual <= mech.closure_tol
+    assert np.abs(mech.actuator_positions(run.q) - exact.actuator_positions(ref.q)).max() < 1e-4
