@@ -271,7 +271,7 @@ def inverse_dynamics(
         internal: prescribed internal forces.
         min_compression: preload: every hinged link in compression by this much [N].
         link_limits: bounds on named links' axial forces [N].
-        singular_rtol: see :data:`~plm_pin.statics.balance.SINGULAR_RTOL`.
+        singular_rtol: see :data:`~plm_pin.tolerances.STATICS_SINGULAR_RTOL`.
 
     Raises:
         InvalidInput: malformed options, a trajectory of another mechanism, or a body group

@@ -43,7 +43,7 @@ class ModeNode(Result):
         label: the mode written as in the paper, e.g. ``[+ 0]``.
         q: representative configuration (read-only), shape (nq,).
         rank: rank of the closed-chain direct Jacobian :math:`C` there (relative tolerance
-            :data:`plm_pin.core.rank.RANK_RTOL`).
+            :data:`plm_pin.tolerances.RANK_RTOL`).
         full_rank: the mechanism's mobility (rank of a non-singular :math:`C`).
         direct_margin: direct margin there [-].
         redundancy_margin: :func:`plm_pin.kinematics.paths.redundancy_margin` there [-].

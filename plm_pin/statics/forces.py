@@ -329,7 +329,7 @@ def static_forces(
         min_compression: every hinged link (see :mod:`~plm_pin.statics.reactions`) in
             compression by at least this much [N] (a preload condition).
         link_limits: bounds on the axial force (tension positive) [N] of named links.
-        singular_rtol: see :data:`~plm_pin.statics.balance.SINGULAR_RTOL`.
+        singular_rtol: see :data:`~plm_pin.tolerances.STATICS_SINGULAR_RTOL`.
 
     Raises:
         InvalidInput: malformed arguments (the message names the valid choices).

@@ -131,7 +131,7 @@ def elastic_state(
 def _check_forces_at(mech: Mechanism, q: ArrayLike, forces: StaticForces) -> None:
     """Refuse a static solution ``forces`` solved at another configuration than ``q``.
 
-    The two agree when they differ by at most :data:`~plm_pin.core.checks.CLOSURE_TOL` [m, rad]
+    The two agree when they differ by at most :data:`~plm_pin.tolerances.ASSEMBLED_TOL` [m, rad]
     on the tangent space (room for a ``q`` read back from a file).
 
     Raises:
