@@ -17,6 +17,7 @@ rigid and its joint is locked. Passive joints may carry springs too.
 
 from __future__ import annotations
 
+import dataclasses
 import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -151,7 +152,7 @@ def _build(mech: Mechanism, spec: ComplianceSpec) -> CompliantModel:
         model, q_index, v_index, first_v = _insert_virtual_joints(mech.model, beams)
         cmech = Mechanism(
             model,
-            mech.sidecar,
+            dataclasses.replace(mech.sidecar, mobility=None),  # the virtual joints add DOF: rank from the gap
             name=f"{mech.name}_compliant",
             source=mech.source,
             idle_gauges=gauges,
