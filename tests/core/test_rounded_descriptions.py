@@ -14,6 +14,7 @@ modelled in 3D, close only to about 1e-7 m. The oracles are independent of the r
 from __future__ import annotations
 
 import json
+import re
 import shutil
 import warnings
 from pathlib import Path
@@ -239,3 +240,31 @@ def test_stiffness_and_simulation_agree_with_the_exact_description(case):
     ref = simulate(exact, exact.q_ref, duration=0.2, dt=0.02)
     assert run.max_residual <= mech.closure_tol
     assert np.abs(mech.actuator_positions(run.q) - exact.actuator_positions(ref.q)).max() < 1e-4
+
+
+def test_a_rounded_mjcf_loads_and_mujoco_measures_the_same_residual(tmp_path):
+    """An MJCF export rounded to 6 digits: warned, mobility kept; MuJoCo's equality residual is ours."""
+    mujoco = pytest.importorskip("mujoco")
+    from plm_pin.description.mjcf import read_mjcf
+    from plm_pin.export import export_mjcf
+
+    exact, _ = _load(_copy("harada2011_3d4m", tmp_path, digits=None))
+    export_mjcf(exact, tmp_path / "exact.xml")
+
+    def six(match: re.Match[str]) -> str:
+        return f'{match.group(1)}="{" ".join(f"{float(v):.6g}" for v in match.group(2).split())}"'
+
+    text = (tmp_path / "exact.xml").read_text()
+    (tmp_path / "rounded.xml").write_text(re.sub(r'\b(pos|quat|axis|euler)="([^"]*)"', six, text))
+    mech, caught = _load(tmp_path / "rounded.xml")
+    assert caught and mech.mobility == exact.mobility == 3 and mech.closure_tol >= 1e-7
+    mjcf = read_mjcf(tmp_path / "rounded.xml")
+    found = rounded_closure(
+        mech.model, compile_closures(mech.model, mjcf.sidecar.closures), mech.reference_guess(), 1e-12
+    )
+    assert found is not None and f"close only to {found.residual:.2g} m/rad" in str(caught[0].message)
+    data = mujoco.MjData(mjcf.mj_model)
+    data.qpos[:] = mjcf.state_map().qpos(found.q)
+    mujoco.mj_forward(mjcf.mj_model, data)
+    eq = np.array(data.efc_pos[: 3 * len(mjcf.sidecar.closures)])  # the connects' rows, in order
+    assert np.abs(eq).max() == pytest.approx(found.residual, rel=1e-9)
