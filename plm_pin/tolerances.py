@@ -274,7 +274,7 @@ MODE_CHANGE_DEVIATION_TOL = 1e-7
 """[m, rad] Largest deviation of a tracked mode change from its planned route for the planners."""
 
 STAR_SINGULAR_SIN = 1e-9
-"""[-] |sin phi| below which the star-triangle's star lines are parallel to their rails
+"""[-] The absolute sine of phi below which the star-triangle's star lines are parallel to their rails
 (actuator singularity)."""
 
 UNIT_VECTOR_TOL = 1e-12
