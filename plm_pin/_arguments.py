@@ -59,6 +59,107 @@ def count(value: object, name: str, minimum: int = 0) -> int:
     return int(value)
 
 
+def nonnegative(value: object, name: str, unit: str = "") -> float:
+    """``value`` as a float if it is a finite real number >= 0 (a mass, an inertia, a magnitude).
+
+    Args:
+        value: the value given.
+        name: the argument's name, for the message.
+        unit: its SI unit, written in brackets after "number" when given (e.g. ``"kg"``).
+
+    Raises:
+        InvalidInput: naming ``name`` and the value (a string, a boolean, NaN, inf or a negative number).
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (0.0 <= value < math.inf):
+        shown = f" [{unit}]" if unit else ""
+        raise InvalidInput(f"{name} must be a finite number >= 0{shown}, got {short(value)}")
+    return float(value)
+
+
+def length(value: object, name: str) -> float:
+    """``value`` as a float if it is a length: a finite real number > 0 [m].
+
+    Raises:
+        InvalidInput: naming ``name``, the value and the valid range.
+    """
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, numbers.Real)
+        or not math.isfinite(value)
+        or value <= 0
+    ):
+        raise InvalidInput(f"{name} must be a length > 0 [m] (a finite number), got {short(value)}")
+    return float(value)
+
+
+def numbers_of(
+    value: object, name: str, size: int, what: str = "finite numbers", check: str = "finite"
+) -> np.ndarray:
+    """``value`` as a float array of shape (size,): every entry finite, and > 0 or >= 0 as ``check`` says.
+
+    Args:
+        value: the sequence given.
+        name: the argument's name, for the message.
+        size: the number of entries.
+        what: what the entries are, for the message (e.g. ``"lengths > 0 [m]"``).
+        check: ``"finite"``, ``"positive"`` (> 0) or ``"nonnegative"`` (>= 0).
+
+    Raises:
+        InvalidInput: naming ``name``, what it got and which entries are wrong.
+    """
+    real_numbers(value, name)
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        arr = np.empty(0)
+    if isinstance(value, (str, bytes)) or arr.shape != (size,):
+        raise InvalidInput(f"{name} must be {size} {what}, got {short(value)}")
+    bad = ~np.isfinite(arr)
+    if check == "positive":
+        bad |= ~(arr > 0.0)
+    elif check == "nonnegative":
+        bad |= ~(arr >= 0.0)
+    if bad.any():
+        raise InvalidInput(
+            f"{name} must be {size} {what}, got {short(value)} "
+            f"(wrong at indices {np.flatnonzero(bad).tolist()})"
+        )
+    return arr
+
+
+def flag(value: object, name: str) -> bool:
+    """``value`` if it is a boolean (``True`` or ``False``; a NumPy boolean is accepted).
+
+    Raises:
+        InvalidInput: naming ``name`` and the value (e.g. the string ``"no"``, which would count as true).
+    """
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidInput(f"{name} must be True or False, got {short(value)}")
+    return bool(value)
+
+
+def choice(value: object, name: str, choices: Sequence[str]) -> str:
+    """``value`` if it is one of the strings ``choices``.
+
+    Raises:
+        InvalidInput: naming ``name``, the value and the valid choices.
+    """
+    if not isinstance(value, str) or value not in choices:
+        raise InvalidInput(f"{name} must be one of {list(choices)}, got {short(value)}")
+    return value
+
+
+def mapping(value: object, name: str, what: str) -> Mapping:
+    """``value`` if it is a mapping (a dict); ``what`` says of what, for the message.
+
+    Raises:
+        InvalidInput: naming ``name``, what it got and what it must map.
+    """
+    if not isinstance(value, Mapping):
+        raise InvalidInput(f"{name} must be a mapping of {what}, got {short(value)}")
+    return value
+
+
 def optional_name(value: object, name: str, kind: str = "frame") -> str | None:
     """``value`` if it is None or a name (a string); whether the name exists is checked by the caller.
 
@@ -190,10 +291,9 @@ def check_tolerance(value: object, name: str, *, relative: bool = False) -> floa
         InvalidInput: naming ``name`` and the valid range.
     """
     valid = "a finite number in [0, 1)" if relative else "a finite number >= 0"
-    try:
-        tol = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise InvalidInput(f"{name} must be {valid}, got {value!r}") from None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):  # "1e-6" is text, not a number
+        raise InvalidInput(f"{name} must be {valid}, got {short(value)}")
+    tol = float(value)
     if not (0.0 <= tol < (1.0 if relative else np.inf)):  # NaN fails every comparison
         raise InvalidInput(f"{name} must be {valid}, got {tol!r}")
     return tol
