@@ -32,8 +32,10 @@ def as_vector(x: object, size: int, name: str) -> np.ndarray:
     return arr
 
 
-def positive(value: object, name: str) -> float:
+def positive(value: object, name: str, unit: str = "") -> float:
     """``value`` as a float if it is a finite real number > 0 (a tolerance, a step, a duration).
+
+    ``unit``, when given, is written in brackets after "number" (e.g. ``"m/rev"``).
 
     Raises:
         InvalidInput: naming ``name`` and the value (a string, a boolean, NaN, 0 or a negative number).
@@ -44,7 +46,8 @@ def positive(value: object, name: str) -> float:
         or not math.isfinite(value)
         or value <= 0
     ):
-        raise InvalidInput(f"{name} must be a positive finite number, got {short(value)}")
+        shown = f" [{unit}]" if unit else ""
+        raise InvalidInput(f"{name} must be a positive finite number{shown}, got {short(value)}")
     return float(value)
 
 
@@ -125,6 +128,72 @@ def numbers_of(
             f"(wrong at indices {np.flatnonzero(bad).tolist()})"
         )
     return arr
+
+
+def finite_number(value: object, name: str, unit: str = "") -> float:
+    """``value`` as a float if it is a finite real number (an angle, a coordinate), not a boolean.
+
+    Raises:
+        InvalidInput: naming ``name`` and the value.
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        shown = f" [{unit}]" if unit else ""
+        raise InvalidInput(f"{name} must be a finite number{shown}, got {short(value)}")
+    return float(value)
+
+
+def finite_array(value: object, name: str, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """``value`` as a float array of ``shape`` with finite entries (points, directions, poses).
+
+    Args:
+        value: the array-like given.
+        name: the argument's name, for the message.
+        shape: the shape it must have.
+        what: what it holds, for the message (e.g. ``"points [m]"``).
+
+    Raises:
+        InvalidInput: naming ``name``, the shape asked and got, or the non-finite entries.
+    """
+    real_numbers(value, name)
+    valid = f"{name} must be an array of shape {shape} of {what}"
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):  # ragged
+        raise InvalidInput(f"{valid}, got {short(value)}") from None
+    if arr.shape != shape:
+        raise InvalidInput(f"{valid}, got shape {arr.shape}")
+    if not np.isfinite(arr).all():
+        at = [tuple(int(i) for i in k) if arr.ndim > 1 else int(k[0]) for k in np.argwhere(~np.isfinite(arr))]
+        raise InvalidInput(f"{name} has non-finite entries at indices {at}")
+    return arr
+
+
+def optional_positive(value: object, name: str, unit: str) -> float | None:
+    """``value`` as a float if it is None or a finite number > 0 (an optional stiffness, say).
+
+    Raises:
+        InvalidInput: naming ``name``, the unit and the value.
+    """
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (0.0 < value < math.inf):
+        raise InvalidInput(f"{name} must be None or a finite number > 0 [{unit}], got {short(value)}")
+    return float(value)
+
+
+def leg_numbers(value: object, name: str, n: int) -> tuple[int, ...]:
+    """``value`` as a sorted tuple if it is a non-empty sequence of distinct whole numbers in 1..n.
+
+    Raises:
+        InvalidInput: naming ``name``, the value and the valid numbers.
+    """
+    ok = isinstance(value, Sequence | np.ndarray) and not isinstance(value, (str, bytes)) and len(value) > 0
+    if ok:
+        ok = all(isinstance(i, numbers.Integral) and not isinstance(i, bool) and 1 <= i <= n for i in value)
+        ok = ok and len(set(value)) == len(value)  # type: ignore[arg-type]
+    if not ok:
+        raise InvalidInput(f"{name} must be distinct leg numbers among 1..{n}, got {short(value)}")
+    return tuple(sorted(int(i) for i in value))  # type: ignore[union-attr]
 
 
 def flag(value: object, name: str) -> bool:
