@@ -13,6 +13,12 @@ from ._text import short
 from .exceptions import InvalidInput
 
 
+def nonfinite_indices(arr: np.ndarray) -> list:
+    """Indices of the non-finite entries of ``arr``: ints for a vector, tuples for higher ranks."""
+    bad = np.argwhere(~np.isfinite(arr))
+    return [int(k[0]) if arr.ndim == 1 else tuple(int(i) for i in k) for k in bad]
+
+
 def as_vector(x: object, size: int, name: str) -> np.ndarray:
     """Return ``x`` as a float array of shape (size,); refuse non-numbers, wrong shapes, non-finite values.
 
@@ -26,9 +32,7 @@ def as_vector(x: object, size: int, name: str) -> np.ndarray:
     if arr.shape != (size,):
         raise InvalidInput(f"{name} must have shape ({size},), got {arr.shape}")
     if not np.isfinite(arr).all():
-        raise InvalidInput(
-            f"{name} has non-finite entries at indices {np.flatnonzero(~np.isfinite(arr)).tolist()}"
-        )
+        raise InvalidInput(f"{name} has non-finite entries at indices {nonfinite_indices(arr)}")
     return arr
 
 
@@ -163,8 +167,7 @@ def finite_array(value: object, name: str, shape: tuple[int, ...], what: str) ->
     if arr.shape != shape:
         raise InvalidInput(f"{valid}, got shape {arr.shape}")
     if not np.isfinite(arr).all():
-        at = [tuple(int(i) for i in k) if arr.ndim > 1 else int(k[0]) for k in np.argwhere(~np.isfinite(arr))]
-        raise InvalidInput(f"{name} has non-finite entries at indices {at}")
+        raise InvalidInput(f"{name} has non-finite entries at indices {nonfinite_indices(arr)}")
     return arr
 
 

@@ -61,7 +61,11 @@ def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = 
 
     Angles equal modulo 2 pi, and the two joint-angle sets of a universal joint that point
     an axisymmetric strut the same way, count as the same assembly.
+
+    Raises:
+        InvalidInput: a ``tol`` that is not a positive number [m].
     """
+    tol = positive(tol, "tol", "m")
     return frame_distance(mech, q1, q2) < tol
 
 

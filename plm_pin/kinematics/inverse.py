@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import positive, signs
+from .._arguments import count, positive, signs
 from ..core import closures as _closures
 from ..core.assembly import assemble, newton
 from ..core.closures import Closure, compile_closures
@@ -306,7 +306,10 @@ def working_modes(
 
     Raises:
         PoseUnreachable: when some leg cannot reach.
+        InvalidInput: malformed inputs, ``starts_per_leg`` not a whole number >= 1 or ``seed`` not
+            one >= 0.
     """
+    starts_per_leg, seed = count(starts_per_leg, "starts_per_leg", minimum=1), count(seed, "seed")
     first = inverse_kinematics(mech, x, guess, tol=tol)
     task = require_task(mech)
     target = TaskTarget(task, first.x)
