@@ -48,6 +48,7 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
+from ._arguments import flag
 from ._io import atomic_write_text
 from .core.mechanism import Mechanism, body_name
 from .description.mjcf import DRIVE_FIELDS, StateMap, require_mujoco, rotation_to_quat_wxyz
@@ -527,6 +528,7 @@ def export_mjcf(
         InvalidInput: a path not ending in ``.xml``, a bad timestep or integrator.
         DescriptionError: what MuJoCo cannot hold (named), or MuJoCo missing.
     """
+    flag(sidecar, "sidecar")
     out = Path(path)
     if out.suffix != ".xml":
         raise InvalidInput(f"MJCF file name must end in .xml, got {out.name!r}")

@@ -8,6 +8,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from ._arguments import flag, mapping
 from ._text import short
 from .core.mechanism import Mechanism
 from .description.loader import Description, build_model, build_visual_model, read_description
@@ -164,6 +165,7 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
         DescriptionError: unknown name, missing or malformed files, unsafe content.
         ClosureNotSatisfied: when the loops cannot be closed from the reference guess.
     """
+    flag(validate, "validate")
     text = str(name_or_path)
     if text in PRESETS:
         return mechanism_from_description(
@@ -244,8 +246,9 @@ def build_mechanism(
         DescriptionError: the builder's output is not a valid description.
         ClosureNotSatisfied: when ``validate`` and the loops cannot be closed.
     """
+    flag(validate, "validate")
     builder, base, label = resolve_builder(target)
-    given = dict(parameters or {})
+    given = dict(mapping(parameters or {}, "parameters", "builder parameter names to values [SI units]"))
     valid = builder_parameters(builder)
     unknown = [key for key in given if key not in valid]
     if unknown:

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import count, positive
+from .._arguments import count, flag, positive
 from ..core.assembly import assemble, newton
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
@@ -137,6 +137,7 @@ def forward_kinematics(
         InvalidInput: malformed inputs.
     """
     starts, seed, tol = count(starts, "starts"), count(seed, "seed"), positive(tol, "tol")
+    flag(all_modes, "all_modes")
     c = check_task_vector(actuators, mech.n_actuators, "actuators")
     if mech.mobility > mech.n_actuators:
         raise InvalidInput(

@@ -36,6 +36,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy.ndimage import label as _label
 
+from .._arguments import positive, real_numbers
 from ..core import closures as _closures
 from ..core.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
 from ..core.legs import Leg, ik_jacobian_from_data, working_mode_from_data
@@ -651,7 +652,7 @@ def base_pose(mech: Mechanism, pose: ArrayLike | None, guess: ArrayLike | None) 
     task = require_task(mech)
     if pose is None:
         return task_pose(mech, start_configuration(mech, guess))
-    base = np.asarray(pose, dtype=float)
+    base = np.asarray(real_numbers(pose, "pose"), dtype=float)
     if base.shape != (task.size,) or not np.all(np.isfinite(base)):
         raise InvalidInput(
             f"pose must hold {task.size} finite task coordinates {list(task.dofs)}, got {pose!r}"
@@ -681,6 +682,7 @@ def solve_poses(
     Returns:
         The solved grid, and the working mode kept (None when no point could be seeded).
     """
+    tol = positive(tol, "tol", "m, rad")
     shape = poses.shape[:-1]
     k = poses.shape[-1]
     ev = IKEvaluator.from_mechanism(mech)
