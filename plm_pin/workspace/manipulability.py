@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._arguments import check_tolerance, flag
-from ..core.mechanism import Mechanism
+from ..core.mechanism import Mechanism, require_task
 from ..exceptions import SingularConfiguration
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import (
@@ -51,6 +51,37 @@ POSE_METRICS: tuple[str, ...] = (
     "direct_margin",
 )
 """Names of the per-pose metrics of workspace maps, in this order."""
+
+
+def manipulability_unit(mech: Mechanism) -> str:
+    r"""SI unit of :math:`w` for ``mech``: the product of the column units of :math:`J_{ce}`.
+
+    Column ``j`` is in actuator units (m for prismatic, rad for revolute actuators) per unit
+    of task coordinate ``j`` (m for ``x y z``, rad for ``rx ry rz``), so :math:`w` is in
+    :math:`a^k / \prod_j t_j` (e.g. m/rad for linear actuators and an x-y-theta task, ``-``
+    for a four-bar's crank angle per rocker angle). With actuators of both kinds the rows of
+    :math:`J_{ce}` mix units and :math:`w` has none: :data:`W_UNIT` is returned.
+
+    Raises:
+        InvalidInput: a mechanism without a task.
+    """
+    task = require_task(mech)
+    kinds = {a.kind for a in mech.actuators}
+    if len(kinds) != 1:
+        return W_UNIT
+    powers = {"m": 0, "rad": 0}
+    powers["m" if kinds == {"prismatic"} else "rad"] += len(task.dofs)
+    for dof in task.dofs:
+        powers["rad" if dof.startswith("r") else "m"] -= 1
+
+    def product(sign: int) -> str:
+        parts = [s if abs(p) == 1 else f"{s}^{abs(p)}" for s, p in powers.items() if p * sign > 0]
+        return " ".join(parts)
+
+    above, below = product(1), product(-1)
+    if not below:
+        return above or "-"
+    return f"{above or '1'}/{below if ' ' not in below else f'({below})'}"
 
 
 @dataclass(frozen=True)
