@@ -309,6 +309,26 @@ def effort_limits(value: object, name: str, n: int) -> object:
     return value
 
 
+MAX_EFFORT = 1e12  # TOLERANCE -> tolerances.py
+"""Largest force [N] or torque [N m] a simulation accepts: a thousand times the largest presses'
+(about 1e9 N); far beyond it a step's accelerations and energies overflow or lose every digit."""
+
+
+def physical_effort(value: np.ndarray, name: str) -> np.ndarray:
+    """``value`` unchanged if every entry is at most :data:`MAX_EFFORT` in magnitude.
+
+    Raises:
+        InvalidInput: naming ``name``, the largest magnitude and the bound.
+    """
+    largest = float(np.max(np.abs(value), initial=0.0))
+    if largest > MAX_EFFORT:
+        raise InvalidInput(
+            f"{name} reaches {largest:.3g} N (N m), beyond {MAX_EFFORT:.0e}, more than any machine exerts: "
+            "not a physical load"
+        )
+    return value
+
+
 MAX_SAMPLES = 10_000_000
 """Most samples a simulation or trajectory keeps (``duration / dt``): more would not fit in memory."""
 

@@ -52,7 +52,7 @@ class StiffnessMap(Result):
         Raises:
             InvalidInput: an unknown name.
         """
-        if name not in VARIABLES:
+        if not isinstance(name, str) or name not in VARIABLES:
             raise InvalidInput(f"unknown stiffness-map variable {name!r}; variables are {list(VARIABLES)}")
         return np.asarray(getattr(self, name))
 

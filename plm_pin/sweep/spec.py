@@ -388,7 +388,7 @@ def make_spec(
     if isinstance(metrics, str) or not metrics:
         raise InvalidInput(f"metrics must be a non-empty list among {list(METRICS)}, got {short(metrics)}")
     for m in metrics:
-        if m not in METRICS:
+        if not isinstance(m, str) or m not in METRICS:
             raise InvalidInput(f"unknown metric {short(m)}; metrics are {list(METRICS)}")
     if len(set(metrics)) != len(metrics):
         raise InvalidInput(f"metrics are repeated: {list(metrics)}")
