@@ -1,0 +1,300 @@
+"""Options of the wrong type or range: one InvalidInput (or DescriptionError) naming the option, no traceback.
+
+Classes: solver tolerances and iteration caps not > 0; numbers given as text, lists or None; booleans given
+as text or numbers; mappings given as lists; names given as lists; results of the wrong kind; profiles
+that are not functions; non-finite entries named by index; loads no machine exerts.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import math
+import re
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+
+from plm_pin import DescriptionError, InvalidInput, SimulationFailed, build_mechanism, load
+from plm_pin.description.interop import parse_epr_sidecar
+from plm_pin.description.sidecar import ClosureSpec
+from plm_pin.dynamics import (
+    adaptive_trapezoid_work,
+    decoupling_check,
+    differentiated_profile,
+    inverse_dynamics,
+    simulate,
+    task_trajectory,
+)
+from plm_pin.dynamics.trajectory import sampled_profile
+from plm_pin.kinematics import (
+    classify,
+    follow_targets,
+    forward_kinematics,
+    inverse_kinematics,
+    same_assembly,
+    task_pose,
+    track_actuator_path,
+    working_mode,
+    working_modes,
+)
+from plm_pin.statics import static_balance, static_forces
+from plm_pin.stiffness import deflection, natural_frequencies, stiffness
+from plm_pin.workspace import orientation_range
+from tests.conftest import preset
+
+
+@functools.cache
+def trajectory():
+    """A short task trajectory of the 3D4M (seven samples from the reference pose)."""
+    m = preset("harada2011_3d4m")
+    t = np.linspace(0.0, 0.06, 7)
+    return task_trajectory(m, sampled_profile(t, task_pose(m, m.q_ref) + np.outer(t, [0.1, 0.0, 0.0])), t)
+
+
+def calls() -> dict[str, Callable[..., Any]]:
+    """Each function under test bound to a valid call, so that only the option given varies."""
+    m, fb = preset("harada2011_3d4m"), preset("fourbar")
+    x, c = task_pose(m, m.q_ref), m.actuator_positions(m.q_ref)
+    t = np.linspace(0.0, 0.06, 7)
+    return {
+        "assemble": lambda **kw: m.assemble(m.q_ref, **kw),
+        "inverse_kinematics": lambda **kw: inverse_kinematics(m, x, **kw),
+        "forward_kinematics": lambda **kw: forward_kinematics(m, c, **kw),
+        "working_modes": lambda **kw: working_modes(m, x, **kw),
+        "working_mode": lambda **kw: working_mode(m, m.q_ref, **kw),
+        "same_assembly": lambda **kw: same_assembly(m, m.q_ref, m.q_ref, **kw),
+        "classify": lambda **kw: classify(m, m.q_ref, **kw),
+        "follow_targets": lambda **kw: follow_targets(m, m.q_ref, **{"fixed": {"slider1": [c[0]]}, **kw}),
+        "track_actuator_path": lambda **kw: track_actuator_path(m, [c, c], m.q_ref, **kw),
+        "static_balance": lambda **kw: static_balance(m, m.q_ref, **kw),
+        "static_forces": lambda **kw: static_forces(m, m.q_ref, **kw),
+        "inverse_dynamics": lambda **kw: inverse_dynamics(m, trajectory(), **kw),
+        "task_trajectory": lambda **kw: task_trajectory(
+            m, kw.pop("profile", sampled_profile(t, x + np.outer(t, [0.1, 0.0, 0.0]))), t, **kw
+        ),
+        "differentiated_profile": lambda **kw: differentiated_profile(lambda s: x, **kw),
+        "adaptive_trapezoid_work": lambda **kw: adaptive_trapezoid_work(
+            lambda s: np.ones((len(s), 1)), 0, 1, **kw
+        ),
+        "decoupling_check": lambda **kw: decoupling_check(m, [(0.0, 0.08, 0.0)], **kw),
+        "orientation_range": lambda **kw: orientation_range(m, "rz", [-0.1, 0.0, 0.1], **kw),
+        "stiffness": lambda **kw: stiffness(m, m.q_ref, **kw),
+        "deflection": lambda **kw: deflection(m, m.q_ref, [1.0, 0.0, 0.0], **kw),
+        "natural_frequencies": lambda **kw: natural_frequencies(m, m.q_ref, **kw),
+        "simulate": lambda **kw: simulate(fb, fb.q_ref, **{"duration": 0.01, "dt": 0.01, **kw}),
+        "load": lambda **kw: load("fourbar", **kw),
+        "build_mechanism": lambda **kw: build_mechanism("fourbar", **kw),
+    }
+
+
+def refused(function: str, option: str, value: Any, message: str, error: type = InvalidInput) -> None:
+    """Call ``function`` with ``option=value``: it raises ``error`` whose message starts with ``message``."""
+    with pytest.raises(error) as info:
+        calls()[function](**{option: value})
+    assert re.match(message, str(info.value)), str(info.value)
+
+
+TOLERANCES = [
+    # solver tolerances and iteration caps: > 0 (a tolerance of 0 is never reached), a whole number >= 1
+    ("assemble", "tol", -1e-9, r"tol must be a positive finite number \[m, rad\], got -1e-09$"),
+    ("assemble", "tol", 0.0, r"tol must be a positive finite number \[m, rad\], got 0.0$"),
+    ("assemble", "tol", "1e-9", r"tol must be a positive finite number \[m, rad\], got '1e-9'$"),
+    ("assemble", "tol", [1e-9], r"tol must be a positive finite number \[m, rad\], got \[1e-09\]$"),
+    ("assemble", "tol", math.nan, r"tol must be a positive finite number"),
+    ("assemble", "max_iterations", 0, r"max_iterations must be a whole number >= 1, got 0$"),
+    ("assemble", "max_iterations", -3, r"max_iterations must be a whole number >= 1, got -3$"),
+    ("assemble", "max_iterations", "100", r"max_iterations must be a whole number >= 1, got '100'$"),
+    ("assemble", "max_iterations", 2.5, r"max_iterations must be a whole number >= 1, got 2.5$"),
+    ("assemble", "max_iterations", None, r"max_iterations must be a whole number >= 1, got None$"),
+    ("inverse_kinematics", "tol", -1.0, r"tol must be a positive finite number"),
+    ("forward_kinematics", "tol", 0, r"tol must be a positive finite number"),
+    ("working_modes", "starts_per_leg", 0, r"starts_per_leg must be a whole number >= 1, got 0$"),
+    ("working_modes", "starts_per_leg", "12", r"starts_per_leg must be a whole number >= 1"),
+    ("working_modes", "seed", -1, r"seed must be a whole number >= 0, got -1$"),
+    ("working_mode", "rtol", "1e-9", r"rtol must be a finite number in \[0, 1\), got '1e-9'$"),
+    ("working_mode", "rtol", 1.5, r"rtol must be a finite number in \[0, 1\), got 1.5$"),
+    ("same_assembly", "tol", None, r"tol must be a positive finite number \[m\], got None$"),
+    ("classify", "tol", "1e-6", r"tol must be a finite number >= 0, got '1e-6'$"),
+    ("follow_targets", "tol", -1.0, r"tol must be a positive finite number"),
+    ("track_actuator_path", "closure_tol", 0.0, r"closure_tol must be a positive finite number"),
+    ("track_actuator_path", "tol", "a", r"tol must be a finite number >= 0, got 'a'$"),
+    ("static_forces", "singular_rtol", "1e-8", r"singular_rtol must be a finite number in \[0, 1\)"),
+    ("inverse_dynamics", "singular_rtol", [1e-8], r"singular_rtol must be a finite number in \[0, 1\)"),
+    ("task_trajectory", "tol", -1e-12, r"tol must be a positive finite number \[m, rad\]"),
+    ("task_trajectory", "singularity_tol", None, r"singularity_tol must be a finite number >= 0, got None$"),
+    ("differentiated_profile", "step", "1e-3", r"step must be a positive finite number \[s\], got '1e-3'$"),
+    ("adaptive_trapezoid_work", "tol", "0.001", r"tol must be a positive finite number \[J\], got '0.001'$"),
+    ("adaptive_trapezoid_work", "n_max", math.inf, r"n_max must be a whole number >= 1, got inf$"),
+    ("decoupling_check", "atol", [0.0], r"atol must be a finite number >= 0, got \[0.0\]$"),
+    ("decoupling_check", "velocity_scale", -1.0, r"velocity_scale must be a positive finite number"),
+    ("orientation_range", "near", "0.01", r"near must be a finite number >= 0, got '0.01'$"),
+    ("orientation_range", "ik_tol", 0.0, r"ik_tol must be a positive finite number \[m, rad\], got 0.0$"),
+    ("orientation_range", "reference", "0", r"reference must be a finite number \[rad\], got '0'$"),
+    ("deflection", "max_iterations", "30", r"max_iterations must be a whole number >= 1, got '30'$"),
+    ("deflection", "max_iterations", 0, r"max_iterations must be a whole number >= 1, got 0$"),
+    ("natural_frequencies", "count", "2", r"count must be a positive integer or None, got '2'$"),
+    ("simulate", "rtol", "1e-10", r"rtol must be a positive finite number, got '1e-10'$"),
+]
+
+
+@pytest.mark.parametrize(("function", "option", "value", "message"), TOLERANCES, ids=lambda v: str(v)[:24])
+def test_tolerances_caps_and_numbers_of_the_wrong_kind_are_refused(function, option, value, message):
+    """A negative or zero tolerance, a text or list for a number, a fractional count: named and refused."""
+    refused(function, option, value, rf"^{message}")
+
+
+FLAGS = [
+    ("inverse_kinematics", "explain"),
+    ("inverse_kinematics", "respect_limits"),
+    ("forward_kinematics", "all_modes"),
+    ("classify", "raise_if_singular"),
+    ("static_forces", "gravity"),
+    ("static_balance", "gravity"),
+    ("inverse_dynamics", "gravity"),
+    ("stiffness", "gravity"),
+    ("load", "validate"),
+    ("build_mechanism", "validate"),
+]
+
+
+@pytest.mark.parametrize(("function", "option"), FLAGS, ids=str)
+@pytest.mark.parametrize("value", ["no", "False", 0, 1.0, None, [True]], ids=repr)
+def test_a_boolean_option_takes_true_or_false_only(function, option, value):
+    """gravity="no" would count as true: every boolean option refuses text, numbers, None and lists."""
+    refused(function, option, value, rf"^{option} must be True or False, got {re.escape(repr(value))}$")
+
+
+KINDS = [
+    # mappings given as lists or numbers, names given as lists, results of the wrong kind
+    ("static_forces", "link_limits", [("rod1", (0.0, 1.0))], r"link_limits must be a mapping of link names"),
+    ("static_forces", "link_limits", {"rod1": 5.0}, r"link_limits\['rod1'\] must be \(lower, upper\)"),
+    ("static_forces", "link_limits", {"rod1": "0, 1"}, r"link_limits\['rod1'\] must be real numbers"),
+    ("static_forces", "link_limits", {1: (0.0, 1.0)}, r"link_limits must be keyed by link names \(strings\)"),
+    ("static_forces", "min_compression", "5", r"min_compression must be a finite number \[N\], got '5'$"),
+    (
+        "static_forces",
+        "min_compression",
+        [5.0],
+        r"min_compression must be a finite number \[N\], got \[5.0\]$",
+    ),
+    (
+        "static_forces",
+        "internal",
+        {"rod2": "a"},
+        r"internal\['rod2'\] must be a finite number \[N\], got 'a'$",
+    ),
+    ("static_forces", "objective", ["norm"], r"objective \['norm'\] is not one of \['norm', 'max'\]$"),
+    ("inverse_dynamics", "groups", ["rod1"], r"groups must be a mapping of group names to sequences of body"),
+    (
+        "inverse_dynamics",
+        "groups",
+        {"g": "rod1"},
+        r"groups\['g'\] must be a sequence of body names, got 'rod1'$",
+    ),
+    ("inverse_dynamics", "link_limits", 3.0, r"link_limits must be a mapping of link names"),
+    (
+        "assemble",
+        "fixed",
+        3,
+        r"fixed must be joint names or a mapping from joint name to value \[m, rad\], got 3$",
+    ),
+    ("assemble", "fixed", [1, 2], r"fixed must be joint names or a mapping"),
+    ("assemble", "fixed", {1: 0.0}, r"fixed must map joint names to values, got a key 1$"),
+    ("follow_targets", "fixed", [("slider1", [0.0])], r"fixed must be a mapping of one-DOF joint names"),
+    ("follow_targets", "task_dofs", "x", r"task_dofs must be a sequence of task coordinate names, got 'x'$"),
+    ("build_mechanism", "parameters", [("crank", 0.1)], r"parameters must be a mapping of builder parameter"),
+    ("stiffness", "forces", {"f_c": [1.0]}, r"forces must be a StaticForces result \(plm_pin.statics"),
+    ("stiffness", "compliance", {"actuators": {}}, r"compliance must be a ComplianceSpec"),
+    ("natural_frequencies", "result", "K", r"result must be a StiffnessResult"),
+    ("natural_frequencies", "model", ["task"], r"model \['task'\] is not one of"),
+    ("deflection", "frame", 3, r"frame must be a frame name \(a string\) or None, got 3$"),
+    ("decoupling_check", "mode", (1,), r"mode must hold 4 signs \(\+1 or -1\), one per leg; got \(1,\)$"),
+    ("task_trajectory", "profile", None, r"profile must be a function t -> \(x, xd, xdd\) or positions"),
+    ("task_trajectory", "profile", "line", r"profile must be a function t -> \(x, xd, xdd\) or positions"),
+    ("task_trajectory", "mode", "+-", r"mode must be None or a sequence of signs"),
+    ("simulate", "method", ["fixed"], r"method \['fixed'\] is not one of"),
+]
+
+
+@pytest.mark.parametrize(("function", "option", "value", "message"), KINDS, ids=lambda v: str(v)[:24])
+def test_mappings_names_and_results_of_the_wrong_kind_are_refused(function, option, value, message):
+    """A list for a mapping, a list for a name, a dict for a result: named, with the valid form."""
+    refused(function, option, value, rf"^{message}")
+
+
+NONFINITE = [
+    ("static_forces", "internal", [math.nan], r"internal has non-finite entries at indices \[0\]$"),
+    (
+        "static_forces",
+        "weights",
+        [1.0, math.nan, 1.0, math.inf],
+        r"weights has non-finite entries at indices \[1, 3\]$",
+    ),
+    (
+        "static_forces",
+        "weights",
+        np.where(np.eye(4) > 0, 1.0, np.nan),
+        r"weights has non-finite entries at indices \[\(0, 1\), \(0, 2\)",
+    ),
+    ("inverse_dynamics", "internal", [math.inf], r"internal has non-finite entries at indices \[0\]$"),
+    ("stiffness", "internal", [math.nan], r"internal has non-finite entries at indices \[0\]$"),
+]
+
+
+@pytest.mark.parametrize(("function", "option", "value", "message"), NONFINITE, ids=lambda v: str(v)[:24])
+def test_non_finite_entries_are_named_by_their_indices_not_by_a_shape(function, option, value, message):
+    """NaN in internal or weights: the message says which entries, not 'got shape (1,)'."""
+    refused(function, option, value, rf"^{message}")
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "message"),
+    [
+        ("actuator_forces", [1e300], r"actuator_forces reaches 1e\+300 N \(N m\), beyond 1e\+12"),
+        ("actuator_forces", [-2e12], r"actuator_forces reaches 2e\+12 N \(N m\), beyond 1e\+12"),
+        ("wrench", [1e300, 0.0, 0.0, 0.0, 0.0, 0.0], r"wrench reaches 1e\+300 N \(N m\)"),
+    ],
+)
+def test_simulate_refuses_a_load_no_machine_exerts(option, value, message):
+    """1e300 N ended in 'LinAlgError: SVD did not converge'; now refused at the entry as not physical."""
+    refused("simulate", option, value, rf"^{message}")
+
+
+def test_simulate_still_runs_a_large_but_physical_load():
+    """1e3 N m on the four-bar's crank is a load: the run goes (or stops with SimulationFailed), unrefused."""
+    fb = preset("fourbar")
+    with contextlib.suppress(SimulationFailed):
+        simulate(fb, fb.q_ref, duration=0.01, dt=0.01, actuator_forces=[1e3])
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"type": ["point"]}, r"closure 'c': invalid closure type \['point'\]; valid types are"),
+        ({"type": "ball"}, r"closure 'c': invalid closure type 'ball'"),
+        ({"frames": ("a",)}, r"closure 'c': frames must be a pair of frame names, got \('a',\)$"),
+        ({"frames": ("a", 2)}, r"closure 'c': frames must be a pair of frame names"),
+        ({"name": 3}, r"closure 3: the name must be a string$"),
+        ({"type": "revolute", "axis": (0.0, math.nan, 1.0)}, r"closure 'c': axis must be 3 finite numbers"),
+        ({"type": "revolute", "axis": "001"}, r"closure 'c': axis must be 3 finite numbers"),
+    ],
+)
+def test_a_closure_built_in_python_checks_its_types(changes, message):
+    """A ClosureSpec built in Python with a closure type given as a list: DescriptionError, not KeyError."""
+    given = {"name": "c", "frames": ("a", "b"), "type": "point", **changes}
+    with pytest.raises(DescriptionError, match=rf"^{message}"):
+        ClosureSpec(**given)
+
+
+def test_an_example_parallel_robots_closure_type_given_as_a_list_is_refused():
+    """robot.yaml's type: [[3d]] was 'TypeError: unhashable type: list'; now the entry is named."""
+    data = {"closed_loop": [["a", "b"]], "type": [["3d"]], "name_mot": ["m"]}
+    with pytest.raises(
+        DescriptionError,
+        match=r"^robot.yaml: type\[0\]: invalid constraint type \[\['3d'\]\]|"
+        r"type\[0\]: invalid constraint type",
+    ):
+        parse_epr_sidecar(data, "robot.yaml")
