@@ -72,7 +72,11 @@ def _predict(mech: Mechanism, qs: Sequence[np.ndarray], s: np.ndarray, k: int) -
 
 
 def _check_path_parameter(s: ArrayLike | None, n: int) -> np.ndarray:
-    arr = np.arange(n, dtype=float) / max(n - 1, 1) if s is None else np.asarray(s, dtype=float)
+    arr = (
+        np.arange(n, dtype=float) / max(n - 1, 1)
+        if s is None
+        else np.asarray(real_numbers(s, "s"), dtype=float)
+    )
     if arr.shape != (n,) or not np.all(np.isfinite(arr)):
         raise InvalidInput(f"s must be {n} finite numbers, got shape {arr.shape}")
     if n > 1 and np.any(np.diff(arr) < 0.0):
@@ -118,7 +122,11 @@ def follow_targets(
     """
     tol = positive(tol, "tol", "m, rad")
     task = require_task(mech)
-    if isinstance(task_dofs, str) or not all(isinstance(d, str) for d in task_dofs):
+    if (
+        isinstance(task_dofs, str)
+        or not isinstance(task_dofs, Sequence)
+        or not all(isinstance(d, str) for d in task_dofs)
+    ):
         raise InvalidInput(f"task_dofs must be a sequence of task coordinate names, got {short(task_dofs)}")
     dofs = tuple(task_dofs)
     unknown = [d for d in dofs if d not in task.dofs]

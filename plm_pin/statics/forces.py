@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._arguments import finite_number, load_arguments, mapping, real_numbers
+from .._arguments import effort_limits, finite_number, load_arguments, mapping, real_numbers
 from .._text import short
 from ..core.checks import check_finite_result
 from ..core.mechanism import Mechanism
@@ -140,6 +140,7 @@ def actuator_limits(mech: Mechanism, limits: ArrayLike | None) -> np.ndarray:
             +inf or an upper bound of -inf (no effort would be admissible).
     """
     n = mech.n_actuators
+    effort_limits(limits, "limits", n)
     if isinstance(limits, str):
         if limits != "description":
             raise InvalidInput(f"limits {limits!r} is not 'description', None or an ({n}, 2) array")

@@ -40,10 +40,14 @@ from plm_pin.kinematics import (
     working_mode,
     working_modes,
 )
-from plm_pin.statics import static_balance, static_forces
+from plm_pin.statics import internal_force_range, static_balance, static_forces, wrench_polygon
 from plm_pin.stiffness import deflection, natural_frequencies, stiffness
-from plm_pin.workspace import orientation_range
+from plm_pin.sweep import sweep
+from plm_pin.workspace import orientation_range, workspace_map
 from tests.conftest import preset
+
+LIMITS = [(-100.0, 100.0)] * 4
+"""Effort limits of the 3D4M's drives for the capability calls [N]."""
 
 
 @functools.cache
@@ -86,6 +90,12 @@ def calls() -> dict[str, Callable[..., Any]]:
         "natural_frequencies": lambda **kw: natural_frequencies(m, m.q_ref, **kw),
         "simulate": lambda **kw: simulate(fb, fb.q_ref, **{"duration": 0.01, "dt": 0.01, **kw}),
         "load": lambda **kw: load("fourbar", **kw),
+        "workspace_map": lambda **kw: workspace_map(m, ("x", "y"), ([0.0, 0.01], [0.08, 0.09]), **kw),
+        "wrench_polygon": lambda **kw: wrench_polygon(
+            m, m.q_ref, [1.0, 0, 0], [0, 1.0, 0], limits=LIMITS, **kw
+        ),
+        "internal_force_range": lambda **kw: internal_force_range(m, m.q_ref, **kw),
+        "sweep": lambda **kw: sweep("harada2011_3d4m", {"half_plate": [0.05]}, {"y": [0.08]}, **kw),
         "build_mechanism": lambda **kw: build_mechanism("fourbar", **kw),
     }
 
@@ -216,6 +226,25 @@ KINDS = [
     ("task_trajectory", "profile", "line", r"profile must be a function t -> \(x, xd, xdd\) or positions"),
     ("task_trajectory", "mode", "+-", r"mode must be None or a sequence of signs"),
     ("simulate", "method", ["fixed"], r"method \['fixed'\] is not one of"),
+    ("workspace_map", "mode", 1, r"mode must be None or a sequence of signs"),
+    ("workspace_map", "mode", (1, -1), r"mode must hold 4 signs \(\+1 or -1\), one per leg; got \(1, -1\)$"),
+    ("workspace_map", "workers", "2", r"workers must be a whole number >= 1, got '2'$"),
+    ("wrench_polygon", "n", "72", r"n must be a whole number >= 8, got '72'$"),
+    ("wrench_polygon", "n", 4, r"n must be a whole number >= 8, got 4$"),
+    (
+        "internal_force_range",
+        "limits",
+        {"slider1": (-1.0, 1.0)},
+        r"limits must be 'description', None or an \(4, 2\)",
+    ),
+    ("follow_targets", "s", "uniform", r"s must be real numbers \(array-like\), got 'uniform'$"),
+    ("sweep", "metrics", 3, r"metrics must be a non-empty list among"),
+    ("sweep", "metrics", [["manipulability"]], r"unknown metric \['manipulability'\]"),
+    ("sweep", "base", [("legs", (1, 2, 4))], r"base must be a mapping of builder parameter names to values"),
+    ("sweep", "options", ["over"], r"options must be a mapping of option names to values"),
+    ("sweep", "pose", "0 0.08 0", r"pose must be real numbers \(array-like\), got '0 0.08 0'$"),
+    ("sweep", "store", 3, r"store must be a folder path \(a string or a Path\) or None, got 3$"),
+    ("sweep", "progress", True, r"progress must be a function \(done, total\) or None, got True$"),
 ]
 
 
