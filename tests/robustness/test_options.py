@@ -29,6 +29,7 @@ from plm_pin.dynamics import (
     task_trajectory,
 )
 from plm_pin.dynamics.trajectory import sampled_profile
+from plm_pin.families import prrrp
 from plm_pin.kinematics import (
     classify,
     follow_targets,
@@ -60,7 +61,7 @@ def trajectory():
 
 def calls() -> dict[str, Callable[..., Any]]:
     """Each function under test bound to a valid call, so that only the option given varies."""
-    m, fb = preset("harada2011_3d4m"), preset("fourbar")
+    m, fb, asym = preset("harada2011_3d4m"), preset("fourbar"), preset("harada2015_asymmetric")
     x, c = task_pose(m, m.q_ref), m.actuator_positions(m.q_ref)
     t = np.linspace(0.0, 0.06, 7)
     return {
@@ -90,6 +91,12 @@ def calls() -> dict[str, Callable[..., Any]]:
         "natural_frequencies": lambda **kw: natural_frequencies(m, m.q_ref, **kw),
         "simulate": lambda **kw: simulate(fb, fb.q_ref, **{"duration": 0.01, "dt": 0.01, **kw}),
         "load": lambda **kw: load("fourbar", **kw),
+        "prrrp_state": lambda **kw: prrrp.prrrp_state(asym, asym.q_ref, **kw),
+        "pair_solutions": lambda **kw: prrrp.pair_solutions(
+            **{"c1": 0.0, "c2": 0.1, "l1": 0.24, "l2": 0.17, **kw}
+        ),
+        "assembly_mode_graph": lambda **kw: prrrp.assembly_mode_graph(asym, **kw),
+        "plan_working_mode_change": lambda **kw: prrrp.plan_working_mode_change(asym, **kw),
         "workspace_map": lambda **kw: workspace_map(m, ("x", "y"), ([0.0, 0.01], [0.08, 0.09]), **kw),
         "wrench_polygon": lambda **kw: wrench_polygon(
             m, m.q_ref, [1.0, 0, 0], [0, 1.0, 0], limits=LIMITS, **kw
@@ -245,6 +252,14 @@ KINDS = [
     ("sweep", "pose", "0 0.08 0", r"pose must be real numbers \(array-like\), got '0 0.08 0'$"),
     ("sweep", "store", 3, r"store must be a folder path \(a string or a Path\) or None, got 3$"),
     ("sweep", "progress", True, r"progress must be a function \(done, total\) or None, got True$"),
+    ("prrrp_state", "layout", {"legs": []}, r"layout must be a PrrrpLayout \(prrrp_layout\(mech\)\) or None"),
+    ("prrrp_state", "tol", "1e-9", r"tol must be a finite number >= 0, got '1e-9'$"),
+    ("pair_solutions", "l1", -0.24, r"l1 must be a length > 0 \[m\] \(a finite number\), got -0.24$"),
+    ("pair_solutions", "c2", "0.1", r"c2 must be a finite number \[m\], got '0.1'$"),
+    ("assembly_mode_graph", "walk_samples", "7", r"walk_samples must be a whole number >= 1, got '7'$"),
+    ("assembly_mode_graph", "height", "0.02", r"height must be a finite number \[m\], got '0.02'$"),
+    ("plan_working_mode_change", "tilt", "0.5", r"tilt must be a finite number \[rad\], got '0.5'$"),
+    ("plan_working_mode_change", "samples", 101.0, r"samples must be a whole number >= 5, got 101.0$"),
 ]
 
 
