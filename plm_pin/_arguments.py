@@ -77,7 +77,7 @@ def nonnegative(value: object, name: str, unit: str = "") -> float:
     Raises:
         InvalidInput: naming ``name`` and the value (a string, a boolean, NaN, inf or a negative number).
     """
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (0.0 <= value < math.inf):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (0.0 <= float(value) < math.inf):
         shown = f" [{unit}]" if unit else ""
         raise InvalidInput(f"{name} must be a finite number >= 0{shown}, got {short(value)}")
     return float(value)
@@ -179,7 +179,7 @@ def optional_positive(value: object, name: str, unit: str) -> float | None:
     """
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (0.0 < value < math.inf):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not (0.0 < float(value) < math.inf):
         raise InvalidInput(f"{name} must be None or a finite number > 0 [{unit}], got {short(value)}")
     return float(value)
 
@@ -190,13 +190,18 @@ def leg_numbers(value: object, name: str, n: int) -> tuple[int, ...]:
     Raises:
         InvalidInput: naming ``name``, the value and the valid numbers.
     """
-    ok = isinstance(value, Sequence | np.ndarray) and not isinstance(value, (str, bytes)) and len(value) > 0
-    if ok:
-        ok = all(isinstance(i, numbers.Integral) and not isinstance(i, bool) and 1 <= i <= n for i in value)
-        ok = ok and len(set(value)) == len(value)  # type: ignore[arg-type]
-    if not ok:
+    numbers_given: list[int] = []
+    if isinstance(value, Sequence | np.ndarray) and not isinstance(value, (str, bytes)):
+        numbers_given = [
+            int(i)
+            for i in value
+            if isinstance(i, numbers.Integral) and not isinstance(i, bool) and 1 <= int(i) <= n
+        ]
+        if len(numbers_given) != len(value):  # some entry is not a leg number
+            numbers_given = []
+    if not numbers_given or len(set(numbers_given)) != len(numbers_given):
         raise InvalidInput(f"{name} must be distinct leg numbers among 1..{n}, got {short(value)}")
-    return tuple(sorted(int(i) for i in value))  # type: ignore[union-attr]
+    return tuple(sorted(numbers_given))
 
 
 def flag(value: object, name: str) -> bool:

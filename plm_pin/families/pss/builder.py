@@ -246,22 +246,24 @@ def build_pss(
             f"guide_points must be a non-empty sequence of (x, y, z) points [m], got {guide_points!r}"
         )
     legs = leg_numbers(legs, "legs", n)
-    guide_points = finite_array(guide_points, "guide_points", (n, 3), "points [m]")
-    guide_directions = finite_array(guide_directions, "guide_directions", (n, 3), "unit vectors")
-    platform_points = finite_array(platform_points, "platform_points", (n, 3), "points [m]")
-    strut_lengths = numbers_of(strut_lengths, "strut_lengths", n, "lengths > 0 [m]", "positive")
+    guide_points = finite_array(guide_points, "guide_points", (n, 3), "points [m]").tolist()
+    guide_directions = finite_array(guide_directions, "guide_directions", (n, 3), "unit vectors").tolist()
+    platform_points = finite_array(platform_points, "platform_points", (n, 3), "points [m]").tolist()
+    strut_lengths = numbers_of(strut_lengths, "strut_lengths", n, "lengths > 0 [m]", "positive").tolist()
     strut_mass = nonnegative(strut_mass, "strut_mass", "kg")
-    strut_inertia = numbers_of(strut_inertia, "strut_inertia", 3, "inertias >= 0 [kg m^2]", "nonnegative")
+    strut_inertia = tuple(
+        numbers_of(strut_inertia, "strut_inertia", 3, "inertias >= 0 [kg m^2]", "nonnegative").tolist()
+    )
     platform_mass = nonnegative(platform_mass, "platform_mass", "kg")
     platform_inertia = numbers_of(
         platform_inertia, "platform_inertia", 3, "inertias >= 0 [kg m^2]", "nonnegative"
-    )
+    ).tolist()
     slider_mass = nonnegative(slider_mass, "slider_mass", "kg")
     lead = positive(lead, "lead", "m/rev")
     screw_inertia = nonnegative(screw_inertia, "screw_inertia", "kg m^2")
     rotor_inertia = nonnegative(rotor_inertia, "rotor_inertia", "kg m^2")
-    home_pose = finite_array(home_pose, "home_pose", (6,), "x, y, z [m], phi_x, phi_y, phi_z [rad]")
-    gravity = finite_array(gravity, "gravity", (3,), "components [m/s^2]")
+    home_pose = finite_array(home_pose, "home_pose", (6,), "x, y, z [m], phi_x, phi_y, phi_z [rad]").tolist()
+    gravity = finite_array(gravity, "gravity", (3,), "components [m/s^2]").tolist()
     low, high = finite_array(stroke, "stroke", (2,), "slider limits [m]")
     if not low < high:
         raise InvalidInput(
@@ -274,7 +276,7 @@ def build_pss(
             raise InvalidInput(f"guide direction of leg {i} must be a unit vector, |e| = {norm}")
     if strut_inertia[0] != strut_inertia[1]:
         raise InvalidInput(
-            f"strut_inertia {tuple(strut_inertia.tolist())}: the transverse moments must be equal (an "
+            f"strut_inertia {strut_inertia}: the transverse moments must be equal (an "
             "axisymmetric strut, whose idle spin the universal joint may drop)"
         )
     ik = pss_inverse_kinematics(
