@@ -571,7 +571,13 @@ RESULT = "result.nc"
 
 @app.command("sweep")
 def sweep_command(
-    config: Annotated[Path, typer.Argument(help="sweep configuration (YAML; format in the README)")],
+    config: Annotated[
+        Path,
+        typer.Argument(
+            help="sweep configuration (YAML; its format is in the sweeps guide, docs/guide/sweeps.md, "
+            "and its JSON Schema plm_pin/schemas/plm-pin-sweep.schema.json)"
+        ),
+    ],
     out: Annotated[Path, typer.Option("--out", help="output folder: checkpoints and the result")],
     scheduler: Annotated[
         str | None,
