@@ -44,7 +44,7 @@ from plm_pin.kinematics import (
 from plm_pin.statics import internal_force_range, static_balance, static_forces, wrench_polygon
 from plm_pin.stiffness import deflection, natural_frequencies, stiffness
 from plm_pin.sweep import sweep
-from plm_pin.workspace import orientation_range, workspace_map
+from plm_pin.workspace import orientation_range, workspace_map, workspace_sweep
 from tests.conftest import preset
 
 LIMITS = [(-100.0, 100.0)] * 4
@@ -342,3 +342,46 @@ def test_an_example_parallel_robots_closure_type_given_as_a_list_is_refused():
         r"type\[0\]: invalid constraint type",
     ):
         parse_epr_sidecar(data, "robot.yaml")
+
+
+@functools.cache
+def _drawables() -> dict[str, Any]:
+    """A map, a sweep and a static solution of the 3D4M to draw."""
+    m = preset("harada2011_3d4m")
+    return {
+        "grid": workspace_map(m, ("x", "y"), ([0.0, 0.01], [0.08, 0.09])),
+        "line": workspace_sweep(m, "x", [0.0, 0.01]),
+        "forces": static_forces(m, m.q_ref),
+    }
+
+
+VIZ = [
+    ("plot_map", "ax", "left", r"ax must be matplotlib Axes or None, got 'left'$"),
+    ("plot_map", "loci", [1, 2], r"loci must be a sequence of SingularPoint"),
+    ("plot_map", "metric", ["manipulability"], r"unknown metric \['manipulability'\]"),
+    ("plot_sweep", "singular", 0.1, r"singular must be a sequence of SingularPoint"),
+    ("plot_sweep", "label", ["w"], r"label must be a string or None, got \['w'\]$"),
+    ("plot_static_forces", "overlay", {"f_c": 1.0}, r"overlay must be a StaticForces result or None"),
+    ("plot_static_forces", "scale", -1.0, r"scale must be a positive finite number \[m/N\], got -1.0$"),
+    ("panel_grid", "width", "4", r"width must be a positive finite number \[in\], got '4'$"),
+    ("plot_panels", "labels", "ab", r"labels must be a sequence of legend texts \(strings\), got 'ab'$"),
+    ("plot_panels", "noise", "1e-9", r"noise must be a finite number >= 0, got '1e-9'$"),
+]
+
+
+@pytest.mark.parametrize(("function", "option", "value", "message"), VIZ, ids=lambda v: str(v)[:24])
+def test_figure_options_of_the_wrong_kind_are_refused(function, option, value, message):
+    """Axes, marked points, labels, scales and sizes of the figures: named, with their valid form."""
+    pytest.importorskip("matplotlib")
+    from plm_pin import viz
+
+    d = _drawables()
+    call = {
+        "plot_map": lambda **kw: viz.plot_map(d["grid"], **kw),
+        "plot_sweep": lambda **kw: viz.plot_sweep(d["line"], **kw),
+        "plot_static_forces": lambda **kw: viz.plot_static_forces(d["forces"], **kw),
+        "panel_grid": lambda **kw: viz.panel_grid(2, **kw),
+        "plot_panels": lambda **kw: viz.plot_panels([0.0, 1.0], {"a [m]": [0.0, 1.0]}, xlabel="t [s]", **kw),
+    }[function]
+    with pytest.raises(InvalidInput, match=rf"^{message}"):
+        call(**{option: value})
