@@ -114,12 +114,8 @@ def numbers_of(
     Raises:
         InvalidInput: naming ``name``, what it got and which entries are wrong.
     """
-    real_numbers(value, name)
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        arr = np.empty(0)
-    if isinstance(value, (str, bytes)) or arr.shape != (size,):
+    arr = np.asarray(real_numbers(value, name), dtype=float)  # None: NaN of shape (), refused below
+    if arr.shape != (size,):
         raise InvalidInput(f"{name} must be {size} {what}, got {short(value)}")
     bad = ~np.isfinite(arr)
     if check == "positive":
@@ -158,14 +154,9 @@ def finite_array(value: object, name: str, shape: tuple[int, ...], what: str) ->
     Raises:
         InvalidInput: naming ``name``, the shape asked and got, or the non-finite entries.
     """
-    real_numbers(value, name)
-    valid = f"{name} must be an array of shape {shape} of {what}"
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):  # ragged
-        raise InvalidInput(f"{valid}, got {short(value)}") from None
+    arr = np.asarray(real_numbers(value, name), dtype=float)  # None: NaN of shape (), refused below
     if arr.shape != shape:
-        raise InvalidInput(f"{valid}, got shape {arr.shape}")
+        raise InvalidInput(f"{name} must be an array of shape {shape} of {what}, got shape {arr.shape}")
     if not np.isfinite(arr).all():
         raise InvalidInput(f"{name} has non-finite entries at indices {nonfinite_indices(arr)}")
     return arr
@@ -213,17 +204,6 @@ def flag(value: object, name: str) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise InvalidInput(f"{name} must be True or False, got {short(value)}")
     return bool(value)
-
-
-def choice(value: object, name: str, choices: Sequence[str]) -> str:
-    """``value`` if it is one of the strings ``choices``.
-
-    Raises:
-        InvalidInput: naming ``name``, the value and the valid choices.
-    """
-    if not isinstance(value, str) or value not in choices:
-        raise InvalidInput(f"{name} must be one of {list(choices)}, got {short(value)}")
-    return value
 
 
 def mapping(value: object, name: str, what: str) -> Mapping:
