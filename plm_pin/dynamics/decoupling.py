@@ -427,7 +427,7 @@ def decoupling_check(
         if {"inverse", "constraint"}.intersection(classify(mech, q, singular_tol).kinds):
             singular.append(k)
             continue
-        dyn = [task_space_dynamics(mech, q, xdot=xdot) for xdot in velocities]
+        dyn = [task_space_dynamics(mech, q, xdot=xdot, singularity_tol=singular_tol) for xdot in velocities]
         kept.append(k)
         kept_q.append(q)
         _collect(terms, dyn)
