@@ -477,7 +477,13 @@ def _decoupling(section: Section, four: Mechanism, asym: Mechanism) -> None:
             ),
         ],
     )
-    section.table("Decoupling table of the 3D4M", ["entry", "behaviour"], _entries(rep))
+    section.table(
+        "Decoupling table of the 3D4M",
+        ["entry", "behaviour"],
+        _entries(rep),
+        note=f"h_x at the {len(rep.velocities)} task velocities {rep.velocity_text()}, which determine the "
+        "quadratic h_x: zero there is zero at every velocity.",
+    )
     asym_rep = decoupling_check(asym, sample + np.array([0.0, 0.01, 0.0]))
     section.table(
         "The asymmetric design of Harada 2015 (unequal rods) loses the decoupling",

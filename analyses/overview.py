@@ -29,7 +29,14 @@ from plm_pin.viz import (
     plot_stiffness_map,
     plot_sweep,
 )
-from plm_pin.workspace import WorkspaceSlice, manipulability, singular_loci, workspace_map, workspace_sweep
+from plm_pin.workspace import (
+    WorkspaceSlice,
+    manipulability,
+    manipulability_unit,
+    singular_loci,
+    workspace_map,
+    workspace_sweep,
+)
 
 TITLE = "Overview"
 SUMMARY = (
@@ -161,7 +168,7 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
             ("inverse (type 1) margin", report.inverse_margin, "-"),
             ("direct (type 2) margin", report.direct_margin, "-"),
             ("singular at the reference", report.singular, ""),
-            ("manipulability w", m.w, "product of J_ce column units"),
+            ("manipulability w", m.w, manipulability_unit(mech)),
             ("condition number of J_ce", m.condition_number, "-"),
         ]
     section.table(
@@ -217,6 +224,7 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
         )
     reached = grid.reachable
     w = grid.manipulability[reached]
+    w_unit = manipulability_unit(mech)
     section.table(
         "Slice summary",
         ["quantity", "value", "unit"],
@@ -225,8 +233,8 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
             ("reachable fraction", grid.reachable_fraction, "-"),
             ("fraction reached within the joint limits", float(np.mean(grid.within_limits(mech))), "-"),
             ("fraction reached free of self-collision", float(np.mean(grid.collision_free(mech))), "-"),
-            ("smallest manipulability reached", float(np.min(w)) if w.size else None, "J_ce units"),
-            ("largest manipulability reached", float(np.max(w)) if w.size else None, "J_ce units"),
+            ("smallest manipulability reached", float(np.min(w)) if w.size else None, w_unit),
+            ("largest manipulability reached", float(np.max(w)) if w.size else None, w_unit),
             (
                 "smallest direct margin reached",
                 float(np.min(grid.direct_margin[reached])) if w.size else None,
@@ -378,13 +386,27 @@ def _decoupling(section: Section, mech: Mechanism, grid: WorkspaceSlice) -> None
         "reachable poses of the slice. An entry is *zero* when it stays within its tolerance of zero "
         f"at every pose (relative to its Cauchy-Schwarz bound, rtol = {report.rtol:g}), *constant* "
         "when its spread stays within that tolerance, and *varies* otherwise; the coupling is its "
-        f"largest ratio to the bound (0 to 1). h_x is evaluated at {report.n_velocities} random task "
-        "velocities per pose."
+        f"largest ratio to the bound (0 to 1). h_x is quadratic in the task velocity: it is evaluated at "
+        f"the {len(report.velocities)} task velocities {report.velocity_text()}, which determine it, so "
+        "*zero* there means zero at every velocity and *nonzero* gives its range over them. The spread "
+        "(max - min) is compared with the tolerance."
     )
     section.table(
         "Decoupling table",
-        ["entry", "behaviour", Column("min"), Column("max"), "unit", Column("coupling", "-")],
-        [(name, e.kind, e.minimum, e.maximum, e.unit, e.ratio) for name, e in report.entries()],
+        [
+            "entry",
+            "behaviour",
+            Column("min", fmt=".6g"),
+            Column("max", fmt=".6g"),
+            Column("spread (max - min)", fmt=".3g"),
+            Column("tolerance", fmt=".3g"),
+            "unit",
+            Column("coupling", "-"),
+        ],
+        [
+            (name, e.kind, e.minimum, e.maximum, e.spread, e.tolerance, e.unit, e.ratio)
+            for name, e in report.entries()
+        ],
         note="Decoupled with constant inertia: "
         + (", ".join(report.decoupled()) or "none")
         + f"; poses skipped: {len(report.unreachable)} unreachable, {len(report.singular)} singular.",

@@ -8,6 +8,7 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from ._arguments import flag, mapping
 from ._text import short
 from .core.mechanism import Mechanism
 from .description.loader import (
@@ -182,6 +183,7 @@ def load(name_or_path: str | Path, *, validate: bool = True, ignore: str | Itera
         ClosureNotSatisfied: when the loops cannot be closed from the reference guess.
         InvalidInput: ``ignore`` names an unknown kind, or is given for a model that is not an MJCF.
     """
+    flag(validate, "validate")
     text = str(name_or_path)
     if check_ignore(ignore) and not _is_mjcf(Path(text)):
         raise InvalidInput(f"ignore={ignore!r} applies to MuJoCo models (.xml) only; {text!r} is not one")
@@ -275,8 +277,9 @@ def build_mechanism(
         DescriptionError: the builder's output is not a valid description.
         ClosureNotSatisfied: when ``validate`` and the loops cannot be closed.
     """
+    flag(validate, "validate")
     builder, base, label = resolve_builder(target)
-    given = dict(parameters or {})
+    given = dict(mapping(parameters or {}, "parameters", "builder parameter names to values [SI units]"))
     valid = builder_parameters(builder)
     unknown = [key for key in given if key not in valid]
     if unknown:

@@ -12,7 +12,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import as_vector
+from .._arguments import as_vector, count, positive
+from .._text import short
 from ..description.sidecar import Sidecar, TaskSpec
 from ..exceptions import ClosureNotSatisfied, InvalidInput
 from . import closures as _closures
@@ -39,6 +40,20 @@ def body_names(model: pin.Model) -> tuple[str, ...]:
         if f.type == pin.FrameType.BODY:
             first.setdefault(f.parentJoint, str(f.name))
     return tuple(first.get(j, str(model.names[j])) for j in range(1, model.njoints))
+
+
+def _joint_names(value: object, name: str) -> list[str]:
+    """``value`` as a list if it is an iterable of joint names (strings).
+
+    Raises:
+        InvalidInput: naming ``name`` and the valid forms.
+    """
+    names = list(value) if isinstance(value, Iterable) and not isinstance(value, bytes) else None
+    if names is None or not all(isinstance(n, str) for n in names):
+        raise InvalidInput(
+            f"{name} must be joint names or a mapping from joint name to value [m, rad], got {short(value)}"
+        )
+    return names
 
 
 @dataclass(frozen=True)
@@ -382,17 +397,22 @@ class Mechanism:
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol``; the error
                 carries the best configuration and the worst closure.
-            InvalidInput: on a malformed ``guess`` or an unknown joint in ``fixed``.
+            InvalidInput: on a malformed ``guess``, an unknown joint in ``fixed``, a ``tol`` that
+                is not a positive number or a ``max_iterations`` that is not a whole number >= 1.
         """
+        tol = positive(tol, "tol", "m, rad")
+        max_iterations = count(max_iterations, "max_iterations", minimum=1)
         q0 = self.q_ref.copy() if guess is None else self.check_q(guess, "guess").copy()
         names: list[str] = []
         if fixed is not None:
             if isinstance(fixed, Mapping):
                 for joint, value in fixed.items():
+                    if not isinstance(joint, str):
+                        raise InvalidInput(f"fixed must map joint names to values, got a key {short(joint)}")
                     names.append(joint)
                     self.set_joint(q0, joint, value)
             else:
-                names = [fixed] if isinstance(fixed, str) else list(fixed)
+                names = [fixed] if isinstance(fixed, str) else _joint_names(fixed, "fixed")
         free = self.free_columns(names)
 
         def failure(q: np.ndarray, phi: np.ndarray) -> ClosureNotSatisfied:

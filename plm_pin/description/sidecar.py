@@ -69,6 +69,35 @@ class ClosureSpec:
     type: ClosureType
     axis: tuple[float, float, float] | None = None
 
+    def __post_init__(self) -> None:
+        """Refuse a closure of the wrong types (descriptions built in Python, not through the parser).
+
+        Raises:
+            DescriptionError: a name or frames that are not strings, a type other than those of
+                :data:`CLOSURE_TYPES` (e.g. a list), or an axis that is not 3 finite numbers.
+        """
+        where = f"closure {short(self.name)}"
+        if not isinstance(self.name, str):
+            raise DescriptionError(f"{where}: the name must be a string")
+        frames = self.frames
+        if not (
+            isinstance(frames, (tuple, list)) and len(frames) == 2 and all(isinstance(f, str) for f in frames)
+        ):
+            raise DescriptionError(f"{where}: frames must be a pair of frame names, got {short(frames)}")
+        if not isinstance(self.type, str) or self.type not in CLOSURE_TYPES:
+            raise DescriptionError(
+                f"{where}: invalid closure type {short(self.type)}; valid types are {list(CLOSURE_TYPES)}"
+            )
+        if self.axis is not None:
+            try:
+                if isinstance(self.axis, (str, bytes)):
+                    raise TypeError
+                axis = [float(a) for a in self.axis]
+            except (TypeError, ValueError):
+                axis = []
+            if len(axis) != 3 or not all(math.isfinite(a) for a in axis):
+                raise DescriptionError(f"{where}: axis must be 3 finite numbers, got {short(self.axis)}")
+
     @property
     def rows(self) -> int:
         """Number of scalar constraint equations of this closure."""

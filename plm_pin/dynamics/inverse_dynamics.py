@@ -32,7 +32,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import load_arguments, repeated
+from .._arguments import check_tolerance, flag, load_arguments, mapping, repeated
+from .._text import short
 from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL, check_finite_model, check_samples_assembled
 from ..core.mechanism import Mechanism
@@ -140,6 +141,17 @@ class _BodyGroups:
         return members, support
 
 
+def _body_names(members: object, group: object) -> list[str]:
+    """The bodies of one group: a sequence of body names (strings)."""
+    if (
+        isinstance(members, (str, bytes))
+        or not isinstance(members, Sequence)
+        or not all(isinstance(b, str) for b in members)
+    ):
+        raise InvalidInput(f"groups[{group!r}] must be a sequence of body names, got {short(members)}")
+    return list(members)
+
+
 def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) -> _BodyGroups:
     """The groups of bodies (bodies named by their joint's first body frame), checked."""
     model = mech.model
@@ -148,7 +160,8 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
         chosen = {name: [name] for name in bodies}
         _check_group_names(list(chosen), default=True)
     else:
-        chosen = {str(g): list(members) for g, members in groups.items()}
+        what = "group names to sequences of body names"
+        chosen = {str(g): _body_names(members, g) for g, members in mapping(groups, "groups", what).items()}
         _check_group_names(list(chosen), default=False)
         listed = [b for members in chosen.values() for b in members]
         unknown = sorted(set(listed) - set(bodies))
@@ -284,6 +297,8 @@ def inverse_dynamics(
     """
     trajectory = checked_trajectory(trajectory, "trajectory")
     load_arguments(None if callable(wrench) else wrench, frame, limits, mech.n_actuators)
+    check_tolerance(singular_rtol, "singular_rtol", relative=True)
+    flag(gravity, "gravity")
     rule = AllocationRule.checked(
         mech,
         objective=objective,

@@ -63,7 +63,7 @@ Units: time [s]; lengths [m], angles [rad] and their rates [/s], [/s^2].
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -71,6 +71,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy.interpolate import BPoly, make_interp_spline
 
+from .._arguments import check_tolerance, positive, real_numbers, signs
 from .._text import short
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism, require_task
@@ -127,9 +128,7 @@ def differentiated_profile(positions: Callable[[float], ArrayLike], step: float 
     Raises:
         InvalidInput: on a step that is not a positive finite number.
     """
-    h = float(step)
-    if not (np.isfinite(h) and h > 0.0):
-        raise InvalidInput(f"step must be a positive finite time [s], got {step!r}")
+    h = positive(step, "step", "s")
 
     def profile(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         xm2, xm1, x0, xp1, xp2 = (np.asarray(positions(t + j * h), dtype=float) for j in (-2, -1, 0, 1, 2))
@@ -193,7 +192,7 @@ def sampled_profile(
 
 
 def _samples(values: ArrayLike, n: int, name: str) -> np.ndarray:
-    arr = np.asarray(values, dtype=float)
+    arr = np.asarray(real_numbers(values, name), dtype=float)
     arr = arr[:, None] if arr.ndim == 1 else arr
     if arr.ndim != 2 or arr.shape[0] != n:
         raise InvalidInput(f"{name} must have shape ({n}, n) or ({n},), one row per time, got {arr.shape}")
@@ -237,6 +236,11 @@ def _evaluate(
     Raises:
         InvalidInput: on a value of the wrong shape or not finite, naming the sample.
     """
+    if profile is None or isinstance(profile, (str, bytes, Mapping)):
+        raise InvalidInput(
+            f"profile must be a function t -> (x, xd, xdd) or positions sampled at the times, shape "
+            f"({times.shape[0]}, {size}); got {short(profile)}"
+        )
     fn: Profile = profile if callable(profile) else sampled_profile(times, profile)
     out = np.empty((3, times.shape[0], size))
     for k, t in enumerate(times.tolist()):
@@ -506,6 +510,8 @@ def task_trajectory(
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "a task trajectory needs", mech.name)
+    tol, singularity_tol = positive(tol, "tol", "m, rad"), check_tolerance(singularity_tol, "singularity_tol")
+    mode = signs(mode, "mode")
     ts = _check_times(times)
     x_all, xd_all, xdd_all = _evaluate(profile, ts, task.size)
     rec = _Recorder(mech, task, ts)
@@ -593,6 +599,8 @@ def actuator_trajectory(
             f"{mech.name}: {mech.n_actuators} actuators cannot drive {mech.mobility} DOF; an actuator "
             "trajectory needs at least as many actuators as DOF"
         )
+    tol, singularity_tol = positive(tol, "tol", "m, rad"), check_tolerance(singularity_tol, "singularity_tol")
+    consistency_tol = check_tolerance(consistency_tol, "consistency_tol")
     ts = _check_times(times)
     c_all, cd_all, cdd_all = _evaluate(profile, ts, mech.n_actuators)
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")

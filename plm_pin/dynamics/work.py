@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 
+from .._arguments import count, positive
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..results import Result, unit
@@ -75,10 +76,9 @@ def adaptive_trapezoid_work(
     """
     if not (np.isfinite(ts) and np.isfinite(te) and te > ts):
         raise InvalidInput(f"need finite ts < te, got ts = {ts}, te = {te}")
-    if not tol > 0:
-        raise InvalidInput(f"tol must be positive [J], got {tol}")
+    tol, n_max = positive(tol, "tol", "J"), count(n_max, "n_max", minimum=1)
     previous = change = None
-    for n in range(1, int(n_max) + 1):
+    for n in range(1, n_max + 1):
         t = np.linspace(ts, te, 2**n + 1)
         work = np.trapezoid(np.abs(np.asarray(power_at(t), dtype=float)), t, axis=0)
         if previous is not None:

@@ -10,6 +10,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._arguments import check_tolerance
 from ..core.legs import MODE_RTOL, structure_jacobian_from_data, working_mode_from_data
 from ..core.mechanism import Mechanism, require_task
 
@@ -26,6 +27,10 @@ def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = MODE_RTOL) -> tupl
     """Sign (+1, -1, or 0 when singular) of each actuated leg block's determinant at ``q``.
 
     See :func:`~plm_pin.core.legs.working_mode_from_data`.
+
+    Raises:
+        InvalidInput: a malformed ``q`` or an ``rtol`` outside [0, 1).
     """
+    rtol = check_tolerance(rtol, "rtol", relative=True)
     structure_jacobian(mech, mech.check_q(q))
     return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), mech.legs, rtol)

@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 from scipy.linalg import blas as _blas
 from scipy.linalg import lapack as _lapack
 
-from .._arguments import as_vector, check_tolerance
+from .._arguments import as_vector, check_tolerance, flag
 from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL, check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism
@@ -227,6 +227,7 @@ def static_balance(
     check_finite_model(mech)
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
     rtol = check_tolerance(singular_rtol, "singular_rtol", relative=True)
+    flag(gravity, "gravity")
     tau = _loaded(model, data, load, None)
     if gravity:
         tau += pin.computeGeneralizedGravity(model, data, qa)

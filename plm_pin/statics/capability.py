@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._arguments import load_arguments
+from .._arguments import count, load_arguments
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, PlmError
 from ..results import Result, unit
@@ -247,8 +247,7 @@ def wrench_polygon(
         ``(n, 2)`` coordinates :math:`(a, b)` of the boundary, counter-clockwise from :math:`d_1`
         (``inf`` along rays the structure holds without actuator force).
     """
-    if int(n) < 8:
-        raise InvalidInput(f"n must be at least 8 rays, got {n}")
+    n = count(n, "n", minimum=8)
     a = np.asarray(d1, dtype=float)
     b = np.asarray(d2, dtype=float)
     if a.shape != b.shape:

@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._arguments import load_arguments, real_numbers
+from .._arguments import effort_limits, finite_number, load_arguments, mapping, real_numbers
+from .._text import short
 from ..core.checks import check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
@@ -139,6 +140,7 @@ def actuator_limits(mech: Mechanism, limits: ArrayLike | None) -> np.ndarray:
             +inf or an upper bound of -inf (no effort would be admissible).
     """
     n = mech.n_actuators
+    effort_limits(limits, "limits", n)
     if isinstance(limits, str):
         if limits != "description":
             raise InvalidInput(f"limits {limits!r} is not 'description', None or an ({n}, 2) array")
@@ -193,14 +195,29 @@ class AllocationRule:
         """Check the options against ``mech`` (see :func:`static_forces` for their meaning).
 
         Raises:
-            InvalidInput: an unknown objective, bad weights or limits.
+            InvalidInput: an unknown objective, bad weights or limits, internal forces, a
+                minimum compression or link limits of the wrong type.
         """
-        if objective not in OBJECTIVES:
-            raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
+        if not isinstance(objective, str) or objective not in OBJECTIVES:
+            raise InvalidInput(f"objective {short(objective)} is not one of {list(OBJECTIVES)}")
         W = check_weights(weights, mech.n_actuators)
         bounds = actuator_limits(mech, limits)
-        if internal is not None and not isinstance(internal, Mapping):
+        if isinstance(internal, Mapping):
+            internal = {
+                _link_name(name, "internal"): finite_number(value, f"internal[{name!r}]", "N")
+                for name, value in internal.items()
+            }
+        elif internal is not None:
             internal = np.asarray(real_numbers(internal, "internal"), dtype=float)
+        if min_compression is not None:
+            min_compression = finite_number(min_compression, "min_compression", "N")
+        if link_limits is not None:
+            link_limits = {
+                _link_name(name, "link_limits"): _force_bounds(pair, f"link_limits[{name!r}]")
+                for name, pair in mapping(
+                    link_limits, "link_limits", "link names to (lower, upper) axial forces [N]"
+                ).items()
+            }
         return cls(objective, W, bounds, internal, min_compression, link_limits)
 
     @functools.cached_property
@@ -348,6 +365,23 @@ def static_forces(
     )
     balance = static_balance(mech, q, wrench, frame, gravity=gravity, singular_rtol=singular_rtol)
     return solve_balance(mech, balance, rule)
+
+
+def _link_name(name: object, argument: str) -> str:
+    """``name`` if it is a link name (a string); ``argument`` is named in the message otherwise."""
+    if not isinstance(name, str):
+        raise InvalidInput(f"{argument} must be keyed by link names (strings), got the key {short(name)}")
+    return name
+
+
+def _force_bounds(pair: object, name: str) -> tuple[float, float]:
+    """``pair`` as ``(lower, upper)`` [N]: two real numbers, not NaN, lower <= upper (infinities allowed)."""
+    arr = np.asarray(real_numbers(pair, name), dtype=float)  # None: NaN, refused below
+    if arr.shape != (2,) or np.isnan(arr).any() or arr[0] > arr[1]:
+        raise InvalidInput(
+            f"{name} must be (lower, upper) axial forces [N] with lower <= upper, got {short(pair)}"
+        )
+    return float(arr[0]), float(arr[1])
 
 
 def _link_conditions(

@@ -24,6 +24,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._arguments import count, optional_name, real_numbers
 from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
@@ -116,6 +117,9 @@ def deflection(
             moves it too far), or the state at ``q`` cannot be held.
     """
     task = require_task(mech)
+    max_iterations = count(max_iterations, "max_iterations", minimum=1)
+    real_numbers(wrench, "wrench")
+    optional_name(frame, "frame")
     state = elastic_state(mech, q, gravity=gravity, internal=internal, forces=forces, compliance=compliance)
     cm = state.compliant
     cmech = cm.mech

@@ -30,6 +30,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._text import short
 from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL
 from ..core.mechanism import Mechanism
@@ -106,6 +107,11 @@ def elastic_state(
         SingularConfiguration: the load cannot be held at ``q``.
     """
     cm = compliant_model(mech, compliance)
+    if forces is not None and not isinstance(forces, StaticForces):
+        raise InvalidInput(
+            "forces must be a StaticForces result (plm_pin.statics.static_forces) or None, got "
+            f"{short(forces)}"
+        )
     if forces is None:
         forces = static_forces(mech, q, wrench, frame, gravity=gravity, internal=internal, limits=None)
     elif wrench is not None or frame is not None or internal is not None:

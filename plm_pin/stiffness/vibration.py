@@ -23,6 +23,7 @@ import pinocchio as pin
 import scipy.linalg
 from numpy.typing import ArrayLike
 
+from .._text import short
 from ..core.mechanism import Mechanism
 from ..dynamics.task_space import task_space_dynamics
 from ..exceptions import InvalidInput, SingularConfiguration
@@ -88,8 +89,14 @@ def natural_frequencies(
         SingularConfiguration: the equilibrium is unstable (a non-positive stiffness), and as
             :func:`~plm_pin.stiffness.stiffness`.
     """
-    if model not in MODELS:
-        raise InvalidInput(f"model {model!r} is not one of {list(MODELS)}")
+    if not isinstance(model, str) or model not in MODELS:
+        raise InvalidInput(f"model {short(model)} is not one of {list(MODELS)}")
+    if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 1):
+        raise InvalidInput(f"count must be a positive integer or None, got {short(count)}")
+    if result is not None and not isinstance(result, StiffnessResult):
+        raise InvalidInput(
+            f"result must be a StiffnessResult (plm_pin.stiffness.stiffness) or None, got {short(result)}"
+        )
     res = result if result is not None else stiffness(mech, q, **stiffness_options)
     if model == "task":
         M = task_space_dynamics(mech, res.q).M_x
@@ -112,8 +119,6 @@ def natural_frequencies(
     order = np.argsort(-inv_w2[keep])
     inv_w2, shapes = inv_w2[keep][order], shapes[:, keep][:, order]
     if count is not None:
-        if not isinstance(count, int) or count < 1:
-            raise InvalidInput(f"count must be a positive integer, got {count!r}")
         inv_w2, shapes = inv_w2[:count], shapes[:, :count]
     omega = 1.0 / np.sqrt(inv_w2)
     task_shapes = T @ shapes if model == "full" else shapes

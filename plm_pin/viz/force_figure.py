@@ -24,6 +24,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._arguments import positive
+from .._text import short
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..statics import StaticForces, static_forces
@@ -107,6 +109,10 @@ def plot_static_forces(
         The axes.
     """
     i, j = plane_axes(plane)
+    if overlay is not None and not isinstance(overlay, StaticForces):
+        raise InvalidInput(f"overlay must be a StaticForces result or None, got {short(overlay)}")
+    if scale is not None:
+        scale = positive(scale, "scale", "m/N")
     if overlay is not None and not np.allclose(overlay.balance.q, sol.balance.q):
         raise InvalidInput("overlay must be a solution at the same configuration")
     arrows = force_arrows(sol)

@@ -36,6 +36,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy.ndimage import label as _label
 
+from .._arguments import count, positive, real_numbers
 from ..core import closures as _closures
 from ..core.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
 from ..core.legs import Leg, ik_jacobian_from_data, working_mode_from_data
@@ -43,7 +44,7 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import Task, TaskTarget
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.forward import task_pose
-from ..kinematics.inverse import inverse_kinematics
+from ..kinematics.inverse import check_mode, inverse_kinematics
 from ..kinematics.working_mode import working_mode
 from ._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
 from .manipulability import batch_metrics
@@ -357,8 +358,7 @@ RESEED_ATTEMPTS = 64
 def _auto_workers(n_points: int, shape: tuple[int, ...], workers: int | None) -> int:
     if workers is None:
         workers = (os.cpu_count() or 1) if n_points >= PARALLEL_MIN_POINTS else 1
-    if workers < 1:
-        raise InvalidInput(f"workers must be at least 1, got {workers}")
+    workers = count(workers, "workers", minimum=1)
     if len(shape) < 2:
         return 1
     return max(1, min(workers, shape[0] // 4))
@@ -651,7 +651,7 @@ def base_pose(mech: Mechanism, pose: ArrayLike | None, guess: ArrayLike | None) 
     task = require_task(mech)
     if pose is None:
         return task_pose(mech, start_configuration(mech, guess))
-    base = np.asarray(pose, dtype=float)
+    base = np.asarray(real_numbers(pose, "pose"), dtype=float)
     if base.shape != (task.size,) or not np.all(np.isfinite(base)):
         raise InvalidInput(
             f"pose must hold {task.size} finite task coordinates {list(task.dofs)}, got {pose!r}"
@@ -681,6 +681,8 @@ def solve_poses(
     Returns:
         The solved grid, and the working mode kept (None when no point could be seeded).
     """
+    tol = positive(tol, "tol", "m, rad")
+    mode = check_mode(mech, mode)
     shape = poses.shape[:-1]
     k = poses.shape[-1]
     ev = IKEvaluator.from_mechanism(mech)

@@ -36,9 +36,10 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy.optimize import brentq, minimize_scalar
 
+from .._arguments import check_tolerance, flag, positive, real_numbers
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
-from ..kinematics.inverse import IK_TOL, inverse_kinematics
+from ..kinematics.inverse import IK_TOL, check_mode, inverse_kinematics
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import SINGULARITY_TOL, SingularityReport, classify
 from ..results import Result, unit
@@ -215,7 +216,10 @@ def singular_points(
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "singularity location needs", mech.name)
-    ts = np.asarray(t, dtype=float)
+    xtol, tol, near = positive(xtol, "xtol"), check_tolerance(tol, "tol"), check_tolerance(near, "near")
+    flag(boundaries, "boundaries")
+    mode = check_mode(mech, mode)
+    ts = np.asarray(real_numbers(t, "t"), dtype=float)
     if ts.ndim != 1 or ts.size < 2 or not np.all(np.isfinite(ts)) or np.any(np.diff(ts) <= 0.0):
         raise InvalidInput(f"t must be an increasing 1-D array of at least 2 finite samples, got {t!r}")
 

@@ -60,6 +60,9 @@ def test_overview_sections_and_mobility(fivebar_overview):
     )
     assert (rows["mobility (DOF)"], rows["redundancy"]) == (2, 0)
     assert rows["singular at the reference"] is False
+    # two motor angles per two tip coordinates: w in rad^2/m^2, stated in SI, not "J_ce units"
+    units = {r[0]: r[2] for r in result.block("sizes").rows}
+    assert units["manipulability w"] == "rad^2/m^2"
 
 
 def test_overview_static_forces_balance_gravity(fivebar_overview):
@@ -167,6 +170,12 @@ def test_overview_decoupling_of_the_3d4m_is_harada_s(limited_3d4m_overview):
         (2 * m_l + m_t) * gravity, rel=1e-9
     )
     assert rows["M_yy"][1] == "varies"
+    header = [c.name for c in limited_3d4m_overview.block("decoupling").columns]
+    spread, tolerance = header.index("spread (max - min)"), header.index("tolerance")
+    for name, row in rows.items():  # 'varies' exactly when the spread exceeds the tolerance stated beside it
+        if row[1] in ("constant", "varies"):
+            assert (row[1] == "varies") == (row[spread] > row[tolerance]), name
+    assert rows["h_y"][1] == "nonzero"  # a velocity term is zero or not; it has no constant value
 
 
 def test_overview_simulation_conserves_energy_and_closure(limited_3d4m_overview):

@@ -26,6 +26,15 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from ..._arguments import (
+    finite_array,
+    leg_numbers,
+    length,
+    nonnegative,
+    numbers_of,
+    optional_positive,
+    signs,
+)
 from ..._lazy import lazy_module
 from ...description import _urdf_build as u
 from ...description.compliance import assumed_drive_stiffness
@@ -131,17 +140,42 @@ def build_2prrrp(
 
     Returns:
         The URDF tree and its sidecar.
+
+    Raises:
+        InvalidInput: a length not > 0, a mass, inertia or gravity not >= 0, a pose that is not three
+            finite numbers, working modes other than four signs, legs other than 1, 2 and at least one
+            right leg, or a reference pose some leg cannot reach.
     """
-    legs = tuple(sorted(legs))
+    legs = leg_numbers(legs, "legs", 4)
     if 1 not in legs or not any(i in legs for i in RIGHT_LEGS) or 2 not in legs:
         raise InvalidInput(f"legs {legs}: legs 1 and 2 and at least one right leg are needed")
-    rt = half_plate
+    rod_lengths = tuple(numbers_of(rod_lengths, "rod_lengths", 4, "lengths > 0 [m]", "positive").tolist())
+    rt = length(half_plate, "half_plate")
+    slider_mass = nonnegative(slider_mass, "slider_mass", "kg")
+    rod_masses = tuple(numbers_of(rod_masses, "rod_masses", 4, "masses >= 0 [kg]", "nonnegative").tolist())
+    rod_inertias = tuple(
+        numbers_of(rod_inertias, "rod_inertias", 4, "inertias >= 0 [kg m^2]", "nonnegative").tolist()
+    )
+    plate_mass = nonnegative(plate_mass, "plate_mass", "kg")
+    plate_inertia = nonnegative(plate_inertia, "plate_inertia", "kg m^2")
+    reference_pose = tuple(
+        finite_array(reference_pose, "reference_pose", (3,), "x [m], y [m], theta [rad]").tolist()
+    )
+    modes = signs(working_modes, "working_modes")
+    if modes is None or len(modes) != 4 or any(m not in (-1, 1) for m in modes):
+        raise InvalidInput(f"working_modes must be four signs (+1 or -1), one per leg, got {working_modes!r}")
+    working_modes = modes
+    gravity = nonnegative(gravity, "gravity", "m/s^2")
+    optional_positive(actuator_stiffness, "actuator_stiffness", "N/m")
+    try:
+        ik = leg_inverse_kinematics(reference_pose, rod_lengths, rt, working_modes, legs)
+    except InvalidInput as exc:
+        raise InvalidInput(f"reference_pose {reference_pose} is out of reach: {exc}") from None
     links: list[yourdfpy.Link] = []
     joints: list[yourdfpy.Joint] = []
     stator = 1.0
     links.append(u.link("base", visuals=[u.box_visual((stator, 0.01, 0.004), "base", (0.0, -0.01, -0.01))]))
     slider_size = CARRIAGE_SIZE
-    ik = leg_inverse_kinematics(reference_pose, rod_lengths, rt, working_modes, legs)
     reference: dict[str, tuple[float, ...]] = {}
     closures: list[ClosureSpec] = []
     for i in legs:
