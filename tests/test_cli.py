@@ -491,14 +491,3 @@ def test_a_missing_module_is_named_with_its_extra():
     )
     own = ImportError("plm_pin.sweep needs dask, which is not installed: pip install 'plm-pin[sweep]'")
     assert missing_extra(own) == str(own)
-
-
-def test_sweep_help_sends_the_reader_to_the_sweeps_guide():
-    """`plm-pin sweep --help` names where the configuration format is: the sweeps guide and its schema."""
-    from typer.testing import CliRunner
-
-    from plm_pin.cli import app
-
-    text = " ".join(CliRunner().invoke(app, ["sweep", "--help"], terminal_width=400).output.split())
-    assert "docs/guide/sweeps.md" in text and "plm-pin-sweep.schema.json" in text
-    assert "README" not in text
