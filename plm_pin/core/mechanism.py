@@ -295,11 +295,11 @@ class Mechanism:
     # ---------------------------------------------------------- closures
     def closure_residual(self, q: ArrayLike) -> np.ndarray:
         r"""Closure residual :math:`\phi(q)` [m, rad] (see :mod:`plm_pin.core.closures`), shape (m,)."""
-        return _closures.residual(self.model, self.data, self.closures, self.check_q(q))
+        return _closures.residual(self.model, self._data, self.closures, self.check_q(q))
 
     def closure_jacobian(self, q: ArrayLike) -> np.ndarray:
         r"""Closure Jacobian :math:`J_\phi(q)` on the tangent space, shape (m, nv)."""
-        return _closures.jacobian(self.model, self.data, self.closures, self.check_q(q))
+        return _closures.jacobian(self.model, self._data, self.closures, self.check_q(q))
 
     def closure_rank(self, q: ArrayLike, rtol: float = RANK_RTOL) -> int:
         r"""Rank of :math:`J_\phi(q)` by SVD: singular values above ``rtol * max(s_max, 1)``."""
@@ -387,7 +387,7 @@ class Mechanism:
 
         return assemble(
             self.model,
-            self.data,
+            self._data,
             self.closures,
             q0,
             free,

@@ -27,5 +27,6 @@ def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = MODE_RTOL) -> tupl
 
     See :func:`~plm_pin.core.legs.working_mode_from_data`.
     """
+    legs = mech.legs  # built first: building it must not come between the pass and its reading
     structure_jacobian(mech, mech.check_q(q))
-    return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), mech.legs, rtol)
+    return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), legs, rtol)
