@@ -291,7 +291,7 @@ def test_bad_mode_is_refused(mode):
 
 
 def test_first_call_mode_does_not_depend_on_the_lazily_built_legs(tmp_path):
-    """The first IK on a fresh mechanism (fresh process) labels its mode as working_mode does after legs exist.
+    """The first IK on a fresh mechanism (fresh process) labels its mode as working_mode does later.
 
     Every other working mode of the 3D3M at its reference pose is solved from its own
     configuration as guess in a fresh process, where building ``mech.legs`` inside the first
