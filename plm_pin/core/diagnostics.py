@@ -146,7 +146,7 @@ def findings(mech: Mechanism) -> tuple[Finding, ...]:
 
 
 def _missing_causes(mech: Mechanism) -> str:
-    """The two causes of a task shorter than the mobility, a missing closure first when a loose end shows one."""
+    """Both causes of a task shorter than the mobility; a missing closure first, named by a loose end."""
     ends = loose_ends(mech)
     closure = (
         "either a closure is missing"

@@ -36,7 +36,7 @@ def without_last_closure(name: str, tmp_path: Path) -> Path:
     [("fourbar", ("coupler_tip", "rocker_tip")), ("harada2011_3d3m", ("plate_right", "rod4_tip"))],
 )
 def test_deleted_closure_is_named_as_a_loose_end(name, pair, tmp_path):
-    """The deleted closure's two frames are the loose end found, and `check` names it before the task cause."""
+    """The deleted closure's frames are the loose end found; `check` names it before the task cause."""
     intact = plm_pin.load(name)
     assert loose_ends(intact) == ()
     cut = intact.sidecar.closures[-1]
@@ -60,7 +60,8 @@ def test_deleted_closure_is_named_as_a_loose_end(name, pair, tmp_path):
     assert result.exit_code == 1
     end = ends[0]
     assert (
-        f"either a closure is missing: frame {end.frame!r} of leaf body {end.body!r} lies {end.distance:.3g} m "
-        f"from frame {end.near!r} of body {end.near_body!r} with no closure between them (add it under "
-        "closures), or the task lacks coordinates (add the missing coordinates to end_effector.task)"
+        f"either a closure is missing: frame {end.frame!r} of leaf body {end.body!r} lies "
+        f"{end.distance:.3g} m from frame {end.near!r} of body {end.near_body!r} with no closure "
+        "between them (add it under closures), or the task lacks coordinates (add the "
+        "missing coordinates to end_effector.task)"
     ) in result.stderr.replace("\n", " ")

@@ -96,7 +96,8 @@ def test_task_smaller_than_the_mobility_is_refused(tmp_path):
     assert result.stderr == (
         "error: the task ['x', 'y'] has 2 coordinates but the mechanism has 3 DOF: a pose does not "
         "determine the configuration, so IK, FK, the Jacobians and manipulability are undefined; either a "
-        "closure is missing, or the task lacks coordinates (add the missing coordinates to end_effector.task)\n"
+        "closure is missing, or the task lacks coordinates (add the missing coordinates to "
+        "end_effector.task)\n"
     )
 
 
