@@ -204,7 +204,12 @@ def info(
         limits = "unbounded" if a["limits"] is None else f"[{a['limits'][0]:g}, {a['limits'][1]:g}]"
         table.add_row(escape(f"actuator {a['joint']}"), escape(f"{a['kind']}, limits {limits}"))
     task = summary["task"]
-    table.add_row("task", "none" if task is None else escape(f"{task['frame']}: {' '.join(task['dofs'])}"))
+    table.add_row(
+        "task",
+        "none"
+        if task is None
+        else escape(f"{task['frame'] or 'output joints'}: {' '.join(task['dofs'])}"),
+    )
     table.add_row(
         "mobility",
         str(summary["mobility"])
