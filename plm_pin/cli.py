@@ -206,9 +206,7 @@ def info(
     task = summary["task"]
     table.add_row(
         "task",
-        "none"
-        if task is None
-        else escape(f"{task['frame'] or 'output joints'}: {' '.join(task['dofs'])}"),
+        "none" if task is None else escape(f"{task['frame'] or 'output joints'}: {' '.join(task['dofs'])}"),
     )
     table.add_row(
         "mobility",

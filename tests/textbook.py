@@ -400,3 +400,154 @@ def stewart(folder: Path, spherical_base: bool = False, name: str = "stewart") -
     )
     write_description(yourdfpy.Robot(name=name, links=links, joints=joints), sidecar, folder, name)
     return plm_pin.load(folder / f"{name}.urdf")
+
+
+# --------------------------------------------------------------------------- four-bar finger
+FINGER = {"a": 0.02, "b": 0.045, "c": 0.035, "d": 0.04}
+"""Gripper finger four-bar [m]: crank a (input, pivot A at the origin), coupler b, finger c
+(output, pivot D = (d, 0)); all joints turn about z, gravity along -y."""
+
+FINGER_BODIES = {  # mass [kg], centre of mass in the body frame [m], izz about it [kg m^2]
+    "crank": (0.010, (0.010, 0.000), 4e-7),
+    "coupler": (0.015, (0.0225, 0.002), 3e-6),
+    "finger": (0.030, (0.030, 0.006), 9e-6),
+}
+
+
+def finger_freudenstein(theta2: float, branch: int = -1) -> tuple[float, float]:
+    """Output and coupler angles (theta4, theta3) [rad] of the finger at crank angle theta2.
+
+    Freudenstein's equation K1 cos t4 - K2 cos t2 + K3 = cos(t2 - t4), K1 = d/a, K2 = d/c,
+    K3 = (a^2 - b^2 + c^2 + d^2) / (2 a c), solved by the half-angle substitution
+    t = tan(t4 / 2): A t^2 + B t + C = 0; ``branch`` picks the root's sign (-1: the finger
+    above the palm, the reference's assembly).
+    """
+    a, b, c, d = (FINGER[k] for k in "abcd")
+    K1, K2, K3 = d / a, d / c, (a * a - b * b + c * c + d * d) / (2 * a * c)
+    A = math.cos(theta2) - K1 - K2 * math.cos(theta2) + K3
+    B = -2 * math.sin(theta2)
+    C = K1 - (K2 + 1) * math.cos(theta2) + K3
+    t4 = 2 * math.atan((-B + branch * math.sqrt(B * B - 4 * A * C)) / (2 * A))
+    Bx, By = a * math.cos(theta2), a * math.sin(theta2)
+    Cx, Cy = d + c * math.cos(t4), c * math.sin(t4)
+    return t4, math.atan2(Cy - By, Cx - Bx)
+
+
+def finger_velocity_ratio(theta2: float, branch: int = -1) -> float:
+    """D theta4 / d theta2 = a sin(t3 - t2) / (c sin(t3 - t4)) (the four-bar's angular velocity ratio)."""
+    t4, t3 = finger_freudenstein(theta2, branch)
+    return FINGER["a"] * math.sin(t3 - theta2) / (FINGER["c"] * math.sin(t3 - t4))
+
+
+def finger_transmission_angle(theta2: float) -> float:
+    """Transmission angle mu between coupler and finger [rad], by the law of cosines.
+
+    cos mu = (b^2 + c^2 - BD^2) / (2 b c), BD^2 = a^2 + d^2 - 2 a d cos t2.
+    """
+    a, b, c, d = (FINGER[k] for k in "abcd")
+    bd2 = a * a + d * d - 2 * a * d * math.cos(theta2)
+    return math.acos((b * b + c * c - bd2) / (2 * b * c))
+
+
+def finger_from_output(theta4: float, branch: int = -1) -> tuple[float, float]:
+    """Crank and coupler angles (theta2, theta3) [rad] at output angle theta4 (circle intersection).
+
+    B is where the circle of radius a about A meets the circle of radius b about C; ``branch``
+    picks the side of the line A C (-1: B to its left, the reference's assembly).
+    """
+    a, b, c, d = (FINGER[k] for k in "abcd")
+    C = np.array([d + c * math.cos(theta4), c * math.sin(theta4)])
+    L = float(np.linalg.norm(C))
+    along = (a * a - b * b + L * L) / (2 * L)
+    h = math.sqrt(a * a - along * along)
+    e = C / L
+    n = np.array([e[1], -e[0]])  # e turned by -90 degrees
+    B = along * e + branch * h * n
+    return math.atan2(B[1], B[0]), math.atan2(C[1] - B[1], C[0] - B[0])
+
+
+def finger_points(theta4: float, branch: int = -1) -> dict[str, tuple[np.ndarray, float]]:
+    """Each body's centre of mass [m] and angle [rad] at output angle ``theta4`` (closed form)."""
+    a, d = FINGER["a"], FINGER["d"]
+    t2, t3 = finger_from_output(theta4, branch)
+    origins = {
+        "crank": (np.zeros(2), t2),
+        "coupler": (a * np.array([math.cos(t2), math.sin(t2)]), t3),
+        "finger": (np.array([d, 0.0]), theta4),
+    }
+    out = {}
+    for name, (o, ang) in origins.items():
+        com = np.array(FINGER_BODIES[name][1])
+        R = np.array([[math.cos(ang), -math.sin(ang)], [math.sin(ang), math.cos(ang)]])
+        out[name] = (o + R @ com, ang)
+    return out
+
+
+FINGER_URDF = """<?xml version="1.0"?>
+<robot name="{name}">
+  <link name="palm"/>
+  <link name="crank">
+    <inertial><origin xyz="{crank_com}"/><mass value="{crank_m}"/>
+      <inertia ixx="{crank_i}" iyy="{crank_i}" izz="{crank_i}" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <link name="coupler">
+    <inertial><origin xyz="{coupler_com}"/><mass value="{coupler_m}"/>
+      <inertia ixx="{coupler_i}" iyy="{coupler_i}" izz="{coupler_i}" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <link name="coupler_tip"/>
+  <link name="finger">
+    <inertial><origin xyz="{finger_com}"/><mass value="{finger_m}"/>
+      <inertia ixx="{finger_i}" iyy="{finger_i}" izz="{finger_i}" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <link name="finger_knuckle"/>
+  <joint name="drive" type="revolute">
+    <parent link="palm"/><child link="crank"/><axis xyz="0 0 1"/>
+    <limit lower="-7" upper="7" effort="10" velocity="10"/>
+  </joint>
+  <joint name="coupler_pivot" type="revolute">
+    <parent link="crank"/><child link="coupler"/><origin xyz="{a} 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-7" upper="7" effort="10" velocity="10"/>
+  </joint>
+  <joint name="coupler_tip_fixed" type="fixed">
+    <parent link="coupler"/><child link="coupler_tip"/><origin xyz="{b} 0 0"/>
+  </joint>
+  <joint name="finger_pivot" type="revolute">
+    <parent link="palm"/><child link="finger"/><origin xyz="{d} 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-7" upper="7" effort="10" velocity="10"/>
+  </joint>
+  <joint name="finger_knuckle_fixed" type="fixed">
+    <parent link="finger"/><child link="finger_knuckle"/><origin xyz="{c} 0 0"/>
+  </joint>
+</robot>
+"""
+
+FINGER_SIDECAR = """format: plm-pin/1
+name: {name}
+gravity: [0.0, -9.81, 0.0]
+closures:
+  - name: knuckle
+    frames: [coupler_tip, finger_knuckle]
+    type: point
+actuation:
+  - joint: drive
+    limits: [-2.0, 2.0]
+end_effector:
+  joints: [finger_pivot]
+reference: {{drive: {t2}, coupler_pivot: {t32}, finger_pivot: {t4}}}
+"""
+
+FINGER_THETA2 = 1.2
+"""Crank angle of the finger's reference [rad]."""
+
+
+def finger(folder: Path, name: str = "finger") -> Mechanism:
+    """Write the four-bar gripper finger (URDF + sidecar, output joint as the task) and load it."""
+    t4, t3 = finger_freudenstein(FINGER_THETA2)
+    fields: dict[str, object] = {k: v for k, v in FINGER.items()}
+    for body, (m, com, izz) in FINGER_BODIES.items():
+        fields[f"{body}_m"], fields[f"{body}_com"], fields[f"{body}_i"] = m, f"{com[0]} {com[1]} 0", izz
+    (folder / f"{name}.urdf").write_text(FINGER_URDF.format(name=name, **fields))
+    (folder / f"{name}.plm.yaml").write_text(
+        FINGER_SIDECAR.format(name=name, t2=FINGER_THETA2, t32=t3 - FINGER_THETA2, t4=t4)
+    )
+    return plm_pin.load(folder / f"{name}.urdf")
