@@ -90,7 +90,7 @@ class Load(Result):
 
 @dataclass(frozen=True)
 class JointLoad(Result):
-    """Forces applied by the outside along output joints: the load of a joint task.
+    r"""Forces applied by the outside along output joints: the load of a joint task.
 
     A torque on a revolute joint is a pair of opposite moments about its axis on the two
     bodies it joins (a force on a prismatic joint, a pair of opposite forces along it): it
