@@ -35,6 +35,7 @@ from .core.mechanism import Mechanism
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .export import export_mjcf
 from .kinematics import inverse_kinematics, task_pose
+from .kinematics.reference import reference_findings, reference_report
 from .loading import load
 from .models.registry import PRESETS
 from .report import Animation, Study, find_study, run_study, study_names, write_index, write_report
@@ -185,8 +186,18 @@ def info(
     target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
 ) -> None:
-    """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""
-    summary = _load(target).summary()
+    """Sizes, closures, actuators, task, mobility, redundancy, the reference (pose, modes, residual)."""
+    mech = _load(target)
+    summary = mech.summary()
+    with _reported():
+        reference = reference_report(mech)
+    summary["reference"] = {
+        "q": reference.q.tolist(),
+        "pose": reference.pose.tolist(),
+        "working_mode": list(reference.working_mode),
+        "assembly_mode": reference.assembly_mode,
+        "singularity_margins": reference.margins,
+    }
     if as_json:
         console.print_json(json.dumps(summary))
         return
@@ -215,6 +226,8 @@ def info(
     )
     red = summary["redundancy"]
     table.add_row("redundancy", f"{red}" + (" (under-actuated)" if red < 0 else ""))
+    dofs = mech.task.dofs if mech.task is not None else ()
+    table.add_row("reference", escape(reference.describe(dofs)))
     table.add_row("reference residual", f"{summary['reference_residual']:.3g} m/rad")
     table.add_row("gravity", f"{summary['gravity']} m/s^2")
     console.print(table)
@@ -225,7 +238,10 @@ def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or descr
     """Validate a description and say exactly what is wrong and where (idle DOF, task size, limits)."""
     mech = _load(path)
     summary = mech.summary()
-    found = findings(mech)
+    with _reported():
+        found = tuple(
+            sorted((*findings(mech), *reference_findings(mech)), key=lambda f: f.severity != "error")
+        )
     for finding in found:
         prefix = "[bold red]error:[/]" if finding.severity == "error" else "[cyan]note:[/]"
         target = errors if finding.severity == "error" else console

@@ -2,23 +2,29 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import warnings
 from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from ._text import short
 from .core.mechanism import Mechanism
 from .description.loader import Description, build_model, build_visual_model, read_description
 from .description.mjcf import MJCF_SUFFIX, read_mjcf
 from .description.overrides import DescriptionBuilder
+from .description.sidecar import FORMAT, ActuatorSpec, Sidecar, TaskSpec
 from .description.sidecar import SIDECAR_SUFFIX_DEFAULT as SIDECAR_SUFFIX
-from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
 from .description.urdf import read_urdf_text
 from .description.writer import urdf_text
 from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
+from .kinematics.reference import REFERENCE_MARGIN, REFERENCE_STARTS, choose_reference, reference_report
 from .models.registry import PRESETS, Builder, builder_parameters, urdf_folder
+from .warnings import ReferenceWarning
 
 ERD_PREFIX = "erd:"
 
@@ -45,7 +51,54 @@ def mechanism_from_description(description: Description, name: str, *, validate:
         visual_factory=functools.partial(build_visual_model, model, description),  # picklable
     )
     guess = "sidecar reference" if description.sidecar.reference else "neutral configuration"
-    return _validated(mech, guess, validate)
+    mech = _validated(mech, guess, validate)
+    if validate and not description.sidecar.reference and description.convention == FORMAT and mech.closures:
+        return _with_chosen_reference(mech, description, name)
+    return mech
+
+
+def _with_chosen_reference(mech: Mechanism, description: Description, name: str) -> Mechanism:
+    """The mechanism again, its reference chosen away from singularities (a sidecar without one).
+
+    Warns with the reference chosen (pose, modes, margin) and the ``reference:`` entry that
+    keeps it; keeps ``mech`` as it is when no square task allows the choice.
+    """
+    chosen = choose_reference(mech)
+    if chosen is None:
+        return mech
+    q, margin = chosen
+    reference = {}
+    for jid in range(1, mech.model.njoints):
+        j = mech.model.joints[jid]
+        values = tuple(float(v) for v in q[j.idx_q : j.idx_q + j.nq])
+        if j.nq == 2 and j.nv == 1:  # unbounded revolute: its angle
+            values = (float(np.arctan2(values[1], values[0])),)
+        reference[str(mech.model.names[jid])] = values
+    sidecar = dataclasses.replace(description.sidecar, reference=reference)
+    model = build_model(description)  # a fresh tree: the idle gauges add frames to their model
+    out = Mechanism(
+        model,
+        sidecar,
+        name=name,
+        source=mech.source,
+        visual_factory=functools.partial(build_visual_model, model, description),
+    )
+    report = reference_report(out)
+    dofs = out.task.dofs if out.task is not None else ()
+    entry = ", ".join(f"{k}: {v[0]:.6g}" if len(v) == 1 else f"{k}: {list(v)}" for k, v in reference.items())
+    closeness = (
+        f" (even so within {REFERENCE_MARGIN} of a singularity: the workspace may be small)"
+        if margin < REFERENCE_MARGIN
+        else ""
+    )
+    warnings.warn(
+        f"{name}: the sidecar gives no reference; chose the assembled configuration farthest from "
+        f"singularities among {REFERENCE_STARTS + 1} starts: {report.describe(dofs)}{closeness}. "
+        f"Keep it with `reference: {{{entry}}}`",
+        ReferenceWarning,
+        stacklevel=3,
+    )
+    return out
 
 
 def mechanism_from_mjcf(path: str | Path, *, validate: bool = True) -> Mechanism:

@@ -551,3 +551,104 @@ def finger(folder: Path, name: str = "finger") -> Mechanism:
         FINGER_SIDECAR.format(name=name, t2=FINGER_THETA2, t32=t3 - FINGER_THETA2, t4=t4)
     )
     return plm_pin.load(folder / f"{name}.urdf")
+
+
+# --------------------------------------------------------------------------- 3-PRR
+PRR = {"Rb": 0.35, "rp": 0.1, "l": 0.3}
+"""Planar 3-PRR [m]: slider i runs through A_i = Rb (cos a_i, sin a_i) along the tangent
+u_i = (-sin a_i, cos a_i), a_i = 90 deg + 120 deg i; a rod of length l joins the slider's pivot
+B_i = A_i + s_i u_i to the platform vertex C_i = p + R(phi) rp (cos a_i, sin a_i)."""
+
+
+def prr_ik(pose: tuple[float, float, float], signs: tuple[int, ...], l: float | None = None) -> np.ndarray:
+    """Closed-form slider positions s_i [m] in branches ``signs``: |C_i - A_i - s_i u_i| = l.
+
+    s_i = (C_i - A_i) . u_i + sign_i sqrt(l^2 - ((C_i - A_i) . n_i)^2), n_i = (cos a_i, sin a_i).
+    """
+    rod = PRR["l"] if l is None else l
+    a = rrr_angles()
+    x, y, phi = pose
+    out = []
+    for i, s in enumerate(signs):
+        A = PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
+        C = np.array([x, y]) + PRR["rp"] * np.array([math.cos(a[i] + phi), math.sin(a[i] + phi)])
+        u = np.array([-math.sin(a[i]), math.cos(a[i])])
+        n = np.array([math.cos(a[i]), math.sin(a[i])])
+        d = C - A
+        out.append(float(d @ u + s * math.sqrt(rod * rod - float(d @ n) ** 2)))
+    return np.array(out)
+
+
+def prr_inverse_margins(pose: tuple[float, float, float], l: float | None = None) -> np.ndarray:
+    """|cos| of each rod's angle to the normal of its slider: 0 at leg i's inverse (type 1) singularity."""
+    rod = PRR["l"] if l is None else l
+    a = rrr_angles()
+    x, y, phi = pose
+    out = []
+    for i in range(3):
+        A = PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
+        C = np.array([x, y]) + PRR["rp"] * np.array([math.cos(a[i] + phi), math.sin(a[i] + phi)])
+        n = np.array([math.cos(a[i]), math.sin(a[i])])
+        out.append(math.sqrt(max(0.0, 1.0 - (float((C - A) @ n) / rod) ** 2)))
+    return np.array(out)
+
+
+def three_prr(
+    folder: Path, name: str = "prr3", rod: float | None = None, reference: dict | None = None
+) -> Mechanism:
+    """Write a planar 3-PRR as a user would from the docs (no ``reference`` unless given) and load it.
+
+    ``rod`` overrides the length of rod 2 only (a typo in one rod); the platform hangs on
+    leg 0, legs 1 and 2 close on its vertices with point closures.
+    """
+    a = rrr_angles()
+    rp = PRR["rp"]
+    c = rp * np.column_stack([np.cos(a), np.sin(a)])
+    links = [u.link("base")]
+    joints = []
+    for i in range(3):
+        A = PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
+        length = rod if (rod is not None and i == 2) else PRR["l"]
+        links += [
+            u.link(f"carriage{i}", 0.3, (1e-4, 1e-4, 1e-4)),
+            u.link(f"rod{i}", 0.2, (1e-5, 1.5e-3, 1.5e-3), com=(length / 2, 0, 0)),
+            u.link(f"tip{i}"),
+        ]
+        joints += [
+            u.joint(
+                f"slider{i}",
+                "prismatic",
+                "base",
+                f"carriage{i}",
+                xyz=(*A, 0.0),
+                rpy=(0.0, 0.0, float(a[i] + math.pi / 2)),
+                axis=(1, 0, 0),
+                limits=(-1.0, 1.0),
+            ),
+            u.joint(f"pivot{i}", "revolute", f"carriage{i}", f"rod{i}", limits=(-7.0, 7.0)),
+            u.joint(f"tip{i}_fixed", "fixed", f"rod{i}", f"tip{i}", xyz=(length, 0, 0)),
+        ]
+    links += [u.link("platform", 1.0, (1e-3, 1e-3, 2e-3), com=(*(-c[0]), 0.0)), u.link("centre")]
+    joints += [
+        u.joint("p0", "revolute", "rod0", "platform", xyz=(PRR["l"], 0, 0), limits=(-7.0, 7.0)),
+        u.joint("centre_fixed", "fixed", "platform", "centre", xyz=(*(-c[0]), 0.0)),
+    ]
+    for i in (1, 2):
+        links.append(u.link(f"vertex{i}"))
+        joints.append(
+            u.joint(f"vertex{i}_fixed", "fixed", "platform", f"vertex{i}", xyz=(*(c[i] - c[0]), 0.0))
+        )
+    data = {
+        "format": "plm-pin/1",
+        "closures": [
+            {"name": f"leg{i}", "frames": [f"vertex{i}", f"tip{i}"], "type": "point"} for i in (1, 2)
+        ],
+        "actuation": [{"joint": f"slider{i}"} for i in range(3)],
+        "end_effector": {"frame": "centre", "task": ["x", "y", "rz"]},
+    }
+    if reference is not None:
+        data["reference"] = reference
+    write_description(
+        yourdfpy.Robot(name=name, links=links, joints=joints), parse_sidecar(data), folder, name
+    )
+    return plm_pin.load(folder / f"{name}.urdf")
