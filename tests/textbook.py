@@ -554,7 +554,7 @@ def finger(folder: Path, name: str = "finger") -> Mechanism:
 
 
 # --------------------------------------------------------------------------- 3-PRR
-PRR = {"Rb": 0.35, "rp": 0.1, "l": 0.3}
+PRR = {"Rb": 0.25, "rp": 0.1, "l": 0.3}
 """Planar 3-PRR [m]: slider i runs through A_i = Rb (cos a_i, sin a_i) along the tangent
 u_i = (-sin a_i, cos a_i), a_i = 90 deg + 120 deg i; a rod of length l joins the slider's pivot
 B_i = A_i + s_i u_i to the platform vertex C_i = p + R(phi) rp (cos a_i, sin a_i)."""
