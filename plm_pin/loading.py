@@ -21,8 +21,13 @@ from .description.sidecar import FORMAT, ActuatorSpec, Sidecar, TaskSpec
 from .description.sidecar import SIDECAR_SUFFIX_DEFAULT as SIDECAR_SUFFIX
 from .description.urdf import read_urdf_text
 from .description.writer import urdf_text
-from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
-from .kinematics.reference import REFERENCE_MARGIN, REFERENCE_STARTS, choose_reference, reference_report
+from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput, PlmError
+from .kinematics.reference import (
+    REFERENCE_MARGIN,
+    choose_reference,
+    reference_report,
+    singularity_margin,
+)
 from .models.registry import PRESETS, Builder, builder_parameters, urdf_folder
 from .warnings import ReferenceWarning
 
@@ -58,13 +63,24 @@ def mechanism_from_description(description: Description, name: str, *, validate:
 
 
 def _with_chosen_reference(mech: Mechanism, description: Description, name: str) -> Mechanism:
-    """The mechanism again, its reference chosen away from singularities (a sidecar without one).
+    """``mech``, or its reference chosen again when the neutral one is near a singularity.
+
+    When the reference closed from the neutral configuration lies within
+    :data:`~plm_pin.kinematics.reference.REFERENCE_MARGIN` of a singularity, the mechanism is
+    built again with the reference :func:`~plm_pin.kinematics.reference.choose_reference` moves
+    it to.
 
     Warns with the reference chosen (pose, modes, margin) and the ``reference:`` entry that
     keeps it; keeps ``mech`` as it is when no square task allows the choice.
     """
+    try:
+        current = singularity_margin(mech, mech.q_ref)
+    except PlmError:  # singular right there: choose
+        current = 0.0
+    if current is None or current >= REFERENCE_MARGIN:
+        return mech
     chosen = choose_reference(mech)
-    if chosen is None:
+    if chosen is None or chosen[1] <= current:
         return mech
     q, margin = chosen
     reference = {}
@@ -92,8 +108,9 @@ def _with_chosen_reference(mech: Mechanism, description: Description, name: str)
         else ""
     )
     warnings.warn(
-        f"{name}: the sidecar gives no reference; chose the assembled configuration farthest from "
-        f"singularities among {REFERENCE_STARTS + 1} starts: {report.describe(dofs)}{closeness}. "
+        f"{name}: the sidecar gives no reference and the loops close from the neutral configuration "
+        f"within {current:.3g} of a singularity; moved it away, in the same working mode and assembly: "
+        f"{report.describe(dofs)}{closeness}. "
         f"Keep it with `reference: {{{entry}}}`",
         ReferenceWarning,
         stacklevel=3,

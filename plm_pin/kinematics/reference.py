@@ -7,7 +7,8 @@ left out, or a length mistyped in the description, can put it next to a singular
 from where its author meant. This module reports it (:func:`reference_report`, shown by
 ``plm-pin info`` and ``plm-pin check``), says what is wrong with it
 (:func:`reference_findings`), and chooses one well inside the workspace when the sidecar
-gives none (:func:`choose_reference`, called by :func:`plm_pin.load`).
+gives none and the neutral configuration closes next to a singularity
+(:func:`choose_reference`, called by :func:`plm_pin.load`).
 
 The *assembly mode* is labelled by the sign of :math:`\det(\partial x / \partial c)`
 (:math:`T C^{-1}` of :mod:`plm_pin.kinematics.jacobians`): it changes where the path crosses
@@ -16,20 +17,20 @@ a direct (type 2) singularity, the boundary between assembly modes at fixed actu
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from ..core.assembly import assemble
 from ..core.diagnostics import Finding
 from ..core.mechanism import Mechanism
-from ..exceptions import ClosureNotSatisfied, PlmError
+from ..exceptions import PlmError
 from ..results import Result, unit
+from .forward import task_pose
+from .inverse import inverse_kinematics
 from .jacobians import closed_chain_jacobians
-from .limits import limit_violations, wrap_into_limits
 from .singularity import KINDS, classify
-from .starts import random_starts
 from .working_mode import working_mode
 
 REFERENCE_MARGIN = 0.05  # TOLERANCE -> tolerances.py
@@ -45,8 +46,8 @@ REFERENCE_SHIFT_RTOL = 0.05  # TOLERANCE -> tolerances.py
 """Likewise for a prismatic joint, as a fraction of the mechanism's size (the largest
 distance between two joint origins at the reference) [-]."""
 
-REFERENCE_STARTS = 32
-"""Random starts among which :func:`choose_reference` picks the reference."""
+REFERENCE_STEPS = 40
+"""Pattern-search steps of :func:`choose_reference`."""
 
 
 @dataclass(frozen=True)
@@ -186,38 +187,62 @@ def reference_findings(mech: Mechanism) -> tuple[Finding, ...]:
     return tuple(out)
 
 
-def choose_reference(
-    mech: Mechanism, starts: int = REFERENCE_STARTS, seed: int = 0
-) -> tuple[np.ndarray, float] | None:
-    """The assembled configuration farthest from singularities among random starts, and its margin.
+def singularity_margin(mech: Mechanism, q: np.ndarray) -> float | None:
+    """The smallest singularity margin (constraint, inverse, direct) at an assembled ``q``, or None.
 
-    The neutral configuration and ``starts`` random configurations within the joint limits
-    are assembled; among those that close within the joint limits, the one whose smallest
-    singularity margin is largest is returned. Needs a task with as many coordinates as DOF
-    (the margins are undefined otherwise).
-
-    Returns:
-        ``(q, margin)``, or None when the task is not square or no start assembles.
+    None when the task has not as many coordinates as DOF (the margins are undefined).
     """
     if not _square(mech):
         return None
-    model = mech.model
-    cut = mech.closures
-    data = model.createData()
-    neutral = mech.neutral()
-    rng = np.random.default_rng(seed)
-    best: tuple[np.ndarray, float] | None = None
-    for start in [neutral, *random_starts(mech, rng, neutral, range(mech.nv), starts)]:
-        try:
-            q = wrap_into_limits(
-                mech, assemble(model, data, cut, start, np.arange(mech.nv), max_iterations=100).q
-            )
-            if limit_violations(mech, q):
+    report = classify(mech, q)
+    return min(report.constraint_margin, report.inverse_margin, report.direct_margin)
+
+
+def choose_reference(mech: Mechanism, iterations: int = REFERENCE_STEPS) -> tuple[np.ndarray, float] | None:
+    """The reference moved inside the workspace, away from singularities, in its own modes; and its margin.
+
+    A pattern search in task space from :attr:`~plm_pin.Mechanism.q_ref`: each step tries the
+    pose moved by plus or minus a step along each task coordinate (solved by inverse
+    kinematics from the current configuration, so the working mode and the assembly are kept:
+    a parallelogram stays one) and moves to the one whose smallest singularity margin is
+    largest; without progress the step halves. The steps start at 10 % of the mechanism's
+    size [m] and 0.2 rad. Needs a task with as many coordinates as DOF.
+
+    Returns:
+        ``(q, margin)``, or None when the task is not square or the reference is singular.
+    """
+    if not _square(mech):
+        return None
+    task = mech.task_compiled
+    assert task is not None  # _square(mech) holds
+    q = np.array(mech.q_ref)
+    try:
+        margin = singularity_margin(mech, q)
+    except PlmError:
+        return None
+    assert margin is not None
+    mode = working_mode(mech, q)
+    x = task_pose(mech, q)
+    unit = np.where(np.isin(np.arange(task.size), task.angles), 0.2, 0.1 * _size(mech, q))
+    scale = 1.0
+    for _ in range(iterations):
+        best: tuple[np.ndarray, np.ndarray, float] | None = None
+        for k, sign in itertools.product(range(task.size), (1.0, -1.0)):
+            target = x.copy()
+            target[k] += sign * scale * unit[k]
+            try:
+                sol = inverse_kinematics(mech, target, q, explain=False)
+                if sol.limit_violations or sol.mode != mode:
+                    continue
+                m = singularity_margin(mech, sol.q)
+            except PlmError:
                 continue
-            report = classify(mech, q)
-        except (ClosureNotSatisfied, PlmError):
+            if m is not None and m > (margin if best is None else best[2]):
+                best = (np.array(sol.q), target, m)
+        if best is None:
+            scale /= 2.0
+            if scale < 1e-3:
+                break
             continue
-        margin = min(report.constraint_margin, report.inverse_margin, report.direct_margin)
-        if best is None or margin > best[1]:
-            best = (np.array(q), margin)
-    return best
+        q, x, margin = best
+    return q, margin

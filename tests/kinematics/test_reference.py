@@ -57,7 +57,7 @@ def chosen(tmp_path_factory):
 
 
 def test_reference_without_sidecar_value_is_chosen_away_from_singularities(chosen):
-    """The chosen reference's legs are far from their inverse singularities, unlike the neutral guess's."""
+    """The moved reference's legs are farther from their inverse singularities than the neutral guess's."""
     mech, _, _ = chosen
     pose = tuple(task_pose(mech, mech.q_ref))
     legs = tb.prr_inverse_margins(pose)
