@@ -152,10 +152,6 @@ class TaskSpec:
         """Rows of a 6-D spatial velocity (linear, angular) that a frame task keeps (() for a joint task)."""
         return tuple(TASK_DOFS.index(d) for d in self.dofs) if self.frame is not None else ()
 
-    def describe(self) -> str:
-        """One line for people: ``"plate: x y rz"`` or ``"joints: finger"``."""
-        return f"{self.frame if self.frame is not None else 'joints'}: {' '.join(self.dofs)}"
-
     def to_dict(self) -> dict[str, Any]:
         """The sidecar's ``end_effector`` entry."""
         if self.frame is None:
