@@ -292,7 +292,7 @@ def test_non_string_key_is_reported_not_crashed_on():
 
 
 def test_joint_task_round_trips_and_refuses_a_frame_beside_it():
-    """`end_effector: {joints: [...]}` is a task without frame; it round-trips; a frame beside it is refused."""
+    """`end_effector: {joints: [...]}`: a frameless task that round-trips; a frame beside it is refused."""
     side = parse_sidecar({**_valid(), "end_effector": {"joints": ["j1"]}})
     assert side.task == TaskSpec(None, ("j1",))
     assert side.task.joints == ("j1",) and side.task.rows() == ()
@@ -307,8 +307,8 @@ def test_joint_task_round_trips_and_refuses_a_frame_beside_it():
     )
 
 
-def test_joint_task_on_a_missing_or_ball_joint_is_refused(tmp_path):
-    """Loading refuses an output joint that does not exist (listing the joints) or has several DOF."""
+def test_joint_task_on_a_missing_joint_is_refused(tmp_path):
+    """Loading refuses an output joint that does not exist, listing the joints; a real one loads."""
     import shutil
 
     import yaml
