@@ -652,3 +652,23 @@ def three_prr(
         yourdfpy.Robot(name=name, links=links, joints=joints), parse_sidecar(data), folder, name
     )
     return plm_pin.load(folder / f"{name}.urdf")
+
+
+PRR_POSE = (0.01, -0.02, 0.1)
+"""A pose well inside the 3-PRR's workspace [m, m, rad]."""
+
+
+def prr_reference(pose: tuple[float, float, float]) -> dict[str, float]:
+    """Joint values of the 3-PRR at ``pose`` in branches (+, +, +), from the closed-form IK."""
+    s = prr_ik(pose, (1, 1, 1))
+    a = rrr_angles()
+    out = {}
+    for i in range(3):
+        A = PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
+        B = A + s[i] * np.array([-math.sin(a[i]), math.cos(a[i])])
+        C = np.array(pose[:2]) + PRR["rp"] * np.array([math.cos(a[i] + pose[2]), math.sin(a[i] + pose[2])])
+        rod = math.atan2(C[1] - B[1], C[0] - B[0]) - (a[i] + math.pi / 2)  # in the slider's frame
+        out[f"slider{i}"], out[f"pivot{i}"] = float(s[i]), float(rod)
+        if i == 0:
+            out["p0"] = float(pose[2] - (a[0] + math.pi / 2) - rod)
+    return out

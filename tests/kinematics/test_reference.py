@@ -9,7 +9,6 @@ branches of the leg merge).
 from __future__ import annotations
 
 import json
-import math
 import re
 import warnings
 
@@ -24,25 +23,6 @@ from plm_pin.kinematics import classify, task_pose
 from plm_pin.kinematics.reference import REFERENCE_MARGIN, reference_findings, reference_report
 from plm_pin.warnings import ReferenceWarning
 from tests import textbook as tb
-
-POSE = (0.01, -0.02, 0.1)
-"""A pose well inside the 3-PRR's workspace [m, m, rad]."""
-
-
-def closed_form_reference(pose: tuple[float, float, float]) -> dict[str, float]:
-    """Joint values of the 3-PRR at ``pose`` in branches (+, +, +), from the closed-form IK."""
-    s = tb.prr_ik(pose, (1, 1, 1))
-    a = tb.rrr_angles()
-    out = {}
-    for i in range(3):
-        A = tb.PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
-        B = A + s[i] * np.array([-math.sin(a[i]), math.cos(a[i])])
-        C = np.array(pose[:2]) + tb.PRR["rp"] * np.array([math.cos(a[i] + pose[2]), math.sin(a[i] + pose[2])])
-        rod = math.atan2(C[1] - B[1], C[0] - B[0]) - (a[i] + math.pi / 2)  # in the slider's frame
-        out[f"slider{i}"], out[f"pivot{i}"] = float(s[i]), float(rod)
-        if i == 0:
-            out["p0"] = float(pose[2] - (a[0] + math.pi / 2) - rod)
-    return out
 
 
 @pytest.fixture(scope="module")
@@ -92,8 +72,8 @@ def test_the_warning_says_where_and_its_reference_entry_keeps_it(chosen, tmp_pat
 
 def test_info_and_check_show_the_reference_pose_and_modes(tmp_path):
     """`info` and `check` print the reference pose and working mode of a description with a reference."""
-    mech = tb.three_prr(tmp_path, reference=closed_form_reference(POSE))
-    np.testing.assert_allclose(task_pose(mech, mech.q_ref), POSE, atol=1e-12)
+    mech = tb.three_prr(tmp_path, reference=tb.prr_reference(tb.PRR_POSE))
+    np.testing.assert_allclose(task_pose(mech, mech.q_ref), tb.PRR_POSE, atol=1e-12)
     mode = reference_report(mech).working_mode
     check = CliRunner().invoke(app, ["check", str(tmp_path / "prr3.urdf")])
     assert check.exit_code == 0, check.output
@@ -103,13 +83,13 @@ def test_info_and_check_show_the_reference_pose_and_modes(tmp_path):
     )
     info = CliRunner().invoke(app, ["info", "--json", str(tmp_path / "prr3.urdf")])
     shown = json.loads(info.stdout)["reference"]
-    np.testing.assert_allclose(shown["pose"], POSE, atol=1e-12)
+    np.testing.assert_allclose(shown["pose"], tb.PRR_POSE, atol=1e-12)
     assert tuple(shown["working_mode"]) == mode
 
 
 def test_a_mistyped_rod_moves_the_reference_and_check_fails(tmp_path):
     """Rod 2 typed 0.1 instead of 0.3: the loops close far from the sidecar's reference, `check` says so."""
-    mech = tb.three_prr(tmp_path, rod=0.1, reference=closed_form_reference(POSE))
+    mech = tb.three_prr(tmp_path, rod=0.1, reference=tb.prr_reference(tb.PRR_POSE))
     errors = [f for f in reference_findings(mech) if f.severity == "error"]
     assert len(errors) == 1 and errors[0].message.startswith(
         "the loops closed far from the sidecar's reference"
@@ -120,4 +100,4 @@ def test_a_mistyped_rod_moves_the_reference_and_check_fails(tmp_path):
     moved = reference_report(mech).shifts
     assert "slider2" in moved  # the slider of the mistyped rod moves to reach the platform
     pose = task_pose(mech, mech.q_ref)
-    assert np.max(np.abs(pose - POSE)) > 0.01
+    assert np.max(np.abs(pose - tb.PRR_POSE)) > 0.01

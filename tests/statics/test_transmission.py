@@ -19,6 +19,7 @@ import pinocchio as pin
 import pytest
 from typer.testing import CliRunner
 
+import plm_pin
 from plm_pin import InvalidInput
 from plm_pin.cli import app
 from plm_pin.dynamics import inverse_dynamics, task_trajectory
@@ -215,3 +216,23 @@ def test_cli_info_and_check_show_the_joint_task(finger, tmp_path):
     check = CliRunner().invoke(app, ["check", str(tmp_path / "finger.urdf")])
     assert check.exit_code == 0, check.output
     assert "ok: finger: 1 closures, 1 actuators, mobility 1" in check.stdout
+
+
+def test_prismatic_joint_task_on_the_sliders_is_the_identity_transmission(tmp_path):
+    """A 3-PRR whose task is its sliders: IK puts each slider where asked; ratio and advantage are I."""
+    import yaml
+
+    tb.three_prr(tmp_path, reference=tb.prr_reference(tb.PRR_POSE))
+    sidecar = tmp_path / "prr3.plm.yaml"
+    data = yaml.safe_load(sidecar.read_text())
+    data["end_effector"] = {"joints": ["slider0", "slider1", "slider2"]}
+    sidecar.write_text(yaml.safe_dump(data))
+    mech = plm_pin.load(tmp_path / "prr3.urdf")
+    sliders = tb.prr_ik(tb.PRR_POSE, (1, 1, 1))
+    np.testing.assert_allclose(task_pose(mech, mech.q_ref), sliders, atol=1e-12)
+    target = sliders + np.array([0.01, -0.02, 0.015])
+    sol = inverse_kinematics(mech, target)
+    np.testing.assert_allclose(mech.actuator_positions(sol.q), target, atol=1e-12)
+    result = transmission(mech, sol.q)
+    np.testing.assert_allclose(result.ratio, np.eye(3), atol=1e-10)
+    np.testing.assert_allclose(result.mechanical_advantage, np.eye(3), atol=1e-10)
