@@ -13,6 +13,10 @@ closed forms below are derived here from the geometry alone, never from plm_pin:
   b = 2 La z, c = Lb^2 - La^2 - (x - R')^2 - y^2 - z^2 with R' = R - r.
 - Stewart platform 6-UPS (Gough): leg lengths L_k = |p + R P_k - B_k|, velocities
   L'_k = e_k . (v + w x R P_k).
+- Four-bar gripper finger (output joint as task): Freudenstein's equation, the velocity ratio
+  a sin(t3 - t2) / (c sin(t3 - t4)), the transmission angle by the law of cosines.
+- Planar 3-PRR (a sidecar written as a user would, reference optional): slider positions
+  s_i = (C_i - A_i) . u_i +- sqrt(l^2 - ((C_i - A_i) . n_i)^2).
 """
 
 from __future__ import annotations
