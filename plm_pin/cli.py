@@ -198,7 +198,7 @@ def info(
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
     ignore: IgnoreOption = "",
 ) -> None:
-    """Sizes, joints, closures, actuators, task, mobility, redundancy, the reference (pose, modes, residual)."""
+    """Sizes, joints, closures, actuators, task, mobility, redundancy, the reference (pose, modes)."""
     mech = _load(target, ignore)
     summary = mech.summary()
     with _reported():
