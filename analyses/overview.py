@@ -12,13 +12,19 @@ import itertools
 import numpy as np
 import pinocchio as pin
 
-from plm_pin import Mechanism, PlmError, SimulationFailed, load
+from plm_pin import Mechanism, PlmError, SimulationFailed, SingularConfiguration, load
 from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
 from plm_pin.kinematics import classify, task_pose
 from plm_pin.kinematics.collisions import self_collisions
 from plm_pin.report import Animation, Column, Section, StudyContext
 from plm_pin.results import units
-from plm_pin.statics import StaticForces, actuator_limits, internal_force_range, static_forces
+from plm_pin.statics import (
+    StaticForces,
+    actuator_limits,
+    internal_force_range,
+    static_forces,
+    transmission,
+)
 from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
 from plm_pin.viz import (
     MeshcatViewer,
@@ -70,9 +76,17 @@ SIMULATION_DT = 0.005
 """Output step of the passive simulation [s] (samples of simulate's default DOP853 run)."""
 
 
-def _display(dof: str, value: float) -> tuple[float, str]:
+def _is_angle(mech: Mechanism, dof: str) -> bool:
+    """Whether task coordinate ``dof`` is an angle: a rotation direction, or a revolute output joint."""
+    task = mech.task_compiled
+    if task is not None and mech.task is not None and mech.task.frame is None:
+        return task.dofs.index(dof) in task.angles
+    return dof.startswith("r")
+
+
+def _display(mech: Mechanism, dof: str, value: float) -> tuple[float, str]:
     """A task coordinate in report units: degrees for angles (said so), metres otherwise."""
-    return (float(np.degrees(value)), "deg") if dof.startswith("r") else (float(value), "m")
+    return (float(np.degrees(value)), "deg") if _is_angle(mech, dof) else (float(value), "m")
 
 
 NEEDS_SQUARE_TASK = (
@@ -176,12 +190,47 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
     )
     if mech.task is not None:
         x = task_pose(mech, q)
+        joints = mech.task.frame is None
         section.table(
-            f"Reference pose of the task frame {mech.task.frame}",
+            "Reference positions of the output joints (the task)"
+            if joints
+            else f"Reference pose of the task frame {mech.task.frame}",
             ["coordinate", Column("value", fmt=".6g"), "unit"],
-            [(dof, *_display(dof, v)) for dof, v in zip(mech.task.dofs, x, strict=True)],
-            note="Angles are roll-pitch-yaw (R = Rz Ry Rx), shown in degrees.",
+            [(dof, *_display(mech, dof, v)) for dof, v in zip(mech.task.dofs, x, strict=True)],
+            note="Revolute joint angles, shown in degrees."
+            if joints
+            else "Angles are roll-pitch-yaw (R = Rz Ry Rx), shown in degrees.",
         )
+    if square and mech.n_actuators == mech.mobility:
+        _transmission(section, mech, q)
+
+
+def _transmission(section: Section, mech: Mechanism, q: np.ndarray) -> None:
+    """The transmission ratio, mechanical advantage and transmission indices at ``q``."""
+    try:
+        t = transmission(mech, q)
+    except SingularConfiguration as exc:
+        section.text(f"No transmission at the reference: {exc}")
+        return
+    rows: list[tuple[str, str, float]] = []
+    for i, dof in enumerate(t.dofs):
+        for j, act in enumerate(t.actuators):
+            rows.append((f"d {dof} / d {act}", "ratio", float(t.ratio[i, j])))
+            rows.append(
+                (f"{dof} force per {act} force", "mechanical advantage", float(t.mechanical_advantage[i, j]))
+            )
+    for name, index in t.transmission_index.items():
+        for dof, value in zip(t.dofs, index, strict=True):
+            rows.append((f"closure {name}, motion of {dof}", "transmission index", float(value)))
+    section.table(
+        "Transmission at the reference",
+        ["quantity", "kind", Column("value", fmt=".6g")],
+        rows,
+        id="transmission",
+        note="Ratio: task rate per actuator rate; mechanical advantage: task force (torque) delivered per "
+        "actuator force (torque), from the static balance; transmission index: |cos| of the angle between "
+        "a closure's force and its motion (a four-bar: sin of the transmission angle; 0: dead centre).",
+    )
 
 
 def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
@@ -192,7 +241,7 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
     extent = float(np.max(np.ptp(_frame_origins(mech, mech.q_ref), axis=0)))
     values = []
     for a in axes:
-        half = ANGLE_SPAN if a.startswith("r") else LENGTH_SPAN * extent
+        half = ANGLE_SPAN if _is_angle(mech, a) else LENGTH_SPAN * extent
         centre = x0[dofs.index(a)]
         values.append(np.linspace(centre - half, centre + half, GRID))
     section.text(
@@ -261,9 +310,20 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
         i, j = (dofs.index(a) for a in axes)
         section.table(
             "Singular points found",
-            ["kind", "method", *(Column(a, _display(a, 0.0)[1], ".5g") for a in axes), Column("margin", "-")],
             [
-                (p.kind, p.method, _display(axes[0], p.x[i])[0], _display(axes[1], p.x[j])[0], p.margin)
+                "kind",
+                "method",
+                *(Column(a, _display(mech, a, 0.0)[1], ".5g") for a in axes),
+                Column("margin", "-"),
+            ],
+            [
+                (
+                    p.kind,
+                    p.method,
+                    _display(mech, axes[0], p.x[i])[0],
+                    _display(mech, axes[1], p.x[j])[0],
+                    p.margin,
+                )
                 for p in loci
             ],
         )
@@ -276,10 +336,10 @@ PRELOAD_STEPS = 5
 
 def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -> None:
     compliance = mech.sidecar.compliance
-    if compliance is None or mech.task is None:
+    if compliance is None or mech.task is None or mech.task.frame is None:
         section.text(
             "No stiffness: the description has no `compliance` section (drive stiffness under "
-            "`compliance.actuators`) or no task."
+            "`compliance.actuators`) or no end-effector frame task."
         )
         return
     section.text(
@@ -441,7 +501,7 @@ def _simulation(section: Section, mech: Mechanism) -> None:
         assert mech.task is not None
         curves = {}
         for k, dof in enumerate(mech.task.dofs):
-            unit = _display(dof, 0.0)[1]
+            unit = _display(mech, dof, 0.0)[1]
             curves[f"{dof} [{unit}]"] = np.degrees(np.unwrap(run.x[:, k])) if unit == "deg" else run.x[:, k]
         fig, flat = plot_panels(run.t, curves, xlabel="t [s]")
         section.figure(

@@ -41,7 +41,7 @@ from scipy.sparse.csgraph import connected_components, maximum_bipartite_matchin
 
 from . import closures as _closures
 from .rank import RANK_RTOL, numerical_rank
-from .task import Task
+from .task import FrameTask, Task
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -122,7 +122,9 @@ def ik_jacobian_from_data(
 
 
 def platform_rows(task: Task) -> list[int]:
-    """The twist rows (0..5 of ``v, omega``) of the task frame that the task leaves out."""
+    """The task frame's twist rows (0..5 of ``v, omega``) the task leaves out (none for a joint task)."""
+    if not isinstance(task, FrameTask):
+        return []
     return [r for r in range(6) if r not in task.rows]
 
 
@@ -132,13 +134,14 @@ def structure_jacobian_from_data(
     """``[J_phi; J_x; J_rest]``: :func:`ik_jacobian_from_data` and the platform's other twist rows.
 
     Shape (m + 6, nv); ``J_rest`` holds the task frame's twist rows the task leaves out, so
-    that the whole platform is pinned.
+    that the whole platform is pinned. A joint task has no platform: shape (m + n_task, nv).
     """
     m = _closures.closure_rows(closures)
-    A = np.empty((m + 6, model.nv))
+    rest = platform_rows(task)
+    A = np.empty((m + task.size + len(rest), model.nv))
     ik_jacobian_from_data(model, data, closures, task, A[: m + task.size])
-    J = pin.getFrameJacobian(model, data, task.frame_id, _LWA)
-    A[m + task.size :] = J[platform_rows(task)]
+    if isinstance(task, FrameTask):
+        A[m + task.size :] = pin.getFrameJacobian(model, data, task.frame_id, _LWA)[rest]
     return A
 
 

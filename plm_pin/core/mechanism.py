@@ -22,7 +22,7 @@ from .idle import IdleGauge, find_gauges
 from .legs import Leg, find_legs
 from .rank import RANK_RTOL, numerical_rank
 from .scratch import Workspace
-from .task import Task, compile_task
+from .task import FrameTask, Task, compile_task_spec
 
 ASSEMBLY_TOL = 1e-12
 """Default closure tolerance of :meth:`Mechanism.assemble` [m, rad]."""
@@ -175,10 +175,8 @@ class Mechanism:
                 )
             )
         self.actuators = tuple(actuators)
-        self._task_frame = model.getFrameId(sidecar.task.frame) if sidecar.task else None
-        self.task_compiled: Task | None = (
-            compile_task(model, sidecar.task.frame, sidecar.task.dofs) if sidecar.task else None
-        )
+        self.task_compiled: Task | None = compile_task_spec(model, sidecar.task) if sidecar.task else None
+        self._task_frame = self.task_compiled.frame_id if isinstance(self.task_compiled, FrameTask) else None
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -285,7 +283,7 @@ class Mechanism:
 
     @property
     def task_frame_id(self) -> int | None:
-        """Pinocchio index of the end-effector frame, or None."""
+        """Pinocchio index of the end-effector frame, or None (no task, or a joint task)."""
         return self._task_frame
 
     @property
@@ -335,11 +333,11 @@ class Mechanism:
     # ---------------------------------------------------------- closures
     def closure_residual(self, q: ArrayLike) -> np.ndarray:
         r"""Closure residual :math:`\phi(q)` [m, rad] (see :mod:`plm_pin.core.closures`), shape (m,)."""
-        return _closures.residual(self.model, self.data, self.closures, self.check_q(q))
+        return _closures.residual(self.model, self._data, self.closures, self.check_q(q))
 
     def closure_jacobian(self, q: ArrayLike) -> np.ndarray:
         r"""Closure Jacobian :math:`J_\phi(q)` on the tangent space, shape (m, nv)."""
-        return _closures.jacobian(self.model, self.data, self.closures, self.check_q(q))
+        return _closures.jacobian(self.model, self._data, self.closures, self.check_q(q))
 
     def closure_rank(self, q: ArrayLike, rtol: float = RANK_RTOL) -> int:
         r"""Rank of :math:`J_\phi(q)` by SVD: singular values above ``rtol * max(s_max, 1)``."""
@@ -432,7 +430,7 @@ class Mechanism:
 
         return assemble(
             self.model,
-            self.data,
+            self._data,
             self.closures,
             q0,
             free,
@@ -603,3 +601,19 @@ def require_task(mech: Mechanism) -> Task:
     if mech.task_compiled is None:
         raise InvalidInput(f"{mech.name} has no end-effector task; add 'end_effector' to its sidecar")
     return mech.task_compiled
+
+
+def require_frame_task(mech: Mechanism, needed_by: str) -> FrameTask:
+    """The mechanism's compiled frame task, or a clear error (no task, or a joint task).
+
+    Args:
+        mech: the mechanism.
+        needed_by: what needs it, completing the message (``"the deflection needs"``).
+    """
+    task = require_task(mech)
+    if not isinstance(task, FrameTask):
+        raise InvalidInput(
+            f"{mech.name} has a joint task (joints {list(task.dofs)}); {needed_by} an end-effector frame "
+            "task (end_effector: {frame: ..., task: [...]})"
+        )
+    return task

@@ -37,6 +37,7 @@ from .._text import short
 from ..core import closures as _closures
 from ..core.checks import CLOSURE_TOL, check_finite_model, check_samples_assembled
 from ..core.mechanism import Mechanism
+from ..core.task import FrameTask
 from ..exceptions import (
     AllocationInfeasible,
     InvalidInput,
@@ -45,7 +46,7 @@ from ..exceptions import (
 )
 from ..results import Result, unit
 from ..statics import AllocationRule, solve_balance
-from ..statics.balance import SINGULAR_RTOL, Load, _balance, balance_factors, load_on_frame
+from ..statics.balance import SINGULAR_RTOL, AnyLoad, Load, _balance, balance_factors, load_on_frame
 from .trajectory import JointTrajectory, checked_trajectory
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -341,7 +342,7 @@ class _Kinematics:
         n, m = trajectory.t.shape[0], mech.n_closure_rows
         frame_id = None
         if loaded and frame is None:
-            frame_id = task.frame_id if task is not None else None
+            frame_id = task.frame_id if isinstance(task, FrameTask) else None
         elif loaded and model.existFrame(frame):
             frame_id = model.getFrameId(frame)
         square = task is not None and task.size == mech.mobility == mech.n_actuators
@@ -370,7 +371,7 @@ def _run(
     trajectory: JointTrajectory,
     kinematics: _Kinematics,
     rule: AllocationRule,
-    load_at: Callable[[float], Load | None],
+    load_at: Callable[[float], AnyLoad | None],
     body: _BodyGroups,
     gravity: bool,
     singular_rtol: float,
@@ -396,8 +397,10 @@ def _run(
         parts[:, 0] = tau_full - nle
         parts[:, 1] = nle - g_full
         parts[:, 2] = g_full if gravity else 0.0
-        if load is not None and kinematics.J_load is not None:
+        if isinstance(load, Load) and kinematics.J_load is not None:
             parts[:, 3] = -(kinematics.J_load[i].T @ load.wrench)
+        elif load is not None:
+            parts[:, 3] = -load.generalized_force(model, data)
         tau = parts.sum(axis=1)
         try:
             if linear:  # weighted minimum norm: the forces are F tau, one factorisation
@@ -470,7 +473,7 @@ def _body_shares(
 
 def _load_function(
     mech: Mechanism, wrench: ArrayLike | Callable[[float], ArrayLike] | None, frame: str | None
-) -> Callable[[float], Load | None]:
+) -> Callable[[float], AnyLoad | None]:
     """``t -> Load`` for a constant or time-varying wrench, checked on first use."""
     if wrench is None:
         return lambda t: None

@@ -76,7 +76,7 @@ from .._text import short
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism, require_task
 from ..core.rank import RANK_RTOL
-from ..core.task import Task
+from ..core.task import FrameTask, Task
 from ..exceptions import (
     ClosureNotSatisfied,
     InvalidInput,
@@ -427,8 +427,10 @@ class _RateRows:
     def __init__(self, task: Task, model: pin.Model) -> None:
         self.task = task
         self.model = model
-        self.n_lin = len(task.linear)
-        self.angular = list(task.angular)
+        frame = task if isinstance(task, FrameTask) else None  # a joint task's rates are its velocities
+        self.n_lin = len(frame.linear) if frame is not None else task.size
+        self.angular = list(frame.angular) if frame is not None else []
+        self.frame_id = frame.frame_id if frame is not None else -1
         self.E_inv = np.eye(3)
         self.rpy = np.zeros(3)
 
@@ -440,14 +442,14 @@ class _RateRows:
         """
         if not self.angular:
             return J_x
-        self.rpy = pin.rpy.matrixToRpy(data.oMf[self.task.frame_id].rotation)
+        self.rpy = pin.rpy.matrixToRpy(data.oMf[self.frame_id].rotation)
         self.rpy[self.angular] = x[self.n_lin :]
         if abs(np.cos(self.rpy[1])) <= RANK_RTOL:
             raise SingularConfiguration(
                 f"roll-pitch-yaw rates are undefined at pitch ry = {self.rpy[1]:.9g} rad (cos ry = 0)"
             )
         self.E_inv = pin.rpy.computeRpyJacobianInverse(self.rpy, _WORLD)
-        J_omega = pin.getFrameJacobian(self.model, data, self.task.frame_id, _LWA)[3:]
+        J_omega = pin.getFrameJacobian(self.model, data, self.frame_id, _LWA)[3:]
         J_r = J_x.copy()
         J_r[self.n_lin :] = (self.E_inv @ J_omega)[self.angular]
         return J_r
@@ -457,7 +459,7 @@ class _RateRows:
         drift = self.task.drift_from_data(self.model, data)
         if not self.angular:
             return drift
-        fid = self.task.frame_id
+        fid = self.frame_id
         omega = pin.getFrameVelocity(self.model, data, fid, _LWA).angular
         alpha = pin.getFrameClassicalAcceleration(self.model, data, fid, _LWA).angular
         rates = self.E_inv @ omega
@@ -636,8 +638,7 @@ def actuator_trajectory(
             raise rec.stop("actuator", k, exc) from exc
         rec.x[k] = task.pose_from_data(mech.data)
         rec.record(k, q, v, a, jac.J_x, mech.actuator_positions(q))
-    n_lin = len(task.linear)
-    rec.x[:, n_lin:] = np.unwrap(rec.x[:, n_lin:], axis=0)
+    rec.x[:, task.angles] = np.unwrap(rec.x[:, task.angles], axis=0)
     return rec.result()
 
 

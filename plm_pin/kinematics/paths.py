@@ -29,7 +29,7 @@ from .._arguments import check_tolerance, mapping, positive, real_numbers
 from .._text import short
 from ..core.assembly import assemble
 from ..core.mechanism import Mechanism, require_task
-from ..core.task import TaskTarget, compile_task
+from ..core.task import FrameTask, Task, TaskTarget, compile_joint_task, compile_task
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
@@ -151,7 +151,11 @@ def follow_targets(
         raise InvalidInput(f"prescribe at least one quantity, all with the same sample count; got {sizes}")
     n = sizes[0]
     sp = _check_path_parameter(s, n)
-    sub_task = compile_task(mech.model, mech.model.frames[task.frame_id].name, dofs) if dofs else None
+    sub_task: Task | None = None
+    if dofs and isinstance(task, FrameTask):
+        sub_task = compile_task(mech.model, mech.model.frames[task.frame_id].name, dofs)
+    elif dofs:
+        sub_task = compile_joint_task(mech.model, dofs)
     free = mech.free_columns(fixed_values)
     qs: list[np.ndarray] = [mech.check_q(guess, "guess")]
     for joint in fixed_values:

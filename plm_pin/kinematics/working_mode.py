@@ -32,5 +32,6 @@ def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = MODE_RTOL) -> tupl
         InvalidInput: a malformed ``q`` or an ``rtol`` outside [0, 1).
     """
     rtol = check_tolerance(rtol, "rtol", relative=True)
+    legs = mech.legs  # built first: building it must not come between the pass and its reading
     structure_jacobian(mech, mech.check_q(q))
-    return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), mech.legs, rtol)
+    return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), legs, rtol)

@@ -1,7 +1,7 @@
 """Statics of closed chains: balance, redundant actuator-force allocation, reactions, force capability."""
 
 from .allocation import OBJECTIVES
-from .balance import SINGULAR_RTOL, Load, StaticBalance, static_balance
+from .balance import SINGULAR_RTOL, JointLoad, Load, StaticBalance, static_balance
 from .capability import Capability, InternalRange, force_capability, internal_force_range, wrench_polygon
 from .forces import (
     AllocationRule,
@@ -13,6 +13,7 @@ from .forces import (
     static_forces,
 )
 from .reactions import JointReaction, LinkForce
+from .transmission import Transmission, transmission
 
 __all__ = [
     "OBJECTIVES",
@@ -21,11 +22,13 @@ __all__ = [
     "Capability",
     "InternalMode",
     "InternalRange",
+    "JointLoad",
     "JointReaction",
     "LinkForce",
     "Load",
     "StaticBalance",
     "StaticForces",
+    "Transmission",
     "actuator_limits",
     "force_capability",
     "internal_force_range",
@@ -33,5 +36,6 @@ __all__ = [
     "solve_balance",
     "static_balance",
     "static_forces",
+    "transmission",
     "wrench_polygon",
 ]

@@ -27,7 +27,7 @@ from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, PlmError
 from ..results import Result, unit
 from .allocation import FEASIBILITY_RTOL, Inequalities, allocate, solve_lp
-from .balance import load_on_frame, static_balance
+from .balance import Load, load_on_frame, static_balance
 from .forces import actuator_limits
 
 
@@ -78,9 +78,9 @@ def force_capability(
     load_arguments(direction, frame, limits, mech.n_actuators, "direction")
     bounds = _finite_limits(mech, limits, "force capability")
     load = load_on_frame(mech, direction, frame)
-    if not np.any(load.wrench):
+    if not np.any(load.wrench if isinstance(load, Load) else load.forces):
         raise InvalidInput(f"direction must be a nonzero load (it sets the unit of alpha), got {direction!r}")
-    with_load = static_balance(mech, q, load.wrench, load.frame, gravity=gravity)
+    with_load = static_balance(mech, q, direction, frame, gravity=gravity)
     base = static_balance(mech, q, gravity=gravity) if gravity else None
     f_g = base.f_particular if base is not None else np.zeros(mech.n_actuators)
     f_d = with_load.f_particular - f_g  # (n_act,) forces per unit load (the balance is linear)
@@ -184,8 +184,7 @@ def internal_force_range(
     if wrench is None:
         balance = static_balance(mech, q, gravity=gravity)
     else:
-        load = load_on_frame(mech, wrench, frame)
-        balance = static_balance(mech, q, load.wrench, load.frame, gravity=gravity)
+        balance = static_balance(mech, q, wrench, frame, gravity=gravity)
     G = balance.internal_basis  # (n_act, k)
     k = G.shape[1]
     if k == 0:

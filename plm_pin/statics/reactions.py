@@ -29,7 +29,7 @@ import pinocchio as pin
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism, body_name
 from ..results import Result, unit
-from .balance import Load
+from .balance import AnyLoad, Load
 
 ATTACHMENT_ATOL = 1e-9
 """Attachment points closer than this [m] are the same point."""
@@ -129,7 +129,7 @@ def transmitted_forces(
     mech: Mechanism,
     q: np.ndarray,
     lam: np.ndarray,
-    load: Load | None,
+    load: AnyLoad | None,
     gravity: bool,
     v: np.ndarray | None = None,
     a: np.ndarray | None = None,
@@ -161,8 +161,15 @@ def transmitted_forces(
             moment = _closures.angular_rows(c, data).T @ lam[c.rows.start + 3 : c.rows.stop]
         _add_world_wrench(model, data, fext, fb, force, moment)
         _add_world_wrench(model, data, fext, fa, -force, -moment)
-    if load is not None:
+    if isinstance(load, Load):
         _add_world_wrench(model, data, fext, load.frame_id, load.wrench[:3], load.wrench[3:])
+    elif load is not None:  # on each output joint's child body, and its opposite on the parent body
+        for jid, f in zip(load.joints, load.forces, strict=True):
+            j = model.getJointId(jid)
+            S = np.asarray(data.joints[j].S).reshape(6, -1)[:, 0]  # (v, omega) in the joint's frame
+            pair = pin.Force(S[:3] * f, S[3:] * f)
+            fext[j] += pair
+            fext[model.parents[j]] -= data.liMi[j].act(pair)
     zero = np.zeros(model.nv)
     vel = zero if v is None else v
     acc = zero if a is None else a

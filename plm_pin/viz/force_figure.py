@@ -28,7 +28,7 @@ from .._arguments import positive
 from .._text import short
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
-from ..statics import StaticForces, static_forces
+from ..statics import Load, StaticForces, static_forces
 from .figures import _axes
 from .panels import panel_grid, shared_legend
 from .skeleton import plane_axes, skeleton_segments
@@ -75,7 +75,7 @@ def force_arrows(sol: StaticForces) -> list[ForceArrow]:
         jid = model.getJointId(lf.joint)
         out.append(ForceArrow("f_l", link, data.oMi[jid].translation.copy(), lf.axial * lf.axis))
     load = sol.balance.load
-    if load is not None:
+    if isinstance(load, Load):  # a joint load (pairs of moments on its joints) has no arrow
         point = data.oMf[load.frame_id].translation.copy()
         out.append(ForceArrow("load", load.frame, point, load.wrench[:3].copy()))
     return out

@@ -122,6 +122,24 @@ def test_overview_of_a_one_dof_mechanism_sweeps_its_task(tmp_path):
     assert figures[0].data["slice"]["axes"] == ["rz"]
 
 
+def test_overview_of_a_gripper_finger_reports_its_transmission(tmp_path):
+    """A four-bar finger with its output joint as task: the transmission table holds the closed forms."""
+    import math
+
+    from tests import textbook as tb
+
+    tb.finger(tmp_path)
+    result = run_study(find_study("overview"), tmp_path / "finger.urdf")
+    rows = {row[0]: row[2] for row in result.block("transmission").rows}
+    ratio = tb.finger_velocity_ratio(tb.FINGER_THETA2)
+    assert rows["d finger_pivot / d drive"] == pytest.approx(ratio, rel=1e-9)
+    assert rows["finger_pivot force per drive force"] == pytest.approx(1 / ratio, rel=1e-9)
+    mu = tb.finger_transmission_angle(tb.FINGER_THETA2)
+    assert rows["closure knuckle, motion of finger_pivot"] == pytest.approx(math.sin(mu), abs=1e-10)
+    figures = [b for s in result.sections for b in s.blocks if b.kind == "figure"]
+    assert figures[0].data["slice"]["axes"] == ["finger_pivot"]
+
+
 @pytest.fixture(scope="module")
 def limited_3d4m_overview(tmp_path_factory):
     """The overview of the 3D4M with effort limits of +-1.5 N on every slider, as a user's description."""
