@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -95,6 +94,8 @@ def _validated(mech: Mechanism, guess: str, validate: bool) -> Mechanism:
 
 @functools.cache
 def _erd_root() -> Path:
+    from importlib import metadata  # 20 ms (email, socket): only for example-robot-data
+
     try:
         files = metadata.files("example-robot-data") or []
     except metadata.PackageNotFoundError:
