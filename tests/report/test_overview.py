@@ -1,4 +1,4 @@
-"""The generic overview study (analyses/overview.py) on a user's description."""
+"""The overview study (plm_pin/report/overview.py) on a user's description."""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
-"""Overview of any mechanism plm_pin loads: mobility, workspace slice, statics, decoupling, motion, 3D view.
+"""The overview study: mobility, workspace slice, statics, decoupling, motion and 3D view of any mechanism.
 
-``plm-pin report overview --mechanism path/to/robot.urdf`` (or ``plm-pin report
-path/to/robot.urdf``) runs it on a user's description; ``plm-pin report all`` on
-:data:`MECHANISM`.
+The library's own study (the paper studies are in the checkout's ``analyses/``), so that an
+installed wheel writes the report of any description: ``plm-pin report overview --mechanism
+path/to/robot.urdf`` (or ``plm-pin report path/to/robot.urdf``); ``plm-pin report all`` runs it
+on :data:`MECHANISM`.
 """
 
 from __future__ import annotations
@@ -12,15 +13,16 @@ import itertools
 import numpy as np
 import pinocchio as pin
 
-from plm_pin import Mechanism, PlmError, SimulationFailed, load
-from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
-from plm_pin.kinematics import classify, task_pose
-from plm_pin.kinematics.collisions import self_collisions
-from plm_pin.report import Animation, Column, Section, StudyContext
-from plm_pin.results import units
-from plm_pin.statics import StaticForces, actuator_limits, internal_force_range, static_forces
-from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
-from plm_pin.viz import (
+from ..core.mechanism import Mechanism
+from ..dynamics import SimulationResult, decoupling_check, simulate
+from ..exceptions import PlmError, SimulationFailed
+from ..kinematics import classify, task_pose
+from ..kinematics.collisions import self_collisions
+from ..loading import load
+from ..results import units
+from ..statics import StaticForces, actuator_limits, internal_force_range, static_forces
+from ..stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
+from ..viz import (
     MeshcatViewer,
     force_arrows,
     plot_map,
@@ -29,7 +31,10 @@ from plm_pin.viz import (
     plot_stiffness_map,
     plot_sweep,
 )
-from plm_pin.workspace import WorkspaceSlice, manipulability, singular_loci, workspace_map, workspace_sweep
+from ..workspace import WorkspaceSlice, manipulability, singular_loci, workspace_map, workspace_sweep
+from .animation import Animation
+from .content import Column, Section
+from .study import StudyContext
 
 TITLE = "Overview"
 SUMMARY = (
