@@ -289,7 +289,7 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     q = mech.q_ref
     try:
         res = stiffness(mech, q)
-        modes = natural_frequencies(mech, q, result=res)
+        vibration = natural_frequencies(mech, q, result=res)
     except PlmError as exc:
         section.text(f"No stiffness at the reference: {exc}", markdown=False)
         return
@@ -299,9 +299,9 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     rows += [
         (f"rotational eigen-stiffness {i + 1}", v, "N m/rad") for i, v in enumerate(res.rotational.values)
     ]
-    rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(modes.frequencies)]
+    rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(vibration.frequencies)]
     section.table(
-        "Stiffness and modes at the reference",
+        "Stiffness and natural frequencies at the reference",
         ["quantity", Column("value", fmt=".5g"), "unit"],
         rows,
         id="stiffness",
@@ -441,7 +441,7 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
     section.text(
         "Gravity only, at the reference configuration: the actuator forces `f_c` of minimum norm that "
         "balance it, the axial force of every hinged link (tension positive), and the internal-force "
-        "modes: actuator forces that balance only each other (one per degree of redundancy)."
+        "directions: actuator forces that balance only each other (one per degree of redundancy)."
     )
     try:
         sol = static_forces(mech, mech.q_ref)
@@ -463,21 +463,21 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
             ["link", "proximal joint", Column("axial (tension +)", "N"), Column("shear", "N")],
             [(f.link, f.joint, f.axial, f.shear) for f in links.values()],
         )
-    modes = sol.internal_modes()
-    if modes:
+    directions = sol.internal_directions()
+    if directions:
         section.table(
-            "Internal-force modes (unit vectors of the internal basis)",
-            ["mode", *(Column(a.joint, units.get(a.kind, "")) for a in mech.actuators)],
-            [(k + 1, *m.f_c) for k, m in enumerate(modes)],
-            note="Any multiple of a mode can be added to f_c without moving the mechanism.",
-            id="internal_modes",
+            "Internal-force directions (unit vectors of the internal basis)",
+            ["direction", *(Column(a.joint, units.get(a.kind, "")) for a in mech.actuators)],
+            [(k + 1, *d.f_c) for k, d in enumerate(directions)],
+            note="Any multiple of a direction can be added to f_c without moving the mechanism.",
+            id="internal_directions",
         )
-        names = list(modes[0].link_forces)
+        names = list(directions[0].link_forces)
         if names:
             section.table(
-                "Link axial forces caused by each internal mode",
-                ["mode", *(Column(n, "N") for n in names)],
-                [(k + 1, *(m.link_forces[n].axial for n in names)) for k, m in enumerate(modes)],
+                "Link axial forces caused by each internal-force direction",
+                ["direction", *(Column(n, "N") for n in names)],
+                [(k + 1, *(d.link_forces[n].axial for n in names)) for k, d in enumerate(directions)],
             )
         _internal_range(section, mech, sol)
     spread = np.ptp(_frame_origins(mech, mech.q_ref), axis=0)
@@ -511,10 +511,15 @@ def _internal_range(section: Section, mech: Mechanism, sol: StaticForces) -> Non
         return
     section.table(
         "Internal-force range within the actuator limits, holding gravity",
-        ["mode", Column("lowest", "N or N m"), Column("min-norm", "N or N m"), Column("highest", "N or N m")],
+        [
+            "direction",
+            Column("lowest", "N or N m"),
+            Column("min-norm", "N or N m"),
+            Column("highest", "N or N m"),
+        ],
         [(k + 1, span.lower[k], sol.internal[k], span.upper[k]) for k in range(span.lower.size)],
-        note="Coordinates along the modes above (one linear programme per bound, the other modes free); "
-        "multiply a mode's link forces by a coordinate to read the preload it stands for.",
+        note="Coordinates along the directions above (one linear programme per bound, the others free); "
+        "multiply a direction's link forces by a coordinate to read the preload it stands for.",
         id="internal_range",
     )
 

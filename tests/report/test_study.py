@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import warnings
 
 import pytest
@@ -26,6 +27,8 @@ def fake_package(tmp_path, monkeypatch):
     (package / "broken.py").write_text('TITLE = "No run here"\n')
     (package / "_helper.py").write_text("X = 1\n")
     monkeypatch.syspath_prepend(str(tmp_path))
+    for name in [m for m in sys.modules if m.split(".")[0] == "fake_studies"]:  # another test's package
+        monkeypatch.delitem(sys.modules, name)
     monkeypatch.setattr(study_module, "STUDY_PACKAGE", "fake_studies")
     return package
 
