@@ -12,7 +12,7 @@ from .jacobians import ClosedChainJacobians, closed_chain_jacobians
 from .mode_graph import ModeEdge, ModeGraph, ModeNode
 from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
 from .singularity import SINGULARITY_TOL, SingularityReport, classify
-from .working_mode import working_mode
+from .working_mode import guess_mode, working_mode
 
 __all__ = [
     "SINGULARITY_TOL",
@@ -29,6 +29,7 @@ __all__ = [
     "closed_chain_jacobians",
     "follow_targets",
     "forward_kinematics",
+    "guess_mode",
     "inverse_kinematics",
     "redundancy_margin",
     "same_assembly",

@@ -44,7 +44,7 @@ from ..core.task import Task, TaskTarget
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import inverse_kinematics
-from ..kinematics.working_mode import working_mode
+from ..kinematics.working_mode import start_configuration
 from ._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
 from .manipulability import batch_metrics
 
@@ -630,20 +630,6 @@ def _reseed_solution(
         return inverse_kinematics(mech, x, guess, mode=mode).q
     except PoseUnreachable:
         return None
-
-
-def start_configuration(mech: Mechanism, guess: ArrayLike | None) -> np.ndarray:
-    """The configuration an analysis starts from: ``guess`` (checked), or the reference one."""
-    return mech.q_ref if guess is None else mech.check_q(guess, "guess")
-
-
-def guess_mode(mech: Mechanism, guess: ArrayLike | None) -> tuple[int, ...] | None:
-    """Working mode of ``guess`` (default: the reference configuration); None if a leg is singular there.
-
-    Passed as ``mode`` it keeps an analysis in the guess's working mode wherever its seed is.
-    """
-    mode = working_mode(mech, start_configuration(mech, guess))
-    return None if 0 in mode else mode
 
 
 def base_pose(mech: Mechanism, pose: ArrayLike | None, guess: ArrayLike | None) -> np.ndarray:

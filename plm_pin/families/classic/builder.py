@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..._lazy import lazy_module
-from ...description import _urdf_build as u
+from ...description import urdf_parts as u
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 
 if TYPE_CHECKING:
