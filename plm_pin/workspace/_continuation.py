@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
-from scipy.ndimage import label as _label
 
+from .._lazy import lazy_module
 from ..core import closures as _closures
 from ..core.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
 from ..core.legs import Leg, ik_jacobian_from_data, working_mode_from_data
@@ -47,6 +47,8 @@ from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.working_mode import start_configuration
 from ._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
 from .manipulability import batch_metrics
+
+ndimage = lazy_module("scipy.ndimage")  # label: the unreached regions of a grid
 
 
 @dataclass
@@ -726,7 +728,7 @@ def reseed(
     attempted = np.zeros(state.reached.size, dtype=bool)
     budget = RESEED_ATTEMPTS
     while budget > 0 and not state.reached.all():
-        labels, count = _label(~state.reached.reshape(state.shape))
+        labels, count = ndimage.label(~state.reached.reshape(state.shape))
         labels = labels.reshape(-1)
         grown = False
         for stretch in range(1, count + 1):
