@@ -8,13 +8,14 @@ imported when it is first used:
   stand-in at module level (``scipy_linalg = lazy_module("scipy.linalg")``), so the module's
   code reads as if it were imported there;
 - a package that re-exports names from heavy submodules maps each name to its submodule with
-  :func:`lazy_exports` (its ``__getattr__``), and imports them for type checkers only;
+  :func:`lazy_exports` (its ``__getattr__`` and ``__dir__``), and imports them for type checkers only;
 - a preset names its builder as a ``"module:function"`` string, resolved by :func:`import_object`.
 """
 
 from __future__ import annotations
 
 import importlib
+import sys
 import types
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -35,15 +36,19 @@ def lazy_module(name: str) -> Any:
     return LazyModule(name)
 
 
-def lazy_exports(package: str, exports: Mapping[str, str]) -> Callable[[str], Any]:
-    """A package's module-level ``__getattr__`` importing each re-exported name on first use.
+def lazy_exports(
+    package: str, exports: Mapping[str, str]
+) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """A package's module-level ``__getattr__`` and ``__dir__`` importing each re-exported name on use.
+
+    ``__dir__`` lists the re-exported names too, so that ``dir()``, autodoc and completion see them.
 
     Args:
         package: the package's ``__name__``.
         exports: re-exported name -> the submodule defining it, relative (``".planners"``).
 
     Returns:
-        The ``__getattr__`` function (PEP 562); it raises ``AttributeError`` for other names.
+        ``(__getattr__, __dir__)`` (PEP 562); ``__getattr__`` raises ``AttributeError`` for other names.
     """
 
     def __getattr__(name: str) -> Any:
@@ -52,7 +57,10 @@ def lazy_exports(package: str, exports: Mapping[str, str]) -> Callable[[str], An
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
         return getattr(importlib.import_module(module, package), name)
 
-    return __getattr__
+    def __dir__() -> list[str]:
+        return sorted(set(vars(sys.modules[package])) | set(exports))
+
+    return __getattr__, __dir__
 
 
 def import_object(target: str) -> Any:

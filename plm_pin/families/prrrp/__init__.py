@@ -46,7 +46,7 @@ if TYPE_CHECKING:
         plan_working_mode_change,
     )
 
-__getattr__ = lazy_exports(
+__getattr__, __dir__ = lazy_exports(
     __name__,
     {
         "ASSEMBLY_MODES": ".modes",
