@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
 import pkgutil
 import subprocess
 import sys
@@ -110,6 +111,10 @@ def test_building_a_preset_imports_its_builder_only():
     assert not [m for m in loaded if m.startswith("plm_pin.kinematics")]
 
 
+OUTSIDE = {key: value for key, value in os.environ.items() if key != "PYTHONPATH"}
+"""The environment of a process run outside the checkout (a PYTHONPATH naming it would reach it)."""
+
+
 @pytest.fixture(scope="module")
 def wheel_venv(tmp_path_factory) -> Path:
     """`pip wheel .` installed (with its required dependencies only) into a fresh venv; its bin folder.
@@ -146,7 +151,7 @@ def test_wheel_installed_outside_the_checkout_loads_every_preset(wheel_venv, tmp
         f"for n in {names!r}:\n"
         "    m = plm_pin.load(n); print(n, m.mobility, m.redundancy)\n"
     )
-    out = subprocess.run([str(python), "-c", code], cwd=tmp_path, capture_output=True, text=True)
+    out = subprocess.run([str(python), "-c", code], cwd=tmp_path, capture_output=True, text=True, env=OUTSIDE)
     assert out.returncode == 0, out.stderr
     assert [line.split()[0] for line in out.stdout.splitlines()] == names
 
@@ -157,7 +162,8 @@ def test_installed_wheel_runs_the_command_line_and_the_overview(wheel_venv, tmp_
     bin_ = wheel_venv
 
     def run(*args: str) -> subprocess.CompletedProcess[str]:
-        return subprocess.run([str(a) for a in args], cwd=tmp_path, capture_output=True, text=True)
+        command = [str(a) for a in args]
+        return subprocess.run(command, cwd=tmp_path, capture_output=True, text=True, env=OUTSIDE)
 
     assert run(bin_ / "plm-pin", "--version").stdout.strip() == f"plm-pin {plm_pin.__version__}"
     assert (
