@@ -65,7 +65,7 @@ format: $(STAMP)
 	$(VENV)/bin/ruff check --fix .
 
 bench: $(STAMP)
-	$(PY) -m benchmarks.harness --out $(REPORTS)/bench
+	$(PY) -m benchmarks.harness --out $(REPORTS)/bench --docs docs/_generated/benchmarks.md
 
 urdf: $(STAMP)
 	$(PY) -m plm_pin.models.generate

@@ -1026,38 +1026,69 @@ def _fmt(seconds: float) -> str:
     return f"{seconds * 1e6:.1f} us" if seconds < 1e-3 else f"{seconds * 1e3:.2f} ms"
 
 
-def write(
-    rows: list[dict[str, object]],
-    out: Path,
-    notes: tuple[str, ...] = (),
-    simulation: list[dict[str, object]] | None = None,
-    sweep: list[dict[str, object]] | None = None,
-) -> Path:
-    """Write ``results.md`` (tables, then ``notes``) and ``results.json`` into ``out``.
+VERSIONS = (("system", "system"), ("python", "Python"), ("pinocchio", "Pinocchio"), ("numpy", "NumPy"))
+"""The versions a run records (key of ``machine()``, name printed)."""
 
-    ``results.json`` holds ``{"timings": rows, "simulation": simulation rows, "sweep": sweep rows}``.
 
-    Returns:
-        The Markdown path.
+def machine() -> dict[str, object]:
+    """Where and when the benchmark runs: UTC date, processor, cores, load at the start, versions."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        models = [
+            line for line in Path("/proc/cpuinfo").read_text().splitlines() if line.startswith("model name")
+        ]
+        cpu = models[0].split(":", 1)[1].strip() if models else cpu
+    except OSError:
+        pass
+    return {
+        "date": time.strftime("%Y-%m-%d", time.gmtime()),
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "load_average": os.getloadavg()[0] if hasattr(os, "getloadavg") else None,
+        "system": platform.platform(terse=True),
+        "python": platform.python_version(),
+        "pinocchio": pin.__version__,
+        "numpy": np.__version__,
+    }
+
+
+def machine_line(info: dict[str, object]) -> str:
+    """The sentence stating the date and the machine of a run (what the docs page quotes).
+
+    Keys missing from ``info`` are left out; a ``source`` key (a run not timed by this harness,
+    e.g. transcribed from an earlier table) is appended as said.
     """
-    out.mkdir(parents=True, exist_ok=True)
+    load = info.get("load_average")
+    where = f"{info.get('cpu', 'an unrecorded processor')} ({info.get('cores', '?')} cores"
+    where += f", load average {load:.2f} at the start)" if isinstance(load, float) else ")"
+    versions = [f"{name} {info[key]}" for key, name in VERSIONS if info.get(key)]
+    line = f"Measured on {info['date']} on {where}" + "".join(f", {v}" for v in versions) + "."
+    return f"{line} {info['source']}" if info.get("source") else line
+
+
+def markdown(results: dict[str, Any], level: int = 1, title: str = "plm_pin benchmarks") -> str:
+    """The Markdown tables of a run's ``results.json`` content, its date and machine stated first.
+
+    ``level`` is the heading level of the title (1 for ``results.md``, 2 inside the docs page).
+    """
+    h = "#" * level
     lines = [
-        "# plm_pin benchmarks",
+        f"{h} {title}",
         "",
-        f"Machine: {platform.machine()}, Python {platform.python_version()}, "
-        f"Pinocchio {pin.__version__}. Best of 5 repeats.",
+        machine_line(results["machine"]),
         "",
-        "Floor: the least Python doing the same math with Pinocchio calls, in the same process "
-        "(:class:`benchmarks.harness.Floor`), timed in alternation with the path.",
+        "Times per call are the best of 5 repeats. Floor: the least Python doing the same math with "
+        "Pinocchio calls, in the same process (`benchmarks.harness.Floor`), timed in alternation with the "
+        "path; ratio: plm_pin's time over the floor's.",
         "",
         "| mechanism | case | time per call | floor | ratio |",
         "|---|---|---|---|---|",
     ]
-    lines += [_timing_line(r) for r in rows]
-    if simulation:
+    lines += [_timing_line(r) for r in results["timings"]]
+    if results.get("simulation"):
         lines += [
             "",
-            "## Simulation",
+            f"{h}# Simulation",
             "",
             f"One run each (wall time), except the four-bar's default and MuJoCo RK4 rows: the best of "
             f"{SIM_ROUNDS} alternating runs of both, whose ratio is the cost column. "
@@ -1069,11 +1100,11 @@ def write(
             "| us per step | ms per simulated s | cost / MuJoCo RK4 | total | drift before projection [m] |",
             "|---|---|---|---|---|---|---|---|---|---|---|",
         ]
-        lines += [_simulation_line(r) for r in simulation]
-    if sweep:
+        lines += [_simulation_line(r) for r in results["simulation"]]
+    if results.get("sweep"):
         lines += [
             "",
-            "## Design sweeps (plm_pin.sweep)",
+            f"{h}# Design sweeps (plm_pin.sweep)",
             "",
             "One run each (wall time), results identical on both executors (tested). The cluster's start-up "
             "is timed apart.",
@@ -1081,26 +1112,91 @@ def write(
             "| sweep | executor | poses | seconds | poses per second |",
             "|---|---|---|---|---|",
         ]
-        lines += [_sweep_line(r) for r in sweep]
-    if notes:
-        lines += ["", "## Notes", "", *(f"- {n}" for n in notes)]
+        lines += [_sweep_line(r) for r in results["sweep"]]
+    if results.get("notes"):
+        lines += ["", f"{h}# Notes", "", *(f"- {n}" for n in results["notes"])]
+    return "\n".join(lines) + "\n"
+
+
+DOCS_TABLE = Path(__file__).resolve().parents[1] / "docs" / "_generated" / "benchmarks.md"
+"""The generated tables the docs' benchmark page includes (written by ``make bench``, committed)."""
+
+GENERATED = "<!-- generated by `make bench` (benchmarks/harness.py) from results.json: do not edit -->"
+"""First line of the docs' generated tables."""
+
+
+def write(
+    rows: list[dict[str, object]],
+    out: Path,
+    notes: tuple[str, ...] = (),
+    simulation: list[dict[str, object]] | None = None,
+    sweep: list[dict[str, object]] | None = None,
+    docs: Path | None = None,
+    info: dict[str, object] | None = None,
+) -> Path:
+    """Write ``results.md`` (date and machine, tables, then ``notes``) and ``results.json`` into ``out``.
+
+    ``results.json`` holds ``{"machine", "timings", "simulation", "sweep", "notes"}``; with
+    ``docs``, the same tables are written there for the docs' benchmark page.
+
+    Returns:
+        The Markdown path.
+    """
+    results = {
+        "machine": info or machine(),
+        "timings": rows,
+        "simulation": simulation or [],
+        "sweep": sweep or [],
+        "notes": list(notes),
+    }
+    out.mkdir(parents=True, exist_ok=True)
     md = out / "results.md"
-    md.write_text("\n".join(lines) + "\n")
-    (out / "results.json").write_text(
-        json.dumps({"timings": rows, "simulation": simulation or [], "sweep": sweep or []}, indent=2)
-    )
+    md.write_text(markdown(results))
+    (out / "results.json").write_text(json.dumps(results, indent=2))
+    if docs is not None:
+        write_docs(results, docs)
     return md
+
+
+def write_docs(results: dict[str, Any], docs: Path = DOCS_TABLE) -> None:
+    """Write a run's tables for the docs' benchmark page (title one level down, the generator named)."""
+    docs.parent.mkdir(parents=True, exist_ok=True)
+    docs.write_text(GENERATED + "\n\n" + markdown(results, level=2, title="The latest run"))
 
 
 def main() -> None:
     """Command-line entry point."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--out", type=Path, default=Path("reports/bench"), help="output folder")
+    parser.add_argument(
+        "--docs", type=Path, default=None, help="also write the tables for the docs page here"
+    )
+    parser.add_argument(
+        "--from-json",
+        type=Path,
+        default=None,
+        help="rewrite the tables from a results.json",
+    )
     args = parser.parse_args()
+    if args.from_json is not None:
+        results = json.loads(args.from_json.read_text())
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "results.md").write_text(markdown(results))
+        if args.docs is not None:
+            write_docs(results, args.docs)
+        print(markdown(results))
+        return
+    info = machine()  # the load average before the benchmark adds its own
     rows = run()
     placo_rows, placo_note = placo_benchmark()
     md = write(
-        rows + placo_rows, args.out, (fig6_note(), placo_note), simulation_benchmark(), sweep_benchmark()
+        rows + placo_rows,
+        args.out,
+        (fig6_note(), placo_note),
+        simulation_benchmark(),
+        sweep_benchmark(),
+        docs=args.docs,
+        info=info,
     )
     print(md.read_text())
 

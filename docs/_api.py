@@ -1,8 +1,11 @@
 """The API reference pages, written by conf.py at every build from the packages' ``__all__``.
 
-One page per public package: ``automodule`` documents its classes and functions (imported
-ones included), and each data name of its ``__all__`` gets an ``autodata`` entry (autodoc
-does not document imported data by itself), so that every public name has an entry.
+The index lists each public package with the first line of its docstring. One page per public
+package: the first line of each of its modules' docstrings, then ``automodule`` documents its
+documented classes and functions (imported ones included), and each data name of its
+``__all__`` gets a ``py:data`` entry (autodoc does not document imported data by itself), so
+that every public name has an entry. Dataclass fields are documented once, by the class's
+``Attributes:`` section (napoleon's ``napoleon_use_ivar``), not again as members.
 """
 
 from __future__ import annotations
@@ -16,39 +19,84 @@ from pathlib import Path
 
 from sphinx.pycode import ModuleAnalyzer
 
-PACKAGES = {
-    "plm_pin": "The top level: loading and building mechanisms, the `Mechanism` object, the errors.",
-    "plm_pin.description": "Reading and writing descriptions: URDF spanning tree plus closure sidecar, MJCF.",
-    "plm_pin.core": "The Mechanism and what it is made of: closures, task, legs, idle gauges, assembly, "
-    "workspaces.",
-    "plm_pin.export": "A Mechanism written as a MuJoCo model (MJCF) that simulates with its loops closed.",
-    "plm_pin.models": "The registry of named presets.",
-    "plm_pin.kinematics": "Task pose, Jacobians, working modes, inverse and forward kinematics, "
-    "singularities, limits, mode graphs and path tracking.",
-    "plm_pin.families": "Mechanism families, one package each, with its builder and its own analyses.",
-    "plm_pin.families.classic": "The crank-rocker four-bar and the RRRRR five-bar.",
-    "plm_pin.families.prrrp": "The 2-PRRRP (Harada 2011, 2015): builder, layout, assembly and working modes, "
-    "mode-change planners, complex singularity.",
-    "plm_pin.families.pss": "n-PSS spatial platforms (Zhao 2011's 8-PSS and its 6-PSS counterpart).",
-    "plm_pin.families.star_triangle": "The 3-PRP star-triangle (Enferadi 2017).",
-    "plm_pin.workspace": "Manipulability, workspace maps, singular loci, orientation range.",
-    "plm_pin.statics": "The static balance, actuator-force allocation, reactions, link forces, "
-    "force capability.",
-    "plm_pin.dynamics": "Trajectories on the closure manifold, inverse dynamics, power and work, task-space "
-    "dynamics, decoupling, simulation.",
-    "plm_pin.stiffness": "Elastostatics of closed chains: compliant model (virtual joints), Cartesian "
-    "stiffness, deflection, natural frequencies, stiffness maps.",
-    "plm_pin.sweep": "Design sweeps, local or on Dask, with checkpoints.",
-    "plm_pin.viz": "matplotlib figures and meshcat scenes.",
-    "plm_pin.report": "Studies and their reports.",
-    "plm_pin.schemas": "The JSON Schemas of the sidecar and of the sweep configuration.",
-    "plm_pin.warnings": "The warnings plm_pin emits, all subclasses of `PlmWarning`, for filtering.",
-    "plm_pin.results": "The result protocol: the base of the result dataclasses, the units of their fields.",
-}
-"""Public package -> one line saying what it holds."""
+PACKAGES = (
+    "plm_pin",
+    "plm_pin.description",
+    "plm_pin.core",
+    "plm_pin.kinematics",
+    "plm_pin.families",
+    "plm_pin.families.classic",
+    "plm_pin.families.prrrp",
+    "plm_pin.families.pss",
+    "plm_pin.families.star_triangle",
+    "plm_pin.models",
+    "plm_pin.export",
+    "plm_pin.workspace",
+    "plm_pin.statics",
+    "plm_pin.dynamics",
+    "plm_pin.stiffness",
+    "plm_pin.sweep",
+    "plm_pin.viz",
+    "plm_pin.report",
+    "plm_pin.schemas",
+    "plm_pin.results",
+    "plm_pin.warnings",
+)
+"""The public packages (and modules with an ``__all__``), in the order of the API index."""
+
+INDEX_INTRO = """\
+# API reference
+
+Generated from the docstrings: every name in the `__all__` of `plm_pin` and of its public
+packages (the pages are written from the `__all__` lists at each build, by `docs/_api.py`).
+Units are in brackets in each docstring, SI throughout, angles in radians.
+
+These names are the public API: the functions a user calls, the results they receive, the
+errors they catch and the constants they pass as choices. Each is public in one package only
+(import it from there); the other names of plm_pin's modules are its internals and may change
+without notice.
+"""
 
 SHORT_VALUE = 80
 """Longest value shown in full for a data name [characters]."""
+
+
+def summary(module: str) -> str:
+    """The first line of a module's docstring, its reST roles and literals rewritten for MyST."""
+    doc = importlib.import_module(module).__doc__ or ""
+    line = doc.strip().splitlines()[0] if doc.strip() else ""
+    line = re.sub(r":(\w+):`", r"{\1}`", line)  # :math:`x` -> {math}`x`
+    return re.sub(r"``([^`]+)``", r"`\1`", line).replace("|", "\\|")
+
+
+def submodules(package: str) -> list[str]:
+    """The public modules of a package (not its subpackages, which have their own page), sorted."""
+    module = importlib.import_module(package)
+    if not hasattr(module, "__path__"):
+        return []
+    found = pkgutil.iter_modules(module.__path__, package + ".")
+    return sorted(m.name for m in found if not m.ispkg and not m.name.rsplit(".", 1)[1].startswith("_"))
+
+
+def index() -> str:
+    """The MyST page of the API index: each package with its one-line summary, and the toctree."""
+    rows = [f"| [`{p}`]({page_name(p)}.md) | {summary(p)} |" for p in PACKAGES]
+    return "\n".join(
+        [
+            INDEX_INTRO,
+            "| package | what it holds |",
+            "|---|---|",
+            *rows,
+            "",
+            "```{toctree}",
+            ":hidden:",
+            ":maxdepth: 1",
+            "",
+            *(page_name(p) for p in PACKAGES),
+            "```",
+            "",
+        ]
+    )
 
 
 def page_name(package: str) -> str:
@@ -87,15 +135,15 @@ def _defined_in(package: str, name: str) -> bool:
 def page(package: str) -> str:
     """The MyST page of one package."""
     module = importlib.import_module(package)
-    lines = [
-        f"# `{package}`",
-        "",
-        PACKAGES[package],
-        "",
+    lines = [f"# `{package}`", ""]  # automodule shows the docstring, its first line the index's summary
+    if modules := submodules(package):
+        lines += ["| module | what it holds |", "|---|---|"]
+        lines += [f"| `{m}` | {summary(m)} |" for m in modules]
+        lines += [""]
+    lines += [
         "```{eval-rst}",
         f".. automodule:: {package}",
         "   :members:",
-        "   :undoc-members:",
         "   :imported-members:",
         "",
     ]
@@ -121,9 +169,10 @@ def page(package: str) -> str:
 
 
 def write_pages(folder: Path) -> None:
-    """Write every package's page into ``folder`` (only where its text changed, for Sphinx's cache)."""
-    for package in PACKAGES:
-        path = folder / f"{page_name(package)}.md"
-        text = page(package)
+    """Write the index and every package's page into ``folder`` (only where changed, for Sphinx's cache)."""
+    folder.mkdir(exist_ok=True)  # the pages are not committed: a fresh clone has no folder
+    pages = {"index": index(), **{page_name(p): page(p) for p in PACKAGES}}
+    for stem, text in pages.items():
+        path = folder / f"{stem}.md"
         if not path.is_file() or path.read_text(encoding="utf-8") != text:
             path.write_text(text, encoding="utf-8")

@@ -1,3 +1,3 @@
 """The version of plm_pin: the one place it is written (read by hatch at build)."""
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"

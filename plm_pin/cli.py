@@ -145,10 +145,21 @@ def _reported() -> Iterator[None]:
             errors.print(f"[yellow]warning:[/] {escape(str(w.message))}", highlight=False, soft_wrap=True)
 
 
-def _load(target: str | Path) -> Mechanism:
+IgnoreOption = Annotated[
+    str,
+    typer.Option(
+        "--ignore",
+        help="MJCF elements to drop rather than refuse, comma-separated: "
+        "contacts, tendons, joint_equalities, inactive_equalities, actuators",
+    ),
+]
+"""The ``--ignore`` option of the commands that load a mechanism (see ``plm_pin.load``)."""
+
+
+def _load(target: str | Path, ignore: str = "") -> Mechanism:
     """Load a mechanism, printing its warnings on stderr and turning errors into exit 1."""
     with _reported():
-        mech = load(target)
+        mech = load(target, ignore=ignore)
         mech.summary()  # computes mobility now, inside the error handling
     return mech
 
@@ -184,9 +195,10 @@ def list_presets() -> None:
 def info(
     target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
+    ignore: IgnoreOption = "",
 ) -> None:
-    """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""
-    summary = _load(target).summary()
+    """Sizes, joints, closures, actuators, task, mobility, redundancy and reference residual."""
+    summary = _load(target, ignore).summary()
     if as_json:
         console.print_json(json.dumps(summary))
         return
@@ -195,6 +207,7 @@ def info(
     table.add_column("value", overflow="fold")
     table.add_row("source", escape(summary["source"]))
     table.add_row("nq / nv", f"{summary['nq']} / {summary['nv']}")
+    table.add_row("joints", escape(", ".join(f"{j['name']} ({j['type']})" for j in summary["joints"])))
     for c in summary["closures"]:
         table.add_row(
             escape(f"closure {c['name']}"),
@@ -218,9 +231,12 @@ def info(
 
 
 @app.command()
-def check(path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml or description folder")]) -> None:
+def check(
+    path: Annotated[Path, typer.Argument(help="a .urdf, .plm.yaml, .xml or description folder")],
+    ignore: IgnoreOption = "",
+) -> None:
     """Validate a description and say exactly what is wrong and where (idle DOF, task size, limits)."""
-    mech = _load(path)
+    mech = _load(path, ignore)
     summary = mech.summary()
     found = findings(mech)
     for finding in found:
@@ -246,11 +262,12 @@ def export_command(
     ] = None,
     timestep: Annotated[float, typer.Option("--timestep", help="MuJoCo step [s]")] = 1e-3,
     integrator: Annotated[str, typer.Option("--integrator", help="RK4 or implicitfast")] = "RK4",
+    ignore: IgnoreOption = "",
 ) -> None:
     """Write a mechanism for another tool: --mjcf OUT.xml for MuJoCo, loops closed by equalities."""
     if mjcf is None:
         raise _fail(InvalidInput("give a format to export to: --mjcf OUT.xml"))
-    mech = _load(target)
+    mech = _load(target, ignore)
     with _reported():
         error = export_mjcf(mech, mjcf, timestep=timestep, integrator=integrator)
     console.print(f"wrote {mjcf}: {error.describe()}", markup=False, highlight=False, soft_wrap=True)
@@ -496,6 +513,7 @@ def view(
             "harada2011:simulation2, enferadi2017:circle, zhao2011:8pss, overview:simulation",
         ),
     ] = None,
+    ignore: IgnoreOption = "",
 ) -> None:
     """Show a mechanism in meshcat (127.0.0.1 only): frames, closure points, singularities highlighted.
 
@@ -505,7 +523,7 @@ def view(
     if animate is None:
         if target is None:
             raise _fail(InvalidInput("give a mechanism (preset, erd:<robot>, .urdf, folder) or --animate"))
-        mech, motion = _load(target), None
+        mech, motion = _load(target, ignore), None
     else:
         if pose:
             raise _fail(InvalidInput("--animate plays a motion: it takes no --pose"))
@@ -571,7 +589,13 @@ RESULT = "result.nc"
 
 @app.command("sweep")
 def sweep_command(
-    config: Annotated[Path, typer.Argument(help="sweep configuration (YAML; format in the README)")],
+    config: Annotated[
+        Path,
+        typer.Argument(
+            help="sweep configuration (YAML); format: the user guide's Sweeps page (docs/guide/sweeps.md) "
+            "and the JSON Schema plm_pin/schemas/plm-pin-sweep.schema.json"
+        ),
+    ],
     out: Annotated[Path, typer.Option("--out", help="output folder: checkpoints and the result")],
     scheduler: Annotated[
         str | None,

@@ -4,8 +4,10 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   joint's inertia (``<inertial>`` with ``fullinertia``); a chain of massless joints (the
   gimbal of a universal joint) becomes one body with several joints, as MuJoCo requires
   moving bodies to have mass. Revolute (bounded or not) -> ``hinge``, prismatic ->
-  ``slide``, spherical -> ``ball``, free flyer (on the world only) -> ``free``. Joint
-  position limits are not written: plm_pin's simulation does not enforce them either.
+  ``slide``, spherical -> ``ball``, free flyer (on the world only) -> ``free``; the
+  position limits of a revolute or prismatic joint, when it has finite ones, -> ``range``.
+  The body is placed at the frame of the body the joint carries (a URDF link, an MJCF
+  body), the joint at its anchor there, so that a re-import gives the same frames.
   MuJoCo refuses principal moments below 1e-15 kg m^2; a body with a smaller one (a
   slender strut's axial moment of 0) gets :data:`MIN_PRINCIPAL_MOMENT` about that axis.
 - **Frames**: body and operational frames become ``site``\ s of their name; the frames of
@@ -23,9 +25,14 @@ r"""Writing a mechanism as a MuJoCo model (MJCF) that simulates with its loops c
   effort limits; the joint ``armature`` is the model's, reflected rotor and screw inertia
   included; lead, rotor and screw inertia kept as ``<custom><numeric>`` data
   ``plm_pin:<actuator>:<field>`` for the motor torques of a re-import.
+- **Geometry**: the visual shapes as geoms without contacts (``contype = conaffinity = 0``,
+  group 1; meshes with ``inertia="shell"``, never used for inertia, so that MuJoCo does
+  not refuse a thin mesh's volume); a mechanism's own collision shapes (a URDF's
+  ``<collision>``) as geoms with contacts (group 3), so that a re-import checks
+  self-collision with them.
 - **Solver**: RK4 (or ``implicitfast``), the given timestep, Newton with tolerance 1e-10,
-  contacts disabled (the geoms are visuals: ``contype = conaffinity = 0``), gravity from the
-  mechanism, the reference configuration as keyframe ``reference``.
+  contacts disabled, gravity from the mechanism, the reference configuration as keyframe
+  ``reference``.
 - **Measured**: the model is compiled and simulated by MuJoCo for :data:`MEASURE_DURATION`
   passive under gravity from the reference at rest; the largest closure error (position
   [m], rotation [rad]) is written in an XML comment and returned; when MuJoCo's run
@@ -74,6 +81,7 @@ SOLIMP = (0.99, 0.999, 0.001)
 """Impedance of the exported equalities (MuJoCo ``solimp``): stiff from the first micrometre."""
 
 _MESH_SUFFIXES = (".stl", ".obj")
+_NO_LIMIT = np.finfo(float).max  # Pinocchio's position limit of a joint without one (or inf)
 
 
 @dataclass(frozen=True)
@@ -176,18 +184,53 @@ class _Writer:
         self.integrator = integrator
         self.body_of_joint: dict[int, etree._Element] = {}
         self.last_of_group: dict[int, int] = {}  # joint -> last joint of its body
+        self.body_offset: dict[int, pin.SE3] = {0: pin.SE3.Identity()}  # joint -> its body's frame there
+        self.body_frames: set[int] = set()  # frame ids that are MuJoCo bodies' own frames
         self.site_names: dict[int, str] = {}  # frame id -> site name
-        self.body_names: set[str] = set()
+        self.names: set[str] = set()  # body and site names written (one namespace on re-import)
+        self.geom_names: set[str] = set()
         gauges = {g.closure.name for g in mech.idle_gauges}
         self.closures_out = tuple(c for c in mech.closures if c.name not in gauges)
         self.gauge_frames = {fid for c in mech.closures if c.name in gauges for fid in c.frame_ids}
 
-    def _body_name(self, j: int) -> str:
+    def _unique(self, name: str) -> str:
+        """``name``, or ``name_site``, ``name_site2``, ... when a body or site already has it."""
+        out, k = name, 1
+        while out in self.names:
+            out = f"{name}_site" + (str(k) if k > 1 else "")
+            k += 1
+        self.names.add(out)
+        return out
+
+    def _body_frame(self, group: list[int]) -> tuple[str, pin.SE3]:
+        """The name of the MuJoCo body of a joint group and its frame in the last joint's frame.
+
+        The body is the first body frame of the last joint (a URDF link, an MJCF body), placed
+        where that frame is, so that a re-import gives the frame back as the body's (a joint
+        whose anchor is away from its body's origin gets ``pos``). A free joint's body must be
+        its joint frame (MuJoCo's free joint moves the body frame): when its body frame sits
+        elsewhere, the body takes the joint's name and the frame becomes a site.
+        """
+        j = group[-1]
         name = body_name(self.model, j)
-        if name in self.body_names:
-            name = str(self.model.names[j])
-        self.body_names.add(name)
-        return name
+        fid = next(
+            (
+                i
+                for i, f in enumerate(self.model.frames)
+                if f.type == pin.FrameType.BODY and f.parentJoint == j and f.name == name
+            ),
+            None,
+        )
+        free = _axis(self.model.joints[j], self.model.names[j])[0] == "free"
+        if fid is None or name in self.names or (free and not self.model.frames[fid].placement.isIdentity()):
+            return self._unique(str(self.model.names[j])), pin.SE3.Identity()
+        self.names.add(name)
+        self.body_frames.add(fid)
+        return name, self.model.frames[fid].placement
+
+    def in_body(self, joint: int, placement: pin.SE3) -> pin.SE3:
+        """A placement in the frame of joint ``joint`` expressed in the frame of its MuJoCo body."""
+        return self.body_offset[self.last_of_group.get(joint, joint)].actInv(placement)
 
     def tree(self, world: etree._Element) -> None:
         model = self.model
@@ -198,13 +241,15 @@ class _Writer:
             frame = pin.SE3.Identity()
             for placement in placements:
                 frame = frame * placement
-            body = etree.SubElement(parent, "body", name=self._body_name(group[-1]))
-            body.set("pos", _fmt(frame.translation))
-            body.set("quat", _fmt(rotation_to_quat_wxyz(frame.rotation)))
-            tail = pin.SE3.Identity()  # C_i = (P_{i+1} ... P_n)^-1
+            name, offset_b = self._body_frame(group)
+            pose = self.in_body(parent_joint, frame * offset_b)
+            body = etree.SubElement(parent, "body", name=name)
+            body.set("pos", _fmt(pose.translation))
+            body.set("quat", _fmt(rotation_to_quat_wxyz(pose.rotation)))
+            tail = pin.SE3.Identity()  # C_i = (P_{i+1} ... P_n)^-1, then in the body frame B^-1 C_i
             offsets = []
             for placement in reversed(placements):
-                offsets.append(tail.inverse())
+                offsets.append(offset_b.actInv(tail.inverse()))
                 tail = placement * tail
             offsets.reverse()
             for j, offset in zip(group, offsets, strict=True):
@@ -212,11 +257,16 @@ class _Writer:
                 if kind == "free" and parent_joint != 0:
                     raise DescriptionError(f"free joint {model.names[j]!r} must hang on the world for MuJoCo")
                 element = etree.SubElement(body, "joint", name=str(model.names[j]), type=kind)
+                joint = model.joints[j]
                 if kind in ("hinge", "slide"):
                     element.set("axis", _fmt(offset.rotation @ axis))
                     if np.any(offset.translation):
                         element.set("pos", _fmt(offset.translation))
-                joint = model.joints[j]
+                    if joint.nq == 1:
+                        k = joint.idx_q
+                        limits = (model.lowerPositionLimit[k], model.upperPositionLimit[k])
+                        if np.all(np.abs(limits) < _NO_LIMIT) and limits[0] < limits[1]:
+                            element.set("range", _fmt(limits))
                 armature = model.armature[joint.idx_v : joint.idx_v + joint.nv]
                 if np.any(armature != armature[0]):
                     raise DescriptionError(f"joint {model.names[j]!r}: MuJoCo takes one armature per joint")
@@ -224,7 +274,8 @@ class _Writer:
                     element.set("armature", repr(float(armature[0])))
                 self.body_of_joint[j] = body
                 self.last_of_group[j] = group[-1]
-            inertia = model.inertias[group[-1]]
+                self.body_offset[j] = offset_b
+            inertia = offset_b.actInv(model.inertias[group[-1]])
             if inertia.mass <= 0.0:
                 raise DescriptionError(
                     f"the body of joint {model.names[group[-1]]!r} has no mass: MuJoCo refuses massless "
@@ -259,13 +310,14 @@ class _Writer:
         if frame_id in self.site_names:
             return self.site_names[frame_id]
         frame = self.model.frames[frame_id]
-        name = f"{frame.name}{suffix}"
+        name = self._unique(f"{frame.name}{suffix}")
+        placement = self.in_body(frame.parentJoint, frame.placement)
         etree.SubElement(
             self._body(world, frame_id, what),
             "site",
             name=name,
-            pos=_fmt(frame.placement.translation),
-            quat=_fmt(rotation_to_quat_wxyz(frame.placement.rotation)),
+            pos=_fmt(placement.translation),
+            quat=_fmt(rotation_to_quat_wxyz(placement.rotation)),
         )
         self.site_names[frame_id] = name
         return name
@@ -274,14 +326,7 @@ class _Writer:
         """Sites: body and operational frames but the gauges', closure frames (own body frames too)."""
         model = self.model
         plain = (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
-        own = {
-            i
-            for i, f in enumerate(model.frames)
-            if f.type == pin.FrameType.BODY
-            and f.parentJoint
-            and f.name == body_name(model, f.parentJoint)
-            and f.placement.isIdentity()
-        }
+        own = self.body_frames
         closing = {fid for c in self.closures_out for fid in c.frame_ids}
         task = self.mech.task_frame_id
         for i, f in enumerate(model.frames):
@@ -293,15 +338,24 @@ class _Writer:
             ):
                 self.site(world, i, "frame")
 
-    def visuals(self, world: etree._Element, asset: etree._Element) -> None:
+    def geoms(self, world: etree._Element, asset: etree._Element, collision: bool) -> None:
+        """The visual geoms (no contacts, group 1), or the collision shapes (contacts, group 3).
+
+        Collision shapes are written when the mechanism has its own (a URDF's ``<collision>``);
+        the file's contacts stay disabled, the shapes are there for a re-import's self-collision.
+        """
         import coal
 
-        for obj in self.mech.visual_model.geometryObjects:
+        mech = self.mech
+        if collision and mech.collision_model is mech.visual_model:
+            return
+        what = "collision shape" if collision else "visual"
+        for obj in (mech.collision_model if collision else mech.visual_model).geometryObjects:
             j = obj.parentJoint
             body = world if j == 0 else self.body_of_joint[j]
             if j and self.last_of_group[j] != j:
                 warnings.warn(
-                    f"visual {obj.name!r} sits on the massless joint {self.model.names[j]!r}, merged into "
+                    f"{what} {obj.name!r} sits on the massless joint {self.model.names[j]!r}, merged into "
                     "one MuJoCo body with the next joint: left out",
                     IgnoredElementWarning,
                     stacklevel=4,
@@ -319,7 +373,14 @@ class _Writer:
                 attrs = {"type": "capsule", "size": _fmt([shape.radius, shape.halfLength])}
             elif obj.meshPath and Path(obj.meshPath).suffix.lower() in _MESH_SUFFIXES:
                 mesh = f"mesh{len(asset)}"
-                etree.SubElement(asset, "mesh", name=mesh, file=str(obj.meshPath), scale=_fmt(obj.meshScale))
+                etree.SubElement(
+                    asset,
+                    "mesh",
+                    name=mesh,
+                    file=str(obj.meshPath),
+                    scale=_fmt(obj.meshScale),
+                    inertia="shell",
+                )
                 attrs = {"type": "mesh", "mesh": mesh}
             elif isinstance(shape, coal.BVHModelBase) and shape.num_tris:  # a mesh read from an MJCF
                 mesh = f"mesh{len(asset)}"
@@ -330,25 +391,31 @@ class _Writer:
                     name=mesh,
                     vertex=_fmt(np.asarray(shape.vertices()).ravel()),
                     face=" ".join(str(t[i]) for t in faces for i in range(3)),
+                    inertia="shell",
                 )
                 attrs = {"type": "mesh", "mesh": mesh}
             else:
                 warnings.warn(
-                    f"visual {obj.name!r} ({type(shape).__name__}) has no MuJoCo geom: left out",
+                    f"{what} {obj.name!r} ({type(shape).__name__}) has no MuJoCo geom: left out",
                     IgnoredElementWarning,
                     stacklevel=4,
                 )
                 continue
+            placement = self.in_body(j, obj.placement)
+            name, k = str(obj.name), 1
+            while name in self.geom_names:  # Pinocchio names visuals and collisions alike
+                name, k = f"{obj.name}_{'collision' if collision else 'visual'}{k}", k + 1
+            self.geom_names.add(name)
             etree.SubElement(
                 body,
                 "geom",
-                name=str(obj.name),
-                pos=_fmt(obj.placement.translation),
-                quat=_fmt(rotation_to_quat_wxyz(obj.placement.rotation)),
+                name=name,
+                pos=_fmt(placement.translation),
+                quat=_fmt(rotation_to_quat_wxyz(placement.rotation)),
                 rgba=_fmt(obj.meshColor),
-                contype="0",
-                conaffinity="0",
-                group="1",
+                contype="1" if collision else "0",
+                conaffinity="1" if collision else "0",
+                group="3" if collision else "1",
                 **attrs,
             )
 
@@ -367,10 +434,9 @@ class _Writer:
                 ends = []
                 for fid, side in zip(c.frame_ids, "ab", strict=True):
                     frame = self.model.frames[fid]
-                    name = f"{c.name}_axis_{side}"
-                    pos = frame.placement.translation + frame.placement.rotation @ (
-                        REVOLUTE_PAIR_SPACING * c.axis
-                    )
+                    name = self._unique(f"{c.name}_axis_{side}")
+                    placement = self.in_body(frame.parentJoint, frame.placement)
+                    pos = placement.translation + placement.rotation @ (REVOLUTE_PAIR_SPACING * c.axis)
                     etree.SubElement(
                         self._body(world, fid, "closure frame"), "site", name=name, pos=_fmt(pos)
                     )
@@ -411,7 +477,8 @@ class _Writer:
         world = etree.SubElement(root, "worldbody")
         self.tree(world)
         self.frames(world)
-        self.visuals(world, asset)
+        self.geoms(world, asset, collision=False)
+        self.geoms(world, asset, collision=True)
         equality = etree.SubElement(root, "equality")
         self.closures(world, equality)
         actuator = etree.SubElement(root, "actuator")

@@ -3,14 +3,20 @@
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 from ._text import short
 from .core.mechanism import Mechanism
-from .description.loader import Description, build_model, build_visual_model, read_description
-from .description.mjcf import MJCF_SUFFIX, read_mjcf
+from .description.loader import (
+    Description,
+    build_collision_model,
+    build_model,
+    build_visual_model,
+    read_description,
+)
+from .description.mjcf import MJCF_SUFFIX, check_ignore, read_mjcf
 from .description.overrides import DescriptionBuilder
 from .description.sidecar import SIDECAR_SUFFIX_DEFAULT as SIDECAR_SUFFIX
 from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
@@ -42,24 +48,30 @@ def mechanism_from_description(description: Description, name: str, *, validate:
         name=name,
         source=description.sidecar.source or str(description.urdf_path or ""),
         visual_factory=functools.partial(build_visual_model, model, description),  # picklable
+        collision_factory=functools.partial(build_collision_model, model, description),
     )
     guess = "sidecar reference" if description.sidecar.reference else "neutral configuration"
     return _validated(mech, guess, validate)
 
 
-def mechanism_from_mjcf(path: str | Path, *, validate: bool = True) -> Mechanism:
+def mechanism_from_mjcf(
+    path: str | Path, *, validate: bool = True, ignore: str | Iterable[str] = ()
+) -> Mechanism:
     """Build a :class:`Mechanism` from a MuJoCo model (see :mod:`plm_pin.description.mjcf`).
 
     Args:
         path: the ``.xml`` file (a ``.plm.yaml`` sidecar beside it is read when present).
         validate: assemble the reference configuration now.
+        ignore: kinds of MJCF elements to drop rather than refuse (see
+            :data:`~plm_pin.description.mjcf.IGNORABLE`), with a warning listing them.
 
     Raises:
         DescriptionError: when MuJoCo is missing or rejects the file, or an element cannot be
             represented.
         ClosureNotSatisfied: when ``validate`` and the loops cannot be closed.
+        InvalidInput: when ``ignore`` names an unknown kind.
     """
-    mjcf = read_mjcf(path)
+    mjcf = read_mjcf(path, ignore)
     name = mjcf.sidecar.name or Path(path).name.split(".")[0]
     mech = Mechanism(
         mjcf.model,
@@ -67,6 +79,7 @@ def mechanism_from_mjcf(path: str | Path, *, validate: bool = True) -> Mechanism
         name=name,
         source=mjcf.sidecar.source or "",
         visual_factory=mjcf.visual_model,
+        collision_factory=mjcf.collision_model,
     )
     return _validated(mech, mjcf.reference_origin, validate)
 
@@ -147,7 +160,7 @@ def load_erd(name: str) -> Mechanism:
     return mechanism_from_description(Description(source, sidecar, path, None, "example-robot-data"), name)
 
 
-def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
+def load(name_or_path: str | Path, *, validate: bool = True, ignore: str | Iterable[str] = ()) -> Mechanism:
     """Load a mechanism.
 
     Args:
@@ -157,6 +170,10 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
             an optional ``.plm.yaml`` beside it; needs ``plm-pin[mjcf]``).
         validate: assemble the reference configuration at once (see
             :func:`mechanism_from_description`).
+        ignore: for a MuJoCo model, kinds of elements plm_pin cannot represent to drop
+            rather than refuse (``"contacts"``, ``"tendons"``, ... see
+            :data:`~plm_pin.description.mjcf.IGNORABLE`), as names or one comma-separated
+            string; a warning lists what was dropped.
 
     Returns:
         The mechanism.
@@ -164,8 +181,11 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
     Raises:
         DescriptionError: unknown name, missing or malformed files, unsafe content.
         ClosureNotSatisfied: when the loops cannot be closed from the reference guess.
+        InvalidInput: ``ignore`` names an unknown kind, or is given for a model that is not an MJCF.
     """
     text = str(name_or_path)
+    if check_ignore(ignore) and not _is_mjcf(Path(text)):
+        raise InvalidInput(f"ignore={ignore!r} applies to MuJoCo models (.xml) only; {text!r} is not one")
     if text in PRESETS:
         return mechanism_from_description(
             read_description(urdf_folder() / f"{text}.urdf"), text, validate=validate
@@ -178,17 +198,28 @@ def load(name_or_path: str | Path, *, validate: bool = True) -> Mechanism:
             f"{text!r} is neither a preset nor an existing path; presets are {sorted(PRESETS)}; "
             f"example-robot-data robots load as 'erd:<name>'"
         )
-    if path.suffix == MJCF_SUFFIX:
-        return mechanism_from_mjcf(path, validate=validate)
-    mjcf = path.with_name(path.name.removesuffix(SIDECAR_SUFFIX) + MJCF_SUFFIX)
-    if path.name.endswith(SIDECAR_SUFFIX) and mjcf.is_file() and not mjcf.with_suffix(".urdf").is_file():
-        return mechanism_from_mjcf(mjcf, validate=validate)
+    if _is_mjcf(path):
+        mjcf = path if path.suffix == MJCF_SUFFIX else _mjcf_of_sidecar(path)
+        return mechanism_from_mjcf(mjcf, validate=validate, ignore=ignore)
     description = read_description(path)
     stem = path.name if path.is_dir() else path.name.split(".")[0]
     if stem == "robot":  # the example-parallel-robots file name: name the mechanism after its folder
         stem = path.resolve().parent.name
     name = description.sidecar.name or stem
     return mechanism_from_description(description, name, validate=validate)
+
+
+def _mjcf_of_sidecar(path: Path) -> Path:
+    """The MJCF a ``.plm.yaml`` sits beside (same stem)."""
+    return path.with_name(path.name.removesuffix(SIDECAR_SUFFIX) + MJCF_SUFFIX)
+
+
+def _is_mjcf(path: Path) -> bool:
+    """Whether ``path`` names an MJCF: a ``.xml``, or the sidecar of one with no URDF beside it."""
+    if path.suffix == MJCF_SUFFIX:
+        return True
+    mjcf = _mjcf_of_sidecar(path)
+    return path.name.endswith(SIDECAR_SUFFIX) and mjcf.is_file() and not mjcf.with_suffix(".urdf").is_file()
 
 
 def resolve_builder(target: str | Builder) -> tuple[Builder, dict[str, Any], str]:

@@ -10,11 +10,14 @@ import pytest
 from analyses import _harada2011_paper as paper
 from benchmarks.harness import (
     CAPABILITY_CASES,
+    GENERATED,
     Floor,
     _timing_line,
     capability_floor,
     harada_closed_form_map,
     internal_range_floor,
+    machine,
+    write,
 )
 from plm_pin.kinematics import closed_chain_jacobians, forward_kinematics, inverse_kinematics, task_pose
 from plm_pin.models import PRESETS
@@ -64,6 +67,26 @@ def test_timing_line_prints_the_floor_and_the_ratio():
     assert _timing_line(row) == "| m | c | 300.0 us | 200.0 us | 1.50 |"
     bare = {"mechanism": "m", "case": "c", "seconds_per_call": 2.5}
     assert _timing_line(bare) == "| m | c | 2.50 s | - | - |"
+
+
+def test_written_tables_state_the_date_and_machine_and_reach_the_docs(tmp_path):
+    """results.md, results.json and the docs' tables carry the run's date, processor and versions."""
+    import json
+    import platform
+    import time
+
+    row = {"mechanism": "m", "case": "c", "seconds_per_call": 3e-4, "floor_seconds_per_call": 2e-4}
+    docs = tmp_path / "docs" / "benchmarks.md"
+    md = write([row], tmp_path / "bench", notes=("a note",), docs=docs)
+    info = json.loads((tmp_path / "bench" / "results.json").read_text())["machine"]
+    assert time.strptime(info["date"], "%Y-%m-%d")  # an ISO date (UTC)
+    assert info == machine() | {"date": info["date"], "load_average": info["load_average"]}
+    stated = f"Measured on {info['date']} on {info['cpu']} ({info['cores']} cores"
+    for text in (md.read_text(), docs.read_text()):
+        assert stated in text and f"Python {platform.python_version()}" in text
+        assert "| m | c | 300.0 us | 200.0 us | 1.50 |" in text and "- a note" in text
+    assert md.read_text().startswith("# plm_pin benchmarks")
+    assert docs.read_text().startswith(GENERATED + "\n\n## The latest run")
 
 
 @pytest.mark.parametrize("name", sorted(CAPABILITY_CASES))

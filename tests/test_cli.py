@@ -311,6 +311,28 @@ def test_no_arguments_shows_help():
         assert command in result.output
 
 
+def test_help_texts_point_to_files_that_hold_what_they_promise():
+    """Each command's --help names only files of the checkout; sweep's names its guide page and schema."""
+    repo = Path(__file__).resolve().parents[1]
+    commands = [c.name or c.callback.__name__ for c in app.registered_commands]
+    assert "sweep" in commands
+    texts = {}
+    for command in commands:
+        result = runner.invoke(app, [command, "--help"], terminal_width=400)
+        assert result.exit_code == 0, command
+        texts[command] = " ".join(result.output.split())
+    named = {c: re.findall(r"[\w.-]+(?:/[\w.-]+)+\.(?:md|json|yaml)\b", t) for c, t in texts.items()}  # paths
+    assert {c: [f for f in files if not (repo / f).is_file()] for c, files in named.items() if files} == {
+        "sweep": []
+    }
+    assert [c for c, t in texts.items() if "README" in t] == []
+    assert "docs/guide/sweeps.md" in named["sweep"]
+    sweeps = (repo / "docs" / "guide" / "sweeps.md").read_text(encoding="utf-8")
+    assert (
+        "format: plm-pin-sweep/1" in sweeps and "plm-pin-sweep.schema.json" in sweeps
+    )  # the format is there
+
+
 SWEEP_CONFIG = """\
 mechanism: harada2011_3d4m
 parameters:

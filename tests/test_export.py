@@ -28,21 +28,83 @@ def _tangent_map(a, b, mj, q_a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return q_b, np.linalg.solve(to_a.velocity_matrix(q_a), to_b.velocity_matrix(q_b))
 
 
+def _mujoco_equality_jacobian(a, mj, q_a: np.ndarray) -> np.ndarray:
+    """MuJoCo's Jacobian of its equality constraints at ``q_a``, on ``a``'s tangent space (rows, a.nv)."""
+    to_a = StateMap(a.model, mj)
+    mj.opt.jacobian = int(mujoco.mjtJacobian.mjJAC_DENSE)
+    data = mujoco.MjData(mj)
+    data.qpos[:] = to_a.qpos(q_a)
+    mujoco.mj_forward(mj, data)
+    rows = np.asarray(data.efc_type) == int(mujoco.mjtConstraint.mjCNSTR_EQUALITY)
+    J = np.asarray(data.efc_J).reshape(data.nefc, mj.nv)[rows]
+    return J @ to_a.velocity_matrix(q_a)
+
+
+def _mujoco_mass_matrix(a, mj, q_a: np.ndarray) -> np.ndarray:
+    """MuJoCo's mass matrix at ``q_a`` on ``a``'s tangent space: G^T M_mj G with qvel = G v."""
+    to_a = StateMap(a.model, mj)
+    data = mujoco.MjData(mj)
+    data.qpos[:] = to_a.qpos(q_a)
+    mujoco.mj_forward(mj, data)
+    M = np.zeros((mj.nv, mj.nv))
+    mujoco.mj_fullM(mj, data, M)
+    G = to_a.velocity_matrix(q_a)
+    return G.T @ M @ G
+
+
+def _rank(J: np.ndarray) -> int:
+    """Rank by SVD: singular values above 1e-9 of the largest (exact models: a gap of many decades)."""
+    s = np.linalg.svd(J, compute_uv=False)
+    return int(np.sum(s > 1e-9 * max(s[0], 1.0))) if s.size else 0
+
+
+def _limits(mech) -> dict[str, tuple[float, float]]:
+    """Finite position limits of the one-coordinate joints, by joint name."""
+    out = {}
+    for j in range(1, mech.model.njoints):
+        joint = mech.model.joints[j]
+        lo, hi = mech.model.lowerPositionLimit[joint.idx_q], mech.model.upperPositionLimit[joint.idx_q]
+        if joint.nq == 1 and max(abs(lo), abs(hi)) < np.finfo(float).max:
+            out[str(mech.model.names[j])] = (float(lo), float(hi))
+    return out
+
+
 def _round_trip(a, path: Path, configurations: list[np.ndarray]):
-    """Export ``a`` and load it back: mobility, redundancy, closure rows, visuals, M, J_phi and phi agree."""
+    """Export ``a`` and load it back: mobility, redundancy, closure rows, visuals, limits, M, J_phi, phi.
+
+    MuJoCo's compiled model is the independent check: its mass matrix is ``a``'s, and the rank of
+    its equality Jacobian is the rank of ``a``'s closures (idle gauges, plm_pin's own, left out).
+    """
     error = plm_pin.export_mjcf(a, path)
     b = plm_pin.load(path)
     mj = mujoco.MjModel.from_xml_path(str(path))
     assert (b.mobility, b.redundancy, b.n_closure_rows) == (a.mobility, a.redundancy, a.n_closure_rows)
-    assert b.visual_model.ngeoms == a.visual_model.ngeoms == mj.ngeom
+    assert (b.idle_mobility, b.joint_names) == (a.idle_mobility, a.joint_names)
+    assert b.visual_model.ngeoms == a.visual_model.ngeoms
+    assert b.collision_model.ngeoms == a.collision_model.ngeoms
+    own = a.collision_model is not a.visual_model  # collision shapes of its own, written beside the visuals
+    assert mj.ngeom == a.visual_model.ngeoms + own * a.collision_model.ngeoms
+    assert _limits(b) == _limits(a)
+    gauges = {g.closure.name for g in a.idle_gauges}
+    own_rows = np.concatenate(
+        [np.arange(a.n_closure_rows)[c.rows] for c in a.closures if c.name not in gauges]
+        or [np.zeros(0, int)]
+    )
     for q_a in configurations:
         q_b, T = _tangent_map(a, b, mj, q_a)
-        np.testing.assert_allclose(
-            T.T @ pin.crba(a.model, a.data, q_a) @ T, pin.crba(b.model, b.data, q_b), atol=1e-12
-        )
+        M_a = pin.crba(a.model, a.data, q_a)
+        np.testing.assert_allclose(T.T @ M_a @ T, pin.crba(b.model, b.data, q_b), atol=1e-12)
+        np.testing.assert_allclose(_mujoco_mass_matrix(a, mj, q_a), M_a, atol=1e-12)
         np.testing.assert_allclose(a.closure_jacobian(q_a) @ T, b.closure_jacobian(q_b), atol=1e-12)
         np.testing.assert_allclose(a.closure_residual(q_a), b.closure_residual(q_b), atol=1e-12)
+        assert _rank(_mujoco_equality_jacobian(a, mj, q_a)) == _rank(a.closure_jacobian(q_a)[own_rows])
     return b, mj, error
+
+
+def _random_configurations(a, n: int, seed: int) -> list[np.ndarray]:
+    """``n`` configurations around the reference (loops open), joints turned by up to about 0.3 rad."""
+    rng = np.random.default_rng(seed)
+    return [pin.integrate(a.model, a.q_ref, rng.normal(scale=0.3, size=a.nv)) for _ in range(n)]
 
 
 @pytest.mark.parametrize("name", sorted(PRESETS))
@@ -51,7 +113,9 @@ def test_every_preset_round_trips(tmp_path: Path, name: str) -> None:
     a = preset(name)
     step = np.random.default_rng(5).normal(scale=0.05, size=a.nv)
     moved = a.assemble(pin.integrate(a.model, a.q_ref, step)).q
-    b, mj, error = _round_trip(a, tmp_path / f"{name}.xml", [a.q_ref, moved])
+    b, mj, error = _round_trip(
+        a, tmp_path / f"{name}.xml", [a.q_ref, moved, *_random_configurations(a, 2, 7)]
+    )
     assert error.diverged_at is None
     assert (b.name, b.task) == (a.name, a.task)
     assert b.sidecar.actuation == a.sidecar.actuation  # limits, lead, rotor and screw inertia
@@ -68,7 +132,18 @@ def test_every_preset_round_trips(tmp_path: Path, name: str) -> None:
     assert np.abs(pin.difference(b.model, b.q_ref, q_b)).max() < 1e-12
 
 
-ROBOTS_WRITTEN_ELSEWHERE = ("5bar_linkage", "5bar_linkage_iso6d", "cassie_like", "robot_delta", "wl16_like")
+ROBOTS_WRITTEN_ELSEWHERE = (
+    "5bar_linkage",
+    "5bar_linkage_iso3d",
+    "5bar_linkage_iso6d",
+    "cassie_like",
+    "digit_like",
+    "disney_like",
+    "robot_delta",
+    "talos_like",
+    "wl16_like",
+)
+"""Every robot of the example-parallel-robots corpus that loads (kangaroo_like does not assemble)."""
 
 
 @pytest.mark.filterwarnings("ignore::plm_pin.warnings.PlmWarning")  # missing meshes, a diverging run
@@ -76,7 +151,8 @@ ROBOTS_WRITTEN_ELSEWHERE = ("5bar_linkage", "5bar_linkage_iso6d", "cassie_like",
 def test_example_parallel_robots_round_trip(tmp_path: Path, name: str) -> None:
     """Robots of example-parallel-robots (STL meshes, welds, free-floating bases) export and load back."""
     a = plm_pin.load(INTEROP / name)
-    _round_trip(a, tmp_path / f"{name}.xml", [a.q_ref])  # the re-import holds the same idle joints
+    # the re-import holds the same idle joints
+    _round_trip(a, tmp_path / f"{name}.xml", [a.q_ref, *_random_configurations(a, 2, 11)])
     assert "idle" not in (tmp_path / f"{name}.xml").read_text()  # gauges are plm_pin's, not MuJoCo's
 
 
@@ -205,3 +281,25 @@ def test_mesh_read_from_mjcf_exports_inline(tmp_path: Path) -> None:
 
     # MuJoCo stores mesh vertices in single precision: 2^-24 relative on coordinates below 0.25 m
     np.testing.assert_allclose(world_vertices(b), world_vertices(a), atol=0.25 * 2.0**-24)
+
+
+def test_mjcf_with_anchors_off_body_origins_round_trips(tmp_path: Path) -> None:
+    """An MJCF with unnamed joints, a hinge 2 cm from its body origin and a range exports and loads back.
+
+    The re-import keeps every frame where it was (bodies where the MJCF put them, sites by name)
+    and the hinge's range, beside the checks of :func:`_round_trip`.
+    """
+    from tests.description.test_mjcf import FLOATING_MJCF
+
+    (tmp_path / "floating.xml").write_text(FLOATING_MJCF)
+    a = plm_pin.load(tmp_path / "floating.xml")
+    b, mj, _ = _round_trip(a, tmp_path / "out" / "floating.xml", [a.q_ref, *_random_configurations(a, 3, 2)])
+    assert b.frame_names == a.frame_names
+    q_b, _ = _tangent_map(a, b, mj, a.q_ref)
+    da, db = a.model.createData(), b.model.createData()
+    pin.framesForwardKinematics(a.model, da, a.q_ref)
+    pin.framesForwardKinematics(b.model, db, q_b)
+    for name in a.frame_names:
+        fa, fb = a.model.getFrameId(name), b.model.getFrameId(name)
+        np.testing.assert_allclose(db.oMf[fb].homogeneous, da.oMf[fa].homogeneous, atol=1e-12)
+    assert 'range="-1.0 1.5"' in (tmp_path / "out" / "floating.xml").read_text()

@@ -19,6 +19,7 @@ GUIDE_PAGES = (
     "simulation",
     "sweeps",
     "mujoco",
+    "cad-and-mujoco",
     "any-robot",
 )
 """The docs/guide pages whose examples were the README's (each in a namespace of its own)."""

@@ -66,6 +66,26 @@ class Actuator:
     reflected_inertia: float
 
 
+JOINT_TYPES: tuple[tuple[str, str], ...] = (
+    ("JointModelFreeFlyer", "free"),
+    ("JointModelSpherical", "spherical"),
+    ("JointModelPlanar", "planar"),
+    ("JointModelTranslation", "translation"),
+    ("JointModelUniversal", "universal"),
+    ("JointModelRevoluteUnbounded", "continuous"),
+    ("JointModelRUB", "continuous"),
+    ("JointModelR", "revolute"),
+    ("JointModelP", "prismatic"),
+)
+"""Pinocchio joint class prefixes and the joint type :meth:`Mechanism.summary` reports, first match."""
+
+
+def joint_type(model: pin.Model, joint_id: int) -> str:
+    """The type of joint ``joint_id`` in words (``revolute``, ``free``, ...; see :data:`JOINT_TYPES`)."""
+    short = model.joints[joint_id].shortname()
+    return next((kind for prefix, kind in JOINT_TYPES if short.startswith(prefix)), short)
+
+
 def _joint_kind(model: pin.Model, joint_id: int) -> str:
     short = model.joints[joint_id].shortname()
     if short.startswith("JointModelP"):
@@ -104,11 +124,14 @@ class Mechanism:
         source: str = "",
         visual_factory: Callable[[], pin.GeometryModel] | None = None,
         idle_gauges: tuple[IdleGauge, ...] | None = None,
+        collision_factory: Callable[[], pin.GeometryModel] | None = None,
     ) -> None:
         """Wrap a Pinocchio model and a validated sidecar (use :func:`plm_pin.load`).
 
         ``idle_gauges`` holds these gauges (their frames already in ``model``) instead of
         detecting the idle mobilities, for a model derived from a mechanism's own.
+        ``collision_factory`` builds the description's collision shapes (see
+        :attr:`collision_model`).
         """
         self.name = name
         self.model = model
@@ -116,6 +139,7 @@ class Mechanism:
         self.source = source
         self._local = threading.local()  # per-thread scratch data (not pickled)
         self._visual_factory = visual_factory
+        self._collision_factory = collision_factory
         self._assembled_guess: np.ndarray | None = None
         if idle_gauges is not None:
             self.__dict__["idle_gauges"] = idle_gauges  # fills the cached property
@@ -211,6 +235,7 @@ class Mechanism:
         state = dict(self.__dict__)
         state.pop("_local", None)
         state.pop("visual_model", None)  # rebuilt on first use from the factory
+        state.pop("collision_model", None)
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -504,6 +529,17 @@ class Mechanism:
             return pin.GeometryModel()
         return self._visual_factory()
 
+    @functools.cached_property
+    def collision_model(self) -> pin.GeometryModel:
+        """Collision geometry: the description's collision shapes where it has any, else :attr:`visual_model`.
+
+        A URDF's ``<collision>`` elements, an MJCF's geoms that take part in contacts
+        (``contype`` or ``conaffinity`` not zero); a description without any gets its visual
+        shapes, so that self-collision can still be checked.
+        """
+        shapes = self._collision_factory() if self._collision_factory is not None else None
+        return shapes if shapes is not None and shapes.ngeoms else self.visual_model
+
     def summary(self) -> dict[str, Any]:
         """Sizes, closures, actuators, task, mobility, redundancy and reference residual."""
         return {
@@ -511,6 +547,10 @@ class Mechanism:
             "source": self.source,
             "nq": self.nq,
             "nv": self.nv,
+            "joints": [
+                {"name": str(self.model.names[j]), "type": joint_type(self.model, j)}
+                for j in range(1, self.model.njoints)
+            ],
             "closures": [
                 {"name": c.name, "type": c.spec.type, "frames": list(c.spec.frames), "rows": c.spec.rows}
                 for c in self.closures

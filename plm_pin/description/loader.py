@@ -16,6 +16,7 @@ from .._yaml import read_head
 from ..exceptions import DescriptionError, FrameNotFound
 from ..warnings import MissingLimitsWarning
 from .interop import corpus_task, parse_epr_sidecar
+from .onshape import closing_closures
 from .sidecar import SIDECAR_SUFFIX_DEFAULT, Sidecar, parse_sidecar, read_yaml
 from .urdf import UrdfSource, read_urdf, read_urdf_text
 
@@ -32,7 +33,8 @@ class Description:
         sidecar: closures, actuation, task and reference.
         urdf_path: the URDF file, or None when built from text.
         sidecar_path: the sidecar file, or None.
-        convention: ``"plm-pin/1"`` or ``"example-parallel-robots"``.
+        convention: ``"plm-pin/1"``, ``"example-parallel-robots"`` or ``"onshape-to-robot"``
+            (closures from closing frames, see :mod:`plm_pin.description.onshape`).
     """
 
     urdf: UrdfSource
@@ -54,7 +56,10 @@ def read_description(path: str | Path) -> Description:
 
     Args:
         path: ``<name>.urdf`` (sidecar ``<name>.plm.yaml`` beside it), ``<name>.plm.yaml``
-            (URDF beside it), or a folder holding ``robot.urdf`` and ``robot.yaml``.
+            (URDF beside it), or a folder holding ``robot.urdf`` and ``robot.yaml``. A URDF
+            holding onshape-to-robot closing frames (``closing_<name>_1`` / ``_2`` links)
+            needs no sidecar: its closures are read from them, as they are when a sidecar
+            gives no ``closures``.
 
     Returns:
         The description.
@@ -87,9 +92,15 @@ def read_description(path: str | Path) -> Description:
             return _read_pair(p, sidecar_path)
         if p.name == "robot.urdf" and (p.parent / EPR_SIDECAR).is_file():
             return read_epr_folder(p.parent)
+        urdf = read_urdf(p)
+        closures = closing_closures(_link_names(urdf), str(p))
+        if closures:
+            source = f"onshape-to-robot closing frames in {p.name}"
+            return Description(urdf, Sidecar(closures=closures, source=source), p, None, "onshape-to-robot")
         raise DescriptionError(
             f"no closure sidecar found beside the URDF: expected {sidecar_path.name} "
-            f"(format plm-pin/1) or {EPR_SIDECAR} (example-parallel-robots)",
+            f"(format plm-pin/1) or {EPR_SIDECAR} (example-parallel-robots), or closing frames "
+            "closing_<name>_1 / closing_<name>_2 (onshape-to-robot)",
             str(p),
         )
     raise DescriptionError(
@@ -99,8 +110,20 @@ def read_description(path: str | Path) -> Description:
 
 
 def _read_pair(urdf_path: Path, sidecar_path: Path) -> Description:
-    sidecar = parse_sidecar(read_yaml(_read_head(sidecar_path), str(sidecar_path)), str(sidecar_path))
-    return Description(read_urdf(urdf_path), sidecar, urdf_path, sidecar_path)
+    raw = read_yaml(_read_head(sidecar_path), str(sidecar_path))
+    sidecar = parse_sidecar(raw, str(sidecar_path))
+    urdf = read_urdf(urdf_path)
+    if "closures" not in raw:  # a sidecar for actuation and task only: the closing frames' loops
+        closures = closing_closures(_link_names(urdf), str(urdf_path))
+        if closures:
+            sidecar = dataclasses.replace(sidecar, closures=closures)
+            return Description(urdf, sidecar, urdf_path, sidecar_path, "onshape-to-robot")
+    return Description(urdf, sidecar, urdf_path, sidecar_path)
+
+
+def _link_names(urdf: UrdfSource) -> list[str]:
+    """The link names of a checked URDF, in file order."""
+    return [str(e.get("name")) for e in etree.fromstring(urdf.xml.encode()).iter("link")]
 
 
 def read_epr_folder(folder: Path) -> Description:
@@ -194,10 +217,20 @@ def build_model(description: Description) -> pin.Model:
 
 def build_visual_model(model: pin.Model, description: Description) -> pin.GeometryModel:
     """Build the visual geometry (meshes already resolved and checked)."""
+    return _geometry(model, description, pin.GeometryType.VISUAL)
+
+
+def build_collision_model(model: pin.Model, description: Description) -> pin.GeometryModel:
+    """Build the collision geometry: the URDF's ``<collision>`` shapes (none when it has none)."""
+    return _geometry(model, description, pin.GeometryType.COLLISION)
+
+
+def _geometry(model: pin.Model, description: Description, kind: pin.GeometryType) -> pin.GeometryModel:
     try:
-        return pin.buildGeomFromUrdfString(model, description.urdf.xml, pin.GeometryType.VISUAL)
+        return pin.buildGeomFromUrdfString(model, description.urdf.xml, kind)
     except (RuntimeError, ValueError) as exc:
-        raise DescriptionError(f"cannot build the visual geometry: {exc}") from None
+        what = str(kind).split(".")[-1].lower()
+        raise DescriptionError(f"cannot build the {what} geometry: {exc}") from None
 
 
 def open_missing_limits(model: pin.Model, label: str = "") -> list[str]:

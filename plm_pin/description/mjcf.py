@@ -21,6 +21,14 @@ Mapping:
 - ``connect`` -> ``point`` closure, ``weld`` -> ``weld`` closure (a weld with
   ``torquescale = 0`` constrains no rotation: ``point``); between sites (site semantics) or
   between frames added at the body anchors (body semantics, ``<name>/1`` and ``<name>/2``).
+  An unnamed equality is named ``equality<i>``, or ``closing_<name>`` when it joins the sites
+  ``closing_<name>_1`` and ``closing_<name>_2`` of onshape-to-robot (see
+  :mod:`plm_pin.description.onshape`).
+- an unnamed joint is named after its body: ``<body>_free``, or ``<body>_<kind><i>`` for
+  the ``i``-th joint (from 0) of its body, of type ``kind`` (``hinge``, ``slide``, ``ball``);
+  see :func:`joint_names`.
+- geoms: those that take part in contacts (``contype`` or ``conaffinity`` not zero) are the
+  collision geometry, the others the visual geometry (every geom when none is visual-only).
 - actuator on a hinge or slide -> actuation of that joint, limits ``gear * forcerange`` when
   force-limited, else ``gear * gain * ctrlrange`` for a motor; joint ``armature`` -> armature;
   the ball-screw lead and inertias of :data:`DRIVE_FIELDS` from ``<custom><numeric
@@ -31,16 +39,21 @@ Mapping:
 The sidecar ``<name>.plm.yaml`` beside ``<name>.xml`` may add ``end_effector`` (a body or
 site), ``reference``, ``name`` and ``source``; closures and actuation come from the MJCF.
 
-Refused with a :class:`~plm_pin.exceptions.DescriptionError` naming the element: tendons,
-flexes, ``joint`` / ``tendon`` / ``flex`` equalities (polynomial couplings), inactive
-equalities, explicit contact pairs, mocap bodies, actuators not on one hinge or slide, two
-actuators on one joint. Joint damping, stiffness and friction loss are ignored with an
-:class:`~plm_pin.warnings.IgnoredElementWarning`.
+Refused with one :class:`~plm_pin.exceptions.DescriptionError` listing every such element
+with counts: tendons, flexes, ``joint`` / ``tendon`` / ``flex`` equalities (polynomial
+couplings), inactive equalities, explicit contact pairs, mocap bodies, actuators not on one
+hinge or slide; and two actuators on one joint. The kinds of :data:`IGNORABLE` (contact
+pairs, tendons, joint couplings, inactive equalities, other actuators) can be dropped instead
+with ``read_mjcf(path, ignore=...)`` (``plm_pin.load(..., ignore=...)``, ``--ignore``), with
+an :class:`~plm_pin.warnings.IgnoredElementWarning` listing what was dropped: contacts and
+coupling tendons do not change a linkage's kinematics. Joint damping, stiffness and
+friction loss are ignored with an :class:`~plm_pin.warnings.IgnoredElementWarning`.
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -48,8 +61,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import DescriptionError, FrameNotFound
+from ..exceptions import DescriptionError, FrameNotFound, InvalidInput
 from ..warnings import IgnoredElementWarning
+from .onshape import closing_name
 from .sidecar import ActuatorSpec, ClosureSpec, Sidecar, parse_sidecar, read_yaml
 
 MJCF_SUFFIX = ".xml"
@@ -58,9 +72,9 @@ MJCF_SIDECAR_KEYS: tuple[str, ...] = ("format", "name", "source", "end_effector"
 
 _HINGE, _SLIDE, _BALL, _FREE = 3, 2, 1, 0  # mjtJoint
 _OBJ_SITE = 6  # mjtObj.mjOBJ_SITE
-_EQ_CONNECT, _EQ_WELD = 0, 1  # mjtEq
+_EQ_CONNECT, _EQ_WELD, _EQ_JOINT, _EQ_TENDON = 0, 1, 2, 3  # mjtEq
 _EQ_NAMES = {2: "joint", 3: "tendon", 4: "flex", 5: "flexvert", 6: "flexstrain", 7: "distance"}
-_TRN_JOINT = 0  # mjtTrn
+_TRN_JOINT, _TRN_TENDON = 0, 3  # mjtTrn
 _GEOM_PLANE, _GEOM_HFIELD, _GEOM_SPHERE, _GEOM_CAPSULE = 0, 1, 2, 3
 _GEOM_ELLIPSOID, _GEOM_CYLINDER, _GEOM_BOX, _GEOM_MESH = 4, 5, 6, 7
 
@@ -99,6 +113,46 @@ def _name(mujoco: Any, m: Any, kind: str, i: int) -> str:
     return str(mujoco.mj_id2name(m, getattr(mujoco.mjtObj, f"mjOBJ_{kind.upper()}"), i) or "")
 
 
+JOINT_KINDS: dict[int, str] = {_FREE: "free", _BALL: "ball", _SLIDE: "slide", _HINGE: "hinge"}
+"""MuJoCo joint types by their ``mjtJoint`` code, as written in MJCF."""
+
+
+def body_label(mujoco: Any, m: Any, b: int) -> str:
+    """The name of MuJoCo body ``b``, or ``body<b>`` for an unnamed one."""
+    return _name(mujoco, m, "body", b) or f"body{b}"
+
+
+def joint_names(mujoco: Any, m: Any, label: str | None = None) -> list[str]:
+    """The name of every MuJoCo joint, in MuJoCo order, unnamed ones named after their body.
+
+    A joint without a name (a floating base's ``<freejoint/>``, say) is named
+    ``<body>_free`` for a free joint, else ``<body>_<kind><i>`` with ``kind`` its type
+    (``hinge``, ``slide``, ``ball``) and ``i`` its position among the joints of its body
+    (from 0): the second, unnamed hinge of body ``knee`` is ``knee_hinge1``. The names depend
+    on the MJCF alone, so they are the same at every load.
+
+    Raises:
+        DescriptionError: when such a name is already the name of another joint.
+    """
+    names = [_name(mujoco, m, "joint", k) for k in range(m.njnt)]
+    given = set(names)
+    for k, name in enumerate(names):
+        if name:
+            continue
+        b = int(m.jnt_bodyid[k])
+        kind = int(m.jnt_type[k])
+        suffix = "free" if kind == _FREE else f"{JOINT_KINDS[kind]}{k - int(m.body_jntadr[b])}"
+        names[k] = f"{body_label(mujoco, m, b)}_{suffix}"
+        if names[k] in given:
+            raise DescriptionError(
+                f"an unnamed joint of body {body_label(mujoco, m, b)!r} would be named {names[k]!r}, "
+                "the name of another joint; name it",
+                label,
+            )
+        given.add(names[k])
+    return names
+
+
 @dataclass(frozen=True)
 class _JointPair:
     """One joint present in both models: Pinocchio index and MuJoCo addresses."""
@@ -131,8 +185,7 @@ class StateMap:
         self.mj_model = mj_model
         names = list(model.names)
         pairs = []
-        for k in range(mj_model.njnt):
-            name = _name(mujoco, mj_model, "joint", k)
+        for k, name in enumerate(joint_names(mujoco, mj_model)):
             if name not in names:
                 raise DescriptionError(
                     f"MuJoCo joint {name!r} has no Pinocchio joint; joints are {names[1:]}"
@@ -242,8 +295,19 @@ class MjcfDescription:
         return StateMap(self.model, self.mj_model)
 
     def visual_model(self) -> pin.GeometryModel:
-        """The MuJoCo geoms (planes and height fields left out) as Pinocchio visual geometry."""
-        return _visuals(self.model, self.mj_model)
+        """The visual geoms (planes and height fields left out) as Pinocchio geometry.
+
+        The geoms that take no part in contacts (``contype = conaffinity = 0``, MuJoCo's
+        convention for visual-only geoms); every geom when the model has none of them.
+        """
+        colliding = _colliding(self.mj_model)
+        shown = [g for g in range(self.mj_model.ngeom) if not colliding[g]]
+        return _geometry(self.model, self.mj_model, shown or range(self.mj_model.ngeom))
+
+    def collision_model(self) -> pin.GeometryModel:
+        """The geoms that take part in contacts (``contype`` or ``conaffinity`` not zero), as geometry."""
+        colliding = _colliding(self.mj_model)
+        return _geometry(self.model, self.mj_model, [g for g in range(self.mj_model.ngeom) if colliding[g]])
 
 
 def _joint_model(kind: int, axis: np.ndarray) -> pin.JointModel:
@@ -258,43 +322,144 @@ def _joint_model(kind: int, axis: np.ndarray) -> pin.JointModel:
     return pin.JointModelFreeFlyer()
 
 
-def _refuse_unsupported(mujoco: Any, m: Any, label: str) -> None:
-    if m.ntendon:
-        raise DescriptionError(
-            f"<tendon> {_name(mujoco, m, 'tendon', 0) or '#0'!r}: tendons cannot be represented "
-            f"({m.ntendon} in the model); describe the coupling by bodies, joints and equalities",
-            label,
-        )
-    if m.nflex:
-        raise DescriptionError(
-            f"<flex> {_name(mujoco, m, 'flex', 0) or '#0'!r}: deformable bodies cannot be represented", label
-        )
-    if m.npair:
-        raise DescriptionError(
-            f"<contact><pair> {_name(mujoco, m, 'pair', 0) or '#0'!r}: contacts cannot close a loop "
-            "in plm_pin: close it with a <connect> or <weld> equality",
-            label,
-        )
+IGNORABLE: dict[str, str] = {
+    "contacts": "explicit contact pairs (<contact><pair>)",
+    "tendons": "tendons, with the tendon equalities and actuators that use them",
+    "joint_equalities": "joint couplings (<equality><joint>)",
+    "inactive_equalities": 'equalities with active="false"',
+    "actuators": "actuators on a site, a body or a ball joint (not on one hinge or slide)",
+}
+"""Kinds of MJCF elements ``read_mjcf(..., ignore=...)`` may drop, and what each kind holds."""
+
+_SAFE_TO_DROP = ("contacts", "tendons", "inactive_equalities")
+"""Kinds whose dropping leaves the kinematics of a linkage unchanged (said in the warning)."""
+
+
+@dataclass(frozen=True)
+class _Unsupported:
+    """Elements of one tag plm_pin cannot represent.
+
+    Attributes:
+        kind: their key in :data:`IGNORABLE`, or a kind that cannot be ignored.
+        what: the MJCF tag, in words.
+        obj: the MuJoCo object type (``equality``, ``actuator``, ...).
+        indices: their MuJoCo indices.
+        names: their names (``#i`` when unnamed).
+    """
+
+    kind: str
+    what: str
+    obj: str
+    indices: tuple[int, ...]
+    names: tuple[str, ...]
+
+    def describe(self) -> str:
+        """``<count> <what> ('name', ...)``, at most five names shown."""
+        shown = ", ".join(repr(n) for n in self.names[:5]) + (", ..." if len(self.names) > 5 else "")
+        return f"{len(self.indices)} {self.what} ({shown})"
+
+
+def check_ignore(ignore: str | Iterable[str]) -> frozenset[str]:
+    """The kinds of ``ignore`` (names, or one comma-separated string), checked against :data:`IGNORABLE`.
+
+    Raises:
+        InvalidInput: naming a kind that is not one of :data:`IGNORABLE`.
+    """
+    items = ignore.split(",") if isinstance(ignore, str) else list(ignore)
+    kinds = [str(k).strip() for k in items if str(k).strip()]
+    bad = [k for k in kinds if k not in IGNORABLE]
+    if bad:
+        raise InvalidInput(f"ignore: unknown element kind(s) {bad}; valid are {list(IGNORABLE)}")
+    return frozenset(kinds)
+
+
+def _unsupported(mujoco: Any, m: Any) -> list[_Unsupported]:
+    """Every element plm_pin cannot represent, grouped by tag, in a fixed order."""
+    found: dict[tuple[str, str, str], tuple[list[int], list[str]]] = {}
+
+    def add(kind: str, what: str, obj: str, i: int) -> None:
+        indices, names = found.setdefault((kind, what, obj), ([], []))
+        indices.append(i)
+        names.append(_name(mujoco, m, obj, i) or f"#{i}")
+
+    for i in range(m.npair):
+        add("contacts", "<contact><pair>", "pair", i)
+    for i in range(m.ntendon):
+        add("tendons", "<tendon>", "tendon", i)
+    for i in range(m.nflex):
+        add("flexes", "<flex> (deformable bodies)", "flex", i)
     for i in range(m.neq):
         kind = int(m.eq_type[i])
-        name = _name(mujoco, m, "equality", i) or f"#{i}"
-        if kind not in (_EQ_CONNECT, _EQ_WELD):
-            raise DescriptionError(
-                f"<equality><{_EQ_NAMES.get(kind, str(kind))}> {name!r}: only connect and weld equalities "
-                "can be represented (joint and tendon couplings by polynomials cannot)",
-                label,
-            )
-        if not m.eq_active0[i]:
-            raise DescriptionError(
-                f'<equality> {name!r} is inactive (active="false"): plm_pin closures always hold; '
-                "remove it or make it active",
-                label,
-            )
+        tag = f"<equality><{_EQ_NAMES.get(kind, str(kind))}>"
+        if kind == _EQ_JOINT:
+            add("joint_equalities", tag, "equality", i)
+        elif kind == _EQ_TENDON:
+            add("tendons", tag, "equality", i)
+        elif kind not in (_EQ_CONNECT, _EQ_WELD):
+            add("equalities", tag + " (only connect and weld can be represented)", "equality", i)
+        elif not m.eq_active0[i]:
+            what = '<equality active="false"> (plm_pin closures always hold)'
+            add("inactive_equalities", what, "equality", i)
+    for a in range(m.nu):
+        trn = int(m.actuator_trntype[a])
+        if trn == _TRN_TENDON:
+            add("tendons", "<actuator> on a tendon", "actuator", a)
+        elif trn != _TRN_JOINT or int(m.jnt_type[int(m.actuator_trnid[a][0])]) not in (_HINGE, _SLIDE):
+            add("actuators", "<actuator> not on one hinge or slide", "actuator", a)
     for b in range(1, m.nbody):
         if m.body_mocapid[b] >= 0:
-            raise DescriptionError(
-                f"body {_name(mujoco, m, 'body', b)!r} is a mocap body: not supported", label
+            add("mocap", "mocap <body>", "body", b)
+    return [
+        _Unsupported(kind, what, obj, tuple(indices), tuple(names))
+        for (kind, what, obj), (indices, names) in found.items()
+    ]
+
+
+def _drop_unsupported(mujoco: Any, m: Any, label: str, ignore: frozenset[str]) -> dict[str, set[int]]:
+    """Refuse at once every element plm_pin cannot represent, but the kinds ``ignore`` drops (warned).
+
+    Returns:
+        The dropped MuJoCo indices by MuJoCo object type (``equality``, ``actuator``, ...).
+
+    Raises:
+        DescriptionError: listing every element neither represented nor ignored, with counts,
+            and the ``ignore`` value that would drop the ignorable ones.
+    """
+    groups = _unsupported(mujoco, m)
+    refused = [g for g in groups if g.kind not in ignore]
+    if refused:
+        ignorable = list(dict.fromkeys(g.kind for g in groups if g.kind in IGNORABLE))
+        hint = (
+            f". To read the loops without them, load with ignore={tuple(ignorable)} "
+            f"(CLI: --ignore {','.join(ignorable)})"
+            if any(g.kind in IGNORABLE for g in refused)
+            else ""
+        )
+        raise DescriptionError(
+            "the model holds elements plm_pin cannot represent: "
+            + "; ".join(g.describe() for g in refused)
+            + hint,
+            label,
+        )
+    dropped = [g for g in groups if g.kind in ignore]
+    if dropped:
+        text = f"{label}: dropped as asked by ignore: " + "; ".join(g.describe() for g in dropped)
+        if any(g.kind in _SAFE_TO_DROP for g in dropped):
+            text += ". Contacts, tendons and inactive equalities do not change a linkage's kinematics"
+        changing = list(dict.fromkeys(g.kind for g in dropped if g.kind not in _SAFE_TO_DROP))
+        if changing:
+            text += (
+                f". Without the {' and '.join(changing)}, the joints they coupled or drove move "
+                "freely: mobility and actuation change"
             )
+        warnings.warn(text, IgnoredElementWarning, stacklevel=4)
+    out: dict[str, set[int]] = {}
+    for g in dropped:
+        out.setdefault(g.obj, set()).update(g.indices)
+    return out
+
+
+def _warn_ignored_joint_properties(m: Any, label: str) -> None:
     for what, values in (
         ("damping", m.dof_damping),
         ("frictionloss", m.dof_frictionloss),
@@ -326,14 +491,15 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
                 )
             used[name] = element
 
+    jnames = joint_names(mujoco, m, label)
     for b in range(1, m.nbody):
-        bname = _name(mujoco, m, "body", b) or f"body{b}"
+        bname = body_label(mujoco, m, b)
         parent = int(m.body_parentid[b])
         pj, pM = where[parent]
         current, offset = pj, pM * _se3(m.body_pos[b], m.body_quat[b])
         for k in range(int(m.body_jntadr[b]), int(m.body_jntadr[b] + m.body_jntnum[b])):
             kind = int(m.jnt_type[k])
-            jname = _name(mujoco, m, "joint", k) or f"{bname}_joint{k}"
+            jname = jnames[k]
             anchor = pin.SE3(np.eye(3), np.array(m.jnt_pos[k], dtype=float))
             if kind == _FREE:
                 if parent != 0:
@@ -346,10 +512,11 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
                 placement = offset * anchor
             joint = _joint_model(kind, np.array(m.jnt_axis[k], dtype=float))
             current = model.addJoint(current, joint, placement, jname)
-            if kind in (_HINGE, _SLIDE) and m.jnt_limited[k]:
+            if kind in (_HINGE, _SLIDE):  # MuJoCo's range, else unlimited (as an unlimited URDF joint)
                 q0 = float(m.qpos0[m.jnt_qposadr[k]])
-                model.lowerPositionLimit[model.joints[current].idx_q] = m.jnt_range[k][0] - q0
-                model.upperPositionLimit[model.joints[current].idx_q] = m.jnt_range[k][1] - q0
+                lower, upper = (m.jnt_range[k] - q0) if m.jnt_limited[k] else (-np.inf, np.inf)
+                model.lowerPositionLimit[model.joints[current].idx_q] = lower
+                model.upperPositionLimit[model.joints[current].idx_q] = upper
             if jname not in used:  # a body or site of that name keeps the frame name
                 model.addJointFrame(current, body_frame[parent])
             offset = anchor.inverse()
@@ -373,10 +540,12 @@ def _build_tree(mujoco: Any, m: Any, label: str) -> tuple[pin.Model, dict[int, t
 
 
 def _closures(
-    mujoco: Any, m: Any, model: pin.Model, where: dict[int, tuple[int, pin.SE3]]
+    mujoco: Any, m: Any, model: pin.Model, where: dict[int, tuple[int, pin.SE3]], dropped: set[int]
 ) -> tuple[ClosureSpec, ...]:
     out = []
     for i in range(m.neq):
+        if i in dropped:
+            continue
         name = _name(mujoco, m, "equality", i) or f"equality{i}"
         kind = int(m.eq_type[i])
         data = np.array(m.eq_data[i], dtype=float)
@@ -387,6 +556,8 @@ def _closures(
                 _name(mujoco, m, "site", o1) or f"site{o1}",
                 _name(mujoco, m, "site", o2) or f"site{o2}",
             )
+            if not _name(mujoco, m, "equality", i):  # onshape-to-robot's: named after its frames
+                name = closing_name(*frames) or name
         else:
             if kind == _EQ_CONNECT:
                 local = ((data[0:3], np.array([1.0, 0, 0, 0])), (data[3:6], np.array([1.0, 0, 0, 0])))
@@ -404,17 +575,16 @@ def _closures(
     return tuple(out)
 
 
-def _actuation(mujoco: Any, m: Any, label: str) -> tuple[ActuatorSpec, ...]:
+def _actuation(mujoco: Any, m: Any, label: str, dropped: set[int]) -> tuple[ActuatorSpec, ...]:
     out: list[ActuatorSpec] = []
+    jnames = joint_names(mujoco, m, label)
     seen: dict[int, str] = {}
     for a in range(m.nu):
+        if a in dropped:
+            continue
         aname = _name(mujoco, m, "actuator", a) or f"#{a}"
-        joint = int(m.actuator_trnid[a][0])
-        if int(m.actuator_trntype[a]) != _TRN_JOINT or int(m.jnt_type[joint]) not in (_HINGE, _SLIDE):
-            raise DescriptionError(
-                f"<actuator> {aname!r}: only actuators on one hinge or slide joint can be represented", label
-            )
-        jname = _name(mujoco, m, "joint", joint)
+        joint = int(m.actuator_trnid[a][0])  # on one hinge or slide: the others are refused or dropped
+        jname = jnames[joint]
         if joint in seen:
             raise DescriptionError(
                 f"<actuator> {aname!r}: joint {jname!r} is already driven by {seen[joint]!r}", label
@@ -462,7 +632,13 @@ def _drive(mujoco: Any, m: Any, actuator: str) -> dict[str, float]:
     return out
 
 
-def _visuals(model: pin.Model, m: Any) -> pin.GeometryModel:
+def _colliding(m: Any) -> np.ndarray:
+    """Whether each geom can take part in a contact (MuJoCo: ``contype`` or ``conaffinity`` not zero)."""
+    return (np.asarray(m.geom_contype) != 0) | (np.asarray(m.geom_conaffinity) != 0)
+
+
+def _geometry(model: pin.Model, m: Any, geoms: Iterable[int]) -> pin.GeometryModel:
+    """The geoms ``geoms`` (planes and height fields left out) as a Pinocchio geometry model."""
     import coal
 
     mujoco = require_mujoco()
@@ -473,7 +649,7 @@ def _visuals(model: pin.Model, m: Any) -> pin.GeometryModel:
         fid = model.getFrameId(_name(mujoco, m, "body", b) or f"body{b}")
         frame_of_body[b] = fid
         joint_of_body[b] = (model.frames[fid].parentJoint, model.frames[fid].placement)
-    for g in range(m.ngeom):
+    for g in geoms:
         kind, size = int(m.geom_type[g]), np.array(m.geom_size[g], dtype=float)
         shape: Any
         if kind == _GEOM_SPHERE:
@@ -537,20 +713,25 @@ def _read_mjcf_sidecar(path: Path) -> tuple[Sidecar | None, Path | None]:
     return parse_sidecar(raw, str(sidecar_path)), sidecar_path
 
 
-def read_mjcf(path: str | Path) -> MjcfDescription:
+def read_mjcf(path: str | Path, ignore: str | Iterable[str] = ()) -> MjcfDescription:
     """Compile an MJCF with MuJoCo and build the Pinocchio model and sidecar of the closed chain.
 
     Args:
         path: the ``.xml`` file; a sidecar ``<stem>.plm.yaml`` beside it is read when present.
+        ignore: kinds of elements to drop rather than refuse (keys of :data:`IGNORABLE`, or
+            one comma-separated string), with an :class:`~plm_pin.warnings.IgnoredElementWarning`
+            that lists what was dropped.
 
     Returns:
         The description (see the module docstring for the mapping).
 
     Raises:
-        DescriptionError: when MuJoCo is missing or rejects the file, or the model holds an
-            element plm_pin cannot represent (named in the message).
+        DescriptionError: when MuJoCo is missing or rejects the file, or the model holds
+            elements plm_pin cannot represent and ``ignore`` does not drop (all of them listed).
         FrameNotFound: when the sidecar's task frame or a reference joint does not exist.
+        InvalidInput: when ``ignore`` names an unknown kind.
     """
+    kinds = check_ignore(ignore)
     mujoco = require_mujoco()
     p = Path(path)
     label = str(p)
@@ -559,10 +740,11 @@ def read_mjcf(path: str | Path) -> MjcfDescription:
     except (ValueError, RuntimeError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise DescriptionError(f"MuJoCo cannot compile this MJCF: {first}", label) from None
-    _refuse_unsupported(mujoco, m, label)
+    dropped = _drop_unsupported(mujoco, m, label, kinds)
+    _warn_ignored_joint_properties(m, label)
     model, where = _build_tree(mujoco, m, label)
-    closures = _closures(mujoco, m, model, where)
-    actuation = _actuation(mujoco, m, label)
+    closures = _closures(mujoco, m, model, where, dropped.get("equality", set()))
+    actuation = _actuation(mujoco, m, label, dropped.get("actuator", set()))
     model.armature = np.array(m.dof_armature, dtype=float)
     gravity = (
         np.zeros(3)

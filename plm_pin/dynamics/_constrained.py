@@ -34,6 +34,32 @@ Two solvers give the same :math:`a`:
   singularity, where the answer would be inexact and an adaptive integrator would crawl), the
   accelerations come from the KKT solve instead.
 
+**Constraint singularities on the way through.** Where two sheets of the closure manifold
+cross (the 3D4M's two rods of a leg pair hanging straight down: a mirrored and a coincident
+sheet meet), the closure Jacobian loses a rank: its r-th singular value :math:`\sigma_r`
+passes through zero, linearly in time, each time the legs swing through. On the sheet the
+motion is on, the accelerations stay bounded and continuous: differentiating
+:math:`J_\phi v = 0` along it gives :math:`u_r^T \dot J_\phi v = -\sigma_r v_r^T a`, so the
+drift row tends to zero with :math:`\sigma_r` and their ratio stays finite; the joint-space
+closure force :math:`J_\phi^T \lambda = M a + h - \tau` stays finite too, while the cut
+forces along the vanishing row grow like :math:`1/\sigma_r` (a self-stress of the aligned rods
+whose lever arm vanishes). At a state *off* the manifold the drift row does not vanish, and
+the index-1 solve amplifies the state's error by :math:`1/\sigma_r`; an integrator's stages
+near the crossing are such states. :meth:`ClosedChainDynamics.stage_rates` therefore
+evaluates the rates of a stage at its projection onto the closures, where the ratio is exact.
+
+At the crossing itself (:math:`\sigma_r \le` ``RANK_RTOL`` :math:`\sigma_1`) the lost row
+:math:`u` is dropped from the solve (a least-squares KKT) when the motion is defined there, and
+the step stops with :class:`~plm_pin.exceptions.SingularConfiguration` when it is not. The
+motion is defined when (i) the lost row is **consistent**, :math:`u^T \dot J_\phi v = 0`
+(else no finite force keeps the loops closed: :math:`J_\phi a = -\dot J_\phi v` has no
+solution), and (ii) the velocity picks **one** sheet: the closures allow the velocities of the
+tangent cone :math:`\{w : J_\phi w = 0,\ Q(w) = u^T \dot J_\phi(w) w = 0\}` (second-order
+analysis of the singular point), a union of the sheets' tangent spaces; :math:`v` lies on one
+sheet only when it is a regular point of that cone, :math:`\nabla Q(v) \ne 0` on the null
+space of :math:`J_\phi`. At rest (:math:`v = 0`) or with :math:`v` on the intersection of the
+sheets, the continuation is not determined by the model (a bifurcation), and the run stops.
+
 After an integration step the state is projected back onto the closures
 (:meth:`ClosedChainDynamics.project`). The velocity projection onto :math:`J_\phi v = 0` is
 the one of least kinetic energy change, :math:`\min \|v^+ - v\|_M`, solved with the same
@@ -72,6 +98,31 @@ PROJECTION_ITERATIONS = 20
 
 _PROXIMAL = (1e-12, 1e-10, 20)
 """Pinocchio proximal settings: absolute accuracy, regularization mu, iteration cap."""
+
+STAGE_ITERATIONS = 2
+"""Gauss-Newton steps that put an integrator's stage on the closures before its rates are taken.
+
+From a stage error e, one step leaves e^2/sigma_r (sigma_r: the smallest kept closure singular
+value), two leave e^4/sigma_r^3: below round-off for the stages of a step near a crossing.
+"""
+
+CONSISTENCY_RTOL = 1e-6  # TOLERANCE -> tolerances.py
+"""[1] Largest drift in a lost closure row at a constraint singularity, relative to the drift's norm.
+
+Decides whether the acceleration constraint stays consistent (finite closure forces) where
+the closure Jacobian loses a rank; above it the motion is not defined there.
+"""
+
+NEAR_SINGULAR = 0.1  # TOLERANCE -> tolerances.py
+"""[1] Closure singular values below this fraction of the largest are watched for a crossing."""
+
+BRANCH_RTOL = 1e-6  # TOLERANCE -> tolerances.py
+"""[1] Smallest gradient of the lost row's second-order form Q(v), relative to its scale.
+
+Decides at a constraint singularity whether the velocity lies on one sheet of the closure
+manifold (a regular point of the tangent cone Q = 0: the motion continues on it) or where
+sheets meet (Q's gradient vanishes, as at rest: the continuation is not determined).
+"""
 
 
 class ReducedRows(NamedTuple):
@@ -176,6 +227,7 @@ class ClosedChainDynamics:
         self._name = mech.name
         self._all_columns = np.arange(mech.nv)
         self._bound = _closures.BoundClosures(self.data, self.closures)  # few Python calls per pass
+        self._scratch = model.createData()  # for the drift at other velocities (constraint singularities)
         self._K = np.zeros((2 * mech.nv, 2 * mech.nv))  # saddle-point matrix, its top-left (nv + r) block
         if self.solver == "pinocchio":
             self._pin_data = model.createData()
@@ -210,20 +262,89 @@ class ClosedChainDynamics:
             return None
         return pin.getFrameJacobian(self.model, data, self.load.frame_id, _LWA).T @ self.load.wrench
 
-    def _reduced_rows(self, J: np.ndarray) -> ReducedRows:
-        """``U_r``, ``Sigma_r`` and ``W = V_r^T`` of the closure Jacobian's independent rows.
+    def _split(self, J: np.ndarray) -> tuple[ReducedRows, np.ndarray]:
+        """The closure Jacobian's independent rows, and the left singular vectors of rows lost here.
 
-        Raises:
-            SingularConfiguration: when the r-th singular value vanishes (constraint singularity).
+        Returns:
+            ``U_r``, ``Sigma_r``, ``W = V_r^T`` of the rows kept, and the left singular vectors of
+            the independent rows whose singular value vanishes (a constraint singularity),
+            shape (m, d); d = 0 away from one.
         """
         U, s, Vt = np.linalg.svd(J, full_matrices=False)
         r = self.rank
+        kept = r
         if r and s[r - 1] <= RANK_RTOL * max(s[0], 1.0):
+            kept = int(np.sum(s[:r] > RANK_RTOL * max(s[0], 1.0)))
+        return ReducedRows(U[:, :kept], s[:kept], Vt[:kept]), U[:, kept:r]
+
+    def _reduced_rows(
+        self, J: np.ndarray, through: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> ReducedRows:
+        """``U_r``, ``Sigma_r`` and ``W = V_r^T`` of the closure Jacobian's independent rows.
+
+        ``through``: the state ``(q, v)`` on the closures that ``J`` belongs to, to pass a
+        constraint singularity where the motion is defined (module docstring): the lost rows
+        are dropped then.
+
+        Raises:
+            SingularConfiguration: when the r-th singular value vanishes (constraint singularity),
+                without ``through`` or where the motion is not defined.
+        """
+        rows, lost = self._split(J)
+        if lost.shape[1]:
+            if through is None:
+                s = np.linalg.svd(J, compute_uv=False)
+                raise SingularConfiguration(
+                    f"{self._name}: constraint singularity: closure Jacobian singular values {s.tolist()}, "
+                    f"{self.rank} independent rows expected (mobility {self.model.nv - self.rank})"
+                )
+            self._check_through(*through, lost, rows.W, J)
+        return rows
+
+    def _drift(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        r"""The acceleration drift :math:`\dot J_\phi(q, v) v` (m,), computed in a scratch data."""
+        data = self._scratch
+        pin.forwardKinematics(self.model, data, q, v, np.zeros(self.model.nv))
+        pin.updateFramePlacements(self.model, data)
+        return _closures.drift_from_data(self.model, data, self.closures)
+
+    def _check_through(
+        self, q: np.ndarray, v: np.ndarray, lost: np.ndarray, Wk: np.ndarray, J: np.ndarray
+    ) -> None:
+        r"""Raise unless the motion through this constraint singularity is defined (module docstring).
+
+        Args:
+            q: configuration on the closures, shape (nq,).
+            v: joint velocities, shape (nv,).
+            lost: left singular vectors of the rows lost here, shape (m, d).
+            Wk: the kept rows :math:`V_k^T`, shape (k, nv).
+            J: the closure Jacobian, for the message, shape (m, nv).
+        """
+        gamma = self._drift(q, v)
+        s = np.linalg.svd(J, compute_uv=False)
+        where = f"{self._name}: constraint singularity (closure Jacobian singular values {s.tolist()})"
+        lost_drift = float(np.max(np.abs(lost.T @ gamma)))
+        scale = float(np.max(np.abs(gamma), initial=0.0))
+        if lost_drift > CONSISTENCY_RTOL * scale:
             raise SingularConfiguration(
-                f"{self._name}: constraint singularity: closure Jacobian singular values {s.tolist()}, "
-                f"{r} independent rows expected (mobility {self.model.nv - r})"
+                f"{where}: the motion is not defined here: the acceleration constraint along the lost "
+                f"closure row is inconsistent (drift {lost_drift:.3g}, {lost_drift / scale:.3g} of the "
+                f"drift's size, more than {CONSISTENCY_RTOL:g}): no finite closure force keeps the loops "
+                "closed"
             )
-        return ReducedRows(U[:, :r], s[:r], Vt[:r])
+        # Q(w) = lost^T gamma(q, w) is quadratic in w: its gradient at v along n is
+        # lost^T (gamma(v + n) - gamma(v - n)) / 2, exactly; n spans the null space of the kept rows
+        N = np.linalg.svd(Wk)[2][Wk.shape[0] :] if Wk.size else np.eye(self.model.nv)
+        size = float(np.linalg.norm(v))
+        drift = self._drift
+        grad = np.array([lost.T @ (drift(q, v + size * n) - drift(q, v - size * n)) / 2 for n in N])
+        form = np.array([lost.T @ drift(q, size * n) for n in N])
+        if size == 0.0 or np.max(np.abs(grad)) <= BRANCH_RTOL * 2 * np.max(np.abs(form)):
+            raise SingularConfiguration(
+                f"{where}: the motion is not defined here: the velocity (|v| = {size:.3g}) lies where "
+                "sheets of the closure manifold meet (at rest, or moving along their intersection), so "
+                "the model does not say which one the mechanism follows"
+            )
 
     def _saddle(self, M: np.ndarray, W: np.ndarray, top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
         """Solve ``[[M, -W^T], [W, 0]] [x; mu] = [top; bottom]``, returning ``(x, mu)`` stacked."""
@@ -257,7 +378,7 @@ class ClosedChainDynamics:
         ``rows``: the reduced closure rows at ``q`` when already known (from :meth:`project`).
 
         Raises:
-            SingularConfiguration: at a constraint singularity.
+            SingularConfiguration: at a constraint singularity where the motion is not defined.
         """
         model, data = self.model, self.data
         pin.computeAllTerms(model, data, q, v)
@@ -269,7 +390,7 @@ class ClosedChainDynamics:
         if not self.closures:
             return np.linalg.solve(M, rhs), np.zeros(0)
         gamma = _closures.drift_from_data(model, data, self.closures)
-        Ur, sr, W = self._reduced_rows(J) if rows is None else rows
+        Ur, sr, W = self._reduced_rows(J, (q, v)) if rows is None else rows
         sol = self._saddle(M, W, rhs, -(Ur.T @ gamma) / sr)
         nv = model.nv
         return sol[:nv], Ur @ (sol[nv:] / sr)
@@ -328,7 +449,7 @@ class ClosedChainDynamics:
         model, pdata = self.model, self._pin_data
         pin.computeJointJacobians(model, pdata, q)
         force = pin.getConstraintsJacobian(model, pdata, self._cms, self._cds).T @ pdata.lambda_c  # (nv,)
-        Ur, sr, W = self._reduced_rows(self._closure_terms(q)[1]) if rows is None else rows
+        Ur, sr, W = self._reduced_rows(self._closure_terms(q)[1], (q, v)) if rows is None else rows
         return a, Ur @ ((W @ force) / sr)
 
     def project(self, q: np.ndarray, v: np.ndarray, tol: float, velocity_tol: float = 0.0) -> Projection:
@@ -353,7 +474,7 @@ class ClosedChainDynamics:
 
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol`` from ``q``.
-            SingularConfiguration: at a constraint singularity.
+            SingularConfiguration: at a constraint singularity where the motion is not defined.
         """
         if not self.closures:
             return Projection(q, v, 0.0, 0.0, None)
@@ -361,7 +482,7 @@ class ClosedChainDynamics:
         phi, J = self._closure_terms(q)
         before = after = self.distance(phi)
         if before > tol:
-            Ur, sr, W = self._reduced_rows(J)
+            Ur, sr, W = self._split(J)[0]
             q = pin.integrate(model, q, -W.T @ ((Ur.T @ phi) / sr))
             phi, J = self._closure_terms(q)
             after = self.distance(phi)
@@ -372,10 +493,72 @@ class ClosedChainDynamics:
                 after = self.distance(phi)
         elif np.max(np.abs(J @ v)) <= velocity_tol:
             return Projection(q, v, before, after, None)
-        rows = self._reduced_rows(J)
+        rows, lost = self._split(J)
         M = pin.crba(model, data, q)
         v = v + self._saddle(M, rows.W, np.zeros(model.nv), -(rows.W @ v))[: model.nv]
+        if lost.shape[1]:
+            self._check_through(q, v, lost, rows.W, J)
         return Projection(q, v, before, after, rows)
+
+    def stage_rates(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        r"""Rates of an integrator's stage, taken at its projection onto the closures.
+
+        :data:`STAGE_ITERATIONS` minimum-norm Gauss-Newton steps on :math:`\phi(q) = 0`, then
+        :math:`v` projected orthogonally onto :math:`J_\phi v = 0`; the accelerations there by
+        the KKT solve. Near a constraint singularity the index-1 accelerations of an off-manifold
+        state are off by its error over :math:`\sigma_r`; on the manifold they are exact
+        (module docstring). Where the rank drops, the lost rows are dropped if the motion is
+        defined there.
+
+        Args:
+            q: configuration of the stage, shape (nq,).
+            v: joint velocities of the stage, shape (nv,).
+            tau: applied generalized forces, shape (nv,).
+
+        Returns:
+            The projected velocities (the configuration's rate) and the accelerations, shape (nv,) each.
+
+        Raises:
+            SingularConfiguration: at a constraint singularity where the motion is not defined.
+        """
+        model = self.model
+        if not self.closures:
+            return v, self.kkt(q, v, tau)[0]
+        for _ in range(STAGE_ITERATIONS):
+            phi, J = self._closure_terms(q)
+            Ur, sr, W = self._split(J)[0]
+            q = pin.integrate(model, q, -W.T @ ((Ur.T @ phi) / sr))
+        J = self._closure_terms(q)[1]
+        rows, lost = self._split(J)
+        v = v - rows.W.T @ (rows.W @ v)
+        if lost.shape[1]:
+            self._check_through(q, v, lost, rows.W, J)
+        return v, self.kkt(q, v, tau, rows)[0]
+
+    def time_to_crossing(self, q: np.ndarray, v: np.ndarray) -> float:
+        r"""Predicted time [s] until an independent closure singular value reaches zero, moving at ``v``.
+
+        Each of the closure Jacobian's r independent singular values :math:`\sigma_i` below
+        :data:`NEAR_SINGULAR` of the largest changes at the rate
+        :math:`\dot\sigma_i = u_i^T \dot J_\phi v_i`, with :math:`\dot J_\phi` by a central
+        difference of :math:`J_\phi` along ``v``; the earliest :math:`\sigma_i / (-\dot\sigma_i)`
+        of those decreasing. A singular value passes through zero linearly at a crossing of two
+        sheets of the closure manifold. ``inf`` when none is near or decreasing.
+        """
+        r = self.rank
+        if not r:
+            return math.inf
+        U, s, Vt = np.linalg.svd(self._closure_terms(q)[1], full_matrices=False)
+        near = [i for i in range(r) if s[i] < NEAR_SINGULAR * s[0]]
+        speed = float(np.linalg.norm(v))
+        if not near or speed == 0.0:
+            return math.inf
+        tau = 1e-6 / speed  # [s]: a 1e-6 move along v
+        Jp = self._closure_terms(pin.integrate(self.model, q, tau * v))[1]
+        Jm = self._closure_terms(pin.integrate(self.model, q, -tau * v))[1]
+        rates = [float(U[:, i] @ (Jp - Jm) @ Vt[i]) / (2 * tau) for i in near]
+        times = [s[i] / -rate for i, rate in zip(near, rates, strict=True) if rate < 0.0]
+        return min(times, default=math.inf)
 
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic (armature included) plus gravitational potential energy [J]."""

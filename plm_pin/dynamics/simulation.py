@@ -44,15 +44,19 @@ free-flyer, spherical and unbounded revolute joints.
 **Energy guard.** A passive run (no actuator forces, no wrench) conserves the energy; when it
 strays from its initial value by more than :data:`ENERGY_RTOL` of the largest kinetic energy
 reached, the run stops with :class:`~plm_pin.exceptions.SimulationFailed` naming the time, the
-energy change and the smallest closure singular value there, keeping the samples before. The
-case that motivated it: the passive 3D4M (``harada2011_3d4m``) under gravity swings until legs
-1 and 2 reach the same slider position with both rods vertical (t = 12.54 s from ``q_ref``).
-There the sheet of the closure manifold the motion is on (mirrored legs) crosses the sheet where
-the two legs coincide; the closure Jacobian loses a rank (a constraint singularity), so the
-index-1 accelerations of the integrator's slightly off-manifold stages are amplified by the
-inverse of a vanishing singular value; a 1 ms RK4 step took the energy from 0.144 J to 1.2 J
-before its projection (which then landed on the other sheet, 6 mm away, at 0.83 J) while the
-residual after it stayed at 1e-12.
+energy change and the smallest closure singular value there, keeping the samples before.
+
+**Constraint singularities.** Where two sheets of the closure manifold cross, the closure
+Jacobian loses a rank (the passive 3D4M, ``harada2011_3d4m``, swings through such a place
+whenever the two rods of a leg pair hang straight down, about twice a second). The motion
+through it is defined when the lost row stays consistent and the velocity picks one sheet
+(:mod:`plm_pin.dynamics._constrained`); then the run passes through, else it stops. The
+index-1 accelerations of a state off the closures are off there by its error over the
+vanishing singular value, so DOP853, whose stages are such states, shrinks its step; below
+:data:`MIN_STEP` it hands over to a *bridge*: fixed RK4 steps from the sample before to
+:data:`BRIDGE_STEPS` steps past the place, each stage put on the closures before its rates are
+taken (:meth:`~plm_pin.dynamics._constrained.ClosedChainDynamics.stage_rates`), the step that
+reaches the crossing shortened so that the crossing falls a quarter step from every stage.
 
 Accelerations, closure forces, energy and task pose are computed once per sample, when it is
 recorded, with the SVD of the closure Jacobian its projection computed there.
@@ -99,7 +103,13 @@ MIN_STEP = 1e-6
 """Adaptive step [s] below which DOP853 is taken to be stuck (at a constraint singularity): bridged."""
 
 BRIDGE_STEPS = 10
-"""Fixed RK4 steps (of DEFAULT_STEP at most) past a place DOP853 cannot step, from the sample before it."""
+"""Fixed RK4 steps (of DEFAULT_STEP at most) past a place DOP853 cannot step, from the sample before it.
+
+Each bridge advances the run by at least this many steps, so repeated bridges always progress.
+"""
+
+CROSSING_MARGIN = 1e-3  # TOLERANCE -> tolerances.py
+"""[1] A crossing predicted within this fraction of a bridge step is taken to be at its start (left as is)."""
 
 _CHART_SPAN = 0.5
 """Largest chart coordinate [m, rad] of the adaptive run before it re-centres on a non-vector-space joint."""
@@ -273,29 +283,48 @@ class _Run:
     def _accel(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         return self.dyn.acceleration(q, v, self.tau(t, q, v))
 
-    def rk4(self, t: float, q: np.ndarray, v: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-        """One classical Runge-Kutta 4 step of size ``h`` [s] in the chart at ``q``."""
-        model = self.model
-        k1d, k1v = v, self._accel(t, q, v)
+    def _stage_rates(self, t: float, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Velocity and acceleration of a stage, taken at its projection onto the closures."""
+        return self.dyn.stage_rates(q, v, self.tau(t, q, v))
+
+    def _rates(self, t: float, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Velocity and acceleration of a stage, by the index-1 solve at the stage itself."""
+        return v, self._accel(t, q, v)
+
+    def rk4(
+        self, t: float, q: np.ndarray, v: np.ndarray, h: float, projected: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One classical Runge-Kutta 4 step of size ``h`` [s] in the chart at ``q``.
+
+        ``projected``: take each stage's rates at its projection onto the closures (near a
+        constraint singularity, :meth:`~plm_pin.dynamics._constrained.ClosedChainDynamics.stage_rates`).
+        """
+        model, rates = self.model, self._stage_rates if projected else self._rates
+        k1d, k1v = rates(t, q, v)
         d, w = 0.5 * h * k1d, v + 0.5 * h * k1v
-        k2d, k2v = self._delta_rate(q, d, w), self._accel(t + 0.5 * h, pin.integrate(model, q, d), w)
+        qs = pin.integrate(model, q, d)
+        w, k2v = rates(t + 0.5 * h, qs, w)
+        k2d = self._delta_rate(q, d, w)
         d, w = 0.5 * h * k2d, v + 0.5 * h * k2v
-        k3d, k3v = self._delta_rate(q, d, w), self._accel(t + 0.5 * h, pin.integrate(model, q, d), w)
+        w, k3v = rates(t + 0.5 * h, pin.integrate(model, q, d), w)
+        k3d = self._delta_rate(q, d, w)
         d, w = h * k3d, v + h * k3v
-        k4d, k4v = self._delta_rate(q, d, w), self._accel(t + h, pin.integrate(model, q, d), w)
+        w, k4v = rates(t + h, pin.integrate(model, q, d), w)
+        k4d = self._delta_rate(q, d, w)
         delta = (h / 6.0) * (k1d + 2.0 * k2d + 2.0 * k3d + k4d)
         self.steps += 1
         return pin.integrate(model, q, delta), v + (h / 6.0) * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
 
     def fixed_step(
-        self, t: float, q: np.ndarray, v: np.ndarray, h: float, halvings: int = 0
+        self, t: float, q: np.ndarray, v: np.ndarray, h: float, halvings: int = 0, projected: bool = False
     ) -> tuple[np.ndarray, np.ndarray, float]:
         """RK4 over ``h`` [s] then projection; halved while the step opens the loops past STEP_DRIFT_TOL.
 
+        ``projected``: stages' rates at their projection onto the closures (:meth:`rk4`).
         Returns the projected state and the largest closure distance before a projection.
         """
         self.t_now = t
-        q1, v1 = self.rk4(t, q, v, h)
+        q1, v1 = self.rk4(t, q, v, h, projected)
         if np.all(np.isfinite(q1)) and np.all(np.isfinite(v1)):
             opened = self.distance(q1)
             if opened <= STEP_DRIFT_TOL:
@@ -309,22 +338,22 @@ class _Run:
                 f"{opened:.3g} before its projection (more than {STEP_DRIFT_TOL:g}): the dynamics change "
                 f"faster than RK4 resolves there{self._conditioning(q)}"
             )
-        qm, vm, d1 = self.fixed_step(t, q, v, 0.5 * h, halvings + 1)
-        q2, v2, d2 = self.fixed_step(t + 0.5 * h, qm, vm, 0.5 * h, halvings + 1)
+        qm, vm, d1 = self.fixed_step(t, q, v, 0.5 * h, halvings + 1, projected)
+        q2, v2, d2 = self.fixed_step(t + 0.5 * h, qm, vm, 0.5 * h, halvings + 1, projected)
         return q2, v2, max(d1, d2)
 
     def adaptive(self, q: np.ndarray, v: np.ndarray, rtol: float, atol: float, max_step: float) -> None:
         """DOP853 over the whole run; samples from its dense output, projected; the state when it drifts.
 
         Where DOP853 cannot step on (its step shrinks to nothing, or a closure row vanishes at a
-        stage: a constraint singularity crossed), fixed RK4 steps carry the state from the sample
-        before to :data:`BRIDGE_STEPS` steps past the place, then DOP853 resumes; a second failure
-        at the same place stops the run.
+        stage: a constraint singularity crossed), fixed RK4 steps with the stages' rates taken on
+        the closures carry the state from the sample before to :data:`BRIDGE_STEPS` steps past
+        the place, then DOP853 resumes. A bridge stops the run only where the motion is not
+        defined (:mod:`plm_pin.dynamics._constrained`) or its steps cannot keep the loops closed.
         """
         nv, model, times, euclidean = self.mech.nv, self.model, self.times, self.euclidean
         accel, tau, rate, tau_c = self.dyn.accelerator(), self.tau, self._delta_rate, self.tau_constant
         t, k, first_step, drift = 0.0, 1, None, 0.0
-        bridged = -1.0  # end of the last bridge [s]
         while k < times.size:
             origin = q
 
@@ -380,32 +409,51 @@ class _Run:
                         q, v = p.q, p.v
                         first_step = min(solver.h_abs, float(times[-1]) - t)
                         break
-            except (_StepFailed, SingularConfiguration) as exc:
-                if t <= bridged:
-                    raise _Stop(f"{exc}{self._conditioning(q)}") from exc
+            except (_StepFailed, SingularConfiguration):
                 # from the last sample: DOP853 may have crept up to the singular place itself
                 h = min(DEFAULT_STEP, max_step)
                 last = float(times[k - 1])
                 t, k, q, v, drift = self._bridge(
-                    last, k, self.q[k - 1], self.v[k - 1], t + BRIDGE_STEPS * h, h
+                    last, k, self.q[k - 1], self.v[k - 1], max(t, last) + BRIDGE_STEPS * h, h
                 )
-                bridged = t
 
     def _bridge(
         self, t: float, k: int, q: np.ndarray, v: np.ndarray, end: float, h: float
     ) -> tuple[float, int, np.ndarray, np.ndarray, float]:
-        """Fixed steps of at most ``h`` [s] from ``t`` to ``end``, landing on the samples they pass."""
+        """Fixed steps of at most ``h`` [s] from ``t`` to ``end``, landing on the samples they pass.
+
+        The stages' rates are taken on the closures (:meth:`rk4`), and a step that would reach
+        a constraint singularity is shortened so that the crossing falls at three quarters of
+        it, a quarter step from every stage but the first (:meth:`_across`).
+        """
         times, drift = self.times, 0.0
         end = min(end, float(times[-1]))
         while t < end and k < times.size:
-            t_next = min(t + h, float(times[k]))
-            q, v, before = self.fixed_step(t, q, v, t_next - t)
+            t_next = t + self._across(q, v, min(h, float(times[k]) - t))
+            q, v, before = self.fixed_step(t, q, v, t_next - t, projected=True)
             drift = max(drift, before)
             t = t_next
             if t >= times[k]:
                 self.record(k, q, v, drift)
                 k, drift = k + 1, 0.0
         return t, k, q, v, drift
+
+    def _across(self, q: np.ndarray, v: np.ndarray, h: float) -> float:
+        r"""A step [s] from the state ``(q, v)`` on the closures whose stages keep clear of a crossing.
+
+        Near a constraint singularity a stage's projection onto the closures is reliable only
+        while its error (of order :math:`h^2`) is small beside its distance to the crossing,
+        where the sheets of the closure manifold meet (there it may land on the other sheet).
+        The RK4 stages sit at 0, h/2 and h; with the crossing predicted at :math:`\Delta` from
+        now (:meth:`~plm_pin.dynamics._constrained.ClosedChainDynamics.time_to_crossing`), the step
+        is :math:`4\Delta/3` (the crossing at three quarters) when that fits in ``h``, else
+        :math:`\Delta/2` when the crossing is near its end; else ``h``. The first stage, at the
+        projected state itself, may be at the crossing.
+        """
+        delta = self.dyn.time_to_crossing(q, v)
+        if not CROSSING_MARGIN * h < delta < 1.25 * h:
+            return h
+        return 4.0 * delta / 3.0 if 4.0 * delta / 3.0 <= h else 0.5 * delta
 
     # --------------------------------------------------------- projection
     def distance(self, q: np.ndarray) -> float:
@@ -511,7 +559,7 @@ def _check_forces(mech: Mechanism, actuator_forces: ArrayLike | ForceLaw | None)
 
 
 def _check_start(
-    mech: Mechanism, dyn: ClosedChainDynamics, q0: ArrayLike, v0: ArrayLike | None, closure_tol: float
+    mech: Mechanism, q0: ArrayLike, v0: ArrayLike | None, closure_tol: float
 ) -> tuple[np.ndarray, np.ndarray]:
     q = mech.check_q(q0, "q0").copy()
     v = np.zeros(mech.nv) if v0 is None else as_vector(v0, mech.nv, "v0").copy()
@@ -535,8 +583,6 @@ def _check_start(
                 f"{bound:.3g}; "
                 "choose v0 = S @ xdot with S from plm_pin.kinematics.closed_chain_jacobians(mech, q0)"
             )
-        p = dyn.project(q, v, closure_tol)
-        q, v = p.q, p.v
     return q, v
 
 
@@ -602,7 +648,9 @@ def simulate(
         FrameNotFound: unknown ``frame``.
         ClosureNotSatisfied: ``q0`` is not assembled to ``closure_tol``.
         SimulationFailed: the state or the forces became non-finite, the loops could not
-            be kept closed (for instance at a constraint singularity), a fixed step stayed too
+            be kept closed, the motion is not defined at a constraint singularity reached
+            (at rest there, or a velocity on no sheet: the cause is a
+            :class:`~plm_pin.exceptions.SingularConfiguration` saying which), a fixed step stayed too
             large after :data:`MAX_HALVINGS` halvings, or a passive run's energy strayed past
             :data:`ENERGY_RTOL`; the message names the time and the reason, and the error
             carries the samples computed before.
@@ -622,10 +670,12 @@ def simulate(
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
     forces = _check_forces(mech, actuator_forces)
     dyn = ClosedChainDynamics(mech, solver, load)
-    q, v = _check_start(mech, dyn, q0, v0, closure_tol)
+    q, v = _check_start(mech, q0, v0, closure_tol)
     times = _output_times(duration, dt)
     run = _Run(mech, dyn, forces, closure_tol, times, method)
     try:
+        p = dyn.project(q, v, closure_tol)  # a constraint singularity may stop the run here
+        q, v = p.q, p.v
         run.record(0, q, v, run.distance(q))
         if method == "adaptive":
             run.adaptive(q, v, rtol, atol, h_max)

@@ -1,10 +1,14 @@
 """Self-collision of a mechanism's links, with Pinocchio's GeometryModel and coal.
 
-The shapes checked are the description's visual geometry (boxes, cylinders, spheres and
-meshes of the URDF). Every pair of shapes on two different bodies is checked, except
-*adjacent* bodies, which touch by design: a body and its parent across a joint (through
-bodies that carry no shape, such as the cross of a universal joint), and the two bodies a
-closure joins. More pairs can be ignored by body name: in the sidecar,
+The shapes checked are the description's collision geometry
+(:attr:`~plm_pin.core.mechanism.Mechanism.collision_model`): a URDF's ``<collision>``
+shapes, an MJCF's geoms that take part in contacts, or the visual shapes (boxes,
+cylinders, spheres and meshes) of a description that has no collision shapes.
+
+Every pair of shapes on two different bodies is checked, except *adjacent* bodies, which
+touch by design: a body and its parent across a joint (through bodies that carry no shape,
+such as the cross of a universal joint), and the two bodies a closure joins. More pairs can
+be ignored by body name: in the sidecar,
 
 .. code-block:: yaml
 
@@ -31,7 +35,7 @@ class SelfCollision:
 
     Attributes:
         mech: the mechanism.
-        geometry: the shapes (a copy of its visual geometry model) with the pairs checked.
+        geometry: the shapes (a copy of its collision geometry model) with the pairs checked.
         pairs: the checked pairs, as body names.
     """
 
@@ -55,7 +59,7 @@ class SelfCollision:
                         f"cannot ignore collisions of {n!r}: no such body; bodies are {list(names)}"
                     )
             ignored.add(frozenset((names.index(first), names.index(second))))
-        self.geometry = mech.visual_model.copy()
+        self.geometry = mech.collision_model.copy()
         shaped = {int(g.parentJoint) for g in self.geometry.geometryObjects}
         adjacent = {frozenset((j, _shaped_ancestor(model, j, shaped))) for j in shaped}
         for c in mech.closures:  # the cut joint's two bodies

@@ -68,7 +68,8 @@ def test_urdf_without_sidecar_names_the_expected_file(fourbar):
         read_description(fourbar)
     assert str(info.value) == (
         f"{fourbar}: no closure sidecar found beside the URDF: expected fourbar.plm.yaml "
-        "(format plm-pin/1) or robot.yaml (example-parallel-robots)"
+        "(format plm-pin/1) or robot.yaml (example-parallel-robots), or closing frames "
+        "closing_<name>_1 / closing_<name>_2 (onshape-to-robot)"
     )
 
 

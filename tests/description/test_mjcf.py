@@ -11,7 +11,7 @@ import pytest
 
 import plm_pin
 from plm_pin.core.mechanism import Mechanism
-from plm_pin.description.mjcf import read_mjcf
+from plm_pin.description.mjcf import StateMap, read_mjcf
 from plm_pin.exceptions import DescriptionError, FrameNotFound
 from plm_pin.warnings import IgnoredElementWarning
 
@@ -366,25 +366,27 @@ def test_state_map_round_trip(tmp_path: Path) -> None:
 REFUSED = {
     "tendon": (
         '<tendon><fixed name="t"><joint joint="crank_pivot" coef="1"/></fixed></tendon>',
-        "<tendon> 't': tendons cannot be represented",
+        "cannot represent: 1 <tendon> ('t'). To read the loops without them, load with ignore=('tendons',)",
     ),
     "joint equality": (
         '<equality><joint name="couple" joint1="crank_pivot" joint2="coupler_pivot" '
         'polycoef="0 2 0 0 0"/></equality>',
-        "<equality><joint> 'couple': only connect and weld equalities can be represented",
+        "cannot represent: 1 <equality><joint> ('couple'). To read the loops without them, load with "
+        "ignore=('joint_equalities',) (CLI: --ignore joint_equalities)",
     ),
     "contact pair": (
         '<worldbody><geom name="g" type="sphere" size="0.1"/></worldbody>'
         '<contact><pair name="p" geom1="g" geom2="g2"/></contact>',
-        "<contact><pair> 'p': contacts cannot close a loop",
+        "cannot represent: 1 <contact><pair> ('p'). To read the loops without them, load with "
+        "ignore=('contacts',) (CLI: --ignore contacts)",
     ),
     "site actuator": (
         '<actuator><general name="push" site="coupler_tip" gear="1 0 0 0 0 0"/></actuator>',
-        "<actuator> 'push': only actuators on one hinge or slide joint can be represented",
+        "cannot represent: 1 <actuator> not on one hinge or slide ('push')",
     ),
     "inactive equality": (
         '<equality><connect name="off" site1="coupler_tip" site2="rocker_tip" active="false"/></equality>',
-        "<equality> 'off' is inactive",
+        """1 <equality active="false"> (plm_pin closures always hold) ('off')""",
     ),
 }
 
@@ -512,6 +514,8 @@ def test_enum_values_are_mujocos() -> None:
     for name in ("FREE", "BALL", "SLIDE", "HINGE"):
         assert getattr(mjcf, f"_{name}") == int(getattr(mujoco.mjtJoint, f"mjJNT_{name}"))
     assert (mjcf._EQ_CONNECT, mjcf._EQ_WELD) == (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD))
+    assert (mjcf._EQ_JOINT, mjcf._EQ_TENDON) == (int(mujoco.mjtEq.mjEQ_JOINT), int(mujoco.mjtEq.mjEQ_TENDON))
+    assert mjcf._TRN_TENDON == int(mujoco.mjtTrn.mjTRN_TENDON)
     for code, name in mjcf._EQ_NAMES.items():
         assert int(getattr(mujoco.mjtEq, f"mjEQ_{name.upper()}")) == code
     assert mjcf._TRN_JOINT == int(mujoco.mjtTrn.mjTRN_JOINT) and mjcf._OBJ_SITE == int(
@@ -530,3 +534,204 @@ def test_sidecar_path_loads_its_mjcf(tmp_path: Path) -> None:
         "rocker_tip",
         "MJCF fourbar_hand.xml",
     )
+
+
+# a floating four-bar as public collections write one: unnamed <freejoint/> and hinges, a rocker
+# whose hinge sits 2 cm from its body origin, a limited hinge; a parallelogram closed at qpos0
+FLOATING_MJCF = """<mujoco model="floating">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="base" pos="0 0 1">
+      <freejoint/>
+      <inertial pos="0 0 0" mass="1" diaginertia="0.01 0.02 0.03"/>
+      <body name="crank">
+        <joint type="hinge" axis="0 0 1" range="-1 1.5" limited="true"/>
+        <inertial pos="0 0.05 0" mass="0.2" diaginertia="1e-4 1e-5 1e-4"/>
+        <body name="coupler" pos="0 0.1 0">
+          <joint type="hinge" axis="0 0 1"/>
+          <inertial pos="0.15 0 0" mass="0.3" diaginertia="1e-5 1e-3 1e-3"/>
+          <site name="coupler_tip" pos="0.3 0 0"/>
+        </body>
+      </body>
+      <body name="rocker" pos="0.3 0 0">
+        <joint type="hinge" axis="0 0 1" pos="0 0.02 0"/>
+        <joint type="slide" axis="0 1 0"/>
+        <inertial pos="0 0.05 0" mass="0.2" diaginertia="1e-4 1e-5 1e-4"/>
+        <site name="rocker_tip" pos="0 0.1 0"/>
+      </body>
+    </body>
+  </worldbody>
+  <equality><connect site1="coupler_tip" site2="rocker_tip"/></equality>
+</mujoco>
+"""
+
+
+def test_unnamed_joints_are_named_after_their_body(tmp_path: Path) -> None:
+    """Unnamed joints load as <body>_free and <body>_<kind><i>; the model is MuJoCo's (M, frames)."""
+    path = _write(tmp_path, "floating", {".xml": FLOATING_MJCF})
+    mech = plm_pin.load(path)
+    assert mech.joint_names == (
+        "base_free",
+        "crank_hinge0",
+        "coupler_hinge0",
+        "rocker_hinge0",
+        "rocker_slide1",
+    )
+    mjcf = read_mjcf(path)
+    m = mjcf.mj_model
+    state = mjcf.state_map()
+    data = mujoco.MjData(m)
+    pin.seed(6)
+    for _ in range(3):
+        q = pin.randomConfiguration(mjcf.model, -np.ones(mjcf.model.nq), np.ones(mjcf.model.nq))
+        _frames_match(mjcf, q)
+        data.qpos[:] = state.qpos(q)
+        mujoco.mj_forward(m, data)
+        M_mj = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, data, M_mj)
+        G = state.velocity_matrix(q)
+        np.testing.assert_allclose(
+            pin.crba(mjcf.model, mjcf.model.createData(), q), G.T @ M_mj @ G, atol=1e-12
+        )
+    # the limited hinge keeps MuJoCo's range; the others are unlimited
+    crank = mech.model.joints[mech.model.getJointId("crank_hinge0")].idx_q
+    assert (mech.model.lowerPositionLimit[crank], mech.model.upperPositionLimit[crank]) == (-1.0, 1.5)
+    assert mech.model.upperPositionLimit[mech.model.joints[3].idx_q] == np.inf
+    # the floating base's 6 DOF, the parallelogram's 1 and the slide's 1 (a point closure of rank 2)
+    assert mech.mobility == 8
+
+
+def test_cli_info_lists_the_joint_names(tmp_path: Path) -> None:
+    """``plm-pin info`` shows the joints, named ones and the names given to unnamed ones."""
+    from typer.testing import CliRunner
+
+    from plm_pin.cli import app
+
+    path = _write(tmp_path, "floating", {".xml": FLOATING_MJCF})
+    result = CliRunner().invoke(app, ["info", str(path), "--json"])
+    assert result.exit_code == 0, result.output
+    assert '"name": "base_free",\n      "type": "free"' in result.output
+    assert '"name": "rocker_slide1",\n      "type": "prismatic"' in result.output
+
+
+def test_generated_name_taken_by_another_joint_is_refused(tmp_path: Path) -> None:
+    """An unnamed joint whose generated name another joint holds: the error names both and the file."""
+    text = FLOATING_MJCF.replace('<joint type="slide"', '<joint name="crank_hinge0" type="slide"')
+    with pytest.raises(DescriptionError) as info:
+        plm_pin.load(_write(tmp_path, "floating", {".xml": text}))
+    assert str(info.value) == (
+        f"{tmp_path / 'floating.xml'}: an unnamed joint of body 'crank' would be named 'crank_hinge0', "
+        "the name of another joint; name it"
+    )
+
+
+# the four-bar with what MuJoCo models for contacts and couplings: two tendons (one driven), a
+# tendon equality, a joint coupling and two contact pairs
+MANY_EXTRAS = """<tendon>
+    <fixed name="t1"><joint joint="crank_pivot" coef="1"/></fixed>
+    <fixed name="t2"><joint joint="rocker_pivot" coef="1"/><joint joint="coupler_pivot" coef="0.5"/></fixed>
+  </tendon>
+  <contact><pair name="p1" geom1="g1" geom2="g2"/><pair geom1="g2" geom2="g1"/></contact>
+  <equality>
+    <tendon name="te" tendon1="t1" tendon2="t2"/>
+    <joint name="couple" joint1="crank_pivot" joint2="coupler_pivot" polycoef="0 2 0 0 0"/>
+  </equality>
+  <actuator><motor name="pull" tendon="t2"/></actuator>
+</mujoco>"""
+
+
+def _many(tmp_path: Path) -> Path:
+    text = FOURBAR_MJCF.replace("</mujoco>", MANY_EXTRAS)
+    text = text.replace('<site name="rocker_tip"', '<geom name="g1" size="0.01"/><site name="rocker_tip"')
+    text = text.replace('<site name="coupler_tip"', '<geom name="g2" size="0.01"/><site name="coupler_tip"')
+    return _write(tmp_path, "many", {".xml": text, ".plm.yaml": FOURBAR_SIDECAR})
+
+
+def test_every_unsupported_element_in_one_refusal(tmp_path: Path) -> None:
+    """One error lists every element plm_pin cannot represent, with counts, and the ignore= dropping them."""
+    with pytest.raises(DescriptionError) as info:
+        plm_pin.load(_many(tmp_path))
+    assert info.value.problem == (
+        "the model holds elements plm_pin cannot represent: 2 <contact><pair> ('p1', '#1'); "
+        "2 <tendon> ('t1', 't2'); 1 <equality><tendon> ('te'); 1 <equality><joint> ('couple'); "
+        "1 <actuator> on a tendon ('pull'). To read the loops without them, load with "
+        "ignore=('contacts', 'tendons', 'joint_equalities') (CLI: --ignore contacts,tendons,joint_equalities)"
+    )
+    with pytest.raises(
+        DescriptionError, match=r"cannot represent: 1 <equality><joint> \('couple'\)\. To read"
+    ):
+        plm_pin.load(tmp_path / "many.xml", ignore=("contacts", "tendons"))
+
+
+def test_ignore_drops_and_warns_and_keeps_the_linkage(tmp_path: Path) -> None:
+    """ignore= drops what it names with one warning; the loops are MuJoCo's (equality Jacobian rank)."""
+    with pytest.warns(IgnoredElementWarning) as caught:
+        mech = plm_pin.load(_many(tmp_path), ignore="contacts,tendons,joint_equalities")
+    (message,) = [str(w.message) for w in caught if "dropped" in str(w.message)]
+    assert message == (
+        f"{tmp_path / 'many.xml'}: dropped as asked by ignore: 2 <contact><pair> ('p1', '#1'); 2 <tendon> "
+        "('t1', 't2'); 1 <equality><tendon> ('te'); 1 <equality><joint> ('couple'); 1 <actuator> on a "
+        "tendon ('pull'). Contacts, tendons and inactive equalities do not change a linkage's kinematics. "
+        "Without the joint_equalities, the joints they coupled or drove move freely: mobility and "
+        "actuation change"
+    )
+    assert [c.name for c in mech.closures] == ["loop"] and [a.joint for a in mech.actuators] == [
+        "crank_pivot"
+    ]
+    # MuJoCo's own model with the coupling switched off: its connect's Jacobian has the closure's rank
+    m = mujoco.MjModel.from_xml_path(str(tmp_path / "many.xml"))
+    m.eq_active0[:] = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, i) == "loop" for i in range(m.neq)]
+    m.opt.jacobian = int(mujoco.mjtJacobian.mjJAC_DENSE)
+    m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    data = mujoco.MjData(m)
+    state = StateMap(mech.model, m)
+    data.qpos[:] = state.qpos(mech.q_ref)
+    mujoco.mj_forward(m, data)
+    J = np.asarray(data.efc_J).reshape(data.nefc, m.nv) @ state.velocity_matrix(mech.q_ref)
+    assert data.nefc == 3
+    assert np.linalg.matrix_rank(J) == mech.closure_rank(mech.q_ref) == mech.nv - mech.mobility == 2
+
+
+def test_ignore_values_checked(tmp_path: Path) -> None:
+    """An unknown kind lists the valid ones; ignore= on a model that is not an MJCF is refused."""
+    with pytest.raises(plm_pin.InvalidInput) as info:
+        plm_pin.load(_many(tmp_path), ignore=("contact",))
+    assert str(info.value) == (
+        "ignore: unknown element kind(s) ['contact']; valid are ['contacts', 'tendons', 'joint_equalities', "
+        "'inactive_equalities', 'actuators']"
+    )
+    with pytest.raises(plm_pin.InvalidInput, match=r"ignore=\('contacts',\) applies to MuJoCo models"):
+        plm_pin.load("fourbar", ignore=("contacts",))
+
+
+def test_cli_ignore_option(tmp_path: Path) -> None:
+    """``plm-pin check robot.xml --ignore ...`` loads the loops and prints the warning."""
+    from typer.testing import CliRunner
+
+    from plm_pin.cli import app
+
+    path = _many(tmp_path)
+    refused = CliRunner().invoke(app, ["check", str(path)])
+    assert refused.exit_code == 1 and "--ignore contacts,tendons,joint_equalities" in refused.output
+    result = CliRunner().invoke(app, ["check", str(path), "--ignore", "contacts,tendons,joint_equalities"])
+    assert result.exit_code == 0, result.output
+    assert "ok: many: 1 closures, 1 actuators, mobility 1" in result.output
+    assert "dropped as asked by ignore" in result.output
+
+
+def test_collision_geoms_apart_from_visual_geoms(tmp_path: Path) -> None:
+    """Geoms without contacts (contype = conaffinity = 0) are the visuals, the others the collision shapes."""
+    text = FLOATING_MJCF.replace(
+        '<site name="coupler_tip"',
+        '<geom name="look" type="box" size="0.15 0.01 0.01" pos="0.15 0 0" contype="0" conaffinity="0" '
+        'group="2"/><geom name="touch" type="capsule" fromto="0 0 0 0.3 0 0" size="0.02" group="3"/>'
+        '<site name="coupler_tip"',
+    )
+    mech = plm_pin.load(_write(tmp_path, "floating", {".xml": text}))
+    assert [g.name for g in mech.visual_model.geometryObjects] == ["look"]
+    assert [g.name for g in mech.collision_model.geometryObjects] == ["touch"]
+    # without visual-only geoms every geom is drawn, and the colliding ones are the collision shapes
+    text = text.replace(' contype="0" conaffinity="0"', "")
+    mech = plm_pin.load(_write(tmp_path, "floating", {".xml": text}))
+    assert [g.name for g in mech.visual_model.geometryObjects] == ["look", "touch"]
+    assert [g.name for g in mech.collision_model.geometryObjects] == ["look", "touch"]

@@ -697,3 +697,207 @@ def test_unconverged_pinocchio_solve_takes_accelerations_and_forces_from_the_kkt
     converged = ClosedChainDynamics(mech, "pinocchio", None)
     np.testing.assert_allclose(converged.accelerator()(q, v, tau), a_kkt, atol=1e-9)
     np.testing.assert_allclose(converged.solve(q, v, tau)[1], lam_kkt, atol=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------
+# Constraint singularities on the way through: the 3D4M's leg pairs swing through the place
+# where their two rods hang straight down, the crossing of the mirrored and the coincident
+# sheets of the closure manifold (issue 27)
+
+
+class MirrorSheets3D4M:
+    r"""harada2011_3d4m on its mirrored-legs sheets, by hand: coordinates z = (s1, θ1, θ3, α).
+
+    Each leg pair stays mirrored, θ2 = π − θ1, s2 = s1 + 2 l cos θ1 (and 3-4 alike); the plate
+    angle α = θ1 + q_plate; the right pair's slider s3 = s1 + l cos θ1 + 2 r_t cos α − l cos θ3
+    and one regular constraint g = l sin θ3 − l sin θ1 − 2 r_t sin α = 0 closes the plate.
+    The equations of motion are the tree's (Pinocchio's M and h) projected on z, with one
+    multiplier for g: no closure Jacobian, SVD, projection or bridge of plm_pin's, and nothing
+    singular where the rods hang straight down.
+    """
+
+    def __init__(self, mech: plm_pin.Mechanism) -> None:
+        p = PRESETS["harada2011_3d4m"].parameters
+        assert len(set(p["rod_lengths"])) == 1
+        self.l, self.rt = p["rod_lengths"][0], p["half_plate"]
+        self.model, self.data = mech.model, mech.model.createData()
+
+    def state(self, z: np.ndarray, zd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Tree q, v and the tree acceleration at zero z-acceleration, each (9,)."""
+        l, rt = self.l, self.rt
+        s1, a, b, al = z
+        sd, ad, bd, ald = zd
+        ca, sa, cb, sb, cal, sal = (
+            math.cos(a),
+            math.sin(a),
+            math.cos(b),
+            math.sin(b),
+            math.cos(al),
+            math.sin(al),
+        )
+        s3 = s1 + l * ca + 2 * rt * cal - l * cb
+        s3d = sd - l * sa * ad - 2 * rt * sal * ald + l * sb * bd
+        s3dd = -l * ca * ad**2 - 2 * rt * cal * ald**2 + l * cb * bd**2
+        q = np.array([s1, a, al - a, s1 + 2 * l * ca, math.pi - a, s3, b, s3 + 2 * l * cb, math.pi - b])
+        v = np.array([sd, ad, ald - ad, sd - 2 * l * sa * ad, -ad, s3d, bd, s3d - 2 * l * sb * bd, -bd])
+        bias = np.array([0, 0, 0, -2 * l * ca * ad**2, 0, s3dd, 0, s3dd - 2 * l * cb * bd**2, 0])
+        return q, v, bias
+
+    def rhs(self, _t: float, y: np.ndarray) -> np.ndarray:
+        """(ż, z̈) from S^T M S z̈ + G^T μ = −S^T (M c + h), G z̈ = −Ġ ż."""
+        l, rt = self.l, self.rt
+        z, zd = y[:4], y[4:]
+        _, a, b, al = z
+        _, ad, bd, ald = zd
+        q, v, bias = self.state(z, zd)
+        S = np.column_stack([self.state(z, e)[1] for e in np.eye(4)])
+        M = pin.crba(self.model, self.data, q)
+        h = pin.nonLinearEffects(self.model, self.data, q, v)
+        G = np.array([0.0, -l * math.cos(a), l * math.cos(b), -2 * rt * math.cos(al)])
+        Gd = l * math.sin(a) * ad**2 - l * math.sin(b) * bd**2 + 2 * rt * math.sin(al) * ald**2
+        K = np.zeros((5, 5))
+        K[:4, :4], K[:4, 4], K[4, :4] = S.T @ M @ S, G, G
+        zdd = np.linalg.solve(K, np.concatenate([-S.T @ (M @ bias + h), [-Gd]]))[:4]
+        return np.concatenate([zd, zdd])
+
+    def trajectory(self, times: np.ndarray, z: np.ndarray, zd: np.ndarray) -> np.ndarray:
+        """Tree configurations at ``times`` from (z, ż) at times[0], shape (n, 9)."""
+        y0 = np.concatenate([z, zd])
+        sol = solve_ivp(self.rhs, (times[0], times[-1]), y0, "DOP853", t_eval=times, rtol=1e-12, atol=1e-13)
+        return np.array([self.state(y[:4], y[4:])[0] for y in sol.y.T])
+
+    def at_crossing(self, zd: tuple[float, float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Coordinates with rods 1 and 2 straight down (θ1 = −π/2, α = 0.3), rates from (ṡ1, θ̇1, θ̇3) on g."""
+        a, al = -math.pi / 2, 0.3
+        b = math.asin(math.sin(a) + 2 * self.rt / self.l * math.sin(al))
+        G = np.array([-self.l * math.cos(a), self.l * math.cos(b), -2 * self.rt * math.cos(al)])
+        rates = np.array([*zd, -(G[:2] @ zd[1:]) / G[2]])
+        return np.array([0.0, a, b, al]), rates
+
+
+def _crossings(angle: np.ndarray) -> int:
+    """How often a rod angle passes straight down (−π/2 modulo 2π)."""
+    return int(np.count_nonzero(np.diff(np.floor((angle + math.pi / 2) / (2 * math.pi)))))
+
+
+def test_3d4m_swings_through_its_leg_crossings_like_the_reduced_model():
+    """harada2011_3d4m, 2.5 s passive (default): q matches the hand-reduced model through 3 rod crossings."""
+    mech = preset("harada2011_3d4m")
+    run = simulate(mech, mech.q_ref, duration=2.5, dt=0.01)
+    q0 = mech.q_ref
+    ref = MirrorSheets3D4M(mech).trajectory(
+        run.t, np.array([q0[0], q0[1], q0[6], q0[1] + q0[2]]), np.zeros(4)
+    )
+    assert _crossings(run.q[:, 1]) + _crossings(run.q[:, 6]) >= 3
+    # measured 1.0e-9 (the motion is chaotic: 5e-8 at 3 s, 4e-5 at 5 s)
+    np.testing.assert_allclose(run.q, ref, atol=1e-7)
+    assert run.max_residual <= 1e-12
+
+
+@pytest.mark.parametrize("solver", ["pinocchio", "kkt"])
+def test_3d4m_started_at_a_crossing_moving_passes_through(solver):
+    """Rods 1-2 straight down (closure rank 5 of 6), moving on the mirrored sheet: as the reduced model."""
+    mech = preset("harada2011_3d4m")
+    ref = MirrorSheets3D4M(mech)
+    z, zd = ref.at_crossing((0.1, 2.0, -1.0))
+    q, v, _ = ref.state(z, zd)
+    s = np.linalg.svd(mech.closure_jacobian(q), compute_uv=False)
+    assert s[5] <= 1e-15 * s[0]  # at the constraint singularity
+    run = simulate(mech, q, v, duration=1.0, dt=0.01, solver=solver)
+    np.testing.assert_allclose(run.q, ref.trajectory(run.t, z, zd), atol=1e-6)  # measured 1.1e-7
+    energy = np.array([_energy_of(mech, qk, vk) for qk, vk in zip(run.q, run.v, strict=True)])
+    assert np.max(np.abs(energy - energy[0])) <= 1e-6 * abs(energy[0])
+
+
+def test_3d4m_at_a_crossing_at_rest_stops_saying_the_motion_is_not_defined():
+    """At rest where the sheets meet, either may be followed: SimulationFailed says so, no sample."""
+    mech = preset("harada2011_3d4m")
+    ref = MirrorSheets3D4M(mech)
+    q, _, _ = ref.state(*ref.at_crossing((0.0, 0.0, 0.0)))
+    with pytest.raises(
+        SimulationFailed,
+        match=r"constraint singularity .*not defined here: the velocity \(\|v\| = 0\) lies where sheets",
+    ) as info:
+        simulate(mech, q, duration=0.1, dt=0.01)
+    assert isinstance(info.value.cause, SingularConfiguration)
+    assert len(info.value.partial) == 0
+
+
+def test_3d4m_at_a_crossing_off_both_sheets_stops_saying_the_constraint_is_inconsistent():
+    """J_phi v = 0 but v on neither sheet (θ̇2² ≠ θ̇1²): no finite force closes the loops; the run stops."""
+    mech = preset("harada2011_3d4m")
+    ref = MirrorSheets3D4M(mech)
+    q, v, _ = ref.state(*ref.at_crossing((0.1, 2.0, -1.0)))
+    J = mech.closure_jacobian(q)
+    off = np.zeros(mech.nv)
+    off[4] = 1.0  # rod 2 alone: J's row through rod 2 vanishes with both rods straight down
+    off -= np.linalg.pinv(J) @ (J @ off)  # then made to satisfy J_phi v = 0
+    assert abs(off[4]) > 0.5 and np.max(np.abs(J @ (v + off))) <= 1e-12
+    with pytest.raises(
+        SimulationFailed,
+        match="not defined here: the acceleration constraint along the lost closure row is inconsistent",
+    ) as info:
+        simulate(mech, q, v + off, duration=0.1, dt=0.01)
+    assert isinstance(info.value.cause, SingularConfiguration)
+
+
+def test_time_to_crossing_matches_the_reduced_model():
+    """Before rods 1-2 hang straight down, the predicted crossing time has an error of second order."""
+    from plm_pin.dynamics._constrained import ClosedChainDynamics
+
+    mech = preset("harada2011_3d4m")
+    ref = MirrorSheets3D4M(mech)
+    dyn = ClosedChainDynamics(mech, "kkt", None)
+    z, zd = ref.at_crossing((0.1, 2.0, -1.0))
+    errors = []
+    for before in (0.006, 0.003):  # [s]: integrated back from the crossing
+        back = solve_ivp(ref.rhs, (0.0, -before), np.concatenate([z, zd]), "DOP853", rtol=1e-12, atol=1e-13)
+        q, v, _ = ref.state(back.y[:4, -1], back.y[4:, -1])
+        errors.append(abs(dyn.time_to_crossing(q, v) - before))
+    assert errors[0] <= 0.01 * 0.006  # measured 1.8e-5 s: well inside the quarter step kept clear
+    assert 3.0 <= errors[0] / errors[1] <= 5.0  # halving the distance quarters the error
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("dt", [0.01, 0.001])
+def test_3d4m_fifteen_seconds_passive_holds_energy(dt):
+    """harada2011_3d4m, 15 s passive from q_ref (default): energy (computed apart) within 1e-6 of E0.
+
+    Before, fixed RK4 bridges over the rods' crossings took index-1 rates at off-manifold stages
+    amplified by 1/sigma_r: 1.4e-5 of E0 at dt = 1 ms (a 2e-6 J step at t = 13.857 s).
+    """
+    mech = preset("harada2011_3d4m")
+    run = simulate(mech, mech.q_ref, duration=15.0, dt=dt)
+    assert _crossings(run.q[:, 1]) + _crossings(run.q[:, 6]) >= 10
+    energy = np.array([_energy_of(mech, q, v) for q, v in zip(run.q, run.v, strict=True)])
+    assert np.max(np.abs(energy - energy[0])) <= 1e-6 * abs(energy[0])  # measured 1.5e-9, 1.2e-7
+
+
+@pytest.mark.slow
+def test_3d4m_sixty_seconds_passive_at_10_ms_passes_every_crossing():
+    """harada2011_3d4m, 60 s passive, dt = 0.01: completes (it stopped at 32.86 s once); energy to 1e-6."""
+    mech = preset("harada2011_3d4m")
+    run = simulate(mech, mech.q_ref, duration=60.0, dt=0.01)
+    assert run.t[-1] == 60.0 and run.max_residual <= 1e-12
+    assert _crossings(run.q[:, 1]) + _crossings(run.q[:, 6]) >= 40
+    energy = np.array([_energy_of(mech, q, v) for q, v in zip(run.q, run.v, strict=True)])
+    assert np.max(np.abs(energy - energy[0])) <= 1e-6 * abs(energy[0])  # measured 4.4e-7
+
+
+@pytest.mark.parametrize("solver", ["pinocchio", "kkt"])
+def test_parallelogram_turns_through_its_flat_configurations_staying_a_parallelogram(tmp_path, solver):
+    """A parallelogram four-bar spun at 40 rad/s turns 13 times, through 26 flat (rank-losing) places.
+
+    Where the bars are collinear its parallelogram and anti-parallelogram sheets meet; it stays
+    a parallelogram: the coupler horizontal (crank + coupler angle = 0) and the rocker parallel
+    to the crank, exactly, and the energy is kept.
+    """
+    robot, sidecar = build_fourbar(crank=0.1, coupler=0.3, rocker=0.1, ground=0.3, crank_angle=0.3)
+    mech = _load_variant(tmp_path, "parallelogram", sidecar, robot)
+    v0 = 40.0 * np.array([1.0, -1.0, 1.0])  # the parallelogram's tangent: coupler translating
+    run = simulate(mech, mech.q_ref, v0, duration=2.0, dt=0.01, solver=solver)
+    assert run.q[-1, 0] > 2 * math.pi * 12.5  # through 26 flat configurations
+    wrapped = np.angle(np.exp(1j * np.column_stack([run.q[:, 0] + run.q[:, 1], run.q[:, 2] - run.q[:, 0]])))
+    assert np.max(np.abs(wrapped)) <= 1e-9  # measured 2.8e-10
+    energy = np.array([_energy_of(mech, q, v) for q, v in zip(run.q, run.v, strict=True)])
+    assert np.max(np.abs(energy - energy[0])) <= 1e-7 * abs(energy[0])  # measured 4.3e-9 (3.5e-7 before)

@@ -133,3 +133,41 @@ def test_harada_reference_is_free_and_only_carriages_share_a_layer(name):
     carriages = [b for b in mech.body_names if b.startswith("carriage")]
     checked = set(SelfCollision(mech).pairs)
     assert {p for p in checked if "universe" not in p} == set(itertools.combinations(carriages, 2))
+
+
+def test_collision_shapes_are_used_where_the_description_has_them(rrr, tmp_path):
+    """With <collision> spheres and visual boxes that always overlap, the closed form of the spheres decides.
+
+    The visuals become boxes 2 m wide at the elbows (any two legs' boxes overlap at every pose of
+    the map); the spheres move to <collision>: collision_free must still be |B_i - B_k| > 2 rho.
+    """
+    import re
+
+    import plm_pin
+
+    _, rho = rrr
+    tb.three_rrr(tmp_path, elbow_spheres=rho)
+    path = tmp_path / "rrr3.urdf"
+    visual = re.compile(r"<visual>(.*?)</visual>", re.S)
+    box = '<geometry><box size="2 2 2"/></geometry><origin xyz="0.3 0 0" rpy="0 0 0"/>'
+
+    def _swap(match: re.Match) -> str:
+        sphere = re.sub(r"<material.*?</material>", "", match.group(1), flags=re.S)
+        return f"<visual>{box}</visual><collision>{sphere}</collision>"
+
+    text, n = visual.subn(_swap, path.read_text())
+    assert n == 3
+    path.write_text(text)
+    shaped = plm_pin.load(path)
+    assert [g.geometry.__class__.__name__ for g in shaped.visual_model.geometryObjects] == ["Box"] * 3
+    assert [g.geometry.__class__.__name__ for g in shaped.collision_model.geometryObjects] == ["Sphere"] * 3
+    grid = workspace_map(shaped, ("x", "y"), (XS, YS), tb.RRR_POSE)
+    free = grid.collision_free(shaped)
+    checked = 0
+    for i, x in enumerate(XS):
+        for j, y in enumerate(YS):
+            d = _closest((x, y, tb.RRR_POSE[2]))
+            if abs(d - 2 * rho) > 1e-6:
+                assert free[i, j] == (d > 2 * rho)
+                checked += 1
+    assert checked > 40 and 0 < free.sum() < free.size

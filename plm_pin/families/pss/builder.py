@@ -37,13 +37,13 @@ slider-side ball: the third rotation, the strut's spin about its own axis, is an
 freedom (a ball there would add 8 DOF, mobility 14). The paper drops it: an S-S strut
 transmits no axial torque, so an axisymmetric strut's spin rate stays constant (Euler:
 :math:`I_a \dot\omega_3 = (I_t - I_t) \omega_1 \omega_2 = 0`), zero, and its angular velocity
-is :math:`\omega_i = w_i 	imes \dot w_i`, normal to the strut (eqs. (6b), (9)). The
-universal joint instead slaves the spin to the swing (:math:`\omega \cdot w = \dotlpha
-\sineta`, up to 0.1 rad/s on the eq. (35) trajectory), and would make the motors drive the
+is :math:`\omega_i = w_i \times \dot w_i`, normal to the strut (eqs. (6b), (9)). The
+universal joint instead slaves the spin to the swing (:math:`\omega \cdot w = \dot\alpha
+\sin\beta`, up to 0.1 rad/s on the eq. (35) trajectory), and would make the motors drive the
 axial inertia. So the tree's strut carries the transverse moments only, its axial moment
-set to zero: the component of :math:`\omega` normal to the strut is :math:`w 	imes \dot w`
+set to zero: the component of :math:`\omega` normal to the strut is :math:`w \times \dot w`
 in both models, hence the strut's kinetic energy
-:math:`	frac12 m |v_G|^2 + 	frac12 I_t |w 	imes \dot w|^2` and every dynamic result are
+:math:`\tfrac12 m |v_G|^2 + \tfrac12 I_t |w \times \dot w|^2` and every dynamic result are
 exactly the paper's S-S ones (the builder refuses unequal transverse moments, for which
 that does not hold). The axial moment still sizes the drawn strut. The universal joint's
 frame is turned so that its z axis is the guide direction :math:`e_i`; its first axis is
