@@ -6,7 +6,6 @@ import dataclasses
 import functools
 import warnings
 from collections.abc import Iterable, Mapping
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -176,6 +175,8 @@ def _validated(mech: Mechanism, guess: str, validate: bool) -> Mechanism:
 
 @functools.cache
 def _erd_root() -> Path:
+    from importlib import metadata  # 20 ms (email, socket): only for example-robot-data
+
     try:
         files = metadata.files("example-robot-data") or []
     except metadata.PackageNotFoundError:

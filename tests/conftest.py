@@ -16,7 +16,7 @@ import pytest
 import plm_pin
 from plm_pin.core.mechanism import Mechanism
 from plm_pin.description import Sidecar, write_description
-from plm_pin.description import _urdf_build as u
+from plm_pin.description import urdf_parts as u
 from plm_pin.models import urdf_folder
 from plm_pin.report import StudyResult
 

@@ -46,7 +46,7 @@ from ..exceptions import (
 )
 from ..results import Result, unit
 from ..statics import AllocationRule, solve_balance
-from ..statics.balance import SINGULAR_RTOL, AnyLoad, Load, _balance, balance_factors, load_on_frame
+from ..statics.balance import SINGULAR_RTOL, AnyLoad, Load, balance_factors, build_balance, load_on_frame
 from .trajectory import JointTrajectory, checked_trajectory
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -414,7 +414,7 @@ def _run(
                 out.internal.append(factors.G.T @ f_c)
                 N, C = factors.N, factors.C
             else:
-                balance = _balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol, v, a)
+                balance = build_balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol, v, a)
                 sol = solve_balance(mech, balance, rule)
                 F = rule.linear_map(balance)
                 f_c, lam = sol.f_c, sol.lam

@@ -69,9 +69,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
-from scipy.interpolate import BPoly, make_interp_spline
 
 from .._arguments import check_tolerance, positive, real_numbers, signs
+from .._lazy import lazy_module
 from .._text import short
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism, require_task
@@ -89,6 +89,8 @@ from ..kinematics.inverse import IK_TOL, inverse_kinematics
 from ..kinematics.jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import SINGULARITY_TOL, constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
+
+interpolate = lazy_module("scipy.interpolate")  # BPoly, make_interp_spline
 
 Profile = Callable[[float], ArrayLike]
 """A profile: ``t`` [s] -> ``(x, xd, xdd)``, each shape (n,) (or three numbers when n = 1)."""
@@ -177,12 +179,12 @@ def sampled_profile(
     if len(given) == 3:
         if ts.shape[0] < 2:
             raise InvalidInput("a Hermite profile needs at least 2 samples")
-        poly = BPoly.from_derivatives(ts, np.stack(given, axis=1))
+        poly = interpolate.BPoly.from_derivatives(ts, np.stack(given, axis=1))
         d1, d2 = poly.derivative(1), poly.derivative(2)
     else:
         if ts.shape[0] < 6:
             raise InvalidInput(f"a quintic spline through x needs at least 6 samples, got {ts.shape[0]}")
-        poly = make_interp_spline(ts, given[0], k=5, axis=0)
+        poly = interpolate.make_interp_spline(ts, given[0], k=5, axis=0)
         d1, d2 = poly.derivative(1), poly.derivative(2)
 
     def profile(time: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -19,14 +19,16 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import CubicSpline
 
 from .._arguments import count, positive
+from .._lazy import lazy_module
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..results import Result, unit
 from .inverse_dynamics import inverse_dynamics
 from .trajectory import Profile, task_trajectory
+
+interpolate = lazy_module("scipy.interpolate")  # CubicSpline
 
 PAPER_TOL = 1e-3
 """Zhao 2011's convergence tolerance e of eq. (34) [J]."""
@@ -111,7 +113,7 @@ def spline_work(t: ArrayLike, power: ArrayLike) -> np.ndarray:
     columns = P.reshape(tt.shape[0], -1).T
     out = np.empty(columns.shape[0])
     for k, column in enumerate(columns):
-        spline = CubicSpline(tt, column)
+        spline = interpolate.CubicSpline(tt, column)
         roots = spline.roots(extrapolate=False)
         edges = np.unique(np.concatenate([[tt[0]], roots, [tt[-1]]]))
         antiderivative = spline.antiderivative()

@@ -13,7 +13,7 @@ from .mode_graph import ModeEdge, ModeGraph, ModeNode
 from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
 from .reference import ReferenceReport, choose_reference, reference_report
 from .singularity import SINGULARITY_TOL, SingularityReport, classify
-from .working_mode import working_mode
+from .working_mode import guess_mode, working_mode
 
 __all__ = [
     "SINGULARITY_TOL",
@@ -32,6 +32,7 @@ __all__ = [
     "closed_chain_jacobians",
     "follow_targets",
     "forward_kinematics",
+    "guess_mode",
     "inverse_kinematics",
     "redundancy_margin",
     "reference_report",

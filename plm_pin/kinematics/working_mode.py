@@ -35,3 +35,22 @@ def working_mode(mech: Mechanism, q: ArrayLike, rtol: float = MODE_RTOL) -> tupl
     legs = mech.legs  # built first: building it must not come between the pass and its reading
     structure_jacobian(mech, mech.check_q(q))
     return working_mode_from_data(mech.model, mech.data, mech.closures, require_task(mech), legs, rtol)
+
+
+def start_configuration(mech: Mechanism, guess: ArrayLike | None) -> np.ndarray:
+    """The configuration an analysis starts from: ``guess`` (checked), or the reference one."""
+    return mech.q_ref if guess is None else mech.check_q(guess, "guess")
+
+
+def guess_mode(mech: Mechanism, guess: ArrayLike | None = None) -> tuple[int, ...] | None:
+    """Working mode of ``guess`` (default: the reference configuration); None if a leg is singular there.
+
+    Passed as ``mode`` to an analysis (a workspace map, a sweep) it keeps the analysis in the
+    guess's working mode wherever its seed is.
+
+    Raises:
+        InvalidInput: a guess of the wrong size or not finite.
+        ClosureNotSatisfied: without a guess, when the reference cannot be assembled.
+    """
+    mode = working_mode(mech, start_configuration(mech, guess))
+    return None if 0 in mode else mode

@@ -5,10 +5,10 @@ from .balance import SINGULAR_RTOL, JointLoad, Load, StaticBalance, static_balan
 from .capability import Capability, InternalRange, force_capability, internal_force_range, wrench_polygon
 from .forces import (
     AllocationRule,
-    InternalMode,
+    InternalDirection,
     StaticForces,
     actuator_limits,
-    internal_modes,
+    internal_directions,
     solve_balance,
     static_forces,
 )
@@ -20,7 +20,7 @@ __all__ = [
     "SINGULAR_RTOL",
     "AllocationRule",
     "Capability",
-    "InternalMode",
+    "InternalDirection",
     "InternalRange",
     "JointLoad",
     "JointReaction",
@@ -31,8 +31,8 @@ __all__ = [
     "Transmission",
     "actuator_limits",
     "force_capability",
+    "internal_directions",
     "internal_force_range",
-    "internal_modes",
     "solve_balance",
     "static_balance",
     "static_forces",

@@ -280,7 +280,7 @@ def static_balance(
     tau = _loaded(model, data, load, None)
     if gravity:
         tau += pin.computeGeneralizedGravity(model, data, qa)
-    return _balance(mech, qa, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol)
+    return build_balance(mech, qa, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol)
 
 
 def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -> np.ndarray:
@@ -338,7 +338,7 @@ def generalized_balance(
     pin.updateFramePlacements(model, data)
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
     applied = _loaded(model, data, load, tau)
-    return _balance(mech, q, applied, load, gravity, J_phi, mech.actuated_v_indices, rtol, v, a)
+    return build_balance(mech, q, applied, load, gravity, J_phi, mech.actuated_v_indices, rtol, v, a)
 
 
 def _loaded(model: pin.Model, data: pin.Data, load: AnyLoad | None, tau: np.ndarray | None) -> np.ndarray:
@@ -473,7 +473,7 @@ def balance_factors(
     return BalanceFactors(N, lambda_map, N[act_v], P, G)
 
 
-def _balance(
+def build_balance(
     mech: Mechanism,
     q: np.ndarray,
     tau: np.ndarray,
@@ -485,7 +485,22 @@ def _balance(
     v: np.ndarray | None = None,
     a: np.ndarray | None = None,
 ) -> StaticBalance:
-    """The :class:`StaticBalance` of ``tau`` at ``q``: ``tau`` checked finite, then :func:`balance_factors`.
+    r"""The :class:`StaticBalance` of ``tau`` at ``q``: ``tau`` checked finite, then :func:`balance_factors`.
+
+    The common step of :func:`static_balance`, :func:`generalized_balance` and the inverse
+    dynamics, which compute ``tau`` and :math:`J_\phi` their own ways.
+
+    Args:
+        mech: the mechanism.
+        q: configuration, shape (nq,).
+        tau: generalized forces to balance [N, N m], shape (nv,).
+        load: the external load in ``tau`` (recorded), or None.
+        gravity: whether ``tau`` holds gravity (recorded).
+        J_phi: closure Jacobian at ``q``, shape (m, nv).
+        act_v: velocity indices of the actuated joints, shape (n_act,).
+        singular_rtol: relative tolerance of the direct-singularity decision (:data:`SINGULAR_RTOL`).
+        v: joint velocities in ``tau`` [m/s, rad/s] (recorded), or None.
+        a: joint accelerations in ``tau`` [m/s^2, rad/s^2] (recorded), or None.
 
     Raises:
         InvalidInput: ``tau`` is not finite (DescriptionError when a body's inertia overflows).

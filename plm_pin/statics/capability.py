@@ -133,8 +133,8 @@ class InternalRange(Result):
     vector is :attr:`lower` .. :attr:`upper`.
 
     Attributes:
-        lower: smallest admissible coordinate along each internal mode, shape (k,) [N, N m].
-        upper: largest admissible coordinate along each internal mode, shape (k,) [N, N m].
+        lower: smallest admissible coordinate along each internal-force direction, shape (k,) [N, N m].
+        upper: largest admissible coordinate along each internal-force direction, shape (k,) [N, N m].
         f_lower: actuator forces at each lower end, shape (k, n_act) [N, N m].
         f_upper: actuator forces at each upper end, shape (k, n_act) [N, N m].
         internal_basis: the basis :math:`G` the coordinates refer to, shape (n_act, k).
@@ -160,8 +160,8 @@ def internal_force_range(
 
     One linear programme per bound: :math:`\min / \max\ y_k` s.t.
     :math:`l \le f_p + G y \le u` (the other coordinates free), solved by HiGHS as in
-    :func:`force_capability`. Multiply a mode's
-    :class:`~plm_pin.statics.InternalMode` readings (link axial forces, guide forces) by a
+    :func:`force_capability`. Multiply a direction's
+    :class:`~plm_pin.statics.InternalDirection` readings (link axial forces, guide forces) by a
     coordinate to read the preload it stands for.
 
     Args:

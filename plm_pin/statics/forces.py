@@ -3,7 +3,7 @@ r"""Static forces of a closed chain in one call: balance, allocation, and every 
 :func:`static_forces` sets up the balance (:mod:`~plm_pin.statics.balance`), allocates the
 actuator forces (:mod:`~plm_pin.statics.allocation`) and returns a :class:`StaticForces`
 from which cut-joint forces, joint reactions, slider normal forces, link axial forces
-(:mod:`~plm_pin.statics.reactions`) and the internal-force modes are read.
+(:mod:`~plm_pin.statics.reactions`) and the internal-force directions are read.
 """
 
 from __future__ import annotations
@@ -27,11 +27,11 @@ from .balance import SINGULAR_RTOL, StaticBalance, static_balance
 
 
 @dataclass(frozen=True)
-class InternalMode(Result):
-    """One internal-force mode: actuator forces that balance nothing but each other, and what they load.
+class InternalDirection(Result):
+    """One internal-force direction: actuator forces that balance nothing but each other, and what they load.
 
     Attributes:
-        f_c: actuator forces of the mode (a unit vector of the internal basis) [N, N m], shape (n_act,).
+        f_c: actuator forces of the direction (a unit vector of the internal basis) [N, N m], shape (n_act,).
         lam: cut-joint forces it causes [N, N m], shape (m,).
         link_forces: axial forces it causes in the hinged links (tension positive) [N].
         slider_normal_forces: normal forces it causes on the prismatic guides [N].
@@ -90,9 +90,9 @@ class StaticForces(Result):
         """Force each prismatic guide exerts normal to its axis [N], world, keyed by joint name."""
         return _reactions.slider_normal_forces(self.mechanism, self._transmitted[0])
 
-    def internal_modes(self) -> tuple[InternalMode, ...]:
+    def internal_directions(self) -> tuple[InternalDirection, ...]:
         """The internal-force basis with its physical reading (loads in the links and guides)."""
-        return internal_modes(self.mechanism, self.balance)
+        return internal_directions(self.mechanism, self.balance)
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready dictionary of the forces (reactions included)."""
@@ -109,7 +109,7 @@ class StaticForces(Result):
         }
 
 
-def internal_modes(mech: Mechanism, balance: StaticBalance) -> tuple[InternalMode, ...]:
+def internal_directions(mech: Mechanism, balance: StaticBalance) -> tuple[InternalDirection, ...]:
     """Read each internal-force basis vector as the forces it causes (no load, no gravity)."""
     out = []
     for k in range(balance.n_internal):
@@ -117,7 +117,7 @@ def internal_modes(mech: Mechanism, balance: StaticBalance) -> tuple[InternalMod
         lam = -balance.lambda_map @ balance.generalized(g)
         forces, _ = _reactions.transmitted_forces(mech, balance.q, lam, None, False)
         out.append(
-            InternalMode(
+            InternalDirection(
                 g,
                 lam,
                 _reactions.link_forces(mech, forces, lam),
@@ -323,7 +323,7 @@ def static_forces(
 
     By default (gravity, minimum norm, the description's limits) it computes the actuator
     forces, the cut-joint forces, the internal coordinates and the residual; reactions, link
-    forces and internal modes are computed when asked for.
+    forces and internal-force directions are computed when asked for.
 
     Args:
         mech: the mechanism.
@@ -413,10 +413,10 @@ def _link_conditions(
         mech, balance.q, lam_p, balance.load, balance.gravity, balance.v, balance.a
     )
     axial_p = _reactions.link_forces(mech, forces_p, lam_p)
-    modes = internal_modes(mech, balance)
+    directions = internal_directions(mech, balance)
     chosen = list(bounds)
-    D = np.array([[m.link_forces[name].axial for m in modes] for name in chosen]).reshape(
-        len(chosen), len(modes)
+    D = np.array([[d.link_forces[name].axial for d in directions] for name in chosen]).reshape(
+        len(chosen), len(directions)
     )
     return Inequalities(
         tuple(f"{name} axial" for name in chosen),
@@ -430,7 +430,7 @@ def _link_conditions(
 def _internal_from_links(mech: Mechanism, balance: StaticBalance, targets: Mapping[str, float]) -> np.ndarray:
     """Internal coordinates giving the internal part the named link axial forces."""
     k = balance.n_internal
-    modes = internal_modes(mech, balance)
+    directions = internal_directions(mech, balance)
     links = [h.link for h in _reactions.hinged_links(mech)]
     unknown = [name for name in targets if name not in links]
     if unknown:
@@ -440,7 +440,7 @@ def _internal_from_links(mech: Mechanism, balance: StaticBalance, targets: Mappi
             f"{mech.name} has {k} internal force(s) at this configuration; "
             f"name {k} link(s), got {list(targets)}"
         )
-    R = np.array([[m.link_forces[name].axial for m in modes] for name in targets]).reshape(k, k)
+    R = np.array([[d.link_forces[name].axial for d in directions] for name in targets]).reshape(k, k)
     s = np.linalg.svd(R, compute_uv=False) if k else np.zeros(0)
     if k and s[-1] <= 1e-9 * max(s[0], 1e-300):
         raise InvalidInput(

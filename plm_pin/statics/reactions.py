@@ -14,7 +14,7 @@ the joint's structure. Projections give the quantities of Harada 2011 (eqs. (16)
   proximal reaction along the link's axis, **tension positive** (:math:`f_l`). It is the
   whole reaction (shear zero) on a two-force link: massless or without gravity, no load on it.
 
-Everything is linear in the loads, so internal-force modes (no load, no gravity) are read
+Everything is linear in the loads, so internal-force directions (no load, no gravity) are read
 by the same code.
 """
 

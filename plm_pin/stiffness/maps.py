@@ -1,4 +1,4 @@
-"""Stiffness over a workspace slice: smallest translational eigen-stiffness, a compliance, the lowest mode."""
+"""Stiffness over a workspace slice: smallest translational eigen-stiffness, compliance, lowest frequency."""
 
 from __future__ import annotations
 
@@ -105,12 +105,12 @@ def stiffness_map(
         q = grid.q[index]
         try:
             res = stiffness(mech, q, gravity=gravity, internal=internal, compliance=compliance)
-            modes = natural_frequencies(mech, q, result=res)
+            vibration = natural_frequencies(mech, q, result=res)
         except (SingularConfiguration, AllocationInfeasible):
             continue
         out["min_translational_stiffness"][index] = res.min_translational
         out["compliance_along"][index] = res.compliance_along(u)
-        out["lowest_frequency"][index] = modes.lowest
+        out["lowest_frequency"][index] = vibration.lowest
     for arr in (*out.values(), u):
         arr.setflags(write=False)
     return StiffnessMap(

@@ -34,20 +34,20 @@ MODELS: tuple[str, ...] = ("task", "full")
 """The vibration models of :func:`natural_frequencies`."""
 
 MASSLESS_RTOL = 1e-12
-"""Modes whose :math:`1/\\omega^2` is below this fraction of the largest are massless (left out)."""
+"""Vibrations whose :math:`1/\\omega^2` is below this fraction of the largest are massless (left out)."""
 
 
 @dataclass(frozen=True)
-class Modes(Result):
-    """Lowest vibration modes at a pose, ascending.
+class Vibration(Result):
+    """Lowest natural vibrations at a pose, ascending.
 
     Attributes:
         model: ``"task"`` or ``"full"``.
         dofs: task coordinates.
         frequencies: natural frequencies [Hz], shape (n,).
         omega: angular frequencies [rad/s], shape (n,).
-        task_shapes: task motion of each mode [m, rad], scaled to a unit largest entry, shape (n_task, n).
-        joint_shapes: tree motion of each mode (compliant model) [m, rad], same scaling, shape (nv_c, n).
+        task_shapes: task motion of each vibration [m, rad], largest entry scaled to 1, shape (n_task, n).
+        joint_shapes: tree motion of each vibration (compliant model) [m, rad], same scaling, shape (nv_c, n).
     """
 
     model: str
@@ -72,14 +72,14 @@ def natural_frequencies(
     count: int | None = None,
     result: StiffnessResult | None = None,
     **stiffness_options: Any,
-) -> Modes:
-    """Lowest natural frequencies and mode shapes at ``q``.
+) -> Vibration:
+    """Lowest natural frequencies and vibration shapes at ``q``.
 
     Args:
         mech: the mechanism (with a task).
         q: assembled configuration, shape (nq,).
         model: ``"task"`` (:math:`M_x`, :math:`K_x`) or ``"full"`` (compliant model).
-        count: number of modes kept (default all).
+        count: number of vibrations kept, lowest first (default all).
         result: a :func:`~plm_pin.stiffness.stiffness` result at ``q`` to reuse.
         **stiffness_options: passed to :func:`~plm_pin.stiffness.stiffness` (``wrench``,
             ``gravity``, ``internal``, ``forces``, ``compliance``).
@@ -113,7 +113,8 @@ def natural_frequencies(
         inv_w2, shapes = scipy.linalg.eigh(M, K)  # M phi = (1 / omega^2) K phi
     except np.linalg.LinAlgError:
         raise SingularConfiguration(
-            f"{mech.name}: the equilibrium is unstable (stiffness not positive definite): no vibration modes"
+            f"{mech.name}: the equilibrium is unstable (stiffness not positive definite): "
+            "no natural vibrations"
         ) from None
     keep = inv_w2 > MASSLESS_RTOL * max(float(inv_w2.max()), 1e-300)
     order = np.argsort(-inv_w2[keep])
@@ -131,4 +132,4 @@ def natural_frequencies(
     joint = joint / (big * signs)
     for a in (omega, task_shapes, joint):
         a.setflags(write=False)
-    return Modes(model, res.dofs, omega / (2 * np.pi), omega, task_shapes, joint)
+    return Vibration(model, res.dofs, omega / (2 * np.pi), omega, task_shapes, joint)

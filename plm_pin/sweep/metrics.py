@@ -43,13 +43,13 @@ from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfigurati
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import KINDS, SINGULARITY_TOL
+from ..kinematics.working_mode import guess_mode
 from ..results import units
 from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
 from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
 from ..workspace import WorkspaceSlice, workspace_grid
-from ..workspace._continuation import guess_mode
 from ..workspace.manipulability import Manipulability
 from ..workspace.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
 

@@ -16,7 +16,7 @@ ends the range before the first or last sample, that sample is the end (``lower_
 ``upper_end`` is ``"grid"``: the range is at least that wide).
 
 The working mode kept is the guess's (the reference configuration's by default,
-:func:`guess_mode`).
+:func:`~plm_pin.kinematics.guess_mode`).
 """
 
 from __future__ import annotations
@@ -32,8 +32,8 @@ from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..kinematics.inverse import IK_TOL
 from ..kinematics.singularity import SINGULARITY_TOL
+from ..kinematics.working_mode import guess_mode, start_configuration
 from ..results import Result, unit
-from ._continuation import guess_mode, start_configuration
 from .maps import workspace_sweep
 from .singular_loci import NEAR, SingularPoint, line_path, locate_on_solved
 

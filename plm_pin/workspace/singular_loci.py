@@ -34,9 +34,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
-from scipy.optimize import brentq, minimize_scalar
 
 from .._arguments import check_tolerance, flag, positive, real_numbers
+from .._lazy import lazy_module
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.inverse import IK_TOL, check_mode, inverse_kinematics
@@ -44,6 +44,8 @@ from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import SINGULARITY_TOL, SingularityReport, classify
 from ..results import Result, unit
 from ._continuation import IKEvaluator, base_pose, compatible, solve_poses
+
+optimize = lazy_module("scipy.optimize")  # brentq, minimize_scalar: 0.1 s to import
 
 XTOL = 1e-12
 """Default tolerance on the path parameter of a located singularity [unit of t]."""
@@ -326,7 +328,7 @@ def _refine_root(
         return signed_singularity_function(mech, q)
 
     try:
-        root, result = brentq(g, t_a, t_b, xtol=xtol, full_output=True, disp=False)
+        root, result = optimize.brentq(g, t_a, t_b, xtol=xtol, full_output=True, disp=False)
     except _Unreached:
         return None
     if not result.converged:
@@ -370,7 +372,7 @@ def _refine_minimum(
         cache[s] = q
         return _margin_of(mech, q, kind)
 
-    result = minimize_scalar(
+    result = optimize.minimize_scalar(
         f, bounds=(ts[i - 1], ts[i + 1]), method="bounded", options={"xatol": xtol, "maxiter": 500}
     )
     s = float(result.x)

@@ -16,8 +16,8 @@ paper's text gives (+, -, +, -) for links 1-4, but its code (M.5) and its skelet
 We follow the code, which produced the paper's figures.
 
 Self-collision: the drawing puts every shape in the plane z = 0, but a real table stacks them
-(:data:`LAYERS`): only the carriages share a layer, on the stator, and can touch; the
-sidecar's ``self_collision.ignore`` lists every other pair of shapes on non-adjacent bodies.
+(as the 2-PRRRP presets' notes state): only the carriages share a layer, on the stator, and
+can touch; the sidecar's ``self_collision.ignore`` lists every other pair of shapes on non-adjacent bodies.
 """
 
 from __future__ import annotations
@@ -36,10 +36,11 @@ from ..._arguments import (
     signs,
 )
 from ..._lazy import lazy_module
-from ...description import _urdf_build as u
+from ...description import urdf_parts as u
 from ...description.compliance import assumed_drive_stiffness
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from ...exceptions import InvalidInput
+from ...models.registry import HARADA2011_ROD, rod_scaled
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -63,14 +64,6 @@ TASK_FRAME = "plate_center"
 
 CARRIAGE_SIZE = (0.03, 0.02, 0.01)
 """Box of each carriage (moving part of a linear motor): length along the stator, height, depth [m]."""
-
-LAYERS = (
-    "Self-collision (ours; the papers show no layout): the carriages ride in one layer on the stator "
-    "and collide when closer than their length (3 cm); each rod moves in a layer of its own above "
-    "them and the plate above the rods, so rod-rod, rod-carriage and plate-carriage contacts of the "
-    "planar drawing are not collisions (sidecar self_collision.ignore)."
-)
-"""The layers assumed for the self-collision check, as a preset note."""
 
 
 def leg_inverse_kinematics(
@@ -249,7 +242,7 @@ def build_2prrrp(
 
 
 def _other_layers(legs: Sequence[int]) -> tuple[tuple[str, str], ...]:
-    """The body pairs in different layers of the real table (:data:`LAYERS`), not yet adjacent.
+    """The body pairs in different layers of the real table (see the module docstring), not yet adjacent.
 
     Adjacent pairs (a rod and its carriage, a rod and the plate) are left out by the checker.
     """
@@ -259,20 +252,11 @@ def _other_layers(legs: Sequence[int]) -> tuple[tuple[str, str], ...]:
     return tuple(pairs)
 
 
-def rod_scaled(length: float, ref_length: float, ref_mass: float, ref_inertia: float) -> tuple[float, float]:
-    """Mass [kg] and centroidal inertia [kg m^2] of a rod of the same section and material.
-
-    Mass scales with length and the centroidal inertia with mass times length squared.
-    """
-    k = length / ref_length
-    return ref_mass * k, ref_inertia * k**3
-
-
 def symmetric_rods(rod_length: float) -> dict[str, tuple[float, ...]]:
     """Builder parameters of four equal rods ``rod_length`` [m] long, for :func:`build_2prrrp`.
 
     Masses and inertias scale from the Harada 2011 rod (140 mm, 0.026 kg, 9.84e-5 kg m^2,
-    Table 1) by :func:`rod_scaled`, as in the 2015 preset. Give them to
+    Table 1) by :func:`~plm_pin.models.registry.rod_scaled`, as in the 2015 preset. Give them to
     :func:`plm_pin.build_mechanism` with a 2-PRRRP preset to rebuild it with equal rods.
 
     Raises:
@@ -280,5 +264,5 @@ def symmetric_rods(rod_length: float) -> dict[str, tuple[float, ...]]:
     """
     if not (isinstance(rod_length, (int, float)) and math.isfinite(rod_length) and rod_length > 0.0):
         raise InvalidInput(f"rod_length must be a positive length [m], got {rod_length!r}")
-    mass, inertia = rod_scaled(float(rod_length), 0.140, 0.026, 9.84e-5)
+    mass, inertia = rod_scaled(float(rod_length), *HARADA2011_ROD)
     return {"rod_lengths": (rod_length,) * 4, "rod_masses": (mass,) * 4, "rod_inertias": (inertia,) * 4}

@@ -88,7 +88,7 @@ import pinocchio as pin
 
 from ..._arguments import finite_array, leg_numbers, nonnegative, numbers_of, optional_positive, positive
 from ..._lazy import lazy_module
-from ...description import _urdf_build as u
+from ...description import urdf_parts as u
 from ...description.compliance import assumed_drive_stiffness
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from ...exceptions import InvalidInput

@@ -81,7 +81,7 @@ import numpy as np
 
 from ..._arguments import finite_array, length, nonnegative
 from ..._lazy import lazy_module
-from ...description import _urdf_build as u
+from ...description import urdf_parts as u
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from ...exceptions import InvalidInput
 

@@ -1,8 +1,9 @@
-"""Overview of any mechanism plm_pin loads: mobility, workspace slice, statics, decoupling, motion, 3D view.
+"""The overview study: mobility, workspace slice, statics, decoupling, motion and 3D view of any mechanism.
 
-``plm-pin report overview --mechanism path/to/robot.urdf`` (or ``plm-pin report
-path/to/robot.urdf``) runs it on a user's description; ``plm-pin report all`` on
-:data:`MECHANISM`.
+The library's own study (the paper studies are in the checkout's ``analyses/``), so that an
+installed wheel writes the report of any description: ``plm-pin report overview --mechanism
+path/to/robot.urdf`` (or ``plm-pin report path/to/robot.urdf``); ``plm-pin report all`` runs it
+on :data:`MECHANISM`.
 """
 
 from __future__ import annotations
@@ -12,21 +13,16 @@ import itertools
 import numpy as np
 import pinocchio as pin
 
-from plm_pin import Mechanism, PlmError, SimulationFailed, SingularConfiguration, load
-from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
-from plm_pin.kinematics import classify, task_pose
-from plm_pin.kinematics.collisions import self_collisions
-from plm_pin.report import Animation, Column, Section, StudyContext
-from plm_pin.results import units
-from plm_pin.statics import (
-    StaticForces,
-    actuator_limits,
-    internal_force_range,
-    static_forces,
-    transmission,
-)
-from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
-from plm_pin.viz import (
+from ..core.mechanism import Mechanism
+from ..dynamics import SimulationResult, decoupling_check, simulate
+from ..exceptions import PlmError, SimulationFailed, SingularConfiguration
+from ..kinematics import classify, task_pose
+from ..kinematics.collisions import self_collisions
+from ..loading import load
+from ..results import units
+from ..statics import StaticForces, actuator_limits, internal_force_range, static_forces, transmission
+from ..stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
+from ..viz import (
     MeshcatViewer,
     force_arrows,
     plot_map,
@@ -35,7 +31,7 @@ from plm_pin.viz import (
     plot_stiffness_map,
     plot_sweep,
 )
-from plm_pin.workspace import (
+from ..workspace import (
     WorkspaceSlice,
     manipulability,
     manipulability_unit,
@@ -43,6 +39,9 @@ from plm_pin.workspace import (
     workspace_map,
     workspace_sweep,
 )
+from .animation import Animation
+from .content import Column, Section
+from .study import StudyContext
 
 TITLE = "Overview"
 SUMMARY = (
@@ -352,7 +351,7 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     q = mech.q_ref
     try:
         res = stiffness(mech, q)
-        modes = natural_frequencies(mech, q, result=res)
+        vibration = natural_frequencies(mech, q, result=res)
     except PlmError as exc:
         section.text(f"No stiffness at the reference: {exc}", markdown=False)
         return
@@ -362,9 +361,9 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     rows += [
         (f"rotational eigen-stiffness {i + 1}", v, "N m/rad") for i, v in enumerate(res.rotational.values)
     ]
-    rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(modes.frequencies)]
+    rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(vibration.frequencies)]
     section.table(
-        "Stiffness and modes at the reference",
+        "Stiffness and natural frequencies at the reference",
         ["quantity", Column("value", fmt=".5g"), "unit"],
         rows,
         id="stiffness",
@@ -518,7 +517,7 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
     section.text(
         "Gravity only, at the reference configuration: the actuator forces `f_c` of minimum norm that "
         "balance it, the axial force of every hinged link (tension positive), and the internal-force "
-        "modes: actuator forces that balance only each other (one per degree of redundancy)."
+        "directions: actuator forces that balance only each other (one per degree of redundancy)."
     )
     try:
         sol = static_forces(mech, mech.q_ref)
@@ -540,21 +539,21 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
             ["link", "proximal joint", Column("axial (tension +)", "N"), Column("shear", "N")],
             [(f.link, f.joint, f.axial, f.shear) for f in links.values()],
         )
-    modes = sol.internal_modes()
-    if modes:
+    directions = sol.internal_directions()
+    if directions:
         section.table(
-            "Internal-force modes (unit vectors of the internal basis)",
-            ["mode", *(Column(a.joint, units.get(a.kind, "")) for a in mech.actuators)],
-            [(k + 1, *m.f_c) for k, m in enumerate(modes)],
-            note="Any multiple of a mode can be added to f_c without moving the mechanism.",
-            id="internal_modes",
+            "Internal-force directions (unit vectors of the internal basis)",
+            ["direction", *(Column(a.joint, units.get(a.kind, "")) for a in mech.actuators)],
+            [(k + 1, *d.f_c) for k, d in enumerate(directions)],
+            note="Any multiple of a direction can be added to f_c without moving the mechanism.",
+            id="internal_directions",
         )
-        names = list(modes[0].link_forces)
+        names = list(directions[0].link_forces)
         if names:
             section.table(
-                "Link axial forces caused by each internal mode",
-                ["mode", *(Column(n, "N") for n in names)],
-                [(k + 1, *(m.link_forces[n].axial for n in names)) for k, m in enumerate(modes)],
+                "Link axial forces caused by each internal-force direction",
+                ["direction", *(Column(n, "N") for n in names)],
+                [(k + 1, *(d.link_forces[n].axial for n in names)) for k, d in enumerate(directions)],
             )
         _internal_range(section, mech, sol)
     spread = np.ptp(_frame_origins(mech, mech.q_ref), axis=0)
@@ -588,10 +587,15 @@ def _internal_range(section: Section, mech: Mechanism, sol: StaticForces) -> Non
         return
     section.table(
         "Internal-force range within the actuator limits, holding gravity",
-        ["mode", Column("lowest", "N or N m"), Column("min-norm", "N or N m"), Column("highest", "N or N m")],
+        [
+            "direction",
+            Column("lowest", "N or N m"),
+            Column("min-norm", "N or N m"),
+            Column("highest", "N or N m"),
+        ],
         [(k + 1, span.lower[k], sol.internal[k], span.upper[k]) for k in range(span.lower.size)],
-        note="Coordinates along the modes above (one linear programme per bound, the other modes free); "
-        "multiply a mode's link forces by a coordinate to read the preload it stands for.",
+        note="Coordinates along the directions above (one linear programme per bound, the others free); "
+        "multiply a direction's link forces by a coordinate to read the preload it stands for.",
         id="internal_range",
     )
 

@@ -1,4 +1,4 @@
-"""The generic overview study (analyses/overview.py) on a user's description."""
+"""The overview study (plm_pin/report/overview.py) on a user's description."""
 
 from __future__ import annotations
 
@@ -163,11 +163,11 @@ LIMIT = 1.5
 
 
 def test_overview_internal_range_is_the_interval_intersection(limited_3d4m_overview):
-    """One internal mode g: y is admissible iff -L <= f_p,i + g_i y <= L for all i (interval intersection)."""
+    """One internal-force direction g: y is admissible iff -L <= f_p,i + g_i y <= L for all i (intervals)."""
     result = limited_3d4m_overview
     f_p = np.array([row[2] for row in result.block("actuator_forces").rows])
-    (mode,) = result.block("internal_modes").rows
-    g = np.array(mode[1:])
+    (direction,) = result.block("internal_directions").rows
+    g = np.array(direction[1:])
     ends = np.sort(np.stack([(-LIMIT - f_p) / g, (LIMIT - f_p) / g]), axis=0)
     (row,) = result.block("internal_range").rows
     assert row[1] == pytest.approx(np.max(ends[0]), abs=1e-9)
