@@ -78,7 +78,7 @@ from .._arguments import as_vector, optional_name, physical_effort, positive, re
 from ..core.mechanism import Mechanism
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
 from ..results import Result, unit
-from ..statics.balance import load_on_frame
+from ..statics.balance import JointLoad, load_on_frame
 from ._constrained import ClosedChainDynamics, Projection, ReducedRows
 
 METHODS = ("fixed", "adaptive")
@@ -669,7 +669,7 @@ def simulate(
         raise InvalidInput(f"frame {frame!r} given without a wrench")
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
     if load is not None:
-        physical_effort(load.wrench, "wrench")
+        physical_effort(load.forces if isinstance(load, JointLoad) else load.wrench, "wrench")
     forces = _check_forces(mech, actuator_forces)
     if not callable(forces):
         physical_effort(forces, "actuator_forces")
