@@ -1,1 +1,1 @@
-"""Studies of plm_pin: one module per paper or design question, each filling a report (plm_pin.report)."""
+"""The paper studies: one module per paper or design question, each filling a report (plm_pin.report)."""

@@ -22,7 +22,7 @@ from plm_pin.models.registry import HARADA2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.results import units
 from plm_pin.statics import force_capability, static_forces, wrench_polygon
-from plm_pin.stiffness import Modes, StiffnessResult, natural_frequencies, stiffness, stiffness_map
+from plm_pin.stiffness import StiffnessResult, Vibration, natural_frequencies, stiffness, stiffness_map
 from plm_pin.viz import fig8, panel_grid, plot_panels, plot_skeletons, plot_sweep, shared_legend
 from plm_pin.workspace import singular_points_along, workspace_sweep
 
@@ -219,8 +219,8 @@ def _statics(section: Section, four: Mechanism, three: Mechanism) -> None:
         )
         section.comparison(f"{name}: eqs. (15)-(22) and plm_pin", comparisons)
     sol = static_forces(four, q, gravity=False)
-    (mode,) = sol.internal_modes()
-    on_right = [mode.lam[c.rows] for c in four.closures if c.name.endswith("right")]
+    (direction,) = sol.internal_directions()
+    on_right = [direction.lam[c.rows] for c in four.closures if c.name.endswith("right")]
     if not on_right:
         raise PlmError(f"{four.name}: no closure at the plate's right end")
     right = sum(on_right[1:], on_right[0])
@@ -380,7 +380,11 @@ def _stiffness(section: Section, four: Mechanism, three: Mechanism) -> None:
         rows.append((name, model, *m.frequencies[:3].tolist()))
     section.table(
         f"Lowest natural frequencies at the reference pose (drives {k:g} N/m)",
-        ["table", "model", *(Column(f"mode {i + 1}", units(Modes)["frequencies"], ".5g") for i in range(3))],
+        [
+            "table",
+            "model",
+            *(Column(f"f{i + 1}", units(Vibration)["frequencies"], ".5g") for i in range(3)),
+        ],
         rows,
         note="'task': M_x and K_x (the plane's three motions); 'full': every motion of the compliant model, "
         "here with the rods' out-of-plane bending, which lets the plate move out of the plane.",
@@ -477,7 +481,13 @@ def _decoupling(section: Section, four: Mechanism, asym: Mechanism) -> None:
             ),
         ],
     )
-    section.table("Decoupling table of the 3D4M", ["entry", "behaviour"], _entries(rep))
+    section.table(
+        "Decoupling table of the 3D4M",
+        ["entry", "behaviour"],
+        _entries(rep),
+        note=f"h_x at the {len(rep.velocities)} task velocities {rep.velocity_text()}, which determine the "
+        "quadratic h_x: zero there is zero at every velocity.",
+    )
     asym_rep = decoupling_check(asym, sample + np.array([0.0, 0.01, 0.0]))
     section.table(
         "The asymmetric design of Harada 2015 (unequal rods) loses the decoupling",

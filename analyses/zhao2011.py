@@ -28,7 +28,7 @@ from plm_pin.models.registry import ZHAO2011_DRIVE_STIFFNESS
 from plm_pin.report import Animation, Column, Comparison, Section, StudyContext
 from plm_pin.results import units
 from plm_pin.statics import static_forces
-from plm_pin.stiffness import Modes, StiffnessResult, natural_frequencies, stiffness
+from plm_pin.stiffness import StiffnessResult, Vibration, natural_frequencies, stiffness
 from plm_pin.viz import plot_panels
 
 from ._zhao2011_paper import ZHAO2011_TABLE5_WORK, ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
@@ -409,16 +409,18 @@ def _stiffness(section: Section, eight: Mechanism, six: Mechanism) -> None:
     data: dict[str, object] = {}
     for name, mech in (("8-PSS", eight), ("6-PSS", six)):
         res = stiffness(mech, mech.q_ref)
-        modes = natural_frequencies(mech, mech.q_ref, result=res)
-        rows.append((name, *res.translational.values.tolist(), *res.rotational.values.tolist(), modes.lowest))
-        data[name] = {"stiffness": res.to_dict(), "modes": modes.to_dict()}
+        vibration = natural_frequencies(mech, mech.q_ref, result=res)
+        rows.append(
+            (name, *res.translational.values.tolist(), *res.rotational.values.tolist(), vibration.lowest)
+        )
+        data[name] = {"stiffness": res.to_dict(), "vibration": vibration.to_dict()}
     section.table(
         "Eigen-stiffness and lowest natural frequency at the home pose, gravity held",
         [
             "platform",
             *(Column(f"translational {i + 1}", _K["translational"], ".4g") for i in range(3)),
             *(Column(f"rotational {i + 1}", _K["rotational"], ".4g") for i in range(3)),
-            Column("lowest frequency", units(Modes)["frequencies"], ".4g"),
+            Column("lowest frequency", units(Vibration)["frequencies"], ".4g"),
         ],
         rows,
         note="Two more drives on the 8-PSS (legs 1 and 8) add their stiffness along their guides.",

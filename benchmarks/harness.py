@@ -42,6 +42,7 @@ import proxsuite
 from analyses._zhao2011_paper import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 from plm_pin.core.closures import jacobian_from_data as closure_jacobian_from_data
 from plm_pin.core.mechanism import Mechanism
+from plm_pin.core.task import FrameTask
 from plm_pin.dynamics.inverse_dynamics import inverse_dynamics
 from plm_pin.dynamics.simulation import SimulationResult, simulate
 from plm_pin.dynamics.trajectory import task_trajectory
@@ -64,7 +65,7 @@ from plm_pin.statics import (
     static_forces,
 )
 from plm_pin.statics.allocation import new_highs
-from plm_pin.statics.balance import load_on_frame
+from plm_pin.statics.balance import wrench_on_frame
 from plm_pin.workspace import manipulability, singular_points_along, workspace_map
 
 MAP_SHAPE = (317, 316)
@@ -130,7 +131,7 @@ class Floor:
         """Collect the frame pairs, task frame and actuated indices of ``mech``."""
         task = mech.task_compiled
         if (
-            task is None
+            not isinstance(task, FrameTask)
             or task.dofs != ("x", "y", "rz")
             or any(c.spec.type != "point" for c in mech.closures)
         ):
@@ -641,7 +642,7 @@ def capability_benchmark() -> list[dict[str, object]]:
         q = mech.q_ref
         limits = np.array([[-bound, bound]] * mech.n_actuators)
         data, highs = mech.model.createData(), new_highs()
-        task = load_on_frame(mech, direction)
+        task = wrench_on_frame(mech, direction)
         floored: dict[str, tuple[Callable[[], object], Callable[[], object], str]] = {
             "force_capability (gravity, limits)": (
                 functools.partial(force_capability, mech, q, direction, limits=limits),

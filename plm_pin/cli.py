@@ -35,6 +35,7 @@ from .core.mechanism import Mechanism
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .export import export_mjcf
 from .kinematics import inverse_kinematics, task_pose
+from .kinematics.reference import reference_findings, reference_report
 from .loading import load
 from .models.registry import PRESETS
 from .report import Animation, Study, find_study, run_study, study_names, write_index, write_report
@@ -217,8 +218,18 @@ def info(
     ignore: IgnoreOption = "",
     closure_tol: ClosureTolOption = None,
 ) -> None:
-    """Sizes, joints, closures, actuators, task, mobility, redundancy and reference residual."""
-    summary = _load(target, ignore, closure_tol).summary()
+    """Sizes, joints, closures, actuators, task, mobility, redundancy, the reference (pose, modes)."""
+    mech = _load(target, ignore, closure_tol)
+    summary = mech.summary()
+    with _reported():
+        reference = reference_report(mech)
+    summary["reference"] = {
+        "q": reference.q.tolist(),
+        "pose": reference.pose.tolist(),
+        "working_mode": list(reference.working_mode),
+        "assembly_mode": reference.assembly_mode,
+        "singularity_margins": reference.margins,
+    }
     if as_json:
         console.print_json(json.dumps(summary))
         return
@@ -237,7 +248,10 @@ def info(
         limits = "unbounded" if a["limits"] is None else f"[{a['limits'][0]:g}, {a['limits'][1]:g}]"
         table.add_row(escape(f"actuator {a['joint']}"), escape(f"{a['kind']}, limits {limits}"))
     task = summary["task"]
-    table.add_row("task", "none" if task is None else escape(f"{task['frame']}: {' '.join(task['dofs'])}"))
+    table.add_row(
+        "task",
+        "none" if task is None else escape(f"{task['frame'] or 'output joints'}: {' '.join(task['dofs'])}"),
+    )
     table.add_row(
         "mobility",
         str(summary["mobility"])
@@ -245,6 +259,8 @@ def info(
     )
     red = summary["redundancy"]
     table.add_row("redundancy", f"{red}" + (" (under-actuated)" if red < 0 else ""))
+    dofs = mech.task.dofs if mech.task is not None else ()
+    table.add_row("reference", escape(reference.describe(dofs)))
     table.add_row("reference residual", f"{summary['reference_residual']:.3g} m/rad")
     table.add_row("closure tolerance", f"{summary['closure_tolerance']:.3g} m/rad")
     table.add_row("rank gap", _rank_gap_text(summary["rank_gap"]))
@@ -261,7 +277,10 @@ def check(
     """Validate a description and say exactly what is wrong and where (idle DOF, task size, limits)."""
     mech = _load(path, ignore, closure_tol)
     summary = mech.summary()
-    found = findings(mech)
+    with _reported():
+        found = tuple(
+            sorted((*findings(mech), *reference_findings(mech)), key=lambda f: f.severity != "error")
+        )
     for finding in found:
         prefix = "[bold red]error:[/]" if finding.severity == "error" else "[cyan]note:[/]"
         target = errors if finding.severity == "error" else console

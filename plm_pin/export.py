@@ -44,7 +44,6 @@ The task, name and source go to a sidecar ``<stem>.plm.yaml`` beside the file (s
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -55,6 +54,7 @@ import numpy as np
 import pinocchio as pin
 from lxml import etree
 
+from ._arguments import flag, positive
 from ._io import atomic_write_text
 from .core.mechanism import Mechanism, body_name
 from .description.mjcf import DRIVE_FIELDS, StateMap, require_mujoco, rotation_to_quat_wxyz
@@ -541,10 +541,10 @@ def mjcf_text(
         InvalidInput: a bad timestep or integrator.
         DescriptionError: a joint, frame or body MuJoCo cannot hold, or MuJoCo missing.
     """
-    if integrator not in INTEGRATORS:
+    if not isinstance(integrator, str) or integrator not in INTEGRATORS:
         raise InvalidInput(f"unknown integrator {integrator!r}; valid are {list(INTEGRATORS)}")
-    if not (math.isfinite(timestep) and timestep > 0.0):
-        raise InvalidInput(f"timestep must be a positive number of seconds, got {timestep!r}")
+    timestep = positive(timestep, "timestep", "s")
+    measure_duration = positive(measure_duration, "measure_duration", "s")
     mujoco = require_mujoco()
     writer = _Writer(mech, timestep, integrator)
     root = writer.document()
@@ -592,6 +592,7 @@ def export_mjcf(
         InvalidInput: a path not ending in ``.xml``, a bad timestep or integrator.
         DescriptionError: what MuJoCo cannot hold (named), or MuJoCo missing.
     """
+    flag(sidecar, "sidecar")
     out = Path(path)
     if out.suffix != ".xml":
         raise InvalidInput(f"MJCF file name must end in .xml, got {out.name!r}")

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import warnings
 from collections.abc import Iterable, Mapping
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from ._arguments import flag, mapping
 from ._text import short
 from .core.assembly import rounded_closure
 from .core.closures import compile_closures
@@ -22,13 +25,19 @@ from .description.loader import (
 )
 from .description.mjcf import MJCF_SUFFIX, check_ignore, read_mjcf
 from .description.overrides import DescriptionBuilder
+from .description.sidecar import FORMAT, ActuatorSpec, Sidecar, TaskSpec
 from .description.sidecar import SIDECAR_SUFFIX_DEFAULT as SIDECAR_SUFFIX
-from .description.sidecar import ActuatorSpec, Sidecar, TaskSpec
 from .description.urdf import read_urdf_text
 from .description.writer import urdf_text
-from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
+from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput, PlmError
+from .kinematics.reference import (
+    choose_reference,
+    reference_report,
+    singularity_margin,
+)
 from .models.registry import PRESETS, Builder, builder_parameters, urdf_folder
-from .warnings import RoundedClosureWarning
+from .tolerances import REFERENCE_MARGIN
+from .warnings import ReferenceWarning, RoundedClosureWarning
 
 ERD_PREFIX = "erd:"
 
@@ -58,19 +67,82 @@ def mechanism_from_description(
         DescriptionError: when the model cannot be built or names are wrong.
         ClosureNotSatisfied: when ``validate`` and the loops cannot be closed.
     """
-    model = build_model(description)
-    mech = Mechanism(
+    mech = _mechanism(description, description.sidecar, name, closure_tol, mobility)
+    guess = "sidecar reference" if description.sidecar.reference else "neutral configuration"
+    mech = _validated(mech, guess, validate, stated=closure_tol is not None)
+    if validate and not description.sidecar.reference and description.convention == FORMAT and mech.closures:
+        return _with_chosen_reference(mech, description, name)
+    return mech
+
+
+def _mechanism(
+    description: Description,
+    sidecar: Sidecar,
+    name: str,
+    closure_tol: float | None = None,
+    mobility: int | None = None,
+) -> Mechanism:
+    """The Mechanism of a description's tree with ``sidecar`` (the description's, or one derived from it)."""
+    model = build_model(description)  # a fresh tree: the idle gauges add frames to their model
+    return Mechanism(
         model,
-        description.sidecar,
+        sidecar,
         name=name,
-        source=description.sidecar.source or str(description.urdf_path or ""),
+        source=sidecar.source or str(description.urdf_path or ""),
         visual_factory=functools.partial(build_visual_model, model, description),  # picklable
         collision_factory=functools.partial(build_collision_model, model, description),
         closure_tol=closure_tol,
         mobility=mobility,
     )
-    guess = "sidecar reference" if description.sidecar.reference else "neutral configuration"
-    return _validated(mech, guess, validate, stated=closure_tol is not None)
+
+
+def _with_chosen_reference(mech: Mechanism, description: Description, name: str) -> Mechanism:
+    """``mech``, or its reference chosen again when the neutral one is near a singularity.
+
+    When the reference closed from the neutral configuration lies within
+    :data:`~plm_pin.tolerances.REFERENCE_MARGIN` of a singularity, the mechanism is
+    built again with the reference :func:`~plm_pin.kinematics.reference.choose_reference` moves
+    it to.
+
+    Warns with the reference chosen (pose, modes, margin) and the ``reference:`` entry that
+    keeps it; keeps ``mech`` as it is when no square task allows the choice.
+    """
+    try:
+        current = singularity_margin(mech, mech.q_ref)
+    except PlmError:  # singular right there: choose
+        current = 0.0
+    if current is None or current >= REFERENCE_MARGIN:
+        return mech
+    chosen = choose_reference(mech)
+    if chosen is None or chosen[1] <= current:
+        return mech
+    q, margin = chosen
+    reference = {}
+    for jid in range(1, mech.model.njoints):
+        j = mech.model.joints[jid]
+        values = tuple(float(v) for v in q[j.idx_q : j.idx_q + j.nq])
+        if j.nq == 2 and j.nv == 1:  # unbounded revolute: its angle
+            values = (float(np.arctan2(values[1], values[0])),)
+        reference[str(mech.model.names[jid])] = values
+    side = dataclasses.replace(description.sidecar, reference=reference)
+    out = _mechanism(description, side, name, mech.closure_tol, mech.fixed_mobility)
+    report = reference_report(out)
+    dofs = out.task.dofs if out.task is not None else ()
+    entry = ", ".join(f"{k}: {v[0]:.6g}" if len(v) == 1 else f"{k}: {list(v)}" for k, v in reference.items())
+    closeness = (
+        f" (even so within {REFERENCE_MARGIN} of a singularity: the workspace may be small)"
+        if margin < REFERENCE_MARGIN
+        else ""
+    )
+    warnings.warn(
+        f"{name}: the sidecar gives no reference and the loops close from the neutral configuration "
+        f"within {current:.3g} of a singularity; moved it away, in the same working mode and assembly: "
+        f"{report.describe(dofs)}{closeness}. "
+        f"Keep it with `reference: {{{entry}}}`",
+        ReferenceWarning,
+        stacklevel=3,
+    )
+    return out
 
 
 def mechanism_from_mjcf(
@@ -161,6 +233,8 @@ def _validated(mech: Mechanism, guess: str, validate: bool, *, stated: bool) -> 
 
 @functools.cache
 def _erd_root() -> Path:
+    from importlib import metadata  # 20 ms (email, socket): only for example-robot-data
+
     try:
         files = metadata.files("example-robot-data") or []
     except metadata.PackageNotFoundError:
@@ -253,6 +327,7 @@ def load(
         InvalidInput: ``ignore`` names an unknown kind, or is given for a model that is not an
             MJCF; a ``closure_tol`` or ``mobility`` out of range.
     """
+    flag(validate, "validate")
     extra: dict[str, Any] = {"validate": validate, "closure_tol": closure_tol, "mobility": mobility}
     text = str(name_or_path)
     if check_ignore(ignore) and not _is_mjcf(Path(text)):
@@ -345,8 +420,9 @@ def build_mechanism(
         DescriptionError: the builder's output is not a valid description.
         ClosureNotSatisfied: when ``validate`` and the loops cannot be closed.
     """
+    flag(validate, "validate")
     builder, base, label = resolve_builder(target)
-    given = dict(parameters or {})
+    given = dict(mapping(parameters or {}, "parameters", "builder parameter names to values [SI units]"))
     valid = builder_parameters(builder)
     unknown = [key for key in given if key not in valid]
     if unknown:

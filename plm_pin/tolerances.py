@@ -29,6 +29,7 @@ __all__ = [
     "CONSTRAINT_NULL_RTOL",
     "CROSSING_MARGIN",
     "CROSSING_WATCH_RTOL",
+    "DEAD_RTOL",
     "DECOUPLING_RTOL",
     "DEFLECTION_CLOSURE_TOL",
     "DEFLECTION_RTOL",
@@ -56,9 +57,11 @@ __all__ = [
     "LOCUS_REFINE_MARGIN",
     "LOCUS_XTOL",
     "LOG3_SERIES_ANGLE",
+    "LOOSE_END_RTOL",
     "LOST_ROW_DRIFT_RTOL",
     "MASSLESS_INERTIA_RTOL",
     "MASSLESS_RTOL",
+    "MAX_EFFORT",
     "MIN_PRINCIPAL_MOMENT",
     "MODE_CHANGE_DEVIATION_TOL",
     "MODE_CHANGE_RESIDUAL_TOL",
@@ -77,6 +80,9 @@ __all__ = [
     "RANK_GAP_MIN",
     "RANK_RTOL",
     "RATE_CONSISTENCY_TOL",
+    "REFERENCE_MARGIN",
+    "REFERENCE_SHIFT_ANGLE",
+    "REFERENCE_SHIFT_RTOL",
     "RIGHT_ANGLE_TOL",
     "ROUNDED_DATA_HEADROOM",
     "ROUNDED_DATA_RTOL",
@@ -174,6 +180,29 @@ PATTERN_ATOL = 1e-12
 
 LEG_SINGULAR_RTOL = 1e-9
 """[-] A leg block is singular when its determinant is at most this times Hadamard's bound."""
+
+# ----------------------------------------------------------------- reference, diagnostics, transmission
+REFERENCE_MARGIN = 0.05
+"""[-] A reference whose smallest singularity margin (constraint, inverse, direct; normalised
+singular values, see :class:`~plm_pin.kinematics.SingularityReport`) is below this is flagged
+as close to that singularity."""
+
+REFERENCE_SHIFT_ANGLE = 0.1
+"""[rad] A revolute joint that the assembly moved farther than this from the sidecar's reference
+value flags a reference far from its author's (a mistyped length, a wrong guess)."""
+
+REFERENCE_SHIFT_RTOL = 0.05
+"""[-] Likewise for a prismatic joint, as a fraction of the mechanism's size (the largest
+distance between two joint origins at the reference)."""
+
+DEAD_RTOL = 1e-12
+"""[-] The actuators cannot drive the task (a dead centre) when the smallest singular value of
+:math:`C` is at most this fraction of its largest."""
+
+LOOSE_END_RTOL = 0.02
+"""[-] A leaf body's frame within this fraction of the mechanism's size (the largest distance
+between two joint origins at the reference) of another body's frame is a loose end: a
+closure between them may be missing."""
 
 # ----------------------------------------------------------------- descriptions
 INERTIA_RTOL = 1e-9
@@ -311,6 +340,10 @@ LINK_FORCE_RTOL = 1e-9
 link-force matrix is above this times the largest."""
 
 # ----------------------------------------------------------------- dynamics
+MAX_EFFORT = 1e12
+"""[N or N m] Largest force or torque a simulation accepts: a thousand times the largest presses'
+(about 1e9 N); far beyond it a step's accelerations and energies overflow or lose every digit."""
+
 CROSSING_MARGIN = 1e-3
 """[-] A crossing predicted within this fraction of a bridge step is taken to be at its start (left as is)."""
 

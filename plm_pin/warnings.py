@@ -11,6 +11,7 @@ __all__ = [
     "MissingLimitsWarning",
     "MissingMeshWarning",
     "PlmWarning",
+    "ReferenceWarning",
     "RoundedClosureWarning",
     "SimulationUnstableWarning",
 ]
@@ -46,6 +47,10 @@ class SimulationUnstableWarning(PlmWarning):
 
 class MissingLimitsWarning(PlmWarning):
     """URDF joints carry no position limits (read as [0, 0]); they are treated as unlimited."""
+
+
+class ReferenceWarning(PlmWarning):
+    """A description gives no reference: the loader chose one (said where), or it lies near a singularity."""
 
 
 class RoundedClosureWarning(PlmWarning):

@@ -16,7 +16,7 @@ import pytest
 import plm_pin
 from plm_pin.core.mechanism import Mechanism
 from plm_pin.description import Sidecar, write_description
-from plm_pin.description import _urdf_build as u
+from plm_pin.description import urdf_parts as u
 from plm_pin.models import urdf_folder
 from plm_pin.report import StudyResult
 
@@ -25,17 +25,19 @@ INTEROP = REPO.parent / "shared" / "interop" / "example-parallel-robots"
 
 
 def load_corpus(path: Path) -> Mechanism:
-    """Load an example-parallel-robots description, its missing meshes and URDF limits not warned.
+    """Load an example-parallel-robots description, its missing meshes, URDF limits and reference not warned.
 
-    Those warnings are tested in tests/description/test_interop.py and tests/kinematics/test_limits.py.
+    Those warnings are tested in tests/description/test_interop.py, tests/kinematics/test_limits.py
+    and tests/kinematics/test_reference.py (a sidecar written for a corpus robot has no reference).
     """
     import warnings
 
-    from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning
+    from plm_pin.warnings import MissingLimitsWarning, MissingMeshWarning, ReferenceWarning
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MissingMeshWarning)
         warnings.simplefilter("ignore", MissingLimitsWarning)
+        warnings.simplefilter("ignore", ReferenceWarning)
         return plm_pin.load(path)
 
 

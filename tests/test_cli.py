@@ -86,12 +86,13 @@ def test_info_unknown_target_is_one_error_line():
 
 
 def test_check_good_description_prints_ok(fourbar):
-    """`check` on a valid description prints an ok line with its sizes and mobility."""
+    """`check` on a valid description prints the reference pose (the sidecar's rocker angle), then ok."""
     result = runner.invoke(app, ["check", str(fourbar)])
     assert result.exit_code == 0, result.output
-    assert result.stdout.startswith(
-        "ok: fourbar: 1 closures, 1 actuators, mobility 1, redundancy 0, reference residual "
-    )
+    note, ok = result.stdout.splitlines()
+    rocker = yaml.safe_load(fourbar.with_name("fourbar.plm.yaml").read_text())["reference"]["rocker_pivot"]
+    assert note.startswith(f"note: reference: pose rz = {rocker:.6g}; working mode (")
+    assert ok.startswith("ok: fourbar: 1 closures, 1 actuators, mobility 1, redundancy 0, reference ")
     assert result.stderr == ""
 
 
@@ -127,7 +128,7 @@ def test_info_and_check_print_bracketed_names_verbatim(fourbar):
     sidecar.write_text(yaml.safe_dump(data, sort_keys=False))
     checked = runner.invoke(app, ["check", str(fourbar)])
     assert checked.exit_code == 0, checked.output
-    assert checked.stdout.startswith("ok: [/weird]: 1 closures")
+    assert checked.stdout.splitlines()[-1].startswith("ok: [/weird]: 1 closures")
     shown = runner.invoke(app, ["info", str(fourbar)])
     assert shown.exit_code == 0, shown.output
     assert "[/weird]" in shown.stdout
@@ -144,7 +145,7 @@ def test_check_reports_missing_meshes_as_a_warning(fourbar):
     assert result.stderr == (
         f"warning: {fourbar}: 1 mesh file(s) missing, loading without those visuals: base.stl\n"
     )
-    assert result.stdout.startswith("ok: fourbar:")
+    assert result.stdout.splitlines()[-1].startswith("ok: fourbar:")
 
 
 def _tree(folder: Path) -> dict[str, bytes]:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import importlib
+import json
+import os
 import pkgutil
 import subprocess
 import sys
@@ -39,25 +41,78 @@ def test_each_public_name_is_public_in_one_package_only():
     assert {name: where for (name, _), where in owners.items() if len(where) > 1} == {}
 
 
-def test_core_import_does_not_pull_optional_dependencies():
-    """`import plm_pin` loads no optional or heavy dependency: meshcat, matplotlib, yourdfpy, trimesh, ..."""
-    optional = (
-        "('meshcat', 'matplotlib', 'jinja2', 'dask', 'distributed', 'xarray', 'zarr', 'pyarrow', 'pandas', "
-        "'yourdfpy', 'trimesh')"
-    )
-    code = f"import sys, plm_pin; print(sorted(m for m in {optional} if m in sys.modules))"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "[]"
+HEAVY = (
+    "scipy",
+    "meshcat",
+    "matplotlib",
+    "jinja2",
+    "dask",
+    "distributed",
+    "xarray",
+    "zarr",
+    "pyarrow",
+    "pandas",
+    "yourdfpy",
+    "trimesh",
+    "mujoco",
+    "proxsuite",
+    "highspy",
+    "numba",
+)
+"""Third-party modules that ``import plm_pin`` and loading a shipped description never import."""
+
+ABOVE_THE_LOADER = (
+    "families",
+    "kinematics",
+    "statics",
+    "dynamics",
+    "stiffness",
+    "workspace",
+    "sweep",
+    "viz",
+    "report",
+)
+"""plm_pin packages that ``import plm_pin`` and loading a shipped description never import."""
 
 
-def test_loading_a_preset_does_not_pull_the_urdf_writer():
-    """Loading a shipped preset reads its URDF without yourdfpy / trimesh (only builders need them)."""
-    code = (
-        "import sys, plm_pin; plm_pin.load('fourbar'); "
-        "print(sorted(m for m in ('yourdfpy', 'trimesh') if m in sys.modules))"
-    )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "[]"
+def _modules_after(code: str) -> list[str]:
+    """The names in sys.modules after running ``code`` in a fresh interpreter."""
+    probe = f"import json, sys; {code}; print(json.dumps(sorted(sys.modules)))"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    return json.loads(out.stdout)
+
+
+def _heavy_or_above(modules: list[str]) -> list[str]:
+    """The :data:`HEAVY` modules and :data:`ABOVE_THE_LOADER` packages among ``modules``."""
+    heavy = {m.split(".")[0] for m in modules if m.split(".")[0] in HEAVY}
+    above = {".".join(m.split(".")[:2]) for m in modules if m.split(".")[:1] == ["plm_pin"]}
+    return sorted(heavy | {m for m in above if m.split(".")[-1] in ABOVE_THE_LOADER})
+
+
+def test_import_loads_no_family_no_analysis_and_no_heavy_dependency():
+    """`import plm_pin` loads no family, no analysis package, no scipy, matplotlib, yourdfpy, ..."""
+    assert _heavy_or_above(_modules_after("import plm_pin")) == []
+
+
+def test_loading_a_preset_runs_no_builder_and_no_analysis():
+    """Loading a shipped description reads its URDF: no family (builder), no kinematics, no yourdfpy."""
+    presets = _modules_after("import plm_pin; plm_pin.load('harada2011_3d4m'); plm_pin.load('fourbar')")
+    assert _heavy_or_above(presets) == []
+    urdf = REPO / "urdf" / "zhao2011_8pss.urdf"
+    assert _heavy_or_above(_modules_after(f"import plm_pin; plm_pin.load({str(urdf)!r})")) == []
+
+
+def test_building_a_preset_imports_its_builder_only():
+    """Building a preset imports its family's builder (a string in the registry), not the planners."""
+    code = "import plm_pin; plm_pin.build_mechanism('harada2015_asymmetric', validate=False)"
+    loaded = _modules_after(code)
+    families = [m for m in loaded if m.startswith("plm_pin.families")]
+    assert families == ["plm_pin.families", "plm_pin.families.prrrp", "plm_pin.families.prrrp.builder"]
+    assert not [m for m in loaded if m.startswith("plm_pin.kinematics")]
+
+
+OUTSIDE = {key: value for key, value in os.environ.items() if key != "PYTHONPATH"}
+"""The environment of a process run outside the checkout (a PYTHONPATH naming it would reach it)."""
 
 
 @pytest.fixture(scope="module")
@@ -96,7 +151,7 @@ def test_wheel_installed_outside_the_checkout_loads_every_preset(wheel_venv, tmp
         f"for n in {names!r}:\n"
         "    m = plm_pin.load(n); print(n, m.mobility, m.redundancy)\n"
     )
-    out = subprocess.run([str(python), "-c", code], cwd=tmp_path, capture_output=True, text=True)
+    out = subprocess.run([str(python), "-c", code], cwd=tmp_path, capture_output=True, text=True, env=OUTSIDE)
     assert out.returncode == 0, out.stderr
     assert [line.split()[0] for line in out.stdout.splitlines()] == names
 
@@ -107,7 +162,8 @@ def test_installed_wheel_runs_the_command_line_and_the_overview(wheel_venv, tmp_
     bin_ = wheel_venv
 
     def run(*args: str) -> subprocess.CompletedProcess[str]:
-        return subprocess.run([str(a) for a in args], cwd=tmp_path, capture_output=True, text=True)
+        command = [str(a) for a in args]
+        return subprocess.run(command, cwd=tmp_path, capture_output=True, text=True, env=OUTSIDE)
 
     assert run(bin_ / "plm-pin", "--version").stdout.strip() == f"plm-pin {plm_pin.__version__}"
     assert (

@@ -13,6 +13,10 @@ closed forms below are derived here from the geometry alone, never from plm_pin:
   b = 2 La z, c = Lb^2 - La^2 - (x - R')^2 - y^2 - z^2 with R' = R - r.
 - Stewart platform 6-UPS (Gough): leg lengths L_k = |p + R P_k - B_k|, velocities
   L'_k = e_k . (v + w x R P_k).
+- Four-bar gripper finger (output joint as task): Freudenstein's equation, the velocity ratio
+  a sin(t3 - t2) / (c sin(t3 - t4)), the transmission angle by the law of cosines.
+- Planar 3-PRR (a sidecar written as a user would, reference optional): slider positions
+  s_i = (C_i - A_i) . u_i +- sqrt(l^2 - ((C_i - A_i) . n_i)^2).
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ import yourdfpy
 
 import plm_pin
 from plm_pin.core.mechanism import Mechanism
-from plm_pin.description import _urdf_build as u
+from plm_pin.description import urdf_parts as u
 from plm_pin.description import write_description
 from plm_pin.description.sidecar import parse_sidecar
 
@@ -400,3 +404,275 @@ def stewart(folder: Path, spherical_base: bool = False, name: str = "stewart") -
     )
     write_description(yourdfpy.Robot(name=name, links=links, joints=joints), sidecar, folder, name)
     return plm_pin.load(folder / f"{name}.urdf")
+
+
+# --------------------------------------------------------------------------- four-bar finger
+FINGER = {"a": 0.02, "b": 0.045, "c": 0.035, "d": 0.04}
+"""Gripper finger four-bar [m]: crank a (input, pivot A at the origin), coupler b, finger c
+(output, pivot D = (d, 0)); all joints turn about z, gravity along -y."""
+
+FINGER_BODIES = {  # mass [kg], centre of mass in the body frame [m], izz about it [kg m^2]
+    "crank": (0.010, (0.010, 0.000), 4e-7),
+    "coupler": (0.015, (0.0225, 0.002), 3e-6),
+    "finger": (0.030, (0.030, 0.006), 9e-6),
+}
+
+
+def finger_freudenstein(theta2: float, branch: int = -1) -> tuple[float, float]:
+    """Output and coupler angles (theta4, theta3) [rad] of the finger at crank angle theta2.
+
+    Freudenstein's equation K1 cos t4 - K2 cos t2 + K3 = cos(t2 - t4), K1 = d/a, K2 = d/c,
+    K3 = (a^2 - b^2 + c^2 + d^2) / (2 a c), solved by the half-angle substitution
+    t = tan(t4 / 2): A t^2 + B t + C = 0; ``branch`` picks the root's sign (-1: the finger
+    above the palm, the reference's assembly).
+    """
+    a, b, c, d = (FINGER[k] for k in "abcd")
+    K1, K2, K3 = d / a, d / c, (a * a - b * b + c * c + d * d) / (2 * a * c)
+    A = math.cos(theta2) - K1 - K2 * math.cos(theta2) + K3
+    B = -2 * math.sin(theta2)
+    C = K1 - (K2 + 1) * math.cos(theta2) + K3
+    t4 = 2 * math.atan((-B + branch * math.sqrt(B * B - 4 * A * C)) / (2 * A))
+    Bx, By = a * math.cos(theta2), a * math.sin(theta2)
+    Cx, Cy = d + c * math.cos(t4), c * math.sin(t4)
+    return t4, math.atan2(Cy - By, Cx - Bx)
+
+
+def finger_velocity_ratio(theta2: float, branch: int = -1) -> float:
+    """D theta4 / d theta2 = a sin(t3 - t2) / (c sin(t3 - t4)) (the four-bar's angular velocity ratio)."""
+    t4, t3 = finger_freudenstein(theta2, branch)
+    return FINGER["a"] * math.sin(t3 - theta2) / (FINGER["c"] * math.sin(t3 - t4))
+
+
+def finger_transmission_angle(theta2: float) -> float:
+    """Transmission angle mu between coupler and finger [rad], by the law of cosines.
+
+    cos mu = (b^2 + c^2 - BD^2) / (2 b c), BD^2 = a^2 + d^2 - 2 a d cos t2.
+    """
+    a, b, c, d = (FINGER[k] for k in "abcd")
+    bd2 = a * a + d * d - 2 * a * d * math.cos(theta2)
+    return math.acos((b * b + c * c - bd2) / (2 * b * c))
+
+
+def finger_from_output(theta4: float, branch: int = -1) -> tuple[float, float]:
+    """Crank and coupler angles (theta2, theta3) [rad] at output angle theta4 (circle intersection).
+
+    B is where the circle of radius a about A meets the circle of radius b about C; ``branch``
+    picks the side of the line A C (-1: B to its left, the reference's assembly).
+    """
+    a, b, c, d = (FINGER[k] for k in "abcd")
+    C = np.array([d + c * math.cos(theta4), c * math.sin(theta4)])
+    L = float(np.linalg.norm(C))
+    along = (a * a - b * b + L * L) / (2 * L)
+    h = math.sqrt(a * a - along * along)
+    e = C / L
+    n = np.array([e[1], -e[0]])  # e turned by -90 degrees
+    B = along * e + branch * h * n
+    return math.atan2(B[1], B[0]), math.atan2(C[1] - B[1], C[0] - B[0])
+
+
+def finger_points(theta4: float, branch: int = -1) -> dict[str, tuple[np.ndarray, float]]:
+    """Each body's centre of mass [m] and angle [rad] at output angle ``theta4`` (closed form)."""
+    a, d = FINGER["a"], FINGER["d"]
+    t2, t3 = finger_from_output(theta4, branch)
+    origins = {
+        "crank": (np.zeros(2), t2),
+        "coupler": (a * np.array([math.cos(t2), math.sin(t2)]), t3),
+        "finger": (np.array([d, 0.0]), theta4),
+    }
+    out = {}
+    for name, (o, ang) in origins.items():
+        com = np.array(FINGER_BODIES[name][1])
+        R = np.array([[math.cos(ang), -math.sin(ang)], [math.sin(ang), math.cos(ang)]])
+        out[name] = (o + R @ com, ang)
+    return out
+
+
+FINGER_URDF = """<?xml version="1.0"?>
+<robot name="{name}">
+  <link name="palm"/>
+  <link name="crank">
+    <inertial><origin xyz="{crank_com}"/><mass value="{crank_m}"/>
+      <inertia ixx="{crank_i}" iyy="{crank_i}" izz="{crank_i}" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <link name="coupler">
+    <inertial><origin xyz="{coupler_com}"/><mass value="{coupler_m}"/>
+      <inertia ixx="{coupler_i}" iyy="{coupler_i}" izz="{coupler_i}" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <link name="coupler_tip"/>
+  <link name="finger">
+    <inertial><origin xyz="{finger_com}"/><mass value="{finger_m}"/>
+      <inertia ixx="{finger_i}" iyy="{finger_i}" izz="{finger_i}" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <link name="finger_knuckle"/>
+  <joint name="drive" type="revolute">
+    <parent link="palm"/><child link="crank"/><axis xyz="0 0 1"/>
+    <limit lower="-7" upper="7" effort="10" velocity="10"/>
+  </joint>
+  <joint name="coupler_pivot" type="revolute">
+    <parent link="crank"/><child link="coupler"/><origin xyz="{a} 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-7" upper="7" effort="10" velocity="10"/>
+  </joint>
+  <joint name="coupler_tip_fixed" type="fixed">
+    <parent link="coupler"/><child link="coupler_tip"/><origin xyz="{b} 0 0"/>
+  </joint>
+  <joint name="finger_pivot" type="revolute">
+    <parent link="palm"/><child link="finger"/><origin xyz="{d} 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-7" upper="7" effort="10" velocity="10"/>
+  </joint>
+  <joint name="finger_knuckle_fixed" type="fixed">
+    <parent link="finger"/><child link="finger_knuckle"/><origin xyz="{c} 0 0"/>
+  </joint>
+</robot>
+"""
+
+FINGER_SIDECAR = """format: plm-pin/1
+name: {name}
+gravity: [0.0, -9.81, 0.0]
+closures:
+  - name: knuckle
+    frames: [coupler_tip, finger_knuckle]
+    type: point
+actuation:
+  - joint: drive
+    limits: [-2.0, 2.0]
+end_effector:
+  joints: [finger_pivot]
+reference: {{drive: {t2}, coupler_pivot: {t32}, finger_pivot: {t4}}}
+"""
+
+FINGER_THETA2 = 1.2
+"""Crank angle of the finger's reference [rad]."""
+
+
+def finger(folder: Path, name: str = "finger") -> Mechanism:
+    """Write the four-bar gripper finger (URDF + sidecar, output joint as the task) and load it."""
+    t4, t3 = finger_freudenstein(FINGER_THETA2)
+    fields: dict[str, object] = {k: v for k, v in FINGER.items()}
+    for body, (m, com, izz) in FINGER_BODIES.items():
+        fields[f"{body}_m"], fields[f"{body}_com"], fields[f"{body}_i"] = m, f"{com[0]} {com[1]} 0", izz
+    (folder / f"{name}.urdf").write_text(FINGER_URDF.format(name=name, **fields))
+    (folder / f"{name}.plm.yaml").write_text(
+        FINGER_SIDECAR.format(name=name, t2=FINGER_THETA2, t32=t3 - FINGER_THETA2, t4=t4)
+    )
+    return plm_pin.load(folder / f"{name}.urdf")
+
+
+# --------------------------------------------------------------------------- 3-PRR
+PRR = {"Rb": 0.25, "rp": 0.1, "l": 0.3}
+"""Planar 3-PRR [m]: slider i runs through A_i = Rb (cos a_i, sin a_i) along the tangent
+u_i = (-sin a_i, cos a_i), a_i = 90 deg + 120 deg i; a rod of length l joins the slider's pivot
+B_i = A_i + s_i u_i to the platform vertex C_i = p + R(phi) rp (cos a_i, sin a_i)."""
+
+
+def prr_ik(pose: tuple[float, float, float], signs: tuple[int, ...], l: float | None = None) -> np.ndarray:
+    """Closed-form slider positions s_i [m] in branches ``signs``: |C_i - A_i - s_i u_i| = l.
+
+    s_i = (C_i - A_i) . u_i + sign_i sqrt(l^2 - ((C_i - A_i) . n_i)^2), n_i = (cos a_i, sin a_i).
+    """
+    rod = PRR["l"] if l is None else l
+    a = rrr_angles()
+    x, y, phi = pose
+    out = []
+    for i, s in enumerate(signs):
+        A = PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
+        C = np.array([x, y]) + PRR["rp"] * np.array([math.cos(a[i] + phi), math.sin(a[i] + phi)])
+        u = np.array([-math.sin(a[i]), math.cos(a[i])])
+        n = np.array([math.cos(a[i]), math.sin(a[i])])
+        d = C - A
+        out.append(float(d @ u + s * math.sqrt(rod * rod - float(d @ n) ** 2)))
+    return np.array(out)
+
+
+def prr_inverse_margins(pose: tuple[float, float, float], l: float | None = None) -> np.ndarray:
+    """|cos| of each rod's angle to the normal of its slider: 0 at leg i's inverse (type 1) singularity."""
+    rod = PRR["l"] if l is None else l
+    a = rrr_angles()
+    x, y, phi = pose
+    out = []
+    for i in range(3):
+        A = PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
+        C = np.array([x, y]) + PRR["rp"] * np.array([math.cos(a[i] + phi), math.sin(a[i] + phi)])
+        n = np.array([math.cos(a[i]), math.sin(a[i])])
+        out.append(math.sqrt(max(0.0, 1.0 - (float((C - A) @ n) / rod) ** 2)))
+    return np.array(out)
+
+
+def three_prr(
+    folder: Path, name: str = "prr3", rod: float | None = None, reference: dict | None = None
+) -> Mechanism:
+    """Write a planar 3-PRR as a user would from the docs (no ``reference`` unless given) and load it.
+
+    ``rod`` overrides the length of rod 2 only (a typo in one rod); the platform hangs on
+    leg 0, legs 1 and 2 close on its vertices with point closures.
+    """
+    a = rrr_angles()
+    rp = PRR["rp"]
+    c = rp * np.column_stack([np.cos(a), np.sin(a)])
+    links = [u.link("base")]
+    joints = []
+    for i in range(3):
+        A = PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
+        length = rod if (rod is not None and i == 2) else PRR["l"]
+        links += [
+            u.link(f"carriage{i}", 0.3, (1e-4, 1e-4, 1e-4)),
+            u.link(f"rod{i}", 0.2, (1e-5, 1.5e-3, 1.5e-3), com=(length / 2, 0, 0)),
+            u.link(f"tip{i}"),
+        ]
+        joints += [
+            u.joint(
+                f"slider{i}",
+                "prismatic",
+                "base",
+                f"carriage{i}",
+                xyz=(*A, 0.0),
+                rpy=(0.0, 0.0, float(a[i] + math.pi / 2)),
+                axis=(1, 0, 0),
+                limits=(-1.0, 1.0),
+            ),
+            u.joint(f"pivot{i}", "revolute", f"carriage{i}", f"rod{i}", limits=(-7.0, 7.0)),
+            u.joint(f"tip{i}_fixed", "fixed", f"rod{i}", f"tip{i}", xyz=(length, 0, 0)),
+        ]
+    links += [u.link("platform", 1.0, (1e-3, 1e-3, 2e-3), com=(*(-c[0]), 0.0)), u.link("centre")]
+    joints += [
+        u.joint("p0", "revolute", "rod0", "platform", xyz=(PRR["l"], 0, 0), limits=(-7.0, 7.0)),
+        u.joint("centre_fixed", "fixed", "platform", "centre", xyz=(*(-c[0]), 0.0)),
+    ]
+    for i in (1, 2):
+        links.append(u.link(f"vertex{i}"))
+        joints.append(
+            u.joint(f"vertex{i}_fixed", "fixed", "platform", f"vertex{i}", xyz=(*(c[i] - c[0]), 0.0))
+        )
+    data = {
+        "format": "plm-pin/1",
+        "closures": [
+            {"name": f"leg{i}", "frames": [f"vertex{i}", f"tip{i}"], "type": "point"} for i in (1, 2)
+        ],
+        "actuation": [{"joint": f"slider{i}"} for i in range(3)],
+        "end_effector": {"frame": "centre", "task": ["x", "y", "rz"]},
+    }
+    if reference is not None:
+        data["reference"] = reference
+    write_description(
+        yourdfpy.Robot(name=name, links=links, joints=joints), parse_sidecar(data), folder, name
+    )
+    return plm_pin.load(folder / f"{name}.urdf")
+
+
+PRR_POSE = (0.01, -0.02, 0.1)
+"""A pose well inside the 3-PRR's workspace [m, m, rad]."""
+
+
+def prr_reference(pose: tuple[float, float, float]) -> dict[str, float]:
+    """Joint values of the 3-PRR at ``pose`` in branches (+, +, +), from the closed-form IK."""
+    s = prr_ik(pose, (1, 1, 1))
+    a = rrr_angles()
+    out = {}
+    for i in range(3):
+        A = PRR["Rb"] * np.array([math.cos(a[i]), math.sin(a[i])])
+        B = A + s[i] * np.array([-math.sin(a[i]), math.cos(a[i])])
+        C = np.array(pose[:2]) + PRR["rp"] * np.array([math.cos(a[i] + pose[2]), math.sin(a[i] + pose[2])])
+        rod = math.atan2(C[1] - B[1], C[0] - B[0]) - (a[i] + math.pi / 2)  # in the slider's frame
+        out[f"slider{i}"], out[f"pivot{i}"] = float(s[i]), float(rod)
+        if i == 0:
+            out["p0"] = float(pose[2] - (a[0] + math.pi / 2) - rod)
+    return out

@@ -9,12 +9,14 @@ from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg.lapack import dposv as _posv
 
+from .._lazy import lazy_module
 from ..exceptions import ClosureNotSatisfied
 from ..results import Result, unit
 from ..tolerances import ASSEMBLY_RCOND, CLOSURE_TOL, ROUND_OFF, ROUNDED_DATA_HEADROOM, ROUNDED_DATA_RTOL
 from .closures import BoundClosures, Closure, closure_rows, jacobian_from_data, residual_from_placements
+
+lapack = lazy_module("scipy.linalg.lapack")  # dposv: the normal equations of each Newton step
 
 NEWTON_MAX_ITERATIONS = 12
 """Newton iterations allowed before :func:`newton` gives up (and the caller falls back to LM)."""
@@ -129,7 +131,7 @@ def newton(
             if extra is not None:
                 extra.jacobian(model, data, A_x)
             Af = A if free is None else A[:, free]
-            _, solution, info = _posv(Af.T @ Af, Af.T)
+            _, solution, info = lapack.dposv(Af.T @ Af, Af.T)
             if info != 0:
                 return None
             if free is None:

@@ -35,14 +35,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-import scipy.linalg
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components, maximum_bipartite_matching
 
+from .._lazy import lazy_module
 from ..tolerances import CLOSURE_TOL, LEG_SINGULAR_RTOL, PATTERN_ATOL, PATTERN_RTOL
 from . import closures as _closures
 from .rank import rank_by_gap
-from .task import Task
+from .task import FrameTask, Task
+
+scipy_linalg = lazy_module("scipy.linalg")
+sparse = lazy_module("scipy.sparse")
+csgraph = lazy_module("scipy.sparse.csgraph")
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -117,7 +119,9 @@ def ik_jacobian_from_data(
 
 
 def platform_rows(task: Task) -> list[int]:
-    """The twist rows (0..5 of ``v, omega``) of the task frame that the task leaves out."""
+    """The task frame's twist rows (0..5 of ``v, omega``) the task leaves out (none for a joint task)."""
+    if not isinstance(task, FrameTask):
+        return []
     return [r for r in range(6) if r not in task.rows]
 
 
@@ -127,13 +131,14 @@ def structure_jacobian_from_data(
     """``[J_phi; J_x; J_rest]``: :func:`ik_jacobian_from_data` and the platform's other twist rows.
 
     Shape (m + 6, nv); ``J_rest`` holds the task frame's twist rows the task leaves out, so
-    that the whole platform is pinned.
+    that the whole platform is pinned. A joint task has no platform: shape (m + n_task, nv).
     """
     m = _closures.closure_rows(closures)
-    A = np.empty((m + 6, model.nv))
+    rest = platform_rows(task)
+    A = np.empty((m + task.size + len(rest), model.nv))
     ik_jacobian_from_data(model, data, closures, task, A[: m + task.size])
-    J = pin.getFrameJacobian(model, data, task.frame_id, _LWA)
-    A[m + task.size :] = J[platform_rows(task)]
+    if isinstance(task, FrameTask):
+        A[m + task.size :] = pin.getFrameJacobian(model, data, task.frame_id, _LWA)[rest]
     return A
 
 
@@ -177,8 +182,8 @@ def find_legs(
         for c2 in np.flatnonzero(pattern[r]):
             src.append(c)
             dst.append(int(c2))
-    graph = csr_matrix((np.ones(len(src)), (src, dst)), shape=(nc, nc))
-    _, component = connected_components(graph, directed=True, connection="strong")
+    graph = sparse.csr_matrix((np.ones(len(src)), (src, dst)), shape=(nc, nc))
+    _, component = csgraph.connected_components(graph, directed=True, connection="strong")
     # blocks that hold task rows form the end-effector chain: merge them into one leg
     task_columns = {c for c, r in row_of_col.items() if rows_kept[r] >= n_closure}
     task_components = {component[c] for c in task_columns}
@@ -188,10 +193,10 @@ def find_legs(
     keep = [
         (a, b) for a, b in zip(src, dst, strict=True) if leg_of_column[a] != -1 and leg_of_column[b] != -1
     ]
-    undirected = csr_matrix(
+    undirected = sparse.csr_matrix(
         (np.ones(len(keep)), ([a for a, _ in keep], [b for _, b in keep])), shape=(nc, nc)
     )
-    _, weak = connected_components(undirected, directed=False)
+    _, weak = csgraph.connected_components(undirected, directed=False)
     for c in others:
         leg_of_column[c] = weak[c]
     joint_of_v = _joint_names_by_velocity(model)
@@ -252,7 +257,7 @@ def _platform_first_matching(pattern: np.ndarray, platform: np.ndarray) -> dict[
     for stage in (platform, ~platform):
         rows = np.flatnonzero(stage)
         sub = pattern[rows] & ~taken
-        match = maximum_bipartite_matching(csr_matrix(sub.astype(np.int8)), perm_type="column")
+        match = csgraph.maximum_bipartite_matching(sparse.csr_matrix(sub.astype(np.int8)), perm_type="column")
         for r, c in zip(rows, match, strict=True):
             if c >= 0:
                 out[int(r)] = int(c)
@@ -265,7 +270,7 @@ def _independent_rows(A: np.ndarray, rows: tuple[int, ...], cols: tuple[int, ...
     if len(rows) < len(cols):
         return ()
     block = A[np.ix_(rows, cols)]
-    _, R, piv = scipy.linalg.qr(block.T, pivoting=True)
+    _, R, piv = scipy_linalg.qr(block.T, pivoting=True)
     scale = max(float(np.abs(R[0, 0])), 1e-300)
     if abs(R[len(cols) - 1, len(cols) - 1]) <= PATTERN_RTOL * scale:
         return ()

@@ -14,7 +14,8 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import as_vector
+from .._arguments import as_vector, count, positive
+from .._text import short
 from ..description.sidecar import Sidecar, TaskSpec
 from ..exceptions import ClosureNotSatisfied, InvalidInput
 from ..tolerances import ASSEMBLED_TOL, CLOSURE_TOL
@@ -25,7 +26,7 @@ from .idle import IdleGauge, find_gauges
 from .legs import Leg, find_legs
 from .rank import RankGap, gap_of, rank_by_gap
 from .scratch import Workspace
-from .task import Task, compile_task
+from .task import FrameTask, Task, compile_task_spec
 
 
 def body_name(model: pin.Model, j: int) -> str:
@@ -40,6 +41,20 @@ def body_names(model: pin.Model) -> tuple[str, ...]:
         if f.type == pin.FrameType.BODY:
             first.setdefault(f.parentJoint, str(f.name))
     return tuple(first.get(j, str(model.names[j])) for j in range(1, model.njoints))
+
+
+def _joint_names(value: object, name: str) -> list[str]:
+    """``value`` as a list if it is an iterable of joint names (strings).
+
+    Raises:
+        InvalidInput: naming ``name`` and the valid forms.
+    """
+    names = list(value) if isinstance(value, Iterable) and not isinstance(value, bytes) else None
+    if names is None or not all(isinstance(n, str) for n in names):
+        raise InvalidInput(
+            f"{name} must be joint names or a mapping from joint name to value [m, rad], got {short(value)}"
+        )
+    return names
 
 
 @dataclass(frozen=True)
@@ -183,10 +198,8 @@ class Mechanism:
                 )
             )
         self.actuators = tuple(actuators)
-        self._task_frame = model.getFrameId(sidecar.task.frame) if sidecar.task else None
-        self.task_compiled: Task | None = (
-            compile_task(model, sidecar.task.frame, sidecar.task.dofs) if sidecar.task else None
-        )
+        self.task_compiled: Task | None = compile_task_spec(model, sidecar.task) if sidecar.task else None
+        self._task_frame = self.task_compiled.frame_id if isinstance(self.task_compiled, FrameTask) else None
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -298,7 +311,7 @@ class Mechanism:
 
     @property
     def task_frame_id(self) -> int | None:
-        """Pinocchio index of the end-effector frame, or None."""
+        """Pinocchio index of the end-effector frame, or None (no task, or a joint task)."""
         return self._task_frame
 
     @property
@@ -348,11 +361,11 @@ class Mechanism:
     # ---------------------------------------------------------- closures
     def closure_residual(self, q: ArrayLike) -> np.ndarray:
         r"""Closure residual :math:`\phi(q)` [m, rad] (see :mod:`plm_pin.core.closures`), shape (m,)."""
-        return _closures.residual(self.model, self.data, self.closures, self.check_q(q))
+        return _closures.residual(self.model, self._data, self.closures, self.check_q(q))
 
     def closure_jacobian(self, q: ArrayLike) -> np.ndarray:
         r"""Closure Jacobian :math:`J_\phi(q)` on the tangent space, shape (m, nv)."""
-        return _closures.jacobian(self.model, self.data, self.closures, self.check_q(q))
+        return _closures.jacobian(self.model, self._data, self.closures, self.check_q(q))
 
     def closure_rank(self, q: ArrayLike) -> int:
         r"""Rank of :math:`J_\phi(q)`, cut at the largest gap of its singular values (closure_rank_gap)."""
@@ -432,12 +445,11 @@ class Mechanism:
         Raises:
             ClosureNotSatisfied: when the loops cannot be closed to ``tol``; the error
                 carries the best configuration and the worst closure.
-            InvalidInput: on a malformed ``guess`` or an unknown joint in ``fixed``.
+            InvalidInput: on a malformed ``guess``, an unknown joint in ``fixed``, a ``tol`` that
+                is not a positive number or a ``max_iterations`` that is not a whole number >= 1.
         """
-        if tol is None:
-            tol = self.closure_tol
-        elif not (0.0 < tol < math.inf):
-            raise InvalidInput(f"tol must be a positive finite number [m, rad], got {tol!r}")
+        tol = self.closure_tol if tol is None else positive(tol, "tol", "m, rad")
+        max_iterations = count(max_iterations, "max_iterations", minimum=1)
         if guess is not None:
             q0 = self.check_q(guess, "guess").copy()
         elif "q_ref" in self.__dict__ or tol <= self.closure_tol:
@@ -448,10 +460,12 @@ class Mechanism:
         if fixed is not None:
             if isinstance(fixed, Mapping):
                 for joint, value in fixed.items():
+                    if not isinstance(joint, str):
+                        raise InvalidInput(f"fixed must map joint names to values, got a key {short(joint)}")
                     names.append(joint)
                     self.set_joint(q0, joint, value)
             else:
-                names = [fixed] if isinstance(fixed, str) else list(fixed)
+                names = [fixed] if isinstance(fixed, str) else _joint_names(fixed, "fixed")
         free = self.free_columns(names)
 
         def failure(q: np.ndarray, phi: np.ndarray) -> ClosureNotSatisfied:
@@ -471,7 +485,7 @@ class Mechanism:
 
         return assemble(
             self.model,
-            self.data,
+            self._data,
             self.closures,
             q0,
             free,
@@ -668,3 +682,19 @@ def require_task(mech: Mechanism) -> Task:
     if mech.task_compiled is None:
         raise InvalidInput(f"{mech.name} has no end-effector task; add 'end_effector' to its sidecar")
     return mech.task_compiled
+
+
+def require_frame_task(mech: Mechanism, needed_by: str) -> FrameTask:
+    """The mechanism's compiled frame task, or a clear error (no task, or a joint task).
+
+    Args:
+        mech: the mechanism.
+        needed_by: what needs it, completing the message (``"the deflection needs"``).
+    """
+    task = require_task(mech)
+    if not isinstance(task, FrameTask):
+        raise InvalidInput(
+            f"{mech.name} has a joint task (joints {list(task.dofs)}); {needed_by} an end-effector frame "
+            "task (end_effector: {frame: ..., task: [...]})"
+        )
+    return task

@@ -1,15 +1,24 @@
-r"""Task coordinates of the end-effector frame, their Jacobian, and task targets for solvers.
+r"""Task coordinates, their Jacobian, and task targets for solvers.
 
-Task coordinates ``x`` are the selected entries of ``(p, rpy)``: the frame origin in the
-world [m] and its roll-pitch-yaw angles [rad] with :math:`R = R_z(r_z) R_y(r_y) R_x(r_x)`
+A task is either the pose of an end-effector frame (:class:`FrameTask`) or the positions of
+output joints (:class:`JointTask`, for a linkage without an end effector: a gripper finger,
+a knee four-bar).
+
+Frame tasks: coordinates ``x`` are the selected entries of ``(p, rpy)``: the frame origin in
+the world [m] and its roll-pitch-yaw angles [rad] with :math:`R = R_z(r_z) R_y(r_y) R_x(r_x)`
 (``pin.rpy``; for a planar task ``rz`` is the plate angle). Task *velocities* are the
 selected entries of the frame's world-aligned twist :math:`(v, \omega)`; for a planar task
 :math:`\omega_z = \dot r_z`, for spatial rotations :math:`\omega` differs from
 :math:`\dot{rpy}` (use :func:`rpy_rates`).
+
+Joint tasks: coordinates are the output joints' positions [m] or [rad] (a revolute angle
+wrapped to (-pi, pi]), their velocities the joints' velocities: the Jacobian selects
+columns of the identity and the acceleration drift is zero.
 """
 
 from __future__ import annotations
 
+import abc
 import functools
 import math
 from dataclasses import dataclass
@@ -18,7 +27,8 @@ import numpy as np
 import pinocchio as pin
 
 from .._arguments import as_vector
-from ..description.sidecar import TASK_DOFS
+from ..description.sidecar import TASK_DOFS, TaskSpec
+from ..exceptions import DescriptionError
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 TWO_PI = 2.0 * math.pi
@@ -29,9 +39,43 @@ def wrap_angle(a: np.ndarray | float) -> np.ndarray:
     return np.asarray(np.pi - np.mod(np.pi - np.asarray(a, dtype=float), 2.0 * np.pi))
 
 
+class Task(abc.ABC):
+    """A compiled task: coordinates ``x(q)``, their Jacobian and acceleration drift.
+
+    Attributes:
+        dofs: the coordinates' names (directions of a frame task, joints of a joint task).
+    """
+
+    dofs: tuple[str, ...]
+
+    @property
+    def size(self) -> int:
+        """Number of task coordinates."""
+        return len(self.dofs)
+
+    @property
+    @abc.abstractmethod
+    def angles(self) -> list[int]:
+        """Indices of the coordinates that are angles [rad] (to wrap or unwrap)."""
+
+    @abc.abstractmethod
+    def pose_from_data(self, data: pin.Data) -> np.ndarray:
+        """Task coordinates from the placements already in ``data``, shape (n_task,)."""
+
+    @abc.abstractmethod
+    def jacobian_from_data(
+        self, model: pin.Model, data: pin.Data, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Task Jacobian from joint Jacobians in ``data``, shape (n_task, nv); into ``out`` when given."""
+
+    @abc.abstractmethod
+    def drift_from_data(self, model: pin.Model, data: pin.Data) -> np.ndarray:
+        r"""Task acceleration drift :math:`\dot J_x v` from the kinematics of ``(q, v, 0)`` in ``data``."""
+
+
 @dataclass(frozen=True)
-class Task:
-    """A compiled task: frame index and selected rows of ``(p, rpy)`` / ``(v, omega)``.
+class FrameTask(Task):
+    """A compiled frame task: frame index and selected rows of ``(p, rpy)`` / ``(v, omega)``.
 
     Attributes:
         frame_id: Pinocchio frame index.
@@ -44,9 +88,9 @@ class Task:
     dofs: tuple[str, ...]
 
     @property
-    def size(self) -> int:
-        """Number of task coordinates."""
-        return len(self.rows)
+    def angles(self) -> list[int]:
+        """Indices of the rotation coordinates (``rx ry rz``) among the task's."""
+        return [k for k, r in enumerate(self.rows) if r >= 3]
 
     @functools.cached_property
     def linear(self) -> tuple[int, ...]:
@@ -102,9 +146,100 @@ def _selector(rows: tuple[int, ...]) -> slice | list[int]:
     return list(rows)
 
 
-def compile_task(model: pin.Model, frame: str, dofs: tuple[str, ...]) -> Task:
-    """Compile a task spec against a model."""
-    return Task(model.getFrameId(frame), tuple(TASK_DOFS.index(d) for d in dofs), dofs)
+@dataclass(frozen=True, eq=False)
+class JointTask(Task):
+    """A compiled joint task: the positions of output joints (one-DOF revolute or prismatic).
+
+    Attributes:
+        joint_ids: Pinocchio joint indices.
+        v_indices: their velocity indices.
+        revolute: whether each joint is revolute (angle [rad]) or prismatic (position [m]).
+        axes: each joint's axis in its own frame, shape (3,) each.
+        placements: each joint's placement in its parent joint's frame (``model.jointPlacements``).
+        dofs: the joint names.
+    """
+
+    joint_ids: tuple[int, ...]
+    v_indices: tuple[int, ...]
+    revolute: tuple[bool, ...]
+    axes: tuple[np.ndarray, ...]
+    placements: tuple[pin.SE3, ...]
+    dofs: tuple[str, ...]
+
+    @property
+    def angles(self) -> list[int]:
+        """Indices of the revolute joints among the task's."""
+        return [k for k, r in enumerate(self.revolute) if r]
+
+    def pose_from_data(self, data: pin.Data) -> np.ndarray:
+        """Joint positions [m, rad] from the joint placements ``data.liMi``, shape (n_task,).
+
+        The joint's own motion is its placement relative to its parent with the fixed
+        placement taken out; a revolute angle is wrapped to (-pi, pi].
+        """
+        out = np.empty(self.size)
+        for k, (jid, axis, M0) in enumerate(zip(self.joint_ids, self.axes, self.placements, strict=True)):
+            M = M0.actInv(data.liMi[jid])
+            out[k] = float(pin.log3(M.rotation) @ axis) if self.revolute[k] else float(M.translation @ axis)
+        return out
+
+    def jacobian_from_data(
+        self, model: pin.Model, data: pin.Data, out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Rows of the identity at the output joints' velocity indices, shape (n_task, nv)."""
+        J = np.zeros((self.size, model.nv)) if out is None else out
+        J[:] = 0.0
+        J[np.arange(self.size), list(self.v_indices)] = 1.0
+        return J
+
+    def drift_from_data(self, model: pin.Model, data: pin.Data) -> np.ndarray:
+        """Zero: a joint's acceleration is its entry of the tree acceleration, shape (n_task,)."""
+        return np.zeros(self.size)
+
+
+def compile_task(model: pin.Model, frame: str, dofs: tuple[str, ...]) -> FrameTask:
+    """Compile a frame task (directions ``dofs`` of ``frame``) against a model."""
+    return FrameTask(model.getFrameId(frame), tuple(TASK_DOFS.index(d) for d in dofs), dofs)
+
+
+def compile_joint_task(model: pin.Model, joints: tuple[str, ...]) -> JointTask:
+    """Compile a joint task (the positions of ``joints``) against a model.
+
+    Raises:
+        DescriptionError: when a joint is missing or is not a one-DOF revolute or prismatic joint.
+    """
+    data = model.createData()
+    q0 = pin.neutral(model)
+    pin.computeJointJacobians(model, data, q0)
+    ids, vs, rev, axes, placements = [], [], [], [], []
+    for name in joints:
+        if not model.existJointName(name):
+            raise DescriptionError(
+                f"end_effector.joints: no joint {name!r}; joints are {list(model.names)[1:]}"
+            )
+        jid = model.getJointId(name)
+        joint = model.joints[jid]
+        short = joint.shortname()
+        if joint.nv != 1 or not short.startswith(("JointModelR", "JointModelP")):
+            raise DescriptionError(
+                f"end_effector.joints: joint {name!r} ({short}) is not a one-DOF revolute or prismatic "
+                "joint; a joint task takes such joints only"
+            )
+        S = pin.getJointJacobian(model, data, jid, pin.ReferenceFrame.LOCAL)[:, joint.idx_v]
+        revolute = short.startswith("JointModelR")
+        ids.append(jid)
+        vs.append(joint.idx_v)
+        rev.append(revolute)
+        axes.append(np.array(S[3:] if revolute else S[:3]))
+        placements.append(model.jointPlacements[jid].copy())
+    return JointTask(tuple(ids), tuple(vs), tuple(rev), tuple(axes), tuple(placements), tuple(joints))
+
+
+def compile_task_spec(model: pin.Model, spec: TaskSpec) -> Task:
+    """Compile a sidecar task (a frame's directions, or output joints) against a model."""
+    if spec.frame is None:
+        return compile_joint_task(model, spec.dofs)
+    return compile_task(model, spec.frame, spec.dofs)
 
 
 class TaskTarget:
@@ -119,6 +254,10 @@ class TaskTarget:
         """Target ``x`` (task coordinates, shape (n_task,)) for ``task``."""
         self.task = task
         self.x = np.asarray(x, dtype=float)
+        self._joints = task if isinstance(task, JointTask) else None
+        if not isinstance(task, FrameTask):
+            return
+        self.frame_task = task
         _, self._lin, self._ang = task.selectors
         self._n_lin = nl = len(task.linear)
         self._x_lin, self._x_ang = self.x[:nl], self.x[nl:]
@@ -136,9 +275,16 @@ class TaskTarget:
         return self.task.size
 
     def residual(self, data: pin.Data, out: np.ndarray | None = None) -> np.ndarray:
-        """Residual from placements in ``data``, shape (n_task,); written into ``out`` when given."""
-        M = data.oMf[self.task.frame_id]
+        """Residual from placements in ``data``, shape (n_task,); written into ``out`` when given.
+
+        For a joint task: the joint positions minus the target, revolute angles wrapped.
+        """
         r = np.empty(self.size) if out is None else out
+        if self._joints is not None:
+            d = self._joints.pose_from_data(data) - self.x
+            r[:] = np.where(self._joints.revolute, wrap_angle(d), d)
+            return r
+        M = data.oMf[self.frame_task.frame_id]
         nl = self._n_lin
         r[:nl] = M.translation[self._lin] - self._x_lin
         if self._R is not None:
@@ -155,12 +301,14 @@ class TaskTarget:
 
         Written into ``out`` (shape (n_task, nv)) when given.
         """
-        J = pin.getFrameJacobian(model, data, self.task.frame_id, _LWA)
+        if self._joints is not None:
+            return self._joints.jacobian_from_data(model, data, out)
+        J = pin.getFrameJacobian(model, data, self.frame_task.frame_id, _LWA)
         A = np.empty((self.size, model.nv)) if out is None else out
         nl = self._n_lin
         A[:nl] = J[self._lin]
         if nl < A.shape[0]:
-            R = data.oMf[self.task.frame_id].rotation
+            R = data.oMf[self.frame_task.frame_id].rotation
             if self._R is not None:
                 E = R @ self._R.T
                 A[nl:] = pin.Jlog3(E) @ E.T @ J[3:]

@@ -65,7 +65,7 @@ def parse_epr_sidecar(data: Any, path: str | None = None, name: str | None = Non
     for i, (pair, kind) in enumerate(zip(loops, types, strict=True)):
         if not (isinstance(pair, list) and len(pair) == 2 and all(isinstance(f, str) for f in pair)):
             raise DescriptionError(f"closed_loop[{i}] must be a pair of frame names, got {short(pair)}", path)
-        if kind not in EPR_TYPES:
+        if not isinstance(kind, str) or kind not in EPR_TYPES:
             raise DescriptionError(
                 f"type[{i}]: invalid constraint type {short(kind)}; valid are {list(EPR_TYPES)}", path
             )

@@ -184,9 +184,13 @@ def build_model(description: Description) -> pin.Model:
                 f"{short(model.names[bodies.pop()])}): it constrains nothing",
                 side,
             )
-    if sidecar.task is not None and not model.existFrame(sidecar.task.frame):
-        raise FrameNotFound(sidecar.task.frame, frames, "frame", f"{side}: end_effector")
+    task = sidecar.task
+    if task is not None and task.frame is not None and not model.existFrame(task.frame):
+        raise FrameNotFound(task.frame, frames, "frame", f"{side}: end_effector")
     joints = list(model.names)[1:]
+    for joint in task.joints if task is not None else ():
+        if not model.existJointName(joint):
+            raise FrameNotFound(joint, joints, "joint", f"{side}: end_effector.joints")
     for actuator in sidecar.actuation:
         if not model.existJointName(actuator.joint):
             raise FrameNotFound(actuator.joint, joints, "joint", f"{side}: actuation")

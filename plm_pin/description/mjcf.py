@@ -759,7 +759,7 @@ def read_mjcf(path: str | Path, ignore: str | Iterable[str] = ()) -> MjcfDescrip
     task = name = source = None
     if extra is not None:
         frames = [f.name for f in model.frames]
-        if extra.task is not None and not model.existFrame(extra.task.frame):
+        if extra.task is not None and extra.task.frame is not None and not model.existFrame(extra.task.frame):
             raise FrameNotFound(extra.task.frame, frames, "frame", f"{side}: end_effector")
         for joint, values in extra.reference.items():
             if not model.existJointName(joint):

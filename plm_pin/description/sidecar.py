@@ -19,7 +19,8 @@ directions form the task. Format ``plm-pin/1``::
         screw_inertia: 0.001           # optional [kg m^2], reflected through the lead
     end_effector:
       frame: plate_center
-      task: [x, y, rz]
+      task: [x, y, rz]                 # or, for a linkage without an end effector (a gripper
+                                       # finger): joints: [finger] (the output joints' positions)
     reference:                         # optional guess of an assembled configuration
       slider1: -0.1                    # [m] or [rad]; multi-DOF joints take a list (Pinocchio order)
     closure_tolerance: 1.0e-6          # optional [m, rad]: how far the loops close (rounded CAD data)
@@ -75,6 +76,35 @@ class ClosureSpec:
     frames: tuple[str, str]
     type: ClosureType
     axis: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        """Refuse a closure of the wrong types (descriptions built in Python, not through the parser).
+
+        Raises:
+            DescriptionError: a name or frames that are not strings, a type other than those of
+                :data:`CLOSURE_TYPES` (e.g. a list), or an axis that is not 3 finite numbers.
+        """
+        where = f"closure {short(self.name)}"
+        if not isinstance(self.name, str):
+            raise DescriptionError(f"{where}: the name must be a string")
+        frames = self.frames
+        if not (
+            isinstance(frames, (tuple, list)) and len(frames) == 2 and all(isinstance(f, str) for f in frames)
+        ):
+            raise DescriptionError(f"{where}: frames must be a pair of frame names, got {short(frames)}")
+        if not isinstance(self.type, str) or self.type not in CLOSURE_TYPES:
+            raise DescriptionError(
+                f"{where}: invalid closure type {short(self.type)}; valid types are {list(CLOSURE_TYPES)}"
+            )
+        if self.axis is not None:
+            try:
+                if isinstance(self.axis, (str, bytes)):
+                    raise TypeError
+                axis = [float(a) for a in self.axis]
+            except (TypeError, ValueError):
+                axis = []
+            if len(axis) != 3 or not all(math.isfinite(a) for a in axis):
+                raise DescriptionError(f"{where}: axis must be 3 finite numbers, got {short(self.axis)}")
 
     @property
     def rows(self) -> int:
@@ -138,19 +168,31 @@ class ActuatorSpec:
 
 @dataclass(frozen=True)
 class TaskSpec:
-    """The end-effector frame and the task directions (world-aligned).
+    """The task: an end-effector frame and its directions (world-aligned), or output joints.
 
     Attributes:
-        frame: end-effector frame name.
-        dofs: task directions among ``x y z rx ry rz``.
+        frame: end-effector frame name, or None for a joint task.
+        dofs: task directions among ``x y z rx ry rz``; for a joint task, the output joints
+            (one-DOF revolute or prismatic) whose positions are the task coordinates.
     """
 
-    frame: str
+    frame: str | None
     dofs: tuple[str, ...]
 
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """The output joints of a joint task; () for a frame task."""
+        return self.dofs if self.frame is None else ()
+
     def rows(self) -> tuple[int, ...]:
-        """Rows of a 6-D spatial velocity (linear, angular) that the task keeps."""
-        return tuple(TASK_DOFS.index(d) for d in self.dofs)
+        """Rows of a 6-D spatial velocity (linear, angular) that a frame task keeps (() for a joint task)."""
+        return tuple(TASK_DOFS.index(d) for d in self.dofs) if self.frame is not None else ()
+
+    def to_dict(self) -> dict[str, Any]:
+        """The sidecar's ``end_effector`` entry."""
+        if self.frame is None:
+            return {"joints": list(self.dofs)}
+        return {"frame": self.frame, "task": list(self.dofs)}
 
 
 @dataclass(frozen=True)
@@ -216,7 +258,7 @@ class Sidecar:
             actuation.append(act)
         out["actuation"] = actuation
         if self.task is not None:
-            out["end_effector"] = {"frame": self.task.frame, "task": list(self.task.dofs)}
+            out["end_effector"] = self.task.to_dict()
         if self.reference:
             out["reference"] = {
                 k: (float(v[0]) if len(v) == 1 else [float(x) for x in v]) for k, v in self.reference.items()
@@ -256,6 +298,21 @@ def _string(value: Any, where: str, path: str | None) -> str:
     if not isinstance(value, str) or not value:
         raise DescriptionError(f"{where} must be a non-empty string, got {short(value)}", path)
     return value
+
+
+def _joint_task(ee: Mapping[str, Any], path: str | None) -> TaskSpec:
+    """The joint task of ``end_effector: {joints: [...]}`` (no frame, no task directions)."""
+    if "frame" in ee or "task" in ee:
+        raise DescriptionError(
+            "end_effector takes either joints (a joint task) or frame and task (a frame task), not both",
+            path,
+        )
+    joints = ee.get("joints")
+    if not isinstance(joints, list) or not joints or not all(isinstance(j, str) and j for j in joints):
+        raise DescriptionError("end_effector.joints must be a non-empty list of joint names", path)
+    if len(set(joints)) != len(joints):
+        raise DescriptionError(f"end_effector.joints repeats a joint: {short(joints)}", path)
+    return TaskSpec(None, tuple(joints))
 
 
 def _closure(item: Any, i: int, path: str | None) -> ClosureSpec:
@@ -376,7 +433,11 @@ def parse_sidecar(data: Any, path: str | None = None) -> Sidecar:
         ee = data["end_effector"]
         if not isinstance(ee, Mapping):
             raise DescriptionError("'end_effector' must be a mapping", path)
-        _keys(ee, ("frame", "task"), "end_effector", path)
+        _keys(ee, ("frame", "task", "joints"), "end_effector", path)
+        if "joints" in ee:
+            task = _joint_task(ee, path)
+    if data.get("end_effector") is not None and task is None:
+        ee = data["end_effector"]
         frame = _string(ee.get("frame"), "end_effector.frame", path)
         dofs = ee.get("task")
         if not isinstance(dofs, list) or not dofs:

@@ -1,6 +1,6 @@
 """Closed-chain dynamics: trajectories on the closure manifold, inverse and forward dynamics, task space."""
 
-from .decoupling import DecouplingReport, EntryBehaviour, decoupling_check
+from .decoupling import DecouplingReport, EntryBehaviour, decoupling_check, task_velocities
 from .inverse_dynamics import TERMS, InverseDynamics, inverse_dynamics
 from .simulation import SimulationResult, simulate
 from .task_space import TaskSpaceDynamics, task_space_dynamics
@@ -35,4 +35,5 @@ __all__ = [
     "spline_work",
     "task_space_dynamics",
     "task_trajectory",
+    "task_velocities",
 ]

@@ -82,7 +82,7 @@ from ..core.assembly import assemble
 from ..core.closures import Closure
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, SingularConfiguration
-from ..statics.balance import Load
+from ..statics.balance import AnyLoad, Load
 from ..tolerances import CROSSING_WATCH_RTOL, LOST_ROW_DRIFT_RTOL, RANK_RTOL, SHEET_GRADIENT_RTOL
 
 SOLVERS = ("auto", "kkt", "pinocchio")
@@ -197,7 +197,7 @@ class ClosedChainDynamics:
         rank: number of independent closure rows, :math:`n_v - \text{mobility}`.
     """
 
-    def __init__(self, mech: Mechanism, solver: str, load: Load | None) -> None:
+    def __init__(self, mech: Mechanism, solver: str, load: AnyLoad | None) -> None:
         """Prepare the solver ``solver`` (``auto``, ``kkt`` or ``pinocchio``) for ``mech`` and ``load``."""
         self.solver = resolve_solver(mech, solver)
         self.model = model = mech.model
@@ -242,7 +242,7 @@ class ClosedChainDynamics:
         """Generalized force of the wrench from joint Jacobians and placements in ``data``, (nv,)."""
         if self.load is None:
             return None
-        return pin.getFrameJacobian(self.model, data, self.load.frame_id, _LWA).T @ self.load.wrench
+        return self.load.generalized_force(self.model, data)
 
     def _split(self, J: np.ndarray) -> tuple[ReducedRows, np.ndarray]:
         """The closure Jacobian's independent rows, and the left singular vectors of rows lost here.
@@ -381,10 +381,12 @@ class ClosedChainDynamics:
         """``pin.constraintDynamics``'s accelerations (nv,); None when its iterations hit their cap."""
         model, data = self.model, self._pin_data
         applied = tau
-        if self.load is not None:
+        if isinstance(self.load, Load):
             applied = (
                 tau + pin.computeFrameJacobian(model, data, q, self.load.frame_id, _LWA).T @ self.load.wrench
             )
+        elif self.load is not None:
+            applied = tau + self.load.generalized_force(model)
         a = pin.constraintDynamics(model, data, q, v, applied, self._cms, self._cds, self._settings)
         # not converged: ill-conditioned closures
         return None if self._settings.iter >= self._settings.max_iter else a

@@ -4,12 +4,18 @@ Harada 2011 (eq. (23), (26), (M.29)-(M.30)) designs its 2-PRRRP table so that th
 is *decoupled with constant inertia*: :math:`m_{xx}` constant, :math:`m_{xy} = m_{x\theta} = 0`,
 no velocity or gravity term along x. :func:`decoupling_check` tests such claims numerically
 for any mechanism: it evaluates :func:`plm_pin.dynamics.task_space.task_space_dynamics` at
-every pose of a sample (and at random task velocities for :math:`h_x`) and classifies
+every pose of a sample (and at a stated set of task velocities for :math:`h_x`) and classifies
 
 - each entry of :math:`M_x` and each row of :math:`g_x` as ``zero`` (vanishes at every
   pose), ``constant`` (one value at every pose) or ``varies`` (with its range);
-- each row of :math:`h_x` as ``zero`` or ``varies`` (:math:`h_x` is quadratic in the task
-  velocity, so a row that does not vanish varies).
+- each row of :math:`h_x` as ``zero`` or ``nonzero`` (with its range over the poses and
+  velocities).
+
+Velocities. At a pose :math:`h_x` is a quadratic form in the task velocity,
+:math:`h_{x,i} = \dot x^T \Gamma_i \dot x`, so its values at the :math:`n (n + 1) / 2`
+velocities :math:`v e_i` and :math:`v (e_i + e_j)`, :math:`i < j` (:func:`task_velocities`, each
+rate :math:`v` = ``velocity_scale`` in m/s or rad/s), determine it: a row that vanishes at
+all of them vanishes at every velocity. The range reported is over those velocities.
 
 Tolerances. Each entry is compared with the largest value it could take, its
 Cauchy-Schwarz bound in the kinetic-energy metric of the tree (:math:`s_i = S e_i` the
@@ -20,7 +26,8 @@ motion of task coordinate :math:`i`, :math:`\|s_i\|_M^2 = M_{x,ii}`):
     |g_{x,i}| \le \sqrt{M_{x,ii}}\, \sqrt{g^T M^{-1} g}, \qquad
     |h_{x,i}| \le \sqrt{M_{x,ii}}\, \sqrt{h^T M^{-1} h},
 
-(:math:`M, g, h` the joint-space terms). An entry is ``zero`` when at every pose (and
+(:math:`M, g, h` the joint-space terms; for :math:`h_x` the largest bound over the velocities
+at that pose). An entry is ``zero`` when at every pose (and
 velocity) its magnitude is at most :math:`\text{atol} + \text{rtol}\, B` with :math:`B`
 its bound there, and ``constant`` when its range (max - min) over the sample is at most
 :math:`\text{tol} = \text{atol} + \text{rtol} \max B`; tolerances are in the entry's own
@@ -48,9 +55,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._arguments import check_tolerance, positive
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
-from ..kinematics.inverse import inverse_kinematics
+from ..kinematics.inverse import check_mode, inverse_kinematics
 from ..kinematics.jacobians import check_square_task
 from ..kinematics.singularity import classify
 from ..kinematics.working_mode import working_mode
@@ -66,7 +74,7 @@ class EntryBehaviour(Result):
 
     Attributes:
         kind: ``zero`` (vanishes at every pose), ``constant`` (one value at every pose) or
-            ``varies``; a velocity-term row is ``zero`` or ``varies``.
+            ``varies``; a velocity-term row is ``zero`` or ``nonzero``.
         minimum: smallest value over the sample [unit].
         maximum: largest value over the sample [unit].
         tolerance: ``atol + rtol *`` the entry's largest bound over the sample: the threshold
@@ -101,19 +109,23 @@ class EntryBehaviour(Result):
         return max(abs(self.minimum), abs(self.maximum))
 
     def describe(self) -> str:
-        """Short text: ``0``, the constant value, or the range, with the unit."""
+        """Short text: ``0``, the constant value, or the range with as many digits as tell its ends apart."""
         if self.kind == "zero":
             return "0"
         if self.kind == "constant":
             return f"{self.value:.6g} {self.unit}"
-        return f"{self.minimum:.4g} .. {self.maximum:.4g} {self.unit}"
+        digits = next((p for p in range(4, 18) if f"{self.minimum:.{p}g}" != f"{self.maximum:.{p}g}"), 4)
+        return f"{self.minimum:.{digits}g} .. {self.maximum:.{digits}g} {self.unit}"
 
 
 def _behaviour(
     zero: bool, minimum: float, maximum: float, tol: float, ratio: float, unit: str, *, constant: bool = True
 ) -> EntryBehaviour:
-    """Classify an entry; ``constant=False`` for velocity terms, which vanish at zero velocity."""
-    kind = "zero" if zero else "constant" if constant and maximum - minimum <= tol else "varies"
+    """Classify an entry; ``constant=False`` for velocity terms: ``zero`` or ``nonzero`` (0 at rest)."""
+    if not constant:
+        kind = "zero" if zero else "nonzero"
+    else:
+        kind = "zero" if zero else "constant" if maximum - minimum <= tol else "varies"
     return EntryBehaviour(kind, float(minimum), float(maximum), float(tol), float(ratio), unit)
 
 
@@ -141,15 +153,16 @@ class DecouplingReport(Result):
         g_tol: tolerance of each row of :math:`g_x`, shape (n_task,).
         g_zero: whether each row of :math:`g_x` vanishes at every pose, shape (n_task,).
         g_ratio: largest ratio of each row of :math:`g_x` to its bound [-], shape (n_task,).
-        h_min: smallest value of each row of :math:`h_x` at the sampled velocities [N, N m], shape (n_task,).
+        h_min: smallest value of each row of :math:`h_x` at the velocities ``velocities`` [N, N m],
+            shape (n_task,).
         h_max: largest value of each row of :math:`h_x`, shape (n_task,).
         h_tol: tolerance of each row of :math:`h_x`, shape (n_task,).
         h_zero: whether each row of :math:`h_x` vanishes at every pose and velocity, shape (n_task,).
         h_ratio: largest ratio of each row of :math:`h_x` to its bound [-], shape (n_task,).
         rtol: cancellation ratio used [-].
         atol: absolute tolerance used, in each entry's unit.
-        n_velocities: random task velocities per pose.
-        velocity_scale: standard deviation of their components [m/s, rad/s].
+        velocities: the task velocities :math:`h_x` is evaluated at, at every pose
+            (:func:`task_velocities`) [m/s, rad/s], shape (n_task (n_task + 1) / 2, n_task).
     """
 
     mechanism: str
@@ -175,8 +188,7 @@ class DecouplingReport(Result):
     h_ratio: np.ndarray = field(metadata=unit("-"))
     rtol: float = field(metadata=unit("-"))
     atol: float
-    n_velocities: int
-    velocity_scale: float = field(metadata=unit("m/s, rad/s"))
+    velocities: np.ndarray = field(metadata=unit("m/s, rad/s"))
     _SKIPPED = (
         "configurations",
         *(f"{t}_{s}" for t in "Mgh" for s in ("min", "max", "tol", "zero", "ratio")),
@@ -191,6 +203,7 @@ class DecouplingReport(Result):
         }
         for name in ("poses", "unreachable", "singular"):
             shapes[name] = (getattr(self, name).shape[0], n)
+        shapes["velocities"] = (n * (n + 1) // 2, n)
         shapes["configurations"] = (self.poses.shape[0], self.configurations.shape[-1])
         for name, shape in shapes.items():
             arr = getattr(self, name)
@@ -232,7 +245,7 @@ class DecouplingReport(Result):
         )
 
     def velocity(self, row: str) -> EntryBehaviour:
-        """Behaviour of the row ``row`` of :math:`h_x` at the sampled velocities (``zero`` or ``varies``)."""
+        """Behaviour of the row ``row`` of :math:`h_x` at :attr:`velocities` (``zero`` or ``nonzero``)."""
         i = self._index(row)
         unit = task_units(self.dofs)[1][i]
         return _behaviour(
@@ -274,8 +287,8 @@ class DecouplingReport(Result):
         """Readable text table: ``0``, a constant value, or a range per entry, with the tolerances."""
         header = [
             f"Decoupling of {self.mechanism} over {self.n_poses} poses ({len(self.unreachable)} unreachable "
-            f"and {len(self.singular)} singular skipped), h_x at {self.n_velocities} random task velocities "
-            f"per pose (components of standard deviation {self.velocity_scale:g} m/s, rad/s)",
+            f"and {len(self.singular)} singular skipped), h_x at the {len(self.velocities)} task velocities "
+            f"{self.velocity_text()} per pose, which determine it (zero there: zero at every velocity)",
             f"zero: |value| <= atol + rtol x its Cauchy-Schwarz bound at every pose; constant: max - min <= "
             f"tol = atol + rtol x largest bound (atol = {self.atol:g}, rtol = {self.rtol:g}); (n%): largest "
             f"|value| / bound",
@@ -291,11 +304,16 @@ class DecouplingReport(Result):
         footer = f"decoupled with constant inertia: {', '.join(decoupled) if decoupled else 'none'}"
         return "\n".join([*header, "", *lines, "", footer])
 
+    def velocity_text(self) -> str:
+        """The velocities :math:`h_x` is evaluated at, in words, with their rate ``v`` stated."""
+        v = float(np.abs(self.velocities).max())
+        return f"v e_i and v (e_i + e_j), i < j, with v = {v:g} m/s or rad/s along each task coordinate"
+
     @staticmethod
     def _cell(entry: EntryBehaviour, with_ratio: bool) -> str:
-        if entry.kind != "varies":
+        if entry.kind not in ("varies", "nonzero"):
             return entry.describe()
-        return f"varies {entry.describe()}" + (f" ({entry.ratio:.0%})" if with_ratio else "")
+        return f"{entry.kind} {entry.describe()}" + (f" ({entry.ratio:.0%})" if with_ratio else "")
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for JSON: per-entry behaviours, tolerances and the skipped poses."""
@@ -361,9 +379,7 @@ def decoupling_check(
     mode: tuple[int, ...] | None = None,
     rtol: float = DECOUPLING_RTOL,
     atol: float = 0.0,
-    n_velocities: int = 2,
     velocity_scale: float = 1.0,
-    seed: int = 0,
     singular_tol: float = SINGULARITY_TOL,
 ) -> DecouplingReport:
     """Classify the entries of :math:`M_x`, :math:`g_x` and :math:`h_x` over a workspace sample.
@@ -376,9 +392,8 @@ def decoupling_check(
             a workspace slice keeps its own.
         rtol: cancellation ratio for ``zero`` and ``constant`` [-].
         atol: absolute tolerance added, in each entry's unit.
-        n_velocities: random task velocities per pose at which :math:`h_x` is evaluated.
-        velocity_scale: standard deviation of their components [m/s, rad/s].
-        seed: random seed of the velocities (results are deterministic for a given seed).
+        velocity_scale: the rate :math:`v` of the task velocities :math:`h_x` is evaluated at
+            (:func:`task_velocities`) [m/s or rad/s per task coordinate].
         singular_tol: inverse or constraint margin (:func:`plm_pin.kinematics.classify`) at or
             below which a pose is skipped as singular [-]; direct (type 2) singularities are
             kept, :math:`M_x` being defined there.
@@ -394,15 +409,12 @@ def decoupling_check(
     task = require_task(mech)
     n = task.size
     check_square_task(n, mech.mobility, "decoupling checks need", mech.name)
-    if not (rtol >= 0.0 and atol >= 0.0 and np.isfinite(rtol) and np.isfinite(atol)):
-        raise InvalidInput(f"rtol and atol must be finite and non-negative, got rtol={rtol!r}, atol={atol!r}")
-    if n_velocities < 1 or not (velocity_scale > 0.0 and np.isfinite(velocity_scale)):
-        raise InvalidInput(
-            f"n_velocities must be at least 1 and velocity_scale finite and positive, got "
-            f"{n_velocities!r} and {velocity_scale!r}"
-        )
+    rtol, atol = check_tolerance(rtol, "rtol"), check_tolerance(atol, "atol")
+    velocity_scale = positive(velocity_scale, "velocity_scale", "m/s, rad/s")
+    singular_tol = check_tolerance(singular_tol, "singular_tol")
+    mode = check_mode(mech, mode)
     poses, configurations = _sample(mech, sample, mode, n)
-    rng = np.random.default_rng(seed)
+    velocities = task_velocities(n, velocity_scale)
     kept: list[int] = []
     kept_q: list[np.ndarray] = []
     singular: list[int] = []
@@ -413,10 +425,7 @@ def decoupling_check(
         if {"inverse", "constraint"}.intersection(classify(mech, q, singular_tol).kinds):
             singular.append(k)
             continue
-        dyn = [
-            task_space_dynamics(mech, q, xdot=velocity_scale * rng.standard_normal(n))
-            for _ in range(n_velocities)
-        ]
+        dyn = [task_space_dynamics(mech, q, xdot=xdot, singularity_tol=singular_tol) for xdot in velocities]
         kept.append(k)
         kept_q.append(q)
         _collect(terms, dyn)
@@ -448,9 +457,23 @@ def decoupling_check(
         **fields,
         rtol=float(rtol),
         atol=float(atol),
-        n_velocities=int(n_velocities),
-        velocity_scale=float(velocity_scale),
+        velocities=velocities,
     )
+
+
+def task_velocities(n: int, rate: float = 1.0) -> np.ndarray:
+    """Task velocities that determine a quadratic form in n rates: ``rate e_i``, ``rate (e_i + e_j)``, i < j.
+
+    Args:
+        n: number of task coordinates.
+        rate: the rate along each coordinate involved [m/s or rad/s].
+
+    Returns:
+        The velocities [m/s, rad/s], shape (n (n + 1) / 2, n).
+    """
+    eye = np.eye(n)
+    pairs = [eye[i] + eye[j] for i in range(n) for j in range(i + 1, n)]
+    return rate * np.vstack([eye, *pairs]) if pairs else rate * eye
 
 
 def _collect(terms: dict[str, list[np.ndarray]], dyn: list[TaskSpaceDynamics]) -> None:
@@ -462,6 +485,10 @@ def _collect(terms: dict[str, list[np.ndarray]], dyn: list[TaskSpaceDynamics]) -
     terms["M_bound"].append(np.outer(d, d))
     terms["g"].append(first.g_x)
     terms["g_bound"].append(d * np.sqrt(first.g @ M_inv @ first.g))
+    # h's bound at each velocity, raised to the pose's largest: at a velocity that moves little
+    # (e.g. a decoupled coordinate's own rate) the bound itself is round-off, and so is h_x there
+    bounds = [d * np.sqrt(t.h @ M_inv @ t.h) for t in dyn]
+    scale = np.max(bounds, axis=0)
     for t in dyn:
         terms["h"].append(t.h_x)
-        terms["h_bound"].append(d * np.sqrt(t.h @ M_inv @ t.h))
+        terms["h_bound"].append(scale)

@@ -32,10 +32,12 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import load_arguments, repeated
+from .._arguments import check_tolerance, flag, load_arguments, mapping, repeated
+from .._text import short
 from ..core import closures as _closures
 from ..core.checks import check_finite_model, check_samples_assembled
 from ..core.mechanism import Mechanism
+from ..core.task import FrameTask
 from ..exceptions import (
     AllocationInfeasible,
     InvalidInput,
@@ -44,7 +46,7 @@ from ..exceptions import (
 )
 from ..results import Result, unit
 from ..statics import AllocationRule, solve_balance
-from ..statics.balance import Load, _balance, balance_factors, load_on_frame
+from ..statics.balance import AnyLoad, Load, balance_factors, build_balance, load_on_frame
 from ..tolerances import STATICS_SINGULAR_RTOL
 from .trajectory import JointTrajectory, checked_trajectory
 
@@ -141,6 +143,17 @@ class _BodyGroups:
         return members, support
 
 
+def _body_names(members: object, group: object) -> list[str]:
+    """The bodies of one group: a sequence of body names (strings)."""
+    if (
+        isinstance(members, (str, bytes))
+        or not isinstance(members, Sequence)
+        or not all(isinstance(b, str) for b in members)
+    ):
+        raise InvalidInput(f"groups[{group!r}] must be a sequence of body names, got {short(members)}")
+    return list(members)
+
+
 def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) -> _BodyGroups:
     """The groups of bodies (bodies named by their joint's first body frame), checked."""
     model = mech.model
@@ -149,7 +162,8 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
         chosen = {name: [name] for name in bodies}
         _check_group_names(list(chosen), default=True)
     else:
-        chosen = {str(g): list(members) for g, members in groups.items()}
+        what = "group names to sequences of body names"
+        chosen = {str(g): _body_names(members, g) for g, members in mapping(groups, "groups", what).items()}
         _check_group_names(list(chosen), default=False)
         listed = [b for members in chosen.values() for b in members]
         unknown = sorted(set(listed) - set(bodies))
@@ -285,6 +299,8 @@ def inverse_dynamics(
     """
     trajectory = checked_trajectory(trajectory, "trajectory")
     load_arguments(None if callable(wrench) else wrench, frame, limits, mech.n_actuators)
+    check_tolerance(singular_rtol, "singular_rtol", relative=True)
+    flag(gravity, "gravity")
     rule = AllocationRule.checked(
         mech,
         objective=objective,
@@ -327,7 +343,7 @@ class _Kinematics:
         n, m = trajectory.t.shape[0], mech.n_closure_rows
         frame_id = None
         if loaded and frame is None:
-            frame_id = task.frame_id if task is not None else None
+            frame_id = task.frame_id if isinstance(task, FrameTask) else None
         elif loaded and model.existFrame(frame):
             frame_id = model.getFrameId(frame)
         square = task is not None and task.size == mech.mobility == mech.n_actuators
@@ -356,7 +372,7 @@ def _run(
     trajectory: JointTrajectory,
     kinematics: _Kinematics,
     rule: AllocationRule,
-    load_at: Callable[[float], Load | None],
+    load_at: Callable[[float], AnyLoad | None],
     body: _BodyGroups,
     gravity: bool,
     singular_rtol: float,
@@ -382,8 +398,10 @@ def _run(
         parts[:, 0] = tau_full - nle
         parts[:, 1] = nle - g_full
         parts[:, 2] = g_full if gravity else 0.0
-        if load is not None and kinematics.J_load is not None:
+        if isinstance(load, Load) and kinematics.J_load is not None:
             parts[:, 3] = -(kinematics.J_load[i].T @ load.wrench)
+        elif load is not None:
+            parts[:, 3] = -load.generalized_force(model, data)
         tau = parts.sum(axis=1)
         try:
             if linear:  # weighted minimum norm: the forces are F tau, one factorisation
@@ -397,7 +415,7 @@ def _run(
                 out.internal.append(factors.G.T @ f_c)
                 N, C = factors.N, factors.C
             else:
-                balance = _balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol, v, a)
+                balance = build_balance(mech, q, tau, load, gravity, J_phi, act_v, singular_rtol, v, a)
                 sol = solve_balance(mech, balance, rule)
                 F = rule.linear_map(balance)
                 f_c, lam = sol.f_c, sol.lam
@@ -456,7 +474,7 @@ def _body_shares(
 
 def _load_function(
     mech: Mechanism, wrench: ArrayLike | Callable[[float], ArrayLike] | None, frame: str | None
-) -> Callable[[float], Load | None]:
+) -> Callable[[float], AnyLoad | None]:
     """``t -> Load`` for a constant or time-varying wrench, checked on first use."""
     if wrench is None:
         return lambda t: None

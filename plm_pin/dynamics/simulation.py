@@ -74,11 +74,11 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 from scipy.integrate import DOP853
 
-from .._arguments import as_vector, optional_name, positive, real_numbers, sample_count
+from .._arguments import as_vector, optional_name, physical_effort, positive, real_numbers, sample_count
 from ..core.mechanism import Mechanism
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
 from ..results import Result, unit
-from ..statics.balance import load_on_frame
+from ..statics.balance import JointLoad, load_on_frame
 from ..tolerances import (
     CROSSING_MARGIN,
     ENERGY_ROUND_OFF_RTOL,
@@ -666,7 +666,11 @@ def simulate(
     if wrench is None and frame is not None:
         raise InvalidInput(f"frame {frame!r} given without a wrench")
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
+    if load is not None:
+        physical_effort(load.forces if isinstance(load, JointLoad) else load.wrench, "wrench")
     forces = _check_forces(mech, actuator_forces)
+    if not callable(forces):
+        physical_effort(forces, "actuator_forces")
     dyn = ClosedChainDynamics(mech, solver, load)
     q, v = _check_start(mech, q0, v0, closure_tol)
     times = _output_times(duration, dt)

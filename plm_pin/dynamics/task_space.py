@@ -55,13 +55,13 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import as_vector
+from .._arguments import as_vector, check_tolerance
 from ..core.checks import check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
-from ..exceptions import InvalidInput
+from ..exceptions import InvalidInput, SingularConfiguration
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
-from ..kinematics.singularity import inverse_margins
+from ..kinematics.singularity import SINGULARITY_TOL, inverse_margins
 from ..results import Result, unit
 from ..tolerances import FEASIBLE_VELOCITY_RTOL, ILL_CONDITIONED_MARGIN
 from ..warnings import IllConditionedWarning
@@ -160,7 +160,12 @@ class TaskSpaceDynamics(Result):
 
 
 def task_space_dynamics(
-    mech: Mechanism, q: ArrayLike, v: ArrayLike | None = None, *, xdot: ArrayLike | None = None
+    mech: Mechanism,
+    q: ArrayLike,
+    v: ArrayLike | None = None,
+    *,
+    xdot: ArrayLike | None = None,
+    singularity_tol: float = SINGULARITY_TOL,
 ) -> TaskSpaceDynamics:
     r"""Task inertia, velocity and gravity terms at an assembled state.
 
@@ -170,6 +175,8 @@ def task_space_dynamics(
         v: feasible tree velocity (:math:`J_\phi v = 0`) [m/s, rad/s], shape (nv,).
         xdot: task velocity (twist rows) [m/s, rad/s], shape (n_task,), instead of ``v``
             (then :math:`v = S \dot x`). Neither: at rest (:math:`h_x = 0`).
+        singularity_tol: inverse margin at or below which ``q`` counts as inverse-singular [-]
+            (the tolerance of :func:`plm_pin.kinematics.classify`; a finite number >= 0).
 
     Returns:
         :math:`M_x, h_x, g_x` with the joint-space terms they come from.
@@ -180,7 +187,8 @@ def task_space_dynamics(
         DescriptionError: a body's inertia is not finite (see :func:`plm_pin.core.checks.check_finite_model`).
         ClosureNotSatisfied: ``q`` is not assembled to :attr:`Mechanism.assembled_tol`.
         SingularConfiguration: at an inverse-kinematics (type 1) singularity, where :math:`S`
-            is undefined.
+            is undefined: an inverse margin at or below ``singularity_tol``, as
+            :func:`plm_pin.kinematics.classify` decides.
 
     Warns:
         IllConditionedWarning: when the inverse margin is below :data:`ILL_CONDITIONED_MARGIN`
@@ -189,11 +197,18 @@ def task_space_dynamics(
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "task-space dynamics needs", mech.name)
+    tol = check_tolerance(singularity_tol, "singularity_tol")
     qa = check_assembled(mech, q)
     check_finite_model(mech)
     jac = closed_chain_jacobians(mech, qa)
-    S = jac.S  # (nv, n_task)
     margin = float(inverse_margins(jac.T, jac.J_x))
+    if margin <= tol:
+        raise SingularConfiguration(
+            f"{mech.name}: inverse-kinematics (type 1) singular configuration: inverse margin {margin:.3g} "
+            f"at or below the tolerance {tol:.3g} (as plm_pin.kinematics.classify decides); S and M_x are "
+            "undefined there"
+        )
+    S = jac.S  # (nv, n_task)
     if margin < ILL_CONDITIONED_MARGIN:
         warnings.warn(
             f"{mech.name}: near an inverse (type 1) singularity: inverse margin {margin:.3g} below "

@@ -63,18 +63,19 @@ Units: time [s]; lengths [m], angles [rad] and their rates [/s], [/s^2].
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
-from scipy.interpolate import BPoly, make_interp_spline
 
+from .._arguments import check_tolerance, positive, real_numbers, signs
+from .._lazy import lazy_module
 from .._text import short
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism, require_task
-from ..core.task import Task
+from ..core.task import FrameTask, Task
 from ..exceptions import (
     ClosureNotSatisfied,
     InvalidInput,
@@ -88,6 +89,8 @@ from ..kinematics.jacobians import ClosedChainJacobians, check_square_task, clos
 from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
 from ..tolerances import RANK_RTOL, RATE_CONSISTENCY_TOL, SINGULARITY_TOL
+
+interpolate = lazy_module("scipy.interpolate")  # BPoly, make_interp_spline
 
 Profile = Callable[[float], ArrayLike]
 """A profile: ``t`` [s] -> ``(x, xd, xdd)``, each shape (n,) (or three numbers when n = 1)."""
@@ -124,9 +127,7 @@ def differentiated_profile(positions: Callable[[float], ArrayLike], step: float 
     Raises:
         InvalidInput: on a step that is not a positive finite number.
     """
-    h = float(step)
-    if not (np.isfinite(h) and h > 0.0):
-        raise InvalidInput(f"step must be a positive finite time [s], got {step!r}")
+    h = positive(step, "step", "s")
 
     def profile(t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         xm2, xm1, x0, xp1, xp2 = (np.asarray(positions(t + j * h), dtype=float) for j in (-2, -1, 0, 1, 2))
@@ -175,12 +176,12 @@ def sampled_profile(
     if len(given) == 3:
         if ts.shape[0] < 2:
             raise InvalidInput("a Hermite profile needs at least 2 samples")
-        poly = BPoly.from_derivatives(ts, np.stack(given, axis=1))
+        poly = interpolate.BPoly.from_derivatives(ts, np.stack(given, axis=1))
         d1, d2 = poly.derivative(1), poly.derivative(2)
     else:
         if ts.shape[0] < 6:
             raise InvalidInput(f"a quintic spline through x needs at least 6 samples, got {ts.shape[0]}")
-        poly = make_interp_spline(ts, given[0], k=5, axis=0)
+        poly = interpolate.make_interp_spline(ts, given[0], k=5, axis=0)
         d1, d2 = poly.derivative(1), poly.derivative(2)
 
     def profile(time: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -190,7 +191,7 @@ def sampled_profile(
 
 
 def _samples(values: ArrayLike, n: int, name: str) -> np.ndarray:
-    arr = np.asarray(values, dtype=float)
+    arr = np.asarray(real_numbers(values, name), dtype=float)
     arr = arr[:, None] if arr.ndim == 1 else arr
     if arr.ndim != 2 or arr.shape[0] != n:
         raise InvalidInput(f"{name} must have shape ({n}, n) or ({n},), one row per time, got {arr.shape}")
@@ -234,6 +235,11 @@ def _evaluate(
     Raises:
         InvalidInput: on a value of the wrong shape or not finite, naming the sample.
     """
+    if profile is None or isinstance(profile, (str, bytes, Mapping)):
+        raise InvalidInput(
+            f"profile must be a function t -> (x, xd, xdd) or positions sampled at the times, shape "
+            f"({times.shape[0]}, {size}); got {short(profile)}"
+        )
     fn: Profile = profile if callable(profile) else sampled_profile(times, profile)
     out = np.empty((3, times.shape[0], size))
     for k, t in enumerate(times.tolist()):
@@ -420,8 +426,10 @@ class _RateRows:
     def __init__(self, task: Task, model: pin.Model) -> None:
         self.task = task
         self.model = model
-        self.n_lin = len(task.linear)
-        self.angular = list(task.angular)
+        frame = task if isinstance(task, FrameTask) else None  # a joint task's rates are its velocities
+        self.n_lin = len(frame.linear) if frame is not None else task.size
+        self.angular = list(frame.angular) if frame is not None else []
+        self.frame_id = frame.frame_id if frame is not None else -1
         self.E_inv = np.eye(3)
         self.rpy = np.zeros(3)
 
@@ -433,14 +441,14 @@ class _RateRows:
         """
         if not self.angular:
             return J_x
-        self.rpy = pin.rpy.matrixToRpy(data.oMf[self.task.frame_id].rotation)
+        self.rpy = pin.rpy.matrixToRpy(data.oMf[self.frame_id].rotation)
         self.rpy[self.angular] = x[self.n_lin :]
         if abs(np.cos(self.rpy[1])) <= RANK_RTOL:
             raise SingularConfiguration(
                 f"roll-pitch-yaw rates are undefined at pitch ry = {self.rpy[1]:.9g} rad (cos ry = 0)"
             )
         self.E_inv = pin.rpy.computeRpyJacobianInverse(self.rpy, _WORLD)
-        J_omega = pin.getFrameJacobian(self.model, data, self.task.frame_id, _LWA)[3:]
+        J_omega = pin.getFrameJacobian(self.model, data, self.frame_id, _LWA)[3:]
         J_r = J_x.copy()
         J_r[self.n_lin :] = (self.E_inv @ J_omega)[self.angular]
         return J_r
@@ -450,7 +458,7 @@ class _RateRows:
         drift = self.task.drift_from_data(self.model, data)
         if not self.angular:
             return drift
-        fid = self.task.frame_id
+        fid = self.frame_id
         omega = pin.getFrameVelocity(self.model, data, fid, _LWA).angular
         alpha = pin.getFrameClassicalAcceleration(self.model, data, fid, _LWA).angular
         rates = self.E_inv @ omega
@@ -504,6 +512,8 @@ def task_trajectory(
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "a task trajectory needs", mech.name)
+    tol, singularity_tol = positive(tol, "tol", "m, rad"), check_tolerance(singularity_tol, "singularity_tol")
+    mode = signs(mode, "mode")
     ts = _check_times(times)
     x_all, xd_all, xdd_all = _evaluate(profile, ts, task.size)
     rec = _Recorder(mech, task, ts)
@@ -591,6 +601,8 @@ def actuator_trajectory(
             f"{mech.name}: {mech.n_actuators} actuators cannot drive {mech.mobility} DOF; an actuator "
             "trajectory needs at least as many actuators as DOF"
         )
+    tol, singularity_tol = positive(tol, "tol", "m, rad"), check_tolerance(singularity_tol, "singularity_tol")
+    consistency_tol = check_tolerance(consistency_tol, "consistency_tol")
     ts = _check_times(times)
     c_all, cd_all, cdd_all = _evaluate(profile, ts, mech.n_actuators)
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
@@ -626,8 +638,7 @@ def actuator_trajectory(
             raise rec.stop("actuator", k, exc) from exc
         rec.x[k] = task.pose_from_data(mech.data)
         rec.record(k, q, v, a, jac.J_x, mech.actuator_positions(q))
-    n_lin = len(task.linear)
-    rec.x[:, n_lin:] = np.unwrap(rec.x[:, n_lin:], axis=0)
+    rec.x[:, task.angles] = np.unwrap(rec.x[:, task.angles], axis=0)
     return rec.result()
 
 

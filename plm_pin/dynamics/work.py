@@ -19,14 +19,17 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import CubicSpline
 
+from .._arguments import count, positive
+from .._lazy import lazy_module
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..results import Result, unit
 from ..tolerances import ZHAO_WORK_TOL
 from .inverse_dynamics import inverse_dynamics
 from .trajectory import Profile, task_trajectory
+
+interpolate = lazy_module("scipy.interpolate")  # CubicSpline
 
 
 @dataclass(frozen=True)
@@ -73,10 +76,9 @@ def adaptive_trapezoid_work(
     """
     if not (np.isfinite(ts) and np.isfinite(te) and te > ts):
         raise InvalidInput(f"need finite ts < te, got ts = {ts}, te = {te}")
-    if not tol > 0:
-        raise InvalidInput(f"tol must be positive [J], got {tol}")
+    tol, n_max = positive(tol, "tol", "J"), count(n_max, "n_max", minimum=1)
     previous = change = None
-    for n in range(1, int(n_max) + 1):
+    for n in range(1, n_max + 1):
         t = np.linspace(ts, te, 2**n + 1)
         work = np.trapezoid(np.abs(np.asarray(power_at(t), dtype=float)), t, axis=0)
         if previous is not None:
@@ -109,7 +111,7 @@ def spline_work(t: ArrayLike, power: ArrayLike) -> np.ndarray:
     columns = P.reshape(tt.shape[0], -1).T
     out = np.empty(columns.shape[0])
     for k, column in enumerate(columns):
-        spline = CubicSpline(tt, column)
+        spline = interpolate.CubicSpline(tt, column)
         roots = spline.roots(extrapolate=False)
         edges = np.unique(np.concatenate([[tt[0]], roots, [tt[-1]]]))
         antiderivative = spline.antiderivative()

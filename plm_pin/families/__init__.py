@@ -8,9 +8,9 @@
 
 The named presets built from them are in :mod:`plm_pin.models`; the generic closed-chain
 machinery they use is in :mod:`plm_pin.kinematics`. Each family's names are public in its own
-package only: ``from plm_pin.families.prrrp import build_2prrrp``.
+package only: ``from plm_pin.families.prrrp import build_2prrrp``. This package imports none
+of them: a family is loaded when it is used (building a preset, planning a mode change), never
+by ``import plm_pin`` nor by loading a shipped description.
 """
 
-from . import classic, prrrp, pss, star_triangle
-
-__all__ = ["classic", "prrrp", "pss", "star_triangle"]
+__all__: list[str] = []

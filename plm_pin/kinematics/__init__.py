@@ -1,4 +1,4 @@
-"""Closed-chain kinematics of a Mechanism: IK, FK, Jacobians, working modes, singularities, limits, paths.
+"""Closed-chain kinematics of a Mechanism: IK, FK, Jacobians, modes, singularities, limits, paths, reference.
 
 Generic: any mechanism with a sidecar; the Mechanism and what it is made of (closures, task,
 legs, assembly) are in :mod:`plm_pin.core`. Family-specific modes and planners (the 2-PRRRP's) are in
@@ -11,8 +11,9 @@ from .inverse import IKSolution, inverse_kinematics, working_modes
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
 from .mode_graph import ModeEdge, ModeGraph, ModeNode
 from .paths import TrackedPath, follow_targets, redundancy_margin, track_actuator_path
+from .reference import ReferenceReport, choose_reference, reference_report
 from .singularity import SingularityReport, classify
-from .working_mode import working_mode
+from .working_mode import guess_mode, working_mode
 
 __all__ = [
     "ClosedChainJacobians",
@@ -21,15 +22,19 @@ __all__ = [
     "ModeEdge",
     "ModeGraph",
     "ModeNode",
+    "ReferenceReport",
     "SingularityReport",
     "TaskTarget",
     "TrackedPath",
+    "choose_reference",
     "classify",
     "closed_chain_jacobians",
     "follow_targets",
     "forward_kinematics",
+    "guess_mode",
     "inverse_kinematics",
     "redundancy_margin",
+    "reference_report",
     "same_assembly",
     "task_pose",
     "track_actuator_path",

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import count, positive
+from .._arguments import count, flag, positive
 from ..core.assembly import assemble, newton
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
@@ -59,7 +59,11 @@ def same_assembly(mech: Mechanism, q1: np.ndarray, q2: np.ndarray, tol: float = 
 
     Angles equal modulo 2 pi, and the two joint-angle sets of a universal joint that point
     an axisymmetric strut the same way, count as the same assembly.
+
+    Raises:
+        InvalidInput: a ``tol`` that is not a positive number [m].
     """
+    tol = positive(tol, "tol", "m")
     return frame_distance(mech, q1, q2) < tol
 
 
@@ -132,6 +136,7 @@ def forward_kinematics(
     """
     starts, seed = count(starts, "starts"), count(seed, "seed")
     tol = mech.closure_tol if tol is None else positive(tol, "tol")
+    flag(all_modes, "all_modes")
     c = check_task_vector(actuators, mech.n_actuators, "actuators")
     if mech.mobility > mech.n_actuators:
         raise InvalidInput(

@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._arguments import positive, signs
+from .._arguments import count, flag, positive, signs
 from ..core import closures as _closures
 from ..core.assembly import assemble, newton
 from ..core.closures import Closure, compile_closures
@@ -131,6 +131,20 @@ def _solution_from_residual(mech: Mechanism, target: TaskTarget, q: np.ndarray, 
     return IKSolution(q, target.x.copy(), residual_norm, violations, mech)
 
 
+def check_mode(mech: Mechanism, mode: object) -> tuple[int, ...] | None:
+    """``mode`` as a tuple if it is None or a working mode of ``mech``: one sign (+1 or -1) per square leg.
+
+    Raises:
+        InvalidInput: naming ``mode``, the number of signs wanted and what it got.
+    """
+    signed = signs(mode, "mode")
+    if signed is not None:
+        n_square = sum(leg.square for leg in mech.legs)
+        if len(signed) != n_square or any(m not in (-1, 1) for m in signed):
+            raise InvalidInput(f"mode must hold {n_square} signs (+1 or -1), one per leg; got {mode!r}")
+    return signed
+
+
 def inverse_kinematics(
     mech: Mechanism,
     x: ArrayLike,
@@ -174,6 +188,7 @@ def inverse_kinematics(
     """
     mode = signs(mode, "mode")
     tol = mech.closure_tol if tol is None else positive(tol, "tol")
+    flag(explain, "explain"), flag(respect_limits, "respect_limits")
     task = require_task(mech)
     if task.size < mech.mobility:
         raise InvalidInput(
@@ -183,9 +198,7 @@ def inverse_kinematics(
     xa = check_task_vector(x, task.size)
     target = TaskTarget(task, xa)
     if mode is not None:
-        n_square = sum(leg.square for leg in mech.legs)
-        if len(mode) != n_square or any(m not in (-1, 1) for m in mode):
-            raise InvalidInput(f"mode must hold {n_square} signs (+1 or -1), one per leg; got {mode!r}")
+        check_mode(mech, mode)
         first = _from_guess(mech, target, guess, tol)
         if first is not None and first.mode == tuple(mode):
             return _within_limits(mech, first, respect_limits)
@@ -305,7 +318,10 @@ def working_modes(
 
     Raises:
         PoseUnreachable: when some leg cannot reach.
+        InvalidInput: malformed inputs, ``starts_per_leg`` not a whole number >= 1 or ``seed`` not
+            one >= 0.
     """
+    starts_per_leg, seed = count(starts_per_leg, "starts_per_leg", minimum=1), count(seed, "seed")
     first = inverse_kinematics(mech, x, guess, tol=tol)
     tol = mech.closure_tol if tol is None else tol
     task = require_task(mech)

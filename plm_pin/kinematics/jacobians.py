@@ -104,20 +104,24 @@ def feasible_motions(
     return N, s, J_x @ N, N[..., actuated_v, :]
 
 
-def times_T_inverse(M: np.ndarray, T: np.ndarray, J_x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def times_T_inverse(
+    M: np.ndarray, T: np.ndarray, J_x: np.ndarray, rtol: float = INVERSE_RTOL
+) -> tuple[np.ndarray, np.ndarray]:
     r""":math:`M T^{-1}` for square :math:`T`, batched over leading axes, and where :math:`T` is singular.
 
     :math:`T` counts as singular (an inverse-kinematics, type 1, singularity) when
-    :math:`\sigma_{min}(T) \le` :data:`INVERSE_RTOL` :math:`\sigma_{max}(J_x)`; the product is NaN there.
+    :math:`\sigma_{min}(T) \le` ``rtol`` :math:`\sigma_{max}(J_x)` (default :data:`INVERSE_RTOL`); the
+    product is NaN there.
     The test costs no SVD away from singularities: :math:`\sigma_{min}(T) \ge 1 / |T^{-1}|_F`
     and :math:`\sigma_{max}(J_x) \le |J_x|_F`, so :math:`T` is regular wherever
-    :math:`|J_x|_F |T^{-1}|_F` is below half of 1 / INVERSE_RTOL (the half covers the
+    :math:`|J_x|_F |T^{-1}|_F` is below half of 1 / ``rtol`` (the half covers the
     round-off of the computed inverse); the singular values decide only elsewhere.
 
     Args:
         M: shape (..., r, k).
         T: shape (..., k, k).
         J_x: the task Jacobians :math:`T` restricts, shape (..., k, nv).
+        rtol: the inverse margin at or below which :math:`T` counts as singular [-].
 
     Returns:
         :math:`M T^{-1}` (..., r, k), and the singular mask (...).
@@ -128,10 +132,10 @@ def times_T_inverse(M: np.ndarray, T: np.ndarray, J_x: np.ndarray) -> tuple[np.n
         T_inv = None
     if T_inv is not None:
         bound = (J_x * J_x).sum(axis=(-2, -1)) * (T_inv * T_inv).sum(axis=(-2, -1))  # squared
-        if bound.max() < (0.5 / INVERSE_RTOL) ** 2:  # False on NaN
+        if bound.max() * rtol**2 < 0.25:  # |J_x|_F |T^-1|_F < 0.5 / rtol; False on NaN
             return M @ T_inv, np.zeros(bound.shape, dtype=bool)
     sT = np.linalg.svd(T, compute_uv=False)
-    singular = sT[..., -1] <= INVERSE_RTOL * np.linalg.norm(J_x, ord=2, axis=(-2, -1))
+    singular = sT[..., -1] <= rtol * np.linalg.norm(J_x, ord=2, axis=(-2, -1))
     any_singular = bool(singular.any())
     if any_singular:  # invert the identity in their place, then blank them
         T = np.where(singular[..., None, None], np.eye(T.shape[-1]), T)

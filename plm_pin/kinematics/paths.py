@@ -25,9 +25,11 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._arguments import check_tolerance, mapping, positive, real_numbers
+from .._text import short
 from ..core.assembly import assemble
 from ..core.mechanism import Mechanism, require_task
-from ..core.task import TaskTarget, compile_task
+from ..core.task import FrameTask, Task, TaskTarget, compile_joint_task, compile_task
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
 from ..tolerances import SINGULARITY_TOL, TRACK_TOL
@@ -68,7 +70,11 @@ def _predict(mech: Mechanism, qs: Sequence[np.ndarray], s: np.ndarray, k: int) -
 
 
 def _check_path_parameter(s: ArrayLike | None, n: int) -> np.ndarray:
-    arr = np.arange(n, dtype=float) / max(n - 1, 1) if s is None else np.asarray(s, dtype=float)
+    arr = (
+        np.arange(n, dtype=float) / max(n - 1, 1)
+        if s is None
+        else np.asarray(real_numbers(s, "s"), dtype=float)
+    )
     if arr.shape != (n,) or not np.all(np.isfinite(arr)):
         raise InvalidInput(f"s must be {n} finite numbers, got shape {arr.shape}")
     if n > 1 and np.any(np.diff(arr) < 0.0):
@@ -113,23 +119,29 @@ def follow_targets(
         PoseUnreachable: when a sample cannot be solved; the message names the sample.
         InvalidInput: malformed inputs.
     """
-    tol = max(TRACK_TOL, mech.closure_tol) if tol is None else tol
+    tol = max(TRACK_TOL, mech.closure_tol) if tol is None else positive(tol, "tol", "m, rad")
     task = require_task(mech)
+    if (
+        isinstance(task_dofs, str)
+        or not isinstance(task_dofs, Sequence)
+        or not all(isinstance(d, str) for d in task_dofs)
+    ):
+        raise InvalidInput(f"task_dofs must be a sequence of task coordinate names, got {short(task_dofs)}")
     dofs = tuple(task_dofs)
     unknown = [d for d in dofs if d not in task.dofs]
     if unknown:
         raise InvalidInput(f"task coordinates {unknown} are not in the task {list(task.dofs)}")
-    fixed = dict(fixed or {})
+    fixed = dict(mapping(fixed or {}, "fixed", "one-DOF joint names to values along the path [m, rad]"))
     sizes = []
     values = None
     if dofs:
-        values = np.asarray(task_values, dtype=float)
+        values = np.asarray(real_numbers(task_values, "task_values"), dtype=float)
         if values.ndim != 2 or values.shape[1] != len(dofs) or not np.all(np.isfinite(values)):
             raise InvalidInput(f"task_values must be finite with shape (N, {len(dofs)}), got {values.shape}")
         sizes.append(values.shape[0])
     fixed_values = {}
     for joint, vals in fixed.items():
-        arr = np.asarray(vals, dtype=float)
+        arr = np.asarray(real_numbers(vals, f"fixed[{joint!r}]"), dtype=float)
         if arr.ndim != 1 or not np.all(np.isfinite(arr)):
             raise InvalidInput(f"fixed[{joint!r}] must be a finite 1-D array, got shape {arr.shape}")
         fixed_values[joint] = arr
@@ -138,7 +150,11 @@ def follow_targets(
         raise InvalidInput(f"prescribe at least one quantity, all with the same sample count; got {sizes}")
     n = sizes[0]
     sp = _check_path_parameter(s, n)
-    sub_task = compile_task(mech.model, mech.model.frames[task.frame_id].name, dofs) if dofs else None
+    sub_task: Task | None = None
+    if dofs and isinstance(task, FrameTask):
+        sub_task = compile_task(mech.model, mech.model.frames[task.frame_id].name, dofs)
+    elif dofs:
+        sub_task = compile_joint_task(mech.model, dofs)
     free = mech.free_columns(fixed_values)
     qs: list[np.ndarray] = [mech.check_q(guess, "guess")]
     for joint in fixed_values:
@@ -290,8 +306,13 @@ def track_actuator_path(
         ClosureNotSatisfied: when a sample cannot be assembled; the message names it.
         InvalidInput: malformed inputs.
     """
-    closure_tol = max(TRACK_TOL, mech.closure_tol) if closure_tol is None else closure_tol
-    c = np.asarray(actuators, dtype=float)
+    tol = check_tolerance(tol, "tol")
+    closure_tol = (
+        max(TRACK_TOL, mech.closure_tol)
+        if closure_tol is None
+        else positive(closure_tol, "closure_tol", "m, rad")
+    )
+    c = np.asarray(real_numbers(actuators, "actuators"), dtype=float)
     if c.ndim != 2 or c.shape[1] != mech.n_actuators or not np.all(np.isfinite(c)):
         raise InvalidInput(
             f"actuators must be finite with shape (N, {mech.n_actuators}), got {np.shape(actuators)}"

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._arguments import check_tolerance
+from .._arguments import check_tolerance, flag
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import SingularConfiguration
 from ..results import Result, unit
@@ -168,6 +168,7 @@ def classify(
         InvalidInput: when the task has not as many coordinates as the mechanism has DOF.
     """
     tol = check_tolerance(tol, "tol")
+    flag(raise_if_singular, "raise_if_singular")
     check_square_task(require_task(mech).size, mech.mobility, "singularity classification needs", mech.name)
     report = report_from_jacobians(mech, closed_chain_jacobians(mech, q), tol)
     if raise_if_singular and report.singular:

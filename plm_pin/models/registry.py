@@ -1,4 +1,9 @@
-"""The registry of named presets: the papers' mechanisms and small classic chains."""
+"""The registry of named presets: the papers' mechanisms and small classic chains.
+
+Each preset names its builder as a ``"module:function"`` string, imported when the preset is
+built (:attr:`Preset.builder`), so the registry (read by :func:`plm_pin.load`) imports no
+mechanism family: loading a shipped preset reads its committed URDF and never runs a builder.
+"""
 
 from __future__ import annotations
 
@@ -10,12 +15,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
-from .._lazy import lazy_module
+from .._lazy import import_object, lazy_module
 from ..description.sidecar import Sidecar
-from ..families.classic import build_fivebar, build_fourbar
-from ..families.prrrp.builder import LAYERS, build_2prrrp, rod_scaled
-from ..families.pss import build_pss
-from ..families.star_triangle import build_star_triangle
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -31,7 +32,8 @@ class Preset:
 
     Attributes:
         name: preset name, as given to :func:`plm_pin.load`.
-        builder: parametric builder returning the URDF tree and the sidecar.
+        builder_path: ``"module:function"`` of the parametric builder returning the URDF tree
+            and the sidecar (imported by :attr:`builder`).
         parameters: keyword arguments of ``builder`` (SI units).
         source: the paper and the table or section the parameters come from.
         dof: mobility the mechanism must have.
@@ -41,7 +43,7 @@ class Preset:
     """
 
     name: str
-    builder: Builder
+    builder_path: str
     parameters: Mapping[str, Any]
     source: str
     dof: int
@@ -53,6 +55,12 @@ class Preset:
     def redundancy(self) -> int:
         """Degree of actuation redundancy ``actuators - dof``."""
         return self.actuators - self.dof
+
+    @property
+    def builder(self) -> Builder:
+        """The parametric builder, imported on first use."""
+        builder: Builder = import_object(self.builder_path)
+        return builder
 
     def build(self) -> tuple[yourdfpy.Robot, Sidecar]:
         """Run the builder with the preset's parameters."""
@@ -69,14 +77,35 @@ HARADA2011_DRIVE_STIFFNESS = 1.0e6
 ZHAO2011_DRIVE_STIFFNESS = 1.0e8
 """Assumed axial stiffness of each ball-screw drive of the Zhao 2011 platforms [N/m] (none in the paper)."""
 
+HARADA2011_ROD = (0.140, 0.026, 9.84e-5)
+"""The Harada 2011 rod (Table 1): length [m], mass [kg], inertia about the plane normal [kg m^2]."""
+
+
+def rod_scaled(length: float, ref_length: float, ref_mass: float, ref_inertia: float) -> tuple[float, float]:
+    """Mass [kg] and centroidal inertia [kg m^2] of a rod of the same section and material.
+
+    Mass scales with length and the centroidal inertia with mass times length squared.
+    """
+    k = length / ref_length
+    return ref_mass * k, ref_inertia * k**3
+
+
+_PRRRP_LAYERS = (
+    "Self-collision (ours; the papers show no layout): the carriages ride in one layer on the stator "
+    "and collide when closer than their length (3 cm); each rod moves in a layer of its own above "
+    "them and the plate above the rods, so rod-rod, rod-carriage and plate-carriage contacts of the "
+    "planar drawing are not collisions (sidecar self_collision.ignore)."
+)
+"""The layers assumed by the 2-PRRRP builder's self-collision check, as a preset note."""
+
 # Harada 2011, Table 1 and (M.36): l = 0.140 m, r_t = 0.05 m, rods 0.026 kg 9.84e-5 kg m^2,
 # plate 0.132 kg 8.54e-4 kg m^2, moving parts 0.375 kg, g = 9.8 m/s^2 (M.37).
 _HARADA2011 = dict(
-    rod_lengths=(0.140, 0.140, 0.140, 0.140),
+    rod_lengths=(HARADA2011_ROD[0],) * 4,
     half_plate=0.05,
     slider_mass=0.375,
-    rod_masses=(0.026,) * 4,
-    rod_inertias=(9.84e-5,) * 4,
+    rod_masses=(HARADA2011_ROD[1],) * 4,
+    rod_inertias=(HARADA2011_ROD[2],) * 4,
     plate_mass=0.132,
     plate_inertia=8.54e-4,
     reference_pose=(0.0, 0.08, math.radians(-20.0)),
@@ -94,13 +123,13 @@ _HARADA2011_NOTES = (
     "No actuator force limits are given by the paper; none are set.",
     "No stiffness is given by the paper: each linear motor is assumed to hold its slider with "
     "1e6 N/m (a servo position loop of a small linear motor); rods and plate rigid.",
-    LAYERS,
+    _PRRRP_LAYERS,
 )
 
 
 def _harada2015() -> Mapping[str, Any]:
     lengths = (0.240, 0.170, 0.170, 0.240)
-    scaled = [rod_scaled(l, 0.140, 0.026, 9.84e-5) for l in lengths]
+    scaled = [rod_scaled(l, *HARADA2011_ROD) for l in lengths]
     return _frozen(
         rod_lengths=lengths,
         half_plate=0.05,
@@ -206,7 +235,7 @@ PRESETS: dict[str, Preset] = {
         [
             Preset(
                 "enferadi2017_star_triangle",
-                build_star_triangle,
+                "plm_pin.families.star_triangle.builder:build_star_triangle",
                 _frozen(
                     side=0.5,
                     slider_mass=2.0,
@@ -241,7 +270,7 @@ PRESETS: dict[str, Preset] = {
             ),
             Preset(
                 "fivebar",
-                build_fivebar,
+                "plm_pin.families.classic.builder:build_fivebar",
                 _frozen(),
                 "classic RRRRR five-bar (plm_pin test mechanism)",
                 2,
@@ -250,7 +279,7 @@ PRESETS: dict[str, Preset] = {
             ),
             Preset(
                 "fourbar",
-                build_fourbar,
+                "plm_pin.families.classic.builder:build_fourbar",
                 _frozen(),
                 "classic crank-rocker four-bar (plm_pin test mechanism)",
                 1,
@@ -259,7 +288,7 @@ PRESETS: dict[str, Preset] = {
             ),
             Preset(
                 "harada2011_3d3m",
-                build_2prrrp,
+                "plm_pin.families.prrrp.builder:build_2prrrp",
                 _frozen(**{**_HARADA2011, "legs": (1, 2, 4)}),
                 "Harada 2011, Table 1, (M.36), eq. (5): 3D3M (slider 3 and rod 3 removed)",
                 3,
@@ -269,7 +298,7 @@ PRESETS: dict[str, Preset] = {
             ),
             Preset(
                 "harada2011_3d4m",
-                build_2prrrp,
+                "plm_pin.families.prrrp.builder:build_2prrrp",
                 _frozen(**_HARADA2011),
                 "Harada 2011, Table 1, (M.36): 3D4M 2-PRRRP",
                 3,
@@ -279,7 +308,7 @@ PRESETS: dict[str, Preset] = {
             ),
             Preset(
                 "harada2015_asymmetric",
-                build_2prrrp,
+                "plm_pin.families.prrrp.builder:build_2prrrp",
                 _harada2015(),
                 "Harada 2015, Fig. 2: asymmetric 2-PRRRP, l1 = l4 = 0.240 m, l2 = l3 = 0.170 m",
                 3,
@@ -292,12 +321,12 @@ PRESETS: dict[str, Preset] = {
                     "centroidal inertia to mass x length^2 (9.84e-5 kg m^2 x (l / 0.14 m)^3).",
                     "Gravity 9.81 m/s^2 along -y; reference pose x = 0, y = 0.10 m, theta = 0, "
                     "assembly mode [+ +], working modes (- + - +).",
-                    LAYERS,
+                    _PRRRP_LAYERS,
                 ),
             ),
             Preset(
                 "zhao2011_6pss",
-                build_pss,
+                "plm_pin.families.pss.builder:build_pss",
                 _frozen(**{**_ZHAO2011, "legs": _ZHAO2011_6PSS_LEGS}),
                 "Zhao 2011, Tables 1-4, section 'Simulation', eq. (19): 8-PSS without legs 1 and 8",
                 6,
@@ -313,7 +342,7 @@ PRESETS: dict[str, Preset] = {
             ),
             Preset(
                 "zhao2011_8pss",
-                build_pss,
+                "plm_pin.families.pss.builder:build_pss",
                 _frozen(**_ZHAO2011),
                 "Zhao 2011, Tables 1-4, section 'Simulation', eq. (19): redundant 8-PSS",
                 6,

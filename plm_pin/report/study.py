@@ -1,6 +1,11 @@
-"""Studies: modules of the ``analyses`` package that fill a report through a :class:`StudyContext`.
+"""Studies: modules that fill a report through a :class:`StudyContext`, and where they are found.
 
-A study is a module ``analyses/<name>.py`` defining:
+The studies are found in one place, :func:`study_modules`: the library's own (:data:`BUILTIN_STUDIES`:
+the generic ``overview`` of any mechanism, which an installed wheel carries), then the paper
+studies, the modules of the package :data:`STUDY_PACKAGE` (the ``analyses/`` folder of a source
+checkout) when it is importable.
+
+A study is a module (``analyses/<name>.py`` for a paper study) defining:
 
 - ``TITLE``: the report title;
 - ``SUMMARY``: one line for the index (optional);
@@ -27,7 +32,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
-from types import ModuleType
+from types import MappingProxyType, ModuleType
 
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, PlmError
@@ -39,11 +44,11 @@ from .content import MechanismInfo, Parameter, Section, StudyResult
 from .folders import FOLDER, slug
 from .provenance import software_versions
 
-STUDY_PACKAGE = "analyses"
-"""The package the studies are modules of (the ``analyses/`` folder of a source checkout)."""
+BUILTIN_STUDIES: Mapping[str, str] = MappingProxyType({"overview": "plm_pin.report.overview"})
+"""The library's own studies, found with or without a checkout: name -> module."""
 
-BUILTIN_STUDIES = "plm_pin.studies"
-"""The studies a wheel carries (the overview), used when :data:`STUDY_PACKAGE` is not importable."""
+STUDY_PACKAGE = "analyses"
+"""The package the paper studies are modules of: the ``analyses/`` folder of a source checkout."""
 
 PAPER_STUDIES_HINT = (
     "the paper studies live in the analyses/ folder of the plm_pin source checkout: run plm-pin "
@@ -56,7 +61,7 @@ class Study:
     """A study module, checked.
 
     Attributes:
-        name: module name in :data:`STUDY_PACKAGE`, also the report's folder.
+        name: the study's name (its module's), also the report's folder.
         title: ``TITLE``.
         summary: ``SUMMARY`` (empty when absent).
         mechanism: ``MECHANISM``: the default mechanism, None when the study takes none.
@@ -72,29 +77,47 @@ class Study:
     animations: Mapping[str, Callable[..., Animation]] = field(default_factory=dict)
 
 
-def _package() -> ModuleType:
-    """The package of the studies: ``analyses`` when importable, else the wheel's own."""
+def _study_package() -> ModuleType | None:
+    """The package :data:`STUDY_PACKAGE` when importable, else None."""
     try:
         return importlib.import_module(STUDY_PACKAGE)
     except ModuleNotFoundError as exc:
         if exc.name != STUDY_PACKAGE:
             raise
-        return importlib.import_module(BUILTIN_STUDIES)
+        return None
+
+
+def study_modules() -> dict[str, str]:
+    """Every study: name -> module, the library's own then the paper studies, sorted by name.
+
+    The paper studies are the modules of :data:`STUDY_PACKAGE` whose names are lower-case
+    folder names (modules starting with ``_`` are helpers).
+
+    Raises:
+        PlmError: a paper study takes the name of one of the library's own.
+    """
+    found = dict(BUILTIN_STUDIES)
+    package = _study_package()
+    if package is not None:
+        for m in pkgutil.iter_modules(package.__path__):
+            if m.ispkg or m.name.startswith("_") or not FOLDER.fullmatch(m.name):
+                continue
+            if m.name in found:
+                raise PlmError(
+                    f"{package.__name__}.{m.name} takes the name of plm_pin's own study {m.name!r}"
+                )
+            found[m.name] = f"{package.__name__}.{m.name}"
+    return dict(sorted(found.items()))
 
 
 def study_names() -> list[str]:
-    """Names of the studies in :data:`STUDY_PACKAGE`, sorted."""
-    package = _package()
-    return sorted(
-        m.name
-        for m in pkgutil.iter_modules(package.__path__)
-        if not m.ispkg and not m.name.startswith("_") and FOLDER.fullmatch(m.name)
-    )
+    """Names of the studies (:func:`study_modules`), sorted."""
+    return list(study_modules())
 
 
 def studies_hint() -> str:
-    """Where the paper studies are, when only the wheel's own studies are found (else empty)."""
-    return f" ({PAPER_STUDIES_HINT})" if _package().__name__ == BUILTIN_STUDIES else ""
+    """Where the paper studies are, when :data:`STUDY_PACKAGE` cannot be imported (else empty)."""
+    return f" ({PAPER_STUDIES_HINT})" if _study_package() is None else ""
 
 
 def find_study(name: str) -> Study:
@@ -105,10 +128,10 @@ def find_study(name: str) -> Study:
         PlmError: the module is not a study (no ``TITLE`` or ``run``, or malformed
             ``MECHANISM`` or ``ANIMATIONS``).
     """
-    names = study_names()
-    if name not in names:
-        raise InvalidInput(f"unknown study {name!r}; studies are {names}{studies_hint()}")
-    module = importlib.import_module(f"{_package().__name__}.{name}")
+    modules = study_modules()
+    if name not in modules:
+        raise InvalidInput(f"unknown study {name!r}; studies are {list(modules)}{studies_hint()}")
+    module = importlib.import_module(modules[name])
     title, run = getattr(module, "TITLE", None), getattr(module, "run", None)
     if not isinstance(title, str) or not callable(run):
         raise PlmError(f"{module.__name__} is not a study: it must define TITLE (a string) and run(ctx)")

@@ -1,36 +1,40 @@
 """Statics of closed chains: balance, redundant actuator-force allocation, reactions, force capability."""
 
 from .allocation import OBJECTIVES
-from .balance import Load, StaticBalance, static_balance
+from .balance import JointLoad, Load, StaticBalance, static_balance
 from .capability import Capability, InternalRange, force_capability, internal_force_range, wrench_polygon
 from .forces import (
     AllocationRule,
-    InternalMode,
+    InternalDirection,
     StaticForces,
     actuator_limits,
-    internal_modes,
+    internal_directions,
     solve_balance,
     static_forces,
 )
 from .reactions import JointReaction, LinkForce
+from .transmission import Transmission, transmission
 
 __all__ = [
     "OBJECTIVES",
     "AllocationRule",
     "Capability",
-    "InternalMode",
+    "InternalDirection",
     "InternalRange",
+    "JointLoad",
     "JointReaction",
     "LinkForce",
     "Load",
     "StaticBalance",
     "StaticForces",
+    "Transmission",
     "actuator_limits",
     "force_capability",
+    "internal_directions",
     "internal_force_range",
-    "internal_modes",
     "solve_balance",
     "static_balance",
     "static_forces",
+    "transmission",
     "wrench_polygon",
 ]

@@ -31,6 +31,7 @@ import highspy
 import numpy as np
 import proxsuite
 
+from .._arguments import nonfinite_indices, real_numbers
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError
 from ..results import Result, unit
 from ..tolerances import FEASIBILITY_RTOL, QP_EPS, QP_INFEASIBILITY_EPS
@@ -89,13 +90,15 @@ def check_weights(weights: object, n: int) -> np.ndarray:
     """
     if weights is None:
         return np.eye(n)
-    W = np.asarray(weights, dtype=float)
-    if W.shape == (n,):
-        W = np.diag(W)
-    if W.shape != (n, n) or not np.all(np.isfinite(W)):
+    W = np.asarray(real_numbers(weights, "weights"), dtype=float)
+    if W.shape not in ((n,), (n, n)):
         raise InvalidInput(
             f"weights must be {n} positive numbers or an ({n}, {n}) SPD matrix, got shape {W.shape}"
         )
+    if not np.all(np.isfinite(W)):
+        raise InvalidInput(f"weights has non-finite entries at indices {nonfinite_indices(W)}")
+    if W.shape == (n,):
+        W = np.diag(W)
     if not np.allclose(W, W.T) or np.linalg.eigvalsh(W)[0] <= 0.0:
         raise InvalidInput("weights must be symmetric positive definite")
     return W
@@ -137,10 +140,12 @@ def allocate(
     y: np.ndarray | None
     if internal is not None:
         y = np.asarray(internal, dtype=float)
-        if y.shape != (k,) or not np.all(np.isfinite(y)):
+        if y.shape != (k,):
             raise InvalidInput(
                 f"internal must be {k} finite numbers (one per internal force), got shape {y.shape}"
             )
+        if not np.all(np.isfinite(y)):
+            raise InvalidInput(f"internal has non-finite entries at indices {nonfinite_indices(y)}")
     elif k == 0:
         y = np.zeros(0)
     else:

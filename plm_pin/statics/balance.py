@@ -42,10 +42,11 @@ from numpy.typing import ArrayLike
 from scipy.linalg import blas as _blas
 from scipy.linalg import lapack as _lapack
 
-from .._arguments import as_vector, check_tolerance
+from .._arguments import as_vector, check_tolerance, flag
 from ..core import closures as _closures
 from ..core.checks import check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism
+from ..core.task import FrameTask, JointTask
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
 from ..results import Result, unit
 from ..tolerances import EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL, STATICS_SINGULAR_RTOL
@@ -67,15 +68,49 @@ class Load(Result):
     frame_id: int
     wrench: np.ndarray = field(metadata=unit("N, N m"))
 
+    def generalized_force(self, model: pin.Model, data: pin.Data) -> np.ndarray:
+        r""":math:`J_w^T w` with the frame Jacobian already in ``data``, shape (nv,) [N, N m]."""
+        return np.asarray(pin.getFrameJacobian(model, data, self.frame_id, _LWA).T @ self.wrench)
 
-def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) -> Load:
+
+@dataclass(frozen=True)
+class JointLoad(Result):
+    r"""Forces applied by the outside along output joints: the load of a joint task.
+
+    A torque on a revolute joint is a pair of opposite moments about its axis on the two
+    bodies it joins (a force on a prismatic joint, a pair of opposite forces along it): it
+    enters the balance on that joint's coordinate alone, :math:`\tau = g - S_o^T f_o`.
+
+    Attributes:
+        joints: the output joints.
+        v_indices: their velocity indices.
+        forces: the load along each [N m] (revolute) or [N] (prismatic), shape (n,).
+    """
+
+    joints: tuple[str, ...]
+    v_indices: tuple[int, ...]
+    forces: np.ndarray = field(metadata=unit("N, N m"))
+
+    def generalized_force(self, model: pin.Model, data: pin.Data | None = None) -> np.ndarray:
+        r""":math:`S_o^T f_o`: the forces on their joints' coordinates, shape (nv,) [N, N m]."""
+        out = np.zeros(model.nv)
+        out[list(self.v_indices)] = self.forces
+        return out
+
+
+AnyLoad = Load | JointLoad
+"""An external load: a wrench on a frame, or forces along a joint task's output joints."""
+
+
+def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) -> AnyLoad:
     """Check an external wrench and the frame it acts on.
 
     Args:
         mech: the mechanism.
         wrench: ``(fx, fy, fz, mx, my, mz)`` [N, N m] about the frame origin, world-aligned;
             or, on the task frame, one value per task coordinate (``x y rz`` of a planar
-            task: ``fx fy mz``).
+            task: ``fx fy mz``); for a joint task with no ``frame``, one force [N] or torque
+            [N m] per output joint (a :class:`JointLoad`).
         frame: frame the wrench acts on; default the end-effector (task) frame.
 
     Raises:
@@ -83,9 +118,24 @@ def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) 
         FrameNotFound: unknown frame (the message lists the frames).
     """
     task = mech.task_compiled
+    if frame is None and isinstance(task, JointTask):
+        forces = as_vector(wrench, task.size, "wrench")
+        forces.setflags(write=False)
+        return JointLoad(task.dofs, task.v_indices, forces)
+    return wrench_on_frame(mech, wrench, frame)
+
+
+def wrench_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) -> Load:
+    """:func:`load_on_frame` for a wrench on a frame (default: the task frame of a frame task).
+
+    Raises:
+        InvalidInput: wrong size, non-finite values, or no frame given and no frame task.
+        FrameNotFound: unknown frame (the message lists the frames).
+    """
+    task = mech.task_compiled
     if frame is None:
-        if task is None:
-            raise InvalidInput(f"{mech.name} has no end-effector task; name the frame the wrench acts on")
+        if not isinstance(task, FrameTask):
+            raise InvalidInput(f"{mech.name} has no end-effector frame; name the frame the wrench acts on")
         frame_id = task.frame_id
         frame = mech.model.frames[frame_id].name
     else:
@@ -93,9 +143,8 @@ def load_on_frame(mech: Mechanism, wrench: ArrayLike, frame: str | None = None) 
             raise FrameNotFound(frame, mech.frame_names)
         frame_id = mech.model.getFrameId(frame)
     arr = np.asarray(wrench, dtype=float) if np.ndim(wrench) == 1 else np.asarray(wrench)
-    on_task = task is not None and frame_id == task.frame_id and arr.shape == (task.size,)
-    if on_task:
-        assert task is not None
+    on_task = isinstance(task, FrameTask) and frame_id == task.frame_id and arr.shape == (task.size,)
+    if on_task and isinstance(task, FrameTask):
         w = np.zeros(6)
         w[list(task.rows)] = as_vector(arr, task.size, "wrench")
     else:
@@ -138,7 +187,7 @@ class StaticBalance(Result):
 
     q: np.ndarray = field(metadata=unit("m, rad"))
     tau: np.ndarray = field(metadata=unit("N, N m"))
-    load: Load | None
+    load: AnyLoad | None
     gravity: bool
     J_phi: np.ndarray
     N: np.ndarray
@@ -212,10 +261,11 @@ def static_balance(
     check_finite_model(mech)
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
     rtol = check_tolerance(singular_rtol, "singular_rtol", relative=True)
+    flag(gravity, "gravity")
     tau = _loaded(model, data, load, None)
     if gravity:
         tau += pin.computeGeneralizedGravity(model, data, qa)
-    return _balance(mech, qa, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol)
+    return build_balance(mech, qa, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol)
 
 
 def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -> np.ndarray:
@@ -245,7 +295,7 @@ def generalized_balance(
     q: np.ndarray,
     tau: np.ndarray,
     *,
-    load: Load | None = None,
+    load: AnyLoad | None = None,
     gravity: bool = True,
     v: np.ndarray | None = None,
     a: np.ndarray | None = None,
@@ -276,14 +326,14 @@ def generalized_balance(
     pin.updateFramePlacements(model, data)
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
     applied = _loaded(model, data, load, tau)
-    return _balance(mech, q, applied, load, gravity, J_phi, mech.actuated_v_indices, rtol, v, a)
+    return build_balance(mech, q, applied, load, gravity, J_phi, mech.actuated_v_indices, rtol, v, a)
 
 
-def _loaded(model: pin.Model, data: pin.Data, load: Load | None, tau: np.ndarray | None) -> np.ndarray:
+def _loaded(model: pin.Model, data: pin.Data, load: AnyLoad | None, tau: np.ndarray | None) -> np.ndarray:
     r"""A new array :math:`\tau - J_w^T w` (``tau`` None: zero), the frame Jacobian taken from ``data``."""
     out = np.zeros(model.nv) if tau is None else np.array(tau, dtype=float)
     if load is not None:
-        out -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
+        out -= load.generalized_force(model, data)
     return out
 
 
@@ -420,11 +470,11 @@ def balance_factors(
     return BalanceFactors(N, lambda_map, N[act_v], P, G)
 
 
-def _balance(
+def build_balance(
     mech: Mechanism,
     q: np.ndarray,
     tau: np.ndarray,
-    load: Load | None,
+    load: AnyLoad | None,
     gravity: bool,
     J_phi: np.ndarray,
     act_v: np.ndarray,
@@ -432,7 +482,22 @@ def _balance(
     v: np.ndarray | None = None,
     a: np.ndarray | None = None,
 ) -> StaticBalance:
-    """The :class:`StaticBalance` of ``tau`` at ``q``: ``tau`` checked finite, then :func:`balance_factors`.
+    r"""The :class:`StaticBalance` of ``tau`` at ``q``: ``tau`` checked finite, then :func:`balance_factors`.
+
+    The common step of :func:`static_balance`, :func:`generalized_balance` and the inverse
+    dynamics, which compute ``tau`` and :math:`J_\phi` their own ways.
+
+    Args:
+        mech: the mechanism.
+        q: configuration, shape (nq,).
+        tau: generalized forces to balance [N, N m], shape (nv,).
+        load: the external load in ``tau`` (recorded), or None.
+        gravity: whether ``tau`` holds gravity (recorded).
+        J_phi: closure Jacobian at ``q``, shape (m, nv).
+        act_v: velocity indices of the actuated joints, shape (n_act,).
+        singular_rtol: relative tolerance of the direct-singularity decision (:data:`SINGULAR_RTOL`).
+        v: joint velocities in ``tau`` [m/s, rad/s] (recorded), or None.
+        a: joint accelerations in ``tau`` [m/s^2, rad/s^2] (recorded), or None.
 
     Raises:
         InvalidInput: ``tau`` is not finite (DescriptionError when a body's inertia overflows).

@@ -22,13 +22,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._arguments import load_arguments
+from .._arguments import count, load_arguments
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput, PlmError
 from ..results import Result, unit
 from ..tolerances import FEASIBILITY_RTOL
 from .allocation import Inequalities, allocate, solve_lp
-from .balance import load_on_frame, static_balance
+from .balance import Load, load_on_frame, static_balance
 from .forces import actuator_limits
 
 
@@ -79,9 +79,9 @@ def force_capability(
     load_arguments(direction, frame, limits, mech.n_actuators, "direction")
     bounds = _finite_limits(mech, limits, "force capability")
     load = load_on_frame(mech, direction, frame)
-    if not np.any(load.wrench):
+    if not np.any(load.wrench if isinstance(load, Load) else load.forces):
         raise InvalidInput(f"direction must be a nonzero load (it sets the unit of alpha), got {direction!r}")
-    with_load = static_balance(mech, q, load.wrench, load.frame, gravity=gravity)
+    with_load = static_balance(mech, q, direction, frame, gravity=gravity)
     base = static_balance(mech, q, gravity=gravity) if gravity else None
     f_g = base.f_particular if base is not None else np.zeros(mech.n_actuators)
     f_d = with_load.f_particular - f_g  # (n_act,) forces per unit load (the balance is linear)
@@ -134,8 +134,8 @@ class InternalRange(Result):
     vector is :attr:`lower` .. :attr:`upper`.
 
     Attributes:
-        lower: smallest admissible coordinate along each internal mode, shape (k,) [N, N m].
-        upper: largest admissible coordinate along each internal mode, shape (k,) [N, N m].
+        lower: smallest admissible coordinate along each internal-force direction, shape (k,) [N, N m].
+        upper: largest admissible coordinate along each internal-force direction, shape (k,) [N, N m].
         f_lower: actuator forces at each lower end, shape (k, n_act) [N, N m].
         f_upper: actuator forces at each upper end, shape (k, n_act) [N, N m].
         internal_basis: the basis :math:`G` the coordinates refer to, shape (n_act, k).
@@ -161,8 +161,8 @@ def internal_force_range(
 
     One linear programme per bound: :math:`\min / \max\ y_k` s.t.
     :math:`l \le f_p + G y \le u` (the other coordinates free), solved by HiGHS as in
-    :func:`force_capability`. Multiply a mode's
-    :class:`~plm_pin.statics.InternalMode` readings (link axial forces, guide forces) by a
+    :func:`force_capability`. Multiply a direction's
+    :class:`~plm_pin.statics.InternalDirection` readings (link axial forces, guide forces) by a
     coordinate to read the preload it stands for.
 
     Args:
@@ -185,8 +185,7 @@ def internal_force_range(
     if wrench is None:
         balance = static_balance(mech, q, gravity=gravity)
     else:
-        load = load_on_frame(mech, wrench, frame)
-        balance = static_balance(mech, q, load.wrench, load.frame, gravity=gravity)
+        balance = static_balance(mech, q, wrench, frame, gravity=gravity)
     G = balance.internal_basis  # (n_act, k)
     k = G.shape[1]
     if k == 0:
@@ -248,8 +247,7 @@ def wrench_polygon(
         ``(n, 2)`` coordinates :math:`(a, b)` of the boundary, counter-clockwise from :math:`d_1`
         (``inf`` along rays the structure holds without actuator force).
     """
-    if int(n) < 8:
-        raise InvalidInput(f"n must be at least 8 rays, got {n}")
+    n = count(n, "n", minimum=8)
     a = np.asarray(d1, dtype=float)
     b = np.asarray(d2, dtype=float)
     if a.shape != b.shape:

@@ -3,7 +3,7 @@ r"""Static forces of a closed chain in one call: balance, allocation, and every 
 :func:`static_forces` sets up the balance (:mod:`~plm_pin.statics.balance`), allocates the
 actuator forces (:mod:`~plm_pin.statics.allocation`) and returns a :class:`StaticForces`
 from which cut-joint forces, joint reactions, slider normal forces, link axial forces
-(:mod:`~plm_pin.statics.reactions`) and the internal-force modes are read.
+(:mod:`~plm_pin.statics.reactions`) and the internal-force directions are read.
 """
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._arguments import load_arguments, real_numbers
+from .._arguments import effort_limits, finite_number, load_arguments, mapping, real_numbers
+from .._text import short
 from ..core.checks import check_finite_result
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
@@ -27,11 +28,11 @@ from .balance import StaticBalance, static_balance
 
 
 @dataclass(frozen=True)
-class InternalMode(Result):
-    """One internal-force mode: actuator forces that balance nothing but each other, and what they load.
+class InternalDirection(Result):
+    """One internal-force direction: actuator forces that balance nothing but each other, and what they load.
 
     Attributes:
-        f_c: actuator forces of the mode (a unit vector of the internal basis) [N, N m], shape (n_act,).
+        f_c: actuator forces of the direction (a unit vector of the internal basis) [N, N m], shape (n_act,).
         lam: cut-joint forces it causes [N, N m], shape (m,).
         link_forces: axial forces it causes in the hinged links (tension positive) [N].
         slider_normal_forces: normal forces it causes on the prismatic guides [N].
@@ -90,9 +91,9 @@ class StaticForces(Result):
         """Force each prismatic guide exerts normal to its axis [N], world, keyed by joint name."""
         return _reactions.slider_normal_forces(self.mechanism, self._transmitted[0])
 
-    def internal_modes(self) -> tuple[InternalMode, ...]:
+    def internal_directions(self) -> tuple[InternalDirection, ...]:
         """The internal-force basis with its physical reading (loads in the links and guides)."""
-        return internal_modes(self.mechanism, self.balance)
+        return internal_directions(self.mechanism, self.balance)
 
     def to_dict(self) -> dict[str, object]:
         """JSON-ready dictionary of the forces (reactions included)."""
@@ -109,7 +110,7 @@ class StaticForces(Result):
         }
 
 
-def internal_modes(mech: Mechanism, balance: StaticBalance) -> tuple[InternalMode, ...]:
+def internal_directions(mech: Mechanism, balance: StaticBalance) -> tuple[InternalDirection, ...]:
     """Read each internal-force basis vector as the forces it causes (no load, no gravity)."""
     out = []
     for k in range(balance.n_internal):
@@ -117,7 +118,7 @@ def internal_modes(mech: Mechanism, balance: StaticBalance) -> tuple[InternalMod
         lam = -balance.lambda_map @ balance.generalized(g)
         forces, _ = _reactions.transmitted_forces(mech, balance.q, lam, None, False)
         out.append(
-            InternalMode(
+            InternalDirection(
                 g,
                 lam,
                 _reactions.link_forces(mech, forces, lam),
@@ -140,6 +141,7 @@ def actuator_limits(mech: Mechanism, limits: ArrayLike | None) -> np.ndarray:
             +inf or an upper bound of -inf (no effort would be admissible).
     """
     n = mech.n_actuators
+    effort_limits(limits, "limits", n)
     if isinstance(limits, str):
         if limits != "description":
             raise InvalidInput(f"limits {limits!r} is not 'description', None or an ({n}, 2) array")
@@ -194,14 +196,29 @@ class AllocationRule:
         """Check the options against ``mech`` (see :func:`static_forces` for their meaning).
 
         Raises:
-            InvalidInput: an unknown objective, bad weights or limits.
+            InvalidInput: an unknown objective, bad weights or limits, internal forces, a
+                minimum compression or link limits of the wrong type.
         """
-        if objective not in OBJECTIVES:
-            raise InvalidInput(f"objective {objective!r} is not one of {list(OBJECTIVES)}")
+        if not isinstance(objective, str) or objective not in OBJECTIVES:
+            raise InvalidInput(f"objective {short(objective)} is not one of {list(OBJECTIVES)}")
         W = check_weights(weights, mech.n_actuators)
         bounds = actuator_limits(mech, limits)
-        if internal is not None and not isinstance(internal, Mapping):
+        if isinstance(internal, Mapping):
+            internal = {
+                _link_name(name, "internal"): finite_number(value, f"internal[{name!r}]", "N")
+                for name, value in internal.items()
+            }
+        elif internal is not None:
             internal = np.asarray(real_numbers(internal, "internal"), dtype=float)
+        if min_compression is not None:
+            min_compression = finite_number(min_compression, "min_compression", "N")
+        if link_limits is not None:
+            link_limits = {
+                _link_name(name, "link_limits"): _force_bounds(pair, f"link_limits[{name!r}]")
+                for name, pair in mapping(
+                    link_limits, "link_limits", "link names to (lower, upper) axial forces [N]"
+                ).items()
+            }
         return cls(objective, W, bounds, internal, min_compression, link_limits)
 
     @functools.cached_property
@@ -307,7 +324,7 @@ def static_forces(
 
     By default (gravity, minimum norm, the description's limits) it computes the actuator
     forces, the cut-joint forces, the internal coordinates and the residual; reactions, link
-    forces and internal modes are computed when asked for.
+    forces and internal-force directions are computed when asked for.
 
     Args:
         mech: the mechanism.
@@ -351,6 +368,23 @@ def static_forces(
     return solve_balance(mech, balance, rule)
 
 
+def _link_name(name: object, argument: str) -> str:
+    """``name`` if it is a link name (a string); ``argument`` is named in the message otherwise."""
+    if not isinstance(name, str):
+        raise InvalidInput(f"{argument} must be keyed by link names (strings), got the key {short(name)}")
+    return name
+
+
+def _force_bounds(pair: object, name: str) -> tuple[float, float]:
+    """``pair`` as ``(lower, upper)`` [N]: two real numbers, not NaN, lower <= upper (infinities allowed)."""
+    arr = np.asarray(real_numbers(pair, name), dtype=float)  # None: NaN, refused below
+    if arr.shape != (2,) or np.isnan(arr).any() or arr[0] > arr[1]:
+        raise InvalidInput(
+            f"{name} must be (lower, upper) axial forces [N] with lower <= upper, got {short(pair)}"
+        )
+    return float(arr[0]), float(arr[1])
+
+
 def _link_conditions(
     mech: Mechanism,
     balance: StaticBalance,
@@ -380,10 +414,10 @@ def _link_conditions(
         mech, balance.q, lam_p, balance.load, balance.gravity, balance.v, balance.a
     )
     axial_p = _reactions.link_forces(mech, forces_p, lam_p)
-    modes = internal_modes(mech, balance)
+    directions = internal_directions(mech, balance)
     chosen = list(bounds)
-    D = np.array([[m.link_forces[name].axial for m in modes] for name in chosen]).reshape(
-        len(chosen), len(modes)
+    D = np.array([[d.link_forces[name].axial for d in directions] for name in chosen]).reshape(
+        len(chosen), len(directions)
     )
     return Inequalities(
         tuple(f"{name} axial" for name in chosen),
@@ -397,7 +431,7 @@ def _link_conditions(
 def _internal_from_links(mech: Mechanism, balance: StaticBalance, targets: Mapping[str, float]) -> np.ndarray:
     """Internal coordinates giving the internal part the named link axial forces."""
     k = balance.n_internal
-    modes = internal_modes(mech, balance)
+    directions = internal_directions(mech, balance)
     links = [h.link for h in _reactions.hinged_links(mech)]
     unknown = [name for name in targets if name not in links]
     if unknown:
@@ -407,7 +441,7 @@ def _internal_from_links(mech: Mechanism, balance: StaticBalance, targets: Mappi
             f"{mech.name} has {k} internal force(s) at this configuration; "
             f"name {k} link(s), got {list(targets)}"
         )
-    R = np.array([[m.link_forces[name].axial for m in modes] for name in targets]).reshape(k, k)
+    R = np.array([[d.link_forces[name].axial for d in directions] for name in targets]).reshape(k, k)
     s = np.linalg.svd(R, compute_uv=False) if k else np.zeros(0)
     if k and s[-1] <= LINK_FORCE_RTOL * max(s[0], 1e-300):
         raise InvalidInput(

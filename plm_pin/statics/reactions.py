@@ -14,7 +14,7 @@ the joint's structure. Projections give the quantities of Harada 2011 (eqs. (16)
   proximal reaction along the link's axis, **tension positive** (:math:`f_l`). It is the
   whole reaction (shear zero) on a two-force link: massless or without gravity, no load on it.
 
-Everything is linear in the loads, so internal-force modes (no load, no gravity) are read
+Everything is linear in the loads, so internal-force directions (no load, no gravity) are read
 by the same code.
 """
 
@@ -30,7 +30,7 @@ from ..core import closures as _closures
 from ..core.mechanism import Mechanism, body_name
 from ..results import Result, unit
 from ..tolerances import ATTACHMENT_ATOL
-from .balance import Load
+from .balance import AnyLoad, Load
 
 
 @dataclass(frozen=True)
@@ -128,7 +128,7 @@ def transmitted_forces(
     mech: Mechanism,
     q: np.ndarray,
     lam: np.ndarray,
-    load: Load | None,
+    load: AnyLoad | None,
     gravity: bool,
     v: np.ndarray | None = None,
     a: np.ndarray | None = None,
@@ -160,8 +160,15 @@ def transmitted_forces(
             moment = _closures.angular_rows(c, data).T @ lam[c.rotation_rows]
         _add_world_wrench(model, data, fext, fb, force, moment)
         _add_world_wrench(model, data, fext, fa, -force, -moment)
-    if load is not None:
+    if isinstance(load, Load):
         _add_world_wrench(model, data, fext, load.frame_id, load.wrench[:3], load.wrench[3:])
+    elif load is not None:  # on each output joint's child body, and its opposite on the parent body
+        for jid, f in zip(load.joints, load.forces, strict=True):
+            j = model.getJointId(jid)
+            S = np.asarray(data.joints[j].S).reshape(6, -1)[:, 0]  # (v, omega) in the joint's frame
+            pair = pin.Force(S[:3] * f, S[3:] * f)
+            fext[j] += pair
+            fext[model.parents[j]] -= data.liMi[j].act(pair)
     zero = np.zeros(model.nv)
     vel = zero if v is None else v
     acc = zero if a is None else a

@@ -5,7 +5,7 @@ from .deflection import Deflection, deflection
 from .equilibrium import ElasticState, elastic_state
 from .maps import StiffnessMap, stiffness_map
 from .model import CompliantModel, compliant_model
-from .vibration import MODELS, Modes, natural_frequencies
+from .vibration import MODELS, Vibration, natural_frequencies
 
 __all__ = [
     "MODELS",
@@ -13,9 +13,9 @@ __all__ = [
     "Deflection",
     "EigenStiffness",
     "ElasticState",
-    "Modes",
     "StiffnessMap",
     "StiffnessResult",
+    "Vibration",
     "compliant_model",
     "deflection",
     "elastic_state",

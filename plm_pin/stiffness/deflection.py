@@ -24,12 +24,13 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..core.mechanism import Mechanism, require_task
+from .._arguments import count, optional_name, real_numbers
+from ..core.mechanism import Mechanism, require_frame_task
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..results import Result, unit
 from ..statics import Load, StaticForces
-from ..statics.balance import load_on_frame
+from ..statics.balance import wrench_on_frame
 from ..tolerances import DEFLECTION_CLOSURE_TOL, DEFLECTION_RTOL
 from .cartesian import condense
 from .equilibrium import closure_and_locks, elastic_state, generalized_load, hessian_terms
@@ -75,7 +76,7 @@ def _add(load: Load | None, extra: Load, mech: Mechanism) -> Load:
         raise InvalidInput(
             f"the extra load acts on {extra.frame!r}, the held wrench on {load.frame!r}; use one frame"
         )
-    return load_on_frame(mech, load.wrench + extra.wrench, load.frame)
+    return wrench_on_frame(mech, load.wrench + extra.wrench, load.frame)
 
 
 def deflection(
@@ -113,12 +114,15 @@ def deflection(
         SingularConfiguration: Newton does not converge (the load buckles the mechanism or
             moves it too far), or the state at ``q`` cannot be held.
     """
-    task = require_task(mech)
+    task = require_frame_task(mech, "the deflection under a wrench needs")
+    max_iterations = count(max_iterations, "max_iterations", minimum=1)
+    real_numbers(wrench, "wrench")
+    optional_name(frame, "frame")
     state = elastic_state(mech, q, gravity=gravity, internal=internal, forces=forces, compliance=compliance)
     cm = state.compliant
     cmech = cm.mech
     model, data = cmech.model, cmech.data
-    extra = load_on_frame(
+    extra = wrench_on_frame(
         cmech, wrench, frame if frame is not None else mech.model.frames[task.frame_id].name
     )
     B, T, H, _, _ = condense(state)

@@ -30,13 +30,14 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._text import short
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput
 from ..results import Result, unit
 from ..statics import Load, StaticForces, static_forces
-from ..statics.balance import load_on_frame
+from ..statics.balance import AnyLoad, JointLoad, wrench_on_frame
 from ..tolerances import ASSEMBLED_TOL
 from .geometric import TreeDerivatives, closure_derivative
 from .model import SOURCES, CompliantModel, compliant_model
@@ -106,6 +107,11 @@ def elastic_state(
         SingularConfiguration: the load cannot be held at ``q``.
     """
     cm = compliant_model(mech, compliance)
+    if forces is not None and not isinstance(forces, StaticForces):
+        raise InvalidInput(
+            "forces must be a StaticForces result (plm_pin.statics.static_forces) or None, got "
+            f"{short(forces)}"
+        )
     if forces is None:
         forces = static_forces(mech, q, wrench, frame, gravity=gravity, internal=internal, limits=None)
     elif wrench is not None or frame is not None or internal is not None:
@@ -115,8 +121,12 @@ def elastic_state(
     balance = forces.balance
     qc = cm.lift(balance.q)
     load = None
+    if isinstance(balance.load, JointLoad):
+        raise InvalidInput(
+            f"{mech.name}: the elastostatics take a wrench on a frame, not forces along a joint task's joints"
+        )
     if balance.load is not None:
-        load = load_on_frame(cm.mech, balance.load.wrench, balance.load.frame)
+        load = wrench_on_frame(cm.mech, balance.load.wrench, balance.load.frame)
     if cm.mech is mech and forces.mechanism is mech and balance.v is None and balance.a is None:
         tau, J_phi = balance.tau, balance.J_phi  # rigid links: the static balance is the compliant model's
     else:
@@ -154,19 +164,19 @@ def _check_forces_at(mech: Mechanism, q: ArrayLike, forces: StaticForces) -> Non
         )
 
 
-def generalized_load(mech: Mechanism, q: np.ndarray, load: Load | None, gravity: bool) -> np.ndarray:
+def generalized_load(mech: Mechanism, q: np.ndarray, load: AnyLoad | None, gravity: bool) -> np.ndarray:
     r""":math:`g(q) - J_w^T w`, shape (nv,) [N, N m]."""
     model, data = mech.model, mech.data
     tau = np.array(pin.computeGeneralizedGravity(model, data, q)) if gravity else np.zeros(model.nv)
     if load is not None:
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
-        tau -= pin.getFrameJacobian(model, data, load.frame_id, _LWA).T @ load.wrench
+        tau -= load.generalized_force(model, data)
     return tau
 
 
 def hessian_terms(
-    mech: Mechanism, q: np.ndarray, load: Load | None, gravity: bool, lam: np.ndarray
+    mech: Mechanism, q: np.ndarray, load: AnyLoad | None, gravity: bool, lam: np.ndarray
 ) -> dict[str, np.ndarray]:
     r"""The geometric-stiffness terms of :math:`H` at ``q``, by :data:`GEOMETRIC` name, each (nv, nv).
 
@@ -180,7 +190,7 @@ def hessian_terms(
     pin.updateFramePlacements(model, data)
     tree = TreeDerivatives(model, data)
     out = {"gravity": np.zeros((nv, nv)), "load": np.zeros((nv, nv))}
-    if load is not None:
+    if isinstance(load, Load):  # a joint load's generalized force does not change with q
         M = data.oMf[load.frame_id]
         joint = model.frames[load.frame_id].parentJoint
         w = load.wrench

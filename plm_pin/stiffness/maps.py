@@ -1,4 +1,4 @@
-"""Stiffness over a workspace slice: smallest translational eigen-stiffness, a compliance, the lowest mode."""
+"""Stiffness over a workspace slice: smallest translational eigen-stiffness, compliance, lowest frequency."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._arguments import real_numbers
 from ..core.mechanism import Mechanism
 from ..description.compliance import ComplianceSpec
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
@@ -52,7 +53,7 @@ class StiffnessMap(Result):
         Raises:
             InvalidInput: an unknown name.
         """
-        if name not in VARIABLES:
+        if not isinstance(name, str) or name not in VARIABLES:
             raise InvalidInput(f"unknown stiffness-map variable {name!r}; variables are {list(VARIABLES)}")
         return np.asarray(getattr(self, name))
 
@@ -92,7 +93,11 @@ def stiffness_map(
     shape = grid.reachable.shape
     out = {name: np.full(shape, np.nan) for name in VARIABLES}
     n_lin = sum(1 for d in grid.dofs if not d.startswith("r"))
-    u = np.eye(n_lin)[0] if direction is None else np.asarray(direction, dtype=float)
+    u = (
+        np.eye(n_lin)[0]
+        if direction is None
+        else np.asarray(real_numbers(direction, "direction"), dtype=float)
+    )
     if u.shape != (n_lin,) or not np.all(np.isfinite(u)) or not np.any(u):
         raise InvalidInput(f"direction must be {n_lin} finite numbers, not all zero, got {direction!r}")
     u = u / np.linalg.norm(u)
@@ -100,12 +105,12 @@ def stiffness_map(
         q = grid.q[index]
         try:
             res = stiffness(mech, q, gravity=gravity, internal=internal, compliance=compliance)
-            modes = natural_frequencies(mech, q, result=res)
+            vibration = natural_frequencies(mech, q, result=res)
         except (SingularConfiguration, AllocationInfeasible):
             continue
         out["min_translational_stiffness"][index] = res.min_translational
         out["compliance_along"][index] = res.compliance_along(u)
-        out["lowest_frequency"][index] = modes.lowest
+        out["lowest_frequency"][index] = vibration.lowest
     for arr in (*out.values(), u):
         arr.setflags(write=False)
     return StiffnessMap(

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from .._text import short
 from ..core.mechanism import Mechanism
 from ..description.compliance import BeamSpec, ComplianceSpec
 from ..exceptions import FrameNotFound, InvalidInput
@@ -111,6 +112,11 @@ def compliant_model(mech: Mechanism, compliance: ComplianceSpec | None = None) -
             tip is not on its link or has zero length.
         FrameNotFound: an unknown link or tip frame.
     """
+    if compliance is not None and not isinstance(compliance, ComplianceSpec):
+        raise InvalidInput(
+            "compliance must be a ComplianceSpec (plm_pin.description.compliance) or None, got "
+            f"{short(compliance)}"
+        )
     spec = compliance if compliance is not None else mech.sidecar.compliance
     if spec is None:
         raise InvalidInput(

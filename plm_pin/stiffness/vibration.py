@@ -23,6 +23,7 @@ import pinocchio as pin
 import scipy.linalg
 from numpy.typing import ArrayLike
 
+from .._text import short
 from ..core.mechanism import Mechanism
 from ..dynamics.task_space import task_space_dynamics
 from ..exceptions import InvalidInput, SingularConfiguration
@@ -35,16 +36,16 @@ MODELS: tuple[str, ...] = ("task", "full")
 
 
 @dataclass(frozen=True)
-class Modes(Result):
-    """Lowest vibration modes at a pose, ascending.
+class Vibration(Result):
+    """Lowest natural vibrations at a pose, ascending.
 
     Attributes:
         model: ``"task"`` or ``"full"``.
         dofs: task coordinates.
         frequencies: natural frequencies [Hz], shape (n,).
         omega: angular frequencies [rad/s], shape (n,).
-        task_shapes: task motion of each mode [m, rad], scaled to a unit largest entry, shape (n_task, n).
-        joint_shapes: tree motion of each mode (compliant model) [m, rad], same scaling, shape (nv_c, n).
+        task_shapes: task motion of each vibration [m, rad], largest entry scaled to 1, shape (n_task, n).
+        joint_shapes: tree motion of each vibration (compliant model) [m, rad], same scaling, shape (nv_c, n).
     """
 
     model: str
@@ -69,14 +70,14 @@ def natural_frequencies(
     count: int | None = None,
     result: StiffnessResult | None = None,
     **stiffness_options: Any,
-) -> Modes:
-    """Lowest natural frequencies and mode shapes at ``q``.
+) -> Vibration:
+    """Lowest natural frequencies and vibration shapes at ``q``.
 
     Args:
         mech: the mechanism (with a task).
         q: assembled configuration, shape (nq,).
         model: ``"task"`` (:math:`M_x`, :math:`K_x`) or ``"full"`` (compliant model).
-        count: number of modes kept (default all).
+        count: number of vibrations kept, lowest first (default all).
         result: a :func:`~plm_pin.stiffness.stiffness` result at ``q`` to reuse.
         **stiffness_options: passed to :func:`~plm_pin.stiffness.stiffness` (``wrench``,
             ``gravity``, ``internal``, ``forces``, ``compliance``).
@@ -86,8 +87,14 @@ def natural_frequencies(
         SingularConfiguration: the equilibrium is unstable (a non-positive stiffness), and as
             :func:`~plm_pin.stiffness.stiffness`.
     """
-    if model not in MODELS:
-        raise InvalidInput(f"model {model!r} is not one of {list(MODELS)}")
+    if not isinstance(model, str) or model not in MODELS:
+        raise InvalidInput(f"model {short(model)} is not one of {list(MODELS)}")
+    if count is not None and (isinstance(count, bool) or not isinstance(count, int) or count < 1):
+        raise InvalidInput(f"count must be a positive integer or None, got {short(count)}")
+    if result is not None and not isinstance(result, StiffnessResult):
+        raise InvalidInput(
+            f"result must be a StiffnessResult (plm_pin.stiffness.stiffness) or None, got {short(result)}"
+        )
     res = result if result is not None else stiffness(mech, q, **stiffness_options)
     if model == "task":
         M = task_space_dynamics(mech, res.q).M_x
@@ -104,14 +111,13 @@ def natural_frequencies(
         inv_w2, shapes = scipy.linalg.eigh(M, K)  # M phi = (1 / omega^2) K phi
     except np.linalg.LinAlgError:
         raise SingularConfiguration(
-            f"{mech.name}: the equilibrium is unstable (stiffness not positive definite): no vibration modes"
+            f"{mech.name}: the equilibrium is unstable (stiffness not positive definite): "
+            "no natural vibrations"
         ) from None
     keep = inv_w2 > MASSLESS_RTOL * max(float(inv_w2.max()), 1e-300)
     order = np.argsort(-inv_w2[keep])
     inv_w2, shapes = inv_w2[keep][order], shapes[:, keep][:, order]
     if count is not None:
-        if not isinstance(count, int) or count < 1:
-            raise InvalidInput(f"count must be a positive integer, got {count!r}")
         inv_w2, shapes = inv_w2[:count], shapes[:, :count]
     omega = 1.0 / np.sqrt(inv_w2)
     task_shapes = T @ shapes if model == "full" else shapes
@@ -124,4 +130,4 @@ def natural_frequencies(
     joint = joint / (big * signs)
     for a in (omega, task_shapes, joint):
         a.setflags(write=False)
-    return Modes(model, res.dofs, omega / (2 * np.pi), omega, task_shapes, joint)
+    return Vibration(model, res.dofs, omega / (2 * np.pi), omega, task_shapes, joint)

@@ -58,7 +58,7 @@ def _values(where: str, raw: Any) -> Any:
             f"unit among {list(UNITS)}), got {short(dict(raw))}"
         )
     unit = raw.get("unit", None)
-    if unit is not None and unit not in UNITS:
+    if unit is not None and (not isinstance(unit, str) or unit not in UNITS):
         raise InvalidInput(f"{where}: unknown unit {short(unit)}; units are {list(UNITS)}")
     if "linspace" in raw:
         spec = raw["linspace"]

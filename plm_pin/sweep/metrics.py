@@ -42,6 +42,7 @@ from ..core.mechanism import Mechanism
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
 from ..kinematics.forward import task_pose
 from ..kinematics.singularity import KINDS
+from ..kinematics.working_mode import guess_mode
 from ..results import units
 from ..statics import static_forces
 from ..statics.allocation import OBJECTIVES
@@ -49,7 +50,6 @@ from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
 from ..tolerances import SINGULARITY_TOL
 from ..workspace import WorkspaceSlice, workspace_grid
-from ..workspace._continuation import guess_mode
 from ..workspace.manipulability import Manipulability
 from ..workspace.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
 

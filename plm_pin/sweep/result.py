@@ -150,7 +150,7 @@ def build_dataset(spec: SweepSpec, arrays: dict[str, np.ndarray], failed: np.nda
             attrs["flag_values"] = list(range(len(v.flags)))
             attrs["flag_meanings"] = " ".join(v.flags)
         axes = spec.variable_axes(v)
-        data[v.name] = ((*dims, *axes), arrays[v.name].reshape(*shape, *spec.variable_shape(v)), attrs)
+        data[v.name] = ((*dims, *axes), arrays[v.name].reshape((*shape, *spec.variable_shape(v))), attrs)
     data["failed"] = (dims, failed.reshape(shape), {"units": "-", "description": "the point raised an error"})
     attrs = {
         "title": f"plm_pin design sweep of {spec.label}",

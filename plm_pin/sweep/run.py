@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping, Sequence
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._text import short
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
 from ..models.registry import Builder
@@ -47,6 +48,10 @@ def run_spec(
     require("xarray")
     per_chunk = points_per_chunk(spec, chunk)
     check_execution(scheduler, workers)
+    if store is not None and not isinstance(store, (str, PurePath)):
+        raise InvalidInput(f"store must be a folder path (a string or a Path) or None, got {short(store)}")
+    if progress is not None and not callable(progress):
+        raise InvalidInput(f"progress must be a function (done, total) or None, got {short(progress)}")
     if store is None:
         return _run(spec, None, scheduler, workers, per_chunk, progress, start)
     _check_storable(spec)

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._arguments import mapping, real_numbers
 from .._text import short
 from .._version import __version__
 from ..core.mechanism import Mechanism
@@ -375,7 +376,7 @@ def make_spec(
         builder, _, label = resolve_builder(mechanism)
         valid = builder_parameters(builder)
     fixed = {}
-    for name, v in (base or {}).items():
+    for name, v in mapping(base or {}, "base", "builder parameter names to values").items():
         if name not in valid:
             raise InvalidInput(
                 f"unknown parameter {short(name)} of {label}; its parameters are {list(valid)}"
@@ -385,10 +386,10 @@ def make_spec(
     both = [n for n in space.names if n in fixed]
     if both:
         raise InvalidInput(f"parameters {both} are both varied and fixed (base); give each once")
-    if isinstance(metrics, str) or not metrics:
+    if isinstance(metrics, str) or not isinstance(metrics, Sequence) or not metrics:
         raise InvalidInput(f"metrics must be a non-empty list among {list(METRICS)}, got {short(metrics)}")
     for m in metrics:
-        if m not in METRICS:
+        if not isinstance(m, str) or m not in METRICS:
             raise InvalidInput(f"unknown metric {short(m)}; metrics are {list(METRICS)}")
     if len(set(metrics)) != len(metrics):
         raise InvalidInput(f"metrics are repeated: {list(metrics)}")
@@ -402,13 +403,13 @@ def make_spec(
         )
     fixed_pose = None
     if pose is not None:
-        arr = np.asarray(pose, dtype=float)
+        arr = np.asarray(real_numbers(pose, "pose"), dtype=float)
         if arr.ndim != 1 or not np.all(np.isfinite(arr)):
             raise InvalidInput(
                 f"pose must be a 1-D list of finite task coordinates [m, rad], got {short(pose)}"
             )
         fixed_pose = tuple(float(v) for v in arr)
-    checked = check_options(tuple(metrics), dict(options or {}))
+    checked = check_options(tuple(metrics), dict(mapping(options or {}, "options", "option names to values")))
     held = mechanism if isinstance(mechanism, Mechanism) else None
     spec = SweepSpec(
         mechanism, label, fixed, space, axes, values, fixed_pose, tuple(metrics), checked, built=held

@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._text import short
 from ..exceptions import InvalidInput
 from ..workspace.manipulability import POSE_METRICS
 from ..workspace.maps import WorkspaceSlice
@@ -53,12 +54,26 @@ def _display(axis: str, values: np.ndarray) -> tuple[np.ndarray, str]:
 
 
 def _check_metric(metric: str) -> None:
-    if metric not in POSE_METRICS:
-        raise InvalidInput(f"unknown metric {metric!r}; metrics are {list(POSE_METRICS)}")
+    if not isinstance(metric, str) or metric not in POSE_METRICS:
+        raise InvalidInput(f"unknown metric {short(metric)}; metrics are {list(POSE_METRICS)}")
+
+
+def _check_points(points: object, name: str) -> Sequence[SingularPoint]:
+    """``points`` if it is a sequence of :class:`SingularPoint` (e.g. from ``singular_loci``)."""
+    if not isinstance(points, Sequence) or not all(isinstance(p, SingularPoint) for p in points):
+        raise InvalidInput(
+            f"{name} must be a sequence of SingularPoint (plm_pin.workspace.singular_loci), got "
+            f"{short(points)}"
+        )
+    return points
 
 
 def _axes(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
     if ax is not None:
+        from matplotlib.axes import Axes as AxesType
+
+        if not isinstance(ax, AxesType):
+            raise InvalidInput(f"ax must be matplotlib Axes or None, got {short(ax)}")
         return ax.figure, ax  # type: ignore[return-value]
     plt = _pyplot()
     fig, new_ax = plt.subplots(figsize=figsize)
@@ -89,6 +104,7 @@ def plot_map(
         The figure (with a colour bar).
     """
     _check_metric(metric)
+    loci = _check_points(loci, "loci")
     if len(result.axes) != 2:
         raise InvalidInput(f"plot_map needs a 2-D map, got a slice along {list(result.axes)}; use plot_sweep")
     _pyplot()  # a clear message when matplotlib is missing
@@ -156,6 +172,9 @@ def plot_sweep(
         The figure.
     """
     _check_metric(metric)
+    singular = _check_points(singular, "singular")
+    if label is not None and not isinstance(label, str):
+        raise InvalidInput(f"label must be a string or None, got {short(label)}")
     if len(result.axes) != 1:
         raise InvalidInput(f"plot_sweep needs a 1-D sweep, got a map over {list(result.axes)}; use plot_map")
     _pyplot()

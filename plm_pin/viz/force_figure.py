@@ -24,9 +24,11 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._arguments import positive
+from .._text import short
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
-from ..statics import StaticForces, static_forces
+from ..statics import Load, StaticForces, static_forces
 from .figures import _axes
 from .panels import panel_grid, shared_legend
 from .skeleton import plane_axes, skeleton_segments
@@ -73,7 +75,7 @@ def force_arrows(sol: StaticForces) -> list[ForceArrow]:
         jid = model.getJointId(lf.joint)
         out.append(ForceArrow("f_l", link, data.oMi[jid].translation.copy(), lf.axial * lf.axis))
     load = sol.balance.load
-    if load is not None:
+    if isinstance(load, Load):  # a joint load (pairs of moments on its joints) has no arrow
         point = data.oMf[load.frame_id].translation.copy()
         out.append(ForceArrow("load", load.frame, point, load.wrench[:3].copy()))
     return out
@@ -107,6 +109,10 @@ def plot_static_forces(
         The axes.
     """
     i, j = plane_axes(plane)
+    if overlay is not None and not isinstance(overlay, StaticForces):
+        raise InvalidInput(f"overlay must be a StaticForces result or None, got {short(overlay)}")
+    if scale is not None:
+        scale = positive(scale, "scale", "m/N")
     if overlay is not None and not np.allclose(overlay.balance.q, sol.balance.q):
         raise InvalidInput("overlay must be a solution at the same configuration")
     arrows = force_arrows(sol)

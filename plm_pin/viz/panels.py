@@ -16,6 +16,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._arguments import check_tolerance, count, positive
+from .._text import short
 from ..exceptions import InvalidInput
 from ..tolerances import NOISE
 from .figures import _pyplot
@@ -72,9 +74,8 @@ def flat(
     v = np.asarray(values, dtype=float).ravel()
     if v.size == 0 or not np.all(np.isfinite(v)):
         raise InvalidInput(f"{name!r}: values must be finite and not empty")
-    s = float(np.max(np.abs(v))) if scale is None else float(scale)
-    if not (s >= 0.0 and noise >= 0.0):
-        raise InvalidInput(f"{name!r}: scale ({s}) and noise ({noise}) must be non-negative")
+    noise = check_tolerance(noise, "noise")
+    s = float(np.max(np.abs(v))) if scale is None else check_tolerance(scale, "scale")
     peak = float(np.max(np.abs(v)))
     if peak <= noise * s:
         return Flat(name, 0.0, peak, unit)
@@ -105,8 +106,8 @@ def panel_grid(
     Returns:
         The figure and its ``n`` visible axes, row by row.
     """
-    if n < 1:
-        raise InvalidInput(f"a panel grid needs at least one panel, got {n}")
+    n = count(n, "n", minimum=1)
+    width, height = positive(width, "width", "in"), positive(height, "height", "in")
     cols = min(PANELS_PER_ROW, n)
     rows = -(-n // cols)
     fig, axes = _pyplot().subplots(
@@ -192,6 +193,13 @@ def plot_panels(
     t = np.asarray(x, dtype=float)
     if not curves:
         raise InvalidInput("plot_panels needs at least one curve")
+    if (
+        isinstance(labels, str)
+        or not isinstance(labels, Sequence)
+        or not all(isinstance(s, str) for s in labels)
+    ):
+        raise InvalidInput(f"labels must be a sequence of legend texts (strings), got {short(labels)}")
+    check_tolerance(noise, "noise")
     values: dict[str, np.ndarray] = {}
     for title, v in curves.items():
         a = np.asarray(v, dtype=float)

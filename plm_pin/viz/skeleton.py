@@ -30,7 +30,7 @@ def plane_axes(plane: str) -> tuple[int, int]:
     Raises:
         InvalidInput: ``plane`` is not one of :data:`PLANES`.
     """
-    if plane not in PLANES:
+    if not isinstance(plane, str) or plane not in PLANES:
         raise InvalidInput(f"plane {plane!r} is not one of {list(PLANES)}")
     return PLANES[plane]
 

@@ -1,6 +1,12 @@
 """Analyses over the workspace: manipulability, workspace maps and singular loci."""
 
-from .manipulability import POSE_METRICS, Manipulability, manipulability, manipulability_at
+from .manipulability import (
+    POSE_METRICS,
+    Manipulability,
+    manipulability,
+    manipulability_at,
+    manipulability_unit,
+)
 from .maps import WorkspaceSlice, workspace_grid, workspace_map, workspace_sweep
 from .orientation import OrientationRange, orientation_range
 from .singular_loci import SingularPoint, singular_loci, singular_points, singular_points_along
@@ -13,6 +19,7 @@ __all__ = [
     "WorkspaceSlice",
     "manipulability",
     "manipulability_at",
+    "manipulability_unit",
     "orientation_range",
     "singular_loci",
     "singular_points",

@@ -30,7 +30,7 @@ import pinocchio as pin
 
 from ..core.closures import Closure
 from ..core.legs import Leg
-from ..core.task import Task, wrap_angle
+from ..core.task import FrameTask, Task, wrap_angle
 from ..tolerances import BATCH_LOG3_SERIES_ANGLE, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL
 from .manipulability import batch_metrics
 
@@ -178,8 +178,10 @@ class BatchKinematics:
         Supported: joints ``JointModelP{X,Y,Z}`` / ``JointModelR{X,Y,Z}`` and
         ``JointModelFreeFlyer``, ``point`` closures, tasks of ``x y z`` plus either ``rz``
         when every rotation axis is the world z (a planar chain, where the yaw rate is the
-        z angular rate) or all of ``rx ry rz``.
+        z angular rate) or all of ``rx ry rz``; not joint tasks.
         """
+        if not isinstance(task, FrameTask):
+            return None
         kind, axis, rotational = [0], [-1], np.zeros(model.nv, dtype=bool)
         for j in range(1, model.njoints):
             short, iv = model.joints[j].shortname(), model.joints[j].idx_v

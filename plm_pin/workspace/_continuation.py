@@ -34,8 +34,9 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
-from scipy.ndimage import label as _label
 
+from .._arguments import count, positive, real_numbers
+from .._lazy import lazy_module
 from ..core import closures as _closures
 from ..core.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
 from ..core.legs import Leg, ik_jacobian_from_data, working_mode_from_data
@@ -43,10 +44,12 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import Task, TaskTarget
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.forward import task_pose
-from ..kinematics.inverse import inverse_kinematics
-from ..kinematics.working_mode import working_mode
+from ..kinematics.inverse import check_mode, inverse_kinematics
+from ..kinematics.working_mode import start_configuration
 from ._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
 from .manipulability import batch_metrics
+
+ndimage = lazy_module("scipy.ndimage")  # label: the unreached regions of a grid
 
 
 @dataclass
@@ -357,8 +360,7 @@ RESEED_ATTEMPTS = 64
 def _auto_workers(n_points: int, shape: tuple[int, ...], workers: int | None) -> int:
     if workers is None:
         workers = (os.cpu_count() or 1) if n_points >= PARALLEL_MIN_POINTS else 1
-    if workers < 1:
-        raise InvalidInput(f"workers must be at least 1, got {workers}")
+    workers = count(workers, "workers", minimum=1)
     if len(shape) < 2:
         return 1
     return max(1, min(workers, shape[0] // 4))
@@ -632,26 +634,12 @@ def _reseed_solution(
         return None
 
 
-def start_configuration(mech: Mechanism, guess: ArrayLike | None) -> np.ndarray:
-    """The configuration an analysis starts from: ``guess`` (checked), or the reference one."""
-    return mech.q_ref if guess is None else mech.check_q(guess, "guess")
-
-
-def guess_mode(mech: Mechanism, guess: ArrayLike | None) -> tuple[int, ...] | None:
-    """Working mode of ``guess`` (default: the reference configuration); None if a leg is singular there.
-
-    Passed as ``mode`` it keeps an analysis in the guess's working mode wherever its seed is.
-    """
-    mode = working_mode(mech, start_configuration(mech, guess))
-    return None if 0 in mode else mode
-
-
 def base_pose(mech: Mechanism, pose: ArrayLike | None, guess: ArrayLike | None) -> np.ndarray:
     """The task pose giving a slice's fixed coordinates [m, rad]: ``pose`` (checked), else the guess's."""
     task = require_task(mech)
     if pose is None:
         return task_pose(mech, start_configuration(mech, guess))
-    base = np.asarray(pose, dtype=float)
+    base = np.asarray(real_numbers(pose, "pose"), dtype=float)
     if base.shape != (task.size,) or not np.all(np.isfinite(base)):
         raise InvalidInput(
             f"pose must hold {task.size} finite task coordinates {list(task.dofs)}, got {pose!r}"
@@ -681,6 +669,8 @@ def solve_poses(
     Returns:
         The solved grid, and the working mode kept (None when no point could be seeded).
     """
+    tol = positive(tol, "tol", "m, rad")
+    mode = check_mode(mech, mode)
     shape = poses.shape[:-1]
     k = poses.shape[-1]
     ev = IKEvaluator.from_mechanism(mech)
@@ -740,7 +730,7 @@ def reseed(
     attempted = np.zeros(state.reached.size, dtype=bool)
     budget = RESEED_ATTEMPTS
     while budget > 0 and not state.reached.all():
-        labels, count = _label(~state.reached.reshape(state.shape))
+        labels, count = ndimage.label(~state.reached.reshape(state.shape))
         labels = labels.reshape(-1)
         grown = False
         for stretch in range(1, count + 1):

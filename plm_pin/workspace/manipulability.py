@@ -25,17 +25,19 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core.mechanism import Mechanism
+from .._arguments import check_tolerance, flag
+from ..core.mechanism import Mechanism, require_task
 from ..exceptions import SingularConfiguration
 from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import (
+    INVERSE_RTOL,
     ClosedChainJacobians,
     check_square_task,
     closed_chain_jacobians,
     feasible_motions,
     times_T_inverse,
 )
-from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
+from ..kinematics.singularity import SINGULARITY_TOL, constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
 
 W_UNIT = "product of the column units of J_ce (m/rad for linear actuators and an x-y-theta task)"
@@ -49,6 +51,37 @@ POSE_METRICS: tuple[str, ...] = (
     "direct_margin",
 )
 """Names of the per-pose metrics of workspace maps, in this order."""
+
+
+def manipulability_unit(mech: Mechanism) -> str:
+    r"""SI unit of :math:`w` for ``mech``: the product of the column units of :math:`J_{ce}`.
+
+    Column ``j`` is in actuator units (m for prismatic, rad for revolute actuators) per unit
+    of task coordinate ``j`` (m for ``x y z``, rad for ``rx ry rz``), so :math:`w` is in
+    :math:`a^k / \prod_j t_j` (e.g. m/rad for linear actuators and an x-y-theta task, ``-``
+    for a four-bar's crank angle per rocker angle). With actuators of both kinds the rows of
+    :math:`J_{ce}` mix units and :math:`w` has none: :data:`W_UNIT` is returned.
+
+    Raises:
+        InvalidInput: a mechanism without a task.
+    """
+    task = require_task(mech)
+    kinds = {a.kind for a in mech.actuators}
+    if len(kinds) != 1:
+        return W_UNIT
+    powers = {"m": 0, "rad": 0}
+    powers["m" if kinds == {"prismatic"} else "rad"] += len(task.dofs)
+    for dof in task.dofs:
+        powers["rad" if dof.startswith("r") else "m"] -= 1
+
+    def product(sign: int) -> str:
+        parts = [s if abs(p) == 1 else f"{s}^{abs(p)}" for s, p in powers.items() if p * sign > 0]
+        return " ".join(parts)
+
+    above, below = product(1), product(-1)
+    if not below:
+        return above or "-"
+    return f"{above or '1'}/{below if ' ' not in below else f'({below})'}"
 
 
 @dataclass(frozen=True)
@@ -80,15 +113,20 @@ class Manipulability(Result):
         return 0.0 if not np.isfinite(self.condition_number) else 1.0 / self.condition_number
 
 
-def manipulability_from_jacobians(jac: ClosedChainJacobians) -> Manipulability:
-    """Manipulability from Jacobians already computed (see :func:`manipulability`)."""
+def manipulability_from_jacobians(
+    jac: ClosedChainJacobians, singularity_tol: float = INVERSE_RTOL
+) -> Manipulability:
+    """Manipulability from Jacobians already computed (see :func:`manipulability`).
+
+    ``singularity_tol`` is the inverse margin at or below which :math:`T` counts as singular [-].
+    """
     check_square_task(jac.T.shape[0], jac.T.shape[1], "manipulability needs")
-    J_ce, s, w, cond, singular = _manipulability_values(jac.T, jac.C, jac.J_x)
+    J_ce, s, w, cond, singular = _manipulability_values(jac.T, jac.C, jac.J_x, singularity_tol)
     return Manipulability(float(w), float(cond), s, None if singular else J_ce, bool(singular))
 
 
 def _manipulability_values(
-    T: np.ndarray, C: np.ndarray, J_x: np.ndarray
+    T: np.ndarray, C: np.ndarray, J_x: np.ndarray, rtol: float = INVERSE_RTOL
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     r""":math:`J_{ce} = C T^{-1}`, its singular values, :math:`w` and :math:`\kappa`, batched.
 
@@ -96,12 +134,13 @@ def _manipulability_values(
         T: shape (..., k, k).
         C: shape (..., n_act, k).
         J_x: task Jacobians, shape (..., k, nv) (the scale of :math:`T`'s singularity test).
+        rtol: inverse margin at or below which :math:`T` counts as singular [-].
 
     Returns:
         ``J_ce`` (..., n_act, k) and its singular values (..., k) (NaN where :math:`T` is
         singular), ``w`` and ``condition_number`` (...) (inf there), and the singular mask (...).
     """
-    J_ce, singular = times_T_inverse(C, T, J_x)
+    J_ce, singular = times_T_inverse(C, T, J_x, rtol)
     if singular.any():  # NaN blocks: SVD of zeros there, then NaN
         s = np.linalg.svd(np.where(singular[..., None, None], 0.0, J_ce), compute_uv=False)
         s[singular] = np.nan
@@ -117,7 +156,13 @@ def _manipulability_values(
     return J_ce, s, w, cond, singular
 
 
-def manipulability(mech: Mechanism, q: ArrayLike, *, raise_if_singular: bool = False) -> Manipulability:
+def manipulability(
+    mech: Mechanism,
+    q: ArrayLike,
+    *,
+    raise_if_singular: bool = False,
+    singularity_tol: float = SINGULARITY_TOL,
+) -> Manipulability:
     """Yoshikawa manipulability and condition number of :math:`J_{ce}` at configuration ``q``.
 
     Args:
@@ -125,18 +170,27 @@ def manipulability(mech: Mechanism, q: ArrayLike, *, raise_if_singular: bool = F
         q: assembled configuration, shape (nq,).
         raise_if_singular: raise at an inverse (type 1) singularity instead of returning
             ``w = inf`` flagged ``inverse_singular``.
+        singularity_tol: inverse margin at or below which ``q`` counts as inverse-singular [-]
+            (the tolerance of :func:`plm_pin.kinematics.classify`, so that both agree; a finite
+            number >= 0).
 
     Returns:
         The manipulability.
 
     Raises:
         SingularConfiguration: when ``raise_if_singular`` and :math:`T` is singular.
-        InvalidInput: malformed ``q``, no task, or a task size different from the DOF.
+        InvalidInput: malformed ``q``, ``raise_if_singular`` or ``singularity_tol``, no task, or a
+            task size different from the DOF.
     """
-    result = manipulability_from_jacobians(closed_chain_jacobians(mech, q))
+    flag(raise_if_singular, "raise_if_singular")
+    tol = check_tolerance(singularity_tol, "singularity_tol")
+    jac = closed_chain_jacobians(mech, q)
+    result = manipulability_from_jacobians(jac, tol)
     if raise_if_singular and result.inverse_singular:
+        margin = float(inverse_margins(jac.T, jac.J_x))
         raise SingularConfiguration(
-            f"{mech.name}: inverse-kinematics (type 1) singular configuration: J_ce is undefined"
+            f"{mech.name}: inverse-kinematics (type 1) singular configuration: inverse margin {margin:.3g} "
+            f"at or below the tolerance {tol:.3g}; J_ce is undefined"
         )
     return result
 

@@ -16,7 +16,7 @@ ends the range before the first or last sample, that sample is the end (``lower_
 ``upper_end`` is ``"grid"``: the range is at least that wide).
 
 The working mode kept is the guess's (the reference configuration's by default,
-:func:`guess_mode`).
+:func:`~plm_pin.kinematics.guess_mode`).
 """
 
 from __future__ import annotations
@@ -27,11 +27,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._arguments import check_tolerance, finite_number, positive, real_numbers
 from ..core.mechanism import Mechanism
 from ..exceptions import InvalidInput
+from ..kinematics.working_mode import guess_mode, start_configuration
 from ..results import Result, unit
 from ..tolerances import LOCUS_REFINE_MARGIN, RANGE_XTOL, SINGULARITY_TOL
-from ._continuation import guess_mode, start_configuration
 from .maps import workspace_sweep
 from .singular_loci import SingularPoint, line_path, locate_on_solved
 
@@ -117,9 +118,14 @@ def orientation_range(
         InvalidInput: malformed samples or reference, an unknown axis, or a task whose size
             differs from the DOF.
     """
-    ts = np.asarray(values, dtype=float)
-    if not math.isfinite(reference):
-        raise InvalidInput(f"reference must be a finite angle [rad], got {reference!r}")
+    ts = np.asarray(real_numbers(values, "values"), dtype=float)
+    reference = finite_number(reference, "reference", "rad")
+    xtol, tol, near = (
+        positive(xtol, "xtol", "rad"),
+        check_tolerance(tol, "tol"),
+        check_tolerance(near, "near"),
+    )
+    ik_tol = positive(ik_tol, "ik_tol", "m, rad")
     if ts.ndim != 1 or ts.size < 2 or not np.all(np.isfinite(ts)) or np.any(np.diff(ts) <= 0.0):
         raise InvalidInput(
             f"values must be an increasing 1-D array of at least 2 finite samples, got {values!r}"

@@ -34,16 +34,19 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
-from scipy.optimize import brentq, minimize_scalar
 
+from .._arguments import check_tolerance, flag, positive, real_numbers
+from .._lazy import lazy_module
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
-from ..kinematics.inverse import inverse_kinematics
+from ..kinematics.inverse import check_mode, inverse_kinematics
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
 from ..tolerances import LOCUS_REFINE_MARGIN, LOCUS_XTOL, SINGULARITY_TOL
 from ._continuation import IKEvaluator, base_pose, compatible, solve_poses
+
+optimize = lazy_module("scipy.optimize")  # brentq, minimize_scalar: 0.1 s to import
 
 METHODS: tuple[str, ...] = ("sign_change", "minimum", "boundary")
 
@@ -210,7 +213,10 @@ def singular_points(
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "singularity location needs", mech.name)
-    ts = np.asarray(t, dtype=float)
+    xtol, tol, near = positive(xtol, "xtol"), check_tolerance(tol, "tol"), check_tolerance(near, "near")
+    flag(boundaries, "boundaries")
+    mode = check_mode(mech, mode)
+    ts = np.asarray(real_numbers(t, "t"), dtype=float)
     if ts.ndim != 1 or ts.size < 2 or not np.all(np.isfinite(ts)) or np.any(np.diff(ts) <= 0.0):
         raise InvalidInput(f"t must be an increasing 1-D array of at least 2 finite samples, got {t!r}")
 
@@ -318,7 +324,7 @@ def _refine_root(
         return signed_singularity_function(mech, q)
 
     try:
-        root, result = brentq(g, t_a, t_b, xtol=xtol, full_output=True, disp=False)
+        root, result = optimize.brentq(g, t_a, t_b, xtol=xtol, full_output=True, disp=False)
     except _Unreached:
         return None
     if not result.converged:
@@ -362,7 +368,7 @@ def _refine_minimum(
         cache[s] = q
         return _margin_of(mech, q, kind)
 
-    result = minimize_scalar(
+    result = optimize.minimize_scalar(
         f, bounds=(ts[i - 1], ts[i + 1]), method="bounded", options={"xatol": xtol, "maxiter": 500}
     )
     s = float(result.x)

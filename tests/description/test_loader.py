@@ -22,7 +22,7 @@ from plm_pin.description import (
     read_description,
     write_description,
 )
-from plm_pin.description import _urdf_build as u
+from plm_pin.description import urdf_parts as u
 from plm_pin.description.loader import build_model, description_from_text
 from plm_pin.families.classic import build_fourbar
 

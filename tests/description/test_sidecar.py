@@ -293,6 +293,42 @@ def test_non_string_key_is_reported_not_crashed_on():
     assert "sidecar: unknown key(s) [1, 'foo']" in msg
 
 
+def test_joint_task_round_trips_and_refuses_a_frame_beside_it():
+    """`end_effector: {joints: [...]}`: a frameless task that round-trips; a frame beside it is refused."""
+    side = parse_sidecar({**_valid(), "end_effector": {"joints": ["j1"]}})
+    assert side.task == TaskSpec(None, ("j1",))
+    assert side.task.joints == ("j1",) and side.task.rows() == ()
+    assert parse_sidecar(read_yaml(side.to_yaml())) == side
+    message = _error({**_valid(), "end_effector": {"joints": ["j1"], "frame": "tip"}})
+    assert (
+        "end_effector takes either joints (a joint task) or frame and task (a frame task), not both"
+        in message
+    )
+    assert "end_effector.joints must be a non-empty list" in _error(
+        {**_valid(), "end_effector": {"joints": []}}
+    )
+
+
+def test_joint_task_on_a_missing_joint_is_refused(tmp_path):
+    """Loading refuses an output joint that does not exist, listing the joints; a real one loads."""
+    import shutil
+
+    import yaml
+
+    import plm_pin
+    from plm_pin.models import urdf_folder
+
+    shutil.copy(urdf_folder() / "fourbar.urdf", tmp_path)
+    data = yaml.safe_load((urdf_folder() / "fourbar.plm.yaml").read_text())
+    data["end_effector"] = {"joints": ["rocker"]}
+    (tmp_path / "fourbar.plm.yaml").write_text(yaml.safe_dump(data))
+    with pytest.raises(DescriptionError, match=r"joint 'rocker' not found; joints are \['crank_pivot'"):
+        plm_pin.load(tmp_path / "fourbar.urdf")
+    data["end_effector"] = {"joints": ["rocker_pivot"]}
+    (tmp_path / "fourbar.plm.yaml").write_text(yaml.safe_dump(data))
+    assert plm_pin.load(tmp_path / "fourbar.urdf").task_compiled.dofs == ("rocker_pivot",)
+
+
 @pytest.mark.parametrize(
     ("key", "value", "message"),
     [

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from plm_pin import InvalidInput, PoseUnreachable
+from plm_pin.dynamics import task_space_dynamics
 from plm_pin.dynamics.decoupling import decoupling_check
 from plm_pin.models import PRESETS
 from plm_pin.tolerances import DECOUPLING_RTOL
@@ -43,7 +44,7 @@ def test_3d4m_x_axis_is_decoupled_with_constant_inertia():
     assert report.inertia("rz", "x").kind == "zero"
     assert [report.gravity(d).kind for d in ("x", "y", "rz")] == ["zero", "constant", "zero"]
     assert report.gravity("y").value == pytest.approx((2 * ml + mt) * g, rel=1e-12)
-    assert [report.velocity(d).kind for d in ("x", "y", "rz")] == ["zero", "varies", "varies"]
+    assert [report.velocity(d).kind for d in ("x", "y", "rz")] == ["zero", "nonzero", "nonzero"]
     yy = report.inertia("y", "y")
     assert yy.kind == "varies"
     assert (yy.minimum, yy.maximum) == pytest.approx(closed_form_range("harada2011_3d4m", report.poses, 1, 1))
@@ -82,7 +83,7 @@ def test_asymmetric_table_loses_the_x_decoupling_by_the_hand_derived_couplings()
         assert entry.largest > 1e6 * entry.tolerance
     assert report.inertia("x", "x").kind == "constant"
     assert [report.gravity(d).kind for d in ("x", "y", "rz")] == ["zero", "constant", "zero"]
-    assert report.velocity("x").kind == "varies"
+    assert report.velocity("x").kind == "nonzero"
     assert report.decoupled() == ()
 
 
@@ -112,11 +113,54 @@ def test_unreachable_and_singular_poses_are_skipped_and_listed():
     assert "over 1 poses (1 unreachable and 1 singular skipped)" in report.to_table()
 
 
-def test_a_velocity_term_that_does_not_vanish_varies_even_from_one_sample():
-    """h_x vanishes at zero velocity, so a non-vanishing row is never called constant."""
-    report = decoupling_check(preset("harada2011_3d4m"), [(0.0, 0.08, 0.1)], n_velocities=1)
-    assert report.velocity("y").minimum == report.velocity("y").maximum != 0.0
-    assert report.velocity("y").kind == "varies" and report.velocity("x").kind == "zero"
+def test_a_velocity_term_is_zero_or_nonzero_never_constant():
+    """h_x vanishes at zero velocity, so a non-vanishing row is 'nonzero', not 'constant' nor 'varies'."""
+    report = decoupling_check(preset("harada2011_3d4m"), [(0.0, 0.08, 0.1)])
+    assert report.velocity("y").kind == "nonzero" and report.velocity("x").kind == "zero"
+    assert report.velocity("y").minimum < report.velocity("y").maximum
+
+
+def test_the_stated_velocities_determine_h_x_at_every_velocity(rng):
+    """h_x at v e_i and v (e_i + e_j) fixes the quadratic form: polarised, it gives h_x at any other velocity.
+
+    Gamma_ii = h(e_i), Gamma_ij + Gamma_ji = h(e_i + e_j) - h(e_i) - h(e_j), h(xd) = sum xd_i xd_j Gamma_ij,
+    compared with task_space_dynamics at random velocities, on the asymmetric table (no row vanishes).
+    """
+    mech = preset("harada2015_asymmetric")
+    pose = (0.01, 0.1, 0.2)
+    report = decoupling_check(mech, [pose], velocity_scale=0.5)
+    np.testing.assert_array_equal(
+        report.velocities, 0.5 * np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, 0, 1], [0, 1, 1]])
+    )
+    assert "h_x at the 6 task velocities v e_i and v (e_i + e_j), i < j, with v = 0.5 m/s or rad/s" in (
+        report.to_table()
+    )
+    q = report.configurations[0]
+    h = {tuple(v): task_space_dynamics(mech, q, xdot=v).h_x for v in report.velocities}
+    e = 0.5 * np.eye(3)
+    G = np.zeros((3, 3, 3))  # G[i, j] = Gamma_ij (a vector over rows), per unit rate 0.5
+    for i in range(3):
+        G[i, i] = h[tuple(e[i])]
+        for j in range(i + 1, 3):
+            G[i, j] = G[j, i] = 0.5 * (h[tuple(e[i] + e[j])] - h[tuple(e[i])] - h[tuple(e[j])])
+    for xd in rng.normal(size=(4, 3)):
+        c = xd / 0.5
+        expected = np.einsum("i,j,ijk->k", c, c, G)
+        np.testing.assert_allclose(task_space_dynamics(mech, q, xdot=xd).h_x, expected, rtol=1e-9, atol=1e-12)
+    values = np.array(list(h.values()))
+    assert (report.velocity("x").minimum, report.velocity("x").maximum) == (
+        values[:, 0].min(),
+        values[:, 0].max(),
+    )
+
+
+def test_a_range_is_written_with_the_digits_that_tell_its_ends_apart():
+    """An entry that varies by less than 4 digits shows more, never 'varies 1.736 .. 1.736'."""
+    from plm_pin.dynamics.decoupling import EntryBehaviour
+
+    entry = EntryBehaviour("varies", 1.7360001, 1.7360004, 1e-9, 1.0, "kg")
+    assert entry.describe() == "1.7360001 .. 1.7360004 kg"
+    assert EntryBehaviour("varies", -2.5, 3.25, 1e-9, 1.0, "N").describe() == "-2.5 .. 3.25 N"
 
 
 def test_table_and_dict_state_the_tolerances():
@@ -170,10 +214,12 @@ def test_refuses_bad_samples_and_settings():
         decoupling_check(mech, [(0.0, 0.08, 0.0), (0.0, math.nan, 0.0)])
     with pytest.raises(PoseUnreachable, match=r"none of the 1 poses could be evaluated \(1 unreachable"):
         decoupling_check(mech, [(0.0, 0.5, 0.0)])
-    with pytest.raises(InvalidInput, match="rtol and atol must be finite and non-negative"):
+    with pytest.raises(InvalidInput, match=r"^rtol must be a finite number >= 0, got -1.0$"):
         decoupling_check(mech, [(0.0, 0.08, 0.0)], rtol=-1.0)
-    with pytest.raises(InvalidInput, match="n_velocities must be at least 1"):
-        decoupling_check(mech, [(0.0, 0.08, 0.0)], n_velocities=0)
+    with pytest.raises(
+        InvalidInput, match=r"^velocity_scale must be a positive finite number \[m/s, rad/s\], got 0$"
+    ):
+        decoupling_check(mech, [(0.0, 0.08, 0.0)], velocity_scale=0)
     fivebar_grid = workspace_map(preset("fivebar"), ("x", "y"), ([0.0], [0.2]))
     with pytest.raises(InvalidInput, match="does not belong to harada2011_3d4m"):
         decoupling_check(mech, fivebar_grid)

@@ -13,7 +13,7 @@ import yourdfpy
 from scipy.integrate import solve_ivp
 
 import plm_pin
-from plm_pin.description import _urdf_build as u
+from plm_pin.description import urdf_parts as u
 from plm_pin.description import write_description
 from plm_pin.description.sidecar import ActuatorSpec, ClosureSpec, Sidecar
 from plm_pin.dynamics.simulation import SimulationResult, simulate

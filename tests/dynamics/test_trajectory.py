@@ -433,7 +433,7 @@ def test_bad_times_and_profiles_are_refused_with_their_sample_named():
         sampled_profile([0.0, 1.0, 2.0], [0.0, 1.0, 2.0])
     with pytest.raises(InvalidInput, match=r"x is not finite at samples \[1\]"):
         sampled_profile(np.arange(6.0), [0.0, math.inf, 0.0, 0.0, 0.0, 0.0])
-    with pytest.raises(InvalidInput, match="positive finite time"):
+    with pytest.raises(InvalidInput, match=r"^step must be a positive finite number \[s\], got "):
         differentiated_profile(lambda t: t, step=0.0)
     free = Mechanism(
         mech.model, dataclasses.replace(mech.sidecar, actuation=mech.sidecar.actuation[:1]), name="f"

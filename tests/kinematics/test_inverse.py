@@ -288,3 +288,32 @@ def test_bad_mode_is_refused(mode):
         match=r"^mode must hold 4 signs \(\+1 or -1\), one per leg; got " + re.escape(repr(mode)) + "$",
     ):
         inverse_kinematics(preset("harada2011_3d4m"), [0.0, 0.08, 0.0], mode=mode)
+
+
+def test_first_call_mode_does_not_depend_on_the_lazily_built_legs(tmp_path):
+    """The first IK on a fresh mechanism (fresh process) labels its mode as working_mode does later.
+
+    Every other working mode of the 3D3M at its reference pose is solved from its own
+    configuration as guess in a fresh process, where building ``mech.legs`` inside the first
+    ``.mode`` used to overwrite the scratch data that the label is read from.
+    """
+    import subprocess
+    import sys
+
+    mech = preset("harada2011_3d3m")
+    x = task_pose(mech, mech.q_ref)
+    sols = working_modes(mech, x)
+    assert len(sols) == 8  # two branches per PRRRP leg
+    np.save(tmp_path / "q.npy", np.stack([s.q for s in sols]))
+    code = (
+        "import numpy as np, plm_pin\n"
+        "from plm_pin.kinematics import inverse_kinematics, task_pose\n"
+        f"qs = np.load({str(tmp_path / 'q.npy')!r})\n"
+        "for q in qs:\n"
+        "    mech = plm_pin.load('harada2011_3d3m')\n"
+        "    print(inverse_kinematics(mech, task_pose(mech, q), guess=q).mode)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    labels = [tuple(int(s) for s in line.strip("()").split(",")) for line in out.stdout.splitlines()]
+    assert labels == [working_mode(mech, s.q) for s in sols]
+    assert len(set(labels)) == 8

@@ -342,7 +342,7 @@ def test_fourbar_task_space_dynamics_refuses_or_warns_at_the_rocker_extreme():
     fb = preset("fourbar")
     theta = rocker_extreme_crank_angles()[1]
     q = fb.assemble(fb.q_ref, fixed={"crank_pivot": theta}).q
-    with pytest.raises(SingularConfiguration, match=r"^inverse-kinematics \(type 1\) singular"):
+    with pytest.raises(SingularConfiguration, match=r"^fourbar: inverse-kinematics \(type 1\) singular"):
         task_space_dynamics(fb, q)
     near = fb.assemble(fb.q_ref, fixed={"crank_pivot": 3.7765}).q
     with pytest.warns(

@@ -46,3 +46,11 @@ def test_parameters_are_read_only():
     """Preset parameters cannot be changed in place."""
     with pytest.raises(TypeError):
         PRESETS["fourbar"].parameters["crank"] = 1.0  # type: ignore[index]
+
+
+def test_every_builder_path_names_a_family_builder():
+    """Each preset's builder_path 'module:function' imports that function from a family's builder."""
+    for p in PRESETS.values():
+        module, _, function = p.builder_path.partition(":")
+        assert module.startswith("plm_pin.families.") and module.endswith(".builder")
+        assert p.builder.__module__ == module and p.builder.__name__ == function

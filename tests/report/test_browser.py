@@ -11,7 +11,6 @@ from __future__ import annotations
 import io
 import os
 import shutil
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -90,21 +89,35 @@ def browser() -> Iterator[Any]:
         driver.quit()
 
 
-def _wait(what: str, condition: Callable[[], Any]) -> Any:
-    """Poll ``condition`` until it returns a true value or :data:`TIMEOUT` passes (then fail saying what)."""
-    end = time.monotonic() + TIMEOUT
-    while True:
-        value = condition()
-        if value:
-            return value
-        if time.monotonic() > end:
-            pytest.fail(f"timed out after {TIMEOUT:g} s waiting for {what}", pytrace=False)
-        time.sleep(0.25)
+def _wait(driver: Any, what: str, condition: Callable[[], Any]) -> Any:
+    """Wait explicitly (selenium's WebDriverWait) until ``condition`` holds, up to :data:`TIMEOUT`.
+
+    Each check waits on the state it tests (a page loaded, an image decoded, pixels inked),
+    never on a fixed time, so a loaded machine only makes it wait longer; past the timeout
+    it fails saying what it waited for.
+    """
+    from selenium.common.exceptions import TimeoutException
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    try:
+        return WebDriverWait(driver, TIMEOUT, poll_frequency=0.25).until(lambda _: condition())
+    except TimeoutException:
+        pytest.fail(f"timed out after {TIMEOUT:g} s waiting for {what}", pytrace=False)
 
 
 def _open(driver: Any, url: str) -> None:
     driver.get(url)
-    _wait(f"{url} to load", lambda: driver.execute_script("return document.readyState") == "complete")
+    _wait(driver, f"{url} to load", lambda: driver.execute_script("return document.readyState") == "complete")
+
+
+DECODED_AND_PAINTED = """
+const img = arguments[0], done = arguments[arguments.length - 1];
+img.decode().then(
+    () => requestAnimationFrame(() => requestAnimationFrame(() => done(true))),
+    () => done(false),
+);
+"""
+"""Resolve once the image is decoded and two frames have been painted since (false if it cannot decode)."""
 
 
 def _console_errors(driver: Any) -> list[str]:
@@ -141,7 +154,9 @@ def _check_canvas(driver: Any, where: str) -> None:
     """The current frame has a WebGL canvas showing a mechanism on meshcat's background."""
     from selenium.webdriver.common.by import By
 
-    canvas = _wait(f"the 3D canvas of {where}", lambda: driver.find_elements(By.TAG_NAME, "canvas"))[0]
+    canvas = _wait(driver, f"the 3D canvas of {where}", lambda: driver.find_elements(By.TAG_NAME, "canvas"))[
+        0
+    ]
     driver.execute_script(HIDE_HELPERS)
     size = driver.execute_script("return [arguments[0].width, arguments[0].height]", canvas)
     assert min(size) > 100, f"{where}: canvas of {size} pixels"
@@ -150,7 +165,7 @@ def _check_canvas(driver: Any, where: str) -> None:
         drawn, gradient = _drawn_on_background(canvas.screenshot_as_png)
         return drawn > 300 and gradient > 30
 
-    _wait(f"{where} to draw the mechanism (not blank)", rendered)
+    _wait(driver, f"{where} to draw the mechanism (not blank)", rendered)
 
 
 def _check_report(driver: Any, where: str) -> int:
@@ -161,12 +176,18 @@ def _check_report(driver: Any, where: str) -> int:
     for k, img in enumerate(images):
         driver.execute_script("arguments[0].scrollIntoView()", img)
         _wait(
+            driver,
             f"figure {k} of {where} to load",
             lambda img=img: driver.execute_script(
                 "return arguments[0].complete && arguments[0].naturalWidth", img
             ),
         )
-        assert _inked(img.screenshot_as_png) > 0.01, f"figure {k} of {where} is blank"
+        assert driver.execute_async_script(DECODED_AND_PAINTED, img), f"figure {k} of {where} does not decode"
+        _wait(
+            driver,
+            f"figure {k} of {where} to show ink (it stays blank)",
+            lambda img=img: _inked(img.screenshot_as_png) > 0.01,
+        )
     frames = driver.find_elements(By.CSS_SELECTOR, "iframe.scene")
     for k, frame in enumerate(frames):
         driver.execute_script("arguments[0].scrollIntoView()", frame)

@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-import shutil
+import sys
 import warnings
-from pathlib import Path
 
 import pytest
 
 from plm_pin.exceptions import InvalidInput, PlmError
 from plm_pin.models import PRESETS
-from plm_pin.report import find_study, run_study, study_names
+from plm_pin.report import find_study, run_study, study_modules, study_names
 from plm_pin.report import study as study_module
 from plm_pin.warnings import IllConditionedWarning
 from tests.report.conftest import make_study
@@ -28,22 +27,26 @@ def fake_package(tmp_path, monkeypatch):
     (package / "broken.py").write_text('TITLE = "No run here"\n')
     (package / "_helper.py").write_text("X = 1\n")
     monkeypatch.syspath_prepend(str(tmp_path))
+    for name in [m for m in sys.modules if m.split(".")[0] == "fake_studies"]:  # another test's package
+        monkeypatch.delitem(sys.modules, name)
     monkeypatch.setattr(study_module, "STUDY_PACKAGE", "fake_studies")
     return package
 
 
 def test_shipped_studies_are_found():
-    """The analyses package holds the overview and Harada 2015 studies, each with a title and run()."""
-    names = study_names()
-    assert {"harada2015", "overview"} <= set(names) and names == sorted(names)
+    """The library's overview and the paper studies of analyses/ are found, each with a title and run()."""
+    modules = study_modules()
+    assert modules["overview"] == "plm_pin.report.overview" and modules["harada2015"] == "analyses.harada2015"
+    assert study_names() == sorted(modules) == list(modules)
+    assert {m for m in modules.values() if not m.startswith("analyses.")} == {"plm_pin.report.overview"}
     overview = find_study("overview")
     assert overview.mechanism in PRESETS and overview.title == "Overview"
     assert find_study("harada2015").mechanism is None
 
 
 def test_private_modules_are_not_studies_and_non_studies_are_refused(fake_package):
-    """_helper is skipped; a module without run() is named as not a study."""
-    assert study_names() == ["broken", "good"]
+    """_helper is skipped; a module without run() is named as not a study; the library's overview stays."""
+    assert study_names() == ["broken", "good", "overview"]
     assert find_study("good").mechanism == "fivebar"
     with pytest.raises(PlmError, match=r"^fake_studies.broken is not a study: it must define TITLE"):
         find_study("broken")
@@ -55,21 +58,22 @@ def test_unknown_study_lists_the_studies():
         find_study("nope")
 
 
-def test_without_the_analyses_package_the_wheel_studies_are_used(monkeypatch, tmp_path):
-    """Without ``analyses`` the studies come from plm_pin.studies; a missing paper study says where it is."""
-    package = tmp_path / "builtin_studies"
-    package.mkdir()
-    (package / "__init__.py").write_text("")
-    shutil.copy(Path(__file__).resolve().parents[2] / "analyses" / "overview.py", package / "overview.py")
-    monkeypatch.syspath_prepend(str(tmp_path))
+def test_without_the_analyses_package_only_the_librarys_studies_are_found(monkeypatch):
+    """Without the paper studies' package the overview remains; a missing paper study says where it is."""
     monkeypatch.setattr(study_module, "STUDY_PACKAGE", "no_such_studies_package")
-    monkeypatch.setattr(study_module, "BUILTIN_STUDIES", "builtin_studies")
     assert study_names() == ["overview"]
     assert find_study("overview").mechanism == "harada2011_3d4m"
     with pytest.raises(
         InvalidInput, match=r"unknown study 'harada2011'; studies are \['overview'\] \(the paper"
     ):
         find_study("harada2011")
+
+
+def test_a_paper_study_cannot_take_the_name_of_the_librarys_own(fake_package):
+    """A module overview.py among the paper studies is refused, named, rather than hiding the overview."""
+    (fake_package / "overview.py").write_text('TITLE = "Mine"\n\ndef run(ctx):\n    pass\n')
+    with pytest.raises(PlmError, match=r"^fake_studies.overview takes the name of plm_pin's own study"):
+        study_names()
 
 
 def test_run_study_records_mechanisms_sections_and_plm_warnings():

@@ -18,6 +18,9 @@ CLASSES = {
     "test_cli_errors.py": "command-line errors and failing disks",
     "test_api_arguments.py": "API argument types and values",
     "test_faults.py": "faults (killed report swaps, sweep locks, corrupt checkpoints)",
+    "test_builders.py": "builder parameters (lengths not > 0, negative masses, impossible geometry)",
+    "test_options.py": "option types and ranges (tolerances, counts, flags, mappings, results, loads)",
+    "test_singular_poses.py": "singular configurations flagged alike (a four-bar's inverse singularity)",
 }
 """The module of each class of the robustness suite, as docs/guide/reliability.md names it."""
 

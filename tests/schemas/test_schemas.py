@@ -84,6 +84,11 @@ SIDECARS = [
     ("task direction repeated", _fourbar(end_effector={"frame": "rocker", "task": ["rz", "rz"]}), False),
     ("task empty", _fourbar(end_effector={"frame": "rocker", "task": []}), False),
     ("end effector without frame", _fourbar(end_effector={"task": ["rz"]}), False),
+    ("joint task: the rocker's joint", _fourbar(end_effector={"joints": ["rocker_pivot"]}), True),
+    ("joint task and a frame", _fourbar(end_effector={"joints": ["rocker_pivot"], "frame": "rocker"}), False),
+    ("joint task empty", _fourbar(end_effector={"joints": []}), False),
+    ("joint task repeated", _fourbar(end_effector={"joints": ["rocker_pivot", "rocker_pivot"]}), False),
+    ("joint task not a list", _fourbar(end_effector={"joints": "rocker_pivot"}), False),
     ("reference value as text", _fourbar(reference={"crank_pivot": "up"}), False),
     (
         "compliance: a drive and a joint spring",

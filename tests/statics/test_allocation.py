@@ -161,11 +161,11 @@ def test_preload_condition_puts_named_rods_in_compression():
     np.testing.assert_allclose(sol.f_c, res.x, atol=1e-8)
 
 
-def test_every_rod_in_compression_is_infeasible_for_the_3d4m_internal_mode():
-    """The internal mode loads the two rods of a pair in opposite senses: all-compression is refused."""
+def test_every_rod_in_compression_is_infeasible_for_the_3d4m_internal_force():
+    """The internal-force direction loads a pair's two rods in opposite senses: all-compression is refused."""
     mech = preset("harada2011_3d4m")
-    (mode,) = static_forces(mech, mech.q_ref, gravity=False).internal_modes()
-    signs = {k: np.sign(v.axial) for k, v in mode.link_forces.items() if k.startswith("rod")}
+    (direction,) = static_forces(mech, mech.q_ref, gravity=False).internal_directions()
+    signs = {k: np.sign(v.axial) for k, v in direction.link_forces.items() if k.startswith("rod")}
     assert signs["rod1"] == -signs["rod2"] and signs["rod3"] == -signs["rod4"]
     with pytest.raises(AllocationInfeasible, match="rod"):
         static_forces(mech, mech.q_ref, [0.0, 1.0, 0.0], gravity=False, min_compression=5.0)
@@ -176,16 +176,16 @@ def test_preload_where_proxsuite_stalled_is_the_closed_form_interval():
 
     ProxSuite's least-violation QP stopped there at 1000 iterations (dual residual 1.07e-11 for a
     tolerance of 1e-11). With one internal force y, each hinged link's axial force is a_l + b_l y
-    (b_l from the internal mode), and the least |y| keeping all of them <= 0 is 0 clipped to the
+    (b_l from the internal-force direction), and the least |y| keeping all of them <= 0 is 0 clipped to the
     interval those inequalities leave.
     """
     mech = preset("harada2011_3d4m")
     q = inverse_kinematics(mech, [0.0, 0.04, np.radians(35.0)]).q
     sol = static_forces(mech, q, [1.0, 0.0, 0.0], limits=None, min_compression=0.0)
     free = static_forces(mech, q, [1.0, 0.0, 0.0], limits=None)
-    (mode,) = free.internal_modes()
+    (direction,) = free.internal_directions()
     a = {k: v.axial for k, v in free.link_forces().items()}
-    b = {k: v.axial for k, v in mode.link_forces.items()}
+    b = {k: v.axial for k, v in direction.link_forces.items()}
     lo = max((-a[k] / b[k] for k in a if b[k] < 0.0), default=-np.inf)
     hi = min((-a[k] / b[k] for k in a if b[k] > 0.0), default=np.inf)
     assert lo <= hi

@@ -118,7 +118,20 @@ def test_3d3m_refuses_a_load_at_a_direct_singularity():
         ({"internal": {"rod9": 1.0}}, r"links \['rod9'\] are not hinged links"),
         ({"internal": {"rod1": 1.0, "rod2": 1.0}}, "has 1 internal force"),
         ({"link_limits": {"rod1": (1.0, 0.0)}}, "lower <= upper"),
-        ({"min_compression": np.inf}, "finite force"),
+        ({"min_compression": np.inf}, r"min_compression must be a finite number \[N\], got inf"),
+        ({"min_compression": "10"}, r"min_compression must be a finite number \[N\], got '10'"),
+        (
+            {"link_limits": [("rod1", (0.0, 1.0))]},
+            r"link_limits must be a mapping of link names to \(lower, upper\)",
+        ),
+        (
+            {"link_limits": {"rod1": 5.0}},
+            r"link_limits\['rod1'\] must be \(lower, upper\) axial forces \[N\]",
+        ),
+        ({"internal": [np.nan]}, r"^internal has non-finite entries at indices \[0\]$"),
+        ({"internal": {"rod1": "a"}}, r"^internal\['rod1'\] must be a finite number \[N\], got 'a'$"),
+        ({"weights": [1.0, np.nan, 1.0, np.inf]}, r"^weights has non-finite entries at indices \[1, 3\]$"),
+        ({"objective": ["norm"]}, r"^objective \['norm'\] is not one of"),
     ],
 )
 def test_bad_input_is_refused_with_a_clear_message(kwargs, message):

@@ -73,11 +73,11 @@ def test_3d4m_eqs_20_to_22(pose, f_e, f_i):
 
 @pytest.mark.parametrize("pose", POSES)
 def test_3d4m_internal_force_is_one_dimensional_along_the_end_plate(pose):
-    """Eq. (21) verified, not assumed: one internal mode, its forces on each plate end along the plate."""
+    """Eq. (21) verified, not assumed: one internal-force direction, its forces on each plate end along it."""
     mech = preset("harada2011_3d4m")
     sol = static_forces(mech, _ours(mech, pose), gravity=False)
-    (mode,) = sol.internal_modes()
-    lam = {c.name: mode.lam[c.rows] for c in mech.closures}
+    (direction,) = sol.internal_directions()
+    lam = {c.name: direction.lam[c.rows] for c in mech.closures}
     # forces on the plate (frame B of each closure): right end from rods 3 and 4
     right = lam["rod3_plate_right"] + lam["rod4_plate_right"]
     theta = pose[2]
@@ -85,5 +85,5 @@ def test_3d4m_internal_force_is_one_dimensional_along_the_end_plate(pose):
     assert np.linalg.norm(right) > 0.1
     np.testing.assert_allclose(np.cross(right, along), 0.0, atol=1e-12)
     # and the plate carries it as a pure axial force: zero shear at its hinge
-    assert mode.link_forces["plate"].shear == pytest.approx(0.0, abs=1e-12)
-    assert abs(mode.link_forces["plate"].axial) == pytest.approx(np.linalg.norm(right), rel=1e-12)
+    assert direction.link_forces["plate"].shear == pytest.approx(0.0, abs=1e-12)
+    assert abs(direction.link_forces["plate"].axial) == pytest.approx(np.linalg.norm(right), rel=1e-12)

@@ -11,7 +11,7 @@ import yourdfpy
 
 import plm_pin
 from plm_pin.core.mechanism import Mechanism
-from plm_pin.description import _urdf_build as u
+from plm_pin.description import urdf_parts as u
 from plm_pin.description import write_description
 from plm_pin.description.sidecar import parse_sidecar
 

@@ -14,7 +14,14 @@ from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.results import units
 from plm_pin.statics import static_forces
 from plm_pin.statics.balance import load_on_frame
-from plm_pin.stiffness import Modes, StiffnessMap, deflection, natural_frequencies, stiffness, stiffness_map
+from plm_pin.stiffness import (
+    StiffnessMap,
+    Vibration,
+    deflection,
+    natural_frequencies,
+    stiffness,
+    stiffness_map,
+)
 from plm_pin.stiffness.equilibrium import elastic_state, hessian_terms
 from plm_pin.stiffness.geometric import TreeDerivatives
 from plm_pin.workspace import workspace_map
@@ -248,12 +255,12 @@ def test_flexible_tip_mass_frequency(tmp_path):
     """A massless cantilever with a tip point mass m vibrates at sqrt(3 E I / (m L^3)) / 2 pi (full model)."""
     L, m = 0.4, 2.0
     mech = cantilever(tmp_path, L, m, compliance={"links": [{"link": "beam", "tip": "beam_tip", **BEAM}]})
-    modes = natural_frequencies(mech, mech.q_ref, model="full", gravity=False)
+    vibration = natural_frequencies(mech, mech.q_ref, model="full", gravity=False)
     soft = min(BEAM["Iy"], BEAM["Iz"])
-    assert modes.lowest == pytest.approx(
+    assert vibration.lowest == pytest.approx(
         math.sqrt(3 * BEAM["E"] * soft / (m * L**3)) / (2 * math.pi), rel=1e-6
     )
-    shape = modes.task_shapes[:, 0]  # bending in y (about I_z): tip slope / deflection = 3 / (2 L)
+    shape = vibration.task_shapes[:, 0]  # bending in y (about I_z): tip slope / deflection = 3 / (2 L)
     assert shape[5] / shape[1] == pytest.approx(3 / (2 * L), rel=1e-7)  # the 1e-9 kg m^2 tip inertia: ~3e-9
     np.testing.assert_allclose(shape[[0, 2, 3, 4]], 0.0, atol=1e-9)
 
@@ -269,7 +276,7 @@ def test_pendulum_frequency_with_gravity_stiffness(tmp_path):
 
 
 def test_stewart_frequencies_from_hand_stiffness(tmp_path):
-    """6-UPS with massless legs: the modes solve K_GD phi = omega^2 M_platform phi (hand M and K)."""
+    """6-UPS with massless legs: the vibrations solve K_GD phi = omega^2 M_platform phi (hand M and K)."""
     mech = stewart(tmp_path, platform_mass=5.0)
     k = 2.0e5
     q = mech.q_ref
@@ -421,7 +428,7 @@ def test_3d4m_with_flexible_rods_is_drives_and_rods_in_series():
     np.testing.assert_allclose(res.K_x, K, rtol=0, atol=1e-9 * np.abs(K).max())
     full = natural_frequencies(mech, mech.q_ref, model="full", result=res)
     task = natural_frequencies(mech, mech.q_ref, result=res)
-    assert full.lowest < task.lowest  # the rods' out-of-plane bending adds softer modes
+    assert full.lowest < task.lowest  # the rods' out-of-plane bending adds softer vibrations
 
 
 def test_results_are_strict_json_with_their_units():
@@ -440,10 +447,10 @@ def test_results_are_strict_json_with_their_units():
     data = json.loads(json.dumps(res.state.to_dict(), allow_nan=False))
     assert list(data) == ["q", "forces", "load", "gravity", "spring_forces"]  # the compliant model left out
     assert list(data["forces"]["f_c"].values()) == res.f_c.tolist() and data["load"] is None
-    modes = natural_frequencies(mech, mech.q_ref, result=res)
-    data = json.loads(json.dumps(modes.to_dict(), allow_nan=False))
+    vibration = natural_frequencies(mech, mech.q_ref, result=res)
+    data = json.loads(json.dumps(vibration.to_dict(), allow_nan=False))
     assert list(data) == ["model", "dofs", "frequencies", "omega", "task_shapes"]
-    assert data["frequencies"] == modes.frequencies.tolist() and units(Modes)["frequencies"] == "Hz"
+    assert data["frequencies"] == vibration.frequencies.tolist() and units(Vibration)["frequencies"] == "Hz"
     d = deflection(mech, mech.q_ref, [1.0, 2.0, 0.1], compliance=spec)
     data = json.loads(json.dumps(d.to_dict(), allow_nan=False))
     assert data["task_displacement"] == d.task_displacement.tolist() and data["iterations"] == d.iterations

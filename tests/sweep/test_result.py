@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 
+from plm_pin import load
+from plm_pin.models import PRESETS
 from plm_pin.sweep import sweep
 from tests.sweep.conftest import FIG6_RT, THETAS, small
 
@@ -62,3 +65,21 @@ def test_to_dict_is_json_ready():
     w = data["dataset"]["data_vars"]["manipulability"]
     assert w["attrs"]["units"].startswith("product of the column units of J_ce")
     assert "nan" in json.dumps(w["data"])  # unreached poses
+
+
+def test_a_loaded_mechanism_reduced_over_every_axis_gives_one_number_the_brute_force_count():
+    """A loaded mechanism, reachable_fraction over every pose axis: one number, the brute-force share.
+
+    The share counts, pose by pose, where every leg of Harada 2011 eq. (2) has a real root (|L_y| <= l).
+    """
+    mech = load("harada2011_3d4m")
+    parameters = PRESETS["harada2011_3d4m"].parameters
+    l, rt = parameters["rod_lengths"][0], parameters["half_plate"]
+    ys, thetas = [0.02, 0.08, 0.12, 0.15], np.radians([-60.0, -20.0, 0.0, 35.0, 70.0])
+    poses = {"y": ys, "rz": thetas}
+    ds = sweep(mech, poses=poses, pose=(0.0, 0.08, 0.0), metrics=["reachable_fraction"]).dataset
+    assert ds.reachable_fraction.dims == () and ds.failed.dims == ()
+    # L_y = y +- r_t sin(theta) for the two pairs
+    reached = [abs(y) + rt * abs(math.sin(t)) < l for y in ys for t in thetas]
+    assert 0 < sum(reached) < len(reached)  # the box holds poses of both kinds
+    assert float(ds.reachable_fraction) == sum(reached) / len(reached)

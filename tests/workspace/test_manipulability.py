@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from analyses import _harada2011_paper as paper
+from plm_pin import build_mechanism
 from plm_pin.exceptions import InvalidInput, SingularConfiguration
 from plm_pin.kinematics import ClosedChainJacobians, closed_chain_jacobians, inverse_kinematics
-from plm_pin.workspace import manipulability, manipulability_at
+from plm_pin.workspace import manipulability, manipulability_at, manipulability_unit
 from plm_pin.workspace.manipulability import manipulability_from_jacobians
 from tests.conftest import preset, with_rotated_null_basis
 
@@ -124,3 +125,30 @@ def test_to_dict_is_json():
     mech3, q = _fold_configuration()
     singular = json.loads(json.dumps(manipulability(mech3, q).to_dict()))
     assert singular["w"] == "inf" and singular["J_ce"] is None
+
+
+@pytest.mark.parametrize(
+    ("name", "expected", "scaled"),
+    [
+        (
+            "harada2011_3d4m",
+            "m/rad",
+            {
+                "rod_lengths": (0.28,) * 4,
+                "half_plate": 0.1,
+                "reference_pose": (0.0, 0.16, math.radians(-20.0)),
+            },
+        ),
+        ("fivebar", "rad^2/m^2", {"base": 0.4, "proximal": 0.3, "distal": 0.4, "tip": (0.04, 0.5)}),
+        ("fourbar", "-", {"crank": 0.2, "coupler": 0.5, "rocker": 0.4, "ground": 0.6}),
+    ],
+)
+def test_manipulability_unit_is_the_power_of_length_w_scales_with(name, expected, scaled):
+    """The stated unit m^p rad^r is dimensional analysis: doubling every length multiplies w by 2^p."""
+    mech = preset(name)
+    unit_text = manipulability_unit(mech)
+    assert unit_text == expected
+    power = {"m/rad": 1, "rad^2/m^2": -2, "-": 0}[unit_text]
+    big = build_mechanism(name, scaled)  # every length doubled, angles kept
+    w, w_big = manipulability(mech, mech.q_ref).w, manipulability(big, big.q_ref).w
+    assert w_big == pytest.approx(2.0**power * w, rel=1e-6)

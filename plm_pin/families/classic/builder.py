@@ -11,9 +11,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..._arguments import finite_array, finite_number, length, nonnegative
 from ..._lazy import lazy_module
-from ...description import _urdf_build as u
+from ...description import urdf_parts as u
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
+from ...exceptions import InvalidInput
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -46,6 +48,23 @@ def _angle(v: np.ndarray) -> float:
     return math.atan2(float(v[1]), float(v[0]))
 
 
+def _check_triangle(d: float, r0: float, r1: float, bars: str, what: str) -> None:
+    """Refuse ``bars`` ``r0``, ``r1`` [m] whose pivots, ``d`` [m] apart, cannot meet (``what`` says where)."""
+    if not abs(r0 - r1) <= d <= r0 + r1:
+        raise InvalidInput(
+            f"{what}: the {bars} ({r0:.6g} m, {r1:.6g} m) cannot meet: their pivots are {d:.6g} m apart, "
+            f"outside [{abs(r0 - r1):.6g}, {r0 + r1:.6g}] m"
+        )
+
+
+def _bar_parameters(density: object, gravity: object, **lengths: object) -> None:
+    """Check the lengths [m] (> 0), the density [kg/m] and the gravity [m/s^2] (>= 0) of a classic chain."""
+    for key, value in lengths.items():
+        length(value, key)
+    nonnegative(density, "density", "kg/m")
+    nonnegative(gravity, "gravity", "m/s^2")
+
+
 def build_fourbar(
     *,
     name: str = "fourbar",
@@ -70,7 +89,22 @@ def build_fourbar(
         crank_angle: crank angle of the reference configuration [rad].
         gravity: gravity along -y [m/s^2].
         source: provenance.
+
+    Raises:
+        InvalidInput: a length not > 0, a density or gravity not >= 0, a crank angle not finite, or a
+            crank angle where coupler and rocker cannot close the loop.
     """
+    _bar_parameters(density, gravity, crank=crank, coupler=coupler, rocker=rocker, ground=ground)
+    finite_number(crank_angle, "crank_angle", "rad")
+    A = crank * np.array([math.cos(crank_angle), math.sin(crank_angle)])
+    D = np.array([ground, 0.0])
+    _check_triangle(
+        float(np.linalg.norm(D - A)),
+        coupler,
+        rocker,
+        "coupler and rocker",
+        f"crank_angle = {crank_angle:.6g} rad",
+    )
     links = [
         u.link("base", visuals=[u.box_visual((ground, 0.01, 0.004), "base", (ground / 2, -0.02, -0.01))]),
         _bar("crank", crank, density),
@@ -86,8 +120,6 @@ def build_fourbar(
         u.joint("coupler_tip_fixed", "fixed", "coupler", "coupler_tip", xyz=(coupler, 0.0, 0.0)),
         u.joint("rocker_tip_fixed", "fixed", "rocker", "rocker_tip", xyz=(rocker, 0.0, 0.0)),
     ]
-    A = crank * np.array([math.cos(crank_angle), math.sin(crank_angle)])
-    D = np.array([ground, 0.0])
     B = _circle_intersection(A, coupler, D, rocker, upper=True)
     reference = {
         "crank_pivot": (crank_angle,),
@@ -128,7 +160,22 @@ def build_fivebar(
         tip: tip position of the reference configuration [m] (elbows outward).
         gravity: gravity along -y [m/s^2].
         source: provenance.
+
+    Raises:
+        InvalidInput: a length not > 0, a density or gravity not >= 0, a tip that is not two finite
+            numbers or that a side cannot reach.
     """
+    _bar_parameters(density, gravity, base=base, proximal=proximal, distal=distal)
+    tip_xy = finite_array(tip, "tip", (2,), "coordinates [m]")
+    for side, x0 in (("left", -base / 2), ("right", base / 2)):
+        reach = float(np.linalg.norm(tip_xy - (x0, 0.0)))
+        _check_triangle(
+            reach,
+            proximal,
+            distal,
+            "proximal and distal links",
+            f"tip {tuple(tip_xy.tolist())} m, {side} side",
+        )
     links = [u.link("base", visuals=[u.box_visual((base, 0.01, 0.004), "base", (0.0, -0.02, -0.01))])]
     joints = []
     reference: dict[str, tuple[float, ...]] = {}

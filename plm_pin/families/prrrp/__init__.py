@@ -8,32 +8,76 @@
 
 A preset rebuilt with four equal rods: ``plm_pin.build_mechanism("harada2015_asymmetric",
 symmetric_rods(0.240))``.
+
+Each name is imported from its module on first use, so that building a preset (which needs the
+builder alone) loads neither the planners nor the kinematics they use.
 """
 
-from .builder import build_2prrrp, leg_inverse_kinematics, symmetric_rods
-from .complex_singularity import CoincidentCircleSample, ComplexSingularityCase, complex_singularity_check
-from .layout import PrrrpLayout, PrrrpLeg, PrrrpSubMechanism, prrrp_layout
-from .modes import (
-    ASSEMBLY_MODES,
-    PairSolutions,
-    PrrrpState,
-    assembly_mode,
-    mode_label,
-    pair_solutions,
-    paper_working_modes,
-    prrrp_configuration,
-    prrrp_state,
-    working_mode_label,
-)
-from .planners import (
-    PAPER_ASSEMBLY_ROUTE,
-    PAPER_WORKING_ROUTE,
-    AssemblyModeChange,
-    ModeCrossing,
-    WorkingModeChange,
-    assembly_mode_graph,
-    plan_assembly_mode_change,
-    plan_working_mode_change,
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..._lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from .builder import build_2prrrp, leg_inverse_kinematics, symmetric_rods
+    from .complex_singularity import CoincidentCircleSample, ComplexSingularityCase, complex_singularity_check
+    from .layout import PrrrpLayout, PrrrpLeg, PrrrpSubMechanism, prrrp_layout
+    from .modes import (
+        ASSEMBLY_MODES,
+        PairSolutions,
+        PrrrpState,
+        assembly_mode,
+        mode_label,
+        pair_solutions,
+        paper_working_modes,
+        prrrp_configuration,
+        prrrp_state,
+        working_mode_label,
+    )
+    from .planners import (
+        PAPER_ASSEMBLY_ROUTE,
+        PAPER_WORKING_ROUTE,
+        AssemblyModeChange,
+        ModeCrossing,
+        WorkingModeChange,
+        assembly_mode_graph,
+        plan_assembly_mode_change,
+        plan_working_mode_change,
+    )
+
+__getattr__, __dir__ = lazy_exports(
+    __name__,
+    {
+        "ASSEMBLY_MODES": ".modes",
+        "AssemblyModeChange": ".planners",
+        "CoincidentCircleSample": ".complex_singularity",
+        "ComplexSingularityCase": ".complex_singularity",
+        "ModeCrossing": ".planners",
+        "PAPER_ASSEMBLY_ROUTE": ".planners",
+        "PAPER_WORKING_ROUTE": ".planners",
+        "PairSolutions": ".modes",
+        "PrrrpLayout": ".layout",
+        "PrrrpLeg": ".layout",
+        "PrrrpState": ".modes",
+        "PrrrpSubMechanism": ".layout",
+        "WorkingModeChange": ".planners",
+        "assembly_mode": ".modes",
+        "assembly_mode_graph": ".planners",
+        "build_2prrrp": ".builder",
+        "complex_singularity_check": ".complex_singularity",
+        "leg_inverse_kinematics": ".builder",
+        "mode_label": ".modes",
+        "pair_solutions": ".modes",
+        "paper_working_modes": ".modes",
+        "plan_assembly_mode_change": ".planners",
+        "plan_working_mode_change": ".planners",
+        "prrrp_configuration": ".modes",
+        "prrrp_layout": ".layout",
+        "prrrp_state": ".modes",
+        "symmetric_rods": ".builder",
+        "working_mode_label": ".modes",
+    },
 )
 
 __all__ = [

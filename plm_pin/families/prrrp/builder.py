@@ -16,8 +16,8 @@ paper's text gives (+, -, +, -) for links 1-4, but its code (M.5) and its skelet
 We follow the code, which produced the paper's figures.
 
 Self-collision: the drawing puts every shape in the plane z = 0, but a real table stacks them
-(:data:`LAYERS`): only the carriages share a layer, on the stator, and can touch; the
-sidecar's ``self_collision.ignore`` lists every other pair of shapes on non-adjacent bodies.
+(as the 2-PRRRP presets' notes state): only the carriages share a layer, on the stator, and
+can touch; the sidecar's ``self_collision.ignore`` lists every other pair of shapes on non-adjacent bodies.
 """
 
 from __future__ import annotations
@@ -26,11 +26,21 @@ import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from ..._arguments import (
+    finite_array,
+    leg_numbers,
+    length,
+    nonnegative,
+    numbers_of,
+    optional_positive,
+    signs,
+)
 from ..._lazy import lazy_module
-from ...description import _urdf_build as u
+from ...description import urdf_parts as u
 from ...description.compliance import assumed_drive_stiffness
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from ...exceptions import InvalidInput
+from ...models.registry import HARADA2011_ROD, rod_scaled
 
 if TYPE_CHECKING:
     import yourdfpy
@@ -54,14 +64,6 @@ TASK_FRAME = "plate_center"
 
 CARRIAGE_SIZE = (0.03, 0.02, 0.01)
 """Box of each carriage (moving part of a linear motor): length along the stator, height, depth [m]."""
-
-LAYERS = (
-    "Self-collision (ours; the papers show no layout): the carriages ride in one layer on the stator "
-    "and collide when closer than their length (3 cm); each rod moves in a layer of its own above "
-    "them and the plate above the rods, so rod-rod, rod-carriage and plate-carriage contacts of the "
-    "planar drawing are not collisions (sidecar self_collision.ignore)."
-)
-"""The layers assumed for the self-collision check, as a preset note."""
 
 
 def leg_inverse_kinematics(
@@ -131,17 +133,42 @@ def build_2prrrp(
 
     Returns:
         The URDF tree and its sidecar.
+
+    Raises:
+        InvalidInput: a length not > 0, a mass, inertia or gravity not >= 0, a pose that is not three
+            finite numbers, working modes other than four signs, legs other than 1, 2 and at least one
+            right leg, or a reference pose some leg cannot reach.
     """
-    legs = tuple(sorted(legs))
+    legs = leg_numbers(legs, "legs", 4)
     if 1 not in legs or not any(i in legs for i in RIGHT_LEGS) or 2 not in legs:
         raise InvalidInput(f"legs {legs}: legs 1 and 2 and at least one right leg are needed")
-    rt = half_plate
+    rod_lengths = tuple(numbers_of(rod_lengths, "rod_lengths", 4, "lengths > 0 [m]", "positive").tolist())
+    rt = length(half_plate, "half_plate")
+    slider_mass = nonnegative(slider_mass, "slider_mass", "kg")
+    rod_masses = tuple(numbers_of(rod_masses, "rod_masses", 4, "masses >= 0 [kg]", "nonnegative").tolist())
+    rod_inertias = tuple(
+        numbers_of(rod_inertias, "rod_inertias", 4, "inertias >= 0 [kg m^2]", "nonnegative").tolist()
+    )
+    plate_mass = nonnegative(plate_mass, "plate_mass", "kg")
+    plate_inertia = nonnegative(plate_inertia, "plate_inertia", "kg m^2")
+    reference_pose = tuple(
+        finite_array(reference_pose, "reference_pose", (3,), "x [m], y [m], theta [rad]").tolist()
+    )
+    modes = signs(working_modes, "working_modes")
+    if modes is None or len(modes) != 4 or any(m not in (-1, 1) for m in modes):
+        raise InvalidInput(f"working_modes must be four signs (+1 or -1), one per leg, got {working_modes!r}")
+    working_modes = modes
+    gravity = nonnegative(gravity, "gravity", "m/s^2")
+    optional_positive(actuator_stiffness, "actuator_stiffness", "N/m")
+    try:
+        ik = leg_inverse_kinematics(reference_pose, rod_lengths, rt, working_modes, legs)
+    except InvalidInput as exc:
+        raise InvalidInput(f"reference_pose {reference_pose} is out of reach: {exc}") from None
     links: list[yourdfpy.Link] = []
     joints: list[yourdfpy.Joint] = []
     stator = 1.0
     links.append(u.link("base", visuals=[u.box_visual((stator, 0.01, 0.004), "base", (0.0, -0.01, -0.01))]))
     slider_size = CARRIAGE_SIZE
-    ik = leg_inverse_kinematics(reference_pose, rod_lengths, rt, working_modes, legs)
     reference: dict[str, tuple[float, ...]] = {}
     closures: list[ClosureSpec] = []
     for i in legs:
@@ -215,7 +242,7 @@ def build_2prrrp(
 
 
 def _other_layers(legs: Sequence[int]) -> tuple[tuple[str, str], ...]:
-    """The body pairs in different layers of the real table (:data:`LAYERS`), not yet adjacent.
+    """The body pairs in different layers of the real table (see the module docstring), not yet adjacent.
 
     Adjacent pairs (a rod and its carriage, a rod and the plate) are left out by the checker.
     """
@@ -225,20 +252,11 @@ def _other_layers(legs: Sequence[int]) -> tuple[tuple[str, str], ...]:
     return tuple(pairs)
 
 
-def rod_scaled(length: float, ref_length: float, ref_mass: float, ref_inertia: float) -> tuple[float, float]:
-    """Mass [kg] and centroidal inertia [kg m^2] of a rod of the same section and material.
-
-    Mass scales with length and the centroidal inertia with mass times length squared.
-    """
-    k = length / ref_length
-    return ref_mass * k, ref_inertia * k**3
-
-
 def symmetric_rods(rod_length: float) -> dict[str, tuple[float, ...]]:
     """Builder parameters of four equal rods ``rod_length`` [m] long, for :func:`build_2prrrp`.
 
     Masses and inertias scale from the Harada 2011 rod (140 mm, 0.026 kg, 9.84e-5 kg m^2,
-    Table 1) by :func:`rod_scaled`, as in the 2015 preset. Give them to
+    Table 1) by :func:`~plm_pin.models.registry.rod_scaled`, as in the 2015 preset. Give them to
     :func:`plm_pin.build_mechanism` with a 2-PRRRP preset to rebuild it with equal rods.
 
     Raises:
@@ -246,5 +264,5 @@ def symmetric_rods(rod_length: float) -> dict[str, tuple[float, ...]]:
     """
     if not (isinstance(rod_length, (int, float)) and math.isfinite(rod_length) and rod_length > 0.0):
         raise InvalidInput(f"rod_length must be a positive length [m], got {rod_length!r}")
-    mass, inertia = rod_scaled(float(rod_length), 0.140, 0.026, 9.84e-5)
+    mass, inertia = rod_scaled(float(rod_length), *HARADA2011_ROD)
     return {"rod_lengths": (rod_length,) * 4, "rod_masses": (mass,) * 4, "rod_inertias": (inertia,) * 4}

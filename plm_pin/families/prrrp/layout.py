@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from ..._text import short
 from ...core.mechanism import Mechanism
 from ...exceptions import InvalidInput
 from ...results import Result, unit
@@ -191,4 +192,6 @@ def prrrp_layout(mech: Mechanism) -> PrrrpLayout:
 
 def resolve_layout(mech: Mechanism, layout: PrrrpLayout | None) -> PrrrpLayout:
     """The given layout, or the one read from the model by :func:`prrrp_layout` when None."""
+    if layout is not None and not isinstance(layout, PrrrpLayout):
+        raise InvalidInput(f"layout must be a PrrrpLayout (prrrp_layout(mech)) or None, got {short(layout)}")
     return prrrp_layout(mech) if layout is None else layout

@@ -28,6 +28,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from ..._arguments import check_tolerance, finite_number, length
 from ...core.mechanism import Mechanism
 from ...exceptions import InvalidInput, PoseUnreachable
 from ...kinematics.mode_graph import Mode
@@ -121,6 +122,7 @@ def prrrp_state(
         tol: heights [m] and cosines [-] at or below which a sign counts as 0.
     """
     lay = resolve_layout(mech, layout)
+    tol = check_tolerance(tol, "tol")
     qa = mech.check_q(q)
     model, data = mech.model, mech.data
     pin.framesForwardKinematics(model, data, qa)
@@ -187,7 +189,13 @@ def pair_solutions(c1: float, c2: float, l1: float, l2: float, tol: float = PAIR
     The pair lies on the circles of radii ``l1``, ``l2`` [m] centred on the stator at the
     slider positions ``c1``, ``c2`` [m]; ``tol`` [m] decides touching and coincident circles.
     A cross-check of the generic forward kinematics, not used by the planners.
+
+    Raises:
+        InvalidInput: slider positions that are not finite numbers, rod lengths not > 0, or a
+            ``tol`` that is not a finite number >= 0.
     """
+    c1, c2 = finite_number(c1, "c1", "m"), finite_number(c2, "c2", "m")
+    l1, l2, tol = length(l1, "l1"), length(l2, "l2"), check_tolerance(tol, "tol")
     d = c2 - c1
     if abs(d) <= tol:
         kind = "coincident" if abs(l1 - l2) <= tol else "none"

@@ -30,6 +30,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from ..._arguments import check_tolerance, count, finite_number
 from ...core.mechanism import Mechanism, require_task
 from ...core.rank import numerical_rank
 from ...exceptions import InvalidInput, PoseUnreachable, SingularConfiguration
@@ -169,8 +170,9 @@ def assembly_mode_graph(
         The graph; for the 2-PRRRP with two complete sub-mechanisms only ``[0 0]`` is singular.
     """
     lay = resolve_layout(mech, layout)
+    walk_samples, tol = count(walk_samples, "walk_samples", minimum=1), check_tolerance(tol, "tol")
     q0, state, x0, cos_sign = _start(mech, lay, guess)
-    m = 0.5 * lay.half_plate if height is None else float(height)
+    m = 0.5 * lay.half_plate if height is None else finite_number(height, "height", "m")
     if not (0.0 < m < lay.half_plate):
         raise InvalidInput(f"height must lie in (0, {lay.half_plate:.4g}) m, got {m!r}")
     mobility = mech.mobility
@@ -359,10 +361,10 @@ def plan_assembly_mode_change(
     goal_mode = tuple(-v for v in start) if goal is None else tuple(int(v) for v in goal)
     if goal_mode not in ASSEMBLY_MODES or 0 in goal_mode:
         raise InvalidInput(f"goal must be one of [+ +], [+ -], [- +], [- -]; got {goal_mode}")
+    tilt = finite_number(tilt, "tilt", "rad")
     if not (0.0 < tilt < math.pi / 2):
         raise InvalidInput(f"tilt must lie in (0, pi/2) rad, got {tilt!r}")
-    if samples < 3:
-        raise InvalidInput(f"samples must be at least 3, got {samples}")
+    samples, tol = count(samples, "samples", minimum=3), check_tolerance(tol, "tol")
     g = assembly_mode_graph(mech, q0, tol=tol, layout=lay) if graph is None else graph
     if route is None:
         candidates = g.routes(start, goal_mode)
@@ -480,6 +482,7 @@ def fold_plan(
 
     Also the set-up of :func:`plm_pin.families.prrrp.complex_singularity_check`.
     """
+    tilt = finite_number(tilt, "tilt", "rad")
     g = lay.leg(leg)
     sub = lay.sub_of(leg)
     j = lay.subs.index(sub)
@@ -552,9 +555,8 @@ def plan_working_mode_change(
                 f"{g.length:.4g} m where leg {leg} is perpendicular to the stator; only the shorter rod "
                 "of a pair can fold while its partner holds the pair"
             )
+    samples = count(samples, "samples", minimum=5)
     n = samples + (1 - samples % 2)
-    if n < 5:
-        raise InvalidInput(f"samples must be at least 5, got {samples}")
     s = np.linspace(0.0, 1.0, n)
     s[n // 2] = 0.5
     c0 = float(mech.actuator_positions(q0)[g.actuator])

@@ -86,8 +86,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
+from ..._arguments import finite_array, leg_numbers, nonnegative, numbers_of, optional_positive, positive
 from ..._lazy import lazy_module
-from ...description import _urdf_build as u
+from ...description import urdf_parts as u
 from ...description.compliance import assumed_drive_stiffness
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from ...exceptions import InvalidInput
@@ -236,21 +237,48 @@ def build_pss(
         The URDF tree and its sidecar.
 
     Raises:
-        ValueError: on an invalid leg list or direction, unequal transverse strut moments,
-            or an unreachable home pose.
+        InvalidInput: an invalid leg list, point or direction, a length or lead not > 0, a mass or
+            inertia not >= 0, unequal transverse strut moments, an empty stroke, or an
+            unreachable home pose.
     """
-    n = len(guide_points)
-    legs = tuple(sorted(legs))
-    if not legs or len(set(legs)) != len(legs) or not all(1 <= i <= n for i in legs):
-        raise InvalidInput(f"legs {legs}: give distinct leg numbers among 1..{n}")
+    n = len(guide_points) if isinstance(guide_points, Sequence | np.ndarray) else 0
+    if n == 0:
+        raise InvalidInput(
+            f"guide_points must be a non-empty sequence of (x, y, z) points [m], got {guide_points!r}"
+        )
+    legs = leg_numbers(legs, "legs", n)
+    guide_points = finite_array(guide_points, "guide_points", (n, 3), "points [m]").tolist()
+    guide_directions = finite_array(guide_directions, "guide_directions", (n, 3), "unit vectors").tolist()
+    platform_points = finite_array(platform_points, "platform_points", (n, 3), "points [m]").tolist()
+    strut_lengths = numbers_of(strut_lengths, "strut_lengths", n, "lengths > 0 [m]", "positive").tolist()
+    strut_mass = nonnegative(strut_mass, "strut_mass", "kg")
+    strut_inertia = tuple(
+        numbers_of(strut_inertia, "strut_inertia", 3, "inertias >= 0 [kg m^2]", "nonnegative").tolist()
+    )
+    platform_mass = nonnegative(platform_mass, "platform_mass", "kg")
+    platform_inertia = numbers_of(
+        platform_inertia, "platform_inertia", 3, "inertias >= 0 [kg m^2]", "nonnegative"
+    ).tolist()
+    slider_mass = nonnegative(slider_mass, "slider_mass", "kg")
+    lead = positive(lead, "lead", "m/rev")
+    screw_inertia = nonnegative(screw_inertia, "screw_inertia", "kg m^2")
+    rotor_inertia = nonnegative(rotor_inertia, "rotor_inertia", "kg m^2")
+    home_pose = finite_array(home_pose, "home_pose", (6,), "x, y, z [m], phi_x, phi_y, phi_z [rad]").tolist()
+    gravity = finite_array(gravity, "gravity", (3,), "components [m/s^2]").tolist()
+    low, high = finite_array(stroke, "stroke", (2,), "slider limits [m]")
+    if not low < high:
+        raise InvalidInput(
+            f"stroke must be (lower, upper) slider limits [m] with lower < upper, got {stroke!r}"
+        )
+    optional_positive(actuator_stiffness, "actuator_stiffness", "N/m")
     for i in legs:
         norm = float(np.linalg.norm(guide_directions[i - 1]))
         if abs(norm - 1.0) > UNIT_VECTOR_TOL:
             raise InvalidInput(f"guide direction of leg {i} must be a unit vector, |e| = {norm}")
     if strut_inertia[0] != strut_inertia[1]:
         raise InvalidInput(
-            f"strut_inertia {tuple(strut_inertia)}: the transverse moments must be equal (an axisymmetric "
-            "strut, whose idle spin the universal joint may drop)"
+            f"strut_inertia {strut_inertia}: the transverse moments must be equal (an "
+            "axisymmetric strut, whose idle spin the universal joint may drop)"
         )
     ik = pss_inverse_kinematics(
         home_pose, guide_points, guide_directions, platform_points, strut_lengths, legs

@@ -79,8 +79,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..._arguments import finite_array, length, nonnegative
 from ..._lazy import lazy_module
-from ...description import _urdf_build as u
+from ...description import urdf_parts as u
 from ...description.sidecar import ActuatorSpec, ClosureSpec, Sidecar, TaskSpec
 from ...exceptions import InvalidInput
 from ...tolerances import STAR_SINGULAR_SIN
@@ -191,11 +192,24 @@ def build_star_triangle(
         The URDF tree and its sidecar.
 
     Raises:
-        ValueError: when the reference pose puts a slider off its rail or an arm length
-            below zero, or is an actuator singularity.
+        InvalidInput: a side not > 0, a mass, inertia or gravity not >= 0, a reference pose that
+            is not three finite numbers, puts a slider off its rail or an arm length below zero,
+            or is an actuator singularity.
     """
-    a = side
-    pose = (a / 2.0, 0.7 * a, math.pi / 2.0) if reference_pose is None else tuple(reference_pose)
+    a = length(side, "side")
+    for key, value, unit in (
+        ("slider_mass", slider_mass, "kg"),
+        ("link_mass", link_mass, "kg"),
+        ("link_inertia", link_inertia, "kg m^2"),
+        ("star_mass", star_mass, "kg"),
+        ("star_inertia", star_inertia, "kg m^2"),
+        ("gravity", gravity, "m/s^2"),
+    ):
+        nonnegative(value, key, unit)
+    if reference_pose is None:
+        pose = (a / 2.0, 0.7 * a, math.pi / 2.0)
+    else:
+        pose = tuple(finite_array(reference_pose, "reference_pose", (3,), "x [m], y [m], phi [rad]").tolist())
     q, rho = star_triangle_inverse_kinematics(pose, a)
     for k, i in enumerate(LEGS):
         if not (0.0 <= q[k] <= a and rho[k] >= 0.0):

@@ -1,4 +1,4 @@
-"""Small helpers that build yourdfpy links and joints with inertias and simple visuals."""
+"""Building blocks of the parametric builders: yourdfpy links and joints with inertias and simple visuals."""
 
 from __future__ import annotations
 

@@ -1,8 +1,9 @@
-"""Overview of any mechanism plm_pin loads: mobility, workspace slice, statics, decoupling, motion, 3D view.
+"""The overview study: mobility, workspace slice, statics, decoupling, motion and 3D view of any mechanism.
 
-``plm-pin report overview --mechanism path/to/robot.urdf`` (or ``plm-pin report
-path/to/robot.urdf``) runs it on a user's description; ``plm-pin report all`` on
-:data:`MECHANISM`.
+The library's own study (the paper studies are in the checkout's ``analyses/``), so that an
+installed wheel writes the report of any description: ``plm-pin report overview --mechanism
+path/to/robot.urdf`` (or ``plm-pin report path/to/robot.urdf``); ``plm-pin report all`` runs it
+on :data:`MECHANISM`.
 """
 
 from __future__ import annotations
@@ -12,15 +13,16 @@ import itertools
 import numpy as np
 import pinocchio as pin
 
-from plm_pin import Mechanism, PlmError, SimulationFailed, load
-from plm_pin.dynamics import SimulationResult, decoupling_check, simulate
-from plm_pin.kinematics import classify, task_pose
-from plm_pin.kinematics.collisions import self_collisions
-from plm_pin.report import Animation, Column, Section, StudyContext
-from plm_pin.results import units
-from plm_pin.statics import StaticForces, actuator_limits, internal_force_range, static_forces
-from plm_pin.stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
-from plm_pin.viz import (
+from ..core.mechanism import Mechanism
+from ..dynamics import SimulationResult, decoupling_check, simulate
+from ..exceptions import PlmError, SimulationFailed, SingularConfiguration
+from ..kinematics import classify, task_pose
+from ..kinematics.collisions import self_collisions
+from ..loading import load
+from ..results import units
+from ..statics import StaticForces, actuator_limits, internal_force_range, static_forces, transmission
+from ..stiffness import StiffnessResult, natural_frequencies, stiffness, stiffness_map
+from ..viz import (
     MeshcatViewer,
     force_arrows,
     plot_map,
@@ -29,7 +31,17 @@ from plm_pin.viz import (
     plot_stiffness_map,
     plot_sweep,
 )
-from plm_pin.workspace import WorkspaceSlice, manipulability, singular_loci, workspace_map, workspace_sweep
+from ..workspace import (
+    WorkspaceSlice,
+    manipulability,
+    manipulability_unit,
+    singular_loci,
+    workspace_map,
+    workspace_sweep,
+)
+from .animation import Animation
+from .content import Column, Section
+from .study import StudyContext
 
 TITLE = "Overview"
 SUMMARY = (
@@ -63,9 +75,17 @@ SIMULATION_DT = 0.005
 """Output step of the passive simulation [s] (samples of simulate's default DOP853 run)."""
 
 
-def _display(dof: str, value: float) -> tuple[float, str]:
+def _is_angle(mech: Mechanism, dof: str) -> bool:
+    """Whether task coordinate ``dof`` is an angle: a rotation direction, or a revolute output joint."""
+    task = mech.task_compiled
+    if task is not None and mech.task is not None and mech.task.frame is None:
+        return task.dofs.index(dof) in task.angles
+    return dof.startswith("r")
+
+
+def _display(mech: Mechanism, dof: str, value: float) -> tuple[float, str]:
     """A task coordinate in report units: degrees for angles (said so), metres otherwise."""
-    return (float(np.degrees(value)), "deg") if dof.startswith("r") else (float(value), "m")
+    return (float(np.degrees(value)), "deg") if _is_angle(mech, dof) else (float(value), "m")
 
 
 NEEDS_SQUARE_TASK = (
@@ -168,7 +188,7 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
             ("inverse (type 1) margin", report.inverse_margin, "-"),
             ("direct (type 2) margin", report.direct_margin, "-"),
             ("singular at the reference", report.singular, ""),
-            ("manipulability w", m.w, "product of J_ce column units"),
+            ("manipulability w", m.w, manipulability_unit(mech)),
             ("condition number of J_ce", m.condition_number, "-"),
         ]
     section.table(
@@ -176,12 +196,47 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
     )
     if mech.task is not None:
         x = task_pose(mech, q)
+        joints = mech.task.frame is None
         section.table(
-            f"Reference pose of the task frame {mech.task.frame}",
+            "Reference positions of the output joints (the task)"
+            if joints
+            else f"Reference pose of the task frame {mech.task.frame}",
             ["coordinate", Column("value", fmt=".6g"), "unit"],
-            [(dof, *_display(dof, v)) for dof, v in zip(mech.task.dofs, x, strict=True)],
-            note="Angles are roll-pitch-yaw (R = Rz Ry Rx), shown in degrees.",
+            [(dof, *_display(mech, dof, v)) for dof, v in zip(mech.task.dofs, x, strict=True)],
+            note="Revolute joint angles, shown in degrees."
+            if joints
+            else "Angles are roll-pitch-yaw (R = Rz Ry Rx), shown in degrees.",
         )
+    if square and mech.n_actuators == mech.mobility:
+        _transmission(section, mech, q)
+
+
+def _transmission(section: Section, mech: Mechanism, q: np.ndarray) -> None:
+    """The transmission ratio, mechanical advantage and transmission indices at ``q``."""
+    try:
+        t = transmission(mech, q)
+    except SingularConfiguration as exc:
+        section.text(f"No transmission at the reference: {exc}")
+        return
+    rows: list[tuple[str, str, float]] = []
+    for i, dof in enumerate(t.dofs):
+        for j, act in enumerate(t.actuators):
+            rows.append((f"d {dof} / d {act}", "ratio", float(t.ratio[i, j])))
+            rows.append(
+                (f"{dof} force per {act} force", "mechanical advantage", float(t.mechanical_advantage[i, j]))
+            )
+    for name, index in t.transmission_index.items():
+        for dof, value in zip(t.dofs, index, strict=True):
+            rows.append((f"closure {name}, motion of {dof}", "transmission index", float(value)))
+    section.table(
+        "Transmission at the reference",
+        ["quantity", "kind", Column("value", fmt=".6g")],
+        rows,
+        id="transmission",
+        note="Ratio: task rate per actuator rate; mechanical advantage: task force (torque) delivered per "
+        "actuator force (torque), from the static balance; transmission index: |cos| of the angle between "
+        "a closure's force and its motion (a four-bar: sin of the transmission angle; 0: dead centre).",
+    )
 
 
 def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
@@ -192,7 +247,7 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
     extent = float(np.max(np.ptp(_frame_origins(mech, mech.q_ref), axis=0)))
     values = []
     for a in axes:
-        half = ANGLE_SPAN if a.startswith("r") else LENGTH_SPAN * extent
+        half = ANGLE_SPAN if _is_angle(mech, a) else LENGTH_SPAN * extent
         centre = x0[dofs.index(a)]
         values.append(np.linspace(centre - half, centre + half, GRID))
     section.text(
@@ -224,6 +279,7 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
         )
     reached = grid.reachable
     w = grid.manipulability[reached]
+    w_unit = manipulability_unit(mech)
     section.table(
         "Slice summary",
         ["quantity", "value", "unit"],
@@ -232,8 +288,8 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
             ("reachable fraction", grid.reachable_fraction, "-"),
             ("fraction reached within the joint limits", float(np.mean(grid.within_limits(mech))), "-"),
             ("fraction reached free of self-collision", float(np.mean(grid.collision_free(mech))), "-"),
-            ("smallest manipulability reached", float(np.min(w)) if w.size else None, "J_ce units"),
-            ("largest manipulability reached", float(np.max(w)) if w.size else None, "J_ce units"),
+            ("smallest manipulability reached", float(np.min(w)) if w.size else None, w_unit),
+            ("largest manipulability reached", float(np.max(w)) if w.size else None, w_unit),
             (
                 "smallest direct margin reached",
                 float(np.min(grid.direct_margin[reached])) if w.size else None,
@@ -260,9 +316,20 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
         i, j = (dofs.index(a) for a in axes)
         section.table(
             "Singular points found",
-            ["kind", "method", *(Column(a, _display(a, 0.0)[1], ".5g") for a in axes), Column("margin", "-")],
             [
-                (p.kind, p.method, _display(axes[0], p.x[i])[0], _display(axes[1], p.x[j])[0], p.margin)
+                "kind",
+                "method",
+                *(Column(a, _display(mech, a, 0.0)[1], ".5g") for a in axes),
+                Column("margin", "-"),
+            ],
+            [
+                (
+                    p.kind,
+                    p.method,
+                    _display(mech, axes[0], p.x[i])[0],
+                    _display(mech, axes[1], p.x[j])[0],
+                    p.margin,
+                )
                 for p in loci
             ],
         )
@@ -275,10 +342,10 @@ PRELOAD_STEPS = 5
 
 def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -> None:
     compliance = mech.sidecar.compliance
-    if compliance is None or mech.task is None:
+    if compliance is None or mech.task is None or mech.task.frame is None:
         section.text(
             "No stiffness: the description has no `compliance` section (drive stiffness under "
-            "`compliance.actuators`) or no task."
+            "`compliance.actuators`) or no end-effector frame task."
         )
         return
     section.text(
@@ -291,7 +358,7 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     q = mech.q_ref
     try:
         res = stiffness(mech, q)
-        modes = natural_frequencies(mech, q, result=res)
+        vibration = natural_frequencies(mech, q, result=res)
     except PlmError as exc:
         section.text(f"No stiffness at the reference: {exc}", markdown=False)
         return
@@ -301,9 +368,9 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     rows += [
         (f"rotational eigen-stiffness {i + 1}", v, "N m/rad") for i, v in enumerate(res.rotational.values)
     ]
-    rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(modes.frequencies)]
+    rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(vibration.frequencies)]
     section.table(
-        "Stiffness and modes at the reference",
+        "Stiffness and natural frequencies at the reference",
         ["quantity", Column("value", fmt=".5g"), "unit"],
         rows,
         id="stiffness",
@@ -385,13 +452,27 @@ def _decoupling(section: Section, mech: Mechanism, grid: WorkspaceSlice) -> None
         "reachable poses of the slice. An entry is *zero* when it stays within its tolerance of zero "
         f"at every pose (relative to its Cauchy-Schwarz bound, rtol = {report.rtol:g}), *constant* "
         "when its spread stays within that tolerance, and *varies* otherwise; the coupling is its "
-        f"largest ratio to the bound (0 to 1). h_x is evaluated at {report.n_velocities} random task "
-        "velocities per pose."
+        f"largest ratio to the bound (0 to 1). h_x is quadratic in the task velocity: it is evaluated at "
+        f"the {len(report.velocities)} task velocities {report.velocity_text()}, which determine it, so "
+        "*zero* there means zero at every velocity and *nonzero* gives its range over them. The spread "
+        "(max - min) is compared with the tolerance."
     )
     section.table(
         "Decoupling table",
-        ["entry", "behaviour", Column("min"), Column("max"), "unit", Column("coupling", "-")],
-        [(name, e.kind, e.minimum, e.maximum, e.unit, e.ratio) for name, e in report.entries()],
+        [
+            "entry",
+            "behaviour",
+            Column("min", fmt=".6g"),
+            Column("max", fmt=".6g"),
+            Column("spread (max - min)", fmt=".3g"),
+            Column("tolerance", fmt=".3g"),
+            "unit",
+            Column("coupling", "-"),
+        ],
+        [
+            (name, e.kind, e.minimum, e.maximum, e.spread, e.tolerance, e.unit, e.ratio)
+            for name, e in report.entries()
+        ],
         note="Decoupled with constant inertia: "
         + (", ".join(report.decoupled()) or "none")
         + f"; poses skipped: {len(report.unreachable)} unreachable, {len(report.singular)} singular.",
@@ -426,7 +507,7 @@ def _simulation(section: Section, mech: Mechanism) -> None:
         assert mech.task is not None
         curves = {}
         for k, dof in enumerate(mech.task.dofs):
-            unit = _display(dof, 0.0)[1]
+            unit = _display(mech, dof, 0.0)[1]
             curves[f"{dof} [{unit}]"] = np.degrees(np.unwrap(run.x[:, k])) if unit == "deg" else run.x[:, k]
         fig, flat = plot_panels(run.t, curves, xlabel="t [s]")
         section.figure(
@@ -443,7 +524,7 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
     section.text(
         "Gravity only, at the reference configuration: the actuator forces `f_c` of minimum norm that "
         "balance it, the axial force of every hinged link (tension positive), and the internal-force "
-        "modes: actuator forces that balance only each other (one per degree of redundancy)."
+        "directions: actuator forces that balance only each other (one per degree of redundancy)."
     )
     try:
         sol = static_forces(mech, mech.q_ref)
@@ -465,21 +546,21 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
             ["link", "proximal joint", Column("axial (tension +)", "N"), Column("shear", "N")],
             [(f.link, f.joint, f.axial, f.shear) for f in links.values()],
         )
-    modes = sol.internal_modes()
-    if modes:
+    directions = sol.internal_directions()
+    if directions:
         section.table(
-            "Internal-force modes (unit vectors of the internal basis)",
-            ["mode", *(Column(a.joint, units.get(a.kind, "")) for a in mech.actuators)],
-            [(k + 1, *m.f_c) for k, m in enumerate(modes)],
-            note="Any multiple of a mode can be added to f_c without moving the mechanism.",
-            id="internal_modes",
+            "Internal-force directions (unit vectors of the internal basis)",
+            ["direction", *(Column(a.joint, units.get(a.kind, "")) for a in mech.actuators)],
+            [(k + 1, *d.f_c) for k, d in enumerate(directions)],
+            note="Any multiple of a direction can be added to f_c without moving the mechanism.",
+            id="internal_directions",
         )
-        names = list(modes[0].link_forces)
+        names = list(directions[0].link_forces)
         if names:
             section.table(
-                "Link axial forces caused by each internal mode",
-                ["mode", *(Column(n, "N") for n in names)],
-                [(k + 1, *(m.link_forces[n].axial for n in names)) for k, m in enumerate(modes)],
+                "Link axial forces caused by each internal-force direction",
+                ["direction", *(Column(n, "N") for n in names)],
+                [(k + 1, *(d.link_forces[n].axial for n in names)) for k, d in enumerate(directions)],
             )
         _internal_range(section, mech, sol)
     spread = np.ptp(_frame_origins(mech, mech.q_ref), axis=0)
@@ -513,10 +594,15 @@ def _internal_range(section: Section, mech: Mechanism, sol: StaticForces) -> Non
         return
     section.table(
         "Internal-force range within the actuator limits, holding gravity",
-        ["mode", Column("lowest", "N or N m"), Column("min-norm", "N or N m"), Column("highest", "N or N m")],
+        [
+            "direction",
+            Column("lowest", "N or N m"),
+            Column("min-norm", "N or N m"),
+            Column("highest", "N or N m"),
+        ],
         [(k + 1, span.lower[k], sol.internal[k], span.upper[k]) for k in range(span.lower.size)],
-        note="Coordinates along the modes above (one linear programme per bound, the other modes free); "
-        "multiply a mode's link forces by a coordinate to read the preload it stands for.",
+        note="Coordinates along the directions above (one linear programme per bound, the others free); "
+        "multiply a direction's link forces by a coordinate to read the preload it stands for.",
         id="internal_range",
     )
 

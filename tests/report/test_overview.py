@@ -1,4 +1,4 @@
-"""The generic overview study (analyses/overview.py) on a user's description."""
+"""The overview study (plm_pin/report/overview.py) on a user's description."""
 
 from __future__ import annotations
 
@@ -60,6 +60,9 @@ def test_overview_sections_and_mobility(fivebar_overview):
     )
     assert (rows["mobility (DOF)"], rows["redundancy"]) == (2, 0)
     assert rows["singular at the reference"] is False
+    # two motor angles per two tip coordinates: w in rad^2/m^2, stated in SI, not "J_ce units"
+    units = {r[0]: r[2] for r in result.block("sizes").rows}
+    assert units["manipulability w"] == "rad^2/m^2"
 
 
 def test_overview_static_forces_balance_gravity(fivebar_overview):
@@ -119,6 +122,24 @@ def test_overview_of_a_one_dof_mechanism_sweeps_its_task(tmp_path):
     assert figures[0].data["slice"]["axes"] == ["rz"]
 
 
+def test_overview_of_a_gripper_finger_reports_its_transmission(tmp_path):
+    """A four-bar finger with its output joint as task: the transmission table holds the closed forms."""
+    import math
+
+    from tests import textbook as tb
+
+    tb.finger(tmp_path)
+    result = run_study(find_study("overview"), tmp_path / "finger.urdf")
+    rows = {row[0]: row[2] for row in result.block("transmission").rows}
+    ratio = tb.finger_velocity_ratio(tb.FINGER_THETA2)
+    assert rows["d finger_pivot / d drive"] == pytest.approx(ratio, rel=1e-9)
+    assert rows["finger_pivot force per drive force"] == pytest.approx(1 / ratio, rel=1e-9)
+    mu = tb.finger_transmission_angle(tb.FINGER_THETA2)
+    assert rows["closure knuckle, motion of finger_pivot"] == pytest.approx(math.sin(mu), abs=1e-10)
+    figures = [b for s in result.sections for b in s.blocks if b.kind == "figure"]
+    assert figures[0].data["slice"]["axes"] == ["finger_pivot"]
+
+
 @pytest.fixture(scope="module")
 def limited_3d4m_overview(tmp_path_factory):
     """The overview of the 3D4M with effort limits of +-1.5 N on every slider, as a user's description."""
@@ -142,11 +163,11 @@ LIMIT = 1.5
 
 
 def test_overview_internal_range_is_the_interval_intersection(limited_3d4m_overview):
-    """One internal mode g: y is admissible iff -L <= f_p,i + g_i y <= L for all i (interval intersection)."""
+    """One internal-force direction g: y is admissible iff -L <= f_p,i + g_i y <= L for all i (intervals)."""
     result = limited_3d4m_overview
     f_p = np.array([row[2] for row in result.block("actuator_forces").rows])
-    (mode,) = result.block("internal_modes").rows
-    g = np.array(mode[1:])
+    (direction,) = result.block("internal_directions").rows
+    g = np.array(direction[1:])
     ends = np.sort(np.stack([(-LIMIT - f_p) / g, (LIMIT - f_p) / g]), axis=0)
     (row,) = result.block("internal_range").rows
     assert row[1] == pytest.approx(np.max(ends[0]), abs=1e-9)
@@ -167,6 +188,12 @@ def test_overview_decoupling_of_the_3d4m_is_harada_s(limited_3d4m_overview):
         (2 * m_l + m_t) * gravity, rel=1e-9
     )
     assert rows["M_yy"][1] == "varies"
+    header = [c.name for c in limited_3d4m_overview.block("decoupling").columns]
+    spread, tolerance = header.index("spread (max - min)"), header.index("tolerance")
+    for name, row in rows.items():  # 'varies' exactly when the spread exceeds the tolerance stated beside it
+        if row[1] in ("constant", "varies"):
+            assert (row[1] == "varies") == (row[spread] > row[tolerance]), name
+    assert rows["h_y"][1] == "nonzero"  # a velocity term is zero or not; it has no constant value
 
 
 def test_overview_simulation_conserves_energy_and_closure(limited_3d4m_overview):
