@@ -5,13 +5,12 @@ from __future__ import annotations
 import dataclasses
 import functools
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ._arguments import flag, mapping
+from ._lazy import import_object
 from ._text import short
 from .core.assembly import rounded_closure
 from .core.closures import compile_closures
@@ -29,15 +28,16 @@ from .description.sidecar import FORMAT, ActuatorSpec, Sidecar, TaskSpec
 from .description.sidecar import SIDECAR_SUFFIX_DEFAULT as SIDECAR_SUFFIX
 from .description.urdf import read_urdf_text
 from .description.writer import urdf_text
-from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput, PlmError
-from .kinematics.reference import (
-    choose_reference,
-    reference_report,
-    singularity_margin,
-)
+from .exceptions import ClosureNotSatisfied, DescriptionError, InvalidInput
 from .models.registry import PRESETS, Builder, builder_parameters, urdf_folder
-from .tolerances import REFERENCE_MARGIN
-from .warnings import ReferenceWarning, RoundedClosureWarning
+from .warnings import RoundedClosureWarning
+
+REFERENCE_CHOOSER = "plm_pin.kinematics.reference:away_from_singularities"
+"""Where a description without a ``reference`` gets its reference chosen: named, not imported.
+
+The loader sits below the kinematics; it calls this one kinematic step only for a plm-pin
+description that gives no reference (shipped presets and most descriptions give one), so a
+load imports no kinematics otherwise. The preset registry names its builders the same way."""
 
 ERD_PREFIX = "erd:"
 
@@ -71,7 +71,9 @@ def mechanism_from_description(
     guess = "sidecar reference" if description.sidecar.reference else "neutral configuration"
     mech = _validated(mech, guess, validate, stated=closure_tol is not None)
     if validate and not description.sidecar.reference and description.convention == FORMAT and mech.closures:
-        return _with_chosen_reference(mech, description, name)
+        rebuild = functools.partial(_with_reference, description, name, mech.closure_tol, mech.fixed_mobility)
+        chooser: Callable[..., Mechanism] = import_object(REFERENCE_CHOOSER)
+        return chooser(mech, rebuild, name)
     return mech
 
 
@@ -96,53 +98,16 @@ def _mechanism(
     )
 
 
-def _with_chosen_reference(mech: Mechanism, description: Description, name: str) -> Mechanism:
-    """``mech``, or its reference chosen again when the neutral one is near a singularity.
-
-    When the reference closed from the neutral configuration lies within
-    :data:`~plm_pin.tolerances.REFERENCE_MARGIN` of a singularity, the mechanism is
-    built again with the reference :func:`~plm_pin.kinematics.reference.choose_reference` moves
-    it to.
-
-    Warns with the reference chosen (pose, modes, margin) and the ``reference:`` entry that
-    keeps it; keeps ``mech`` as it is when no square task allows the choice.
-    """
-    try:
-        current = singularity_margin(mech, mech.q_ref)
-    except PlmError:  # singular right there: choose
-        current = 0.0
-    if current is None or current >= REFERENCE_MARGIN:
-        return mech
-    chosen = choose_reference(mech)
-    if chosen is None or chosen[1] <= current:
-        return mech
-    q, margin = chosen
-    reference = {}
-    for jid in range(1, mech.model.njoints):
-        j = mech.model.joints[jid]
-        values = tuple(float(v) for v in q[j.idx_q : j.idx_q + j.nq])
-        if j.nq == 2 and j.nv == 1:  # unbounded revolute: its angle
-            values = (float(np.arctan2(values[1], values[0])),)
-        reference[str(mech.model.names[jid])] = values
+def _with_reference(
+    description: Description,
+    name: str,
+    closure_tol: float | None,
+    mobility: int | None,
+    reference: dict[str, tuple[float, ...]],
+) -> Mechanism:
+    """The mechanism of ``description`` with its sidecar's reference replaced by ``reference``."""
     side = dataclasses.replace(description.sidecar, reference=reference)
-    out = _mechanism(description, side, name, mech.closure_tol, mech.fixed_mobility)
-    report = reference_report(out)
-    dofs = out.task.dofs if out.task is not None else ()
-    entry = ", ".join(f"{k}: {v[0]:.6g}" if len(v) == 1 else f"{k}: {list(v)}" for k, v in reference.items())
-    closeness = (
-        f" (even so within {REFERENCE_MARGIN} of a singularity: the workspace may be small)"
-        if margin < REFERENCE_MARGIN
-        else ""
-    )
-    warnings.warn(
-        f"{name}: the sidecar gives no reference and the loops close from the neutral configuration "
-        f"within {current:.3g} of a singularity; moved it away, in the same working mode and assembly: "
-        f"{report.describe(dofs)}{closeness}. "
-        f"Keep it with `reference: {{{entry}}}`",
-        ReferenceWarning,
-        stacklevel=3,
-    )
-    return out
+    return _mechanism(description, side, name, closure_tol, mobility)
 
 
 def mechanism_from_mjcf(

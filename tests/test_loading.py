@@ -65,3 +65,12 @@ def test_builder_parameters_leave_out_the_labels():
     """builder_parameters lists the keyword parameters except name and source, in signature order."""
     names = builder_parameters(build_2prrrp)
     assert names[:2] == ("rod_lengths", "half_plate") and "name" not in names and "source" not in names
+
+
+def test_the_reference_chooser_named_by_the_loader_is_the_kinematic_step():
+    """The loader names its one kinematic step by a string (it sits below the kinematics): it resolves."""
+    from plm_pin._lazy import import_object
+    from plm_pin.kinematics.reference import away_from_singularities
+    from plm_pin.loading import REFERENCE_CHOOSER
+
+    assert import_object(REFERENCE_CHOOSER) is away_from_singularities

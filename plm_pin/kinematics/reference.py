@@ -18,6 +18,8 @@ a direct (type 2) singularity, the boundary between assembly modes at fixed actu
 from __future__ import annotations
 
 import itertools
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,6 +30,7 @@ from ..core.mechanism import Mechanism
 from ..exceptions import PlmError
 from ..results import Result, unit
 from ..tolerances import REFERENCE_MARGIN, REFERENCE_SHIFT_ANGLE, REFERENCE_SHIFT_RTOL
+from ..warnings import ReferenceWarning
 from .forward import task_pose
 from .inverse import inverse_kinematics
 from .jacobians import closed_chain_jacobians
@@ -234,3 +237,54 @@ def choose_reference(mech: Mechanism, iterations: int = REFERENCE_STEPS) -> tupl
             continue
         q, x, margin = best
     return q, margin
+
+
+def away_from_singularities(
+    mech: Mechanism, rebuild: Callable[[dict[str, tuple[float, ...]]], Mechanism], name: str
+) -> Mechanism:
+    """``mech``, or its reference chosen again when the neutral one is near a singularity.
+
+    When the reference closed from the neutral configuration lies within
+    :data:`REFERENCE_MARGIN` of a singularity, the mechanism is
+    built again (``rebuild``, given the sidecar ``reference`` entry) with the reference
+    :func:`choose_reference` moves it to. The loader calls this for a description without a
+    ``reference`` (see :data:`plm_pin.loading.REFERENCE_CHOOSER`).
+
+    Warns with the reference chosen (pose, modes, margin) and the ``reference:`` entry that
+    keeps it; keeps ``mech`` as it is when no square task allows the choice.
+    """
+    try:
+        current = singularity_margin(mech, mech.q_ref)
+    except PlmError:  # singular right there: choose
+        current = 0.0
+    if current is None or current >= REFERENCE_MARGIN:
+        return mech
+    chosen = choose_reference(mech)
+    if chosen is None or chosen[1] <= current:
+        return mech
+    q, margin = chosen
+    reference: dict[str, tuple[float, ...]] = {}
+    for jid in range(1, mech.model.njoints):
+        j = mech.model.joints[jid]
+        values = tuple(float(v) for v in q[j.idx_q : j.idx_q + j.nq])
+        if j.nq == 2 and j.nv == 1:  # unbounded revolute: its angle
+            values = (float(np.arctan2(values[1], values[0])),)
+        reference[str(mech.model.names[jid])] = values
+    out = rebuild(reference)
+    report = reference_report(out)
+    dofs = out.task.dofs if out.task is not None else ()
+    entry = ", ".join(f"{k}: {v[0]:.6g}" if len(v) == 1 else f"{k}: {list(v)}" for k, v in reference.items())
+    closeness = (
+        f" (even so within {REFERENCE_MARGIN} of a singularity: the workspace may be small)"
+        if margin < REFERENCE_MARGIN
+        else ""
+    )
+    warnings.warn(
+        f"{name}: the sidecar gives no reference and the loops close from the neutral configuration "
+        f"within {current:.3g} of a singularity; moved it away, in the same working mode and assembly: "
+        f"{report.describe(dofs)}{closeness}. "
+        f"Keep it with `reference: {{{entry}}}`",
+        ReferenceWarning,
+        stacklevel=3,
+    )
+    return out
