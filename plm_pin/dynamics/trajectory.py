@@ -512,7 +512,8 @@ def task_trajectory(
     """
     task = require_task(mech)
     check_square_task(task.size, mech.mobility, "a task trajectory needs", mech.name)
-    tol, singularity_tol = positive(tol, "tol", "m, rad"), check_tolerance(singularity_tol, "singularity_tol")
+    tol = mech.closure_tol if tol is None else positive(tol, "tol", "m, rad")
+    singularity_tol = check_tolerance(singularity_tol, "singularity_tol")
     mode = signs(mode, "mode")
     ts = _check_times(times)
     x_all, xd_all, xdd_all = _evaluate(profile, ts, task.size)
@@ -601,7 +602,8 @@ def actuator_trajectory(
             f"{mech.name}: {mech.n_actuators} actuators cannot drive {mech.mobility} DOF; an actuator "
             "trajectory needs at least as many actuators as DOF"
         )
-    tol, singularity_tol = positive(tol, "tol", "m, rad"), check_tolerance(singularity_tol, "singularity_tol")
+    tol = mech.closure_tol if tol is None else positive(tol, "tol", "m, rad")
+    singularity_tol = check_tolerance(singularity_tol, "singularity_tol")
     consistency_tol = check_tolerance(consistency_tol, "consistency_tol")
     ts = _check_times(times)
     c_all, cd_all, cdd_all = _evaluate(profile, ts, mech.n_actuators)

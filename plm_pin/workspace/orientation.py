@@ -125,14 +125,13 @@ def orientation_range(
         check_tolerance(tol, "tol"),
         check_tolerance(near, "near"),
     )
-    ik_tol = positive(ik_tol, "ik_tol", "m, rad")
+    ik_tol = mech.closure_tol if ik_tol is None else positive(ik_tol, "ik_tol", "m, rad")
     if ts.ndim != 1 or ts.size < 2 or not np.all(np.isfinite(ts)) or np.any(np.diff(ts) <= 0.0):
         raise InvalidInput(
             f"values must be an increasing 1-D array of at least 2 finite samples, got {values!r}"
         )
     q0 = start_configuration(mech, guess)
     mode = guess_mode(mech, q0)
-    ik_tol = mech.closure_tol if ik_tol is None else ik_tol
     line = workspace_sweep(mech, axis, ts, pose, guess=q0, mode=mode, tol=ik_tol)
     base = line.pose
     nan = math.nan

@@ -227,7 +227,7 @@ def singular_points(
         return x
 
     poses = np.stack([pose(float(s)) for s in ts])
-    ik_tol = mech.closure_tol if ik_tol is None else ik_tol
+    ik_tol = mech.closure_tol if ik_tol is None else positive(ik_tol, "ik_tol", "m, rad")
     state, target = solve_poses(mech, poses, guess, mode=mode, tol=ik_tol, workers=1)
     if target is None:
         return []
