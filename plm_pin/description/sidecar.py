@@ -92,7 +92,7 @@ class ClosureSpec:
             isinstance(frames, (tuple, list)) and len(frames) == 2 and all(isinstance(f, str) for f in frames)
         ):
             raise DescriptionError(f"{where}: frames must be a pair of frame names, got {short(frames)}")
-        if not isinstance(self.type, str) or self.type not in CLOSURE_TYPES:
+        if not isinstance(self.type, str) or self.type not in CLOSURE_ROWS:  # twist: the idle gauges'
             raise DescriptionError(
                 f"{where}: invalid closure type {short(self.type)}; valid types are {list(CLOSURE_TYPES)}"
             )
