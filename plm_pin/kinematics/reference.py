@@ -31,9 +31,10 @@ from ..exceptions import PlmError
 from ..results import Result, unit
 from ..tolerances import REFERENCE_MARGIN, REFERENCE_SHIFT_ANGLE, REFERENCE_SHIFT_RTOL
 from ..warnings import ReferenceWarning
-from .forward import task_pose
+from .forward import forward_kinematics, task_pose
 from .inverse import inverse_kinematics
 from .jacobians import closed_chain_jacobians
+from .limits import limit_violations
 from .singularity import KINDS, classify
 from .working_mode import working_mode
 
@@ -195,7 +196,7 @@ def choose_reference(mech: Mechanism, iterations: int = REFERENCE_STEPS) -> tupl
     A pattern search in task space from :attr:`~plm_pin.Mechanism.q_ref`: each step tries the
     pose moved by plus or minus a step along each task coordinate (solved by inverse
     kinematics from the current configuration, so the working mode and the assembly are kept:
-    a parallelogram stays one) and moves to the one whose smallest singularity margin is
+    a parallelogram stays one; a leg singular at the start, sign 0, leaves it to either sign) and moves to the one whose smallest singularity margin is
     largest; without progress the step halves. The steps start at 10 % of the mechanism's
     size [m] and 0.2 rad. Needs a task with as many coordinates as DOF.
 
@@ -213,30 +214,72 @@ def choose_reference(mech: Mechanism, iterations: int = REFERENCE_STEPS) -> tupl
         return None
     assert margin is not None
     mode = working_mode(mech, q)
-    x = task_pose(mech, q)
-    unit = np.where(np.isin(np.arange(task.size), task.angles), 0.2, 0.1 * _size(mech, q))
+    size = _size(mech, q)
+    task_unit = np.where(np.isin(np.arange(task.size), task.angles), 0.2, 0.1 * size)
+    actuator_unit = np.array([0.1 * size if _prismatic(mech, a.joint_id) else 0.2 for a in mech.actuators])
     scale = 1.0
     for _ in range(iterations):
-        best: tuple[np.ndarray, np.ndarray, float] | None = None
-        for k, sign in itertools.product(range(task.size), (1.0, -1.0)):
-            target = x.copy()
-            target[k] += sign * scale * unit[k]
+        best: tuple[np.ndarray, float] | None = None
+        for candidate in _neighbours(mech, q, scale * task_unit, scale * actuator_unit):
+            if candidate is None or not _same_mode(mode, working_mode(mech, candidate)):
+                continue
             try:
-                sol = inverse_kinematics(mech, target, q, explain=False)
-                if sol.limit_violations or sol.mode != mode:
-                    continue
-                m = singularity_margin(mech, sol.q)
+                m = singularity_margin(mech, candidate)
             except PlmError:
                 continue
-            if m is not None and m > (margin if best is None else best[2]):
-                best = (np.array(sol.q), target, m)
+            if m is not None and m > (margin if best is None else best[1]):
+                best = (candidate, m)
         if best is None:
             scale /= 2.0
             if scale < 1e-3:
                 break
             continue
-        q, x, margin = best
+        q, margin = best
+        mode = working_mode(mech, q)
     return q, margin
+
+
+def _prismatic(mech: Mechanism, joint_id: int) -> bool:
+    """Whether a one-DOF joint translates (its step is a length, not an angle)."""
+    name = mech.model.joints[joint_id].shortname()
+    return "Prismatic" in name or name.startswith("JointModelP")
+
+
+def _neighbours(
+    mech: Mechanism, q: np.ndarray, task_steps: np.ndarray, actuator_steps: np.ndarray
+) -> list[np.ndarray | None]:
+    """Configurations one step from ``q``: each task coordinate moved (inverse kinematics) and
+    each actuator moved (forward kinematics, the same assembly), both from ``q``; None where a
+    step cannot be solved or leaves the joint limits.
+
+    Both kinds are needed: at an inverse singularity (a slider-crank at its dead centre) the
+    task cannot move but the actuators can, at a direct singularity the other way round.
+    """
+    x = task_pose(mech, q)
+    a = mech.actuator_positions(q)
+    out: list[np.ndarray | None] = []
+    for k, sign in itertools.product(range(x.size), (1.0, -1.0)):
+        target = x.copy()
+        target[k] += sign * task_steps[k]
+        try:
+            sol = inverse_kinematics(mech, target, q, explain=False)
+            out.append(None if sol.limit_violations else np.array(sol.q))
+        except PlmError:
+            out.append(None)
+    for k, sign in itertools.product(range(a.size), (1.0, -1.0)):
+        moved = a.copy()
+        moved[k] += sign * actuator_steps[k]
+        try:
+            (fk,) = forward_kinematics(mech, moved, q, all_modes=False)
+            out.append(None if limit_violations(mech, fk.q) else np.array(fk.q))
+        except PlmError:
+            out.append(None)
+    return out
+
+
+def _same_mode(mode: tuple[int, ...], other: tuple[int, ...]) -> bool:
+    """Whether ``other`` keeps ``mode``: equal signs where ``mode`` has one (a 0, singular, leg may take either)."""
+    return all(a == 0 or a == b for a, b in zip(mode, other, strict=True))
 
 
 def away_from_singularities(
@@ -251,7 +294,8 @@ def away_from_singularities(
     ``reference`` (see :data:`plm_pin.loading.REFERENCE_CHOOSER`).
 
     Warns with the reference chosen (pose, modes, margin) and the ``reference:`` entry that
-    keeps it; keeps ``mech`` as it is when no square task allows the choice.
+    keeps it, or, when no move finds a larger margin, with where the reference is and how
+    close to which singularity; keeps ``mech`` as it is when no square task allows the choice.
     """
     try:
         current = singularity_margin(mech, mech.q_ref)
@@ -261,6 +305,14 @@ def away_from_singularities(
         return mech
     chosen = choose_reference(mech)
     if chosen is None or chosen[1] <= current:
+        warnings.warn(
+            f"{name}: the sidecar gives no reference and the loops close from the neutral configuration "
+            f"within {current:.3g} of a singularity, and no move of the task found a better one: "
+            f"{reference_report(mech).describe(mech.task.dofs if mech.task is not None else ())}. "
+            "Give a `reference:` in the sidecar inside the workspace",
+            ReferenceWarning,
+            stacklevel=3,
+        )
         return mech
     q, margin = chosen
     reference: dict[str, tuple[float, ...]] = {}
