@@ -133,7 +133,8 @@ SLIDER_CRANK_SIDECAR = {
 def test_a_reference_closed_at_a_dead_centre_is_moved_off_it(tmp_path):
     """A slider-crank whose neutral configuration is its dead centre (crank and rod aligned, the
     slider at r + l, working mode 0): the loader moves the crank (the task cannot move there) and
-    the slider lands where the closed form x = r cos(t) + sqrt(l^2 - r^2 sin(t)^2) puts it."""
+    the slider lands where the closed form x = r cos(t) + sqrt(l^2 - r^2 sin(t)^2) puts it.
+    """
     (tmp_path / "slider_crank.urdf").write_text(SLIDER_CRANK_URDF)
     (tmp_path / "slider_crank.plm.yaml").write_text(yaml.safe_dump(SLIDER_CRANK_SIDECAR))
     with warnings.catch_warnings(record=True) as caught:
