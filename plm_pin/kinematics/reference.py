@@ -193,12 +193,13 @@ def singularity_margin(mech: Mechanism, q: np.ndarray) -> float | None:
 def choose_reference(mech: Mechanism, iterations: int = REFERENCE_STEPS) -> tuple[np.ndarray, float] | None:
     """The reference moved inside the workspace, away from singularities, in its own modes; and its margin.
 
-    A pattern search in task space from :attr:`~plm_pin.Mechanism.q_ref`: each step tries the
-    pose moved by plus or minus a step along each task coordinate (solved by inverse
-    kinematics from the current configuration, so the working mode and the assembly are kept:
-    a parallelogram stays one; a leg singular at the start, sign 0, leaves it to either sign) and moves to the one whose smallest singularity margin is
-    largest; without progress the step halves. The steps start at 10 % of the mechanism's
-    size [m] and 0.2 rad. Needs a task with as many coordinates as DOF.
+    A pattern search from :attr:`~plm_pin.Mechanism.q_ref`: each step tries the pose moved by
+    plus or minus a step along each task coordinate and each actuator (see :func:`_neighbours`;
+    solved from the current configuration, so the working mode and the assembly are kept: a
+    parallelogram stays one; a leg singular at the start, sign 0, may take either sign) and
+    moves to the one whose smallest singularity margin is largest; without progress the step
+    halves. The steps start at 10 % of the mechanism's size [m] and 0.2 rad. Needs a task with
+    as many coordinates as DOF.
 
     Returns:
         ``(q, margin)``, or None when the task is not square or the reference is singular.
@@ -248,9 +249,10 @@ def _prismatic(mech: Mechanism, joint_id: int) -> bool:
 def _neighbours(
     mech: Mechanism, q: np.ndarray, task_steps: np.ndarray, actuator_steps: np.ndarray
 ) -> list[np.ndarray | None]:
-    """Configurations one step from ``q``: each task coordinate moved (inverse kinematics) and
-    each actuator moved (forward kinematics, the same assembly), both from ``q``; None where a
-    step cannot be solved or leaves the joint limits.
+    """Configurations one step from ``q``, each task coordinate and each actuator moved.
+
+    Task steps by inverse kinematics, actuator steps by forward kinematics (the same
+    assembly), both from ``q``; None where a step cannot be solved or leaves the joint limits.
 
     Both kinds are needed: at an inverse singularity (a slider-crank at its dead centre) the
     task cannot move but the actuators can, at a direct singularity the other way round.
@@ -278,7 +280,7 @@ def _neighbours(
 
 
 def _same_mode(mode: tuple[int, ...], other: tuple[int, ...]) -> bool:
-    """Whether ``other`` keeps ``mode``: equal signs where ``mode`` has one (a 0, singular, leg may take either)."""
+    """Whether ``other`` keeps ``mode``: equal signs where ``mode`` has one (a singular leg, 0, takes any)."""
     return all(a == 0 or a == b for a, b in zip(mode, other, strict=True))
 
 

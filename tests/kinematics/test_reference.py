@@ -114,10 +114,12 @@ SLIDER_CRANK_URDF = """<?xml version="1.0"?>
   <link name="rod_tip"/>
   <link name="slider"><inertial><mass value="0.3"/>
     <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="crank_joint" type="continuous"><parent link="base"/><child link="crank"/><axis xyz="0 0 1"/></joint>
+  <joint name="crank_joint" type="continuous"><parent link="base"/><child link="crank"/>
+    <axis xyz="0 0 1"/></joint>
   <joint name="rod_joint" type="continuous"><parent link="crank"/><child link="rod"/>
     <origin xyz="0.05 0 0"/><axis xyz="0 0 1"/></joint>
-  <joint name="rod_tip_fixed" type="fixed"><parent link="rod"/><child link="rod_tip"/><origin xyz="0.2 0 0"/></joint>
+  <joint name="rod_tip_fixed" type="fixed"><parent link="rod"/><child link="rod_tip"/>
+    <origin xyz="0.2 0 0"/></joint>
   <joint name="slider_joint" type="prismatic"><parent link="base"/><child link="slider"/><axis xyz="1 0 0"/>
     <limit lower="0.0" upper="0.4" effort="100" velocity="1"/></joint>
 </robot>
@@ -131,9 +133,10 @@ SLIDER_CRANK_SIDECAR = {
 
 
 def test_a_reference_closed_at_a_dead_centre_is_moved_off_it(tmp_path):
-    """A slider-crank whose neutral configuration is its dead centre (crank and rod aligned, the
-    slider at r + l, working mode 0): the loader moves the crank (the task cannot move there) and
-    the slider lands where the closed form x = r cos(t) + sqrt(l^2 - r^2 sin(t)^2) puts it.
+    """A slider-crank closed at its dead centre (working mode 0) is moved by its crank.
+
+    The neutral configuration aligns crank and rod, the slider at r + l, where the task cannot
+    move; the slider lands where the closed form x = r cos(t) + sqrt(l^2 - r^2 sin(t)^2) puts it.
     """
     (tmp_path / "slider_crank.urdf").write_text(SLIDER_CRANK_URDF)
     (tmp_path / "slider_crank.plm.yaml").write_text(yaml.safe_dump(SLIDER_CRANK_SIDECAR))
