@@ -1,0 +1,370 @@
+r"""The closure equations of a mechanism as a square polynomial system.
+
+Generated from the description (the Pinocchio tree, its closures, its actuation), for any
+mechanism whose loop joints are revolute, prismatic, spherical or free-flyer joints.
+
+Unknowns :math:`x` (one block per passive joint on a loop, in joint order):
+
+- revolute: :math:`(c, s)`, the cosine and sine of the angle, with
+  :math:`c^2 + s^2 - 1 = 0` (degree 2);
+- prismatic: the displacement :math:`d` (enters linearly);
+- spherical: a quaternion :math:`(w, x, y, z)` with :math:`w^2 + x^2 + y^2 + z^2 - 1 = 0`
+  (degree 2; the rotation matrix is quadratic in it, and :math:`\pm` the quaternion give
+  the same rotation, so every assembly appears twice among the solutions);
+- free flyer: a translation (linear) and a quaternion as above.
+
+Parameters :math:`p`: the actuated joint positions (an angle [rad] enters through its
+cosine and sine, a displacement [m] linearly).
+
+Joints held by the gauge of an idle mobility (:mod:`plm_pin.core.idle`) are fixed at their
+gauge value; joints that carry no closure frame are left out (they do not enter the
+closures). Each joint's local transform :math:`X_j` is polynomial in its block (degree 1 in
+:math:`(c, s)` or :math:`d`, 2 in a quaternion), and a frame's world placement is the
+product :math:`\prod_j M_j X_j` along its path, so its entries have degree at most the sum
+of these block degrees along the path (:attr:`PolynomialForm.degrees`).
+
+Closure entries (the residuals of :mod:`plm_pin.core.closures` written polynomially):
+
+- point: :math:`p_B - p_A` (3 entries);
+- weld: the point entries and the 9 entries of :math:`R_A^T R_B - I`;
+- revolute: the point entries and :math:`R_A^T R_B u - u` (3 entries).
+
+Entries that vanish identically (the out-of-plane rows of a planar chain) are dropped;
+the rest are combined by a fixed random matrix :math:`C` (seeded) into as many equations
+as unknowns remain after the unit equations, so the system is square. A solution of the
+square system is kept only when the full set of entries vanishes too (redundant actuation,
+and the random combination, add spurious solutions that this filter removes).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ...core.idle import GAUGE_PREFIX
+from ...core.mechanism import Mechanism
+
+FIXED, REVOLUTE, PRISMATIC, SPHERICAL, FREE_FLYER, REVOLUTE_PARAM, PRISMATIC_PARAM = range(7)
+"""Joint kinds of the polynomial form (codes shared with the compiled kernels)."""
+
+_SIZES = {FIXED: 0, REVOLUTE: 2, PRISMATIC: 1, SPHERICAL: 4, FREE_FLYER: 7}  # unknowns per joint
+_ENTRIES = {"point": 3, "weld": 12, "revolute": 6}
+SEED = 20261204
+"""Seed of the random combination and of the generic parameters (fixed: results are reproducible)."""
+
+ZERO_ENTRY_RTOL = 1e-9  # TOLERANCE -> tolerances.py
+"""Relative size below which a closure entry counts as identically zero at random complex points."""
+
+
+class NotPolynomial(Exception):
+    """The mechanism has no polynomial form here (a joint kind or a count it does not cover)."""
+
+
+@dataclass(frozen=True)
+class PolynomialForm:
+    """A mechanism's closures as a square polynomial system (see the module docstring).
+
+    Attributes:
+        joints: Pinocchio ids of the joints kept (on a path to a closure frame), ascending.
+        parent: index in ``joints`` of each kept joint's parent, -1 for the universe, shape (k,).
+        kind: joint kind codes, shape (k,).
+        offset: first unknown (or parameter, for actuated joints) of each joint, shape (k,).
+        axis: joint axis in its own frame (revolute, prismatic), shape (k, 3).
+        placement: joint placement in its parent :math:`M_j`, homogeneous, shape (k, 4, 4).
+        fixed: local transform of fixed joints :math:`X_j`, shape (k, 4, 4).
+        frame_joint: index in ``joints`` of the parent joint of each closure frame, shape (f,).
+        frame_placement: closure frame placement in its joint, shape (f, 4, 4).
+        closure_kind: 0 point, 1 weld, 2 revolute, per closure, shape (nc,).
+        closure_frames: indices of frames A and B per closure, shape (nc, 2).
+        closure_axis: revolute closure axis in B's frame, shape (nc, 3).
+        entry_offset: first entry of each closure, shape (nc,).
+        n_entries: total closure entries.
+        combination: the random matrix :math:`C`, shape (n - n_unit, n_entries).
+        n: number of unknowns.
+        n_unit: number of unit equations (first in the system).
+        unit_offsets: first unknown of each unit block (revolute 2, quaternion 4), shape (n_unit,).
+        unit_sizes: 2 or 4 per unit block, shape (n_unit,).
+        n_params: number of parameters (actuators).
+        degrees: degree of each equation of the square system, shape (n,).
+        digest: hex digest of all of the above (the cache key of the generic solve).
+    """
+
+    joints: np.ndarray
+    parent: np.ndarray
+    kind: np.ndarray
+    offset: np.ndarray
+    axis: np.ndarray
+    placement: np.ndarray
+    fixed: np.ndarray
+    frame_joint: np.ndarray
+    frame_placement: np.ndarray
+    closure_kind: np.ndarray
+    closure_frames: np.ndarray
+    closure_axis: np.ndarray
+    entry_offset: np.ndarray
+    n_entries: int
+    combination: np.ndarray
+    n: int
+    n_unit: int
+    unit_offsets: np.ndarray
+    unit_sizes: np.ndarray
+    n_params: int
+    degrees: np.ndarray
+    digest: str
+
+    def kernel_args(self) -> tuple[np.ndarray, ...]:
+        """The arrays the compiled kernels take, in their order."""
+        return (
+            self.parent,
+            self.kind,
+            self.offset,
+            self.axis,
+            self.placement,
+            self.fixed,
+            self.frame_joint,
+            self.frame_placement,
+            self.closure_kind,
+            self.closure_frames,
+            self.closure_axis,
+            self.entry_offset,
+            self.combination,
+            self.unit_offsets,
+            self.unit_sizes,
+        )
+
+
+def _homogeneous(M: pin.SE3) -> np.ndarray:
+    return np.asarray(M.homogeneous, dtype=float).copy()
+
+
+def _joint_kind(jm: pin.JointModel) -> tuple[int, np.ndarray]:
+    """Kind and axis of a passive joint; NotPolynomial for kinds without a polynomial form."""
+    name = jm.shortname()
+    unit = {"X": np.array([1.0, 0, 0]), "Y": np.array([0, 1.0, 0]), "Z": np.array([0, 0, 1.0])}
+    if name in ("JointModelRX", "JointModelRY", "JointModelRZ"):
+        return REVOLUTE, unit[name[-1]]
+    if name in ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ"):
+        return REVOLUTE, unit[name[-1]]
+    if name in ("JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnaligned"):
+        return REVOLUTE, np.array(jm.extract().axis, dtype=float)
+    if name in ("JointModelPX", "JointModelPY", "JointModelPZ"):
+        return PRISMATIC, unit[name[-1]]
+    if name == "JointModelPrismaticUnaligned":
+        return PRISMATIC, np.array(jm.extract().axis, dtype=float)
+    if name == "JointModelSpherical":
+        return SPHERICAL, np.zeros(3)
+    if name == "JointModelFreeFlyer":
+        return FREE_FLYER, np.zeros(3)
+    raise NotPolynomial(f"joint kind {name} has no polynomial form")
+
+
+def polynomial_form(mech: Mechanism) -> PolynomialForm:
+    """The polynomial form of ``mech``'s closures with its actuators as parameters.
+
+    Raises:
+        NotPolynomial: a loop joint of another kind, or fewer independent closure entries
+            than unknowns (the actuators do not fix the configuration).
+    """
+    model = mech.model
+    gauges = {g.joint: g.value for g in mech.idle_gauges}
+    closures = [c for c in mech.closures if not c.spec.name.startswith(GAUGE_PREFIX)]
+    if not closures:
+        raise NotPolynomial("no closures")
+    frames = list(dict.fromkeys(f for c in closures for f in c.frame_ids))
+    keep: set[int] = set()
+    for f in frames:
+        j = model.frames[f].parentJoint
+        while j > 0:
+            keep.add(j)
+            j = model.parents[j]
+    joints = np.array(sorted(keep), dtype=int)
+    index = {int(j): i for i, j in enumerate(joints)}
+    actuated = {a.joint_id: i for i, a in enumerate(mech.actuators)}
+    if set(actuated) - keep:
+        raise NotPolynomial("an actuated joint carries no closure")
+    data = model.createData()
+    pin.forwardKinematics(model, data, mech.q_ref)
+    k = len(joints)
+    parent = np.full(k, -1, dtype=np.int64)
+    kind = np.zeros(k, dtype=np.int64)
+    offset = np.zeros(k, dtype=np.int64)
+    axis = np.zeros((k, 3))
+    placement = np.zeros((k, 4, 4))
+    fixed = np.zeros((k, 4, 4))
+    block_degree = np.zeros(k, dtype=np.int64)
+    n = 0
+    unit_offsets, unit_sizes = [], []
+    for i, j in enumerate(joints.tolist()):
+        jm, name = model.joints[j], model.names[j]
+        parent[i] = index.get(int(model.parents[j]), -1)
+        placement[i] = _homogeneous(model.jointPlacements[j])
+        fixed[i] = _homogeneous(model.jointPlacements[j].inverse() * data.liMi[j])
+        if j in actuated:
+            jk, ax = _joint_kind(jm)
+            if jk not in (REVOLUTE, PRISMATIC):
+                raise NotPolynomial(f"actuated joint {name} is neither revolute nor prismatic")
+            kind[i] = REVOLUTE_PARAM if jk == REVOLUTE else PRISMATIC_PARAM
+            offset[i], axis[i] = actuated[j], ax
+            continue
+        if name in gauges:
+            kind[i] = FIXED
+            continue
+        kind[i], axis[i] = _joint_kind(jm)
+        offset[i] = n
+        if kind[i] == REVOLUTE:
+            unit_offsets.append(n)
+            unit_sizes.append(2)
+            block_degree[i] = 1
+        elif kind[i] == PRISMATIC:
+            block_degree[i] = 1
+        else:
+            quat = n + (3 if kind[i] == FREE_FLYER else 0)
+            unit_offsets.append(quat)
+            unit_sizes.append(4)
+            block_degree[i] = 2
+        n += _SIZES[int(kind[i])]
+    frame_joint = np.array([index[model.frames[f].parentJoint] for f in frames], dtype=np.int64)
+    frame_placement = np.array([_homogeneous(model.frames[f].placement) for f in frames])
+    codes = {"point": 0, "weld": 1, "revolute": 2}
+    closure_kind = np.array([codes[c.spec.type] for c in closures], dtype=np.int64)
+    closure_frames = np.array([[frames.index(f) for f in c.frame_ids] for c in closures], dtype=np.int64)
+    closure_axis = np.array([c.axis if c.axis is not None else np.zeros(3) for c in closures])
+    sizes = [_ENTRIES[c.spec.type] for c in closures]
+    entry_offset = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    n_entries = int(sum(sizes))
+    n_unit = len(unit_offsets)
+    n_comb = n - n_unit
+    if n_comb <= 0:
+        raise NotPolynomial("no unknown left to solve for")
+    # degree of each entry: the largest path degree of the frames it involves
+    path_degree = []
+    for fj in frame_joint:
+        d, i = 0, int(fj)
+        while i >= 0:
+            d += int(block_degree[i])
+            i = int(parent[i])
+        path_degree.append(d)
+    entry_degree = np.zeros(n_entries, dtype=np.int64)
+    for c in range(len(closures)):
+        a, b = closure_frames[c]
+        start = entry_offset[c]
+        entry_degree[start : start + 3] = max(path_degree[a], path_degree[b])
+        entry_degree[start + 3 : start + sizes[c]] = path_degree[a] + path_degree[b]
+    form = PolynomialForm(
+        joints=joints,
+        parent=parent,
+        kind=kind,
+        offset=offset,
+        axis=axis,
+        placement=placement,
+        fixed=fixed,
+        frame_joint=frame_joint,
+        frame_placement=frame_placement,
+        closure_kind=closure_kind,
+        closure_frames=closure_frames,
+        closure_axis=closure_axis,
+        entry_offset=entry_offset,
+        n_entries=n_entries,
+        combination=np.zeros((n_comb, n_entries)),
+        n=n,
+        n_unit=n_unit,
+        unit_offsets=np.array(unit_offsets, dtype=np.int64),
+        unit_sizes=np.array(unit_sizes, dtype=np.int64),
+        n_params=mech.n_actuators,
+        degrees=np.zeros(n, dtype=np.int64),
+        digest="",
+    )
+    live = _live_entries(form)
+    if live.sum() < n_comb:
+        raise NotPolynomial(
+            f"{int(live.sum())} independent closure entries for {n_comb} unknowns: the actuators do not fix "
+            "the configuration"
+        )
+    rng = np.random.default_rng(SEED)
+    combination = rng.normal(size=(n_comb, n_entries)) * live
+    degrees = np.concatenate([np.full(n_unit, 2), np.full(n_comb, int(entry_degree[live].max()))])
+    h = hashlib.sha256()
+    for arr in (parent, kind, offset, axis, placement, fixed, frame_joint, frame_placement, closure_kind):
+        h.update(np.ascontiguousarray(arr).tobytes())
+    for arr in (closure_frames, closure_axis, combination):
+        h.update(np.ascontiguousarray(arr).tobytes())
+    h.update(f"{n} {n_unit} {mech.n_actuators} {SEED}".encode())
+    object.__setattr__(form, "combination", combination)
+    object.__setattr__(form, "degrees", degrees)
+    object.__setattr__(form, "digest", h.hexdigest())
+    return form
+
+
+def _live_entries(form: PolynomialForm) -> np.ndarray:
+    """Mask of the closure entries that do not vanish identically, shape (n_entries,)."""
+    from .evaluation import closure_entries
+
+    rng = np.random.default_rng(SEED + 1)
+    size = np.zeros(form.n_entries)
+    for _ in range(3):
+        x = rng.normal(size=form.n) + 1j * rng.normal(size=form.n)
+        p = rng.normal(size=form.n_params) + 1j * rng.normal(size=form.n_params)
+        e, de = closure_entries(form, x, p)
+        size = np.maximum(size, np.abs(e) + np.abs(de).sum(axis=1))
+    return size > ZERO_ENTRY_RTOL * max(size.max(), 1.0)
+
+
+def to_configuration(
+    form: PolynomialForm, mech: Mechanism, x: np.ndarray, actuators: np.ndarray
+) -> np.ndarray:
+    """The tree configuration of a real solution ``x`` with the actuators at ``actuators``, shape (nq,).
+
+    Joints off the loops keep their reference value; quaternions and (cos, sin) pairs are
+    normalised.
+    """
+    model = mech.model
+    q = mech.q_ref.copy()
+    x = np.real(x)
+    for i, j in enumerate(form.joints.tolist()):
+        jm, kd, o = model.joints[j], int(form.kind[i]), int(form.offset[i])
+        iq = jm.idx_q
+        if kd in (REVOLUTE, REVOLUTE_PARAM):
+            angle = float(actuators[o]) if kd == REVOLUTE_PARAM else float(np.arctan2(x[o + 1], x[o]))
+            if jm.nq == 2:
+                q[iq : iq + 2] = np.cos(angle), np.sin(angle)
+            else:
+                q[iq] = angle
+        elif kd == PRISMATIC:
+            q[iq] = x[o]
+        elif kd == PRISMATIC_PARAM:
+            q[iq] = actuators[o]
+        elif kd in (SPHERICAL, FREE_FLYER):
+            t = 3 if kd == FREE_FLYER else 0
+            w, qx, qy, qz = x[o + t : o + t + 4] / np.linalg.norm(x[o + t : o + t + 4])
+            if t:
+                q[iq : iq + 3] = x[o : o + 3]
+            q[iq + t : iq + t + 4] = qx, qy, qz, w  # Pinocchio stores (x, y, z, w)
+    return q
+
+
+def from_configuration(form: PolynomialForm, mech: Mechanism, q: np.ndarray) -> np.ndarray:
+    """The unknowns of a configuration ``q``, shape (n,) (the inverse of :func:`to_configuration`)."""
+    model = mech.model
+    x = np.zeros(form.n)
+    data = model.createData()
+    pin.forwardKinematics(model, data, q)
+    for i, j in enumerate(form.joints.tolist()):
+        kd, o = int(form.kind[i]), int(form.offset[i])
+        X = (model.jointPlacements[j].inverse() * data.liMi[j]).homogeneous
+        if kd == REVOLUTE:
+            R = X[:3, :3]
+            a = form.axis[i]
+            e = np.linalg.svd(np.eye(3) - np.outer(a, a))[0][:, 0]
+            x[o], x[o + 1] = e @ R @ e, np.cross(e, R @ e) @ a
+        elif kd == PRISMATIC:
+            x[o] = form.axis[i] @ X[:3, 3]
+        elif kd in (SPHERICAL, FREE_FLYER):
+            t = 3 if kd == FREE_FLYER else 0
+            quat = pin.Quaternion(X[:3, :3])
+            if t:
+                x[o : o + 3] = X[:3, 3]
+            x[o + t : o + t + 4] = quat.w, quat.x, quat.y, quat.z
+    return x

@@ -1,0 +1,183 @@
+r"""Every assembly mode at given actuator values: parameter homotopy from the generic solve.
+
+Each of the :math:`N` generic solutions (:mod:`.generic`) is tracked from the generic complex
+parameters to the actuator values (:mod:`.tracking`). By the parameter continuation theorem
+(Morgan & Sommese 1989; Sommese & Wampler 2005, thm. 7.1.1) every isolated solution at the
+target is the end of one of these paths, and no parameter has more than :math:`N`
+non-singular isolated solutions. So when the :math:`N` paths end at :math:`N` distinct
+non-singular roots, they are all the roots: the result is *complete*. Otherwise (a path went to
+infinity, ended singular, failed, or two paths met) it is not, and says how many and why.
+
+Real roots are refined by Newton on the real system, kept when every closure entry vanishes
+(not only the random combination), and certified by a Krawczyk test (:mod:`.certify`).
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.mechanism import Mechanism
+from .generic import SAME_ROOT_RTOL, SINGULAR_COND, GenericSolution, generic_solution
+from .polynomial import PolynomialForm, polynomial_form
+
+REAL_RTOL = 1e-7  # TOLERANCE -> tolerances.py
+"""Relative imaginary part under which a root counts as real [-]."""
+ROOT_RTOL = 1e-8  # TOLERANCE -> tolerances.py
+"""Relative residual of the square system under which a path end is a root [-]."""
+ENTRY_TOL = 1e-9  # TOLERANCE -> tolerances.py
+"""Largest closure entry [m, -] of a real root of the square system that solves the full system."""
+
+
+@dataclass(frozen=True)
+class RealRoot:
+    """A certified real root of the polynomial form.
+
+    Attributes:
+        x: the unknowns, shape (n,).
+        box_radius: relative half-width of the Krawczyk box proven to hold it alone (times 1 + |x|).
+    """
+
+    x: np.ndarray
+    box_radius: float
+
+
+@dataclass(frozen=True)
+class HomotopySolve:
+    """Outcome of the homotopy at one actuator vector.
+
+    Attributes:
+        generic_count: number of complex solutions at a generic parameter (monodromy: a lower bound).
+        roots: distinct non-singular complex roots reached.
+        real: certified real roots that solve the full closure system.
+        uncertified: real roots of the full system whose Krawczyk test failed.
+        spurious: real roots of the square system only (the random combination's).
+        diverged: paths that went to infinity.
+        singular: paths that ended at a singular root.
+        failed: paths the tracker lost.
+        collided: paths that ended on a root another path had reached.
+    """
+
+    generic_count: int
+    roots: int
+    real: tuple[RealRoot, ...]
+    uncertified: int
+    spurious: int
+    diverged: int
+    singular: int
+    failed: int
+    collided: int
+
+    @property
+    def complete(self) -> bool:
+        """Whether every generic path ended at its own non-singular root (all roots found)."""
+        return self.roots == self.generic_count and self.uncertified == 0
+
+    def why_incomplete(self) -> str:
+        """What kept the solve from being complete ('' when complete)."""
+        if self.complete:
+            return ""
+        parts = [
+            f"{k} {what}"
+            for k, what in (
+                (self.diverged, "paths went to infinity"),
+                (self.singular, "paths ended singular"),
+                (self.failed, "paths were lost by the tracker"),
+                (self.collided, "paths met another"),
+                (self.uncertified, "real roots failed the interval test"),
+            )
+            if k
+        ]
+        return f"{self.roots} of {self.generic_count} roots reached: " + ", ".join(parts)
+
+
+_Prepared = tuple[PolynomialForm, GenericSolution]
+_FORMS: weakref.WeakKeyDictionary[Mechanism, _Prepared] = weakref.WeakKeyDictionary()
+
+
+def prepared(mech: Mechanism) -> tuple[PolynomialForm, GenericSolution]:
+    """The polynomial form and generic solve of ``mech`` (built once per mechanism, solve cached on disk).
+
+    Raises:
+        NotPolynomial: the mechanism has no polynomial form.
+    """
+    hit = _FORMS.get(mech)
+    if hit is None:
+        form = polynomial_form(mech)
+        hit = (form, generic_solution(form))
+        _FORMS[mech] = hit
+    return hit
+
+
+def _real_newton(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> np.ndarray:
+    from .evaluation import evaluate
+
+    x = np.real(x).astype(float)
+    for _ in range(3):
+        F, Jx, _ = evaluate(form, x, p)
+        step = np.linalg.solve(np.real(Jx), -np.real(F))
+        x = x + step
+        if np.abs(step).max() < 1e-15 * (1.0 + np.abs(x).max()):
+            break
+    return x
+
+
+def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
+    """Track every generic solution of ``mech`` to ``actuators`` and certify the real ends.
+
+    Raises:
+        NotPolynomial: the mechanism has no polynomial form.
+    """
+    from .certify import certify
+    from .evaluation import closure_entries, evaluate
+    from .tracking import DIVERGED, REACHED, track_all
+
+    form, gen = prepared(mech)
+    p1 = np.asarray(actuators, dtype=np.complex128)
+    zero = np.zeros(form.n, dtype=np.complex128)
+    X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args())
+    roots: list[np.ndarray] = []
+    diverged = int(np.sum(codes == DIVERGED))
+    failed = int(np.sum((codes != DIVERGED) & (codes != REACHED)))
+    singular = collided = 0
+    for x, code in zip(X, codes, strict=True):
+        if code != REACHED:
+            continue
+        scale = 1.0 + np.abs(x).max()
+        F, Jx, _ = evaluate(form, x, p1)
+        if not np.all(np.isfinite(F)) or np.abs(F).max() > ROOT_RTOL * scale:
+            failed += 1
+        elif np.linalg.cond(Jx) > SINGULAR_COND:
+            singular += 1
+        elif any(np.abs(x - y).max() <= SAME_ROOT_RTOL * scale for y in roots):
+            collided += 1
+        else:
+            roots.append(x)
+    real, uncertified, spurious = [], 0, 0
+    pr = np.real(p1)
+    for x in roots:
+        if np.abs(x.imag).max() > REAL_RTOL * (1.0 + np.abs(x).max()):
+            continue
+        xr = _real_newton(form, x, pr)
+        entries, _ = closure_entries(form, xr, pr)
+        if np.abs(entries).max() > ENTRY_TOL * (1.0 + np.abs(xr).max()):
+            spurious += 1
+            continue
+        radius = certify(form, xr, pr)
+        if radius is None:
+            uncertified += 1
+        else:
+            real.append(RealRoot(xr, radius))
+    return HomotopySolve(
+        generic_count=gen.count,
+        roots=len(roots),
+        real=tuple(real),
+        uncertified=uncertified,
+        spurious=spurious,
+        diverged=diverged,
+        singular=singular,
+        failed=failed,
+        collided=collided,
+    )
