@@ -7,6 +7,7 @@ __all__ = [
     "DescriptionWarning",
     "IgnoredElementWarning",
     "IllConditionedWarning",
+    "IncompleteSearchWarning",
     "MissingLimitsWarning",
     "MissingMeshWarning",
     "PlmWarning",
@@ -44,3 +45,7 @@ class SimulationUnstableWarning(PlmWarning):
 
 class MissingLimitsWarning(PlmWarning):
     """URDF joints carry no position limits (read as [0, 0]); they are treated as unlimited."""
+
+
+class IncompleteSearchWarning(PlmWarning):
+    """A search for every solution (every assembly mode) cannot prove it found them all."""

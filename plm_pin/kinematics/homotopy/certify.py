@@ -203,6 +203,7 @@ def interval_system(
     closure_kind: np.ndarray,
     closure_frames: np.ndarray,
     closure_axis: np.ndarray,
+    closure_length2: np.ndarray,
     entry_offset: np.ndarray,
     combination: np.ndarray,
     unit_offsets: np.ndarray,
@@ -237,7 +238,7 @@ def interval_system(
     for f in range(nf):
         S = _point(frame_placement[f])
         i = frame_joint[f]
-        Tf[f] = _matmul(T[i], S)
+        Tf[f] = _matmul(T[i], S) if i >= 0 else S
         while i >= 0:
             for c in range(ncoord[i]):
                 dTf[f, offset[i] + c] = _matmul(_matmul(A[i], dXs[i, c]), S)
@@ -248,6 +249,17 @@ def interval_system(
     de = np.zeros((m, n, 2))
     for c in range(closure_kind.shape[0]):
         a, b, o = closure_frames[c, 0], closure_frames[c, 1], entry_offset[c]
+        if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2
+            acc = np.empty(2)
+            acc[0], acc[1] = -closure_length2[c], -closure_length2[c]
+            for r in range(3):
+                d = _add(Tf[b, r, 3], _neg(Tf[a, r, 3]))
+                acc = _add(acc, _mul(d, d))
+                for j in range(n):
+                    dd = _add(dTf[b, j, r, 3], _neg(dTf[a, j, r, 3]))
+                    de[o, j] = _add(de[o, j], 2.0 * _mul(d, dd))
+            e[o] = acc
+            continue
         for r in range(3):
             e[o + r] = _add(Tf[b, r, 3], _neg(Tf[a, r, 3]))
             for j in range(n):

@@ -120,6 +120,7 @@ def _entries(
     closure_kind: np.ndarray,
     closure_frames: np.ndarray,
     closure_axis: np.ndarray,
+    closure_length2: np.ndarray,
     entry_offset: np.ndarray,
     n_entries: int,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -153,7 +154,7 @@ def _entries(
     for f in range(nf):
         S = frame_placement[f].astype(np.complex128)
         i = frame_joint[f]
-        Tf[f] = T[i] @ S
+        Tf[f] = T[i] @ S if i >= 0 else S
         while i >= 0:
             for c in range(ncoord[i]):
                 dTf[f, col[i] + c] = A[i] @ dXs[i, c] @ S
@@ -163,20 +164,28 @@ def _entries(
     de = np.zeros((n_entries, nc), dtype=np.complex128)
     for c in range(closure_kind.shape[0]):
         a, b, o = closure_frames[c, 0], closure_frames[c, 1], entry_offset[c]
+        if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2
+            e[o] = -closure_length2[c]
+            for r in range(3):
+                d = Tf[b, r, 3] - Tf[a, r, 3]
+                e[o] += d * d
+                for j in range(nc):
+                    de[o, j] += 2.0 * d * (dTf[b, j, r, 3] - dTf[a, j, r, 3])
+            continue
         for r in range(3):
             e[o + r] = Tf[b, r, 3] - Tf[a, r, 3]
             for j in range(nc):
                 de[o + r, j] = dTf[b, j, r, 3] - dTf[a, j, r, 3]
         if closure_kind[c] == 0:
             continue
-        Ra, Rb = Tf[a, :3, :3], Tf[b, :3, :3]
-        E = Ra.T @ Rb
+        RaT, Rb = Tf[a, :3, :3].T.copy(), Tf[b, :3, :3].copy()
+        E = RaT @ Rb
         if closure_kind[c] == 1:
             for r in range(3):
                 for s in range(3):
                     e[o + 3 + 3 * r + s] = E[r, s] - (1.0 if r == s else 0.0)
             for j in range(nc):
-                dE = dTf[a, j, :3, :3].T @ Rb + Ra.T @ dTf[b, j, :3, :3]
+                dE = dTf[a, j, :3, :3].T.copy() @ Rb + RaT @ dTf[b, j, :3, :3].copy()
                 for r in range(3):
                     for s in range(3):
                         de[o + 3 + 3 * r + s, j] = dE[r, s]
@@ -186,7 +195,7 @@ def _entries(
             for r in range(3):
                 e[o + 3 + r] = Eu[r] - u[r]
             for j in range(nc):
-                dEu = (dTf[a, j, :3, :3].T @ Rb + Ra.T @ dTf[b, j, :3, :3]) @ u
+                dEu = (dTf[a, j, :3, :3].T.copy() @ Rb + RaT @ dTf[b, j, :3, :3].copy()) @ u
                 for r in range(3):
                     de[o + 3 + r, j] = dEu[r]
     return e, de
@@ -208,6 +217,7 @@ def system(
     closure_kind: np.ndarray,
     closure_frames: np.ndarray,
     closure_axis: np.ndarray,
+    closure_length2: np.ndarray,
     entry_offset: np.ndarray,
     combination: np.ndarray,
     unit_offsets: np.ndarray,
@@ -229,6 +239,7 @@ def system(
         closure_kind,
         closure_frames,
         closure_axis,
+        closure_length2,
         entry_offset,
         combination.shape[1],
     )
@@ -265,6 +276,7 @@ def closure_entries(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> tuple
         form.closure_kind,
         form.closure_frames,
         form.closure_axis,
+        form.closure_length2,
         form.entry_offset,
         form.n_entries,
     )

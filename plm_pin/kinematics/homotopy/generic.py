@@ -13,6 +13,11 @@ solutions, and new ones appear until none is left to find. The loops stop after
 parameter :math:`p_0` (paths to infinity or to singular ends dropped), and
 :data:`CHECK_LOOPS` further loops in :math:`p` alone at :math:`b = 0` must find nothing new.
 
+Quaternion signs: the system is even in each quaternion block (:math:`R(-e) = R(e)`), so
+the roots come in orbits of :math:`2^k` (:math:`k` quaternions); only one root per orbit is
+kept and tracked (the one whose quaternions have a positive real part of :math:`w`), and the
+count multiplies by :math:`2^k`.
+
 What it proves: the count is a *lower bound* on the generic number of solutions (monodromy
 cannot show that nothing is left); the stale loops make a miss unlikely, not impossible.
 
@@ -34,7 +39,7 @@ STALE_LOOPS = 5
 """Monodromy loops in a row without a new solution before the generic solve stops."""
 CHECK_LOOPS = 2
 """Loops in the actuator parameters alone that must find no new solution."""
-MAX_SOLUTIONS = 2000
+MAX_SOLUTIONS = 1000
 """Generic counts above this are not solved (the mechanism falls back to multi-start)."""
 SAME_ROOT_RTOL = 1e-6  # TOLERANCE -> tolerances.py
 """Relative distance under which two generic solutions are the same root [-]."""
@@ -48,18 +53,20 @@ class GenericSolution:
 
     Attributes:
         p: the generic actuator parameters (complex), shape (n_params,).
-        x: the solutions, shape (N, n); N is the generic count (a lower bound, see module).
+        x: one solution per quaternion-sign orbit, shape (N / symmetry, n).
         loops: monodromy loops run.
+        symmetry: roots per orbit (2 to the number of quaternions).
     """
 
     p: np.ndarray
     x: np.ndarray
     loops: int
+    symmetry: int = 1
 
     @property
     def count(self) -> int:
-        """Generic number of complex solutions found."""
-        return int(self.x.shape[0])
+        """Generic number of complex solutions found (a lower bound, see the module)."""
+        return int(self.x.shape[0]) * self.symmetry
 
 
 def cache_folder() -> Path:
@@ -85,6 +92,16 @@ def _regular(
             continue
         keep.append(x)
     return np.array(keep).reshape(-1, form.n)
+
+
+def canonical(form: PolynomialForm, X: np.ndarray) -> np.ndarray:
+    """Each row of ``X`` (n,) or (N, n) with every quaternion signed to a positive real part of w."""
+    X = np.array(X, dtype=np.complex128)
+    for o, size in zip(form.unit_offsets, form.unit_sizes, strict=True):
+        if size == 4:
+            flip = np.real(X[..., o]) < 0
+            X[..., o : o + 4] = np.where(flip[..., None], -X[..., o : o + 4], X[..., o : o + 4])
+    return X
 
 
 def _merge(known: np.ndarray, new: np.ndarray) -> np.ndarray:
@@ -126,25 +143,28 @@ def solve_generic(form: PolynomialForm) -> GenericSolution:
     p0 = rng.normal(size=form.n_params) + 1j * rng.normal(size=form.n_params)
     x0 = rng.normal(size=form.n) + 1j * rng.normal(size=form.n)
     b0 = -evaluate(form, x0, p0)[0]
-    known = x0.reshape(1, -1)
+    known = canonical(form, x0.reshape(1, -1))
     stale, loops = 0, 0
     while stale < STALE_LOOPS:
         loops += 1
-        found = _merge(known, _loop(form, known, p0, b0, rng, vary_b=True))
+        found = _merge(known, canonical(form, _loop(form, known, p0, b0, rng, vary_b=True)))
         stale = stale + 1 if len(found) == len(known) else 0
         known = found
-        if len(known) > MAX_SOLUTIONS:
+        if len(known) * 2 ** int(np.sum(form.unit_sizes == 4)) > MAX_SOLUTIONS:
             raise NotPolynomial(f"more than {MAX_SOLUTIONS} generic solutions")
     zero = np.zeros(form.n, dtype=np.complex128)
     X, codes, _ = track_all(known, p0, b0, p0, zero, form.kernel_args())
-    roots = _merge(np.zeros((0, form.n), dtype=np.complex128), _regular(form, X, codes, p0, zero))
+    roots = _merge(
+        np.zeros((0, form.n), dtype=np.complex128), canonical(form, _regular(form, X, codes, p0, zero))
+    )
     if not len(roots):
         raise NotPolynomial("no isolated solution at a generic parameter")
     for _ in range(CHECK_LOOPS):
         loops += 1
-        more = _merge(roots, _loop(form, roots, p0, zero, rng, vary_b=False))
+        more = _merge(roots, canonical(form, _loop(form, roots, p0, zero, rng, vary_b=False)))
         roots = more
-    return GenericSolution(p=p0, x=roots, loops=loops)
+    symmetry = 2 ** int(np.sum(form.unit_sizes == 4))
+    return GenericSolution(p=p0, x=roots, loops=loops, symmetry=symmetry)
 
 
 def generic_solution(form: PolynomialForm, *, use_cache: bool = True) -> GenericSolution:
@@ -152,11 +172,11 @@ def generic_solution(form: PolynomialForm, *, use_cache: bool = True) -> Generic
     path = cache_folder() / f"{form.digest}.npz"
     if use_cache and path.exists():
         with np.load(path) as z:
-            return GenericSolution(p=z["p"], x=z["x"], loops=int(z["loops"]))
+            return GenericSolution(p=z["p"], x=z["x"], loops=int(z["loops"]), symmetry=int(z["symmetry"]))
     sol = solve_generic(form)
     if use_cache:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
-        np.savez(tmp, p=sol.p, x=sol.x, loops=sol.loops)
+        np.savez(tmp, p=sol.p, x=sol.x, loops=sol.loops, symmetry=sol.symmetry)
         os.replace(tmp, path)
     return sol

@@ -27,7 +27,12 @@ Closure entries (the residuals of :mod:`plm_pin.core.closures` written polynomia
 
 - point: :math:`p_B - p_A` (3 entries);
 - weld: the point entries and the 9 entries of :math:`R_A^T R_B - I`;
-- revolute: the point entries and :math:`R_A^T R_B u - u` (3 entries).
+- revolute: the point entries and :math:`R_A^T R_B u - u` (3 entries);
+- distance (a leg that ends in revolutes meeting at one point O, then a rigid strut to the
+  closure point B at distance L from O: a universal or spherical joint then a strut, as in
+  Stewart-Gough legs): :math:`|p_B - O|^2 - L^2` (1 entry, twice the degree of B's path);
+  the leg's revolutes leave the system, which removes the two mirror angle sets of each
+  universal joint from the count.
 
 Entries that vanish identically (the out-of-plane rows of a planar chain) are dropped;
 the rest are combined by a fixed random matrix :math:`C` (seeded) into as many equations
@@ -51,7 +56,7 @@ FIXED, REVOLUTE, PRISMATIC, SPHERICAL, FREE_FLYER, REVOLUTE_PARAM, PRISMATIC_PAR
 """Joint kinds of the polynomial form (codes shared with the compiled kernels)."""
 
 _SIZES = {FIXED: 0, REVOLUTE: 2, PRISMATIC: 1, SPHERICAL: 4, FREE_FLYER: 7}  # unknowns per joint
-_ENTRIES = {"point": 3, "weld": 12, "revolute": 6}
+_ENTRIES = {0: 3, 1: 12, 2: 6, 3: 1}  # point, weld, revolute, distance
 SEED = 20261204
 """Seed of the random combination and of the generic parameters (fixed: results are reproducible)."""
 
@@ -75,11 +80,12 @@ class PolynomialForm:
         axis: joint axis in its own frame (revolute, prismatic), shape (k, 3).
         placement: joint placement in its parent :math:`M_j`, homogeneous, shape (k, 4, 4).
         fixed: local transform of fixed joints :math:`X_j`, shape (k, 4, 4).
-        frame_joint: index in ``joints`` of the parent joint of each closure frame, shape (f,).
+        frame_joint: index in ``joints`` of the joint carrying each closure point (-1: world), shape (f,).
         frame_placement: closure frame placement in its joint, shape (f, 4, 4).
-        closure_kind: 0 point, 1 weld, 2 revolute, per closure, shape (nc,).
+        closure_kind: 0 point, 1 weld, 2 revolute, 3 distance (an eliminated leg), shape (nc,).
         closure_frames: indices of frames A and B per closure, shape (nc, 2).
         closure_axis: revolute closure axis in B's frame, shape (nc, 3).
+        closure_length2: squared length of each distance closure [m^2], shape (nc,).
         entry_offset: first entry of each closure, shape (nc,).
         n_entries: total closure entries.
         combination: the random matrix :math:`C`, shape (n - n_unit, n_entries).
@@ -89,6 +95,7 @@ class PolynomialForm:
         unit_sizes: 2 or 4 per unit block, shape (n_unit,).
         n_params: number of parameters (actuators).
         degrees: degree of each equation of the square system, shape (n,).
+        eliminated_v: velocity indices of the joints of the eliminated legs (set by the polish).
         digest: hex digest of all of the above (the cache key of the generic solve).
     """
 
@@ -104,6 +111,7 @@ class PolynomialForm:
     closure_kind: np.ndarray
     closure_frames: np.ndarray
     closure_axis: np.ndarray
+    closure_length2: np.ndarray
     entry_offset: np.ndarray
     n_entries: int
     combination: np.ndarray
@@ -113,6 +121,7 @@ class PolynomialForm:
     unit_sizes: np.ndarray
     n_params: int
     degrees: np.ndarray
+    eliminated_v: np.ndarray
     digest: str
 
     def kernel_args(self) -> tuple[np.ndarray, ...]:
@@ -129,6 +138,7 @@ class PolynomialForm:
             self.closure_kind,
             self.closure_frames,
             self.closure_axis,
+            self.closure_length2,
             self.entry_offset,
             self.combination,
             self.unit_offsets,
@@ -173,20 +183,38 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
     closures = [c for c in mech.closures if not c.spec.name.startswith(GAUGE_PREFIX)]
     if not closures:
         raise NotPolynomial("no closures")
-    frames = list(dict.fromkeys(f for c in closures for f in c.frame_ids))
+    actuated = {a.joint_id: i for i, a in enumerate(mech.actuators)}
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, mech.q_ref)
+    legs = _distance_legs(mech, data, closures, actuated, set(gauges))
+    anchors: list[tuple[int, pin.SE3]] = []  # (parent joint, placement in it) of each closure point
+
+    def anchor(joint: int, placement: pin.SE3) -> int:
+        anchors.append((joint, placement))
+        return len(anchors) - 1
+
+    rows = []  # (code, anchor A, anchor B, axis, squared length)
+    for c in closures:
+        fa, fb = (anchor(model.frames[f].parentJoint, model.frames[f].placement) for f in c.frame_ids)
+        if c.name in legs:
+            side, joint, placement, length2, _ = legs[c.name]
+            fa, fb = anchor(joint, placement), fb if side == 0 else fa
+            rows.append((3, fa, fb, np.zeros(3), length2))
+        else:
+            code = {"point": 0, "weld": 1, "revolute": 2}[c.spec.type]
+            rows.append((code, fa, fb, c.axis if c.axis is not None else np.zeros(3), 0.0))
+    used = {a for r in rows for a in r[1:3]}
     keep: set[int] = set()
-    for f in frames:
-        j = model.frames[f].parentJoint
+    for a in used:
+        j = anchors[a][0]
         while j > 0:
             keep.add(j)
             j = model.parents[j]
     joints = np.array(sorted(keep), dtype=int)
     index = {int(j): i for i, j in enumerate(joints)}
-    actuated = {a.joint_id: i for i, a in enumerate(mech.actuators)}
     if set(actuated) - keep:
         raise NotPolynomial("an actuated joint carries no closure")
-    data = model.createData()
-    pin.forwardKinematics(model, data, mech.q_ref)
+    eliminated = sorted({int(j) for leg in legs.values() for j in leg[4]} - keep)
     k = len(joints)
     parent = np.full(k, -1, dtype=np.int64)
     kind = np.zeros(k, dtype=np.int64)
@@ -226,13 +254,14 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
             unit_sizes.append(4)
             block_degree[i] = 2
         n += _SIZES[int(kind[i])]
-    frame_joint = np.array([index[model.frames[f].parentJoint] for f in frames], dtype=np.int64)
-    frame_placement = np.array([_homogeneous(model.frames[f].placement) for f in frames])
-    codes = {"point": 0, "weld": 1, "revolute": 2}
-    closure_kind = np.array([codes[c.spec.type] for c in closures], dtype=np.int64)
-    closure_frames = np.array([[frames.index(f) for f in c.frame_ids] for c in closures], dtype=np.int64)
-    closure_axis = np.array([c.axis if c.axis is not None else np.zeros(3) for c in closures])
-    sizes = [_ENTRIES[c.spec.type] for c in closures]
+    order = sorted(used)
+    frame_joint = np.array([index.get(anchors[a][0], -1) for a in order], dtype=np.int64)
+    frame_placement = np.array([_homogeneous(anchors[a][1]) for a in order])
+    closure_kind = np.array([r[0] for r in rows], dtype=np.int64)
+    closure_frames = np.array([[order.index(r[1]), order.index(r[2])] for r in rows], dtype=np.int64)
+    closure_axis = np.array([r[3] for r in rows])
+    closure_length2 = np.array([r[4] for r in rows])
+    sizes = [_ENTRIES[int(r[0])] for r in rows]
     entry_offset = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
     n_entries = int(sum(sizes))
     n_unit = len(unit_offsets)
@@ -248,9 +277,12 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
             i = int(parent[i])
         path_degree.append(d)
     entry_degree = np.zeros(n_entries, dtype=np.int64)
-    for c in range(len(closures)):
+    for c in range(len(rows)):
         a, b = closure_frames[c]
         start = entry_offset[c]
+        if closure_kind[c] == 3:  # a squared distance
+            entry_degree[start] = 2 * max(path_degree[a], path_degree[b])
+            continue
         entry_degree[start : start + 3] = max(path_degree[a], path_degree[b])
         entry_degree[start + 3 : start + sizes[c]] = path_degree[a] + path_degree[b]
     form = PolynomialForm(
@@ -266,6 +298,7 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
         closure_kind=closure_kind,
         closure_frames=closure_frames,
         closure_axis=closure_axis,
+        closure_length2=closure_length2,
         entry_offset=entry_offset,
         n_entries=n_entries,
         combination=np.zeros((n_comb, n_entries)),
@@ -275,6 +308,7 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
         unit_sizes=np.array(unit_sizes, dtype=np.int64),
         n_params=mech.n_actuators,
         degrees=np.zeros(n, dtype=np.int64),
+        eliminated_v=np.array([model.joints[j].idx_v for j in eliminated], dtype=np.int64),
         digest="",
     )
     live = _live_entries(form)
@@ -289,13 +323,87 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
     h = hashlib.sha256()
     for arr in (parent, kind, offset, axis, placement, fixed, frame_joint, frame_placement, closure_kind):
         h.update(np.ascontiguousarray(arr).tobytes())
-    for arr in (closure_frames, closure_axis, combination):
+    for arr in (closure_frames, closure_axis, closure_length2, combination):
         h.update(np.ascontiguousarray(arr).tobytes())
     h.update(f"{n} {n_unit} {mech.n_actuators} {SEED}".encode())
     object.__setattr__(form, "combination", combination)
     object.__setattr__(form, "degrees", degrees)
     object.__setattr__(form, "digest", h.hexdigest())
     return form
+
+
+CONCURRENT_TOL = 1e-9  # TOLERANCE -> tolerances.py
+"""Distance [m] under which joint axes count as meeting at one point (a leg reduces to a distance)."""
+
+
+def _distance_legs(
+    mech: Mechanism, data: pin.Data, closures: list, actuated: dict[int, int], gauged: set[str]
+) -> dict[str, tuple[int, int, pin.SE3, float, list[int]]]:
+    """Point closures whose one side ends in revolute joints meeting at one point O.
+
+    Such a side (a universal or spherical joint made of revolutes, then a rigid strut to the
+    closure point) holds its closure point at a fixed distance L from O, whatever its angles;
+    the closure reduces to :math:`|p_B - O|^2 - L^2 = 0` (degree 2 in the other side's
+    unknowns) and the side's revolutes leave the system (their angles are found again by the
+    polish). O is fixed in the body above the revolutes.
+
+    Returns:
+        Per closure name: (side of the leg, joint carrying O, O's placement in it, L^2 [m^2],
+        the eliminated joints).
+    """
+    model = mech.model
+    others: dict[str, set[int]] = {}
+    for c in closures:  # joints each closure frame hangs from
+        for f in c.frame_ids:
+            j, chain = model.frames[f].parentJoint, set()
+            while j > 0:
+                chain.add(j)
+                j = model.parents[j]
+            others.setdefault(c.name, set()).update(chain)
+    if mech.task_frame_id is not None:
+        j, chain = model.frames[mech.task_frame_id].parentJoint, set()
+        while j > 0:
+            chain.add(j)
+            j = model.parents[j]
+        others["<task>"] = chain
+    out = {}
+    for c in closures:
+        if c.spec.type != "point":
+            continue
+        for side in (0, 1):
+            f = c.frame_ids[side]
+            block, j = [], model.frames[f].parentJoint
+            while j > 0 and j not in actuated and model.names[j] not in gauged:
+                try:
+                    kind = _joint_kind(model.joints[j])[0]
+                except NotPolynomial:
+                    break
+                if kind != REVOLUTE:
+                    break
+                block.append(j)
+                j = model.parents[j]
+            if not block or any(set(block) & chain for name, chain in others.items() if name != c.name):
+                continue
+            lines = []
+            for b in block:
+                _, ax = _joint_kind(model.joints[b])
+                lines.append((data.oMi[b].translation, data.oMi[b].rotation @ ax))
+            # least-squares meeting point of the axes
+            A = sum(np.eye(3) - np.outer(u, u) for _, u in lines)
+            rhs = sum((np.eye(3) - np.outer(u, u)) @ p for p, u in lines)
+            O = np.linalg.lstsq(A, rhs, rcond=None)[0]
+            if max(np.linalg.norm((np.eye(3) - np.outer(u, u)) @ (O - p)) for p, u in lines) > CONCURRENT_TOL:
+                continue
+            if len(block) == 1:  # one revolute: O alone is not fixed (the point circles about the axis)
+                continue
+            top = block[-1]
+            carrier = int(model.parents[top])
+            frame_of_top = data.oMi[carrier] * model.jointPlacements[top]
+            placement = model.jointPlacements[top] * pin.SE3(np.eye(3), frame_of_top.actInv(O))
+            length2 = float(np.sum((data.oMf[f].translation - O) ** 2))
+            out[c.name] = (side, carrier, placement, length2, block)
+            break
+    return out
 
 
 def _live_entries(form: PolynomialForm) -> np.ndarray:

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.mechanism import Mechanism
-from .generic import SAME_ROOT_RTOL, SINGULAR_COND, GenericSolution, generic_solution
+from .generic import SAME_ROOT_RTOL, SINGULAR_COND, GenericSolution, canonical, generic_solution
 from .polynomial import PolynomialForm, polynomial_form
 
 REAL_RTOL = 1e-7  # TOLERANCE -> tolerances.py
@@ -51,7 +51,7 @@ class HomotopySolve:
     Attributes:
         generic_count: number of complex solutions at a generic parameter (monodromy: a lower bound).
         roots: distinct non-singular complex roots reached.
-        real: certified real roots that solve the full closure system.
+        real: certified real roots that solve the full closure system (one per quaternion-sign orbit).
         uncertified: real roots of the full system whose Krawczyk test failed.
         spurious: real roots of the square system only (the random combination's).
         diverged: paths that went to infinity.
@@ -151,10 +151,10 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
             failed += 1
         elif np.linalg.cond(Jx) > SINGULAR_COND:
             singular += 1
-        elif any(np.abs(x - y).max() <= SAME_ROOT_RTOL * scale for y in roots):
+        elif any(np.abs(canonical(form, x) - y).max() <= SAME_ROOT_RTOL * scale for y in roots):
             collided += 1
         else:
-            roots.append(x)
+            roots.append(canonical(form, x))
     real, uncertified, spurious = [], 0, 0
     pr = np.real(p1)
     for x in roots:
@@ -172,7 +172,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
             real.append(RealRoot(xr, radius))
     return HomotopySolve(
         generic_count=gen.count,
-        roots=len(roots),
+        roots=len(roots) * gen.symmetry,
         real=tuple(real),
         uncertified=uncertified,
         spurious=spurious,
