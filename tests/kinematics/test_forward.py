@@ -165,7 +165,7 @@ def test_same_assembly_ignores_full_turns():
 
 
 def test_actuators_without_assembly_raise_pose_unreachable():
-    """Sliders too far apart for the rods (|c2 - c1| > l1 + l2) raise PoseUnreachable: proven, or with the residual."""
+    """Sliders too far apart for the rods (|c2 - c1| > l1 + l2): PoseUnreachable, proven or with residual."""
     mech = preset("harada2011_3d4m")
     with pytest.raises(
         PoseUnreachable,
