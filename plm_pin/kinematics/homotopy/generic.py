@@ -15,8 +15,8 @@ parameter :math:`p_0` (paths to infinity or to singular ends dropped), and
 
 Quaternion signs: the system is even in each quaternion block (:math:`R(-e) = R(e)`), so
 the roots come in orbits of :math:`2^k` (:math:`k` quaternions); only one root per orbit is
-kept and tracked (the one whose quaternions have a positive real part of :math:`w`), and the
-count multiplies by :math:`2^k`.
+kept, tracked and counted (the one whose quaternions have a positive real part of :math:`w`):
+the counts are of assemblies, not of signed quaternions.
 
 What it proves: the count is a *lower bound* on the generic number of solutions (monodromy
 cannot show that nothing is left); the stale loops make a miss unlikely, not impossible.
@@ -65,8 +65,8 @@ class GenericSolution:
 
     @property
     def count(self) -> int:
-        """Generic number of complex solutions found (a lower bound, see the module)."""
-        return int(self.x.shape[0]) * self.symmetry
+        """Generic number of complex solutions found, one per quaternion-sign orbit (a lower bound)."""
+        return int(self.x.shape[0])
 
 
 def cache_folder() -> Path:

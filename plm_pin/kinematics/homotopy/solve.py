@@ -49,8 +49,9 @@ class HomotopySolve:
     """Outcome of the homotopy at one actuator vector.
 
     Attributes:
-        generic_count: number of complex solutions at a generic parameter (monodromy: a lower bound).
-        roots: distinct non-singular complex roots reached.
+        generic_count: number of complex solutions at a generic parameter (monodromy: a lower bound),
+            one per quaternion-sign orbit.
+        roots: distinct non-singular complex roots reached (one per orbit).
         real: certified real roots that solve the full closure system (one per quaternion-sign orbit).
         uncertified: real roots of the full system whose Krawczyk test failed.
         spurious: real roots of the square system only (the random combination's).
@@ -172,7 +173,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
             real.append(RealRoot(xr, radius))
     return HomotopySolve(
         generic_count=gen.count,
-        roots=len(roots) * gen.symmetry,
+        roots=len(roots),
         real=tuple(real),
         uncertified=uncertified,
         spurious=spurious,
