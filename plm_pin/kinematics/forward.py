@@ -22,6 +22,9 @@ from .starts import random_starts
 FK_TOL = 1e-12
 """Default closure tolerance of the forward kinematics [m, rad]."""
 
+FK_METHODS = ("auto", "multi-start")
+"""Search methods of :func:`forward_kinematics` with ``all_modes``."""
+
 
 @dataclass(frozen=True)
 class FKSolution(Result):
@@ -110,9 +113,11 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
 
 def _fit_eliminated(mech: Mechanism, q: np.ndarray, columns: np.ndarray, tol: float) -> np.ndarray:
     """Close the loops moving only ``columns`` (the joints of the legs reduced to distances)."""
-    rng = np.random.default_rng(0)
-    starts = [q, *random_starts(mech, rng, q, columns, 8)]
-    for start in starts:
+    try:
+        return _close(mech, q, columns, tol)[0]
+    except ClosureNotSatisfied:
+        pass
+    for start in random_starts(mech, np.random.default_rng(0), q, columns, 8):
         try:
             return _close(mech, start, columns, tol)[0]
         except ClosureNotSatisfied:
@@ -192,6 +197,7 @@ def forward_kinematics(
     starts: int = 48,
     seed: int = 0,
     tol: float = FK_TOL,
+    method: str = "auto",
 ) -> FKModes:
     """Assemble the mechanism with its actuators at ``actuators``: every assembly mode found.
 
@@ -214,6 +220,8 @@ def forward_kinematics(
         starts: random starts when ``all_modes``.
         seed: random seed.
         tol: closure tolerance [m, rad].
+        method: with ``all_modes``, ``"auto"`` (the homotopy where the closures have a
+            polynomial form, else multi-start) or ``"multi-start"``.
 
     Returns:
         The solutions, sorted by task coordinates (the guess's first when not ``all_modes``),
@@ -225,6 +233,8 @@ def forward_kinematics(
         InvalidInput: malformed inputs.
     """
     starts, seed, tol = count(starts, "starts"), count(seed, "seed"), positive(tol, "tol")
+    if method not in FK_METHODS:
+        raise InvalidInput(f"method must be one of {list(FK_METHODS)}, got {method!r}")
     c = check_task_vector(actuators, mech.n_actuators, "actuators")
     if mech.mobility > mech.n_actuators:
         raise InvalidInput(
@@ -233,7 +243,7 @@ def forward_kinematics(
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     free = mech.passive_v_indices  # actuators are one-DOF joints
-    found = _homotopy_modes(mech, c, tol) if all_modes else None
+    found = _homotopy_modes(mech, c, tol) if all_modes and method == "auto" else None
     if found is not None and (found or found.complete):  # an incomplete empty search: try multi-start
         if not found:
             raise PoseUnreachable(

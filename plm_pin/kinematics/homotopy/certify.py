@@ -47,6 +47,12 @@ def _up(v: float) -> float:
 
 
 @njit(cache=True, inline="always")
+def _mul2(alo: float, ahi: float, blo: float, bhi: float) -> tuple[float, float]:
+    p1, p2, p3, p4 = alo * blo, alo * bhi, ahi * blo, ahi * bhi
+    return _dn(min(min(p1, p2), min(p3, p4))), _up(max(max(p1, p2), max(p3, p4)))
+
+
+@njit(cache=True, inline="always")
 def _add(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     out = np.empty(2)
     out[0], out[1] = _dn(a[0] + b[0]), _up(a[1] + b[1])
@@ -78,10 +84,14 @@ def _matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     out = np.zeros((m, n, 2))
     for i in range(m):
         for j in range(n):
-            acc = np.zeros(2)
+            lo, hi = 0.0, 0.0
             for r in range(k):
-                acc = _add(acc, _mul(A[i, r], B[r, j]))
-            out[i, j] = acc
+                alo, ahi = A[i, r, 0], A[i, r, 1]
+                if alo == 0.0 and ahi == 0.0:
+                    continue
+                plo, phi = _mul2(alo, ahi, B[r, j, 0], B[r, j, 1])
+                lo, hi = _dn(lo + plo), _up(hi + phi)
+            out[i, j, 0], out[i, j, 1] = lo, hi
     return out
 
 

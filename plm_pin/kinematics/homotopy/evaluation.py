@@ -24,6 +24,20 @@ from .polynomial import (
 )
 
 
+@njit(cache=True, inline="always")
+def _mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Product of two small complex matrices by plain loops (BLAS calls cost more at 4 x 4)."""
+    m, k, n = A.shape[0], A.shape[1], B.shape[1]
+    out = np.zeros((m, n), dtype=np.complex128)
+    for i in range(m):
+        for r in range(k):
+            a = A[i, r]
+            if a != 0:
+                for j in range(n):
+                    out[i, j] += a * B[r, j]
+    return out
+
+
 @njit(cache=True)
 def _skew(a: np.ndarray) -> np.ndarray:
     K = np.zeros((3, 3), dtype=np.complex128)
@@ -65,7 +79,7 @@ def _local(
     X[3, 3] = 1.0
     if kind == REVOLUTE or kind == REVOLUTE_PARAM:
         K = _skew(axis.astype(np.complex128))
-        K2 = K @ K
+        K2 = _mm(K, K)
         if kind == REVOLUTE:
             c, s = v[0], v[1]
         else:
@@ -133,6 +147,8 @@ def _entries(
     col = np.zeros(k, dtype=np.int64)  # first derivative column of each joint
     T = np.zeros((k, 4, 4), dtype=np.complex128)  # world transform after the joint
     A = np.zeros((k, 4, 4), dtype=np.complex128)  # world transform of the joint frame before X_j
+    Mc = placement.astype(np.complex128)
+    Fc = fixed.astype(np.complex128)
     for i in range(k):
         kd = kind[i]
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
@@ -141,24 +157,27 @@ def _entries(
         else:
             v = x[offset[i] : offset[i] + 7] if kd != 0 else x[:0]
             col[i] = offset[i]
-        ncoord[i] = _local(kd, axis[i], fixed[i].astype(np.complex128), v, Xs[i], dXs[i])
-        Mi = placement[i].astype(np.complex128)
+        ncoord[i] = _local(kd, axis[i], Fc[i], v, Xs[i], dXs[i])
         if parent[i] >= 0:
-            A[i] = T[parent[i]] @ Mi
+            A[i] = _mm(T[parent[i]], Mc[i])
         else:
-            A[i] = Mi
-        T[i] = A[i] @ Xs[i]
+            A[i] = Mc[i]
+        T[i] = _mm(A[i], Xs[i])
+    AdX = np.zeros((k, 7, 4, 4), dtype=np.complex128)  # A_j dX_j, shared by the frames below joint j
+    for i in range(k):
+        for c in range(ncoord[i]):
+            AdX[i, c] = _mm(A[i], dXs[i, c])
     nf = frame_joint.shape[0]
     Tf = np.zeros((nf, 4, 4), dtype=np.complex128)
     dTf = np.zeros((nf, nc, 4, 4), dtype=np.complex128)
     for f in range(nf):
         S = frame_placement[f].astype(np.complex128)
         i = frame_joint[f]
-        Tf[f] = T[i] @ S if i >= 0 else S
+        Tf[f] = _mm(T[i], S) if i >= 0 else S
         while i >= 0:
             for c in range(ncoord[i]):
-                dTf[f, col[i] + c] = A[i] @ dXs[i, c] @ S
-            S = placement[i].astype(np.complex128) @ Xs[i] @ S
+                dTf[f, col[i] + c] = _mm(AdX[i, c], S)
+            S = _mm(_mm(Mc[i], Xs[i]), S)
             i = parent[i]
     e = np.zeros(n_entries, dtype=np.complex128)
     de = np.zeros((n_entries, nc), dtype=np.complex128)
@@ -179,23 +198,23 @@ def _entries(
         if closure_kind[c] == 0:
             continue
         RaT, Rb = Tf[a, :3, :3].T.copy(), Tf[b, :3, :3].copy()
-        E = RaT @ Rb
+        E = _mm(RaT, Rb)
         if closure_kind[c] == 1:
             for r in range(3):
                 for s in range(3):
                     e[o + 3 + 3 * r + s] = E[r, s] - (1.0 if r == s else 0.0)
             for j in range(nc):
-                dE = dTf[a, j, :3, :3].T.copy() @ Rb + RaT @ dTf[b, j, :3, :3].copy()
+                dE = _mm(dTf[a, j, :3, :3].T, Rb) + _mm(RaT, dTf[b, j, :3, :3])
                 for r in range(3):
                     for s in range(3):
                         de[o + 3 + 3 * r + s, j] = dE[r, s]
         else:
             u = closure_axis[c].astype(np.complex128)
-            Eu = E @ u
+            Eu = _mm(E, u.reshape(3, 1)).ravel()
             for r in range(3):
                 e[o + 3 + r] = Eu[r] - u[r]
             for j in range(nc):
-                dEu = (dTf[a, j, :3, :3].T.copy() @ Rb + RaT @ dTf[b, j, :3, :3].copy()) @ u
+                dEu = _mm(_mm(dTf[a, j, :3, :3].T, Rb) + _mm(RaT, dTf[b, j, :3, :3]), u.reshape(3, 1)).ravel()
                 for r in range(3):
                     de[o + 3 + r, j] = dEu[r]
     return e, de
@@ -254,8 +273,8 @@ def system(
             J[u, o + r] = 2.0 * x[o + r]
         F[u] = acc
     C = combination.astype(np.complex128)
-    F[nu:] = C @ e
-    J[nu:] = C @ de
+    F[nu:] = _mm(C, e.reshape(-1, 1)).ravel()
+    J[nu:] = _mm(C, de)
     F += b
     return F, J[:, :n].copy(), J[:, n:].copy()
 

@@ -150,12 +150,15 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         F, Jx, _ = evaluate(form, x, p1)
         if not np.all(np.isfinite(F)) or np.abs(F).max() > ROOT_RTOL * scale:
             failed += 1
-        elif np.linalg.cond(Jx) > SINGULAR_COND:
+            continue
+        if np.linalg.cond(Jx) > SINGULAR_COND:
             singular += 1
-        elif any(np.abs(canonical(form, x) - y).max() <= SAME_ROOT_RTOL * scale for y in roots):
+            continue
+        x = canonical(form, x)
+        if any(np.abs(x - y).max() <= SAME_ROOT_RTOL * scale for y in roots):
             collided += 1
         else:
-            roots.append(canonical(form, x))
+            roots.append(x)
     real, uncertified, spurious = [], 0, 0
     pr = np.real(p1)
     for x in roots:

@@ -72,7 +72,11 @@ def solve_linear(A: np.ndarray, b: np.ndarray) -> np.ndarray:
 @njit(cache=True)
 def _velocity(x, p, b, dp, db, args):  # type: ignore[no-untyped-def]
     _, Jx, Jp = system(x, p, b, *args)
-    return solve_linear(Jx, -(Jp @ dp + db))
+    rhs = -db.copy()
+    for i in range(Jp.shape[0]):
+        for j in range(Jp.shape[1]):
+            rhs[i] -= Jp[i, j] * dp[j]
+    return solve_linear(Jx, rhs)
 
 
 @njit(cache=True)
