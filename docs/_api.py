@@ -25,6 +25,8 @@ PACKAGES = {
     "plm_pin.models": "The registry of named presets.",
     "plm_pin.kinematics": "Task pose, Jacobians, working modes, inverse and forward kinematics, "
     "singularities, limits, mode graphs and path tracking.",
+    "plm_pin.kinematics.homotopy": "Complete forward kinematics: polynomial form of the closures, generic "
+    "solve, parameter homotopy, interval certificates.",
     "plm_pin.families": "Mechanism families, one package each, with its builder and its own analyses.",
     "plm_pin.families.classic": "The crank-rocker four-bar and the RRRRR five-bar.",
     "plm_pin.families.prrrp": "The 2-PRRRP (Harada 2011, 2015): builder, layout, assembly and working modes, "

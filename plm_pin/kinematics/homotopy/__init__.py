@@ -4,8 +4,9 @@ Importing this package does not import numba; the compiled modules (:mod:`.evalu
 :mod:`.tracking`, :mod:`.certify`) load it when first used.
 """
 
+from .form import PolynomialForm
 from .generic import GenericSolution, cache_folder, generic_solution
-from .polynomial import NotPolynomial, PolynomialForm, polynomial_form
+from .polynomial import NotPolynomial, polynomial_form
 from .solve import HomotopySolve, RealRoot, prepared, solve_homotopy
 
 __all__ = [

@@ -22,18 +22,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .polynomial import (
-    FREE_FLYER,
-    PRISMATIC,
-    PRISMATIC_PARAM,
-    REVOLUTE,
-    REVOLUTE_PARAM,
-    SPHERICAL,
-    PolynomialForm,
-)
+from .form import FREE_FLYER, PRISMATIC, PRISMATIC_PARAM, REVOLUTE, REVOLUTE_PARAM, SPHERICAL, PolynomialForm
 
 BOX_RADII = (1e-9, 1e-7, 1e-11)
-"""Relative half-widths of the boxes tried, in order (times 1 + |x|)."""
+"""Relative half-widths of the boxes tried, in order (times 1 + abs(x))."""
 
 
 @njit(cache=True, inline="always")
@@ -325,7 +317,7 @@ def interval_system(
 
 @njit(cache=True)
 def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple) -> bool:
-    """Whether the box ``x +- radius (1 + |x|)`` provably holds exactly one root (Krawczyk test)."""
+    """Whether the box ``x +- radius (1 + abs(x))`` provably holds exactly one root (Krawczyk test)."""
     n = x.shape[0]
     box = np.empty((n, 2))
     for i in range(n):
@@ -373,7 +365,7 @@ def parameter_intervals(form: PolynomialForm, actuators: np.ndarray) -> np.ndarr
 
 
 def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float | None:
-    """Half-width (relative, times 1 + |x|) of a box around real ``x`` proven to hold one root, or None."""
+    """Half-width (relative, times 1 + abs(x)) of a box around real ``x`` proven to hold one root, or None."""
     pi = parameter_intervals(form, actuators)
     args = form.kernel_args()
     for radius in BOX_RADII:

@@ -13,15 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .polynomial import (
-    FREE_FLYER,
-    PRISMATIC,
-    PRISMATIC_PARAM,
-    REVOLUTE,
-    REVOLUTE_PARAM,
-    SPHERICAL,
-    PolynomialForm,
-)
+from .form import FREE_FLYER, PRISMATIC, PRISMATIC_PARAM, REVOLUTE, REVOLUTE_PARAM, SPHERICAL, PolynomialForm
 
 
 @njit(cache=True, inline="always")

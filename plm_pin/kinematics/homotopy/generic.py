@@ -33,7 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .polynomial import SEED, NotPolynomial, PolynomialForm
+from .form import PolynomialForm
+from .polynomial import SEED, NotPolynomial
 
 STALE_LOOPS = 5
 """Monodromy loops in a row without a new solution before the generic solve stops."""

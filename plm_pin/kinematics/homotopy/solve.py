@@ -20,8 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...core.mechanism import Mechanism
+from .form import PolynomialForm
 from .generic import SAME_ROOT_RTOL, SINGULAR_COND, GenericSolution, canonical, generic_solution
-from .polynomial import PolynomialForm, polynomial_form
+from .polynomial import polynomial_form
 
 REAL_RTOL = 1e-7  # TOLERANCE -> tolerances.py
 """Relative imaginary part under which a root counts as real [-]."""
@@ -37,7 +38,7 @@ class RealRoot:
 
     Attributes:
         x: the unknowns, shape (n,).
-        box_radius: relative half-width of the Krawczyk box proven to hold it alone (times 1 + |x|).
+        box_radius: relative half-width of the Krawczyk box proven to hold it alone (times 1 + abs(x)).
     """
 
     x: np.ndarray
