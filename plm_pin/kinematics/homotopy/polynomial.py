@@ -205,14 +205,14 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
             i = int(parent[i])
         path_degree.append(d)
     entry_degree = np.zeros(n_entries, dtype=np.int64)
-    for c in range(len(rows)):
-        a, b = closure_frames[c]
-        start = entry_offset[c]
-        if closure_kind[c] == 3:  # a squared distance
+    for k in range(len(rows)):
+        a, b = closure_frames[k]
+        start = entry_offset[k]
+        if closure_kind[k] == 3:  # a squared distance
             entry_degree[start] = 2 * max(path_degree[a], path_degree[b])
             continue
         entry_degree[start : start + 3] = max(path_degree[a], path_degree[b])
-        entry_degree[start + 3 : start + sizes[c]] = path_degree[a] + path_degree[b]
+        entry_degree[start + 3 : start + sizes[k]] = path_degree[a] + path_degree[b]
     form = PolynomialForm(
         joints=joints,
         parent=parent,

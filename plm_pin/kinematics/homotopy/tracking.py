@@ -110,13 +110,13 @@ def track(
         k4 = _velocity(x + h * k3, p0 + (t + h) * dp, b0 + (t + h) * db, dp, db, args)
         y = x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
         pt, bt = p0 + (t + h) * dp, b0 + (t + h) * db
-        ok = np.all(np.isfinite(y))
-        last = np.inf
+        ok = bool(np.all(np.isfinite(y)))
+        last: float = np.inf
         if ok:
             converged = False
             for _ in range(CORRECTOR_STEPS):
                 d = _newton(y, pt, bt, args)
-                nd = np.linalg.norm(d)
+                nd = float(np.linalg.norm(d))
                 if not np.isfinite(nd) or nd > 0.5 * last:
                     break
                 y += d
@@ -124,7 +124,7 @@ def track(
                 if nd <= CORRECTOR_TOL * (1.0 + np.linalg.norm(y)):
                     converged = True
                     break
-            ok = converged or last <= 1e-6 * (1.0 + np.linalg.norm(y))
+            ok = converged or last <= 1e-6 * (1.0 + float(np.linalg.norm(y)))
         if ok:
             x = y
             t += h
