@@ -31,14 +31,6 @@ def _mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _skew(a: np.ndarray) -> np.ndarray:
-    K = np.zeros((3, 3), dtype=np.complex128)
-    K[0, 1], K[0, 2], K[1, 2] = -a[2], a[1], -a[0]
-    K[1, 0], K[2, 0], K[2, 1] = a[2], -a[1], a[0]
-    return K
-
-
-@njit(cache=True)
 def _quaternion(w: complex, x: complex, y: complex, z: complex, R: np.ndarray, dR: np.ndarray) -> None:
     """Homogeneous quadratic rotation of a quaternion into ``R`` and its 4 derivatives into ``dR``."""
     R[0, 0], R[0, 1], R[0, 2] = w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)
@@ -59,55 +51,80 @@ def _quaternion(w: complex, x: complex, y: complex, z: complex, R: np.ndarray, d
     dR[3, 2, 0], dR[3, 2, 1], dR[3, 2, 2] = 2 * x, 2 * y, 2 * z
 
 
+@njit(cache=True, inline="always")
+def _mm_into(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
+    """``out = A @ B`` for small complex matrices, by plain loops (no allocation)."""
+    m, k, n = A.shape[0], A.shape[1], B.shape[1]
+    for i in range(m):
+        for j in range(n):
+            acc = 0j
+            for r in range(k):
+                acc += A[i, r] * B[r, j]
+            out[i, j] = acc
+
+
+@njit(cache=True, inline="always")
+def _skew_entry(a: np.ndarray, r: int, k: int) -> float:
+    """Entry (r, k) of the cross-product matrix of ``a``."""
+    if r == k:
+        return 0.0
+    if r == 0:
+        return -a[2] if k == 1 else a[1]
+    if r == 1:
+        return a[2] if k == 0 else -a[0]
+    return -a[1] if k == 0 else a[0]
+
+
 @njit(cache=True)
 def _local(
     kind: int, axis: np.ndarray, fixed: np.ndarray, v: np.ndarray, X: np.ndarray, dX: np.ndarray
 ) -> int:
-    """Local transform of one joint from its coordinates ``v`` into ``X``, derivatives into ``dX``.
+    r"""Local transform of one joint from its coordinates ``v`` into ``X``, derivatives into ``dX``.
 
-    Returns the number of coordinates (derivatives written).
+    Returns the number of coordinates (derivatives written). A revolute joint about the unit
+    axis :math:`a`: :math:`R = I + s K + (1 - c) K^2`, :math:`K = [a]_\times`,
+    :math:`K^2 = a a^T - (a^T a) I`.
     """
     X[:, :] = 0.0
     X[3, 3] = 1.0
     if kind == REVOLUTE or kind == REVOLUTE_PARAM:
-        K = _skew(axis.astype(np.complex128))
-        K2 = _mm(K, K)
         if kind == REVOLUTE:
             c, s = v[0], v[1]
         else:
             c, s = np.cos(v[0]), np.sin(v[0])
+        aa = axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]
+        dX[0] = 0.0
+        if kind == REVOLUTE:
+            dX[1] = 0.0
         for r in range(3):
             for k in range(3):
-                X[r, k] = (1.0 if r == k else 0.0) + s * K[r, k] + (1.0 - c) * K2[r, k]
-        dX[:2] = 0.0
-        if kind == REVOLUTE:
-            dX[0, :3, :3] = -K2
-            dX[1, :3, :3] = K
-            return 2
-        dX[0, :3, :3] = c * K + s * K2
-        return 1
+                K = _skew_entry(axis, r, k)
+                K2 = axis[r] * axis[k] - (aa if r == k else 0.0)
+                X[r, k] = (1.0 if r == k else 0.0) + s * K + (1.0 - c) * K2
+                if kind == REVOLUTE:
+                    dX[0, r, k] = -K2
+                    dX[1, r, k] = K
+                else:
+                    dX[0, r, k] = c * K + s * K2
+        return 2 if kind == REVOLUTE else 1
     if kind == PRISMATIC or kind == PRISMATIC_PARAM:
+        dX[0] = 0.0
         for r in range(3):
             X[r, r] = 1.0
             X[r, 3] = v[0] * axis[r]
-        dX[0] = 0.0
-        for r in range(3):
             dX[0, r, 3] = axis[r]
         return 1
     if kind == SPHERICAL or kind == FREE_FLYER:
         t = 3 if kind == FREE_FLYER else 0
-        dR = np.zeros((4, 3, 3), dtype=np.complex128)
-        R = np.zeros((3, 3), dtype=np.complex128)
-        _quaternion(v[t], v[t + 1], v[t + 2], v[t + 3], R, dR)
-        X[:3, :3] = R
         dX[: t + 4] = 0.0
+        _quaternion(v[t], v[t + 1], v[t + 2], v[t + 3], X[:3, :3], dX[t : t + 4, :3, :3])
         for r in range(t):
             X[r, 3] = v[r]
             dX[r, r, 3] = 1.0
-        for k in range(4):
-            dX[t + k, :3, :3] = dR[k]
         return t + 4
-    X[:, :] = fixed
+    for r in range(4):
+        for k in range(4):
+            X[r, k] = fixed[r, k]
     return 0
 
 
@@ -139,40 +156,49 @@ def _entries(
     col = np.zeros(k, dtype=np.int64)  # first derivative column of each joint
     T = np.zeros((k, 4, 4), dtype=np.complex128)  # world transform after the joint
     A = np.zeros((k, 4, 4), dtype=np.complex128)  # world transform of the joint frame before X_j
+    MX = np.zeros((k, 4, 4), dtype=np.complex128)  # M_j X_j
+    AdX = np.zeros((k, 7, 4, 4), dtype=np.complex128)  # A_j dX_j, shared by the frames below joint j
     Mc = placement.astype(np.complex128)
-    Fc = fixed.astype(np.complex128)
     for i in range(k):
         kd = kind[i]
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
             v = p[offset[i] : offset[i] + 1]
             col[i] = n + offset[i]
         else:
-            v = x[offset[i] : offset[i] + 7] if kd != 0 else x[:0]
+            v = x[offset[i] : offset[i] + 7]
             col[i] = offset[i]
-        ncoord[i] = _local(kd, axis[i], Fc[i], v, Xs[i], dXs[i])
+        ncoord[i] = _local(kd, axis[i], fixed[i], v, Xs[i], dXs[i])
         if parent[i] >= 0:
-            A[i] = _mm(T[parent[i]], Mc[i])
+            _mm_into(T[parent[i]], Mc[i], A[i])
         else:
             A[i] = Mc[i]
-        T[i] = _mm(A[i], Xs[i])
-    AdX = np.zeros((k, 7, 4, 4), dtype=np.complex128)  # A_j dX_j, shared by the frames below joint j
-    for i in range(k):
+        _mm_into(A[i], Xs[i], T[i])
+        _mm_into(Mc[i], Xs[i], MX[i])
         for c in range(ncoord[i]):
-            AdX[i, c] = _mm(A[i], dXs[i, c])
+            _mm_into(A[i], dXs[i, c], AdX[i, c])
     nf = frame_joint.shape[0]
     Tf = np.zeros((nf, 4, 4), dtype=np.complex128)
     dTf = np.zeros((nf, nc, 4, 4), dtype=np.complex128)
+    S = np.empty((4, 4), dtype=np.complex128)
+    S2 = np.empty((4, 4), dtype=np.complex128)
     for f in range(nf):
-        S = frame_placement[f].astype(np.complex128)
+        for r in range(4):
+            for q in range(4):
+                S[r, q] = frame_placement[f, r, q]
         i = frame_joint[f]
-        Tf[f] = _mm(T[i], S) if i >= 0 else S
+        if i >= 0:
+            _mm_into(T[i], S, Tf[f])
+        else:
+            Tf[f] = S
         while i >= 0:
             for c in range(ncoord[i]):
-                dTf[f, col[i] + c] = _mm(AdX[i, c], S)
-            S = _mm(_mm(Mc[i], Xs[i]), S)
+                _mm_into(AdX[i, c], S, dTf[f, col[i] + c])
+            _mm_into(MX[i], S, S2)
+            S[:, :] = S2
             i = parent[i]
     e = np.zeros(n_entries, dtype=np.complex128)
     de = np.zeros((n_entries, nc), dtype=np.complex128)
+    E = np.empty((3, 3), dtype=np.complex128)
     for c in range(closure_kind.shape[0]):
         a, b, o = closure_frames[c, 0], closure_frames[c, 1], entry_offset[c]
         if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2
@@ -189,26 +215,35 @@ def _entries(
                 de[o + r, j] = dTf[b, j, r, 3] - dTf[a, j, r, 3]
         if closure_kind[c] == 0:
             continue
-        RaT, Rb = Tf[a, :3, :3].T.copy(), Tf[b, :3, :3].copy()
-        E = _mm(RaT, Rb)
+        # E = R_A^T R_B and its derivatives dR_A^T R_B + R_A^T dR_B, entry by entry
+        for r in range(3):
+            for q in range(3):
+                acc = 0j
+                for t in range(3):
+                    acc += Tf[a, t, r] * Tf[b, t, q]
+                E[r, q] = acc
+        u = closure_axis[c]
         if closure_kind[c] == 1:
             for r in range(3):
-                for s in range(3):
-                    e[o + 3 + 3 * r + s] = E[r, s] - (1.0 if r == s else 0.0)
-            for j in range(nc):
-                dE = _mm(dTf[a, j, :3, :3].T, Rb) + _mm(RaT, dTf[b, j, :3, :3])
-                for r in range(3):
-                    for s in range(3):
-                        de[o + 3 + 3 * r + s, j] = dE[r, s]
+                for q in range(3):
+                    e[o + 3 + 3 * r + q] = E[r, q] - (1.0 if r == q else 0.0)
         else:
-            u = closure_axis[c].astype(np.complex128)
-            Eu = _mm(E, u.reshape(3, 1)).ravel()
             for r in range(3):
-                e[o + 3 + r] = Eu[r] - u[r]
-            for j in range(nc):
-                dEu = _mm(_mm(dTf[a, j, :3, :3].T, Rb) + _mm(RaT, dTf[b, j, :3, :3]), u.reshape(3, 1)).ravel()
+                e[o + 3 + r] = E[r, 0] * u[0] + E[r, 1] * u[1] + E[r, 2] * u[2] - u[r]
+        for j in range(nc):
+            for r in range(3):
+                for q in range(3):
+                    acc = 0j
+                    for t in range(3):
+                        acc += dTf[a, j, t, r] * Tf[b, t, q] + Tf[a, t, r] * dTf[b, j, t, q]
+                    E[r, q] = acc
+            if closure_kind[c] == 1:
                 for r in range(3):
-                    de[o + 3 + r, j] = dEu[r]
+                    for q in range(3):
+                        de[o + 3 + 3 * r + q, j] = E[r, q]
+            else:
+                for r in range(3):
+                    de[o + 3 + r, j] = E[r, 0] * u[0] + E[r, 1] * u[1] + E[r, 2] * u[2]
     return e, de
 
 
