@@ -22,7 +22,7 @@ What it proves: the count is a *lower bound* on the generic number of solutions 
 cannot show that nothing is left); the stale loops make a miss unlikely, not impossible.
 
 The result depends only on the polynomial form (:attr:`PolynomialForm.digest`) and is stored
-in ``$PLM_PIN_CACHE/homotopy/<digest>.npz`` (default ``~/.cache/plm_pin``).
+in ``$PLM_PIN_CACHE/homotopy/<digest>.v<version>.npz`` (default ``~/.cache/plm_pin``).
 """
 
 from __future__ import annotations
@@ -44,6 +44,8 @@ MAX_SOLUTIONS = 1000
 """Generic counts above this are not solved (the mechanism falls back to multi-start)."""
 SAME_ROOT_RTOL = 1e-6  # TOLERANCE -> tolerances.py
 """Relative distance under which two generic solutions are the same root [-]."""
+CACHE_VERSION = 1
+"""Version of the stored generic solves (part of the file name: a new algorithm starts afresh)."""
 SINGULAR_COND = 1e10  # TOLERANCE -> tolerances.py
 """Condition number of F_x above which an end point counts as singular [-]."""
 
@@ -170,7 +172,7 @@ def solve_generic(form: PolynomialForm) -> GenericSolution:
 
 def generic_solution(form: PolynomialForm, *, use_cache: bool = True) -> GenericSolution:
     """The generic solve of ``form``, read from the disk cache or computed and stored there."""
-    path = cache_folder() / f"{form.digest}.npz"
+    path = cache_folder() / f"{form.digest}.v{CACHE_VERSION}.npz"
     if use_cache and path.exists():
         with np.load(path) as z:
             return GenericSolution(p=z["p"], x=z["x"], loops=int(z["loops"]), symmetry=int(z["symmetry"]))

@@ -29,7 +29,7 @@ REACHED, DIVERGED, FAILED = 0, 1, 2
 CORRECTOR_STEPS = 3
 MIN_STEP = 1e-9  # TOLERANCE -> tolerances.py
 """Smallest step in t [-] before a path is declared failed."""
-MAX_STEP = 0.1
+MAX_STEP = 0.2
 DIVERGED_NORM = 1e8  # TOLERANCE -> tolerances.py
 """Norm of x above which a path goes to infinity [-]."""
 CORRECTOR_TOL = 1e-9  # TOLERANCE -> tolerances.py
@@ -96,7 +96,7 @@ def track(
     """
     x = x0.copy()
     dp, db = p1 - p0, b1 - b0
-    t, h = 0.0, 0.05
+    t, h = 0.0, 0.1
     steps, streak = 0, 0
     while t < 1.0:
         if steps > 5000:

@@ -14,9 +14,10 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from plm_pin.kinematics.homotopy import polynomial_form, prepared
+from plm_pin.kinematics.homotopy import generic_solution, polynomial_form, prepared
 from plm_pin.kinematics.homotopy.certify import _matmul, certify
 from plm_pin.kinematics.homotopy.evaluation import evaluate
+from plm_pin.kinematics.homotopy.generic import solve_generic
 from plm_pin.kinematics.homotopy.polynomial import from_configuration, to_configuration
 from tests.conftest import preset
 
@@ -88,3 +89,25 @@ def test_import_plm_pin_does_not_import_numba():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize(("name", "count"), [("fourbar", 2), ("harada2011_3d3m", 4)])
+def test_generic_count_from_scratch_equals_the_closed_form_count(name, count):
+    """Monodromy without the disk cache finds the closed-form count (circle intersections: 2, and 2 x 2)."""
+    assert solve_generic(polynomial_form(preset(name))).count == count
+
+
+@pytest.mark.slow
+def test_generic_count_of_the_6_6_platform_is_40():
+    """Monodromy without the disk cache finds the 40 roots of a general 6-6 Stewart-Gough platform."""
+    assert solve_generic(polynomial_form(preset("zhao2011_6pss"))).count == 40
+
+
+def test_generic_solve_is_stored_and_read_back(tmp_path, monkeypatch):
+    """The generic solve is written under $PLM_PIN_CACHE and read back equal."""
+    monkeypatch.setenv("PLM_PIN_CACHE", str(tmp_path))
+    form = polynomial_form(preset("fourbar"))
+    first = generic_solution(form)
+    assert len(list((tmp_path / "homotopy").glob(f"{form.digest}.v*.npz"))) == 1
+    again = generic_solution(form)
+    assert np.array_equal(first.x, again.x) and np.array_equal(first.p, again.p)
