@@ -98,17 +98,32 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
     res = solve_homotopy(mech, c)
     free = mech.passive_v_indices
     out = FKModes()
-    for root in res.real:
-        q = to_configuration(form, mech, root.x, c)
+    for xr in [r.x for r in res.real] + list(res.uncertified):  # uncertified: kept, said by complete=False
+        q = to_configuration(form, mech, xr, c)
         if form.eliminated_v.size:  # the legs reduced to distances: find their angles again
             q = _fit_eliminated(mech, q, form.eliminated_v, tol)
         q, residual_norm, x = _close(mech, q, free, tol)
-        if not any(same_assembly(mech, s.q, q) for s in out):
+        if not any(_same_mode(mech, s, q, x) for s in out):
             out.append(FKSolution(q, x, residual_norm))
     out.method, out.complete = "homotopy", res.complete
     out.generic_count, out.certified = res.generic_count, len(res.real)
     out.why_incomplete = res.why_incomplete()
     return out
+
+
+def _same_mode(mech: Mechanism, s: FKSolution, q: np.ndarray, x: np.ndarray) -> bool:
+    """Whether ``(q, x)`` is the mode of ``s``: every frame origin and the task pose (angles modulo 2 pi).
+
+    A half-turn of a symmetric platform can leave every frame origin in place and still turn
+    the end effector: the task pose tells the two apart.
+    """
+    d = np.asarray(x - s.x, dtype=float)
+    task = mech.task
+    if task is not None:
+        for i, dof in enumerate(task.dofs):
+            if dof.startswith("r"):
+                d[i] = (d[i] + np.pi) % (2 * np.pi) - np.pi
+    return bool(np.all(np.abs(d) < 1e-7)) and same_assembly(mech, s.q, q)
 
 
 def _fit_eliminated(mech: Mechanism, q: np.ndarray, columns: np.ndarray, tol: float) -> np.ndarray:
@@ -243,8 +258,9 @@ def forward_kinematics(
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     free = mech.passive_v_indices  # actuators are one-DOF joints
-    found = _homotopy_modes(mech, c, tol) if all_modes and method == "auto" else None
-    if found is not None and (found or found.complete):  # an incomplete empty search: try multi-start
+    homotopy = _homotopy_modes(mech, c, tol) if all_modes and method == "auto" else None
+    if homotopy is not None and homotopy.complete:
+        found = homotopy
         if not found:
             raise PoseUnreachable(
                 f"{mech.name}: no assembly with actuators at {c.tolist()}: the closures have no real "
@@ -256,7 +272,9 @@ def forward_kinematics(
     if all_modes:
         rng = np.random.default_rng(seed)
         starts_q += [_with_actuators(mech, q, c) for q in random_starts(mech, rng, q0, free, starts)]
-    found = FKModes()
+    found = FKModes() if homotopy is None else homotopy  # an incomplete homotopy: multi-start adds
+    if homotopy is not None:
+        homotopy.why_incomplete += "; multi-start Newton added what its starts found"
     best = np.inf
     for start in starts_q:
         try:

@@ -36,7 +36,7 @@ import numpy as np
 from .form import PolynomialForm
 from .polynomial import SEED, NotPolynomial
 
-STALE_LOOPS = 5
+STALE_LOOPS = 20
 """Monodromy loops in a row without a new solution before the generic solve stops."""
 CHECK_LOOPS = 2
 """Loops in the actuator parameters alone that must find no new solution."""
@@ -44,7 +44,7 @@ MAX_SOLUTIONS = 1000
 """Generic counts above this are not solved (the mechanism falls back to multi-start)."""
 SAME_ROOT_RTOL = 1e-6  # TOLERANCE -> tolerances.py
 """Relative distance under which two generic solutions are the same root [-]."""
-CACHE_VERSION = 1
+CACHE_VERSION = 2
 """Version of the stored generic solves (part of the file name: a new algorithm starts afresh)."""
 SINGULAR_COND = 1e10  # TOLERANCE -> tolerances.py
 """Condition number of F_x above which an end point counts as singular [-]."""

@@ -54,7 +54,7 @@ class HomotopySolve:
             one per quaternion-sign orbit.
         roots: distinct non-singular complex roots reached (one per orbit).
         real: certified real roots that solve the full closure system (one per quaternion-sign orbit).
-        uncertified: real roots of the full system whose Krawczyk test failed.
+        uncertified: real roots of the full system whose Krawczyk test failed (kept, not proven).
         spurious: real roots of the square system only (the random combination's).
         diverged: paths that went to infinity.
         singular: paths that ended at a singular root.
@@ -65,7 +65,7 @@ class HomotopySolve:
     generic_count: int
     roots: int
     real: tuple[RealRoot, ...]
-    uncertified: int
+    uncertified: tuple[np.ndarray, ...]
     spurious: int
     diverged: int
     singular: int
@@ -75,7 +75,7 @@ class HomotopySolve:
     @property
     def complete(self) -> bool:
         """Whether every generic path ended at its own non-singular root (all roots found)."""
-        return self.roots == self.generic_count and self.uncertified == 0
+        return self.roots == self.generic_count and not self.uncertified
 
     def why_incomplete(self) -> str:
         """What kept the solve from being complete ('' when complete)."""
@@ -88,7 +88,7 @@ class HomotopySolve:
                 (self.singular, "paths ended singular"),
                 (self.failed, "paths were lost by the tracker"),
                 (self.collided, "paths met another"),
-                (self.uncertified, "real roots failed the interval test"),
+                (len(self.uncertified), "real roots failed the interval test"),
             )
             if k
         ]
@@ -160,7 +160,9 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
             collided += 1
         else:
             roots.append(x)
-    real, uncertified, spurious = [], 0, 0
+    real: list[RealRoot] = []
+    uncertified: list[np.ndarray] = []
+    spurious = 0
     pr = np.real(p1)
     for x in roots:
         if np.abs(x.imag).max() > REAL_RTOL * (1.0 + np.abs(x).max()):
@@ -172,14 +174,14 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
             continue
         radius = certify(form, xr, pr)
         if radius is None:
-            uncertified += 1
+            uncertified.append(xr)
         else:
             real.append(RealRoot(xr, radius))
     return HomotopySolve(
         generic_count=gen.count,
         roots=len(roots),
         real=tuple(real),
-        uncertified=uncertified,
+        uncertified=tuple(uncertified),
         spurious=spurious,
         diverged=diverged,
         singular=singular,

@@ -91,9 +91,15 @@ def test_import_plm_pin_does_not_import_numba():
     assert out.stdout.strip() == "False"
 
 
-@pytest.mark.parametrize(("name", "count"), [("fourbar", 2), ("harada2011_3d3m", 4)])
+@pytest.mark.parametrize(
+    ("name", "count"), [("fourbar", 2), ("harada2011_3d3m", 4), ("enferadi2017_star_triangle", 2)]
+)
 def test_generic_count_from_scratch_equals_the_closed_form_count(name, count):
-    """Monodromy without the disk cache finds the closed-form count (circle intersections: 2, and 2 x 2)."""
+    """Monodromy without the disk cache finds the closed-form count.
+
+    Four-bar: two circle intersections; 3D3M: two, then two for the plate; star-triangle:
+    the platform and its half-turn (the prismatic arms through the centre change sign).
+    """
     assert solve_generic(polynomial_form(preset(name))).count == count
 
 
