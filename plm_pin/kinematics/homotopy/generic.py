@@ -22,7 +22,8 @@ What it proves: the count is a *lower bound* on the generic number of solutions 
 cannot show that nothing is left); the stale loops make a miss unlikely, not impossible.
 
 The result depends only on the polynomial form (:attr:`PolynomialForm.digest`) and is stored
-in ``$PLM_PIN_CACHE/homotopy/<digest>.v<version>.npz`` (default ``~/.cache/plm_pin``).
+in ``$PLM_PIN_CACHE/homotopy/<digest>.v<version>.npz`` (a failed solve leaves its reason
+beside it, so it is not run again) (default ``~/.cache/plm_pin``).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ STALE_LOOPS = 20
 """Monodromy loops in a row without a new solution before the generic solve stops."""
 CHECK_LOOPS = 2
 """Loops in the actuator parameters alone that must find no new solution."""
-MAX_SOLUTIONS = 1000
+MAX_SOLUTIONS = 200
 """Generic counts above this are not solved (the mechanism falls back to multi-start)."""
 SAME_ROOT_RTOL = 1e-6  # TOLERANCE -> tolerances.py
 """Relative distance under which two generic solutions are the same root [-]."""
@@ -173,10 +174,19 @@ def solve_generic(form: PolynomialForm) -> GenericSolution:
 def generic_solution(form: PolynomialForm, *, use_cache: bool = True) -> GenericSolution:
     """The generic solve of ``form``, read from the disk cache or computed and stored there."""
     path = cache_folder() / f"{form.digest}.v{CACHE_VERSION}.npz"
+    refused = path.with_suffix(".refused.txt")  # a generic solve that failed: its reason, not retried
     if use_cache and path.exists():
         with np.load(path) as z:
             return GenericSolution(p=z["p"], x=z["x"], loops=int(z["loops"]), symmetry=int(z["symmetry"]))
-    sol = solve_generic(form)
+    if use_cache and refused.exists():
+        raise NotPolynomial(refused.read_text(encoding="utf-8"))
+    try:
+        sol = solve_generic(form)
+    except NotPolynomial as exc:
+        if use_cache:
+            refused.parent.mkdir(parents=True, exist_ok=True)
+            refused.write_text(str(exc), encoding="utf-8")
+        raise
     if use_cache:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")

@@ -236,3 +236,28 @@ def test_presets_modes_contain_every_multistart_mode(name):
             found.append(q)
     for q in [s.q if hasattr(s, "q") else s for s in found]:
         assert any(same_assembly(mech, q, s.q) for s in modes)
+
+
+def test_without_polynomial_form_multistart_is_used_and_said_once(monkeypatch):
+    """A mechanism the homotopy refuses falls back to multi-start: warned once, not complete, modes found."""
+    import plm_pin.kinematics.forward as forward
+    from plm_pin.kinematics import homotopy
+    from plm_pin.warnings import IncompleteSearchWarning
+
+    def refuse(mech):  # type: ignore[no-untyped-def]
+        raise homotopy.NotPolynomial("a joint kind it does not cover")
+
+    monkeypatch.setattr(homotopy, "prepared", refuse)
+    monkeypatch.setattr(forward, "_FALLBACK_WARNED", set())
+    mech = preset("fourbar")
+    with pytest.warns(
+        IncompleteSearchWarning, match=r"^fourbar: no polynomial form of the closures \(a joint"
+    ):
+        modes = forward_kinematics(mech, [0.3])
+    assert modes.method == "multi-start" and not modes.complete and modes.generic_count is None
+    _match(_tips(mech, modes), _coupler_tips(*_fourbar_geometry(mech), 0.3), 1e-12)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        forward_kinematics(mech, [0.3])  # said once
