@@ -255,6 +255,32 @@ PLACO_VENV = Path(os.environ.get("PLM_PIN_PLACO_VENV", ".venv-placo"))
 """Virtual environment of PlaCo (pip ``placo`` pins an older Pinocchio than plm_pin's): made on first use."""
 
 
+def complete_fk_benchmark() -> list[dict[str, object]]:
+    """Every assembly mode of a 3-RPR with 6 real modes: certified homotopy beside 48-start multi-start.
+
+    The 6-6 platform case is the zhao2011_6pss preset's rows (40 roots) in :func:`run`.
+    """
+    import tempfile
+
+    from tests.kinematics.homotopy.rpr import rpr_files  # the test suite's 3-RPR (URDF + sidecar)
+    from tests.kinematics.homotopy.test_complete_fk import RPR_BASE, RPR_PLATE, RPR_RHO
+
+    rows: list[dict[str, object]] = []
+    with tempfile.TemporaryDirectory() as folder:
+        mech = load(rpr_files(Path(folder), RPR_BASE, RPR_PLATE))
+        forward_kinematics(mech, RPR_RHO)  # the generic solve, once (cached on disk)
+        for case, method in (("48 starts", "multi-start"), ("certified homotopy", "auto")):
+            fn = functools.partial(forward_kinematics, mech, RPR_RHO, all_modes=True, method=method)
+            rows.append(
+                {
+                    "mechanism": "3-RPR (6 real modes)",
+                    "case": f"forward_kinematics (all_modes=True, {case})",
+                    "seconds_per_call": _per_call(fn),
+                }
+            )
+    return rows
+
+
 def _placo_python() -> tuple[Path | None, str]:
     """PlaCo's interpreter, creating its venv when missing; or None and why not."""
     python = PLACO_VENV / "bin" / "python"
@@ -381,6 +407,9 @@ def run() -> list[dict[str, object]]:
                 forward_kinematics, mech, c, q, all_modes=False
             ),
             "forward_kinematics (all_modes=True, 48 starts)": functools.partial(
+                forward_kinematics, mech, c, q, all_modes=True, method="multi-start"
+            ),
+            "forward_kinematics (all_modes=True, certified homotopy)": functools.partial(
                 forward_kinematics, mech, c, q, all_modes=True
             ),
             "closed_chain_jacobians": functools.partial(closed_chain_jacobians, mech, q),
@@ -391,6 +420,7 @@ def run() -> list[dict[str, object]]:
         for case, fn in cases.items():
             rows.append({"mechanism": name, "case": case, "seconds_per_call": _per_call(fn)})
     rows.extend(kinematics_benchmark())
+    rows.extend(complete_fk_benchmark())
     rows.extend(allocation_benchmark())
     rows.extend(capability_benchmark())
     rows.extend(map_throughput())

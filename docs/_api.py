@@ -24,6 +24,7 @@ PACKAGES = (
     "plm_pin.description",
     "plm_pin.core",
     "plm_pin.kinematics",
+    "plm_pin.kinematics.homotopy",
     "plm_pin.families",
     "plm_pin.families.classic",
     "plm_pin.families.prrrp",

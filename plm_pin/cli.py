@@ -34,7 +34,7 @@ from .core.diagnostics import findings, mobility_text
 from .core.mechanism import Mechanism
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .export import export_mjcf
-from .kinematics import inverse_kinematics, task_pose
+from .kinematics import forward_kinematics, inverse_kinematics, task_pose
 from .kinematics.reference import reference_findings, reference_report
 from .loading import load
 from .models.registry import PRESETS
@@ -295,6 +295,60 @@ def check(
         highlight=False,
         soft_wrap=True,
     )
+
+
+def _actuator_values(mech: Mechanism, assignments: list[str]) -> np.ndarray:
+    """Actuator positions from ``joint=value`` words, the others at their reference value."""
+    values = mech.actuator_positions(mech.q_ref).copy()
+    names = [a.joint for a in mech.actuators]
+    for word in assignments:
+        joint, sep, text = word.partition("=")
+        if not sep or joint not in names:
+            raise InvalidInput(f"actuator assignment {word!r}: write JOINT=VALUE with JOINT one of {names}")
+        try:
+            values[names.index(joint)] = float(text)
+        except ValueError:
+            raise InvalidInput(f"actuator assignment {word!r}: {text!r} is not a number") from None
+    return values
+
+
+@app.command("fk")
+def fk_command(
+    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
+    assignments: Annotated[
+        list[str] | None,
+        typer.Argument(help="actuator positions JOINT=VALUE [m or rad]; the others stay at their reference"),
+    ] = None,
+    all_modes: Annotated[
+        bool, typer.Option("--all", help="every assembly mode, certified where possible")
+    ] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
+) -> None:
+    """Forward kinematics at given actuator positions; with --all every assembly mode and its proof."""
+    mech = _load(target)
+    with _reported():
+        c = _actuator_values(mech, assignments or [])
+        modes = forward_kinematics(mech, c, all_modes=all_modes)
+    if as_json:
+        console.print_json(json.dumps(modes.to_dict(), default=lambda a: np.asarray(a).tolist()))
+        return
+    task = mech.task.dofs if mech.task is not None else []
+    if not all_modes:
+        headline = "the reference assembly's mode (use --all for every mode)"
+    elif modes.complete:
+        headline = f"all {len(modes)} assembly modes (certified; {modes.generic_count} complex roots)"
+    else:
+        headline = f"{len(modes)} assembly modes found, not proven complete: {modes.why_incomplete}"
+    table = Table(title=escape(f"{mech.name}: {headline}"))
+    table.add_column("mode")
+    for dof in task:
+        table.add_column(dof, justify="right")
+    table.add_column("residual", justify="right")
+    table.add_column("certificate")
+    certificate = "Krawczyk" if modes.method == "homotopy" else "none"
+    for i, s in enumerate(modes):
+        table.add_row(str(i + 1), *(f"{v:.6f}" for v in s.x), f"{s.residual_norm:.1e}", certificate)
+    console.print(table)
 
 
 @app.command("export")

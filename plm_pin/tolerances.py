@@ -26,6 +26,7 @@ __all__ = [
     "CLOSURE_TOL",
     "COMPARISON_RTOL",
     "COMPLIANCE_SYMMETRY_RTOL",
+    "CONCURRENT_AXES_TOL",
     "CONSTRAINT_NULL_RTOL",
     "CROSSING_MARGIN",
     "CROSSING_WATCH_RTOL",
@@ -40,10 +41,19 @@ __all__ = [
     "FACTOR_RCOND",
     "FEASIBILITY_RTOL",
     "FEASIBLE_VELOCITY_RTOL",
+    "FK_SAME_MODE_TOL",
     "FOLD_PAIR_TOL",
     "GAUGE_MIN_PIVOT",
     "GAUGE_TIE_RTOL",
     "GRAM_RTOL",
+    "HOMOTOPY_CORRECTOR_TOL",
+    "HOMOTOPY_DIVERGED_NORM",
+    "HOMOTOPY_ENTRY_TOL",
+    "HOMOTOPY_REAL_RTOL",
+    "HOMOTOPY_ROOT_RTOL",
+    "HOMOTOPY_SAME_ROOT_RTOL",
+    "HOMOTOPY_SINGULAR_COND",
+    "HOMOTOPY_ZERO_ENTRY_RTOL",
     "IDLE_RTOL",
     "ILL_CONDITIONED_MARGIN",
     "INERTIA_RTOL",
@@ -461,3 +471,35 @@ NOISE = 1e-9
 Far above double-precision round-off (1e-16) and the integrators' and solvers' tolerances (1e-10
 relative and tighter in the studies), far below anything a figure could show (a pixel is 1e-3 of
 a panel's height)."""
+
+
+# ----------------------------------------------------------------- complete forward kinematics
+HOMOTOPY_REAL_RTOL = 1e-7
+"""[-] Relative imaginary part under which a homotopy root counts as real."""
+
+HOMOTOPY_ROOT_RTOL = 1e-8
+"""[-] Relative residual of the square system under which a path end is a root."""
+
+HOMOTOPY_ENTRY_TOL = 1e-9
+"""[m, -] Largest closure entry of a real root of the square system that solves the full system."""
+
+HOMOTOPY_ZERO_ENTRY_RTOL = 1e-9
+"""[-] Relative size below which a closure entry counts as identically zero at random complex points."""
+
+CONCURRENT_AXES_TOL = 1e-9
+"""[m] Distance under which joint axes count as meeting at one point (a leg reduces to a distance)."""
+
+HOMOTOPY_SAME_ROOT_RTOL = 1e-6
+"""[-] Relative distance under which two generic solutions are the same root."""
+
+HOMOTOPY_SINGULAR_COND = 1e10
+"""[-] Condition number of the square system's Jacobian above which a path end counts as singular."""
+
+HOMOTOPY_DIVERGED_NORM = 1e8
+"""[-] Norm of the unknowns above which a homotopy path goes to infinity."""
+
+HOMOTOPY_CORRECTOR_TOL = 1e-9
+"""[-] Relative Newton correction at which a homotopy corrector step is accepted."""
+
+FK_SAME_MODE_TOL = 1e-7
+"""[m, rad] Largest task-coordinate difference of two forward-kinematics solutions of one assembly mode."""

@@ -8,6 +8,7 @@ __all__ = [
     "DescriptionWarning",
     "IgnoredElementWarning",
     "IllConditionedWarning",
+    "IncompleteSearchWarning",
     "MissingLimitsWarning",
     "MissingMeshWarning",
     "PlmWarning",
@@ -59,3 +60,7 @@ class RoundedClosureWarning(PlmWarning):
 
 class AmbiguousRankWarning(PlmWarning):
     """The singular values of the closure Jacobian have no clear-cut gap: the mobility is in doubt."""
+
+
+class IncompleteSearchWarning(PlmWarning):
+    """A search for every solution (every assembly mode) cannot prove it found them all."""

@@ -492,3 +492,26 @@ def test_a_missing_module_is_named_with_its_extra():
     )
     own = ImportError("plm_pin.sweep needs dask, which is not installed: pip install 'plm-pin[sweep]'")
     assert missing_extra(own) == str(own)
+
+
+def test_fk_all_prints_every_certified_mode_of_the_fourbar():
+    """`fk fourbar crank_pivot=0.3 --all` says all 2 modes are certified; --json gives the rocker angles."""
+    result = runner.invoke(app, ["fk", "fourbar", "crank_pivot=0.3", "--all"])
+    assert result.exit_code == 0, result.output
+    assert "all 2 assembly modes (certified; 2 complex roots)" in " ".join(result.stdout.split())
+    assert result.stdout.count("Krawczyk") == 2
+    data = json.loads(runner.invoke(app, ["fk", "fourbar", "crank_pivot=0.3", "--all", "--json"]).stdout)
+    assert data["complete"] and data["method"] == "homotopy" and len(data["modes"]) == 2
+    mech = plm_pin.load("fourbar")
+    from plm_pin.kinematics import forward_kinematics, task_pose
+
+    expected = sorted(float(task_pose(mech, s.q)[0]) for s in forward_kinematics(mech, [0.3]))
+    assert sorted(m["x"][0] for m in data["modes"]) == pytest.approx(expected, abs=1e-12)
+
+
+def test_fk_bad_assignment_is_one_error_line():
+    """`fk fourbar crank=1` names the valid actuator joints in one error line."""
+    result = runner.invoke(app, ["fk", "fourbar", "crank=1"])
+    _assert_clean_failure(
+        result, "actuator assignment 'crank=1': write JOINT=VALUE with JOINT one of ['crank_pivot']"
+    )

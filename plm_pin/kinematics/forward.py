@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -14,8 +16,12 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..results import Result, unit
-from ..tolerances import SAME_ASSEMBLY_TOL
+from ..tolerances import FK_SAME_MODE_TOL, SAME_ASSEMBLY_TOL
+from ..warnings import IncompleteSearchWarning
 from .starts import random_starts
+
+FK_METHODS = ("auto", "multi-start")
+"""Search methods of :func:`forward_kinematics` with ``all_modes``."""
 
 
 @dataclass(frozen=True)
@@ -31,6 +37,105 @@ class FKSolution(Result):
     q: np.ndarray = field(metadata=unit("m, rad"))
     x: np.ndarray = field(metadata=unit("m, rad"))
     residual_norm: float = field(metadata=unit("m, rad"))
+
+
+class FKModes(list[FKSolution]):
+    """The assembly modes found by :func:`forward_kinematics`, with how far the search is proven.
+
+    A list of :class:`FKSolution` (sorted by task coordinates) with:
+
+    Attributes:
+        method: ``"homotopy"`` (complete search, :mod:`plm_pin.kinematics.homotopy`) or
+            ``"multi-start"``.
+        complete: whether every assembly mode is proven found (homotopy: every generic path
+            ended at its own non-singular root; multi-start: never).
+        generic_count: number of complex solutions of the closures at generic actuator values
+            (homotopy only, else None).
+        certified: real modes proven by an interval (Krawczyk) test, before the polish.
+        why_incomplete: what kept the search from being complete ('' when complete).
+    """
+
+    method: str = "multi-start"
+    complete: bool = False
+    generic_count: int | None = None
+    certified: int = 0
+    why_incomplete: str = "multi-start Newton cannot prove that no assembly mode was missed"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The modes and the search's outcome as JSON-ready data."""
+        return {
+            "modes": [s.to_dict() for s in self],
+            "method": self.method,
+            "complete": self.complete,
+            "generic_count": self.generic_count,
+            "certified": self.certified,
+            "why_incomplete": self.why_incomplete,
+        }
+
+
+_FALLBACK_WARNED: set[str] = set()
+
+
+def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | None:
+    """Every assembly mode by parameter homotopy, or None when the mechanism has no polynomial form."""
+    from .homotopy import NotPolynomial, prepared, solve_homotopy
+    from .homotopy.polynomial import to_configuration
+
+    try:
+        form, _ = prepared(mech)
+    except NotPolynomial as exc:
+        if mech.name not in _FALLBACK_WARNED:
+            _FALLBACK_WARNED.add(mech.name)
+            warnings.warn(
+                f"{mech.name}: no polynomial form of the closures ({exc}); forward kinematics falls back "
+                "to multi-start Newton, which cannot prove that every assembly mode was found",
+                IncompleteSearchWarning,
+                stacklevel=3,
+            )
+        return None
+    res = solve_homotopy(mech, c)
+    free = mech.passive_v_indices
+    out = FKModes()
+    for xr in [r.x for r in res.real] + list(res.uncertified):  # uncertified: kept, said by complete=False
+        q = to_configuration(form, mech, xr, c)
+        if form.eliminated_v.size:  # the legs reduced to distances: find their angles again
+            q = _fit_eliminated(mech, q, form.eliminated_v, tol)
+        q, residual_norm, x = _close(mech, q, free, tol)
+        if not any(_same_mode(mech, s, q, x) for s in out):
+            out.append(FKSolution(q, x, residual_norm))
+    out.method, out.complete = "homotopy", res.complete
+    out.generic_count, out.certified = res.generic_count, len(res.real)
+    out.why_incomplete = res.why_incomplete()
+    return out
+
+
+def _same_mode(mech: Mechanism, s: FKSolution, q: np.ndarray, x: np.ndarray) -> bool:
+    """Whether ``(q, x)`` is the mode of ``s``: every frame origin and the task pose (angles modulo 2 pi).
+
+    A half-turn of a symmetric platform can leave every frame origin in place and still turn
+    the end effector: the task pose tells the two apart.
+    """
+    d = np.asarray(x - s.x, dtype=float)
+    task = mech.task
+    if task is not None:
+        for i, dof in enumerate(task.dofs):
+            if dof.startswith("r"):
+                d[i] = (d[i] + np.pi) % (2 * np.pi) - np.pi
+    return bool(np.all(np.abs(d) < FK_SAME_MODE_TOL)) and same_assembly(mech, s.q, q)
+
+
+def _fit_eliminated(mech: Mechanism, q: np.ndarray, columns: np.ndarray, tol: float) -> np.ndarray:
+    """Close the loops moving only ``columns`` (the joints of the legs reduced to distances)."""
+    try:
+        return _close(mech, q, columns, tol)[0]
+    except ClosureNotSatisfied:
+        pass
+    for start in random_starts(mech, np.random.default_rng(0), q, columns, 8):
+        try:
+            return _close(mech, start, columns, tol)[0]
+        except ClosureNotSatisfied:
+            continue
+    return q  # left to the full polish
 
 
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -109,10 +214,17 @@ def forward_kinematics(
     starts: int = 48,
     seed: int = 0,
     tol: float | None = None,
-) -> list[FKSolution]:
+    method: str = "auto",
+) -> FKModes:
     """Assemble the mechanism with its actuators at ``actuators``: every assembly mode found.
 
-    Multi-start Newton on the closures with the actuated joints fixed: from ``guess`` (or
+    With ``all_modes``, a mechanism whose closures have a polynomial form (revolute,
+    prismatic, spherical and free-flyer loop joints, see
+    :mod:`plm_pin.kinematics.homotopy`) gets every assembly mode by parameter homotopy,
+    each real one certified by an interval test, and ``complete=True`` on the result when
+    no path was lost. Other mechanisms (said once by an
+    :class:`~plm_pin.warnings.IncompleteSearchWarning`), and ``all_modes=False``, use
+    multi-start Newton on the closures with the actuated joints fixed: from ``guess`` (or
     the reference configuration) and, with ``all_modes``, from ``starts`` random
     configurations; solutions are de-duplicated by configuration. Deterministic for a
     given ``seed``.
@@ -125,9 +237,12 @@ def forward_kinematics(
         starts: random starts when ``all_modes``.
         seed: random seed.
         tol: closure tolerance [m, rad] (default: the mechanism's ``closure_tol``).
+        method: with ``all_modes``, ``"auto"`` (the homotopy where the closures have a
+            polynomial form, else multi-start) or ``"multi-start"``.
 
     Returns:
-        The solutions, sorted by task coordinates (the guess's first when not ``all_modes``).
+        The solutions, sorted by task coordinates (the guess's first when not ``all_modes``),
+        with the search's outcome (:class:`FKModes`).
 
     Raises:
         PoseUnreachable: when no start closes the loops (no real assembly), with the
@@ -137,6 +252,8 @@ def forward_kinematics(
     starts, seed = count(starts, "starts"), count(seed, "seed")
     tol = mech.closure_tol if tol is None else positive(tol, "tol")
     flag(all_modes, "all_modes")
+    if method not in FK_METHODS:
+        raise InvalidInput(f"method must be one of {list(FK_METHODS)}, got {method!r}")
     c = check_task_vector(actuators, mech.n_actuators, "actuators")
     if mech.mobility > mech.n_actuators:
         raise InvalidInput(
@@ -145,11 +262,23 @@ def forward_kinematics(
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     free = mech.passive_v_indices  # actuators are one-DOF joints
+    homotopy = _homotopy_modes(mech, c, tol) if all_modes and method == "auto" else None
+    if homotopy is not None and homotopy.complete:
+        found = homotopy
+        if not found:
+            raise PoseUnreachable(
+                f"{mech.name}: no assembly with actuators at {c.tolist()}: the closures have no real "
+                f"solution (none of the {found.generic_count} complex roots is real and closes every loop)"
+            )
+        found.sort(key=lambda s: tuple(np.round(s.x, 9)))
+        return found
     starts_q = [_with_actuators(mech, q0, c)]
     if all_modes:
         rng = np.random.default_rng(seed)
         starts_q += [_with_actuators(mech, q, c) for q in random_starts(mech, rng, q0, free, starts)]
-    found: list[FKSolution] = []
+    found = FKModes() if homotopy is None else homotopy  # an incomplete homotopy: multi-start adds
+    if homotopy is not None:
+        homotopy.why_incomplete += "; multi-start Newton added what its starts found"
     best = np.inf
     for start in starts_q:
         try:

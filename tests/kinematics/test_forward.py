@@ -165,15 +165,20 @@ def test_same_assembly_ignores_full_turns():
 
 
 def test_actuators_without_assembly_raise_pose_unreachable():
-    """Sliders too far apart for the rods (|c2 - c1| > l1 + l2) raise PoseUnreachable with the residual."""
+    """Sliders too far apart for the rods (|c2 - c1| > l1 + l2): PoseUnreachable, proven or with residual."""
     mech = preset("harada2011_3d4m")
     with pytest.raises(
         PoseUnreachable,
-        match=r"^harada2011_3d4m: no assembly with actuators at \[-0\.3, 0\.0, 0\.05, 0\.1\]: the loops "
-        r"cannot "
-        r"be closed \(smallest residual [0-9.e-]+ m/rad over 49 starts\)$",
+        match=r"^harada2011_3d4m: no assembly with actuators at \[-0\.3, 0\.0, 0\.05, 0\.1\]: the closures "
+        r"have no real solution \(none of the 16 complex roots is real and closes every loop\)$",
     ):
         forward_kinematics(mech, [-0.3, 0.0, 0.05, 0.1])
+    with pytest.raises(
+        PoseUnreachable,
+        match=r"^harada2011_3d4m: no assembly with actuators at \[-0\.3, 0\.0, 0\.05, 0\.1\]: the loops "
+        r"cannot be closed \(smallest residual [0-9.e-]+ m/rad over 1 starts\)$",
+    ):
+        forward_kinematics(mech, [-0.3, 0.0, 0.05, 0.1], all_modes=False)
 
 
 @pytest.mark.parametrize(

@@ -1,0 +1,93 @@
+"""The polynomial form of a mechanism's closures as data: the arrays the compiled kernels read.
+
+Built by :func:`plm_pin.kinematics.homotopy.polynomial.polynomial_form`, which documents the
+unknowns, the equations and their degrees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+FIXED, REVOLUTE, PRISMATIC, SPHERICAL, FREE_FLYER, REVOLUTE_PARAM, PRISMATIC_PARAM = range(7)
+"""Joint kinds: held fixed, revolute (cos, sin), prismatic, spherical and free-flyer (quaternion)
+unknowns, actuated revolute and prismatic parameters."""
+
+
+@dataclass(frozen=True)
+class PolynomialForm:
+    """A mechanism's closures as a square polynomial system (see the module docstring).
+
+    Attributes:
+        joints: Pinocchio ids of the joints kept (on a path to a closure frame), ascending.
+        parent: index in ``joints`` of each kept joint's parent, -1 for the universe, shape (k,).
+        kind: joint kind codes, shape (k,).
+        offset: first unknown (or parameter, for actuated joints) of each joint, shape (k,).
+        axis: joint axis in its own frame (revolute, prismatic), shape (k, 3).
+        placement: joint placement in its parent :math:`M_j`, homogeneous, shape (k, 4, 4).
+        fixed: local transform of fixed joints :math:`X_j`, shape (k, 4, 4).
+        frame_joint: index in ``joints`` of the joint carrying each closure point (-1: world), shape (f,).
+        frame_placement: closure frame placement in its joint, shape (f, 4, 4).
+        closure_kind: 0 point, 1 weld, 2 revolute, 3 distance (an eliminated leg), shape (nc,).
+        closure_frames: indices of frames A and B per closure, shape (nc, 2).
+        closure_axis: revolute closure axis in B's frame, shape (nc, 3).
+        closure_length2: squared length of each distance closure [m^2], shape (nc,).
+        entry_offset: first entry of each closure, shape (nc,).
+        n_entries: total closure entries.
+        combination: the random matrix :math:`C`, shape (n - n_unit, n_entries).
+        n: number of unknowns.
+        n_unit: number of unit equations (first in the system).
+        unit_offsets: first unknown of each unit block (revolute 2, quaternion 4), shape (n_unit,).
+        unit_sizes: 2 or 4 per unit block, shape (n_unit,).
+        n_params: number of parameters (actuators).
+        degrees: degree of each equation of the square system, shape (n,).
+        eliminated_v: velocity indices of the joints of the eliminated legs (set by the polish).
+        digest: hex digest of all of the above (the cache key of the generic solve).
+    """
+
+    joints: np.ndarray
+    parent: np.ndarray
+    kind: np.ndarray
+    offset: np.ndarray
+    axis: np.ndarray
+    placement: np.ndarray
+    fixed: np.ndarray
+    frame_joint: np.ndarray
+    frame_placement: np.ndarray
+    closure_kind: np.ndarray
+    closure_frames: np.ndarray
+    closure_axis: np.ndarray
+    closure_length2: np.ndarray
+    entry_offset: np.ndarray
+    n_entries: int
+    combination: np.ndarray
+    n: int
+    n_unit: int
+    unit_offsets: np.ndarray
+    unit_sizes: np.ndarray
+    n_params: int
+    degrees: np.ndarray
+    eliminated_v: np.ndarray
+    digest: str
+
+    def kernel_args(self) -> tuple[np.ndarray, ...]:
+        """The arrays the compiled kernels take, in their order."""
+        return (
+            self.parent,
+            self.kind,
+            self.offset,
+            self.axis,
+            self.placement,
+            self.fixed,
+            self.frame_joint,
+            self.frame_placement,
+            self.closure_kind,
+            self.closure_frames,
+            self.closure_axis,
+            self.closure_length2,
+            self.entry_offset,
+            self.combination,
+            self.unit_offsets,
+            self.unit_sizes,
+        )

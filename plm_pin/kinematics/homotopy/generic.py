@@ -1,0 +1,192 @@
+r"""The generic solve: every solution at one random complex parameter, by monodromy, cached on disk.
+
+Why monodromy: a total-degree start system tracks :math:`\prod_i \deg F_i` paths
+(:math:`2^{10}` for a planar 3-RPR in (cos, sin) unknowns, millions for a 6-6 platform)
+whose vast majority go to infinity; a multi-homogeneous count is smaller but needs a
+variable grouping per family. Monodromy needs neither: it seeds the family
+:math:`F(x; p) + b = 0` (offsets :math:`b` added to every equation) with a random complex
+:math:`x_0`, :math:`p_0` and :math:`b_0 = -F(x_0; p_0)`, then moves the parameters
+:math:`(p, b)` around random triangles back to :math:`(p_0, b_0)`: the paths permute the
+solutions, and new ones appear until none is left to find. The loops stop after
+:data:`STALE_LOOPS` loops in a row without a new solution. Tracking every solution from
+:math:`(p_0, b_0)` to :math:`(p_0, 0)` then gives the solutions of the closures at the generic
+parameter :math:`p_0` (paths to infinity or to singular ends dropped), and
+:data:`CHECK_LOOPS` further loops in :math:`p` alone at :math:`b = 0` must find nothing new.
+
+Quaternion signs: the system is even in each quaternion block (:math:`R(-e) = R(e)`), so
+the roots come in orbits of :math:`2^k` (:math:`k` quaternions); only one root per orbit is
+kept, tracked and counted (the one whose quaternions have a positive real part of :math:`w`):
+the counts are of assemblies, not of signed quaternions.
+
+What it proves: the count is a *lower bound* on the generic number of solutions (monodromy
+cannot show that nothing is left); the stale loops make a miss unlikely, not impossible.
+
+The result depends only on the polynomial form (:attr:`PolynomialForm.digest`) and is stored
+in ``$PLM_PIN_CACHE/homotopy/<digest>.v<version>.npz`` (a failed solve leaves its reason
+beside it, so it is not run again) (default ``~/.cache/plm_pin``).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...tolerances import HOMOTOPY_ROOT_RTOL, HOMOTOPY_SAME_ROOT_RTOL, HOMOTOPY_SINGULAR_COND
+from .form import PolynomialForm
+from .polynomial import SEED, NotPolynomial
+
+STALE_LOOPS = 20
+"""Monodromy loops in a row without a new solution before the generic solve stops."""
+CHECK_LOOPS = 2
+"""Loops in the actuator parameters alone that must find no new solution."""
+MAX_SOLUTIONS = 200
+"""Generic counts above this are not solved (the mechanism falls back to multi-start)."""
+CACHE_VERSION = 2
+"""Version of the stored generic solves (part of the file name: a new algorithm starts afresh)."""
+
+
+@dataclass(frozen=True)
+class GenericSolution:
+    """Every solution of the closures at one generic complex parameter.
+
+    Attributes:
+        p: the generic actuator parameters (complex), shape (n_params,).
+        x: one solution per quaternion-sign orbit, shape (N / symmetry, n).
+        loops: monodromy loops run.
+        symmetry: roots per orbit (2 to the number of quaternions).
+    """
+
+    p: np.ndarray
+    x: np.ndarray
+    loops: int
+    symmetry: int = 1
+
+    @property
+    def count(self) -> int:
+        """Generic number of complex solutions found, one per quaternion-sign orbit (a lower bound)."""
+        return int(self.x.shape[0])
+
+
+def cache_folder() -> Path:
+    """Folder of the stored generic solves: ``$PLM_PIN_CACHE/homotopy`` (default ``~/.cache/plm_pin``)."""
+    root = os.environ.get("PLM_PIN_CACHE") or os.path.join(os.path.expanduser("~"), ".cache", "plm_pin")
+    return Path(root) / "homotopy"
+
+
+def _regular(
+    form: PolynomialForm, X: np.ndarray, codes: np.ndarray, p: np.ndarray, b: np.ndarray
+) -> np.ndarray:
+    """Rows of ``X`` that ended at t = 1 on a finite, non-singular root."""
+    from .evaluation import evaluate
+    from .tracking import REACHED
+
+    keep = []
+    for x, code in zip(X, codes, strict=True):
+        if code != REACHED or not np.all(np.isfinite(x)):
+            continue
+        F, Jx, _ = evaluate(form, x, p, b)
+        scale = 1.0 + np.abs(x).max()
+        if np.abs(F).max() > HOMOTOPY_ROOT_RTOL * scale or np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND:
+            continue
+        keep.append(x)
+    return np.array(keep).reshape(-1, form.n)
+
+
+def canonical(form: PolynomialForm, X: np.ndarray) -> np.ndarray:
+    """Each row of ``X`` (n,) or (N, n) with every quaternion signed to a positive real part of w."""
+    X = np.array(X, dtype=np.complex128)
+    for o, size in zip(form.unit_offsets, form.unit_sizes, strict=True):
+        if size == 4:
+            flip = np.real(X[..., o]) < 0
+            X[..., o : o + 4] = np.where(flip[..., None], -X[..., o : o + 4], X[..., o : o + 4])
+    return X
+
+
+def _merge(known: np.ndarray, new: np.ndarray) -> np.ndarray:
+    rows = list(known)
+    for x in new:
+        if not any(np.abs(x - y).max() <= HOMOTOPY_SAME_ROOT_RTOL * (1.0 + np.abs(y).max()) for y in rows):
+            rows.append(x)
+    return np.array(rows).reshape(-1, known.shape[1])
+
+
+def _loop(form: PolynomialForm, X: np.ndarray, p0, b0, rng: np.random.Generator, vary_b: bool) -> np.ndarray:  # type: ignore[no-untyped-def]
+    from .tracking import track_all
+
+    args = form.kernel_args()
+
+    def rand(k: int) -> np.ndarray:
+        return rng.normal(size=k) + 1j * rng.normal(size=k)
+
+    p1, p2 = p0 + rand(form.n_params), p0 + rand(form.n_params)
+    b1, b2 = (b0 + rand(form.n), b0 + rand(form.n)) if vary_b else (b0, b0)
+    for (pa, ba), (pb, bb) in (((p0, b0), (p1, b1)), ((p1, b1), (p2, b2)), ((p2, b2), (p0, b0))):
+        X, codes, _ = track_all(X, pa, ba, pb, bb, args)
+        X = _regular(form, X, codes, pb, bb)
+        if not len(X):
+            break
+    return X
+
+
+def solve_generic(form: PolynomialForm) -> GenericSolution:
+    """Every solution at a generic complex parameter, by monodromy (no cache).
+
+    Raises:
+        NotPolynomial: more than :data:`MAX_SOLUTIONS` solutions, or none.
+    """
+    from .evaluation import evaluate
+    from .tracking import track_all
+
+    rng = np.random.default_rng(SEED + 2)
+    p0 = rng.normal(size=form.n_params) + 1j * rng.normal(size=form.n_params)
+    x0 = rng.normal(size=form.n) + 1j * rng.normal(size=form.n)
+    b0 = -evaluate(form, x0, p0)[0]
+    known = canonical(form, x0.reshape(1, -1))
+    stale, loops = 0, 0
+    while stale < STALE_LOOPS:
+        loops += 1
+        found = _merge(known, canonical(form, _loop(form, known, p0, b0, rng, vary_b=True)))
+        stale = stale + 1 if len(found) == len(known) else 0
+        known = found
+        if len(known) * 2 ** int(np.sum(form.unit_sizes == 4)) > MAX_SOLUTIONS:
+            raise NotPolynomial(f"more than {MAX_SOLUTIONS} generic solutions")
+    zero = np.zeros(form.n, dtype=np.complex128)
+    X, codes, _ = track_all(known, p0, b0, p0, zero, form.kernel_args())
+    roots = _merge(
+        np.zeros((0, form.n), dtype=np.complex128), canonical(form, _regular(form, X, codes, p0, zero))
+    )
+    if not len(roots):
+        raise NotPolynomial("no isolated solution at a generic parameter")
+    for _ in range(CHECK_LOOPS):
+        loops += 1
+        more = _merge(roots, canonical(form, _loop(form, roots, p0, zero, rng, vary_b=False)))
+        roots = more
+    symmetry = 2 ** int(np.sum(form.unit_sizes == 4))
+    return GenericSolution(p=p0, x=roots, loops=loops, symmetry=symmetry)
+
+
+def generic_solution(form: PolynomialForm, *, use_cache: bool = True) -> GenericSolution:
+    """The generic solve of ``form``, read from the disk cache or computed and stored there."""
+    path = cache_folder() / f"{form.digest}.v{CACHE_VERSION}.npz"
+    refused = path.with_suffix(".refused.txt")  # a generic solve that failed: its reason, not retried
+    if use_cache and path.exists():
+        with np.load(path) as z:
+            return GenericSolution(p=z["p"], x=z["x"], loops=int(z["loops"]), symmetry=int(z["symmetry"]))
+    if use_cache and refused.exists():
+        raise NotPolynomial(refused.read_text(encoding="utf-8"))
+    try:
+        sol = solve_generic(form)
+    except NotPolynomial as exc:
+        if use_cache:
+            refused.parent.mkdir(parents=True, exist_ok=True)
+            refused.write_text(str(exc), encoding="utf-8")
+        raise
+    if use_cache:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(f".{os.getpid()}.tmp.npz")
+        np.savez(tmp, p=sol.p, x=sol.x, loops=sol.loops, symmetry=sol.symmetry)
+        os.replace(tmp, path)
+    return sol

@@ -1,0 +1,403 @@
+r"""The closure equations of a mechanism as a square polynomial system.
+
+Generated from the description (the Pinocchio tree, its closures, its actuation), for any
+mechanism whose loop joints are revolute, prismatic, spherical or free-flyer joints.
+
+Unknowns :math:`x` (one block per passive joint on a loop, in joint order):
+
+- revolute: :math:`(c, s)`, the cosine and sine of the angle, with
+  :math:`c^2 + s^2 - 1 = 0` (degree 2);
+- prismatic: the displacement :math:`d` (enters linearly);
+- spherical: a quaternion :math:`(w, x, y, z)` with :math:`w^2 + x^2 + y^2 + z^2 - 1 = 0`
+  (degree 2; the rotation matrix is quadratic in it, and :math:`\pm` the quaternion give
+  the same rotation, so every assembly appears twice among the solutions);
+- free flyer: a translation (linear) and a quaternion as above.
+
+Parameters :math:`p`: the actuated joint positions (an angle [rad] enters through its
+cosine and sine, a displacement [m] linearly).
+
+Joints held by the gauge of an idle mobility (:mod:`plm_pin.core.idle`) are fixed at their
+gauge value; joints that carry no closure frame are left out (they do not enter the
+closures). Each joint's local transform :math:`X_j` is polynomial in its block (degree 1 in
+:math:`(c, s)` or :math:`d`, 2 in a quaternion), and a frame's world placement is the
+product :math:`\prod_j M_j X_j` along its path, so its entries have degree at most the sum
+of these block degrees along the path (:attr:`PolynomialForm.degrees`).
+
+Closure entries (the residuals of :mod:`plm_pin.core.closures` written polynomially):
+
+- point: :math:`p_B - p_A` (3 entries);
+- weld: the point entries and the 9 entries of :math:`R_A^T R_B - I`;
+- revolute: the point entries and :math:`R_A^T R_B u - u` (3 entries);
+- distance (a leg that ends in revolutes meeting at one point O, then a rigid strut to the
+  closure point B at distance L from O: a universal or spherical joint then a strut, as in
+  Stewart-Gough legs): :math:`|p_B - O|^2 - L^2` (1 entry, twice the degree of B's path);
+  the leg's revolutes leave the system, which removes the two mirror angle sets of each
+  universal joint from the count.
+
+Entries that vanish identically (the out-of-plane rows of a planar chain) are dropped;
+the rest are combined by a fixed random matrix :math:`C` (seeded) into as many equations
+as unknowns remain after the unit equations, so the system is square. A solution of the
+square system is kept only when the full set of entries vanishes too (redundant actuation,
+and the random combination, add spurious solutions that this filter removes).
+"""
+
+from __future__ import annotations
+
+import hashlib
+
+import numpy as np
+import pinocchio as pin
+
+from ...core.idle import GAUGE_PREFIX
+from ...core.mechanism import Mechanism
+from ...tolerances import CONCURRENT_AXES_TOL, HOMOTOPY_ZERO_ENTRY_RTOL
+from .form import (
+    FIXED,
+    FREE_FLYER,
+    PRISMATIC,
+    PRISMATIC_PARAM,
+    REVOLUTE,
+    REVOLUTE_PARAM,
+    SPHERICAL,
+    PolynomialForm,
+)
+
+_SIZES = {FIXED: 0, REVOLUTE: 2, PRISMATIC: 1, SPHERICAL: 4, FREE_FLYER: 7}  # unknowns per joint
+_ENTRIES = {0: 3, 1: 12, 2: 6, 3: 1}  # point, weld, revolute, distance
+SEED = 20261204
+"""Seed of the random combination and of the generic parameters (fixed: results are reproducible)."""
+
+
+class NotPolynomial(Exception):
+    """The mechanism has no polynomial form here (a joint kind or a count it does not cover)."""
+
+
+def _homogeneous(M: pin.SE3) -> np.ndarray:
+    return np.asarray(M.homogeneous, dtype=float).copy()
+
+
+def _joint_kind(jm: pin.JointModel) -> tuple[int, np.ndarray]:
+    """Kind and axis of a passive joint; NotPolynomial for kinds without a polynomial form."""
+    name = jm.shortname()
+    unit = {"X": np.array([1.0, 0, 0]), "Y": np.array([0, 1.0, 0]), "Z": np.array([0, 0, 1.0])}
+    if name in ("JointModelRX", "JointModelRY", "JointModelRZ"):
+        return REVOLUTE, unit[name[-1]]
+    if name in ("JointModelRUBX", "JointModelRUBY", "JointModelRUBZ"):
+        return REVOLUTE, unit[name[-1]]
+    if name in ("JointModelRevoluteUnaligned", "JointModelRevoluteUnboundedUnaligned"):
+        return REVOLUTE, np.array(jm.extract().axis, dtype=float)
+    if name in ("JointModelPX", "JointModelPY", "JointModelPZ"):
+        return PRISMATIC, unit[name[-1]]
+    if name == "JointModelPrismaticUnaligned":
+        return PRISMATIC, np.array(jm.extract().axis, dtype=float)
+    if name == "JointModelSpherical":
+        return SPHERICAL, np.zeros(3)
+    if name == "JointModelFreeFlyer":
+        return FREE_FLYER, np.zeros(3)
+    raise NotPolynomial(f"joint kind {name} has no polynomial form")
+
+
+def polynomial_form(mech: Mechanism) -> PolynomialForm:
+    """The polynomial form of ``mech``'s closures with its actuators as parameters.
+
+    Raises:
+        NotPolynomial: a loop joint of another kind, or fewer independent closure entries
+            than unknowns (the actuators do not fix the configuration).
+    """
+    model = mech.model
+    gauges = {g.joint: g.value for g in mech.idle_gauges}
+    closures = [c for c in mech.closures if not c.spec.name.startswith(GAUGE_PREFIX)]
+    if not closures:
+        raise NotPolynomial("no closures")
+    actuated = {a.joint_id: i for i, a in enumerate(mech.actuators)}
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, mech.q_ref)
+    legs = _distance_legs(mech, data, closures, actuated, set(gauges))
+    anchors: list[tuple[int, pin.SE3]] = []  # (parent joint, placement in it) of each closure point
+
+    def anchor(joint: int, placement: pin.SE3) -> int:
+        anchors.append((joint, placement))
+        return len(anchors) - 1
+
+    rows = []  # (code, anchor A, anchor B, axis, squared length)
+    for c in closures:
+        fa, fb = (anchor(model.frames[f].parentJoint, model.frames[f].placement) for f in c.frame_ids)
+        if c.name in legs:
+            side, joint, placement, length2, _ = legs[c.name]
+            fa, fb = anchor(joint, placement), fb if side == 0 else fa
+            rows.append((3, fa, fb, np.zeros(3), length2))
+        else:
+            code = {"point": 0, "weld": 1, "revolute": 2}[c.spec.type]
+            rows.append((code, fa, fb, c.axis if c.axis is not None else np.zeros(3), 0.0))
+    used = {a for r in rows for a in r[1:3]}
+    keep: set[int] = set()
+    for a in used:
+        j = anchors[a][0]
+        while j > 0:
+            keep.add(j)
+            j = model.parents[j]
+    joints = np.array(sorted(keep), dtype=int)
+    index = {int(j): i for i, j in enumerate(joints)}
+    if set(actuated) - keep:
+        raise NotPolynomial("an actuated joint carries no closure")
+    eliminated = sorted({int(j) for leg in legs.values() for j in leg[4]} - keep)
+    k = len(joints)
+    parent = np.full(k, -1, dtype=np.int64)
+    kind = np.zeros(k, dtype=np.int64)
+    offset = np.zeros(k, dtype=np.int64)
+    axis = np.zeros((k, 3))
+    placement = np.zeros((k, 4, 4))
+    fixed = np.zeros((k, 4, 4))
+    block_degree = np.zeros(k, dtype=np.int64)
+    n = 0
+    unit_offsets, unit_sizes = [], []
+    for i, j in enumerate(joints.tolist()):
+        jm, name = model.joints[j], model.names[j]
+        parent[i] = index.get(int(model.parents[j]), -1)
+        placement[i] = _homogeneous(model.jointPlacements[j])
+        fixed[i] = _homogeneous(model.jointPlacements[j].inverse() * data.liMi[j])
+        if j in actuated:
+            jk, ax = _joint_kind(jm)
+            if jk not in (REVOLUTE, PRISMATIC):
+                raise NotPolynomial(f"actuated joint {name} is neither revolute nor prismatic")
+            kind[i] = REVOLUTE_PARAM if jk == REVOLUTE else PRISMATIC_PARAM
+            offset[i], axis[i] = actuated[j], ax
+            continue
+        if name in gauges:
+            kind[i] = FIXED
+            continue
+        kind[i], axis[i] = _joint_kind(jm)
+        offset[i] = n
+        if kind[i] == REVOLUTE:
+            unit_offsets.append(n)
+            unit_sizes.append(2)
+            block_degree[i] = 1
+        elif kind[i] == PRISMATIC:
+            block_degree[i] = 1
+        else:
+            quat = n + (3 if kind[i] == FREE_FLYER else 0)
+            unit_offsets.append(quat)
+            unit_sizes.append(4)
+            block_degree[i] = 2
+        n += _SIZES[int(kind[i])]
+    order = sorted(used)
+    frame_joint = np.array([index.get(anchors[a][0], -1) for a in order], dtype=np.int64)
+    frame_placement = np.array([_homogeneous(anchors[a][1]) for a in order])
+    closure_kind = np.array([r[0] for r in rows], dtype=np.int64)
+    closure_frames = np.array([[order.index(r[1]), order.index(r[2])] for r in rows], dtype=np.int64)
+    closure_axis = np.array([r[3] for r in rows])
+    closure_length2 = np.array([r[4] for r in rows])
+    sizes = [_ENTRIES[int(r[0])] for r in rows]
+    entry_offset = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    n_entries = int(sum(sizes))
+    n_unit = len(unit_offsets)
+    n_comb = n - n_unit
+    if n_comb <= 0:
+        raise NotPolynomial("no unknown left to solve for")
+    # degree of each entry: the largest path degree of the frames it involves
+    path_degree = []
+    for fj in frame_joint:
+        d, i = 0, int(fj)
+        while i >= 0:
+            d += int(block_degree[i])
+            i = int(parent[i])
+        path_degree.append(d)
+    entry_degree = np.zeros(n_entries, dtype=np.int64)
+    for k in range(len(rows)):
+        a, b = closure_frames[k]
+        start = entry_offset[k]
+        if closure_kind[k] == 3:  # a squared distance
+            entry_degree[start] = 2 * max(path_degree[a], path_degree[b])
+            continue
+        entry_degree[start : start + 3] = max(path_degree[a], path_degree[b])
+        entry_degree[start + 3 : start + sizes[k]] = path_degree[a] + path_degree[b]
+    form = PolynomialForm(
+        joints=joints,
+        parent=parent,
+        kind=kind,
+        offset=offset,
+        axis=axis,
+        placement=placement,
+        fixed=fixed,
+        frame_joint=frame_joint,
+        frame_placement=frame_placement,
+        closure_kind=closure_kind,
+        closure_frames=closure_frames,
+        closure_axis=closure_axis,
+        closure_length2=closure_length2,
+        entry_offset=entry_offset,
+        n_entries=n_entries,
+        combination=np.zeros((n_comb, n_entries)),
+        n=n,
+        n_unit=n_unit,
+        unit_offsets=np.array(unit_offsets, dtype=np.int64),
+        unit_sizes=np.array(unit_sizes, dtype=np.int64),
+        n_params=mech.n_actuators,
+        degrees=np.zeros(n, dtype=np.int64),
+        eliminated_v=np.array([model.joints[j].idx_v for j in eliminated], dtype=np.int64),
+        digest="",
+    )
+    live = _live_entries(form)
+    if live.sum() < n_comb:
+        raise NotPolynomial(
+            f"{int(live.sum())} independent closure entries for {n_comb} unknowns: the actuators do not fix "
+            "the configuration"
+        )
+    rng = np.random.default_rng(SEED)
+    combination = rng.normal(size=(n_comb, n_entries)) * live
+    degrees = np.concatenate([np.full(n_unit, 2), np.full(n_comb, int(entry_degree[live].max()))])
+    h = hashlib.sha256()
+    for arr in (parent, kind, offset, axis, placement, fixed, frame_joint, frame_placement, closure_kind):
+        h.update(np.ascontiguousarray(arr).tobytes())
+    for arr in (closure_frames, closure_axis, closure_length2, combination):
+        h.update(np.ascontiguousarray(arr).tobytes())
+    h.update(f"{n} {n_unit} {mech.n_actuators} {SEED}".encode())
+    object.__setattr__(form, "combination", combination)
+    object.__setattr__(form, "degrees", degrees)
+    object.__setattr__(form, "digest", h.hexdigest())
+    return form
+
+
+def _distance_legs(
+    mech: Mechanism, data: pin.Data, closures: list, actuated: dict[int, int], gauged: set[str]
+) -> dict[str, tuple[int, int, pin.SE3, float, list[int]]]:
+    """Point closures whose one side ends in revolute joints meeting at one point O.
+
+    Such a side (a universal or spherical joint made of revolutes, then a rigid strut to the
+    closure point) holds its closure point at a fixed distance L from O, whatever its angles;
+    the closure reduces to :math:`|p_B - O|^2 - L^2 = 0` (degree 2 in the other side's
+    unknowns) and the side's revolutes leave the system (their angles are found again by the
+    polish). O is fixed in the body above the revolutes.
+
+    Returns:
+        Per closure name: (side of the leg, joint carrying O, O's placement in it, L^2 [m^2],
+        the eliminated joints).
+    """
+    model = mech.model
+    others: dict[str, set[int]] = {}
+    for c in closures:  # joints each closure frame hangs from
+        for f in c.frame_ids:
+            j, chain = model.frames[f].parentJoint, set()
+            while j > 0:
+                chain.add(j)
+                j = model.parents[j]
+            others.setdefault(c.name, set()).update(chain)
+    if mech.task_frame_id is not None:
+        j, chain = model.frames[mech.task_frame_id].parentJoint, set()
+        while j > 0:
+            chain.add(j)
+            j = model.parents[j]
+        others["<task>"] = chain
+    out = {}
+    for c in closures:
+        if c.spec.type != "point":
+            continue
+        for side in (0, 1):
+            f = c.frame_ids[side]
+            block, j = [], model.frames[f].parentJoint
+            while j > 0 and j not in actuated and model.names[j] not in gauged:
+                try:
+                    kind = _joint_kind(model.joints[j])[0]
+                except NotPolynomial:
+                    break
+                if kind != REVOLUTE:
+                    break
+                block.append(j)
+                j = model.parents[j]
+            if not block or any(set(block) & chain for name, chain in others.items() if name != c.name):
+                continue
+            lines = []
+            for b in block:
+                _, ax = _joint_kind(model.joints[b])
+                lines.append((data.oMi[b].translation, data.oMi[b].rotation @ ax))
+            # least-squares meeting point of the axes
+            A = sum(np.eye(3) - np.outer(u, u) for _, u in lines)
+            rhs = sum((np.eye(3) - np.outer(u, u)) @ p for p, u in lines)
+            O = np.linalg.lstsq(A, rhs, rcond=None)[0]
+            if (
+                max(np.linalg.norm((np.eye(3) - np.outer(u, u)) @ (O - p)) for p, u in lines)
+                > CONCURRENT_AXES_TOL
+            ):
+                continue
+            if len(block) == 1:  # one revolute: O alone is not fixed (the point circles about the axis)
+                continue
+            top = block[-1]
+            carrier = int(model.parents[top])
+            frame_of_top = data.oMi[carrier] * model.jointPlacements[top]
+            placement = model.jointPlacements[top] * pin.SE3(np.eye(3), frame_of_top.actInv(O))
+            length2 = float(np.sum((data.oMf[f].translation - O) ** 2))
+            out[c.name] = (side, carrier, placement, length2, block)
+            break
+    return out
+
+
+def _live_entries(form: PolynomialForm) -> np.ndarray:
+    """Mask of the closure entries that do not vanish identically, shape (n_entries,)."""
+    from .evaluation import closure_entries
+
+    rng = np.random.default_rng(SEED + 1)
+    size = np.zeros(form.n_entries)
+    for _ in range(3):
+        x = rng.normal(size=form.n) + 1j * rng.normal(size=form.n)
+        p = rng.normal(size=form.n_params) + 1j * rng.normal(size=form.n_params)
+        e, de = closure_entries(form, x, p)
+        size = np.maximum(size, np.abs(e) + np.abs(de).sum(axis=1))
+    return size > HOMOTOPY_ZERO_ENTRY_RTOL * max(size.max(), 1.0)
+
+
+def to_configuration(
+    form: PolynomialForm, mech: Mechanism, x: np.ndarray, actuators: np.ndarray
+) -> np.ndarray:
+    """The tree configuration of a real solution ``x`` with the actuators at ``actuators``, shape (nq,).
+
+    Joints off the loops keep their reference value; quaternions and (cos, sin) pairs are
+    normalised.
+    """
+    model = mech.model
+    q = mech.q_ref.copy()
+    x = np.real(x)
+    for i, j in enumerate(form.joints.tolist()):
+        jm, kd, o = model.joints[j], int(form.kind[i]), int(form.offset[i])
+        iq = jm.idx_q
+        if kd in (REVOLUTE, REVOLUTE_PARAM):
+            angle = float(actuators[o]) if kd == REVOLUTE_PARAM else float(np.arctan2(x[o + 1], x[o]))
+            if jm.nq == 2:
+                q[iq : iq + 2] = np.cos(angle), np.sin(angle)
+            else:
+                q[iq] = angle
+        elif kd == PRISMATIC:
+            q[iq] = x[o]
+        elif kd == PRISMATIC_PARAM:
+            q[iq] = actuators[o]
+        elif kd in (SPHERICAL, FREE_FLYER):
+            t = 3 if kd == FREE_FLYER else 0
+            w, qx, qy, qz = x[o + t : o + t + 4] / np.linalg.norm(x[o + t : o + t + 4])
+            if t:
+                q[iq : iq + 3] = x[o : o + 3]
+            q[iq + t : iq + t + 4] = qx, qy, qz, w  # Pinocchio stores (x, y, z, w)
+    return q
+
+
+def from_configuration(form: PolynomialForm, mech: Mechanism, q: np.ndarray) -> np.ndarray:
+    """The unknowns of a configuration ``q``, shape (n,) (the inverse of :func:`to_configuration`)."""
+    model = mech.model
+    x = np.zeros(form.n)
+    data = model.createData()
+    pin.forwardKinematics(model, data, q)
+    for i, j in enumerate(form.joints.tolist()):
+        kd, o = int(form.kind[i]), int(form.offset[i])
+        X = (model.jointPlacements[j].inverse() * data.liMi[j]).homogeneous
+        if kd == REVOLUTE:
+            R = X[:3, :3]
+            a = form.axis[i]
+            e = np.linalg.svd(np.eye(3) - np.outer(a, a))[0][:, 0]
+            x[o], x[o + 1] = e @ R @ e, np.cross(e, R @ e) @ a
+        elif kd == PRISMATIC:
+            x[o] = form.axis[i] @ X[:3, 3]
+        elif kd in (SPHERICAL, FREE_FLYER):
+            t = 3 if kd == FREE_FLYER else 0
+            quat = pin.Quaternion(X[:3, :3])
+            if t:
+                x[o : o + 3] = X[:3, 3]
+            x[o + t : o + t + 4] = quat.w, quat.x, quat.y, quat.z
+    return x

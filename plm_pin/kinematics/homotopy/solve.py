@@ -1,0 +1,190 @@
+r"""Every assembly mode at given actuator values: parameter homotopy from the generic solve.
+
+Each of the :math:`N` generic solutions (:mod:`.generic`) is tracked from the generic complex
+parameters to the actuator values (:mod:`.tracking`). By the parameter continuation theorem
+(Morgan & Sommese 1989; Sommese & Wampler 2005, thm. 7.1.1) every isolated solution at the
+target is the end of one of these paths, and no parameter has more than :math:`N`
+non-singular isolated solutions. So when the :math:`N` paths end at :math:`N` distinct
+non-singular roots, they are all the roots: the result is *complete*. Otherwise (a path went to
+infinity, ended singular, failed, or two paths met) it is not, and says how many and why.
+
+Real roots are refined by Newton on the real system, kept when every closure entry vanishes
+(not only the random combination), and certified by a Krawczyk test (:mod:`.certify`).
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.mechanism import Mechanism
+from ...tolerances import (
+    HOMOTOPY_ENTRY_TOL,
+    HOMOTOPY_REAL_RTOL,
+    HOMOTOPY_ROOT_RTOL,
+    HOMOTOPY_SAME_ROOT_RTOL,
+    HOMOTOPY_SINGULAR_COND,
+)
+from .form import PolynomialForm
+from .generic import GenericSolution, canonical, generic_solution
+from .polynomial import polynomial_form
+
+
+@dataclass(frozen=True)
+class RealRoot:
+    """A certified real root of the polynomial form.
+
+    Attributes:
+        x: the unknowns, shape (n,).
+        box_radius: relative half-width of the Krawczyk box proven to hold it alone (times 1 + abs(x)).
+    """
+
+    x: np.ndarray
+    box_radius: float
+
+
+@dataclass(frozen=True)
+class HomotopySolve:
+    """Outcome of the homotopy at one actuator vector.
+
+    Attributes:
+        generic_count: number of complex solutions at a generic parameter (monodromy: a lower bound),
+            one per quaternion-sign orbit.
+        roots: distinct non-singular complex roots reached (one per orbit).
+        real: certified real roots that solve the full closure system (one per quaternion-sign orbit).
+        uncertified: real roots of the full system whose Krawczyk test failed (kept, not proven).
+        spurious: real roots of the square system only (the random combination's).
+        diverged: paths that went to infinity.
+        singular: paths that ended at a singular root.
+        failed: paths the tracker lost.
+        collided: paths that ended on a root another path had reached.
+    """
+
+    generic_count: int
+    roots: int
+    real: tuple[RealRoot, ...]
+    uncertified: tuple[np.ndarray, ...]
+    spurious: int
+    diverged: int
+    singular: int
+    failed: int
+    collided: int
+
+    @property
+    def complete(self) -> bool:
+        """Whether every generic path ended at its own non-singular root (all roots found)."""
+        return self.roots == self.generic_count and not self.uncertified
+
+    def why_incomplete(self) -> str:
+        """What kept the solve from being complete ('' when complete)."""
+        if self.complete:
+            return ""
+        parts = [
+            f"{k} {what}"
+            for k, what in (
+                (self.diverged, "paths went to infinity"),
+                (self.singular, "paths ended singular"),
+                (self.failed, "paths were lost by the tracker"),
+                (self.collided, "paths met another"),
+                (len(self.uncertified), "real roots failed the interval test"),
+            )
+            if k
+        ]
+        return f"{self.roots} of {self.generic_count} roots reached: " + ", ".join(parts)
+
+
+_Prepared = tuple[PolynomialForm, GenericSolution]
+_FORMS: weakref.WeakKeyDictionary[Mechanism, _Prepared] = weakref.WeakKeyDictionary()
+
+
+def prepared(mech: Mechanism) -> tuple[PolynomialForm, GenericSolution]:
+    """The polynomial form and generic solve of ``mech`` (built once per mechanism, solve cached on disk).
+
+    Raises:
+        NotPolynomial: the mechanism has no polynomial form.
+    """
+    hit = _FORMS.get(mech)
+    if hit is None:
+        form = polynomial_form(mech)
+        hit = (form, generic_solution(form))
+        _FORMS[mech] = hit
+    return hit
+
+
+def _real_newton(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> np.ndarray:
+    from .evaluation import evaluate
+
+    x = np.real(x).astype(float)
+    for _ in range(3):
+        F, Jx, _ = evaluate(form, x, p)
+        step = np.linalg.solve(np.real(Jx), -np.real(F))
+        x = x + step
+        if np.abs(step).max() < 1e-15 * (1.0 + np.abs(x).max()):
+            break
+    return x
+
+
+def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
+    """Track every generic solution of ``mech`` to ``actuators`` and certify the real ends.
+
+    Raises:
+        NotPolynomial: the mechanism has no polynomial form.
+    """
+    from .certify import certify
+    from .evaluation import closure_entries, evaluate
+    from .tracking import DIVERGED, REACHED, track_all
+
+    form, gen = prepared(mech)
+    p1 = np.asarray(actuators, dtype=np.complex128)
+    zero = np.zeros(form.n, dtype=np.complex128)
+    X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args())
+    roots: list[np.ndarray] = []
+    diverged = int(np.sum(codes == DIVERGED))
+    failed = int(np.sum((codes != DIVERGED) & (codes != REACHED)))
+    singular = collided = 0
+    for x, code in zip(X, codes, strict=True):
+        if code != REACHED:
+            continue
+        scale = 1.0 + np.abs(x).max()
+        F, Jx, _ = evaluate(form, x, p1)
+        if not np.all(np.isfinite(F)) or np.abs(F).max() > HOMOTOPY_ROOT_RTOL * scale:
+            failed += 1
+            continue
+        if np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND:
+            singular += 1
+            continue
+        x = canonical(form, x)
+        if any(np.abs(x - y).max() <= HOMOTOPY_SAME_ROOT_RTOL * scale for y in roots):
+            collided += 1
+        else:
+            roots.append(x)
+    real: list[RealRoot] = []
+    uncertified: list[np.ndarray] = []
+    spurious = 0
+    pr = np.real(p1)
+    for x in roots:
+        if np.abs(x.imag).max() > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(x).max()):
+            continue
+        xr = _real_newton(form, x, pr)
+        entries, _ = closure_entries(form, xr, pr)
+        if np.abs(entries).max() > HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(xr).max()):
+            spurious += 1
+            continue
+        radius = certify(form, xr, pr)
+        if radius is None:
+            uncertified.append(xr)
+        else:
+            real.append(RealRoot(xr, radius))
+    return HomotopySolve(
+        generic_count=gen.count,
+        roots=len(roots),
+        real=tuple(real),
+        uncertified=tuple(uncertified),
+        spurious=spurious,
+        diverged=diverged,
+        singular=singular,
+        failed=failed,
+        collided=collided,
+    )

@@ -1,0 +1,263 @@
+"""Complete forward kinematics by homotopy (plm_pin/kinematics/homotopy), through forward_kinematics.
+
+Oracles: the four-bar's circle intersection (closed form), a univariate search in the
+platform angle for a planar 3-RPR (tests/kinematics/homotopy/rpr.py), PHCpack on a 6-6
+platform's leg equations written independently (slow, where phcpy is installed), and
+multi-start Newton with many starts on the presets.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from scipy.optimize import brentq
+
+import plm_pin
+from plm_pin.kinematics import forward_kinematics, same_assembly
+from plm_pin.kinematics.forward import FKModes
+from tests.conftest import preset
+
+from .rpr import rpr_files, rpr_poses
+
+HERE = Path(__file__).parent
+# A 3-RPR with six real assembly modes (found by the univariate search of rpr.py, the oracle)
+RPR_BASE = np.array([[0.0, 0.0], [0.61, -0.47], [-0.43, 0.65]])
+RPR_PLATE = np.array([[0.0, 0.0], [0.37, 0.4], [-0.39, 0.15]])
+RPR_RHO = np.array([0.54, 0.59, 0.89])
+
+
+def _fourbar_geometry(mech: plm_pin.Mechanism) -> tuple[np.ndarray, np.ndarray, float, float, float]:
+    """Crank pivot O, rocker pivot P, crank, coupler and rocker lengths, read from the reference pose."""
+    model, data = mech.model, mech.model.createData()
+    pin.framesForwardKinematics(model, data, mech.q_ref)
+    o = data.oMi[model.getJointId("crank_pivot")].translation[:2]
+    c = data.oMi[model.getJointId("coupler_pivot")].translation[:2]
+    p = data.oMi[model.getJointId("rocker_pivot")].translation[:2]
+    tip = data.oMf[model.getFrameId("coupler_tip")].translation[:2]
+    return o, p, float(np.linalg.norm(c - o)), float(np.linalg.norm(tip - c)), float(np.linalg.norm(tip - p))
+
+
+def _coupler_tips(o, p, lc, lk, lr, theta):  # type: ignore[no-untyped-def]
+    """The two coupler-tip positions at crank angle theta: circles about the crank tip and P."""
+    c = o + lc * np.array([math.cos(theta), math.sin(theta)])
+    d = p - c
+    dist = float(np.linalg.norm(d))
+    a = (lk**2 - lr**2 + dist**2) / (2 * dist)
+    h = math.sqrt(max(lk**2 - a**2, 0.0))
+    n = np.array([-d[1], d[0]]) / dist
+    return [c + a * d / dist + s * h * n for s in (1.0, -1.0)]
+
+
+def _tips(mech: plm_pin.Mechanism, modes: FKModes) -> list[np.ndarray]:
+    data = mech.model.createData()
+    out = []
+    for s in modes:
+        pin.framesForwardKinematics(mech.model, data, s.q)
+        out.append(data.oMf[mech.model.getFrameId("coupler_tip")].translation[:2].copy())
+    return out
+
+
+def _match(found: list[np.ndarray], expected: list[np.ndarray], tol: float) -> None:
+    assert len(found) == len(expected)
+    for e in expected:
+        assert min(np.abs(f - e).max() for f in found) <= tol
+
+
+def test_fourbar_two_modes_match_the_circle_intersection():
+    """The four-bar's two assembly modes are the two circle intersections; complete, both certified."""
+    mech = preset("fourbar")
+    geo = _fourbar_geometry(mech)
+    for theta in (0.3, 1.0471975511965976, 2.5):
+        modes = forward_kinematics(mech, [theta])
+        assert modes.method == "homotopy" and modes.complete and modes.generic_count == 2
+        assert modes.certified == 2 and not modes.why_incomplete
+        _match(_tips(mech, modes), _coupler_tips(*geo, theta), 1e-12)
+        assert all(s.residual_norm <= 1e-12 for s in modes)
+
+
+def test_fourbar_modes_1e_3_apart_near_the_folded_singularity_are_both_found():
+    """Near the stretched coupler-rocker pair the two modes are 1e-3 apart: both found and certified."""
+    params = {"crank": 0.1, "coupler": 0.25, "rocker": 0.2, "ground": 0.4, "crank_angle": 1.0}
+    mech = plm_pin.build_mechanism("fourbar", params, name="fourbar_folding")
+    o, p, lc, lk, lr = _fourbar_geometry(mech)
+
+    def gap(theta: float) -> float:  # distance between the two modes, minus 1e-3
+        a, b = _coupler_tips(o, p, lc, lk, lr, theta)
+        return float(np.linalg.norm(a - b)) - 1e-3
+
+    # the crank angle where the crank tip is lk + lr from P (the folded singularity), then 1e-3 apart
+    thetas = np.linspace(-math.pi, math.pi, 20001)
+    reach = [float(np.linalg.norm(o + lc * np.array([math.cos(t), math.sin(t)]) - p)) for t in thetas]
+    i = int(np.argmax(reach))
+    assert reach[i] > lk + lr  # the crank can stretch the pair past its length: a singularity exists
+    j = i
+    while reach[j] > lk + lr:
+        j -= 1
+
+    def stretch(t: float) -> float:
+        return float(np.linalg.norm(o + lc * np.array([math.cos(t), math.sin(t)]) - p)) - (lk + lr)
+
+    singular = brentq(stretch, thetas[j], thetas[j + 1], xtol=1e-16)
+    theta = brentq(gap, singular - 0.2, singular, xtol=1e-16)
+    expected = _coupler_tips(o, p, lc, lk, lr, theta)
+    assert abs(np.linalg.norm(expected[0] - expected[1]) - 1e-3) < 1e-9
+    modes = forward_kinematics(mech, [theta])
+    assert modes.complete and modes.certified == 2 and len(modes) == 2
+    _match(_tips(mech, modes), expected, 1e-10)
+
+
+def test_3rpr_six_real_modes_match_the_univariate_search(tmp_path):
+    """A planar 3-RPR with 6 real modes: all six, complete (generic count 6), equal to the oracle's poses."""
+    mech = plm_pin.load(rpr_files(tmp_path, RPR_BASE, RPR_PLATE))
+    modes = forward_kinematics(mech, RPR_RHO)
+    assert modes.method == "homotopy" and modes.complete
+    assert modes.generic_count == 6 and modes.certified == 6 and len(modes) == 6
+    expected = rpr_poses(RPR_BASE, RPR_PLATE, RPR_RHO, n_grid=100_000)
+    assert len(expected) == 6
+    for e in expected:
+        errs = []
+        for s in modes:
+            d = s.x - e
+            d[2] = (d[2] + math.pi) % (2 * math.pi) - math.pi
+            errs.append(np.abs(d).max())
+        assert min(errs) <= 1e-12
+
+
+def test_3rpr_out_of_reach_is_unreachable_with_proof(tmp_path):
+    """Legs too short to meet: no real mode, PoseUnreachable says all six roots are complex."""
+    mech = plm_pin.load(rpr_files(tmp_path, RPR_BASE, RPR_PLATE))
+    with pytest.raises(plm_pin.PoseUnreachable, match=r"none of the 6 complex roots is real"):
+        forward_kinematics(mech, [0.01, 0.01, 0.01])
+
+
+def _stewart_geometry(mech: plm_pin.Mechanism) -> dict[str, list]:
+    """Base points (U centres), platform points and strut lengths of the 6-PUS at its reference pose."""
+    model, data = mech.model, mech.model.createData()
+    pin.framesForwardKinematics(model, data, mech.q_ref)
+    plat = data.oMi[model.getJointId("platform_floating")]
+    A, B, L = [], [], []
+    for c in mech.closures:
+        fa, fb = c.frame_ids
+        u = model.getJointId(model.names[model.frames[fa].parentJoint][:-1] + "a")
+        a = data.oMi[u].translation
+        A.append(a.tolist())
+        B.append(plat.actInv(data.oMf[fb].translation).tolist())
+        L.append(float(np.linalg.norm(data.oMf[fa].translation - a)))
+    return {"A": A, "B": B, "L": L}
+
+
+def _platform_poses(mech: plm_pin.Mechanism, modes: FKModes) -> list[np.ndarray]:
+    j = mech.model.joints[mech.model.getJointId("platform_floating")]
+    out = []
+    for s in modes:
+        q = s.q[j.idx_q : j.idx_q + 7]
+        R = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
+        out.append(np.concatenate([q[:3], R.ravel()]))
+    return out
+
+
+def test_stewart_platform_has_40_roots_and_every_real_mode_closes():
+    """The 6-PUS (a 6-6 platform once its sliders are fixed): 40 generic roots, complete, modes closed."""
+    mech = preset("zhao2011_6pss")
+    modes = forward_kinematics(mech, mech.actuator_positions(mech.q_ref))
+    assert modes.method == "homotopy" and modes.complete and modes.generic_count == 40
+    assert modes.certified == len(modes) >= 2
+    assert any(same_assembly(mech, s.q, mech.q_ref) for s in modes)
+    for i, s in enumerate(modes):
+        assert s.residual_norm <= 1e-12
+        assert not any(same_assembly(mech, s.q, t.q) for t in modes[:i])
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("/usr/bin/python3") is None, reason="no system python for phcpy")
+def test_stewart_real_modes_equal_phcpack():
+    """PHCpack's real solutions of the independently written leg equations are exactly our modes."""
+    probe = subprocess.run(["/usr/bin/python3", "-c", "import phcpy"], capture_output=True, check=False)
+    if probe.returncode:
+        pytest.skip("phcpy is not installed for the system python (apt-get install python3-phcpy)")
+    mech = preset("zhao2011_6pss")
+    run = subprocess.run(
+        ["/usr/bin/python3", str(HERE / "phc_stewart.py")],
+        input=json.dumps(_stewart_geometry(mech)),
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=1800,
+    )
+    phc = json.loads(run.stdout.strip().splitlines()[-1])
+    assert phc["total"] == 80  # 40 poses, each with its quaternion and its opposite
+    expected = []
+    for x, y, z, w, qx, qy, qz in phc["real"]:
+        R = pin.Quaternion(w, qx, qy, qz).normalized().toRotationMatrix()
+        pose = np.concatenate([[x, y, z], R.ravel()])
+        if not any(np.abs(pose - e).max() < 1e-6 for e in expected):
+            expected.append(pose)
+    modes = forward_kinematics(mech, mech.actuator_positions(mech.q_ref))
+    _match(_platform_poses(mech, modes), expected, 1e-8)
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "fourbar",
+        "fivebar",
+        "harada2011_3d3m",
+        "harada2011_3d4m",
+        "harada2015_asymmetric",
+        "enferadi2017_star_triangle",
+        "zhao2011_6pss",
+    ],
+)
+def test_presets_modes_contain_every_multistart_mode(name):
+    """Every mode 200-start multi-start Newton finds is among the homotopy's, and the homotopy is complete."""
+    mech = preset(name)
+    c = mech.actuator_positions(mech.q_ref)
+    modes = forward_kinematics(mech, c)
+    assert modes.method == "homotopy" and modes.complete
+    multi = forward_kinematics(mech, c, all_modes=False)  # the reference mode
+    rng = np.random.default_rng(3)
+    from plm_pin.kinematics.forward import _close, _with_actuators
+    from plm_pin.kinematics.starts import random_starts
+
+    found = list(multi)
+    for start in random_starts(mech, rng, mech.q_ref, mech.passive_v_indices, 200):
+        try:
+            q = _close(mech, _with_actuators(mech, start, c), mech.passive_v_indices, 1e-12)[0]
+        except plm_pin.exceptions.ClosureNotSatisfied:
+            continue
+        if not any(same_assembly(mech, q, s.q if hasattr(s, "q") else s) for s in found):
+            found.append(q)
+    for q in [s.q if hasattr(s, "q") else s for s in found]:
+        assert any(same_assembly(mech, q, s.q) for s in modes)
+
+
+def test_without_polynomial_form_multistart_is_used_and_said_once(monkeypatch):
+    """A mechanism the homotopy refuses falls back to multi-start: warned once, not complete, modes found."""
+    import plm_pin.kinematics.forward as forward
+    from plm_pin.kinematics import homotopy
+    from plm_pin.warnings import IncompleteSearchWarning
+
+    def refuse(mech):  # type: ignore[no-untyped-def]
+        raise homotopy.NotPolynomial("a joint kind it does not cover")
+
+    monkeypatch.setattr(homotopy, "prepared", refuse)
+    monkeypatch.setattr(forward, "_FALLBACK_WARNED", set())
+    mech = preset("fourbar")
+    with pytest.warns(
+        IncompleteSearchWarning, match=r"^fourbar: no polynomial form of the closures \(a joint"
+    ):
+        modes = forward_kinematics(mech, [0.3])
+    assert modes.method == "multi-start" and not modes.complete and modes.generic_count is None
+    _match(_tips(mech, modes), _coupler_tips(*_fourbar_geometry(mech), 0.3), 1e-12)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        forward_kinematics(mech, [0.3])  # said once

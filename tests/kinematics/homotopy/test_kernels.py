@@ -1,0 +1,119 @@
+"""Polynomial form, compiled evaluation and interval certificates (plm_pin/kinematics/homotopy).
+
+Oracles: finite differences for the Jacobians, the closure residual of plm_pin.core for the
+entries, exact rational arithmetic for the interval enclosures, a shifted point for a
+Krawczyk test that must fail.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from plm_pin.kinematics.homotopy import generic_solution, polynomial_form, prepared
+from plm_pin.kinematics.homotopy.certify import _matmul, certify
+from plm_pin.kinematics.homotopy.evaluation import evaluate
+from plm_pin.kinematics.homotopy.generic import solve_generic
+from plm_pin.kinematics.homotopy.polynomial import from_configuration, to_configuration
+from tests.conftest import preset
+
+NAMES = ["fourbar", "harada2011_3d4m", "enferadi2017_star_triangle", "zhao2011_6pss"]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_jacobians_match_central_differences(name):
+    """F_x and F_p equal central differences of F at a random complex point."""
+    form = polynomial_form(preset(name))
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=form.n) + 1j * rng.normal(size=form.n)
+    p = rng.normal(size=form.n_params) + 1j * rng.normal(size=form.n_params)
+    _, Jx, Jp = evaluate(form, x, p)
+    h = 1e-6
+    for k in range(form.n):
+        e = np.eye(form.n)[k] * h
+        fd = (evaluate(form, x + e, p)[0] - evaluate(form, x - e, p)[0]) / (2 * h)
+        assert np.abs(fd - Jx[:, k]).max() <= 1e-7 * (1 + np.abs(Jx).max())
+    for k in range(form.n_params):
+        e = np.eye(form.n_params)[k] * h
+        fd = (evaluate(form, x, p + e)[0] - evaluate(form, x, p - e)[0]) / (2 * h)
+        assert np.abs(fd - Jp[:, k]).max() <= 1e-7 * (1 + np.abs(Jp).max())
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_reference_pose_solves_the_system_and_round_trips(name):
+    """The reference configuration is a root; unknowns -> configuration -> unknowns is the identity."""
+    mech = preset(name)
+    form = polynomial_form(mech)
+    x = from_configuration(form, mech, mech.q_ref)
+    c = mech.actuator_positions(mech.q_ref)
+    assert np.abs(evaluate(form, x, c)[0]).max() <= 1e-14
+    q = to_configuration(form, mech, x, c)
+    assert np.abs(from_configuration(form, mech, q) - x).max() <= 1e-14
+
+
+def test_krawczyk_certifies_a_root_and_refuses_a_shifted_point():
+    """A box about the reference root is certified; about a point 1e-3 away it is not."""
+    mech = preset("harada2011_3d3m")
+    form, _ = prepared(mech)
+    x = from_configuration(form, mech, mech.q_ref)
+    c = mech.actuator_positions(mech.q_ref)
+    assert certify(form, x, c) is not None
+    assert certify(form, x + 1e-3, c) is None
+
+
+def test_interval_products_enclose_the_exact_product():
+    """Interval matrix products contain the exact rational product of any point in the boxes."""
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        lo = rng.normal(size=(3, 4))
+        A = np.stack([lo, lo + rng.uniform(0, 1e-3, size=lo.shape)], axis=-1)
+        lo = rng.normal(size=(4, 2))
+        B = np.stack([lo, lo + rng.uniform(0, 1e-3, size=lo.shape)], axis=-1)
+        C = _matmul(A, B)
+        a = A[..., 0] if rng.random() < 0.5 else A[..., 1]  # a vertex of the box
+        b = B[..., 1]
+        for i in range(3):
+            for j in range(2):
+                exact = sum(Fraction(a[i, r]) * Fraction(b[r, j]) for r in range(4))
+                assert Fraction(C[i, j, 0]) <= exact <= Fraction(C[i, j, 1])
+
+
+def test_import_plm_pin_does_not_import_numba():
+    """Numba loads only when the homotopy first runs."""
+    code = (
+        "import sys, plm_pin, plm_pin.kinematics, plm_pin.kinematics.homotopy; print('numba' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize(
+    ("name", "count"), [("fourbar", 2), ("harada2011_3d3m", 4), ("enferadi2017_star_triangle", 2)]
+)
+def test_generic_count_from_scratch_equals_the_closed_form_count(name, count):
+    """Monodromy without the disk cache finds the closed-form count.
+
+    Four-bar: two circle intersections; 3D3M: two, then two for the plate; star-triangle:
+    the platform and its half-turn (the prismatic arms through the centre change sign).
+    """
+    assert solve_generic(polynomial_form(preset(name))).count == count
+
+
+@pytest.mark.slow
+def test_generic_count_of_the_6_6_platform_is_40():
+    """Monodromy without the disk cache finds the 40 roots of a general 6-6 Stewart-Gough platform."""
+    assert solve_generic(polynomial_form(preset("zhao2011_6pss"))).count == 40
+
+
+def test_generic_solve_is_stored_and_read_back(tmp_path, monkeypatch):
+    """The generic solve is written under $PLM_PIN_CACHE and read back equal."""
+    monkeypatch.setenv("PLM_PIN_CACHE", str(tmp_path))
+    form = polynomial_form(preset("fourbar"))
+    first = generic_solution(form)
+    assert len(list((tmp_path / "homotopy").glob(f"{form.digest}.v*.npz"))) == 1
+    again = generic_solution(form)
+    assert np.array_equal(first.x, again.x) and np.array_equal(first.p, again.p)
