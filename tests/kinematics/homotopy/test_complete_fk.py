@@ -116,8 +116,10 @@ def test_fourbar_modes_1e_3_apart_near_the_folded_singularity_are_both_found():
 
 
 def _load_rpr(folder: Path) -> plm_pin.Mechanism:
-    """The test 3-RPR; its sidecar gives no reference, so the loader moves the one it closes near a
-    singularity (a ReferenceWarning): the forward kinematics does not depend on the reference.
+    """The test 3-RPR, loaded.
+
+    Its sidecar gives no reference, so the loader moves the one it closes near a singularity (a
+    ReferenceWarning): the forward kinematics does not depend on the reference.
     """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ReferenceWarning)
