@@ -171,7 +171,7 @@ def reference_findings(mech: Mechanism) -> tuple[Finding, ...]:
         out.append(
             Finding(
                 "note",
-                f"the reference is close to a {near[0]} singularity (margin {near[1]:.3g} < "
+                f"the reference is near a singularity ({near[0]}, margin {near[1]:.3g} < "
                 f"{REFERENCE_MARGIN}): maps and singularity searches start there and keep its modes; "
                 "move `reference` inside the workspace",
             )
