@@ -203,9 +203,15 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
             else f"Reference pose of the task frame {mech.task.frame}",
             ["coordinate", Column("value", fmt=".6g"), "unit"],
             [(dof, *_display(mech, dof, v)) for dof, v in zip(mech.task.dofs, x, strict=True)],
-            note="Revolute joint angles, shown in degrees."
-            if joints
-            else "Angles are roll-pitch-yaw (R = Rz Ry Rx), shown in degrees.",
+            note=(
+                (
+                    "Revolute joint angles, shown in degrees."
+                    if joints
+                    else "Angles are roll-pitch-yaw (R = Rz Ry Rx), shown in degrees."
+                )
+                if any(_is_angle(mech, dof) for dof in mech.task.dofs)
+                else ""
+            ),
         )
     if square and mech.n_actuators == mech.mobility:
         _transmission(section, mech, q)
