@@ -1,4 +1,4 @@
-"""Wrong answers refused (plm_pin/_checks.py and its callers), table-driven, messages by text.
+"""Wrong answers refused (plm_pin/_arguments.py and its callers), table-driven, messages by text.
 
 Classes: configurations off the closure manifold, NaN or negative tolerances, limits that admit
 nothing, zero load directions, bodies whose inertia overflows, body groups named like the body
