@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+import yaml
 import yourdfpy
 
 import plm_pin
@@ -676,3 +677,55 @@ def prr_reference(pose: tuple[float, float, float]) -> dict[str, float]:
         if i == 0:
             out["p0"] = float(pose[2] - (a[0] + math.pi / 2) - rod)
     return out
+
+
+# ----------------------------------------------------------------- slider-crank
+SLIDER_CRANK = {"r": 0.05, "l": 0.2}
+"""Crank and rod lengths [m] of the slider-crank below (the slider moves along x through the crank pivot)."""
+
+
+def slider_crank_position(t: float) -> float:
+    """Slider position [m] at crank angle ``t`` [rad]: x = r cos t + sqrt(l^2 - r^2 sin^2 t)."""
+    r, length = SLIDER_CRANK["r"], SLIDER_CRANK["l"]
+    return float(r * np.cos(t) + np.sqrt(length**2 - (r * np.sin(t)) ** 2))
+
+
+def slider_crank_ratio(t: float) -> float:
+    """dx/dt [m/rad] of :func:`slider_crank_position`: -r sin t (1 + r cos t / sqrt(l^2 - r^2 sin^2 t))."""
+    r, length = SLIDER_CRANK["r"], SLIDER_CRANK["l"]
+    return float(-r * np.sin(t) - r**2 * np.sin(t) * np.cos(t) / np.sqrt(length**2 - (r * np.sin(t)) ** 2))
+
+
+SLIDER_CRANK_URDF = """<?xml version="1.0"?>
+<robot name="slider_crank">
+  <link name="base"/>
+  <link name="crank"><inertial><mass value="0.1"/>
+    <inertia ixx="1e-5" iyy="1e-5" izz="2e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="rod"><inertial><origin xyz="0.1 0 0"/><mass value="0.2"/>
+    <inertia ixx="1e-5" iyy="7e-4" izz="7e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="rod_tip"/>
+  <link name="slider"><inertial><mass value="0.3"/>
+    <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="crank_joint" type="continuous"><parent link="base"/><child link="crank"/>
+    <axis xyz="0 0 1"/></joint>
+  <joint name="rod_joint" type="continuous"><parent link="crank"/><child link="rod"/>
+    <origin xyz="0.05 0 0"/><axis xyz="0 0 1"/></joint>
+  <joint name="rod_tip_fixed" type="fixed"><parent link="rod"/><child link="rod_tip"/>
+    <origin xyz="0.2 0 0"/></joint>
+  <joint name="slider_joint" type="prismatic"><parent link="base"/><child link="slider"/><axis xyz="1 0 0"/>
+    <limit lower="0.0" upper="0.4" effort="100" velocity="1"/></joint>
+</robot>
+"""
+SLIDER_CRANK_SIDECAR = {
+    "format": "plm-pin/1",
+    "closures": [{"name": "wrist_pin", "frames": ["rod_tip", "slider"], "type": "point"}],
+    "actuation": [{"joint": "crank_joint", "limits": [-5.0, 5.0]}],
+    "end_effector": {"joints": ["slider_joint"]},
+}
+
+
+def slider_crank(folder: Path) -> Path:
+    """Write the slider-crank (crank input, the slider's joint as task, no reference) into ``folder``."""
+    (folder / "slider_crank.urdf").write_text(SLIDER_CRANK_URDF)
+    (folder / "slider_crank.plm.yaml").write_text(yaml.safe_dump(SLIDER_CRANK_SIDECAR))
+    return folder / "slider_crank.urdf"

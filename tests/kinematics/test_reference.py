@@ -104,51 +104,19 @@ def test_a_mistyped_rod_moves_the_reference_and_check_fails(tmp_path):
     assert np.max(np.abs(pose - tb.PRR_POSE)) > 0.01
 
 
-SLIDER_CRANK_URDF = """<?xml version="1.0"?>
-<robot name="slider_crank">
-  <link name="base"/>
-  <link name="crank"><inertial><mass value="0.1"/>
-    <inertia ixx="1e-5" iyy="1e-5" izz="2e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="rod"><inertial><origin xyz="0.1 0 0"/><mass value="0.2"/>
-    <inertia ixx="1e-5" iyy="7e-4" izz="7e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="rod_tip"/>
-  <link name="slider"><inertial><mass value="0.3"/>
-    <inertia ixx="1e-4" iyy="1e-4" izz="1e-4" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="crank_joint" type="continuous"><parent link="base"/><child link="crank"/>
-    <axis xyz="0 0 1"/></joint>
-  <joint name="rod_joint" type="continuous"><parent link="crank"/><child link="rod"/>
-    <origin xyz="0.05 0 0"/><axis xyz="0 0 1"/></joint>
-  <joint name="rod_tip_fixed" type="fixed"><parent link="rod"/><child link="rod_tip"/>
-    <origin xyz="0.2 0 0"/></joint>
-  <joint name="slider_joint" type="prismatic"><parent link="base"/><child link="slider"/><axis xyz="1 0 0"/>
-    <limit lower="0.0" upper="0.4" effort="100" velocity="1"/></joint>
-</robot>
-"""
-SLIDER_CRANK_SIDECAR = {
-    "format": "plm-pin/1",
-    "closures": [{"name": "wrist_pin", "frames": ["rod_tip", "slider"], "type": "point"}],
-    "actuation": [{"joint": "crank_joint", "limits": [-5.0, 5.0]}],
-    "end_effector": {"joints": ["slider_joint"]},
-}
-
-
 def test_a_reference_closed_at_a_dead_centre_is_moved_off_it(tmp_path):
     """A slider-crank closed at its dead centre (working mode 0) is moved by its crank.
 
     The neutral configuration aligns crank and rod, the slider at r + l, where the task cannot
     move; the slider lands where the closed form x = r cos(t) + sqrt(l^2 - r^2 sin(t)^2) puts it.
     """
-    (tmp_path / "slider_crank.urdf").write_text(SLIDER_CRANK_URDF)
-    (tmp_path / "slider_crank.plm.yaml").write_text(yaml.safe_dump(SLIDER_CRANK_SIDECAR))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        mech = plm_pin.load(tmp_path / "slider_crank.urdf")
+        mech = plm_pin.load(tb.slider_crank(tmp_path))
     (warning,) = [w for w in caught if issubclass(w.category, ReferenceWarning)]
     assert "within 0 of a singularity; moved it away" in str(warning.message)
-    r, length = 0.05, 0.2
     (t,) = mech.actuator_positions(mech.q_ref)
     (x,) = task_pose(mech, mech.q_ref)
-    assert x == pytest.approx(r * np.cos(t) + np.sqrt(length**2 - (r * np.sin(t)) ** 2), abs=1e-10)
-    dx_dt = -r * np.sin(t) - r**2 * np.sin(t) * np.cos(t) / np.sqrt(length**2 - (r * np.sin(t)) ** 2)
-    assert abs(dx_dt) > 0.5 * r  # well off the dead centres (dx/dt = 0 at t = 0, pi)
+    assert x == pytest.approx(tb.slider_crank_position(t), abs=1e-10)
+    assert abs(tb.slider_crank_ratio(t)) > 0.5 * tb.SLIDER_CRANK["r"]  # off the dead centres (0 at t = 0, pi)
     assert reference_report(mech).working_mode in ((1,), (-1,))

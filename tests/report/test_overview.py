@@ -9,6 +9,7 @@ import yaml
 
 import plm_pin
 from plm_pin.report import find_study, run_study
+from plm_pin.warnings import ReferenceWarning
 from tests.report.conftest import rename
 
 SECTIONS = [
@@ -252,3 +253,24 @@ def test_overview_collision_free_slice_of_the_3d4m_is_the_carriage_gaps(limited_
     total = np.size(data["reachable"])
     assert summary["fraction reached free of self-collision"] == pytest.approx(free / total, abs=1e-12)
     assert 0.5 * summary["reachable fraction"] < free / total < summary["reachable fraction"]
+
+
+def test_overview_of_a_slider_crank_reports_its_transmission_in_metres(tmp_path):
+    """A slider-crank with its slider's joint as task: the transmission, and the pose in metres.
+
+    The transmission table holds the closed form dx/dt; the pose table says nothing of degrees.
+    """
+    from plm_pin.kinematics import task_pose
+    from tests import textbook as tb
+
+    with pytest.warns(ReferenceWarning):  # its sidecar gives no reference: moved off the dead centre
+        mech = plm_pin.load(tb.slider_crank(tmp_path))
+    (t,) = mech.actuator_positions(mech.q_ref)
+    result = run_study(find_study("overview"), tmp_path / "slider_crank.urdf")
+    rows = {row[0]: row[2] for row in result.block("transmission").rows}
+    assert rows["d slider_joint / d crank_joint"] == pytest.approx(tb.slider_crank_ratio(t), rel=1e-9)
+    (pose,) = [
+        b for s in result.sections for b in s.blocks if b.kind == "table" and "output joints" in b.title
+    ]
+    assert pose.rows == ((("slider_joint", pytest.approx(task_pose(mech, mech.q_ref)[0]), "m")),)
+    assert "degree" not in pose.note
