@@ -619,7 +619,7 @@ def _scene(section: Section, mech: Mechanism, forces: StaticForces | None) -> No
         extent = float(np.max(np.ptp(_frame_origins(mech, q), axis=0)))
         biggest = max((float(np.linalg.norm(a.force)) for a in arrows), default=0.0)
         scale = 0.25 * extent / biggest if biggest > 0.0 else 1.0
-        viewer.show_forces(q, [(a.point, a.force, f"{a.kind} {a.name}") for a in arrows], scale)
+        viewer.show_forces(q, arrows, scale)
         caption = (
             f"The mechanism at the reference configuration with its static forces ({scale:.3g} m/N); "
             "closure points in green."
