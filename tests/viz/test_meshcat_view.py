@@ -243,7 +243,7 @@ def test_a_frame_name_as_point_starts_the_arrow_at_that_frame():
 
 
 def test_force_arrows_are_drawn_as_they_are_returned():
-    """show_forces takes force_arrows(...) as is: an arrow per nonzero force at its point, named "kind name"."""
+    """show_forces takes force_arrows(...) as is: an arrow per nonzero force at its point, named by kind."""
     from plm_pin.statics import static_forces
     from plm_pin.viz import force_arrows
 
