@@ -39,7 +39,7 @@ from .kinematics import forward_kinematics, inverse_kinematics, task_pose
 from .kinematics.reference import reference_findings, reference_report
 from .loading import load
 from .models.registry import PRESETS
-from .report import Animation, Study, find_study, run_study, study_names, write_index, write_report
+from .report import Animation, Study, StudyCase, find_study, run_study, study_names, write_index, write_report
 from .report.animation import parse_case
 from .report.render import require_renderer
 from .report.study import compute_animation, studies_hint
@@ -754,10 +754,67 @@ def _report_runs(target: str, mechanism: str | None) -> list[tuple[Study, str | 
     )
 
 
-def _regenerate(study: Study, mechanism: str | None, out: Path) -> str:
-    """The shell command that writes this study's report again."""
+def _regenerate(study: Study, mechanism: str | None, out: Path, case_words: list[str]) -> str:
+    """The shell command that writes this study's report again (``case_words``: its case options)."""
     chosen = ["--mechanism", mechanism] if mechanism is not None else []
-    return shlex.join(["plm-pin", "report", study.name, *chosen, "--out", str(out)])
+    return shlex.join(["plm-pin", "report", study.name, *chosen, *case_words, "--out", str(out)])
+
+
+def _named_numbers(text: str, option: str) -> dict[str, float]:
+    """``NAME=VALUE,NAME=VALUE`` as a dict [m, rad].
+
+    Raises:
+        InvalidInput: an item without ``=``, a repeated name, a value that is not a finite number.
+    """
+    out: dict[str, float] = {}
+    for item in text.split(","):
+        name, sep, value = item.strip().partition("=")
+        if not sep or not name:
+            raise InvalidInput(
+                f"{option} {text!r}: write NAME=VALUE items, comma-separated (e.g. x=0.01,y=0.08)"
+            )
+        if name in out:
+            raise InvalidInput(f"{option} {text!r}: {name!r} is given twice")
+        number = _numbers(value, f"{option} {item!r}")
+        if len(number) != 1 or not np.isfinite(number[0]):
+            raise InvalidInput(f"{option} {item!r}: {value!r} is not a finite number")
+        out[name] = number[0]
+    return out
+
+
+def _study_case(
+    load_text: str | None, pose_text: str | None, mode_text: str | None, ranges: dict[str, str | None]
+) -> tuple[StudyCase, list[str]]:
+    """The case the ``report`` options ask for, and the options as words (for the regenerate command).
+
+    Raises:
+        InvalidInput: malformed numbers, pose items, signs or ranges (names are checked by the study).
+    """
+    words: list[str] = []
+    load_values = None
+    if load_text is not None:
+        load_values = tuple(_numbers(load_text, "--load"))
+        if not np.all(np.isfinite(load_values)):
+            raise InvalidInput(f"--load {load_text!r}: the values must be finite numbers [N, N m]")
+        words += ["--load", load_text]
+    pose = {} if pose_text is None else _named_numbers(pose_text, "--pose")
+    if pose_text is not None:
+        words += ["--pose", pose_text]
+    mode = None
+    if mode_text is not None:
+        parts = [w.strip() for w in mode_text.split(",")]
+        if any(w not in MODE_SIGNS for w in parts):
+            raise InvalidInput(
+                f"--mode {mode_text!r}: give one sign (+ or -) per leg, comma-separated, e.g. --mode=+,-"
+            )
+        mode = tuple(MODE_SIGNS[w] for w in parts)
+        words += [f"--mode={mode_text}"]
+    values = {}
+    for axis, text in ranges.items():
+        if text is not None:
+            values[axis] = tuple(float(v) for v in _grid_range(text, f"--{axis}"))
+            words += [f"--{axis}", text]
+    return StudyCase(load=load_values, pose=pose, mode=mode, ranges=values), words
 
 
 def _show_step(progress: Progress, task: TaskID, study: str) -> Callable[[str], None]:
@@ -778,6 +835,31 @@ def report(
         str | None,
         typer.Option("--mechanism", help="mechanism of a study that takes one (overview): preset or path"),
     ] = None,
+    load_text: Annotated[
+        str | None,
+        typer.Option(
+            "--load",
+            help="overview: a load, one value per task coordinate, comma-separated: fx,fy,mz [N, N m] on the "
+            "task frame (world axes), or a force or torque per output joint of a joint task",
+        ),
+    ] = None,
+    pose_text: Annotated[
+        str | None,
+        typer.Option(
+            "--pose",
+            help="overview: the pose to study, NAME=VALUE,... task coordinates [m, rad] (others: reference)",
+        ),
+    ] = None,
+    mode: Annotated[
+        str | None,
+        typer.Option("--mode", help="overview: the working mode, one sign per leg (--mode=+,-,+,-)"),
+    ] = None,
+    x: XOption = None,
+    y: YOption = None,
+    z: ZOption = None,
+    rx: RxOption = None,
+    ry: RyOption = None,
+    rz: RzOption = None,
 ) -> None:
     """Write study reports: per study a self-contained HTML page and results.json, then index.html.
 
@@ -788,12 +870,28 @@ def report(
     require_renderer()  # a missing report extra fails now, not after the studies ran
     try:
         runs = _report_runs(target, mechanism)
-        root = output_folder(out)
+        case, case_words = _study_case(
+            load_text, pose_text, mode, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz}
+        )
+        if not case.empty and not all(study.takes_case for study, _ in runs):
+            raise InvalidInput(
+                "--load, --pose, --mode and slice ranges go with the overview of one mechanism "
+                "(plm-pin report NAME|PATH ... or plm-pin report overview --mechanism NAME|PATH ...)"
+            )
     except PlmError as exc:
         raise _fail(exc) from None
     for _, chosen in runs:
         if chosen is not None:
-            _load(chosen)  # a broken description fails here, with the loader's message
+            mech = _load(chosen)  # a broken description fails here, with the loader's message
+            if not case.empty:
+                from .report.overview import overview_case
+
+                with _reported():
+                    overview_case(mech, case)  # a bad case fails here, in one line
+    try:
+        root = output_folder(out)
+    except PlmError as exc:
+        raise _fail(exc) from None
     columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
     progress = Progress(
         *columns, TimeElapsedColumn(), console=errors, transient=True, disable=not errors.is_terminal
@@ -807,8 +905,9 @@ def report(
                 result = run_study(
                     study,
                     chosen,
-                    command=_regenerate(study, chosen, out),
+                    command=_regenerate(study, chosen, out, case_words),
                     observer=_show_step(progress, task, study.name),
+                    case=case if study.takes_case else None,
                 )
                 path = write_report(result, root)
             except PlmError as exc:

@@ -718,3 +718,94 @@ def test_map_writes_nowhere_but_an_existing_folder(tmp_path):
     args = ["map", "harada2011_3d4m", "--x", "-0.01:0.01:2", "--y", "0.07:0.09:2", "--csv", str(out)]
     _assert_clean_failure(runner.invoke(app, args), f"--csv {out}: the folder {out.parent} does not exist")
     assert list(tmp_path.iterdir()) == []
+
+
+def _report_json(out: Path, folder: str) -> dict:
+    return json.loads((out / folder / "results.json").read_text())
+
+
+def _table(data: dict, title: str) -> list[list]:
+    """The rows of the first table titled ``title`` in a report's results.json."""
+    return next(b["rows"] for s in data["sections"] for b in s["blocks"] if b.get("title") == title)
+
+
+def test_report_load_pose_and_mode_reach_the_overview_statics(tmp_path):
+    """`report 3d4m --load --pose --mode --x --y`: f_c is static_forces at eq. (2)'s q with that wrench."""
+    from plm_pin.statics import static_forces
+    from tests.conftest import prrrp_paper_configuration
+
+    out = tmp_path / "reports"
+    case = ["--load", "3,-2,0.1", "--pose", "x=0.01,y=0.07", "--mode=+,-,+,-"]
+    ranges = ["--x", "-0.02:0.02:5", "--y", "0.05:0.09:4"]
+    result = runner.invoke(app, ["report", "harada2011_3d4m", *case, *ranges, "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    data = _report_json(out, "overview-harada2011_3d4m")
+    mech = plm_pin.load("harada2011_3d4m")
+    pose = (0.01, 0.07, -math.radians(20.0))  # rz stays the reference's, Harada's -20 deg
+    q = prrrp_paper_configuration(mech, pose, (0.14,) * 4, 0.05, (-1, 1, -1, 1))  # mode +,-,+,-
+    expected = static_forces(mech, q, [3.0, -2.0, 0.1]).f_c
+    rows = _table(data, "Actuator forces f_c")
+    assert [r[0] for r in rows] == ["slider1", "slider2", "slider3", "slider4"]
+    np.testing.assert_allclose([r[2] for r in rows], expected, atol=1e-9)
+    assert np.max(np.abs(expected - static_forces(mech, q).f_c)) > 1.0  # the load counts
+    figure = next(
+        b
+        for s in data["sections"]
+        for b in s["blocks"]
+        if b["kind"] == "figure" and "slice" in b.get("data", {})
+    )
+    values = figure["data"]["slice"]["values"]
+    np.testing.assert_allclose(values[0], np.linspace(-0.02, 0.02, 5), atol=1e-15)
+    np.testing.assert_allclose(values[1], np.linspace(0.05, 0.09, 4), atol=1e-15)
+    assert figure["data"]["slice"]["working_mode"] == [1, -1, 1, -1]
+    assert data["command"].endswith(" ".join([*case, *ranges, "--out", str(out)]))
+
+
+def test_report_load_on_the_fourbar_rocker_reaches_the_statics(tmp_path):
+    """`report fourbar --load 0.5 --pose rz=1.8`: the crank torque is static_forces at that pose and load."""
+    from plm_pin.kinematics import inverse_kinematics
+    from plm_pin.statics import static_forces
+
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", "fourbar", "--load", "0.5", "--pose", "rz=1.8", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    rows = _table(_report_json(out, "overview-fourbar"), "Actuator forces f_c")
+    mech = plm_pin.load("fourbar")
+    q = inverse_kinematics(mech, [1.8]).q
+    assert rows[0][2] == pytest.approx(static_forces(mech, q, [0.5]).f_c[0], abs=1e-10)
+    assert rows[0][2] != pytest.approx(static_forces(mech, q).f_c[0], abs=1e-3)  # the load counts
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["harada2011_3d4m", "--load", "3,-2"],
+            "--load: give 3 finite numbers, one per task coordinate (fx,fy,mz) [N, N m], got [3.0, -2.0]",
+        ),
+        (["harada2011_3d4m", "--load", "3,a,1"], "--load: expected comma-separated numbers, got '3,a,1'"),
+        (
+            ["harada2011_3d4m", "--pose", "q=1"],
+            "--pose: 'q' is not a task coordinate of harada2011_3d4m; they are ['x', 'y', 'rz']",
+        ),
+        (
+            ["harada2011_3d4m", "--pose", "x:1"],
+            "--pose 'x:1': write NAME=VALUE items, comma-separated (e.g. x=0.01,y=0.08)",
+        ),
+        (["harada2011_3d4m", "--mode=+,-"], "--mode must hold 4 signs (+1 or -1), one per leg; got (1, -1)"),
+        (
+            ["harada2011_3d4m", "--x", "0.1:0:3"],
+            "--x '0.1:0:3': START must be below STOP; write START:STOP:COUNT (e.g. --x -0.05:0.05:21)",
+        ),
+        (
+            ["all", "--load", "1,2,3"],
+            "--load, --pose, --mode and slice ranges go with the overview of one mechanism "
+            "(plm-pin report NAME|PATH ... or plm-pin report overview --mechanism NAME|PATH ...)",
+        ),
+    ],
+)
+def test_report_bad_case_options_are_one_error_line(tmp_path, args, message):
+    """Malformed or mismatched --load, --pose, --mode, ranges: one error line, nothing written."""
+    out = tmp_path / "reports"
+    _assert_clean_failure(runner.invoke(app, ["report", *args, "--out", str(out)]), message)
+    assert not out.exists()
