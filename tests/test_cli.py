@@ -809,3 +809,17 @@ def test_report_bad_case_options_are_one_error_line(tmp_path, args, message):
     out = tmp_path / "reports"
     _assert_clean_failure(runner.invoke(app, ["report", *args, "--out", str(out)]), message)
     assert not out.exists()
+
+
+def test_shell_guide_examples_run(tmp_path, monkeypatch):
+    """Every `$ plm-pin ...` line of docs/guide/shell.md runs as written (in an empty folder), exit code 0."""
+    import shlex
+
+    page = Path(__file__).resolve().parents[1] / "docs" / "guide" / "shell.md"
+    commands = re.findall(r"^\$ plm-pin (.+)$", page.read_text(encoding="utf-8"), flags=re.M)
+    assert {c.split()[0] for c in commands} == {"ik", "fk", "map", "report"}
+    monkeypatch.chdir(tmp_path)
+    for command in commands:
+        result = runner.invoke(app, shlex.split(command))
+        assert result.exit_code == 0, f"{command}\n{result.output}"
+    assert (tmp_path / "xy.csv").is_file() and (tmp_path / "reports" / "index.html").is_file()
