@@ -823,3 +823,29 @@ def test_shell_guide_examples_run(tmp_path, monkeypatch):
         result = runner.invoke(app, shlex.split(command))
         assert result.exit_code == 0, f"{command}\n{result.output}"
     assert (tmp_path / "xy.csv").is_file() and (tmp_path / "reports" / "index.html").is_file()
+
+
+def test_report_load_moves_a_horizontal_table(tmp_path):
+    """Star triangle (gravity normal to its plane): --load gives J_ce^T f_c = -load (virtual work); it moves."""
+    from plm_pin.kinematics import inverse_kinematics, task_pose
+
+    out = tmp_path / "reports"
+    load = np.array([5.0, -1.0, 0.2])
+    result = runner.invoke(
+        app, ["report", "enferadi2017_star_triangle", "--load", "5,-1,0.2", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    data = _report_json(out, "overview-enferadi2017_star_triangle")
+    f_c = np.array([r[2] for r in _table(data, "Actuator forces f_c")])
+    mech = plm_pin.load("enferadi2017_star_triangle")
+    x0, h = task_pose(mech, mech.q_ref), 1e-6
+    J = np.column_stack(  # J_ce by central differences of the inverse kinematics
+        [
+            (inverse_kinematics(mech, x0 + h * e).actuators - inverse_kinematics(mech, x0 - h * e).actuators)
+            / (2 * h)
+            for e in np.eye(3)
+        ]
+    )
+    np.testing.assert_allclose(J.T @ f_c, -load, atol=1e-7)  # actuators' work + load's work = 0
+    simulation = {r[0]: r[1] for r in _table(data, "Passive simulation")}
+    assert simulation["largest joint speed"] > 0.01  # the load moves it (gravity alone does not)
