@@ -826,7 +826,7 @@ def test_shell_guide_examples_run(tmp_path, monkeypatch):
 
 
 def test_report_load_moves_a_horizontal_table(tmp_path):
-    """Star triangle (gravity normal to its plane): --load gives J_ce^T f_c = -load (virtual work); it moves."""
+    """Star triangle, gravity normal to its plane: --load gives J_ce^T f_c = -load; the simulation moves."""
     from plm_pin.kinematics import inverse_kinematics, task_pose
 
     out = tmp_path / "reports"
