@@ -254,6 +254,8 @@ def _check_arrows(
     out = []
     labels: set[str] = set()
     for k, arrow in enumerate(arrows):
+        point: ArrayLike | str
+        vector: ArrayLike
         if isinstance(arrow, ForceArrow):
             point, vector, label = arrow.point, arrow.force, f"{arrow.kind} {arrow.name}"
         else:
