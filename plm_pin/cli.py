@@ -319,7 +319,7 @@ def fk_command(
     target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
     assignments: Annotated[
         list[str] | None,
-        typer.Argument(help="actuator positions JOINT=VALUE [m or rad]; the others stay at their reference"),
+        typer.Argument(help="actuator positions JOINT=VALUE (m or rad); the others stay at their reference"),
     ] = None,
     all_modes: Annotated[
         bool, typer.Option("--all", help="every assembly mode, certified where possible")
@@ -450,7 +450,7 @@ def ik_command(
     assignments: Annotated[
         list[str] | None,
         typer.Argument(
-            help="the task pose NAME=VALUE [m or rad], every task coordinate (e.g. x=0 y=0.08 rz=-0.3)"
+            help="the task pose NAME=VALUE (m or rad), every task coordinate (e.g. x=0 y=0.08 rz=-0.3)"
         ),
     ] = None,
     mode: Annotated[
@@ -519,7 +519,7 @@ AXES = ("x", "y", "z", "rx", "ry", "rz")
 def _axis_option(axis: str) -> Any:
     return typer.Option(
         f"--{axis}",
-        help=f"vary {axis} over START:STOP:COUNT [{'rad' if axis.startswith('r') else 'm'}] "
+        help=f"vary {axis} over START:STOP:COUNT, in {'rad' if axis.startswith('r') else 'm'} "
         "(COUNT >= 2 evenly spaced values)",
     )
 
@@ -839,7 +839,7 @@ def report(
         str | None,
         typer.Option(
             "--load",
-            help="overview: a load, one value per task coordinate, comma-separated: fx,fy,mz [N, N m] on the "
+            help="overview: a load, one value per task coordinate, comma-separated: fx,fy,mz (N, N m) on the "
             "task frame (world axes), or a force or torque per output joint of a joint task",
         ),
     ] = None,
@@ -847,7 +847,7 @@ def report(
         str | None,
         typer.Option(
             "--pose",
-            help="overview: the pose to study, NAME=VALUE,... task coordinates [m, rad] (others: reference)",
+            help="overview: the pose to study, NAME=VALUE,... task coordinates (m, rad) (others: reference)",
         ),
     ] = None,
     mode: Annotated[
