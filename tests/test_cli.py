@@ -849,3 +849,16 @@ def test_report_load_moves_a_horizontal_table(tmp_path):
     np.testing.assert_allclose(J.T @ f_c, -load, atol=1e-7)  # actuators' work + load's work = 0
     simulation = {r[0]: r[1] for r in _table(data, "Passive simulation")}
     assert simulation["largest joint speed"] > 0.01  # the load moves it (gravity alone does not)
+
+
+def test_report_one_range_sweeps_that_coordinate(tmp_path):
+    """`report fourbar --rz 1.6:1.8:3 --mode=+`: the sweep is over those 3 angles, in that working mode."""
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", "fourbar", "--rz", "1.6:1.8:3", "--mode=+", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    data = _report_json(out, "overview-fourbar")
+    sweep = next(
+        b["data"]["slice"] for s in data["sections"] for b in s["blocks"] if "slice" in b.get("data", {})
+    )
+    assert sweep["axes"] == ["rz"] and sweep["working_mode"] == [1]
+    np.testing.assert_allclose(sweep["values"][0], [1.6, 1.7, 1.8], atol=1e-15)
