@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import csv
 import json
 import shlex
 import sys
@@ -38,7 +39,7 @@ from .kinematics import forward_kinematics, inverse_kinematics, task_pose
 from .kinematics.reference import reference_findings, reference_report
 from .loading import load
 from .models.registry import PRESETS
-from .report import Animation, Study, find_study, run_study, study_names, write_index, write_report
+from .report import Animation, Study, StudyCase, find_study, run_study, study_names, write_index, write_report
 from .report.animation import parse_case
 from .report.render import require_renderer
 from .report.study import compute_animation, studies_hint
@@ -48,6 +49,7 @@ from .sweep.execution import DEFAULT_CHUNK
 from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
+from .workspace import POSE_METRICS, WorkspaceSlice, manipulability_unit, workspace_map
 
 
 class _Commands(TyperGroup):
@@ -317,7 +319,7 @@ def fk_command(
     target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
     assignments: Annotated[
         list[str] | None,
-        typer.Argument(help="actuator positions JOINT=VALUE [m or rad]; the others stay at their reference"),
+        typer.Argument(help="actuator positions JOINT=VALUE (m or rad); the others stay at their reference"),
     ] = None,
     all_modes: Annotated[
         bool, typer.Option("--all", help="every assembly mode, certified where possible")
@@ -349,6 +351,358 @@ def fk_command(
     for i, s in enumerate(modes):
         table.add_row(str(i + 1), *(f"{v:.6f}" for v in s.x), f"{s.residual_norm:.1e}", certificate)
     console.print(table)
+
+
+def _task_dofs(mech: Mechanism, what: str) -> tuple[str, ...]:
+    """The task coordinates of ``mech``.
+
+    Raises:
+        InvalidInput: a mechanism without a task (``what`` names the option that needs one).
+    """
+    if mech.task is None:
+        raise InvalidInput(f"{what}: {mech.name} has no task (`end_effector` in its sidecar)")
+    return tuple(mech.task.dofs)
+
+
+def _task_units(mech: Mechanism) -> dict[str, str]:
+    """The unit of each task coordinate: rad for angles (rotations, revolute output joints), else m."""
+    task = mech.task_compiled
+    dofs = _task_dofs(mech, "task units")
+    angles = task.angles if task is not None else []
+    return {d: "rad" if k in angles else "m" for k, d in enumerate(dofs)}
+
+
+def _task_values(mech: Mechanism, words: list[str], what: str) -> dict[str, float]:
+    """Task coordinates from ``NAME=VALUE`` words [m, rad].
+
+    Raises:
+        InvalidInput: a malformed word, an unknown or repeated coordinate, a value that is not a
+            finite number; the message names the word and the task's coordinates.
+    """
+    dofs = _task_dofs(mech, what)
+    values: dict[str, float] = {}
+    for word in words:
+        name, sep, text = word.partition("=")
+        if not sep or name not in dofs:
+            raise InvalidInput(
+                f"{what} {word!r}: write NAME=VALUE with NAME a task coordinate of {mech.name}, "
+                f"one of {list(dofs)}"
+            )
+        if name in values:
+            raise InvalidInput(f"{what} {word!r}: {name!r} is given twice")
+        try:
+            value = float(text)
+        except ValueError:
+            raise InvalidInput(f"{what} {word!r}: {text!r} is not a number") from None
+        if not np.isfinite(value):
+            raise InvalidInput(f"{what} {word!r}: {text!r} is not a finite number")
+        values[name] = value
+    return values
+
+
+MODE_SIGNS = {"+": 1, "+1": 1, "1": 1, "-": -1, "-1": -1}
+"""The words of a working-mode sign in ``--mode`` (comma-separated, one per square leg)."""
+
+
+def _mode_signs(mech: Mechanism, text: str | None) -> tuple[int, ...] | None:
+    """The working mode written as ``+,-,...`` (None: not given).
+
+    Raises:
+        InvalidInput: a word that is not a sign, or not one sign per square leg.
+    """
+    if text is None:
+        return None
+    n = sum(leg.square for leg in mech.legs)
+    words = [w.strip() for w in text.split(",")]
+    if len(words) != n or any(w not in MODE_SIGNS for w in words):
+        example = ",".join("+-"[k % 2] for k in range(n))
+        raise InvalidInput(
+            f"--mode {text!r}: give {n} signs (+ or -), comma-separated, one per leg of {mech.name}, "
+            f"e.g. --mode={example}"
+        )
+    return tuple(MODE_SIGNS[w] for w in words)
+
+
+def _mode_text(mode: tuple[int, ...] | None) -> str:
+    """A working mode as ``--mode`` takes it: ``+,-,...`` (0 for a leg at an inverse singularity)."""
+    if mode is None:
+        return "none"
+    return ",".join({1: "+", -1: "-"}.get(int(m), "0") for m in mode) or "none (no square leg)"
+
+
+def _joint_values(mech: Mechanism, q: np.ndarray) -> dict[str, float | list[float]]:
+    """Each joint's configuration entries [m or rad]: one number, or a list for multi-entry joints."""
+    out: dict[str, float | list[float]] = {}
+    for name in mech.joint_names:
+        joint = mech.model.joints[mech.model.getJointId(name)]
+        part = [float(v) for v in q[joint.idx_q : joint.idx_q + joint.nq]]
+        out[name] = part[0] if len(part) == 1 else part
+    return out
+
+
+_UNITS = {"prismatic": "m", "revolute": "rad"}
+"""The unit of a one-axis joint's position, by joint type."""
+
+
+@app.command("ik")
+def ik_command(
+    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
+    assignments: Annotated[
+        list[str] | None,
+        typer.Argument(
+            help="the task pose NAME=VALUE (m or rad), every task coordinate (e.g. x=0 y=0.08 rz=-0.3)"
+        ),
+    ] = None,
+    mode: Annotated[
+        str | None,
+        typer.Option("--mode", help="working mode: one sign per leg, comma-separated (--mode=+,-,+,-)"),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
+) -> None:
+    """Inverse kinematics at a task pose: joints, actuator positions, working mode, closure residual."""
+    mech = _load(target)
+    with _reported():
+        dofs = _task_dofs(mech, "ik")
+        values = _task_values(mech, assignments or [], "task coordinate")
+        missing = [d for d in dofs if d not in values]
+        if missing:
+            raise InvalidInput(
+                f"missing task coordinates {missing}: give every one of {list(dofs)} as NAME=VALUE"
+            )
+        sol = inverse_kinematics(mech, [values[d] for d in dofs], mode=_mode_signs(mech, mode))
+        actuators, working = sol.actuators, sol.mode
+        closure = float(np.max(np.abs(mech.closure_residual(sol.q)), initial=0.0))
+    kinds = {j["name"]: j["type"] for j in mech.summary()["joints"]}
+    for joint, by in sol.limit_violations.items():
+        errors.print(
+            f"[yellow]warning:[/] joint {escape(joint)} is outside its limits by {by:.3g} "
+            f"{_UNITS.get(kinds.get(joint, ''), 'm or rad')}",
+            highlight=False,
+            soft_wrap=True,
+        )
+    joints = _joint_values(mech, np.asarray(sol.q))
+    names = [a.joint for a in mech.actuators]
+    if as_json:
+        out = {
+            "mechanism": mech.name,
+            "x": dict(zip(dofs, sol.x.tolist(), strict=True)),
+            "q": joints,
+            "actuators": dict(zip(names, actuators.tolist(), strict=True)),
+            "working_mode": list(working),
+            "closure_residual": closure,
+            "residual_norm": sol.residual_norm,
+            "limit_violations": dict(sol.limit_violations),
+        }
+        console.print_json(json.dumps(out))
+        return
+    units = _task_units(mech)
+    table = Table(title=escape(f"{mech.name}: inverse kinematics"), show_header=False)
+    table.add_column("item")
+    table.add_column("value", justify="right")
+    table.add_column("unit")
+    for dof, v in zip(dofs, sol.x, strict=True):
+        table.add_row(escape(f"task {dof}"), f"{v:.9g}", units[dof])
+    for joint, v in joints.items():
+        text = f"{v:.9g}" if isinstance(v, float) else ", ".join(f"{e:.9g}" for e in v)
+        table.add_row(escape(f"joint {joint}"), text, _UNITS.get(kinds.get(joint, ""), ""))
+    for act, v in zip(mech.actuators, actuators, strict=True):
+        table.add_row(escape(f"actuator {act.joint}"), f"{v:.9g}", _UNITS.get(act.kind, ""))
+    table.add_row("working mode", _mode_text(working), "")
+    table.add_row("closure residual", f"{closure:.3g}", "m, rad")
+    console.print(table)
+
+
+AXES = ("x", "y", "z", "rx", "ry", "rz")
+"""The task coordinates a slice can vary: options ``--x START:STOP:COUNT`` of ``map`` and ``report``."""
+
+
+def _axis_option(axis: str) -> Any:
+    return typer.Option(
+        f"--{axis}",
+        help=f"vary {axis} over START:STOP:COUNT, in {'rad' if axis.startswith('r') else 'm'} "
+        "(COUNT >= 2 evenly spaced values)",
+    )
+
+
+XOption = Annotated[str | None, _axis_option("x")]
+YOption = Annotated[str | None, _axis_option("y")]
+ZOption = Annotated[str | None, _axis_option("z")]
+RxOption = Annotated[str | None, _axis_option("rx")]
+RyOption = Annotated[str | None, _axis_option("ry")]
+RzOption = Annotated[str | None, _axis_option("rz")]
+ModeOption = Annotated[
+    str | None,
+    typer.Option("--mode", help="working mode: one sign per leg, comma-separated (--mode=+,-,+,-)"),
+]
+
+
+def _grid_range(text: str, option: str) -> np.ndarray:
+    """The values ``START:STOP:COUNT`` stands for: COUNT evenly spaced from START to STOP.
+
+    Raises:
+        InvalidInput: naming the option, the text and what is wrong with it.
+    """
+    parts = text.split(":")
+    problem = None
+    if len(parts) != 3:
+        problem = f"expected 3 fields separated by ':', got {len(parts)}"
+    else:
+        try:
+            start, stop = float(parts[0]), float(parts[1])
+        except ValueError:
+            start = stop = float("nan")
+        try:
+            count = int(parts[2])
+        except ValueError:
+            count = 0
+            problem = f"COUNT {parts[2]!r} is not a whole number"
+        if not (np.isfinite(start) and np.isfinite(stop)):
+            problem = "START and STOP must be finite numbers"
+        elif start >= stop:
+            problem = "START must be below STOP"
+        elif problem is None and count < 2:
+            problem = "COUNT must be at least 2"
+    if problem is not None:
+        raise InvalidInput(
+            f"{option} {text!r}: {problem}; write START:STOP:COUNT (e.g. {option} -0.05:0.05:21)"
+        )
+    return np.linspace(start, stop, count)
+
+
+def _slice_ranges(mech: Mechanism, given: dict[str, str | None]) -> dict[str, np.ndarray]:
+    """The varied task coordinates and their values, in the task's order (empty when none given).
+
+    Raises:
+        InvalidInput: a malformed range, or a coordinate the task does not have.
+    """
+    ranges = {a: _grid_range(text, f"--{a}") for a, text in given.items() if text is not None}
+    if not ranges:
+        return {}
+    dofs = _task_dofs(mech, " ".join(f"--{a}" for a in ranges))
+    for a in ranges:
+        if a not in dofs:
+            raise InvalidInput(
+                f"--{a}: {mech.name}'s task has no coordinate {a!r}; its coordinates are {list(dofs)}"
+            )
+    return {d: ranges[d] for d in dofs if d in ranges}
+
+
+def _csv_target(path: Path, force: bool) -> Path:
+    """``path`` checked as the CSV file to write: its folder exists, and it is new unless ``force``.
+
+    Raises:
+        InvalidInput: a missing folder, a folder in its place, an existing file without ``force``.
+    """
+    if not path.parent.is_dir():
+        raise InvalidInput(f"--csv {path}: the folder {path.parent} does not exist")
+    if path.is_dir():
+        raise InvalidInput(f"--csv {path}: a folder stands there; give a file name")
+    if path.exists() and not force:
+        raise InvalidInput(f"--csv {path}: the file exists; give --force to overwrite it")
+    return path
+
+
+def _metric_names(text: str) -> list[str]:
+    """The metrics ``--metric`` asks for: comma-separated names of POSE_METRICS, or ``all``.
+
+    Raises:
+        InvalidInput: an unknown name, listing the metrics.
+    """
+    if text.strip() == "all":
+        return list(POSE_METRICS)
+    names = [m.strip() for m in text.split(",")]
+    for name in names:
+        if name not in POSE_METRICS:
+            raise InvalidInput(f"--metric {name!r}: unknown metric; metrics are {list(POSE_METRICS)} or all")
+    return list(dict.fromkeys(names))
+
+
+def _write_map_csv(path: Path, mech: Mechanism, grid: WorkspaceSlice, metrics: list[str]) -> None:
+    """One row per grid pose: the task coordinates, whether reached, the metrics (nan where not)."""
+    units = _task_units(mech)
+    metric_units = {name: "-" for name in POSE_METRICS} | {"manipulability": manipulability_unit(mech)}
+    header = [
+        *(f"{d} [{units[d]}]" for d in grid.dofs),
+        "reachable",
+        *(f"{m} [{metric_units[m]}]" for m in metrics),
+    ]
+    poses = grid.poses().reshape(-1, len(grid.dofs))
+    reached = grid.reachable.reshape(-1)
+    values = [grid.metric(m).reshape(-1) for m in metrics]
+    with atomic_path(path) as tmp, tmp.open("w", newline="", encoding="utf-8") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(header)
+        for k in range(reached.size):
+            writer.writerow(
+                [*(repr(float(v)) for v in poses[k]), int(reached[k]), *(repr(float(v[k])) for v in values)]
+            )
+
+
+@app.command("map")
+def map_command(
+    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
+    csv_path: Annotated[Path, typer.Option("--csv", help="the CSV file to write (its folder must exist)")],
+    x: XOption = None,
+    y: YOption = None,
+    z: ZOption = None,
+    rx: RxOption = None,
+    ry: RyOption = None,
+    rz: RzOption = None,
+    fixed: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--fixed", help="a fixed task coordinate NAME=VALUE, repeatable (default: the reference's)"
+        ),
+    ] = None,
+    metric: Annotated[
+        str, typer.Option("--metric", help=f"comma-separated, among {', '.join(POSE_METRICS)}, or all")
+    ] = "manipulability",
+    mode: ModeOption = None,
+    force: Annotated[bool, typer.Option("--force", help="overwrite an existing CSV file")] = False,
+) -> None:
+    """A workspace map over two task coordinates, written as CSV (one row per pose) and summarised."""
+    mech = _load(target)
+    with _reported():
+        ranges = _slice_ranges(mech, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz})
+        dofs = _task_dofs(mech, "map")
+        if len(ranges) != 2:
+            raise InvalidInput(
+                f"a map varies two task coordinates: give two of {[f'--{d}' for d in dofs if d in AXES]}, "
+                f"got {len(ranges)}"
+            )
+        values = _task_values(mech, fixed or [], "--fixed")
+        both = [d for d in values if d in ranges]
+        if both:
+            raise InvalidInput(f"--fixed {both[0]}: it is also varied (--{both[0]}); give it one way")
+        metrics = _metric_names(metric)
+        path = _csv_target(csv_path, force)
+        pose = task_pose(mech, mech.q_ref)
+        for d, v in values.items():
+            pose[dofs.index(d)] = v
+        (a, va), (b, vb) = ranges.items()
+        grid = workspace_map(mech, (a, b), (va, vb), pose, mode=_mode_signs(mech, mode))
+    _write_map_csv(path, mech, grid, metrics)
+    units = _task_units(mech)
+    table = Table(title=escape(f"{mech.name}: workspace map over {a} and {b}"), show_header=False)
+    table.add_column("item")
+    table.add_column("value", justify="right")
+    table.add_column("unit")
+    table.add_row("poses", f"{va.size} x {vb.size} = {va.size * vb.size}", "")
+    for d in dofs:
+        if d not in ranges:
+            table.add_row(escape(f"fixed {d}"), f"{grid.pose[dofs.index(d)]:.6g}", units[d])
+    table.add_row("reachable fraction", f"{grid.reachable_fraction:.3g}", "-")
+    table.add_row("working mode", _mode_text(grid.working_mode), "")
+    w_unit = manipulability_unit(mech)
+    for m in metrics:
+        reached = grid.metric(m)[grid.reachable]
+        unit_text = w_unit if m == "manipulability" else "-"
+        low, high = (
+            (f"{float(np.min(reached)):.4g}", f"{float(np.max(reached)):.4g}") if reached.size else ("-", "-")
+        )
+        table.add_row(escape(f"{m} min / max"), f"{low} / {high}", escape(unit_text))
+    console.print(table)
+    console.print(f"wrote {path}", markup=False, highlight=False, soft_wrap=True)
 
 
 @app.command("export")
@@ -400,10 +754,67 @@ def _report_runs(target: str, mechanism: str | None) -> list[tuple[Study, str | 
     )
 
 
-def _regenerate(study: Study, mechanism: str | None, out: Path) -> str:
-    """The shell command that writes this study's report again."""
+def _regenerate(study: Study, mechanism: str | None, out: Path, case_words: list[str]) -> str:
+    """The shell command that writes this study's report again (``case_words``: its case options)."""
     chosen = ["--mechanism", mechanism] if mechanism is not None else []
-    return shlex.join(["plm-pin", "report", study.name, *chosen, "--out", str(out)])
+    return shlex.join(["plm-pin", "report", study.name, *chosen, *case_words, "--out", str(out)])
+
+
+def _named_numbers(text: str, option: str) -> dict[str, float]:
+    """``NAME=VALUE,NAME=VALUE`` as a dict [m, rad].
+
+    Raises:
+        InvalidInput: an item without ``=``, a repeated name, a value that is not a finite number.
+    """
+    out: dict[str, float] = {}
+    for item in text.split(","):
+        name, sep, value = item.strip().partition("=")
+        if not sep or not name:
+            raise InvalidInput(
+                f"{option} {text!r}: write NAME=VALUE items, comma-separated (e.g. x=0.01,y=0.08)"
+            )
+        if name in out:
+            raise InvalidInput(f"{option} {text!r}: {name!r} is given twice")
+        number = _numbers(value, f"{option} {item!r}")
+        if len(number) != 1 or not np.isfinite(number[0]):
+            raise InvalidInput(f"{option} {item!r}: {value!r} is not a finite number")
+        out[name] = number[0]
+    return out
+
+
+def _study_case(
+    load_text: str | None, pose_text: str | None, mode_text: str | None, ranges: dict[str, str | None]
+) -> tuple[StudyCase, list[str]]:
+    """The case the ``report`` options ask for, and the options as words (for the regenerate command).
+
+    Raises:
+        InvalidInput: malformed numbers, pose items, signs or ranges (names are checked by the study).
+    """
+    words: list[str] = []
+    load_values = None
+    if load_text is not None:
+        load_values = tuple(_numbers(load_text, "--load"))
+        if not np.all(np.isfinite(load_values)):
+            raise InvalidInput(f"--load {load_text!r}: the values must be finite numbers [N, N m]")
+        words += ["--load", load_text]
+    pose = {} if pose_text is None else _named_numbers(pose_text, "--pose")
+    if pose_text is not None:
+        words += ["--pose", pose_text]
+    mode = None
+    if mode_text is not None:
+        parts = [w.strip() for w in mode_text.split(",")]
+        if any(w not in MODE_SIGNS for w in parts):
+            raise InvalidInput(
+                f"--mode {mode_text!r}: give one sign (+ or -) per leg, comma-separated, e.g. --mode=+,-"
+            )
+        mode = tuple(MODE_SIGNS[w] for w in parts)
+        words += [f"--mode={mode_text}"]
+    values = {}
+    for axis, text in ranges.items():
+        if text is not None:
+            values[axis] = tuple(float(v) for v in _grid_range(text, f"--{axis}"))
+            words += [f"--{axis}", text]
+    return StudyCase(load=load_values, pose=pose, mode=mode, ranges=values), words
 
 
 def _show_step(progress: Progress, task: TaskID, study: str) -> Callable[[str], None]:
@@ -424,6 +835,31 @@ def report(
         str | None,
         typer.Option("--mechanism", help="mechanism of a study that takes one (overview): preset or path"),
     ] = None,
+    load_text: Annotated[
+        str | None,
+        typer.Option(
+            "--load",
+            help="overview: a load, one value per task coordinate, comma-separated: fx,fy,mz (N, N m) on the "
+            "task frame (world axes), or a force or torque per output joint of a joint task",
+        ),
+    ] = None,
+    pose_text: Annotated[
+        str | None,
+        typer.Option(
+            "--pose",
+            help="overview: the pose to study, NAME=VALUE,... task coordinates (m, rad) (others: reference)",
+        ),
+    ] = None,
+    mode: Annotated[
+        str | None,
+        typer.Option("--mode", help="overview: the working mode, one sign per leg (--mode=+,-,+,-)"),
+    ] = None,
+    x: XOption = None,
+    y: YOption = None,
+    z: ZOption = None,
+    rx: RxOption = None,
+    ry: RyOption = None,
+    rz: RzOption = None,
 ) -> None:
     """Write study reports: per study a self-contained HTML page and results.json, then index.html.
 
@@ -434,12 +870,28 @@ def report(
     require_renderer()  # a missing report extra fails now, not after the studies ran
     try:
         runs = _report_runs(target, mechanism)
-        root = output_folder(out)
+        case, case_words = _study_case(
+            load_text, pose_text, mode, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz}
+        )
+        if not case.empty and not all(study.takes_case for study, _ in runs):
+            raise InvalidInput(
+                "--load, --pose, --mode and slice ranges go with the overview of one mechanism "
+                "(plm-pin report NAME|PATH ... or plm-pin report overview --mechanism NAME|PATH ...)"
+            )
     except PlmError as exc:
         raise _fail(exc) from None
     for _, chosen in runs:
         if chosen is not None:
-            _load(chosen)  # a broken description fails here, with the loader's message
+            mech = _load(chosen)  # a broken description fails here, with the loader's message
+            if not case.empty:
+                from .report.overview import overview_case
+
+                with _reported():
+                    overview_case(mech, case)  # a bad case fails here, in one line
+    try:
+        root = output_folder(out)
+    except PlmError as exc:
+        raise _fail(exc) from None
     columns = (SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
     progress = Progress(
         *columns, TimeElapsedColumn(), console=errors, transient=True, disable=not errors.is_terminal
@@ -453,8 +905,9 @@ def report(
                 result = run_study(
                     study,
                     chosen,
-                    command=_regenerate(study, chosen, out),
+                    command=_regenerate(study, chosen, out, case_words),
                     observer=_show_step(progress, task, study.name),
+                    case=case if study.takes_case else None,
                 )
                 path = write_report(result, root)
             except PlmError as exc:

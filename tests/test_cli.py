@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import re
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 from typer.testing import CliRunner
@@ -515,3 +517,348 @@ def test_fk_bad_assignment_is_one_error_line():
     _assert_clean_failure(
         result, "actuator assignment 'crank=1': write JOINT=VALUE with JOINT one of ['crank_pivot']"
     )
+
+
+def _harada_eq2(pose, signs, rod=0.14, half_plate=0.05) -> list[float]:
+    """Harada 2011 eq. (2) for the 3D4M, c_i = L_ix + s_i sqrt(l^2 - L_iy^2) (legs 1, 2 on the left)."""
+    x, y, theta = pose
+    out = []
+    for i, sign in enumerate(signs):
+        s = -half_plate if i < 2 else half_plate
+        Lx, Ly = x + s * math.cos(theta), y + s * math.sin(theta)
+        out.append(Lx + sign * math.sqrt(rod**2 - Ly**2))
+    return out
+
+
+@pytest.mark.parametrize("mode", ["+,-,+,-", "-,-,+,+"])
+def test_ik_3d4m_gives_harada_eq2_in_the_mode_asked_for(mode):
+    """`ik harada2011_3d4m x= y= rz= --mode` prints eq. (2)'s slider positions (signs: minus the mode)."""
+    pose = (0.01, 0.08, -0.3)
+    args = ["ik", "harada2011_3d4m", "x=0.01", "y=0.08", "rz=-0.3", f"--mode={mode}", "--json"]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    signs = [-1 if w == "+" else 1 for w in mode.split(",")]
+    expected = _harada_eq2(pose, signs)
+    assert list(data["actuators"].values()) == pytest.approx(expected, abs=1e-12)
+    assert [data["q"][f"slider{i}"] for i in (1, 2, 3, 4)] == pytest.approx(expected, abs=1e-12)
+    assert data["working_mode"] == [-s for s in signs]
+    assert data["closure_residual"] <= 1e-12
+    table = runner.invoke(app, args[:-1])
+    assert table.exit_code == 0, table.output
+    assert re.search(rf"working mode\s*│\s*{re.escape(mode)}\s", table.stdout)
+    assert re.search(rf"actuator slider1\s*│\s*{expected[0]:.9g}\s", table.stdout)
+
+
+def test_ik_fourbar_crank_is_the_circle_intersection():
+    """`ik fourbar rz=1.8`: the crank angle puts the crank tip on the coupler circle about the rocker tip."""
+    crank, coupler, rocker, ground, theta = 0.10, 0.25, 0.20, 0.30, 1.8
+    B = np.array([ground + rocker * math.cos(theta), rocker * math.sin(theta)])  # rocker tip
+    d = float(np.linalg.norm(B))
+    a = (crank**2 - coupler**2 + d**2) / (2.0 * d)
+    h = math.sqrt(crank**2 - a**2)
+    perp = np.array([-B[1], B[0]]) / d
+    roots = sorted(math.atan2(*(a * B / d + s * h * perp)[::-1]) for s in (-1.0, 1.0))
+    found = []
+    for mode in ("+", "-"):
+        result = runner.invoke(app, ["ik", "fourbar", "rz=1.8", f"--mode={mode}", "--json"])
+        assert result.exit_code == 0, result.output
+        data = json.loads(result.stdout)
+        assert data["q"]["rocker_pivot"] == pytest.approx(theta, abs=1e-12)
+        found.append(data["actuators"]["crank_pivot"])
+    assert sorted(found) == pytest.approx(roots, abs=1e-12)  # the two modes are the two intersections
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["x=0.01", "y=0.08"],
+            "missing task coordinates ['rz']: give every one of ['x', 'y', 'rz'] as NAME=VALUE",
+        ),
+        (
+            ["x=0", "y=0.08", "rz=0", "z=1"],
+            "task coordinate 'z=1': write NAME=VALUE with NAME a task coordinate of harada2011_3d4m, "
+            "one of ['x', 'y', 'rz']",
+        ),
+        (["x=0", "y=0.08", "rz=zero"], "task coordinate 'rz=zero': 'zero' is not a number"),
+        (
+            ["x=0", "y=0.08", "rz=0", "--mode=+,-"],
+            "--mode '+,-': give 4 signs (+ or -), comma-separated, one per leg of harada2011_3d4m, "
+            "e.g. --mode=+,-,+,-",
+        ),
+        (
+            ["x=0", "y=0.08", "rz=0", "--mode=+,-,+,x"],
+            "--mode '+,-,+,x': give 4 signs (+ or -), comma-separated, one per leg of harada2011_3d4m, "
+            "e.g. --mode=+,-,+,-",
+        ),
+        (
+            ["x=0", "y=1", "rz=0"],
+            "harada2011_3d4m: pose [0.0, 1.0, 0.0] is out of reach of the end-effector chain (slider1): "
+            "it misses by 0.858 m/rad",
+        ),
+    ],
+)
+def test_ik_bad_input_is_one_error_line(args, message):
+    """Unknown, missing or malformed coordinates, bad modes and unreachable poses: one error line each."""
+    _assert_clean_failure(runner.invoke(app, ["ik", "harada2011_3d4m", *args]), message)
+
+
+def _read_map(path: Path) -> tuple[list[str], np.ndarray]:
+    lines = path.read_text().splitlines()
+    return lines[0].split(","), np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+
+
+def test_map_csv_has_a_row_per_pose_with_the_api_metrics(tmp_path):
+    """`map --x --y --fixed rz=`: a row per pose (x outer), metrics equal to pointwise IK + manipulability."""
+    from plm_pin.kinematics import classify
+    from plm_pin.workspace import manipulability_at
+
+    out = tmp_path / "map.csv"
+    args = ["map", "harada2011_3d4m", "--x", "-0.02:0.02:3", "--y", "0.06:0.1:4", "--fixed", "rz=-0.3"]
+    args += ["--metric", "manipulability,condition_number,direct_margin", "--csv", str(out)]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert f"wrote {out}" in result.stdout
+    header, rows = _read_map(out)
+    assert header == [
+        "x [m]",
+        "y [m]",
+        "rz [rad]",
+        "reachable",
+        "manipulability [m/rad]",
+        "condition_number [-]",
+        "direct_margin [-]",
+    ]
+    assert rows.shape == (12, 7)
+    mech = plm_pin.load("harada2011_3d4m")
+    from plm_pin.kinematics import inverse_kinematics
+
+    k = 0
+    for x in (-0.02, 0.0, 0.02):
+        for y in np.linspace(0.06, 0.1, 4):
+            pose = (x, y, -0.3)
+            assert rows[k, :3] == pytest.approx(pose, abs=1e-15)
+            assert rows[k, 3] == 1
+            m = manipulability_at(mech, pose, mode=(1, -1, 1, -1))
+            q = inverse_kinematics(mech, pose, mode=(1, -1, 1, -1)).q
+            assert rows[k, 4:6] == pytest.approx([m.w, m.condition_number], rel=1e-9)
+            assert rows[k, 6] == pytest.approx(classify(mech, q).direct_margin, rel=1e-9)
+            k += 1
+    assert re.search(r"poses\s*│\s*3 x 4 = 12", result.stdout)
+    assert re.search(r"working mode\s*│\s*\+,-,\+,-", result.stdout)
+
+
+def test_map_refuses_to_overwrite_without_force(tmp_path):
+    """An existing CSV is kept (one error line) unless --force; with --force it is replaced."""
+    out = tmp_path / "map.csv"
+    out.write_text("keep me\n")
+    args = ["map", "harada2011_3d4m", "--x", "-0.01:0.01:2", "--y", "0.07:0.09:2", "--csv", str(out)]
+    _assert_clean_failure(
+        runner.invoke(app, args), f"--csv {out}: the file exists; give --force to overwrite it"
+    )
+    assert out.read_text() == "keep me\n"
+    result = runner.invoke(app, [*args, "--force"])
+    assert result.exit_code == 0, result.output
+    assert out.read_text().startswith("x [m],y [m],rz [rad],reachable,manipulability [m/rad]\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["map.csv"]  # no temporary file left beside it
+
+
+@pytest.mark.parametrize(
+    ("ranges", "message"),
+    [
+        (
+            ["--x", "0.02:0.01:5", "--y", "0.06:0.1:4"],
+            "--x '0.02:0.01:5': START must be below STOP; write START:STOP:COUNT (e.g. --x -0.05:0.05:21)",
+        ),
+        (
+            ["--x", "-0.02:0.02:1", "--y", "0.06:0.1:4"],
+            "--x '-0.02:0.02:1': COUNT must be at least 2; write START:STOP:COUNT (e.g. --x -0.05:0.05:21)",
+        ),
+        (
+            ["--x", "-0.02:0.02:5", "--y", "a:0.1:4"],
+            "--y 'a:0.1:4': START and STOP must be finite numbers; write START:STOP:COUNT "
+            "(e.g. --y -0.05:0.05:21)",
+        ),
+        (
+            ["--x", "-0.02:0.02:2.5", "--y", "0.06:0.1:4"],
+            "--x '-0.02:0.02:2.5': COUNT '2.5' is not a whole number; write START:STOP:COUNT "
+            "(e.g. --x -0.05:0.05:21)",
+        ),
+        (
+            ["--x", "-0.02:0.02", "--y", "0.06:0.1:4"],
+            "--x '-0.02:0.02': expected 3 fields separated by ':', got 2; write START:STOP:COUNT "
+            "(e.g. --x -0.05:0.05:21)",
+        ),
+        (
+            ["--x", "-0.02:0.02:3"],
+            "a map varies two task coordinates: give two of ['--x', '--y', '--rz'], got 1",
+        ),
+        (
+            ["--x", "-0.02:0.02:3", "--z", "0:1:2"],
+            "--z: harada2011_3d4m's task has no coordinate 'z'; its coordinates are ['x', 'y', 'rz']",
+        ),
+        (
+            ["--x", "-0.02:0.02:3", "--y", "0:1:2", "--metric", "speed"],
+            "--metric 'speed': unknown metric; metrics are ['manipulability', 'condition_number', "
+            "'constraint_margin', 'inverse_margin', 'direct_margin'] or all",
+        ),
+    ],
+)
+def test_map_bad_ranges_are_one_error_line(tmp_path, ranges, message):
+    """Ranges with n < 2, a >= b or non-numbers, a missing axis, an unknown metric: one line, no file."""
+    out = tmp_path / "map.csv"
+    _assert_clean_failure(runner.invoke(app, ["map", "harada2011_3d4m", *ranges, "--csv", str(out)]), message)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_map_writes_nowhere_but_an_existing_folder(tmp_path):
+    """A CSV path in a missing folder is refused; no folder is created."""
+    out = tmp_path / "missing" / "map.csv"
+    args = ["map", "harada2011_3d4m", "--x", "-0.01:0.01:2", "--y", "0.07:0.09:2", "--csv", str(out)]
+    _assert_clean_failure(runner.invoke(app, args), f"--csv {out}: the folder {out.parent} does not exist")
+    assert list(tmp_path.iterdir()) == []
+
+
+def _report_json(out: Path, folder: str) -> dict:
+    return json.loads((out / folder / "results.json").read_text())
+
+
+def _table(data: dict, title: str) -> list[list]:
+    """The rows of the first table titled ``title`` in a report's results.json."""
+    return next(b["rows"] for s in data["sections"] for b in s["blocks"] if b.get("title") == title)
+
+
+def test_report_load_pose_and_mode_reach_the_overview_statics(tmp_path):
+    """`report 3d4m --load --pose --mode --x --y`: f_c is static_forces at eq. (2)'s q with that wrench."""
+    from plm_pin.statics import static_forces
+    from tests.conftest import prrrp_paper_configuration
+
+    out = tmp_path / "reports"
+    case = ["--load", "3,-2,0.1", "--pose", "x=0.01,y=0.07", "--mode=+,-,+,-"]
+    ranges = ["--x", "-0.02:0.02:5", "--y", "0.05:0.09:4"]
+    result = runner.invoke(app, ["report", "harada2011_3d4m", *case, *ranges, "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    data = _report_json(out, "overview-harada2011_3d4m")
+    mech = plm_pin.load("harada2011_3d4m")
+    pose = (0.01, 0.07, -math.radians(20.0))  # rz stays the reference's, Harada's -20 deg
+    q = prrrp_paper_configuration(mech, pose, (0.14,) * 4, 0.05, (-1, 1, -1, 1))  # mode +,-,+,-
+    expected = static_forces(mech, q, [3.0, -2.0, 0.1]).f_c
+    rows = _table(data, "Actuator forces f_c")
+    assert [r[0] for r in rows] == ["slider1", "slider2", "slider3", "slider4"]
+    np.testing.assert_allclose([r[2] for r in rows], expected, atol=1e-9)
+    assert np.max(np.abs(expected - static_forces(mech, q).f_c)) > 1.0  # the load counts
+    figure = next(
+        b
+        for s in data["sections"]
+        for b in s["blocks"]
+        if b["kind"] == "figure" and "slice" in b.get("data", {})
+    )
+    values = figure["data"]["slice"]["values"]
+    np.testing.assert_allclose(values[0], np.linspace(-0.02, 0.02, 5), atol=1e-15)
+    np.testing.assert_allclose(values[1], np.linspace(0.05, 0.09, 4), atol=1e-15)
+    assert figure["data"]["slice"]["working_mode"] == [1, -1, 1, -1]
+    assert data["command"].endswith(" ".join([*case, *ranges, "--out", str(out)]))
+
+
+def test_report_load_on_the_fourbar_rocker_reaches_the_statics(tmp_path):
+    """`report fourbar --load 0.5 --pose rz=1.8`: the crank torque is static_forces at that pose and load."""
+    from plm_pin.kinematics import inverse_kinematics
+    from plm_pin.statics import static_forces
+
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", "fourbar", "--load", "0.5", "--pose", "rz=1.8", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    rows = _table(_report_json(out, "overview-fourbar"), "Actuator forces f_c")
+    mech = plm_pin.load("fourbar")
+    q = inverse_kinematics(mech, [1.8]).q
+    assert rows[0][2] == pytest.approx(static_forces(mech, q, [0.5]).f_c[0], abs=1e-10)
+    assert rows[0][2] != pytest.approx(static_forces(mech, q).f_c[0], abs=1e-3)  # the load counts
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["harada2011_3d4m", "--load", "3,-2"],
+            "--load: give 3 finite numbers, one per task coordinate (fx,fy,mz) [N, N m], got [3.0, -2.0]",
+        ),
+        (["harada2011_3d4m", "--load", "3,a,1"], "--load: expected comma-separated numbers, got '3,a,1'"),
+        (
+            ["harada2011_3d4m", "--pose", "q=1"],
+            "--pose: 'q' is not a task coordinate of harada2011_3d4m; they are ['x', 'y', 'rz']",
+        ),
+        (
+            ["harada2011_3d4m", "--pose", "x:1"],
+            "--pose 'x:1': write NAME=VALUE items, comma-separated (e.g. x=0.01,y=0.08)",
+        ),
+        (["harada2011_3d4m", "--mode=+,-"], "--mode must hold 4 signs (+1 or -1), one per leg; got (1, -1)"),
+        (
+            ["harada2011_3d4m", "--x", "0.1:0:3"],
+            "--x '0.1:0:3': START must be below STOP; write START:STOP:COUNT (e.g. --x -0.05:0.05:21)",
+        ),
+        (
+            ["all", "--load", "1,2,3"],
+            "--load, --pose, --mode and slice ranges go with the overview of one mechanism "
+            "(plm-pin report NAME|PATH ... or plm-pin report overview --mechanism NAME|PATH ...)",
+        ),
+    ],
+)
+def test_report_bad_case_options_are_one_error_line(tmp_path, args, message):
+    """Malformed or mismatched --load, --pose, --mode, ranges: one error line, nothing written."""
+    out = tmp_path / "reports"
+    _assert_clean_failure(runner.invoke(app, ["report", *args, "--out", str(out)]), message)
+    assert not out.exists()
+
+
+def test_shell_guide_examples_run(tmp_path, monkeypatch):
+    """Every `$ plm-pin ...` line of docs/guide/shell.md runs as written (in an empty folder), exit code 0."""
+    import shlex
+
+    page = Path(__file__).resolve().parents[1] / "docs" / "guide" / "shell.md"
+    commands = re.findall(r"^\$ plm-pin (.+)$", page.read_text(encoding="utf-8"), flags=re.M)
+    assert {c.split()[0] for c in commands} == {"ik", "fk", "map", "report"}
+    monkeypatch.chdir(tmp_path)
+    for command in commands:
+        result = runner.invoke(app, shlex.split(command))
+        assert result.exit_code == 0, f"{command}\n{result.output}"
+    assert (tmp_path / "xy.csv").is_file() and (tmp_path / "reports" / "index.html").is_file()
+
+
+def test_report_load_moves_a_horizontal_table(tmp_path):
+    """Star triangle, gravity normal to its plane: --load gives J_ce^T f_c = -load; the simulation moves."""
+    from plm_pin.kinematics import inverse_kinematics, task_pose
+
+    out = tmp_path / "reports"
+    load = np.array([5.0, -1.0, 0.2])
+    result = runner.invoke(
+        app, ["report", "enferadi2017_star_triangle", "--load", "5,-1,0.2", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    data = _report_json(out, "overview-enferadi2017_star_triangle")
+    f_c = np.array([r[2] for r in _table(data, "Actuator forces f_c")])
+    mech = plm_pin.load("enferadi2017_star_triangle")
+    x0, h = task_pose(mech, mech.q_ref), 1e-6
+    J = np.column_stack(  # J_ce by central differences of the inverse kinematics
+        [
+            (inverse_kinematics(mech, x0 + h * e).actuators - inverse_kinematics(mech, x0 - h * e).actuators)
+            / (2 * h)
+            for e in np.eye(3)
+        ]
+    )
+    np.testing.assert_allclose(J.T @ f_c, -load, atol=1e-7)  # actuators' work + load's work = 0
+    simulation = {r[0]: r[1] for r in _table(data, "Passive simulation")}
+    assert simulation["largest joint speed"] > 0.01  # the load moves it (gravity alone does not)
+
+
+def test_report_one_range_sweeps_that_coordinate(tmp_path):
+    """`report fourbar --rz 1.6:1.8:3 --mode=+`: the sweep is over those 3 angles, in that working mode."""
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", "fourbar", "--rz", "1.6:1.8:3", "--mode=+", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    data = _report_json(out, "overview-fourbar")
+    sweep = next(
+        b["data"]["slice"] for s in data["sections"] for b in s["blocks"] if "slice" in b.get("data", {})
+    )
+    assert sweep["axes"] == ["rz"] and sweep["working_mode"] == [1]
+    np.testing.assert_allclose(sweep["values"][0], [1.6, 1.7, 1.8], atol=1e-15)

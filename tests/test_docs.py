@@ -87,6 +87,7 @@ def test_docs_have_the_pages_the_user_needs(site):
         "guide/simulation",
         "guide/sweeps",
         "guide/reports",
+        "guide/shell",
         "guide/viewer",
         "guide/presets",
         "studies",

@@ -9,7 +9,7 @@ from .content import (
     Section,
     StudyResult,
 )
-from .study import Study, StudyContext, find_study, run_study, study_modules, study_names
+from .study import Study, StudyCase, StudyContext, find_study, run_study, study_modules, study_names
 from .writer import write_index, write_report
 
 __all__ = [
@@ -20,6 +20,7 @@ __all__ = [
     "Parameter",
     "Section",
     "Study",
+    "StudyCase",
     "StudyContext",
     "StudyResult",
     "find_study",

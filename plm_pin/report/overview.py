@@ -4,20 +4,26 @@ The library's own study (the paper studies are in the checkout's ``analyses/``),
 installed wheel writes the report of any description: ``plm-pin report overview --mechanism
 path/to/robot.urdf`` (or ``plm-pin report path/to/robot.urdf``); ``plm-pin report all`` runs it
 on :data:`MECHANISM`.
+
+It reads the context's :class:`~plm_pin.report.study.StudyCase` (``plm-pin report NAME --load
+fx,fy,mz --pose x=..,y=.. --mode +,- --x a:b:n --y a:b:n``): the statics, stiffness and
+simulation take the load, every section the pose and working mode, the slice the ranges.
 """
 
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from ..core.mechanism import Mechanism
 from ..dynamics import SimulationResult, decoupling_check, simulate
-from ..exceptions import PlmError, SimulationFailed, SingularConfiguration
-from ..kinematics import classify, task_pose
+from ..exceptions import InvalidInput, PlmError, SimulationFailed, SingularConfiguration
+from ..kinematics import classify, inverse_kinematics, task_pose
 from ..kinematics.collisions import self_collisions
+from ..kinematics.inverse import check_mode
 from ..loading import load
 from ..results import units
 from ..statics import StaticForces, actuator_limits, internal_force_range, static_forces, transmission
@@ -41,7 +47,7 @@ from ..workspace import (
 )
 from .animation import Animation
 from .content import Column, Section
-from .study import StudyContext
+from .study import StudyCase, StudyContext
 
 TITLE = "Overview"
 SUMMARY = (
@@ -49,6 +55,7 @@ SUMMARY = (
     "a short simulation and a 3D view."
 )
 MECHANISM = "harada2011_3d4m"
+TAKES_CASE = True
 
 _K = units(StiffnessResult)
 """Units of the stiffness results' fields (eigen-stiffnesses: ``translational``, ``rotational``)."""
@@ -101,14 +108,22 @@ def _frame_origins(mech: Mechanism, q: np.ndarray) -> np.ndarray:
     return np.array([M.translation for M in data.oMf])
 
 
-def passive_motion(mech: Mechanism) -> tuple[SimulationResult, SimulationFailed | None]:
-    """The mechanism released at rest from its reference configuration, actuators free, under gravity.
+def passive_motion(
+    mech: Mechanism, q: np.ndarray | None = None, wrench: np.ndarray | None = None
+) -> tuple[SimulationResult, SimulationFailed | None]:
+    """The mechanism released at rest, actuators free, under gravity and a constant load.
+
+    Args:
+        mech: the mechanism.
+        q: where it starts (default: the reference configuration).
+        wrench: the load, one value per task coordinate [N, N m] (default: none).
 
     Returns:
         The samples (up to the failure, if any) and the failure (None when the run completed).
     """
+    start = mech.q_ref if q is None else q
     try:
-        return simulate(mech, mech.q_ref, duration=SIMULATION_TIME, dt=SIMULATION_DT), None
+        return simulate(mech, start, duration=SIMULATION_TIME, dt=SIMULATION_DT, wrench=wrench), None
     except SimulationFailed as exc:
         if not isinstance(exc.partial, SimulationResult):
             raise PlmError(f"{mech.name}: the failed simulation carries no samples ({exc})") from exc
@@ -125,21 +140,110 @@ ANIMATIONS = {"simulation": _passive_animation}
 """The passive simulation, for ``plm-pin view NAME|PATH --animate overview:simulation``."""
 
 
+@dataclass(frozen=True)
+class OverviewCase:
+    """A :class:`~plm_pin.report.study.StudyCase` checked against the mechanism.
+
+    Attributes:
+        q: the configuration studied, shape (nq,).
+        where: how the report names it ("the reference configuration", or the pose and mode).
+        wrench: the load, one value per task coordinate [N, N m], or None.
+        mode: the working mode the slice keeps (None: that of ``q``).
+        ranges: the slice's values per varied task coordinate [m, rad] (empty: the default slice).
+    """
+
+    q: np.ndarray
+    where: str
+    wrench: np.ndarray | None
+    mode: tuple[int, ...] | None
+    ranges: dict[str, np.ndarray]
+
+    @property
+    def at_reference(self) -> bool:
+        """Whether the configuration studied is the reference one."""
+        return self.where == REFERENCE
+
+
+REFERENCE = "the reference configuration"
+"""How the report names the configuration studied when no pose or mode is asked for."""
+
+
+def load_names(mech: Mechanism) -> list[str]:
+    """Names of the load's entries: ``fx fy fz mx my mz`` for a frame task's coordinates, else the joints."""
+    if mech.task is None:
+        return []
+    if mech.task.frame is None:
+        return list(mech.task.dofs)
+    return [("m" if d.startswith("r") else "f") + d[-1] for d in mech.task.dofs]
+
+
+def overview_case(mech: Mechanism, case: StudyCase) -> OverviewCase:
+    """Check ``case`` against ``mech`` and solve its pose (inverse kinematics in its working mode).
+
+    Raises:
+        InvalidInput: a load of the wrong size, unknown pose or slice coordinates, more than two
+            varied coordinates, a malformed working mode, or a case given to a mechanism without task.
+        PoseUnreachable: a pose the inverse kinematics cannot reach (in the working mode).
+    """
+    dofs = tuple(mech.task.dofs) if mech.task is not None else ()
+    if not dofs and not case.empty:
+        raise InvalidInput(
+            f"{mech.name} has no task (`end_effector` in its sidecar): --load, --pose, --mode and slice "
+            "ranges need one"
+        )
+    wrench = None
+    if case.load is not None:
+        wrench = np.asarray(case.load, dtype=float)
+        if wrench.shape != (len(dofs),) or not np.all(np.isfinite(wrench)):
+            raise InvalidInput(
+                f"--load: give {len(dofs)} finite numbers, one per task coordinate "
+                f"({','.join(load_names(mech))}) [N, N m], got {list(case.load)}"
+            )
+    for option, name in (*(("--pose", n) for n in case.pose), *((f"--{n}", n) for n in case.ranges)):
+        if name not in dofs:
+            raise InvalidInput(
+                f"{option}: {name!r} is not a task coordinate of {mech.name}; they are {list(dofs)}"
+            )
+    if len(case.ranges) > 2:
+        raise InvalidInput(f"the slice varies one or two task coordinates; got {list(case.ranges)}")
+    try:
+        mode = check_mode(mech, case.mode)
+    except InvalidInput as exc:
+        raise InvalidInput(f"--{exc}") from None
+    q, where = mech.q_ref, REFERENCE
+    if case.pose or mode is not None:
+        x = task_pose(mech, mech.q_ref)
+        for name, value in case.pose.items():
+            x[dofs.index(name)] = value
+        q = np.array(inverse_kinematics(mech, x, mode=mode).q)
+        where = "the pose " + ", ".join(
+            f"{d} = {value:.6g} {unit}"
+            for d, v in zip(dofs, x, strict=True)
+            for value, unit in [_display(mech, d, v)]
+        )
+        if mode is not None:
+            where += " in working mode " + ",".join("+" if m > 0 else "-" for m in mode)
+    ranges = {d: np.asarray(case.ranges[d], dtype=float) for d in dofs if d in case.ranges}
+    return OverviewCase(q, where, wrench, mode, ranges)
+
+
 def run(ctx: StudyContext) -> None:
-    """Fill the overview report of ``ctx.target``."""
+    """Fill the overview report of ``ctx.target`` in the case ``ctx.case``."""
     mech = ctx.load()
-    ctx.step(f"{mech.name}: mobility and singularity at the reference")
+    case = overview_case(mech, ctx.case)
+    where = "the reference" if case.at_reference else "the pose"
+    ctx.step(f"{mech.name}: mobility and singularity at {where}")
     square = mech.task is not None and len(mech.task.dofs) == mech.mobility
-    _mobility(ctx.section("Mobility and redundancy"), mech, square)
+    _mobility(ctx.section("Mobility and redundancy"), mech, square, case)
     section = ctx.section("Workspace slice: manipulability and singularities")
     grid = None
     if square:
         ctx.step(f"{mech.name}: workspace slice")
-        grid = _workspace(section, mech)
+        grid = _workspace(section, mech, case)
     else:
         section.text(NEEDS_SQUARE_TASK.format(what="No workspace slice"))
-    ctx.step(f"{mech.name}: static forces at the reference")
-    forces = _statics(ctx.section("Static forces at the reference configuration"), mech)
+    ctx.step(f"{mech.name}: static forces at {where}")
+    forces = _statics(ctx.section(f"Static forces at {case.where}"), mech, case)
     section = ctx.section("Task-space dynamics and decoupling")
     if grid is not None:
         ctx.step(f"{mech.name}: decoupling")
@@ -147,14 +251,15 @@ def run(ctx: StudyContext) -> None:
     else:
         section.text(NEEDS_SQUARE_TASK.format(what="No decoupling check"))
     ctx.step(f"{mech.name}: stiffness")
-    _stiffness(ctx.section("Stiffness and natural frequencies"), mech, grid)
+    _stiffness(ctx.section("Stiffness and natural frequencies"), mech, grid, case)
     ctx.step(f"{mech.name}: passive simulation")
-    _simulation(ctx.section("Short simulation: released under gravity"), mech)
+    title = "released under gravity" + ("" if case.wrench is None else " and the load")
+    _simulation(ctx.section(f"Short simulation: {title}"), mech, case)
     ctx.step(f"{mech.name}: 3D scene")
-    _scene(ctx.section("3D view"), mech, forces)
+    _scene(ctx.section("3D view"), mech, forces, case)
 
 
-def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
+def _mobility(section: Section, mech: Mechanism, square: bool, case: OverviewCase) -> None:
     section.text(
         "Mobility is the dimension of the closure Jacobian's null space at a generic assembled "
         "configuration (`nv - rank J_phi`, SVD rank cut at the largest gap of the singular values, "
@@ -163,13 +268,14 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
         "*constraint* for the closures, *inverse* (type 1) for `T = J_x N`, *direct* (type 2) for "
         "`C = S_a N`."
     )
-    q = mech.q_ref
+    q = case.q
+    at = "the reference" if case.at_reference else "the pose"
     rank = mech.closure_rank(q)
     rows: list[tuple[str, object, str]] = [
         ("configuration size nq", mech.nq, ""),
         ("velocity size nv", mech.nv, ""),
         ("closure rows", mech.n_closure_rows, ""),
-        ("rank of J_phi at the reference", rank, ""),
+        (f"rank of J_phi at {at}", rank, ""),
         ("closure tolerance", mech.closure_tol, "m, rad"),
         (
             "singular values around the rank cut",
@@ -187,20 +293,19 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
             ("constraint margin", report.constraint_margin, "-"),
             ("inverse (type 1) margin", report.inverse_margin, "-"),
             ("direct (type 2) margin", report.direct_margin, "-"),
-            ("singular at the reference", report.singular, ""),
+            (f"singular at {at}", report.singular, ""),
             ("manipulability w", m.w, manipulability_unit(mech)),
             ("condition number of J_ce", m.condition_number, "-"),
         ]
-    section.table(
-        "Sizes, ranks and margins at the reference", ["quantity", "value", "unit"], rows, id="sizes"
-    )
+    section.table(f"Sizes, ranks and margins at {at}", ["quantity", "value", "unit"], rows, id="sizes")
     if mech.task is not None:
         x = task_pose(mech, q)
         joints = mech.task.frame is None
+        kind = "Reference" if case.at_reference else "Studied"
         section.table(
-            "Reference positions of the output joints (the task)"
+            f"{kind} positions of the output joints (the task)"
             if joints
-            else f"Reference pose of the task frame {mech.task.frame}",
+            else f"{kind} pose of the task frame {mech.task.frame}",
             ["coordinate", Column("value", fmt=".6g"), "unit"],
             [(dof, *_display(mech, dof, v)) for dof, v in zip(mech.task.dofs, x, strict=True)],
             note=(
@@ -214,15 +319,15 @@ def _mobility(section: Section, mech: Mechanism, square: bool) -> None:
             ),
         )
     if square and mech.n_actuators == mech.mobility:
-        _transmission(section, mech, q)
+        _transmission(section, mech, q, at)
 
 
-def _transmission(section: Section, mech: Mechanism, q: np.ndarray) -> None:
-    """The transmission ratio, mechanical advantage and transmission indices at ``q``."""
+def _transmission(section: Section, mech: Mechanism, q: np.ndarray, at: str) -> None:
+    """The transmission ratio, mechanical advantage and transmission indices at ``q`` (``at``: its name)."""
     try:
         t = transmission(mech, q)
     except SingularConfiguration as exc:
-        section.text(f"No transmission at the reference: {exc}")
+        section.text(f"No transmission at {at}: {exc}")
         return
     rows: list[tuple[str, str, float]] = []
     for i, dof in enumerate(t.dofs):
@@ -235,7 +340,7 @@ def _transmission(section: Section, mech: Mechanism, q: np.ndarray) -> None:
         for dof, value in zip(t.dofs, index, strict=True):
             rows.append((f"closure {name}, motion of {dof}", "transmission index", float(value)))
     section.table(
-        "Transmission at the reference",
+        f"Transmission at {at}",
         ["quantity", "kind", Column("value", fmt=".6g")],
         rows,
         id="transmission",
@@ -245,33 +350,42 @@ def _transmission(section: Section, mech: Mechanism, q: np.ndarray) -> None:
     )
 
 
-def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
+def _workspace(section: Section, mech: Mechanism, case: OverviewCase) -> WorkspaceSlice:
     assert mech.task is not None
     dofs = mech.task.dofs
-    axes = ("x", "y") if {"x", "y"} <= set(dofs) else tuple(dofs[:2])
-    x0 = task_pose(mech, mech.q_ref)
-    extent = float(np.max(np.ptp(_frame_origins(mech, mech.q_ref), axis=0)))
-    values = []
-    for a in axes:
-        half = ANGLE_SPAN if _is_angle(mech, a) else LENGTH_SPAN * extent
-        centre = x0[dofs.index(a)]
-        values.append(np.linspace(centre - half, centre + half, GRID))
+    x0 = task_pose(mech, case.q)
+    if case.ranges:
+        axes = tuple(case.ranges)
+        values = list(case.ranges.values())
+        around = "over the ranges asked for"
+    else:
+        axes = ("x", "y") if {"x", "y"} <= set(dofs) else tuple(dofs[:2])
+        extent = float(np.max(np.ptp(_frame_origins(mech, case.q), axis=0)))
+        values = []
+        for a in axes:
+            half = ANGLE_SPAN if _is_angle(mech, a) else LENGTH_SPAN * extent
+            centre = x0[dofs.index(a)]
+            values.append(np.linspace(centre - half, centre + half, GRID))
+        around = "around the reference pose" if case.at_reference else "around the pose studied"
+    kept = "of the reference" if case.at_reference else "of the pose studied"
     section.text(
-        f"The slice varies {' and '.join(f'`{a}`' for a in axes)} around the reference pose, the other "
-        "task coordinates fixed. Each point is solved by inverse-kinematics continuation from its "
-        "neighbours, keeping the working mode of the reference; blank points are not reachable in "
-        "that mode. Singular points are located by root finding along lines of the slice."
+        f"The slice varies {' and '.join(f'`{a}`' for a in axes)} {around}, the other task coordinates "
+        f"fixed at {'the reference' if case.at_reference else 'the pose studied'}. Each point is solved by "
+        f"inverse-kinematics continuation from its neighbours, keeping the working mode {kept}; blank "
+        "points are not reachable in that mode. Singular points are located by root finding along lines "
+        "of the slice."
     )
+    mode = case.mode
     if len(axes) == 1:
-        sweep = workspace_sweep(mech, axes[0], values[0], x0)
+        sweep = workspace_sweep(mech, axes[0], values[0], x0, guess=case.q, mode=mode)
         fig = plot_sweep(sweep, "manipulability", log=True, title=f"{mech.name}: manipulability")
         section.figure(fig, f"Manipulability along {axes[0]}.", {"slice": sweep.to_dict()})
         grid = sweep
         loci = []
     else:
-        grid = workspace_map(mech, (axes[0], axes[1]), (values[0], values[1]), x0)
-        across = [float(v) for v in values[1][:: max(1, (GRID - 1) // (LOCI_LINES - 1))]]
-        loci = singular_loci(mech, axes[0], values[0], axes[1], across, x0)
+        grid = workspace_map(mech, (axes[0], axes[1]), (values[0], values[1]), x0, guess=case.q, mode=mode)
+        across = [float(v) for v in values[1][:: max(1, (values[1].size - 1) // (LOCI_LINES - 1))]]
+        loci = singular_loci(mech, axes[0], values[0], axes[1], across, x0, guess=case.q, mode=mode)
         import matplotlib.pyplot as plt
 
         fig, (left, right) = plt.subplots(1, 2, figsize=(11.0, 4.5), layout="constrained")
@@ -310,10 +424,10 @@ def _workspace(section: Section, mech: Mechanism) -> WorkspaceSlice:
         ],
         id="slice_summary",
     )
-    touching = self_collisions(mech, mech.q_ref)
+    touching = self_collisions(mech, case.q)
     if touching:
         section.text(
-            "At the reference configuration these pairs of shapes already touch, so they count as "
+            f"At {case.where} these pairs of shapes already touch, so they count as "
             f"colliding everywhere they still do: {', '.join(f'{a}-{b}' for a, b in touching)}. A planar "
             "drawing puts every link in one plane; pairs that move in different planes are left out with "
             "the sidecar's `self_collision: {ignore: [[a, b]]}`."
@@ -346,7 +460,7 @@ PRELOAD_STEPS = 5
 """Internal-force values of the preload table (from 0 to the largest, both signs)."""
 
 
-def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -> None:
+def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None, case: OverviewCase) -> None:
     compliance = mech.sidecar.compliance
     if compliance is None or mech.task is None or mech.task.frame is None:
         section.text(
@@ -357,16 +471,17 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     section.text(
         "The task stiffness K_x is the Hessian of the potential (springs, gravity, loads, and the "
         "constraint forces' curvature lambda^T d2phi) condensed on the closed chain, at the static "
-        "equilibrium under gravity with minimum-norm actuator forces (`plm_pin.stiffness`). "
+        f"equilibrium under gravity{'' if case.wrench is None else ' and the load'} with minimum-norm "
+        "actuator forces (`plm_pin.stiffness`). "
         "Eigen-stiffnesses are read under pure forces [N/m] and pure moments [N m/rad] apart. "
         f"Springs of the description: {compliance.source or 'as described'}."
     )
-    q = mech.q_ref
+    q, at = case.q, "the reference" if case.at_reference else "the pose"
     try:
-        res = stiffness(mech, q)
+        res = stiffness(mech, q, case.wrench)
         vibration = natural_frequencies(mech, q, result=res)
     except PlmError as exc:
-        section.text(f"No stiffness at the reference: {exc}", markdown=False)
+        section.text(f"No stiffness at {at}: {exc}", markdown=False)
         return
     rows: list[tuple[str, object, str]] = [
         (f"translational eigen-stiffness {i + 1}", v, "N/m") for i, v in enumerate(res.translational.values)
@@ -376,21 +491,21 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
     ]
     rows += [(f"natural frequency {i + 1}", f, "Hz") for i, f in enumerate(vibration.frequencies)]
     section.table(
-        "Stiffness and natural frequencies at the reference",
+        f"Stiffness and natural frequencies at {at}",
         ["quantity", Column("value", fmt=".5g"), "unit"],
         rows,
         id="stiffness",
     )
     dofs = res.dofs
     section.table(
-        "Share of each source in the diagonal of K_x at the reference",
+        f"Share of each source in the diagonal of K_x at {at}",
         ["source", *(Column(d, "N/m" if not d.startswith("r") else "N m/rad", ".4g") for d in dofs)],
         [(name, *np.diag(K).tolist()) for name, K in res.contributions.items()],
         note="The shares add up to K_x; the geometric ones (gravity, load, closures) may be negative.",
         id="stiffness_shares",
     )
     if mech.redundancy > 0:
-        _preload_effect(section, mech)
+        _preload_effect(section, mech, case)
     if grid is not None and len(grid.axes) == 2:
         smap = stiffness_map(mech, grid)
         import matplotlib.pyplot as plt
@@ -406,20 +521,22 @@ def _stiffness(section: Section, mech: Mechanism, grid: WorkspaceSlice | None) -
         )
 
 
-def _preload_effect(section: Section, mech: Mechanism) -> None:
-    """Stiffness along the first internal-force direction, both signs, up to 5 times the weight's forces."""
-    scale = max(10.0, 5.0 * float(np.max(np.abs(static_forces(mech, mech.q_ref, limits=None).f_c))))
+def _preload_effect(section: Section, mech: Mechanism, case: OverviewCase) -> None:
+    """Stiffness along the first internal-force direction, both signs, up to 5 times the held forces."""
+    held = static_forces(mech, case.q, case.wrench, limits=None).f_c
+    scale = max(10.0, 5.0 * float(np.max(np.abs(held))))
     rows = []
     for y in np.linspace(-scale, scale, 2 * PRELOAD_STEPS - 1):
         coords = np.zeros(mech.redundancy)
         coords[0] = y
         try:
-            res = stiffness(mech, mech.q_ref, internal=coords)
+            res = stiffness(mech, case.q, case.wrench, internal=coords)
         except PlmError:
             continue
         rows.append((float(y), res.min_translational, *res.rotational.values[:1].tolist()))
     section.table(
-        "Preload: stiffness at the reference along the first internal-force direction",
+        f"Preload: stiffness at {'the reference' if case.at_reference else 'the pose'} along the first "
+        "internal-force direction",
         [
             Column("internal force coordinate", "N", ".4g"),
             Column("smallest translational eigen-stiffness", _K["translational"], ".6g"),
@@ -486,13 +603,18 @@ def _decoupling(section: Section, mech: Mechanism, grid: WorkspaceSlice) -> None
     )
 
 
-def _simulation(section: Section, mech: Mechanism) -> None:
-    run, failure = passive_motion(mech)
+def _simulation(section: Section, mech: Mechanism, case: OverviewCase) -> None:
+    run, failure = passive_motion(mech, case.q, case.wrench)
+    if case.wrench is None:
+        acting = "under gravity"
+        energy = "With no friction and no input, the energy must stay constant."
+    else:
+        acting = f"under gravity and the constant load ({_load_text(mech, case.wrench)})"
+        energy = "The load does work: the energy changes by that work."
     section.text(
-        f"The mechanism released at rest from its reference configuration with its actuators free, "
-        f"under gravity, for {SIMULATION_TIME:g} s (one DOP853 run with dense output, rtol 1e-10, the "
-        "samples projected back onto the closures). With no friction and no input, the energy must stay "
-        "constant."
+        f"The mechanism released at rest from {case.where} with its actuators free, {acting}, for "
+        f"{SIMULATION_TIME:g} s (one DOP853 run with dense output, rtol 1e-10, the samples projected back "
+        f"onto the closures). {energy}"
     )
     if failure is not None:
         section.text(f"The simulation stopped at t = {failure.time:.4g} s: {failure}", markdown=False)
@@ -526,14 +648,30 @@ def _simulation(section: Section, mech: Mechanism) -> None:
         section.animation(Animation(mech, run.q, run.t, "The passive simulation: play it in the page."))
 
 
-def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
+def _load_text(mech: Mechanism, wrench: np.ndarray) -> str:
+    """The load as ``fx = 1 N, mz = 0.2 N m`` (a joint task: ``joint = value``)."""
+    unit = {"f": "N", "m": "N m"}
+    if mech.task is not None and mech.task.frame is None:
+        return (
+            ", ".join(f"{n} = {v:.6g}" for n, v in zip(load_names(mech), wrench, strict=True)) + " [N or N m]"
+        )
+    return ", ".join(f"{n} = {v:.6g} {unit[n[0]]}" for n, v in zip(load_names(mech), wrench, strict=True))
+
+
+def _statics(section: Section, mech: Mechanism, case: OverviewCase) -> StaticForces | None:
+    if case.wrench is None:
+        acting = "Gravity only"
+    elif mech.task is not None and mech.task.frame is None:
+        acting = f"Gravity and the load along the output joints ({_load_text(mech, case.wrench)})"
+    else:
+        acting = f"Gravity and the load on the task frame ({_load_text(mech, case.wrench)}, world axes)"
     section.text(
-        "Gravity only, at the reference configuration: the actuator forces `f_c` of minimum norm that "
+        f"{acting}, at {case.where}: the actuator forces `f_c` of minimum norm that "
         "balance it, the axial force of every hinged link (tension positive), and the internal-force "
         "directions: actuator forces that balance only each other (one per degree of redundancy)."
     )
     try:
-        sol = static_forces(mech, mech.q_ref)
+        sol = static_forces(mech, case.q, case.wrench)
     except PlmError as exc:
         section.text(f"No static solution: {exc}", markdown=False)
         return None
@@ -568,8 +706,8 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
                 ["direction", *(Column(n, "N") for n in names)],
                 [(k + 1, *(d.link_forces[n].axial for n in names)) for k, d in enumerate(directions)],
             )
-        _internal_range(section, mech, sol)
-    spread = np.ptp(_frame_origins(mech, mech.q_ref), axis=0)
+        _internal_range(section, mech, sol, case)
+    spread = np.ptp(_frame_origins(mech, case.q), axis=0)
     plane = "".join(sorted("xyz"[k] for k in np.argsort(spread)[-2:]))
     axes = plot_static_forces(sol, plane=plane, title=f"static forces in the {plane} plane")
     fig = axes.get_figure(root=True)
@@ -584,7 +722,7 @@ def _statics(section: Section, mech: Mechanism) -> StaticForces | None:
     return sol
 
 
-def _internal_range(section: Section, mech: Mechanism, sol: StaticForces) -> None:
+def _internal_range(section: Section, mech: Mechanism, sol: StaticForces, case: OverviewCase) -> None:
     limits = actuator_limits(mech, "description")
     if not np.isfinite(limits).all():
         section.text(
@@ -594,12 +732,13 @@ def _internal_range(section: Section, mech: Mechanism, sol: StaticForces) -> Non
         )
         return
     try:
-        span = internal_force_range(mech, mech.q_ref)
+        span = internal_force_range(mech, case.q, case.wrench)
     except PlmError as exc:
         section.text(f"No internal-force range: {exc}", markdown=False)
         return
     section.table(
-        "Internal-force range within the actuator limits, holding gravity",
+        "Internal-force range within the actuator limits, holding gravity"
+        + ("" if case.wrench is None else " and the load"),
         [
             "direction",
             Column("lowest", "N or N m"),
@@ -613,21 +752,21 @@ def _internal_range(section: Section, mech: Mechanism, sol: StaticForces) -> Non
     )
 
 
-def _scene(section: Section, mech: Mechanism, forces: StaticForces | None) -> None:
+def _scene(section: Section, mech: Mechanism, forces: StaticForces | None, case: OverviewCase) -> None:
     viewer = MeshcatViewer(mech, static=True)
-    q = mech.q_ref
+    q = case.q
     if forces is None:
         viewer.display(q)
-        caption = "The mechanism at the reference configuration; closure points in green."
+        caption = f"The mechanism at {case.where}; closure points in green."
         arrows, scale = [], None
     else:
         arrows = force_arrows(forces)
         extent = float(np.max(np.ptp(_frame_origins(mech, q), axis=0)))
         biggest = max((float(np.linalg.norm(a.force)) for a in arrows), default=0.0)
         scale = 0.25 * extent / biggest if biggest > 0.0 else 1.0
-        viewer.show_forces(q, [(a.point, a.force, f"{a.kind} {a.name}") for a in arrows], scale)
+        viewer.show_forces(q, arrows, scale)
         caption = (
-            f"The mechanism at the reference configuration with its static forces ({scale:.3g} m/N); "
+            f"The mechanism at {case.where} with its static forces ({scale:.3g} m/N); "
             "closure points in green."
         )
     section.scene(viewer.static_html(), caption, {"q": q, "arrows": arrows, "scale": scale})

@@ -16,7 +16,9 @@ A study is a module (``analyses/<name>.py`` for a paper study) defining:
   :meth:`StudyContext.step`;
 - ``ANIMATIONS``: case name -> function returning an :class:`~plm_pin.report.Animation`
   (optional; played by ``plm-pin view --animate STUDY:CASE``, see
-  :mod:`plm_pin.report.animation`).
+  :mod:`plm_pin.report.animation`);
+- ``TAKES_CASE``: True when the study reads :attr:`StudyContext.case` (a load, a pose, a
+  working mode, slice ranges: ``plm-pin report --load ...``); optional, default False.
 
 The engine runs it in memory (:func:`run_study`); nothing is written until it has finished
 (:mod:`plm_pin.report.writer`). Modules whose names start with ``_`` are helpers, not studies.
@@ -67,6 +69,7 @@ class Study:
         mechanism: ``MECHANISM``: the default mechanism, None when the study takes none.
         run: ``run(ctx)``.
         animations: ``ANIMATIONS``: case name -> function computing the motion (empty when absent).
+        takes_case: ``TAKES_CASE``: the study reads :attr:`StudyContext.case`.
     """
 
     name: str
@@ -75,6 +78,35 @@ class Study:
     mechanism: str | None
     run: Callable[[StudyContext], None]
     animations: Mapping[str, Callable[..., Animation]] = field(default_factory=dict)
+    takes_case: bool = False
+
+
+@dataclass(frozen=True)
+class StudyCase:
+    """The case a study is asked to look at (``plm-pin report`` options); empty: the study's own.
+
+    The entries are checked against the mechanism by the study that reads them.
+
+    Attributes:
+        load: external load, one value per task coordinate [N, N m]: a wrench on the task
+            frame (``fx fy mz`` for an ``x y rz`` task), or a force or torque per output joint
+            of a joint task; None: no load.
+        pose: task coordinates of the pose to study [m, rad], by name; the others are the
+            reference's. Empty: the reference configuration.
+        mode: working mode to study, one sign per square leg; None: the reference's.
+        ranges: the workspace slice's values per varied task coordinate [m, rad] (one or two
+            coordinates); empty: the study's default slice.
+    """
+
+    load: tuple[float, ...] | None = None
+    pose: Mapping[str, float] = field(default_factory=dict)
+    mode: tuple[int, ...] | None = None
+    ranges: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+
+    @property
+    def empty(self) -> bool:
+        """Whether nothing is asked for."""
+        return self.load is None and not self.pose and self.mode is None and not self.ranges
 
 
 def _study_package() -> ModuleType | None:
@@ -143,7 +175,11 @@ def find_study(name: str) -> Study:
         isinstance(k, str) and callable(f) for k, f in animations.items()
     ):
         raise PlmError(f"{module.__name__}.ANIMATIONS must map case names to functions")
-    return Study(name, title, str(getattr(module, "SUMMARY", "")), mechanism, run, dict(animations))
+    takes_case = getattr(module, "TAKES_CASE", False)
+    if not isinstance(takes_case, bool):
+        raise PlmError(f"{module.__name__}.TAKES_CASE must be True or False, got {takes_case!r}")
+    summary = str(getattr(module, "SUMMARY", ""))
+    return Study(name, title, summary, mechanism, run, dict(animations), takes_case)
 
 
 def _describe(mech: Mechanism, target: str | Path | Mechanism) -> MechanismInfo:
@@ -163,14 +199,20 @@ class StudyContext:
         study: the study being run.
         target: the mechanism it was asked to study (``--mechanism``, else its ``MECHANISM``),
             None for a study that takes none.
+        case: the load, pose, working mode and slice asked for (empty: the study's own).
     """
 
     def __init__(
-        self, study: Study, target: str | Path | None, observer: Callable[[str], None] | None = None
+        self,
+        study: Study,
+        target: str | Path | None,
+        observer: Callable[[str], None] | None = None,
+        case: StudyCase | None = None,
     ) -> None:
-        """Start an empty report for ``study`` on ``target``; ``observer`` receives the steps."""
+        """Start an empty report for ``study`` on ``target`` and ``case``; ``observer`` receives the steps."""
         self.study = study
         self.target = target
+        self.case = StudyCase() if case is None else case
         self._observer = observer
         self._sections: list[Section] = []
         self._mechanisms: dict[str, MechanismInfo] = {}
@@ -228,6 +270,7 @@ def run_study(
     *,
     command: str = "",
     observer: Callable[[str], None] | None = None,
+    case: StudyCase | None = None,
 ) -> StudyResult:
     """Run a study in memory and return its report (nothing is written).
 
@@ -238,14 +281,20 @@ def run_study(
         mechanism: the mechanism to study instead of its ``MECHANISM`` (preset name or path).
         command: the shell command that writes this report, shown in it.
         observer: called with each step's description (for a progress display).
+        case: the load, pose, working mode and slice to study (a study with ``TAKES_CASE``).
 
     Raises:
-        InvalidInput: a mechanism given to a study that takes none.
+        InvalidInput: a mechanism given to a study that takes none, a case to a study that
+            takes none.
         PlmError: the study failed; the message names it and says why.
     """
     if mechanism is not None and study.mechanism is None:
         raise InvalidInput(f"study {study.name!r} takes no mechanism")
-    ctx = StudyContext(study, study.mechanism if mechanism is None else mechanism, observer)
+    if case is not None and not case.empty and not study.takes_case:
+        raise InvalidInput(
+            f"study {study.name!r} takes no load, pose, working mode or slice ranges; the overview does"
+        )
+    ctx = StudyContext(study, study.mechanism if mechanism is None else mechanism, observer, case)
     start = time.perf_counter()
     generated = datetime.now(timezone.utc).isoformat(timespec="seconds")
     with warnings.catch_warnings(record=True) as caught:

@@ -35,10 +35,11 @@ from numpy.typing import ArrayLike
 
 from .._io import atomic_write_text
 from ..core.mechanism import Mechanism
-from ..exceptions import InvalidInput
+from ..exceptions import FrameNotFound, InvalidInput
 from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
 from ..tolerances import PLANE_NORMAL_TOL, VIEW_MIN_LENGTH, VIEW_OPEN_TOL
+from .force_figure import ForceArrow
 from .meshcat_server import MeshcatServer, ServerWindow, StaticWindow, require_meshcat
 
 CLOSED_COLOR = (0.1, 0.7, 0.2, 1.0)
@@ -236,20 +237,51 @@ def _closure_markers(mech: Mechanism, size: float) -> dict[str, tuple[str, pin.G
     return markers
 
 
+Arrow = ForceArrow | tuple[ArrayLike | str, ArrayLike, str]
+"""A force arrow for :meth:`MeshcatViewer.show_forces`: a ``ForceArrow`` or ``(point, vector, label)``."""
+
+
 def _check_arrows(
-    arrows: Sequence[tuple[ArrayLike, ArrayLike, str]],
+    mech: Mechanism, q: np.ndarray, arrows: Sequence[Arrow]
 ) -> list[tuple[np.ndarray, np.ndarray, str]]:
+    """The arrows as ``(point [m], vector [N], segment name)``, frame names placed at ``q``.
+
+    Raises:
+        InvalidInput: a malformed arrow, a repeated label.
+        FrameNotFound: a point naming no frame of ``mech`` (the message lists the frames).
+    """
+    data = None
     out = []
     labels: set[str] = set()
     for k, arrow in enumerate(arrows):
+        point: ArrayLike | str
+        vector: ArrayLike
+        if isinstance(arrow, ForceArrow):
+            point, vector, label = arrow.point, arrow.force, f"{arrow.kind} {arrow.name}"
+        else:
+            try:
+                point, vector, label = arrow
+            except (TypeError, ValueError):
+                raise InvalidInput(
+                    f"arrow {k} must be a ForceArrow or (point [m] or frame name, vector [N], label), "
+                    f"got {arrow!r}"
+                ) from None
+        if isinstance(point, str):
+            if not mech.model.existFrame(point):
+                raise FrameNotFound(point, mech.frame_names)
+            if data is None:
+                data = mech.model.createData()
+                pin.framesForwardKinematics(mech.model, data, q)
+            point = data.oMf[mech.model.getFrameId(point)].translation
         try:
-            point, vector, label = arrow
+            p = np.asarray(point, dtype=float)
+            f = np.asarray(vector, dtype=float)
         except (TypeError, ValueError):
-            raise InvalidInput(f"arrow {k} must be (point [m], vector [N], label), got {arrow!r}") from None
-        p = np.asarray(point, dtype=float)
-        f = np.asarray(vector, dtype=float)
+            p = f = np.full(0, np.nan)
         if p.shape != (3,) or f.shape != (3,) or not (np.all(np.isfinite(p)) and np.all(np.isfinite(f))):
-            raise InvalidInput(f"arrow {label!r}: point and vector must be 3 finite numbers each")
+            raise InvalidInput(
+                f"arrow {label!r}: point (or a frame name) and vector must be 3 finite numbers each"
+            )
         if not isinstance(label, str) or not label:
             raise InvalidInput(f"arrow {k}: label must be a non-empty string, got {label!r}")
         name = _segment(label)
@@ -438,9 +470,7 @@ class MeshcatViewer:
                 self._viz.loadViewerGeometryObject(obj, _VISUAL, np.array(color))
                 self._shown[obj.name] = color
 
-    def show_forces(
-        self, q: ArrayLike, arrows: Sequence[tuple[ArrayLike, ArrayLike, str]], scale: float
-    ) -> SceneStatus:
+    def show_forces(self, q: ArrayLike, arrows: Sequence[Arrow], scale: float) -> SceneStatus:
         """Display ``q`` with force arrows, e.g. the loads and actuator forces of a static case.
 
         Each arrow starts at its point and is ``scale * |vector|`` long; it is drawn under
@@ -449,8 +479,10 @@ class MeshcatViewer:
 
         Args:
             q: configuration, shape (nq,).
-            arrows: ``(point [m], vector [N], label)`` triples, point and vector in the world
-                frame, labels distinct.
+            arrows: the :class:`~plm_pin.viz.ForceArrow` objects that
+                :func:`~plm_pin.viz.force_arrows` returns (labelled ``"<kind> <name>"``), or
+                ``(point, vector [N], label)`` triples: the point in the world frame [m] or the
+                name of a frame (its origin at ``q``), the vector in the world frame; labels distinct.
             scale: arrow length per force [m/N], positive.
 
         Returns:
@@ -458,12 +490,14 @@ class MeshcatViewer:
 
         Raises:
             InvalidInput: malformed arrows, repeated labels or a scale that is not positive.
+            FrameNotFound: a point naming no frame (the message lists the frames).
         """
         if not (isinstance(scale, numbers.Real) and np.isfinite(scale) and scale > 0.0):
             raise InvalidInput(f"scale must be a positive number [m/N], got {scale!r}")
         scale = float(scale)  # meshcat's messages take Python numbers only
-        checked = _check_arrows(arrows)
-        status = self.display(q)
+        qa = self.mech.check_q(q)
+        checked = _check_arrows(self.mech, qa, arrows)
+        status = self.display(qa)
         mg = require_meshcat().geometry
         material = mg.MeshLambertMaterial(color=FORCE_COLOR)
         radius = self.size * _ARROW

@@ -9,7 +9,7 @@ import pytest
 
 from plm_pin.exceptions import InvalidInput, PlmError
 from plm_pin.models import PRESETS
-from plm_pin.report import find_study, run_study, study_modules, study_names
+from plm_pin.report import Study, find_study, run_study, study_modules, study_names
 from plm_pin.report import study as study_module
 from plm_pin.warnings import IllConditionedWarning
 from tests.report.conftest import make_study
@@ -112,6 +112,24 @@ def test_mechanism_only_for_studies_that_take_one():
         run_study(make_study(), "fivebar")
     with pytest.raises(PlmError, match=r"study 'demo' takes no mechanism; give one to ctx.load"):
         run_study(make_study(lambda ctx: ctx.load()))
+
+
+def test_case_only_for_studies_that_take_one():
+    """A case reaches ctx.case of a study with TAKES_CASE; another study refuses a non-empty one."""
+    from plm_pin.report import StudyCase
+
+    seen = []
+    case = StudyCase(load=(1.0, 2.0), pose={"x": 0.01}, mode=(1, -1), ranges={"y": (0.1, 0.2)})
+    taking = Study("demo", "Demo", "", "fivebar", lambda ctx: seen.append(ctx.case), {}, True)
+    run_study(taking, case=case)
+    assert seen == [case]
+    run_study(make_study(lambda ctx: seen.append(ctx.case)), case=StudyCase())  # empty: accepted
+    assert seen[-1].empty
+    with pytest.raises(
+        InvalidInput, match=r"^study 'demo' takes no load, pose, working mode or slice ranges"
+    ):
+        run_study(make_study(), case=case)
+    assert find_study("overview").takes_case and not find_study("harada2015").takes_case
 
 
 def test_folder_of_a_mechanism_study_names_the_mechanism(user_fivebar):

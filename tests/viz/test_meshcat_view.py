@@ -24,7 +24,7 @@ from typer.testing import CliRunner
 import plm_pin
 from plm_pin.cli import app
 from plm_pin.core.mechanism import Mechanism
-from plm_pin.exceptions import InvalidInput, ViewerError
+from plm_pin.exceptions import FrameNotFound, InvalidInput, ViewerError
 from plm_pin.viz import MeshcatServer, MeshcatViewer, scene_html, show
 from plm_pin.viz.meshcat_server import (
     LOCALHOST,
@@ -224,6 +224,55 @@ def test_force_arrows_start_at_the_point_and_end_at_point_plus_scale_times_force
     assert Scene(viewer.static_html()).under(forces) == []
 
 
+def _tail(scene: Scene, node: str) -> np.ndarray:
+    """Where an arrow drawn under ``node`` starts: its shaft's centre minus half its length along y."""
+    T, h = scene.transforms[f"{node}/shaft"], scene.geometry(f"{node}/shaft")["height"]
+    return T[:3, 3] - 0.5 * h * T[:3, 1]
+
+
+def test_a_frame_name_as_point_starts_the_arrow_at_that_frame():
+    """show_forces: a frame name stands for the frame's origin at q (Pinocchio forward kinematics)."""
+    mech = preset("fivebar")
+    q = mech.assemble(mech.q_ref, fixed={"left_motor": 1.9}).q
+    viewer = MeshcatViewer(mech, static=True)
+    viewer.show_forces(q, [("left_tip", (0.0, -5.0, 0.0), "pull")], 0.01)
+    scene = Scene(viewer.static_html())
+    np.testing.assert_allclose(
+        _tail(scene, f"{root(mech)}/forces/pull"), frame_origins(mech, q)["left_tip"], atol=1e-12
+    )
+
+
+def test_force_arrows_are_drawn_as_they_are_returned():
+    """show_forces takes force_arrows(...) as is: an arrow per nonzero force at its point, named by kind."""
+    from plm_pin.statics import static_forces
+    from plm_pin.viz import force_arrows
+
+    mech = preset("harada2011_3d4m")
+    arrows = force_arrows(static_forces(mech, mech.q_ref, wrench=(3.0, -2.0, 0.5), gravity=False))
+    viewer = MeshcatViewer(mech, static=True)
+    viewer.show_forces(mech.q_ref, arrows, 0.01)
+    scene = Scene(viewer.static_html())
+    drawn = [a for a in arrows if np.linalg.norm(a.force) > 0.0]
+    assert len(drawn) >= 4  # four actuator forces at least
+    forces = f"{root(mech)}/forces"
+    assert {p.rsplit("/", 1)[0] for p in scene.under(forces)} == {
+        f"{forces}/{a.kind} {a.name}" for a in drawn
+    }
+    for a in drawn:
+        node = f"{forces}/{a.kind} {a.name}"
+        np.testing.assert_allclose(_tail(scene, node), a.point, atol=1e-12)
+        T = scene.transforms[f"{node}/shaft"]
+        np.testing.assert_allclose(T[:3, 1], a.force / np.linalg.norm(a.force), atol=1e-12)
+
+
+def test_an_unknown_frame_as_point_is_refused_by_name():
+    """show_forces: a point naming no frame raises FrameNotFound listing the frames (no raw ValueError)."""
+    mech = preset("fivebar")
+    viewer = MeshcatViewer(mech, static=True)
+    with pytest.raises(FrameNotFound, match=re.escape("frame 'nowhere' not found; frames are [")):
+        viewer.show_forces(mech.q_ref, [("nowhere", (1.0, 0.0, 0.0), "f")], 1.0)
+
+
 @pytest.mark.parametrize(
     ("arrows", "scale", "message"),
     [
@@ -232,8 +281,16 @@ def test_force_arrows_start_at_the_point_and_end_at_point_plus_scale_times_force
             1.0,
             "arrow labels must be distinct; 'f'",
         ),
-        ([((0, 0), (1, 0, 0), "f")], 1.0, "arrow 'f': point and vector must be 3 finite numbers each"),
-        ([((0, 0, 0), (1, 0, 0))], 1.0, "arrow 0 must be (point [m], vector [N], label)"),
+        (
+            [((0, 0), (1, 0, 0), "f")],
+            1.0,
+            "arrow 'f': point (or a frame name) and vector must be 3 finite numbers each",
+        ),
+        (
+            [((0, 0, 0), (1, 0, 0))],
+            1.0,
+            "arrow 0 must be a ForceArrow or (point [m] or frame name, vector [N], label)",
+        ),
         ([((0, 0, 0), (1, 0, 0), "f")], 0.0, "scale must be a positive number [m/N], got 0.0"),
         ([((0, 0, 0), (1, 0, 0), "f")], "1", "scale must be a positive number [m/N], got '1'"),
     ],
