@@ -274,7 +274,7 @@ def _delta_modes(mech: Mechanism, q: np.ndarray) -> list[np.ndarray]:
 
 
 def test_delta_assembly_modes_by_homotopy_are_the_circle_intersections(robots):
-    """Homotopy FK of the delta finds the 2 x 2 x 2 circle intersections; complete and certified at the reference.
+    """Homotopy FK of the delta: the 2 x 2 x 2 circle intersections; complete and certified at the reference.
 
     (Its generic solve is seeded by the reference assembly: the random start of the offset family
     loses every path on this robot.)
