@@ -337,10 +337,8 @@ def fk_command(
     task = mech.task.dofs if mech.task is not None else []
     if not all_modes:
         headline = "the reference assembly's mode (use --all for every mode)"
-    elif modes.complete:
-        headline = f"all {len(modes)} assembly modes (certified; {modes.generic_count} complex roots)"
     else:
-        headline = f"{len(modes)} assembly modes found, not proven complete: {modes.why_incomplete}"
+        headline = modes.headline()
     table = Table(title=escape(f"{mech.name}: {headline}"))
     table.add_column("mode")
     for dof in task:

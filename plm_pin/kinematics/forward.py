@@ -61,6 +61,16 @@ class FKModes(list[FKSolution]):
     certified: int = 0
     why_incomplete: str = "multi-start Newton cannot prove that no assembly mode was missed"
 
+    def headline(self) -> str:
+        """One line saying how many modes were found and how far that is proven.
+
+        "all N assembly modes (certified; G complex roots)" when complete, else how many were found
+        and why the list is not proven complete.
+        """
+        if self.complete:
+            return f"all {len(self)} assembly modes (certified; {self.generic_count} complex roots)"
+        return f"{len(self)} assembly modes found, not proven complete: {self.why_incomplete}"
+
     def to_dict(self) -> dict[str, Any]:
         """The modes and the search's outcome as JSON-ready data."""
         return {

@@ -21,7 +21,7 @@ import pinocchio as pin
 from ..core.mechanism import Mechanism
 from ..dynamics import SimulationResult, decoupling_check, simulate
 from ..exceptions import InvalidInput, PlmError, SimulationFailed, SingularConfiguration
-from ..kinematics import classify, inverse_kinematics, task_pose
+from ..kinematics import classify, forward_kinematics, inverse_kinematics, task_pose
 from ..kinematics.collisions import self_collisions
 from ..kinematics.inverse import check_mode
 from ..loading import load
@@ -318,8 +318,47 @@ def _mobility(section: Section, mech: Mechanism, square: bool, case: OverviewCas
                 else ""
             ),
         )
+    if mech.task is not None:
+        _assembly_modes(section, mech)
     if square and mech.n_actuators == mech.mobility:
         _transmission(section, mech, q, at)
+
+
+def _assembly_modes(section: Section, mech: Mechanism) -> None:
+    """Every assembly mode at the reference's actuator values, with the search's certificate."""
+    assert mech.task is not None
+    modes = forward_kinematics(mech, mech.actuator_positions(mech.q_ref), all_modes=True)
+    how = (
+        "parameter homotopy from the generic solve, each real mode proven by a Krawczyk interval test"
+        if modes.method == "homotopy"
+        else "multi-start Newton (no polynomial form), which cannot prove that none was missed"
+    )
+    section.text(
+        f"Forward kinematics at the reference's actuator values: {modes.headline()}. Found by {how}; "
+        "see the complete forward kinematics guide for what *certified* proves and assumes."
+    )
+    dofs = mech.task.dofs
+    units = [_display(mech, dof, 0.0)[1] for dof in dofs]
+    certificate = "Krawczyk" if modes.method == "homotopy" else "none"
+    section.table(
+        f"Assembly modes at the reference actuator values: {modes.headline()}",
+        [
+            "mode",
+            *(Column(d, u, fmt=".6g") for d, u in zip(dofs, units, strict=True)),
+            Column("closure residual", "m, rad", fmt=".1e"),
+            "certificate",
+        ],
+        [
+            (
+                i + 1,
+                *(_display(mech, d, v)[0] for d, v in zip(dofs, s.x, strict=True)),
+                s.residual_norm,
+                certificate,
+            )
+            for i, s in enumerate(modes)
+        ],
+        id="assembly-modes",
+    )
 
 
 def _transmission(section: Section, mech: Mechanism, q: np.ndarray, at: str) -> None:

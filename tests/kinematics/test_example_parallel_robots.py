@@ -204,3 +204,88 @@ def test_actuator_and_velocity_maps_match_finite_differences(robots, folder):
             np.testing.assert_allclose(
                 S[:, k], pin.difference(mech.model, minus.q, plus.q) / (2 * EPS), atol=1e-7
             )
+
+
+def _circles(c1: np.ndarray, r1: float, c2: np.ndarray, r2: float) -> list[np.ndarray]:
+    """The points at distance r1 from c1 and r2 from c2 in a plane (none, or two)."""
+    d = float(np.linalg.norm(c2 - c1))
+    along = (r1 * r1 - r2 * r2 + d * d) / (2 * d)
+    if r1 * r1 < along * along:
+        return []
+    e = (c2 - c1) / d
+    n = np.array([-e[1], e[0]])
+    h = np.sqrt(r1 * r1 - along * along)
+    return [c1 + along * e + s * h * n for s in (1.0, -1.0)]
+
+
+def _turn(v: np.ndarray, angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def _angle(v: np.ndarray) -> float:
+    return float(np.arctan2(v[1], v[0]))
+
+
+def _delta_modes(mech: Mechanism, q: np.ndarray) -> list[np.ndarray]:
+    """Every assembly's effector point (y, z) at the motor angles of ``q``, by circle intersections.
+
+    The robot is a five-bar (motor arms to elbows B1, B2, rods to the effector pivot P) with a
+    transmission chain: a base link O3-T, a body T-K pinned at the elbow B2 (K) carrying the pivot
+    F3, and a rod F3-Q to the effector. So P is where two circles meet (2 ways), T too (2 ways,
+    which turns the body T-K and moves F3), and the effector's turn about P puts Q on the circle
+    about F3 (2 ways): 8 assemblies. Lengths are read at the reference; the elbows are the motor
+    arms' forward kinematics at ``q``.
+    """
+    data = mech.model.createData()
+
+    def points(config: np.ndarray) -> dict[str, np.ndarray]:
+        pin.framesForwardKinematics(mech.model, data, config)
+        out = {
+            name: data.oMi[mech.model.getJointId(joint)].translation[1:].copy()
+            for name, joint in (
+                ("O3", "free1_rod3"),
+                ("T", "free2_rod3"),
+                ("K", "closedloop1_A"),
+                ("F3", "free3_rod3"),
+                ("B1", "free1_rod1"),
+                ("P", "free2_rod1"),
+                ("B2", "free1_rod2"),
+                ("Q", "closedloop3_A"),
+            )
+        }
+        out["E"] = data.oMf[mech.task_frame_id].translation[1:].copy()
+        return out
+
+    ref, now = points(mech.q_ref), points(q)
+    np.testing.assert_allclose(ref["K"], ref["B2"], atol=1e-12)  # the body T-K is pinned at the elbow
+
+    def dist(a: str, b: str) -> float:
+        return float(np.linalg.norm(ref[a] - ref[b]))
+
+    found = []
+    for P in _circles(now["B1"], dist("P", "B1"), now["B2"], dist("P", "B2")):
+        for T in _circles(ref["O3"], dist("T", "O3"), now["B2"], dist("T", "K")):
+            F3 = T + _turn(ref["F3"] - ref["T"], _angle(now["B2"] - T) - _angle(ref["K"] - ref["T"]))
+            for Q in _circles(P, dist("Q", "P"), F3, dist("Q", "F3")):
+                turn = _angle(Q - P) - _angle(ref["Q"] - ref["P"])
+                found.append(P + _turn(ref["E"] - ref["P"], turn))
+    return found
+
+
+def test_delta_assembly_modes_by_homotopy_are_the_circle_intersections(robots):
+    """Homotopy FK of the delta: the 2 x 2 x 2 circle intersections; complete and certified at the reference.
+
+    (Its generic solve is seeded by the reference assembly: the random start of the offset family
+    loses every path on this robot.)
+    """
+    mech, _ = robots["robot_delta"]
+    for k, x in enumerate(_poses(mech)):
+        q = inverse_kinematics(mech, x).q
+        modes = forward_kinematics(mech, mech.actuator_positions(q), all_modes=True)
+        assert (modes.method, modes.generic_count) == ("homotopy", 16)
+        if k == 0:
+            assert (modes.complete, modes.certified) == (True, 8)
+        expected = sorted(map(tuple, _delta_modes(mech, q)))
+        assert len(expected) == 8
+        np.testing.assert_allclose(sorted(tuple(s.x) for s in modes), expected, atol=1e-10)

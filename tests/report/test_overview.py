@@ -141,6 +141,31 @@ def test_overview_of_a_gripper_finger_reports_its_transmission(tmp_path):
     assert figures[0].data["slice"]["axes"] == ["finger_pivot"]
 
 
+def test_overview_of_a_gripper_finger_lists_its_two_certified_assembly_modes(tmp_path):
+    """The report states "all 2 assembly modes (certified": Freudenstein's two branches at the drive angle.
+
+    The output angles of the table (degrees) are the closed form's two roots theta4(+-1), shifted by
+    the joint's offset (the reference's output angle minus its branch's root).
+    """
+    from plm_pin.kinematics import task_pose
+    from tests import textbook as tb
+
+    mech = tb.finger(tmp_path)
+    result = run_study(find_study("overview"), tmp_path / "finger.urdf")
+    table = result.block("assembly-modes")
+    assert "all 2 assembly modes (certified" in table.title
+    texts = [b.text for s in result.sections for b in s.blocks if b.kind == "text"]
+    assert any("all 2 assembly modes (certified" in t for t in texts)
+    offset = task_pose(mech, mech.q_ref)[0] - tb.finger_freudenstein(tb.FINGER_THETA2, -1)[0]
+    expected = sorted(
+        np.degrees(np.angle(np.exp(1j * (tb.finger_freudenstein(tb.FINGER_THETA2, b)[0] + offset))))
+        for b in (-1, 1)
+    )
+    found = sorted(float(np.degrees(np.angle(np.exp(1j * np.radians(row[1]))))) for row in table.rows)
+    np.testing.assert_allclose(found, expected, atol=1e-8)
+    assert all(row[-1] == "Krawczyk" for row in table.rows)
+
+
 @pytest.fixture(scope="module")
 def limited_3d4m_overview(tmp_path_factory):
     """The overview of the 3D4M with effort limits of +-1.5 N on every slider, as a user's description."""

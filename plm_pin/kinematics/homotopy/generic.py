@@ -13,6 +13,13 @@ solutions, and new ones appear until none is left to find. The loops stop after
 parameter :math:`p_0` (paths to infinity or to singular ends dropped), and
 :data:`CHECK_LOOPS` further loops in :math:`p` alone at :math:`b = 0` must find nothing new.
 
+The reference assembly as a seed: the random start of the offset family can fail on every loop
+(its paths lost, or all of them going to infinity as :math:`b \to 0`), as for a planar
+delta whose weld closures tie coaxial half-joints. So a known real solution (the mechanism's
+reference configuration at its actuator values) is also tracked to :math:`p_0` at
+:math:`b = 0`; when that adds a root the offset stage missed, the loops in :math:`p` alone go
+on until :data:`STALE_LOOPS` loops in a row find nothing new.
+
 Quaternion signs: the system is even in each quaternion block (:math:`R(-e) = R(e)`), so
 the roots come in orbits of :math:`2^k` (:math:`k` quaternions); only one root per orbit is
 kept, tracked and counted (the one whose quaternions have a positive real part of :math:`w`):
@@ -42,9 +49,11 @@ STALE_LOOPS = 20
 """Monodromy loops in a row without a new solution before the generic solve stops."""
 CHECK_LOOPS = 2
 """Loops in the actuator parameters alone that must find no new solution."""
+OFFSET_STEP = 0.1
+"""Size of the random offsets of the seeded loops, as a move of the unknowns (unit rows of the Jacobian)."""
 MAX_SOLUTIONS = 200
 """Generic counts above this are not solved (the mechanism falls back to multi-start)."""
-CACHE_VERSION = 2
+CACHE_VERSION = 3
 """Version of the stored generic solves (part of the file name: a new algorithm starts afresh)."""
 
 
@@ -113,7 +122,9 @@ def _merge(known: np.ndarray, new: np.ndarray) -> np.ndarray:
     return np.array(rows).reshape(-1, known.shape[1])
 
 
-def _loop(form: PolynomialForm, X: np.ndarray, p0, b0, rng: np.random.Generator, vary_b: bool) -> np.ndarray:  # type: ignore[no-untyped-def]
+def _loop(  # type: ignore[no-untyped-def]
+    form: PolynomialForm, X: np.ndarray, p0, b0, rng: np.random.Generator, vary_b: bool, b_scale: float = 1.0
+) -> np.ndarray:
     from .tracking import track_all
 
     args = form.kernel_args()
@@ -122,7 +133,7 @@ def _loop(form: PolynomialForm, X: np.ndarray, p0, b0, rng: np.random.Generator,
         return rng.normal(size=k) + 1j * rng.normal(size=k)
 
     p1, p2 = p0 + rand(form.n_params), p0 + rand(form.n_params)
-    b1, b2 = (b0 + rand(form.n), b0 + rand(form.n)) if vary_b else (b0, b0)
+    b1, b2 = (b0 + b_scale * rand(form.n), b0 + b_scale * rand(form.n)) if vary_b else (b0, b0)
     for (pa, ba), (pb, bb) in (((p0, b0), (p1, b1)), ((p1, b1), (p2, b2)), ((p2, b2), (p0, b0))):
         X, codes, _ = track_all(X, pa, ba, pb, bb, args)
         X = _regular(form, X, codes, pb, bb)
@@ -131,8 +142,25 @@ def _loop(form: PolynomialForm, X: np.ndarray, p0, b0, rng: np.random.Generator,
     return X
 
 
-def solve_generic(form: PolynomialForm) -> GenericSolution:
+def _seeded(form: PolynomialForm, seed: tuple[np.ndarray, np.ndarray] | None, p0: np.ndarray) -> np.ndarray:
+    """The known solution ``seed = (x, p)`` tracked to ``p0`` at b = 0: zero or one row of shape (n,)."""
+    from .tracking import track_all
+
+    if seed is None:
+        return np.zeros((0, form.n), dtype=np.complex128)
+    x, p = (np.asarray(a, dtype=np.complex128) for a in seed)
+    zero = np.zeros(form.n, dtype=np.complex128)
+    X, codes, _ = track_all(x.reshape(1, -1), p, zero, p0, zero, form.kernel_args())
+    return canonical(form, _regular(form, X, codes, p0, zero))
+
+
+def solve_generic(form: PolynomialForm, seed: tuple[np.ndarray, np.ndarray] | None = None) -> GenericSolution:
     """Every solution at a generic complex parameter, by monodromy (no cache).
+
+    Args:
+        form: the polynomial form.
+        seed: a known solution ``(x, p)`` of the closures (unknowns, shape (n,); actuator values,
+            shape (n_params,)), e.g. the reference assembly, or None.
 
     Raises:
         NotPolynomial: more than :data:`MAX_SOLUTIONS` solutions, or none.
@@ -158,8 +186,25 @@ def solve_generic(form: PolynomialForm) -> GenericSolution:
     roots = _merge(
         np.zeros((0, form.n), dtype=np.complex128), canonical(form, _regular(form, X, codes, p0, zero))
     )
+    offset_roots = len(roots)
+    roots = _merge(roots, _seeded(form, seed, p0))
     if not len(roots):
         raise NotPolynomial("no isolated solution at a generic parameter")
+    # offsets that move the seeded roots by about OFFSET_STEP (relative), not off to infinity
+    b_scale = OFFSET_STEP * float(np.median(np.linalg.norm(evaluate(form, roots[0], p0)[1], axis=1)))
+    stale = lost = 0
+    while len(roots) > offset_roots and stale < STALE_LOOPS:  # the seed added a root: loops in (p, b)
+        loops += 1
+        back = canonical(form, _loop(form, roots, p0, zero, rng, vary_b=True, b_scale=b_scale))
+        lost += not len(back)
+        if lost > STALE_LOOPS or loops > 20 * STALE_LOOPS:
+            raise NotPolynomial("the monodromy loops from the reference assembly lose their paths")
+        more = _merge(roots, back)
+        if len(more) > len(roots):
+            stale = 0
+        elif len(back) == len(roots):  # only a loop that brought every path back counts as stale
+            stale += 1
+        roots = more
     for _ in range(CHECK_LOOPS):
         loops += 1
         more = _merge(roots, canonical(form, _loop(form, roots, p0, zero, rng, vary_b=False)))
@@ -168,8 +213,13 @@ def solve_generic(form: PolynomialForm) -> GenericSolution:
     return GenericSolution(p=p0, x=roots, loops=loops, symmetry=symmetry)
 
 
-def generic_solution(form: PolynomialForm, *, use_cache: bool = True) -> GenericSolution:
-    """The generic solve of ``form``, read from the disk cache or computed and stored there."""
+def generic_solution(
+    form: PolynomialForm, *, seed: tuple[np.ndarray, np.ndarray] | None = None, use_cache: bool = True
+) -> GenericSolution:
+    """The generic solve of ``form``, read from the disk cache or computed and stored there.
+
+    ``seed`` is a known solution ``(x, p)`` (see :func:`solve_generic`).
+    """
     path = cache_folder() / f"{form.digest}.v{CACHE_VERSION}.npz"
     refused = path.with_suffix(".refused.txt")  # a generic solve that failed: its reason, not retried
     if use_cache and path.exists():
@@ -178,7 +228,7 @@ def generic_solution(form: PolynomialForm, *, use_cache: bool = True) -> Generic
     if use_cache and refused.exists():
         raise NotPolynomial(refused.read_text(encoding="utf-8"))
     try:
-        sol = solve_generic(form)
+        sol = solve_generic(form, seed)
     except NotPolynomial as exc:
         if use_cache:
             refused.parent.mkdir(parents=True, exist_ok=True)

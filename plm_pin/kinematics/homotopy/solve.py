@@ -29,7 +29,7 @@ from ...tolerances import (
 )
 from .form import PolynomialForm
 from .generic import GenericSolution, canonical, generic_solution
-from .polynomial import polynomial_form
+from .polynomial import from_configuration, polynomial_form
 
 
 @dataclass(frozen=True)
@@ -108,7 +108,8 @@ def prepared(mech: Mechanism) -> tuple[PolynomialForm, GenericSolution]:
     hit = _FORMS.get(mech)
     if hit is None:
         form = polynomial_form(mech)
-        hit = (form, generic_solution(form))
+        seed = (from_configuration(form, mech, mech.q_ref), mech.actuator_positions(mech.q_ref))
+        hit = (form, generic_solution(form, seed=seed))
         _FORMS[mech] = hit
     return hit
 
