@@ -71,6 +71,7 @@ app = typer.Typer(
     help="Analyse parallel link mechanisms: closed chains described by a URDF tree plus cut joints.",
     no_args_is_help=True,
     add_completion=False,
+    rich_markup_mode=None,  # help texts hold units in brackets, [m, rad]: plain text, not rich markup
     pretty_exceptions_enable=False,
 )
 console = Console()

@@ -862,3 +862,15 @@ def test_report_one_range_sweeps_that_coordinate(tmp_path):
     )
     assert sweep["axes"] == ["rz"] and sweep["working_mode"] == [1]
     np.testing.assert_allclose(sweep["values"][0], [1.6, 1.7, 1.8], atol=1e-15)
+
+
+def test_help_texts_keep_their_units_in_brackets():
+    """Units written in brackets ([m, rad], [s]) reach the help text (rich markup would eat them)."""
+    from typer.testing import CliRunner
+
+    from plm_pin.cli import app
+
+    check = " ".join(CliRunner().invoke(app, ["check", "--help"], terminal_width=200).output.split())
+    assert "how far the description's loops close [m, rad]" in check
+    export = " ".join(CliRunner().invoke(app, ["export", "--help"], terminal_width=200).output.split())
+    assert "MuJoCo step [s]" in export
