@@ -93,7 +93,9 @@ def test_the_twist_row_matches_finite_differences(rssr, rng):
     second = (phi(h) - 2.0 * phi(0.0) + phi(-h)) / h**2
     data = model.createData()
     drift = _closures.drift(model, data, rssr.closures, q, v)
-    np.testing.assert_allclose(drift, second, atol=1e-5)
+    np.testing.assert_allclose(
+        drift, second, atol=1e-6 * max(1.0, np.abs(drift).max())
+    )  # measured 2e-8 at h = 1e-4
 
 
 def test_the_gauge_carries_no_load(rssr):

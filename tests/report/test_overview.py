@@ -144,22 +144,19 @@ def test_overview_of_a_gripper_finger_reports_its_transmission(tmp_path):
 def test_overview_of_a_gripper_finger_lists_its_two_certified_assembly_modes(tmp_path):
     """The report states "all 2 assembly modes (certified": Freudenstein's two branches at the drive angle.
 
-    The output angles of the table (degrees) are the closed form's two roots theta4(+-1), shifted by
-    the joint's offset (the reference's output angle minus its branch's root).
+    The output angles of the table (degrees) are the closed form's two roots theta4(+-1): the
+    finger's joint sits on the ground line with no offset in its URDF.
     """
-    from plm_pin.kinematics import task_pose
     from tests import textbook as tb
 
-    mech = tb.finger(tmp_path)
+    tb.finger(tmp_path)
     result = run_study(find_study("overview"), tmp_path / "finger.urdf")
     table = result.block("assembly-modes")
     assert "all 2 assembly modes (certified" in table.title
     texts = [b.text for s in result.sections for b in s.blocks if b.kind == "text"]
     assert any("all 2 assembly modes (certified" in t for t in texts)
-    offset = task_pose(mech, mech.q_ref)[0] - tb.finger_freudenstein(tb.FINGER_THETA2, -1)[0]
     expected = sorted(
-        np.degrees(np.angle(np.exp(1j * (tb.finger_freudenstein(tb.FINGER_THETA2, b)[0] + offset))))
-        for b in (-1, 1)
+        np.degrees(np.angle(np.exp(1j * tb.finger_freudenstein(tb.FINGER_THETA2, b)[0]))) for b in (-1, 1)
     )
     found = sorted(float(np.degrees(np.angle(np.exp(1j * np.radians(row[1]))))) for row in table.rows)
     np.testing.assert_allclose(found, expected, atol=1e-8)
@@ -285,7 +282,6 @@ def test_overview_of_a_slider_crank_reports_its_transmission_in_metres(tmp_path)
 
     The transmission table holds the closed form dx/dt; the pose table says nothing of degrees.
     """
-    from plm_pin.kinematics import task_pose
     from tests import textbook as tb
 
     with pytest.warns(ReferenceWarning):  # its sidecar gives no reference: moved off the dead centre
@@ -297,5 +293,5 @@ def test_overview_of_a_slider_crank_reports_its_transmission_in_metres(tmp_path)
     (pose,) = [
         b for s in result.sections for b in s.blocks if b.kind == "table" and "output joints" in b.title
     ]
-    assert pose.rows == ((("slider_joint", pytest.approx(task_pose(mech, mech.q_ref)[0]), "m")),)
+    assert pose.rows == ((("slider_joint", pytest.approx(tb.slider_crank_position(t), abs=1e-10), "m")),)
     assert "degree" not in pose.note
