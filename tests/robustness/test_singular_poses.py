@@ -91,8 +91,9 @@ def test_exact_singular_pose_is_flagged_by_every_analysis(fourbar, extreme):
 
 @pytest.mark.parametrize("extreme", [0, 1])
 def test_pose_solved_at_the_extreme_rocker_angle_is_flagged_as_classify_flags_it(fourbar, extreme):
-    """IK at the extreme rocker angle lands at the fold (the crank within 1e-5 rad of the closed-form
-    extreme): classify, manipulability and task_space_dynamics all flag it, no w = 1e9.
+    """IK at the extreme rocker angle lands at the fold: all three analyses flag it, no w = 1e9.
+
+    The crank lands within 1e-5 rad of the closed-form extreme, so the pose is the fold by hand.
     """
     theta, rocker = extremes()[extreme]
     q = inverse_kinematics(fourbar, [rocker], at_crank(fourbar, theta + 0.02)).q
