@@ -42,7 +42,7 @@ from ..exceptions import ClosureNotSatisfied
 from ..tolerances import CLOSURE_TOL, GAUGE_MIN_PIVOT, GAUGE_TIE_RTOL, IDLE_RTOL
 from . import closures as _closures
 from .assembly import assemble
-from .rank import rank_by_gap
+from .rank import rank_of_singular_values
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -116,8 +116,8 @@ def idle_motions(
     nv = model.nv
     if closures:
         J_phi = _closures.jacobian_from_data(model, data, closures)
-        rank = rank_by_gap(J_phi, tol).rank
-        N = np.linalg.svd(J_phi)[2][rank:].T  # (nv, mobility)
+        _, s, Vt = np.linalg.svd(J_phi)
+        N = Vt[rank_of_singular_values(s, tol).rank :].T  # (nv, mobility)
     else:
         N = np.eye(nv)
     if N.shape[1] == 0:

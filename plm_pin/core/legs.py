@@ -39,7 +39,7 @@ import pinocchio as pin
 from .._lazy import lazy_module
 from ..tolerances import CLOSURE_TOL, LEG_SINGULAR_RTOL, PATTERN_ATOL, PATTERN_RTOL
 from . import closures as _closures
-from .rank import rank_by_gap
+from .rank import rank_of_singular_values
 from .task import FrameTask, Task
 
 scipy_linalg = lazy_module("scipy.linalg")
@@ -239,8 +239,11 @@ def _drop_moving_platform_rows(A: np.ndarray, m: int, n_task: int, tol: float) -
     carrying a single-rod Delta's tip), which pinning it would hide.
     """
     J_phi = A[:m]
-    rank = rank_by_gap(J_phi, tol).rank if m else 0
-    N = np.linalg.svd(J_phi)[2][rank:].T if m else np.eye(A.shape[1])  # (nv, raw mobility)
+    if m:
+        _, s, Vt = np.linalg.svd(J_phi)
+        N = Vt[rank_of_singular_values(s, tol).rank :].T  # (nv, raw mobility)
+    else:
+        N = np.eye(A.shape[1])
     extra = A[m + n_task :]
     moved = np.abs(extra @ N).max(axis=1, initial=0.0) > PATTERN_RTOL * max(float(np.abs(A).max()), 1.0)
     extra[moved] = 0.0

@@ -108,7 +108,14 @@ def rank_by_gap(M: np.ndarray, floor_tol: float) -> RankGap:
     """
     if M.size == 0:
         return RankGap(0, math.nan, 0.0)
-    s = np.linalg.svd(M, compute_uv=False)
+    return rank_of_singular_values(np.linalg.svd(M, compute_uv=False), floor_tol)
+
+
+def rank_of_singular_values(s: np.ndarray, floor_tol: float) -> RankGap:
+    """:func:`rank_by_gap` from the singular values ``s`` (descending, not empty) of a matrix.
+
+    For a caller that also needs the singular vectors, so that the matrix is decomposed once.
+    """
     scale = max(float(s[0]), 1.0)
     floor = max(floor_tol, ROUND_OFF) * scale
     ceiling = max(RANK_CEILING_RTOL * scale, floor)

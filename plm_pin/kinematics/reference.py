@@ -26,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..core.diagnostics import Finding
-from ..core.mechanism import Mechanism
+from ..core.mechanism import Mechanism, joint_type
 from ..exceptions import PlmError
 from ..results import Result, unit
 from ..tolerances import REFERENCE_MARGIN, REFERENCE_SHIFT_ANGLE, REFERENCE_SHIFT_RTOL
@@ -102,9 +102,7 @@ def reference_report(mech: Mechanism) -> ReferenceReport:
     sign = 0
     margins: dict[str, float] = {}
     if task is not None:
-        data = mech.model.createData()
-        pin.framesForwardKinematics(mech.model, data, q)
-        pose = task.pose_from_data(data)
+        pose = task_pose(mech, q)
     if _square(mech):
         report = classify(mech, q)
         margins = dict(
@@ -136,7 +134,7 @@ def _shifts(mech: Mechanism, q: np.ndarray) -> dict[str, float]:
     for name in reference:
         j = mech.model.joints[mech.model.getJointId(name)]
         move = float(np.linalg.norm(dv[j.idx_v : j.idx_v + j.nv]))
-        prismatic = j.shortname().startswith("JointModelP")
+        prismatic = joint_type(mech.model, mech.model.getJointId(name)) == "prismatic"
         limit = REFERENCE_SHIFT_RTOL * size if prismatic else REFERENCE_SHIFT_ANGLE
         if move > limit:
             out[name] = move
@@ -217,7 +215,7 @@ def choose_reference(mech: Mechanism, iterations: int = REFERENCE_STEPS) -> tupl
     mode = working_mode(mech, q)
     size = _size(mech, q)
     task_unit = np.where(np.isin(np.arange(task.size), task.angles), 0.2, 0.1 * size)
-    actuator_unit = np.array([0.1 * size if _prismatic(mech, a.joint_id) else 0.2 for a in mech.actuators])
+    actuator_unit = np.array([0.1 * size if a.kind == "prismatic" else 0.2 for a in mech.actuators])
     scale = 1.0
     for _ in range(iterations):
         best: tuple[np.ndarray, float] | None = None
@@ -238,12 +236,6 @@ def choose_reference(mech: Mechanism, iterations: int = REFERENCE_STEPS) -> tupl
         q, margin = best
         mode = working_mode(mech, q)
     return q, margin
-
-
-def _prismatic(mech: Mechanism, joint_id: int) -> bool:
-    """Whether a one-DOF joint translates (its step is a length, not an angle)."""
-    name = mech.model.joints[joint_id].shortname()
-    return "Prismatic" in name or name.startswith("JointModelP")
 
 
 def _neighbours(
