@@ -32,7 +32,7 @@ from typer.core import TyperGroup
 from ._io import atomic_path
 from ._version import __version__
 from .core.diagnostics import findings, mobility_text
-from .core.mechanism import Mechanism
+from .core.mechanism import Mechanism, joint_type
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .export import export_mjcf
 from .kinematics import forward_kinematics, inverse_kinematics, task_pose
@@ -346,8 +346,8 @@ def fk_command(
         table.add_column(dof, justify="right")
     table.add_column("residual", justify="right")
     table.add_column("certificate")
-    certificate = "Krawczyk" if modes.method == "homotopy" else "none"
     for i, s in enumerate(modes):
+        certificate = "Krawczyk" if s.certified else "none"
         table.add_row(str(i + 1), *(f"{v:.6f}" for v in s.x), f"{s.residual_norm:.1e}", certificate)
     console.print(table)
 
@@ -443,6 +443,12 @@ _UNITS = {"prismatic": "m", "revolute": "rad"}
 """The unit of a one-axis joint's position, by joint type."""
 
 
+ModeOption = Annotated[
+    str | None,
+    typer.Option("--mode", help="working mode: one sign per leg, comma-separated (--mode=+,-,+,-)"),
+]
+
+
 @app.command("ik")
 def ik_command(
     target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
@@ -452,10 +458,7 @@ def ik_command(
             help="the task pose NAME=VALUE (m or rad), every task coordinate (e.g. x=0 y=0.08 rz=-0.3)"
         ),
     ] = None,
-    mode: Annotated[
-        str | None,
-        typer.Option("--mode", help="working mode: one sign per leg, comma-separated (--mode=+,-,+,-)"),
-    ] = None,
+    mode: ModeOption = None,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
 ) -> None:
     """Inverse kinematics at a task pose: joints, actuator positions, working mode, closure residual."""
@@ -471,7 +474,7 @@ def ik_command(
         sol = inverse_kinematics(mech, [values[d] for d in dofs], mode=_mode_signs(mech, mode))
         actuators, working = sol.actuators, sol.mode
         closure = float(np.max(np.abs(mech.closure_residual(sol.q)), initial=0.0))
-    kinds = {j["name"]: j["type"] for j in mech.summary()["joints"]}
+    kinds = {n: joint_type(mech.model, mech.model.getJointId(n)) for n in mech.joint_names}
     for joint, by in sol.limit_violations.items():
         errors.print(
             f"[yellow]warning:[/] joint {escape(joint)} is outside its limits by {by:.3g} "
@@ -529,10 +532,6 @@ ZOption = Annotated[str | None, _axis_option("z")]
 RxOption = Annotated[str | None, _axis_option("rx")]
 RyOption = Annotated[str | None, _axis_option("ry")]
 RzOption = Annotated[str | None, _axis_option("rz")]
-ModeOption = Annotated[
-    str | None,
-    typer.Option("--mode", help="working mode: one sign per leg, comma-separated (--mode=+,-,+,-)"),
-]
 
 
 def _grid_range(text: str, option: str) -> np.ndarray:

@@ -32,11 +32,14 @@ class FKSolution(Result):
         q: assembled configuration, shape (nq,).
         x: task coordinates of the end-effector frame [m, rad], shape (n_task,).
         residual_norm: largest absolute closure residual [m, rad].
+        certified: proven by an interval (Krawczyk) test to be the one root in its box
+            (homotopy); False for a root that failed the test or one multi-start found.
     """
 
     q: np.ndarray = field(metadata=unit("m, rad"))
     x: np.ndarray = field(metadata=unit("m, rad"))
     residual_norm: float = field(metadata=unit("m, rad"))
+    certified: bool = field(default=False, metadata=unit("-"))
 
 
 class FKModes(list[FKSolution]):
@@ -106,16 +109,24 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
     res = solve_homotopy(mech, c)
     free = mech.passive_v_indices
     out = FKModes()
-    for xr in [r.x for r in res.real] + list(res.uncertified):  # uncertified: kept, said by complete=False
+    roots = [(r.x, True) for r in res.real] + [(x, False) for x in res.uncertified]  # kept: complete=False
+    complete = res.complete
+    for xr, certified in roots:
         q = to_configuration(form, mech, xr, c)
         if form.eliminated_v.size:  # the legs reduced to distances: find their angles again
             q = _fit_eliminated(mech, q, form.eliminated_v, tol)
-        q, residual_norm, x = _close(mech, q, free, tol)
+        try:
+            q, residual_norm, x = _close(mech, q, free, tol)
+        except ClosureNotSatisfied:  # a root the full model does not close: not a mode, and not proven
+            complete = False
+            continue
         if not any(_same_mode(mech, s, q, x) for s in out):
-            out.append(FKSolution(q, x, residual_norm))
-    out.method, out.complete = "homotopy", res.complete
+            out.append(FKSolution(q, x, residual_norm, certified))
+    out.method, out.complete = "homotopy", complete
     out.generic_count, out.certified = res.generic_count, len(res.real)
-    out.why_incomplete = res.why_incomplete()
+    out.why_incomplete = res.why_incomplete() or (
+        "" if complete else "a root of the polynomial form does not close the full model's loops"
+    )
     return out
 
 

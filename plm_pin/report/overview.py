@@ -339,7 +339,6 @@ def _assembly_modes(section: Section, mech: Mechanism) -> None:
     )
     dofs = mech.task.dofs
     units = [_display(mech, dof, 0.0)[1] for dof in dofs]
-    certificate = "Krawczyk" if modes.method == "homotopy" else "none"
     section.table(
         f"Assembly modes at the reference actuator values: {modes.headline()}",
         [
@@ -353,7 +352,7 @@ def _assembly_modes(section: Section, mech: Mechanism) -> None:
                 i + 1,
                 *(_display(mech, d, v)[0] for d, v in zip(dofs, s.x, strict=True)),
                 s.residual_norm,
-                certificate,
+                "Krawczyk" if s.certified else "none",
             )
             for i, s in enumerate(modes)
         ],

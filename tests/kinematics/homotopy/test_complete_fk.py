@@ -132,6 +132,8 @@ def test_3rpr_six_real_modes_match_the_univariate_search(tmp_path):
     modes = forward_kinematics(mech, RPR_RHO)
     assert modes.method == "homotopy" and modes.complete
     assert modes.generic_count == 6 and modes.certified == 6 and len(modes) == 6
+    assert all(s.certified for s in modes)
+    assert not any(s.certified for s in forward_kinematics(mech, RPR_RHO, method="multi-start"))
     expected = rpr_poses(RPR_BASE, RPR_PLATE, RPR_RHO, n_grid=100_000)
     assert len(expected) == 6
     for e in expected:
