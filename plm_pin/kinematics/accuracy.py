@@ -102,6 +102,23 @@ class ErrorModel(Result):
         t_ang = nonnegative(angle, "angle", "rad")
         return np.array([t_len if u == "m" else t_ang for u in self.units])
 
+    def check(self, tolerances: ArrayLike) -> np.ndarray:
+        """``tolerances`` as an array of one finite number >= 0 per parameter [m, rad].
+
+        Raises:
+            InvalidInput: a wrong size, a negative or non-finite entry.
+        """
+        try:
+            arr = np.asarray(tolerances, dtype=float)
+        except (TypeError, ValueError):
+            arr = np.full(0, np.nan)
+        if arr.shape != (self.size,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
+            raise InvalidInput(
+                f"tolerances must be {self.size} finite numbers >= 0 [m, rad], one per parameter of "
+                f"error_model (ErrorModel.tolerances(length, angle) makes them), got shape {arr.shape}"
+            )
+        return arr
+
 
 def error_model(mech: Mechanism) -> ErrorModel:
     """The parameters of the accuracy analysis of ``mech`` (see the module docstring).
@@ -145,23 +162,14 @@ class Sensitivity(Result):
     units: tuple[str, ...]
     mismatch: np.ndarray = field(metadata=unit("m, rad per parameter unit"))
 
-    def largest(self, row: int, count: int, tolerances: ArrayLike | None = None) -> list[tuple[str, float]]:
-        """The ``count`` parameters moving task coordinate ``row`` most, with their share.
+    def largest(self, row: int, count: int) -> list[tuple[str, float]]:
+        """The ``count`` parameters moving task coordinate ``row`` most, with ``|S|``, largest first."""
+        return _ranked(np.abs(self.S[row]), self.names, count)
 
-        Args:
-            row: index of the task coordinate.
-            count: how many to list.
-            tolerances: when given (one per parameter), rank by ``|S| * tolerance`` (their
-                contribution to the worst-case bound) instead of by ``|S|``.
 
-        Returns:
-            ``(name, value)`` pairs, largest first.
-        """
-        values = np.abs(self.S[row])
-        if tolerances is not None:
-            values = values * _tolerance_vector(tolerances, len(self.names))
-        order = np.argsort(-values, kind="stable")[:count]
-        return [(self.names[k], float(values[k])) for k in order]
+def _ranked(values: np.ndarray, names: tuple[str, ...], count: int) -> list[tuple[str, float]]:
+    order = np.argsort(-values, kind="stable")[:count]
+    return [(names[k], float(values[k])) for k in order]
 
 
 @dataclass(frozen=True)
@@ -182,15 +190,9 @@ class ErrorBound(Result):
     sensitivity: Sensitivity
     tolerances: np.ndarray = field(metadata=unit("m, rad"))
 
-
-def _tolerance_vector(tolerances: ArrayLike, size: int) -> np.ndarray:
-    arr = np.asarray(tolerances, dtype=float)
-    if arr.shape != (size,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise InvalidInput(
-            f"tolerances must be {size} finite numbers >= 0 [m, rad], one per parameter of error_model "
-            f"(ErrorModel.tolerances(length, angle) makes them), got shape {arr.shape}"
-        )
-    return arr
+    def contributions(self, row: int, count: int) -> list[tuple[str, float]]:
+        """The ``count`` largest terms ``|S| tol`` of coordinate ``row``'s worst case [m, rad], descending."""
+        return _ranked(np.abs(self.sensitivity.S[row]) * self.tolerances, self.sensitivity.names, count)
 
 
 def _placement_columns(
@@ -295,8 +297,8 @@ def error_bound(mech: Mechanism, q: ArrayLike, tolerances: ArrayLike) -> ErrorBo
         InvalidInput: malformed tolerances (see also :func:`sensitivity`).
         SingularConfiguration: see :func:`sensitivity`.
     """
+    tol = error_model(mech).check(tolerances)
     sens = sensitivity(mech, q)
-    tol = _tolerance_vector(tolerances, len(sens.names))
     worst = np.abs(sens.S) @ tol
     rms = np.sqrt((sens.S**2) @ (tol**2))
     return ErrorBound(sens.dofs, worst, rms, sens, tol)

@@ -165,8 +165,10 @@ def test_the_bound_is_the_interval_and_rms_sum_of_the_sensitivity():
     # rms: the standard deviation of S e over independent errors of standard deviation tol
     samples = rng.standard_normal((20000, model.size)) * tol
     assert np.std(samples @ S.T, axis=0) == pytest.approx(bound.rms, rel=0.03)
-    largest = bound.sensitivity.largest(0, 3, tol)
-    assert largest[0][1] == pytest.approx(np.max(np.abs(S[0]) * tol))
+    top = bound.contributions(0, 3)
+    assert top[0][1] == pytest.approx(np.max(np.abs(S[0]) * tol))
+    assert [v for _, v in top] == sorted((v for _, v in top), reverse=True)
+    assert bound.sensitivity.largest(1, 1)[0][1] == pytest.approx(np.max(np.abs(S[1])))
 
 
 def test_bad_tolerances_and_singular_configurations_are_refused():
