@@ -19,6 +19,7 @@ from plm_pin import InvalidInput, SingularConfiguration
 from plm_pin.core.mechanism import Mechanism
 from plm_pin.kinematics import forward_kinematics, task_pose
 from plm_pin.kinematics.accuracy import PLACEMENT_ERRORS, error_bound, error_model, sensitivity
+from tests import textbook
 from tests.conftest import preset
 
 H = 1e-6
@@ -51,8 +52,11 @@ def _perturbed(mech: Mechanism, name: str, h: float) -> tuple[Mechanism, np.ndar
     return Mechanism(model, mech.sidecar, name=mech.name, idle_gauges=mech.idle_gauges), c
 
 
-def _task_placement(mech: Mechanism, c: np.ndarray, guess: np.ndarray) -> pin.SE3:
+def _task_placement(mech: Mechanism, c: np.ndarray, guess: np.ndarray) -> pin.SE3 | np.ndarray:
+    """The task frame's placement (a frame task) or the output joints' positions (a joint task)."""
     q = forward_kinematics(mech, c, guess=guess, all_modes=False)[0].q
+    if mech.task_frame_id is None:
+        return task_pose(mech, q)
     pin.framesForwardKinematics(mech.model, mech.data, q)
     return pin.SE3(mech.data.oMf[mech.task_frame_id])
 
@@ -64,15 +68,13 @@ def _pipeline_column(mech: Mechanism, name: str) -> np.ndarray:
         moved, c = _perturbed(mech, name, h)
         ends.append(_task_placement(moved, c, mech.q_ref))
     plus, minus = ends
+    if isinstance(plus, np.ndarray):
+        return (plus - minus) / (2 * H)
     twist = np.concatenate([plus.translation - minus.translation, pin.log3(plus.rotation @ minus.rotation.T)])
     return twist[mech.task_compiled.selectors[0]] / (2 * H)
 
 
-@pytest.mark.parametrize(
-    "name", ["fivebar", "fourbar", "harada2011_3d3m", "enferadi2017_star_triangle", "zhao2011_6pss"]
-)
-def test_sensitivity_matches_finite_differences_of_the_forward_kinematics(name):
-    mech = preset(name)
+def _check_against_the_pipeline(mech: Mechanism) -> None:
     sens = sensitivity(mech, mech.q_ref)
     model = error_model(mech)
     assert sens.S.shape == (len(mech.task.dofs), model.size)
@@ -86,6 +88,24 @@ def test_sensitivity_matches_finite_differences_of_the_forward_kinematics(name):
         fd = _pipeline_column(mech, model.names[k])
         scale = max(1.0, float(np.max(np.abs(fd))))
         assert np.allclose(sens.S[:, k], fd, rtol=1e-5, atol=1e-7 * scale), model.names[k]
+
+
+@pytest.mark.parametrize(
+    "name", ["fivebar", "fourbar", "harada2011_3d3m", "enferadi2017_star_triangle", "zhao2011_6pss"]
+)
+def test_sensitivity_matches_finite_differences_of_the_forward_kinematics(name):
+    _check_against_the_pipeline(preset(name))
+
+
+@pytest.mark.parametrize("build", ["finger", "delta", "stewart"])
+def test_sensitivity_of_a_joint_task_a_floating_platform_and_ball_joints(tmp_path, build):
+    """The gripper finger (output joint as the task), a Delta on a free-flyer, a Stewart platform."""
+    mech = {
+        "finger": lambda: textbook.finger(tmp_path),
+        "delta": lambda: textbook.delta(tmp_path, parallelogram=False),
+        "stewart": lambda: textbook.stewart(tmp_path),
+    }[build]()
+    _check_against_the_pipeline(mech)
 
 
 def test_fourbar_urdf_edits_move_the_rocker_as_the_sensitivity_says(fourbar):
