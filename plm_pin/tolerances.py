@@ -15,6 +15,7 @@ This module imports nothing from plm_pin.
 """
 
 __all__ = [
+    "ACTUATED_SINGULAR_RTOL",
     "ASSEMBLED_TOL",
     "ASSEMBLY_RCOND",
     "ATTACHMENT_ATOL",
@@ -245,6 +246,10 @@ r"""[-] :math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \l
 
 Relative to the whole task Jacobian (:math:`|J_x| = \sigma_{max}(J_x)`), not to :math:`T` itself,
 whose ratio is 1 for any 1 x 1 :math:`T` (see :mod:`plm_pin.kinematics.singularity`)."""
+
+ACTUATED_SINGULAR_RTOL = 1e-8
+r"""[-] The actuators fix the configuration (the accuracy sensitivity exists) unless the smallest
+singular value of :math:`[J_\phi; S_a]` is at most this times its largest (a direct, type 2, singularity)."""
 
 LIMIT_TOL = 1e-9
 """[m or rad] A joint within this distance of its range respects it."""

@@ -817,7 +817,7 @@ def test_shell_guide_examples_run(tmp_path, monkeypatch):
 
     page = Path(__file__).resolve().parents[1] / "docs" / "guide" / "shell.md"
     commands = re.findall(r"^\$ plm-pin (.+)$", page.read_text(encoding="utf-8"), flags=re.M)
-    assert {c.split()[0] for c in commands} == {"ik", "fk", "map", "report"}
+    assert {c.split()[0] for c in commands} == {"ik", "fk", "accuracy", "map", "report"}
     monkeypatch.chdir(tmp_path)
     for command in commands:
         result = runner.invoke(app, shlex.split(command))
@@ -874,3 +874,58 @@ def test_help_texts_keep_their_units_in_brackets():
     assert "how far the description's loops close [m, rad]" in check
     export = " ".join(CliRunner().invoke(app, ["export", "--help"], terminal_width=200).output.split())
     assert "MuJoCo step [s]" in export
+
+
+def _elbow(O: np.ndarray, P: np.ndarray, outward: float, proximal: float, distal: float) -> np.ndarray:
+    """The five-bar elbow on circles (O, proximal) and (P, distal), on the side ``outward`` (-1 or +1)."""
+    d = float(np.linalg.norm(P - O))
+    a = (proximal**2 - distal**2 + d**2) / (2 * d)
+    h = math.sqrt(proximal**2 - a**2)
+    mid = O + a * (P - O) / d
+    normal = np.array([-(P - O)[1], (P - O)[0]]) / d
+    return max((mid + h * normal, mid - h * normal), key=lambda E: outward * E[0])
+
+
+def test_accuracy_fivebar_bound_is_the_closed_form_of_the_leg_constraints():
+    """`accuracy fivebar x= y= --tol t,0`: each leg keeps the tip on its distal circle, (P - E).(dP - w) = 0.
+
+    ``w`` is the leg tip's displacement by an error at fixed joint angles: a motor or elbow placement
+    error moves it by the error (rotated into the parent link), a tip-frame error by the error in the
+    distal link's axes; errors along z move nothing in the plane and the angle tolerance is 0.
+    """
+    base, proximal, distal, t = 0.2, 0.15, 0.2, 2e-5  # the builder's defaults, kept by the preset
+    P = np.array([0.03, 0.24])
+    result = runner.invoke(app, ["accuracy", "fivebar", "x=0.03", "y=0.24", f"--tol={t},0", "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    columns = []
+    A = []
+    for k, (O, outward) in enumerate(((np.array([-base / 2, 0.0]), -1.0), (np.array([base / 2, 0.0]), 1.0))):
+        E = _elbow(O, P, outward, proximal, distal)
+        A.append(P - E)
+        a, phi = math.atan2(*(E - O)[::-1]), math.atan2(*(P - E)[::-1])
+        for rotation in (0.0, a, phi):  # the motor's, the elbow's and the tip frame's placement axes
+            for e in np.eye(2):
+                w = (
+                    np.array(
+                        [[math.cos(rotation), -math.sin(rotation)], [math.sin(rotation), math.cos(rotation)]]
+                    )
+                    @ e
+                )
+                rhs = np.zeros(2)
+                rhs[k] = (P - E) @ w
+                columns.append(rhs)
+    S = np.linalg.solve(np.array(A), np.array(columns).T)
+    assert data["worst_case"] == pytest.approx(np.abs(S).sum(axis=1) * t, rel=1e-8)
+    assert data["rms"] == pytest.approx(np.sqrt((S**2).sum(axis=1)) * t, rel=1e-8)
+    assert data["length_tolerance"] == t and data["angle_tolerance"] == 0.0
+    table = runner.invoke(app, ["accuracy", "fivebar", "x=0.03", "y=0.24", f"--tol={t},0"])
+    assert table.exit_code == 0 and "38 parameters" in table.stdout
+
+
+@pytest.mark.parametrize("tol", ["", "1e-5", "1e-5,-1", "a,b"])
+def test_accuracy_refuses_a_malformed_tolerance(tol):
+    args = ["accuracy", "fivebar"] + ([f"--tol={tol}"] if tol else [])
+    result = runner.invoke(app, args)
+    assert result.exit_code == 1
+    assert "LENGTH,ANGLE" in result.output

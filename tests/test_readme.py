@@ -14,6 +14,7 @@ GUIDE_PAGES = (
     "singularities",
     "statics",
     "stiffness",
+    "accuracy",
     "viewer",
     "dynamics",
     "simulation",

@@ -17,6 +17,9 @@ mechanism), over the sweep's pose grid; none re-derives a formula:
   (:meth:`plm_pin.workspace.WorkspaceSlice.within_limits`);
 - ``peak_force`` and ``preload`` call :func:`plm_pin.statics.static_forces` at every reached
   pose, for every wrench of the set;
+- ``accuracy`` calls :func:`plm_pin.workspace.accuracy_over` at the grid's configurations: the
+  worst-case pose error for the tolerances ``length_tolerance`` [m] and ``angle_tolerance`` [rad]
+  on every geometric parameter (:mod:`plm_pin.kinematics.accuracy`), and its largest over ``over``;
 - ``stiffness`` calls :func:`plm_pin.stiffness.stiffness` and
   :func:`plm_pin.stiffness.natural_frequencies` at every reached pose (the mechanism's
   sidecar compliance, gravity and the internal preload ``internal``).
@@ -40,6 +43,7 @@ from numpy.typing import ArrayLike
 from .._text import short
 from ..core.mechanism import Mechanism
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
+from ..kinematics.accuracy import error_model
 from ..kinematics.forward import task_pose
 from ..kinematics.singularity import KINDS
 from ..kinematics.working_mode import guess_mode
@@ -49,7 +53,7 @@ from ..statics.allocation import OBJECTIVES
 from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
 from ..tolerances import SINGULARITY_TOL
-from ..workspace import WorkspaceSlice, workspace_grid
+from ..workspace import WorkspaceSlice, accuracy_over, workspace_grid
 from ..workspace.manipulability import Manipulability
 from ..workspace.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
 
@@ -148,6 +152,12 @@ def _names(name: str, value: Any) -> tuple[str, ...] | None:
     return tuple(value)
 
 
+def _nonnegative(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value < math.inf:
+        raise InvalidInput(f"option {name!r} must be a finite number >= 0, got {short(value)}")
+    return float(value)
+
+
 def _objective(name: str, value: Any) -> str:
     if value not in OBJECTIVES:
         raise InvalidInput(f"option {name!r} must be one of {list(OBJECTIVES)}, got {short(value)}")
@@ -241,6 +251,18 @@ OPTIONS: dict[str, Option] = {
             _internal,
         ),
         Option(
+            "length_tolerance",
+            None,
+            "accuracy: tolerance of every placement translation and prismatic actuator offset [m] (required)",
+            _nonnegative,
+        ),
+        Option(
+            "angle_tolerance",
+            None,
+            "accuracy: tolerance of every placement rotation and revolute actuator offset [rad] (required)",
+            _nonnegative,
+        ),
+        Option(
             "compliance_direction",
             None,
             "direction in the task's translation coordinates of compliance_along (default: the first one)",
@@ -261,6 +283,7 @@ class Metric:
         variables: the result variables it fills.
         options: names of the :data:`OPTIONS` it uses (``ik_tol`` is used by all).
         compute: the variables' values at one parameter point.
+        required: the options among ``options`` that have no default and must be given.
     """
 
     name: str
@@ -268,6 +291,7 @@ class Metric:
     variables: tuple[Variable, ...]
     options: tuple[str, ...]
     compute: Callable[[PointEvaluation], dict[str, np.ndarray]]
+    required: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -439,6 +463,18 @@ def _stiffness(ev: PointEvaluation) -> dict[str, np.ndarray]:
     return {name: np.array(smap.variable(name)) for name in STIFFNESS_VARIABLES}
 
 
+def _accuracy(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    tol = error_model(ev.mech).tolerances(ev.option("length_tolerance"), ev.option("angle_tolerance"))
+    amap = accuracy_over(ev.mech, ev.grid, tol)
+    position, angle = amap.worst_position, amap.worst_angle  # NaN where unreached: fmax ignores it
+    return {
+        "position_error": position,
+        "angle_error": angle,
+        "max_position_error": np.asarray(np.fmax.reduce(position, axis=ev.over())),
+        "max_angle_error": np.asarray(np.fmax.reduce(angle, axis=ev.over())),
+    }
+
+
 _W = "Yoshikawa manipulability w = sqrt(det(J_ce^T J_ce)) (Harada 2011 eq. (13)); 0 at a direct singularity"
 
 METRICS: dict[str, Metric] = {
@@ -584,6 +620,26 @@ METRICS: dict[str, Metric] = {
             _stiffness,
         ),
         Metric(
+            "accuracy",
+            "worst-case first-order pose error for tolerances length_tolerance / angle_tolerance on "
+            "every joint placement, closure frame placement and actuator offset "
+            "(plm_pin.kinematics.accuracy), largest over the task coordinates in m and in rad; NaN where "
+            "unreached or singular",
+            (
+                Variable("position_error", "m", "worst-case error of the task's coordinates in m"),
+                Variable("angle_error", "rad", "worst-case error of the task's coordinates in rad"),
+                Variable(
+                    "max_position_error", "m", "largest position_error over the axes 'over'", axes="reduced"
+                ),
+                Variable(
+                    "max_angle_error", "rad", "largest angle_error over the axes 'over'", axes="reduced"
+                ),
+            ),
+            ("length_tolerance", "angle_tolerance", "over"),
+            _accuracy,
+            required=("length_tolerance", "angle_tolerance"),
+        ),
+        Metric(
             "within_limits",
             "whether the reached pose keeps every joint inside its URDF position limits (apart from "
             "'reachable': the loops close there, perhaps only with a passive joint beyond its range)",
@@ -623,6 +679,10 @@ def check_options(metrics: Sequence[str], given: Mapping[str, Any]) -> dict[str,
         InvalidInput: an unknown option, one no chosen metric uses, or a bad value.
     """
     used = metric_options(metrics)
+    for m in metrics:
+        missing = [o for o in METRICS[m].required if o not in given]
+        if missing:
+            raise InvalidInput(f"metric {m!r} needs the options {missing} (no default); give them in options")
     for name in given:
         if name not in OPTIONS:
             raise InvalidInput(f"unknown option {name!r}; options are {sorted(OPTIONS)}")
