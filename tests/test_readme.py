@@ -21,6 +21,7 @@ GUIDE_PAGES = (
     "mujoco",
     "cad-and-mujoco",
     "any-robot",
+    "legs",
 )
 """The docs/guide pages whose examples were the README's (each in a namespace of its own)."""
 

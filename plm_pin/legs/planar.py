@@ -11,9 +11,9 @@ first letter is the joint at the base, the actuated joint is underlined in the u
   (``slider<i>``, position :math:`s_i` from :math:`A_i`), a hinge, a rod of length :math:`l_i`, a
   hinge at :math:`C_i`: :math:`s_i = u_i \cdot d_i + \sigma_i \sqrt{l_i^2 - |d_i|^2 + (u_i \cdot d_i)^2}`,
   :math:`d_i = C_i - A_i`, :math:`\sigma_i` the leg's branch (``modes``).
-- **RRR**: a crank driven at :math:`A_i` (``crank<i>``, length :math:`l_{1i}`), a hinge, a rod
-  (:math:`l_{2i}`), a hinge at :math:`C_i`; the elbow on the side :math:`\sigma_i` of
-  :math:`A_i \to C_i` (+1: to the left).
+- **RRR**: a crank (link ``arm<i>``) driven at :math:`A_i` (joint ``crank<i>``, length
+  :math:`l_{1i}`), a hinge, a rod (:math:`l_{2i}`), a hinge at :math:`C_i`; the elbow on the
+  side :math:`\sigma_i` of :math:`A_i \to C_i` (+1: to the left).
 - **PRP**: a carriage driven along the rail (``slider<i>``), a hinge, and a slot of the
   platform along its direction :math:`v_i` (``slots``, platform frame) sliding on the hinge's
   arm (passive prismatic ``slot<i>``): the pivot :math:`B_i = A_i + s_i u_i` lies on the line
@@ -22,7 +22,8 @@ first letter is the joint at the base, the actuated joint is underlined in the u
 Spanning tree: leg 1 carries the platform (its last hinge, ``wrist1``, is a tree joint; for
 PRP the platform is fixed to leg 1's slot block); legs 2 and 3 are cut at the platform by a
 ``point`` closure (a hinge in a planar chain) or, for PRP, a ``weld`` (the slot keeps the
-relative angle). Each link frame starts at its joint and runs along its own x.
+relative angle). Each link frame starts at its joint and runs along its own x. No link is named
+like a joint, so that every name is one frame of the Pinocchio model.
 """
 
 from __future__ import annotations
@@ -301,13 +302,13 @@ def build_planar(
         l1, l2 = (float(v) for v in L[i])
         base_visuals.append(u.sphere_visual(1.5 * radius, "joint", Ai))
         links += [
-            parts.rod_along_x(f"crank{n}", 0.0, l1, density, 1.3 * radius, "slider"),
+            parts.rod_along_x(f"arm{n}", 0.0, l1, density, 1.3 * radius, "slider"),
             parts.rod_along_x(f"rod{n}", 0.0, l2, density, radius),
             u.link(f"rod{n}_tip"),
         ]
         joints += [
-            u.joint(f"crank{n}", "revolute", "base", f"crank{n}", xyz=Ai),
-            u.joint(f"elbow{n}", "revolute", f"crank{n}", f"rod{n}", xyz=(l1, 0.0, 0.0)),
+            u.joint(f"crank{n}", "revolute", "base", f"arm{n}", xyz=Ai),
+            u.joint(f"elbow{n}", "revolute", f"arm{n}", f"rod{n}", xyz=(l1, 0.0, 0.0)),
             u.joint(f"rod{n}_tip_fixed", "fixed", f"rod{n}", f"rod{n}_tip", xyz=(l2, 0.0, 0.0)),
         ]
         reference[f"crank{n}"] = (_wrap(c["q"]),)
