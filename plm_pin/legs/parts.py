@@ -55,10 +55,16 @@ def leg_type(leg: object, valid: Sequence[str], builder: str, hint: str = "") ->
 def points(value: object, name: str, n: int, dim: int) -> np.ndarray:
     """``value`` as ``n`` points of ``dim`` coordinates [m], shape (n, dim).
 
+    The coordinates may also come flat, ``n * dim`` numbers point after point (the form a
+    sweep varies: a tuple of numbers).
+
     Raises:
         InvalidInput: another count of points, of coordinates, or a non-finite one.
     """
     arr = np.asarray(value, dtype=object)
+    if arr.shape == (n * dim,):
+        arr = arr.reshape(n, dim)
+        value = arr.tolist()
     if arr.ndim != 2 or arr.shape[0] != n:
         got = f"{arr.shape[0]} entries" if arr.ndim >= 1 else short(value)
         raise InvalidInput(f"{name} must be {n} points of {dim} coordinates [m], got {got}")

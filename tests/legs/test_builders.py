@@ -298,3 +298,18 @@ def test_bad_parameters(tmp_path, call, match):
     """One typed error naming the argument (and the valid choices) for each bad parameter."""
     with pytest.raises(plm_pin.InvalidInput, match=match):
         call(tmp_path)
+
+
+def test_flat_points_build_the_same_description():
+    """Points given flat (n * dim numbers, the form a sweep varies) write the same URDF and sidecar."""
+    from plm_pin.description.writer import urdf_text
+    from plm_pin.legs import build_hexapod, build_planar
+
+    nested = build_planar(leg="RPR", base=BASE2, platform=PLAT2)
+    flat = build_planar(leg="RPR", base=tuple(BASE2.ravel()), platform=tuple(PLAT2.ravel()))
+    assert urdf_text(flat[0]) == urdf_text(nested[0]) and flat[1] == nested[1]
+    nested = build_hexapod(leg="UPS", base=BASE6, platform=PLAT6, pose=HEX_HOME)
+    flat = build_hexapod(
+        leg="UPS", base=BASE6.ravel().tolist(), platform=PLAT6.ravel().tolist(), pose=HEX_HOME
+    )
+    assert urdf_text(flat[0]) == urdf_text(nested[0]) and flat[1] == nested[1]
