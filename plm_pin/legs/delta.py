@@ -10,8 +10,8 @@ elbow to the platform point :math:`C_i = p + b_i`: two rods of length :math:`l_b
 :math:`C_i \pm \tfrac{w}{2} k_i`), which keep the platform level. Both rods give the same
 condition :math:`|C_i - E_i| = l_b`, Clavel's closed form: in the crank frame, with
 :math:`d = C_i - a_i`, :math:`\theta_i = \operatorname{atan2}(d_y, d_x) + \sigma_i
-\arccos(K / \sqrt{d_x^2 + d_y^2})`, :math:`K = (|d|^2 + l_a^2 - l_b^2) / (2 l_a)`; the
-default branch :math:`\sigma_i = -1` keeps the elbow outward.
+\arccos(K / \sqrt{d_x^2 + d_y^2})`, :math:`K = (|d|^2 + l_a^2 - l_b^2) / (2 l_a)`; by
+default the branch whose arm points most outward (the larger :math:`\cos\theta_i`, elbows out).
 
 Spanning tree: the platform hangs from the base on a ``floating`` joint; each of the six
 rods hangs from its arm on a universal joint (its idle spin dropped,
@@ -68,7 +68,7 @@ def build_delta(
         forearm: rod length :math:`l_b` of the parallelograms [m].
         pose: the platform position ``(x, y, z)`` [m] of the reference configuration.
         width: distance between a parallelogram's two rods [m] (default ``forearm / 4``).
-        modes: the elbow branch of each arm, +1 or -1 (default all -1: elbows outward).
+        modes: the elbow branch of each arm, +1 or -1 (default: each arm pointing most outward).
         density: mass per length of the arms and rods [kg/m].
         platform_mass: platform mass [kg], at the platform centre.
         effort: motor torque limits ``(lower, upper)`` [N m], or None (unbounded).
@@ -89,7 +89,7 @@ def build_delta(
     lb = length(forearm, "forearm")
     w = length(width, "width") if width is not None else lb / 4
     p = finite_array(pose, "pose", (3,), "x, y, z [m]")
-    sig = parts.signs(modes if modes is not None else (-1, -1, -1), "modes", 3)
+    sig: Sequence[int | None] = parts.signs(modes, "modes", 3) if modes is not None else (None,) * 3
     density, platform_mass, _ = parts.masses(density, platform_mass, 0.0)
     g = parts.gravity_vector(gravity)
     centroid = a.mean(axis=0)

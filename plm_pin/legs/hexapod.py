@@ -11,7 +11,8 @@ Leg ``i`` joins the base point :math:`a_i` to the platform point :math:`C_i = p 
   to :math:`k_i`), a rod of length :math:`l_{2i}` from a universal joint at the crank's tip to a
   ball at :math:`C_i`. In the crank frame (z along :math:`k_i`, x outward),
   :math:`d = C_i - a_i` has :math:`\theta_i = \operatorname{atan2}(d_y, d_x) + \sigma_i
-  \arccos(K / \sqrt{d_x^2 + d_y^2})`, :math:`K = (|d|^2 + l_1^2 - l_2^2) / (2 l_1)`.
+  \arccos(K / \sqrt{d_x^2 + d_y^2})`, :math:`K = (|d|^2 + l_1^2 - l_2^2) / (2 l_1)`, by default
+  the branch whose crank points most outward (the larger :math:`\cos\theta_i`).
 - **PSS**: a carriage driven along the guide through :math:`a_i` with direction :math:`e_i`
   (``slider<i>``), a rod of length :math:`l_i` from a universal joint on the carriage to a
   ball at :math:`C_i`: :math:`q_i = e_i \cdot d + \sigma_i \sqrt{l_i^2 - |d|^2 + (e_i \cdot d)^2}`.
@@ -71,16 +72,20 @@ def crank_frame(axis: np.ndarray, outward: np.ndarray) -> tuple[float, float, fl
     raise AssertionError("unreachable: two orthogonal vectors cannot both lie along one axis")
 
 
-def crank_angle(d: np.ndarray, crank: float, rod: float, sign: int) -> float | None:
+def crank_angle(d: np.ndarray, crank: float, rod: float, sign: int | None) -> float | None:
     """The crank angle [rad] putting the rod's end ``rod`` [m] away from ``d`` (crank frame), or None.
 
-    The crank of length ``crank`` [m] turns about z from x; ``sign`` picks the branch.
+    The crank of length ``crank`` [m] turns about z from x; ``sign`` picks the branch, None the
+    one whose crank points most outward (the larger cosine).
     """
     k = (float(d @ d) + crank * crank - rod * rod) / (2 * crank)
     r = math.hypot(float(d[0]), float(d[1]))
     if not abs(k) <= r:
         return None
-    return math.atan2(float(d[1]), float(d[0])) + sign * math.acos(max(-1.0, min(1.0, k / r)))
+    roots = [
+        math.atan2(float(d[1]), float(d[0])) + s * math.acos(max(-1.0, min(1.0, k / r))) for s in (1, -1)
+    ]
+    return roots[0 if sign == 1 else 1] if sign is not None else max(roots, key=math.cos)
 
 
 def default_axes(base: np.ndarray) -> np.ndarray:
@@ -128,7 +133,8 @@ def build_hexapod(
             the base points about their centroid).
         stroke: the actuator limits written into the URDF: leg lengths (UPS, 0 < lower) or
             slider positions (PSS) [m]; default around the reference. None for RUS.
-        modes: RUS, PSS: the branch of each leg, +1 or -1 (default all -1; module docstring).
+        modes: RUS, PSS: the branch of each leg, +1 or -1 (module docstring); default: PSS -1,
+            RUS the crank pointing most outward.
         density: mass per length of the rods, cranks and cylinders [kg/m].
         platform_mass: platform mass [kg], at the platform centre.
         slider_mass: mass of each carriage [kg] (PSS).
@@ -163,7 +169,7 @@ def build_hexapod(
         parts.unused("hexapod", leg, axes=axes)
     else:
         parts.unused("hexapod", leg, stroke=stroke)
-    sig = parts.signs(modes if modes is not None else (-1,) * 6, "modes", 6)
+    sig: Sequence[int | None] = parts.signs(modes, "modes", 6) if modes is not None else (None,) * 6
     C = X[:3] + b @ parts.pose_rotation(X[3:]).T
     size = max(
         float(np.max(np.linalg.norm(a - a.mean(axis=0), axis=1))), float(np.max(np.linalg.norm(b, axis=1)))
@@ -257,7 +263,7 @@ def build_hexapod(
                     f"{where}, leg {i + 1}'s rod ({L[i, 0]:.6g} m) cannot reach its guide: the platform "
                     f"point is {math.sqrt(float(d @ d) - s * s):.6g} m from it"
                 )
-            q.append(s + sig[i] * math.sqrt(disc))
+            q.append(s + (sig[i] or -1) * math.sqrt(disc))
         lo, hi = parts.interval(
             stroke if stroke is not None else (min(q) - size, max(q) + size), "stroke", "m"
         )
