@@ -1,8 +1,9 @@
-"""The registry of named presets: the papers' mechanisms and small classic chains.
+"""The registry of named presets: the papers' mechanisms, classic chains, textbook ones from leg types.
 
 Each preset names its builder as a ``"module:function"`` string, imported when the preset is
 built (:attr:`Preset.builder`), so the registry (read by :func:`plm_pin.load`) imports no
-mechanism family: loading a shipped preset reads its committed URDF and never runs a builder.
+mechanism family nor :mod:`plm_pin.legs`: loading a shipped preset reads its committed URDF and
+never runs a builder.
 """
 
 from __future__ import annotations
