@@ -28,6 +28,7 @@ LAYERS = (
     "core",
     "loading",
     "export",
+    "legs",
     "kinematics",
     "statics",
     "workspace",
