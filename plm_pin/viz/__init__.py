@@ -2,6 +2,7 @@
 
 from .figures import plot_map, plot_sweep
 from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
+from .inspect_state import InspectState, inspect_state, inspect_update
 from .meshcat_server import MeshcatServer
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
 from .panels import Flat, flat, flat_note, panel_grid, plot_panels, shared_legend
@@ -12,6 +13,7 @@ from .sweep_figures import plot_sweep_heatmap, plot_sweep_lines
 __all__ = [
     "Flat",
     "ForceArrow",
+    "InspectState",
     "MeshcatServer",
     "MeshcatViewer",
     "SceneStatus",
@@ -19,6 +21,8 @@ __all__ = [
     "flat",
     "flat_note",
     "force_arrows",
+    "inspect_state",
+    "inspect_update",
     "panel_grid",
     "plot_map",
     "plot_panels",
