@@ -2,6 +2,7 @@
 
 from .figures import plot_map, plot_sweep
 from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
+from .inspect_server import Inspector, inspect
 from .inspect_state import InspectState, inspect_state, inspect_update
 from .meshcat_server import MeshcatServer
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
@@ -14,6 +15,7 @@ __all__ = [
     "Flat",
     "ForceArrow",
     "InspectState",
+    "Inspector",
     "MeshcatServer",
     "MeshcatViewer",
     "SceneStatus",
@@ -21,6 +23,7 @@ __all__ = [
     "flat",
     "flat_note",
     "force_arrows",
+    "inspect",
     "inspect_state",
     "inspect_update",
     "panel_grid",
