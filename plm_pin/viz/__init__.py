@@ -4,6 +4,7 @@ from .figures import plot_map, plot_sweep
 from .force_figure import ForceArrow, fig8, force_arrows, plot_static_forces
 from .inspect_server import Inspector, inspect
 from .inspect_state import InspectState, inspect_state, inspect_update
+from .inspect_widget import InspectorPanel
 from .meshcat_server import MeshcatServer
 from .meshcat_view import MeshcatViewer, SceneStatus, scene_html, show
 from .panels import Flat, flat, flat_note, panel_grid, plot_panels, shared_legend
@@ -16,6 +17,7 @@ __all__ = [
     "ForceArrow",
     "InspectState",
     "Inspector",
+    "InspectorPanel",
     "MeshcatServer",
     "MeshcatViewer",
     "SceneStatus",

@@ -8,7 +8,7 @@ only) with sliders for the task coordinates and the actuators, working- and asse
 selectors, the load and the preload, the readouts and force bars, and meshcat's page beside
 them. The page talks JSON to two endpoints: ``GET /state`` and ``POST /update`` (a change, as
 :func:`~plm_pin.viz.inspect_state.inspect_update` takes it). In Jupyter the inspector shows
-an ipywidgets panel beside the inline scene instead (:mod:`plm_pin.viz.inspect_widget`).
+an ipywidgets panel beside the inline scene (:mod:`plm_pin.viz.inspect_widget`).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from ..core.mechanism import Mechanism
 from ..exceptions import PlmError
 from ..results import plain
 from .inspect_state import InspectState, inspect_state, inspect_update
+from .inspect_widget import InspectorPanel
 from .meshcat_server import LOCALHOST, MeshcatServer, ServerWindow, free_port, require_meshcat
 from .meshcat_view import MeshcatViewer
 
@@ -182,6 +183,18 @@ class Inspector:
         else:
             node["stiffness"].delete()
 
+    def panel(self) -> InspectorPanel:
+        """The Jupyter panel: ipywidgets controls and readouts beside the inline scene.
+
+        Raises:
+            ViewerError: ipywidgets missing.
+        """
+        return InspectorPanel(self)
+
+    def _ipython_display_(self) -> None:
+        """In a notebook the inspector shows as its panel."""
+        self.panel()._ipython_display_()
+
     def _repr_html_(self) -> str:
         return f'<a href="{html.escape(self.url)}">{html.escape(self.state.mech.name)} inspector</a>'
 
@@ -273,8 +286,9 @@ class _Page(BaseHTTPRequestHandler):
 def inspect(mech: Mechanism, *, port: int | None = None, source: str | None = None) -> Inspector:
     """Inspect ``mech`` live: drag it by its task coordinates or actuators and read it as it moves.
 
-    Outside Jupyter it serves a control page on 127.0.0.1 (open :attr:`Inspector.url`); in a
-    notebook, display the result (:func:`~plm_pin.viz.inspect_panel` builds the widget panel).
+    It serves a control page on 127.0.0.1 (open :attr:`Inspector.url`); in a notebook,
+    displaying the result shows its ipywidgets panel beside the inline scene
+    (:meth:`Inspector.panel`).
 
     Args:
         mech: the mechanism (its task needs as many coordinates as DOF).
