@@ -12,13 +12,24 @@ import html
 import importlib
 import math
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from ..exceptions import PlmError, ViewerError
 from .inspect_state import InspectState
+from .meshcat_view import MeshcatViewer
 
-if TYPE_CHECKING:
-    from .inspect_server import Inspector
+
+class Driven(Protocol):
+    """What the panel drives: an :class:`~plm_pin.viz.Inspector`."""
+
+    state: InspectState
+    viewer: MeshcatViewer
+    ranges: dict[str, dict[str, tuple[float, float]]]
+
+    def update(self, change: Mapping[str, object]) -> InspectState:
+        """Apply a change and redraw; return the new state."""
+        ...
+
 
 SCENE_HEIGHT = 480
 """Height of the inline scene [px]."""
@@ -84,7 +95,7 @@ class InspectorPanel:
         widget: the whole panel (an ``ipywidgets.HBox``).
     """
 
-    def __init__(self, inspector: Inspector) -> None:
+    def __init__(self, inspector: Driven) -> None:
         """Build the controls of ``inspector``.
 
         Raises:
@@ -194,12 +205,3 @@ class InspectorPanel:
         from IPython.display import display
 
         display(self.widget)
-
-
-def inspect_panel(inspector: Inspector) -> InspectorPanel:
-    """The Jupyter panel of ``inspector``: display it in a notebook cell.
-
-    Raises:
-        ViewerError: ipywidgets missing.
-    """
-    return InspectorPanel(inspector)
