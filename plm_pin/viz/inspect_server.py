@@ -234,7 +234,7 @@ def page_html() -> str:
 
 
 class _Page(BaseHTTPRequestHandler):
-    """``GET /`` the page, ``GET /state`` the state, ``POST /update`` a change; nothing else."""
+    """``GET /`` the page, ``GET /state`` the state, ``POST /update`` a change; to its own pages only."""
 
     server_version = "plm-pin-inspect"
 
@@ -252,9 +252,25 @@ class _Page(BaseHTTPRequestHandler):
     def _json(self, status: int, data: object) -> None:
         self._send(status, json.dumps(data, allow_nan=False).encode("utf-8"), "application/json")
 
+    def _foreign(self) -> bool:
+        """Refuse (403) a request naming another host, or posted by a page of another origin.
+
+        The page is on 127.0.0.1, but any web page the user opens could post to it, and a
+        name resolving to 127.0.0.1 could reach it: only its own host and origin are answered.
+        """
+        port = self.server.server_address[1]
+        hosts = {f"{LOCALHOST}:{port}", f"localhost:{port}"}
+        origin = self.headers.get("Origin")
+        if self.headers.get("Host") in hosts and (origin is None or origin.removeprefix("http://") in hosts):
+            return False
+        self._json(HTTPStatus.FORBIDDEN, {"error": f"only pages of http://{LOCALHOST}:{port} are answered"})
+        return True
+
     def do_GET(self) -> None:
         """The page or the state."""
         inspector: Inspector = self.server.inspector  # type: ignore[attr-defined]
+        if self._foreign():
+            return
         if self.path == "/":
             self._send(HTTPStatus.OK, page_html().encode("utf-8"), "text/html; charset=utf-8")
         elif self.path == "/state":
@@ -266,6 +282,8 @@ class _Page(BaseHTTPRequestHandler):
     def do_POST(self) -> None:
         """Apply a change; a malformed one answers 400 with the message."""
         inspector: Inspector = self.server.inspector  # type: ignore[attr-defined]
+        if self._foreign():
+            return
         if self.path != "/update":
             self._json(HTTPStatus.NOT_FOUND, {"error": f"no such endpoint {self.path!r}; post to /update"})
             return

@@ -88,6 +88,18 @@ def test_bad_requests_answer_the_reason(inspector, path, body, code, words):
     assert status == code and words in data["error"]
 
 
+@pytest.mark.parametrize("headers", [{"Origin": "http://example.com"}, {"Host": "evil.example:80"}])
+def test_requests_from_other_origins_or_hosts_are_refused(inspector, headers):
+    """A post from another site's page, or naming another host (DNS rebinding): 403, nothing changed."""
+    before = inspector.state
+    body = json.dumps({"task": {"rz": 2.0}}).encode()
+    request = urllib.request.Request(inspector.url + "update", data=body, method="POST", headers=headers)
+    with pytest.raises(urllib.error.HTTPError) as refused:
+        urllib.request.urlopen(request, timeout=TIMEOUT)
+    assert refused.value.code == 403
+    assert inspector.state is before
+
+
 def test_close_stops_the_page():
     """After close() nothing listens on the page's port."""
     running = Inspector(preset("fourbar"))

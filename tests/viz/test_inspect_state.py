@@ -16,6 +16,7 @@ import pytest
 
 from plm_pin import InvalidInput
 from plm_pin.kinematics import classify, forward_kinematics, inverse_kinematics, same_assembly, working_modes
+from plm_pin.models import PRESETS
 from plm_pin.statics import static_forces
 from plm_pin.stiffness import stiffness
 from plm_pin.viz.inspect_state import InspectState, inspect_state, inspect_update
@@ -108,6 +109,21 @@ def test_task_move_stops_at_the_closed_form_rocker_extreme():
     assert moved.x[0] == pytest.approx(psi, abs=1e-4)
     assert moved.q[0] == pytest.approx(beta, abs=2e-2)  # the crank angle flattens at a fold: sqrt error
     assert moved.margins["inverse"] < 1e-2 < state.margins["inverse"]
+
+
+def test_task_move_stops_at_the_closed_form_direct_singularity():
+    """Turning the 3D3M's plate stops at Harada 2011's type-4 locus theta = -asin(y / (l + r_t)) (11.4)."""
+    mech = preset("harada2011_3d3m")
+    p = PRESETS["harada2011_3d3m"].parameters
+    state = inspect_state(mech)
+    theta = -math.asin(state.x[1] / (p["rod_lengths"][0] + p["half_plate"]))
+    assert theta < state.x[2]  # the locus lies beyond the reference along -rz
+    moved = inspect_update(state, {"task": {"rz": theta - 0.2}})
+    assert "direct singularity" in moved.stopped
+    assert moved.x[2] == pytest.approx(theta, abs=1e-4)
+    np.testing.assert_allclose(moved.x[:2], state.x[:2], atol=1e-9)
+    back = inspect_update(state, {"task": {"rz": theta + 0.05}})  # short of it: moved in full
+    assert back.stopped == "" and back.x[2] == pytest.approx(theta + 0.05)
 
 
 def test_working_mode_switch_changes_the_configuration_not_the_pose(table):
