@@ -258,7 +258,7 @@ class _Page(BaseHTTPRequestHandler):
         The page is on 127.0.0.1, but any web page the user opens could post to it, and a
         name resolving to 127.0.0.1 could reach it: only its own host and origin are answered.
         """
-        port = self.server.server_address[1]
+        port = self.server.server_port  # type: ignore[attr-defined]
         hosts = {f"{LOCALHOST}:{port}", f"localhost:{port}"}
         origin = self.headers.get("Origin")
         if self.headers.get("Host") in hosts and (origin is None or origin.removeprefix("http://") in hosts):
