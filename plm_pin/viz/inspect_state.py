@@ -61,6 +61,9 @@ MOVE_STEP = 0.05
 TURN_STEP = 0.05
 """Largest step of a move along a rotation or a revolute actuator [rad]."""
 
+BISECTIONS = 60
+"""Most halvings of a failed step: enough to reach a singularity's margin band in double precision."""
+
 AXES = {"x": 0, "y": 1, "z": 2}
 """World axis of each translational task coordinate (task rows are world-aligned)."""
 
@@ -317,25 +320,32 @@ def _track(
     """Follow ``solve(s, guess)`` for s from 0 to 1 in ``n`` steps; stop at the first edge found.
 
     ``solve`` raises :class:`~plm_pin.exceptions.PlmError` (with the reason) where there is
-    no configuration. Returns the last configuration reached and why it stopped ('' at s = 1).
+    no configuration. The step that fails is bisected to :data:`INSPECT_EDGE_TOL` of the
+    move; a singularity crossed is bisected further, until a configuration on it (its margin
+    at :data:`SINGULARITY_TOL`) is found, and the move stops there, so that the scene shows
+    it singular. Returns the configuration reached and why it stopped ('' at s = 1).
     """
     good, s_good = _probe(mech, start), 0.0
     for k in range(1, n + 1):
         s = k / n
         probe, why = _attempt(mech, s, good, solve, stop_kinds, keep_mode)
-        if why:
-            lo, hi = s_good, s
-            while hi - lo > INSPECT_EDGE_TOL:
-                mid = 0.5 * (lo + hi)
-                middle, middle_why = _attempt(mech, mid, good, solve, stop_kinds, keep_mode)
-                if middle_why:
-                    hi, why = mid, middle_why
-                else:
-                    assert middle is not None
-                    lo, good = mid, middle
-            return good.q, why
-        assert probe is not None
-        good, s_good = probe, s
+        if not why:
+            assert probe is not None
+            good, s_good = probe, s
+            continue
+        lo, hi, on = s_good, s, probe  # on: a configuration at the singularity, once found
+        for _ in range(BISECTIONS):
+            if hi - lo <= INSPECT_EDGE_TOL and (on is not None or not why.startswith("would cross")):
+                break
+            mid = 0.5 * (lo + hi)
+            middle, middle_why = _attempt(mech, mid, good, solve, stop_kinds, keep_mode)
+            if middle_why:
+                hi, why = mid, middle_why
+                on = middle if middle is not None else on
+            else:
+                assert middle is not None
+                lo, good = mid, middle
+        return (on.q, why) if on is not None and why.startswith("reaches") else (good.q, why)
     return good.q, ""
 
 
@@ -347,7 +357,10 @@ def _attempt(
     stop_kinds: tuple[str, ...],
     keep_mode: bool,
 ) -> tuple[_Probe | None, str]:
-    """The configuration at ``s`` from ``good``, or why there is none the move may reach."""
+    """The configuration at ``s`` from ``good``, or why the move may not go there.
+
+    A configuration at a singularity comes with its reason; none comes with the others.
+    """
     try:
         q = solve(s, good.q)
     except PlmError as exc:
@@ -359,7 +372,7 @@ def _attempt(
     report = report_from_jacobians(mech, probe.jac, SINGULARITY_TOL)
     reached = [k for k in report.kinds if k in stop_kinds]
     if reached:
-        return None, f"reaches a {reached[0]} singularity"
+        return probe, f"reaches a {reached[0]} singularity"
     before, after = _orientation(good.jac, good.jac.N), _orientation(probe.jac, good.jac.N)
     for kind, b, a in zip(("inverse", "direct"), before, after, strict=True):
         if kind in stop_kinds and b * a < 0.0:
@@ -378,7 +391,12 @@ def _move_task(state: InspectState, value: object) -> tuple[np.ndarray, str]:
     rotational = np.array([d.startswith("r") for d in state.dofs])
 
     def solve(s: float, guess: np.ndarray) -> np.ndarray:
-        return inverse_kinematics(mech, state.x + s * delta, guess, explain=False).q
+        x = state.x + s * delta
+        try:
+            return inverse_kinematics(mech, x, guess, explain=False).q
+        except PoseUnreachable:
+            where = ", ".join(f"{d} = {v:.6g}" for d, v in zip(state.dofs, x, strict=True))
+            raise PoseUnreachable(f"no assembly places the task frame at {where}") from None
 
     n = _steps(delta, rotational, _size(mech, state.q))
     return _track(mech, state.q, n, solve, KINDS, keep_mode=True)

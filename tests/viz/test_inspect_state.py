@@ -119,7 +119,8 @@ def test_task_move_stops_at_the_closed_form_direct_singularity():
     theta = -math.asin(state.x[1] / (p["rod_lengths"][0] + p["half_plate"]))
     assert theta < state.x[2]  # the locus lies beyond the reference along -rz
     moved = inspect_update(state, {"task": {"rz": theta - 0.2}})
-    assert "direct singularity" in moved.stopped
+    assert moved.stopped == "reaches a direct singularity"
+    assert moved.singular == ("direct",)  # on the locus: the scene is coloured by classify's kinds
     assert moved.x[2] == pytest.approx(theta, abs=1e-4)
     np.testing.assert_allclose(moved.x[:2], state.x[:2], atol=1e-9)
     back = inspect_update(state, {"task": {"rz": theta + 0.05}})  # short of it: moved in full
