@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from plm_pin.kinematics import inverse_kinematics
+from plm_pin.kinematics import classify, inverse_kinematics
 from plm_pin.statics import static_forces
 from plm_pin.viz import Inspector, inspect
 from plm_pin.workspace import manipulability
@@ -74,6 +74,11 @@ def test_drag_a_slider_and_switch_a_mode(browser, table):  # noqa: F811 (the imp
     np.testing.assert_allclose(browser.execute_script("return state.q"), sol.q, atol=1e-8)
     assert _number(browser, "task-x-value") == pytest.approx(x[0], rel=1e-5, abs=1e-9)
     assert _number(browser, "ro-manipulability") == pytest.approx(manipulability(mech, sol.q).w, rel=1e-5)
+    report = classify(mech, sol.q)
+    for kind in ("constraint", "inverse", "direct"):
+        assert _number(browser, f"ro-margin-{kind}") == pytest.approx(
+            getattr(report, f"{kind}_margin"), rel=1e-5
+        )
     forces = static_forces(mech, sol.q, np.zeros(3), limits=None).f_c
     for name, f in zip(table.state.actuator_names, forces, strict=True):
         assert _number(browser, f"force-{name}") == pytest.approx(f, rel=1e-5, abs=1e-9)
