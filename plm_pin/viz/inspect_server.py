@@ -91,9 +91,8 @@ class Inspector:
         self.state = inspect_state(mech, source=source)
         self.viewer = MeshcatViewer(mech, server=server)
         assert self.viewer.server is not None
-        self._vis = require_meshcat().Visualizer(
-            window=ServerWindow(self.viewer.server.zmq_url, self.viewer.server.web_url)
-        )
+        self._window = ServerWindow(self.viewer.server.zmq_url, self.viewer.server.web_url)
+        self._vis = require_meshcat().Visualizer(window=self._window)
         self.ranges = _ranges(self.state, self.viewer.size)
         self._draw()
         self._http: ThreadingHTTPServer | None = None
@@ -140,7 +139,8 @@ class Inspector:
         return self
 
     def close(self) -> None:
-        """Stop serving the control page (idempotent); the meshcat server stops with the process."""
+        """Stop serving the page and drawing (idempotent); the meshcat server stops with the process."""
+        self._window.close()
         if self._http is not None:
             self._http.shutdown()
             self._http.server_close()
