@@ -425,7 +425,34 @@ def run() -> list[dict[str, object]]:
     rows.extend(capability_benchmark())
     rows.extend(map_throughput())
     rows.extend(stiffness_benchmark())
+    rows.extend(inspect_benchmark())
     return rows
+
+
+def inspect_benchmark() -> list[dict[str, object]]:
+    """Cost of one live-inspector update on the 3D4M (target: 50 ms), state function alone (no drawing).
+
+    A slider step from the reference: the task frame 1 mm along x, or slider 1 by 1 mm; every
+    readout (margins, manipulability, ellipse, statics, stiffness) included.
+    """
+    from plm_pin.viz.inspect_state import inspect_state, inspect_update
+
+    mech = load("harada2011_3d4m")
+    state = inspect_state(mech)
+    changes = {
+        "inspect_update (task x +1 mm, all readouts)": {"task": {"x": float(state.x[0]) + 1e-3}},
+        "inspect_update (slider1 +1 mm, all readouts)": {
+            "actuators": {"slider1": float(state.actuators[0]) + 1e-3}
+        },
+    }
+    return [
+        {
+            "mechanism": mech.name,
+            "case": case,
+            "seconds_per_call": _per_call(functools.partial(inspect_update, state, change)),
+        }
+        for case, change in changes.items()
+    ]
 
 
 def stiffness_benchmark() -> list[dict[str, object]]:

@@ -7,6 +7,7 @@ import csv
 import json
 import shlex
 import sys
+import threading
 import warnings
 import webbrowser
 from collections.abc import Callable, Iterator
@@ -46,6 +47,7 @@ from .report.study import compute_animation, studies_hint
 from .report.writer import output_folder
 from .sweep import load_config, run_spec
 from .sweep.execution import DEFAULT_CHUNK
+from .viz.inspect_server import Inspector
 from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
@@ -1214,6 +1216,48 @@ def view(
         except KeyboardInterrupt:
             return
     raise _fail(PlmError(f"the meshcat server stopped unexpectedly (exit code {code})"))
+
+
+@app.command("inspect")
+def inspect_command(
+    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
+    port: Annotated[
+        int | None, typer.Option("--port", help="port of the control page (default: first free from 7200)")
+    ] = None,
+    open_browser: Annotated[
+        bool, typer.Option("--open/--no-open", help="open the control page in a browser")
+    ] = False,
+    ignore: IgnoreOption = "",
+) -> None:
+    """Inspect a mechanism live (127.0.0.1 only): drag its task or actuators, switch modes, read forces.
+
+    Serves a control page beside the meshcat scene until Ctrl-C.
+    """
+    mech = _load(target, ignore)
+    try:
+        inspector = Inspector(mech, port=port, source=target)
+    except PlmError as exc:
+        raise _fail(exc) from None
+    try:
+        if port is not None and inspector.address is not None and inspector.address[1] != port:
+            errors.print(
+                f"[yellow]warning:[/] port {port} is busy; serving on {inspector.address[1]} instead",
+                highlight=False,
+            )
+        console.print(f"{mech.name}: {inspector.url}", markup=False, highlight=False, soft_wrap=True)
+        console.print(
+            f"meshcat scene: {inspector.viewer.url}\nCtrl-C stops the inspector",
+            markup=False,
+            highlight=False,
+            soft_wrap=True,
+        )
+        if open_browser:
+            inspector.open()
+        threading.Event().wait()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        inspector.close()
 
 
 RESULT = "result.nc"

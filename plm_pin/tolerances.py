@@ -58,6 +58,7 @@ __all__ = [
     "IDLE_RTOL",
     "ILL_CONDITIONED_MARGIN",
     "INERTIA_RTOL",
+    "INSPECT_EDGE_TOL",
     "INTERNAL_TIE_RTOL",
     "INVERSE_RTOL",
     "KNOT_TOL",
@@ -239,6 +240,9 @@ BATCH_LOG3_SERIES_ANGLE = 1e-4
 # ----------------------------------------------------------------- kinematics and singularities
 SINGULARITY_TOL = 1e-6
 """[-] Default margin at or below which a configuration counts as singular."""
+
+INSPECT_EDGE_TOL = 1e-6
+"""[-] Fraction of a move within which the live inspector locates the edge (workspace, singularity) it stops at."""
 
 INVERSE_RTOL = 1e-12
 r"""[-] :math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x
