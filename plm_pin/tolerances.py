@@ -242,7 +242,7 @@ SINGULARITY_TOL = 1e-6
 """[-] Default margin at or below which a configuration counts as singular."""
 
 INSPECT_EDGE_TOL = 1e-6
-"""[-] Fraction of a move within which the live inspector locates the edge (workspace, singularity) it stops at."""
+"""[-] Fraction of a move within which the live inspector finds the edge it stops at (workspace, singular)."""
 
 INVERSE_RTOL = 1e-12
 r"""[-] :math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x
