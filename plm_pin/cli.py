@@ -9,7 +9,7 @@ import shlex
 import sys
 import warnings
 import webbrowser
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -300,18 +300,89 @@ def check(
     )
 
 
+MODE_SIGNS = {"+": 1, "+1": 1, "1": 1, "-": -1, "-1": -1}
+"""The words of a working-mode sign in ``--mode`` (comma-separated, one per square leg)."""
+
+
+def _assignments(
+    words: Sequence[str],
+    what: str,
+    example: str,
+    names: Sequence[str] | None = None,
+    kind: str = "a valid name",
+    *,
+    vectors: bool = False,
+) -> dict[str, list[float]]:
+    """``NAME=VALUE`` words as ``{name: values}``, in their order [m, rad]: every shell assignment.
+
+    Args:
+        words: the words, one assignment each.
+        what: the argument or option they come from, which starts every message.
+        example: a valid use, quoted where a word is malformed.
+        names: the valid names, listed where a word names another (None: any name, checked later).
+        kind: what the valid names are, in the message (e.g. ``"a task coordinate of fivebar"``).
+        vectors: VALUE may be several comma-separated numbers (a joint with several entries);
+            otherwise exactly one.
+
+    Raises:
+        InvalidInput: a word without ``=`` or name, an unknown or repeated name, a value that is
+            not a finite number (or comma-separated finite numbers); the message names the word.
+    """
+    out: dict[str, list[float]] = {}
+    for word in words:
+        name, sep, text = word.strip().partition("=")
+        if not sep or not name:
+            raise InvalidInput(f"{what} {word!r}: write NAME=VALUE, e.g. {example}")
+        if names is not None and name not in names:
+            raise InvalidInput(f"{what} {word!r}: {name!r} is not {kind}, one of {list(names)}")
+        if name in out:
+            raise InvalidInput(f"{what} {word!r}: {name!r} is given twice")
+        try:
+            values = [float(v) for v in (text.split(",") if vectors else [text])]
+        except ValueError:
+            values = [float("nan")]
+        if not np.all(np.isfinite(values)):
+            number = "a finite number or finite numbers, comma-separated" if vectors else "a finite number"
+            raise InvalidInput(f"{what} {word!r}: {text!r} is not {number}")
+        out[name] = values
+    return out
+
+
+def _mode_signs(text: str | None, mech: Mechanism | None = None) -> tuple[int, ...] | None:
+    """The working mode ``--mode`` writes as ``+,-,...`` (None: not given).
+
+    Args:
+        text: the option's value.
+        mech: the mechanism, whose square legs each take a sign (None: counted later).
+
+    Raises:
+        InvalidInput: a word that is not a sign, or (with ``mech``) not one sign per square leg.
+    """
+    if text is None:
+        return None
+    words = [w.strip() for w in text.split(",")]
+    n = sum(leg.square for leg in mech.legs) if mech is not None else len(words)
+    if len(words) != n or any(w not in MODE_SIGNS for w in words):
+        if mech is None:
+            how = "give one sign (+ or -) per leg, comma-separated, e.g. --mode=+,-"
+        else:
+            example = ",".join("+-"[k % 2] for k in range(n))
+            how = (
+                f"give {n} signs (+ or -), comma-separated, one per leg of {mech.name}, e.g. --mode={example}"
+            )
+        raise InvalidInput(f"--mode {text!r}: {how}")
+    return tuple(MODE_SIGNS[w] for w in words)
+
+
 def _actuator_values(mech: Mechanism, assignments: list[str]) -> np.ndarray:
-    """Actuator positions from ``joint=value`` words, the others at their reference value."""
+    """Actuator positions from ``JOINT=VALUE`` words, the others at their reference value."""
     values = mech.actuator_positions(mech.q_ref).copy()
     names = [a.joint for a in mech.actuators]
-    for word in assignments:
-        joint, sep, text = word.partition("=")
-        if not sep or joint not in names:
-            raise InvalidInput(f"actuator assignment {word!r}: write JOINT=VALUE with JOINT one of {names}")
-        try:
-            values[names.index(joint)] = float(text)
-        except ValueError:
-            raise InvalidInput(f"actuator assignment {word!r}: {text!r} is not a number") from None
+    example = f"{names[0]}=0.1" if names else "JOINT=0.1"
+    for joint, number in _assignments(
+        assignments, "actuator", example, names, f"an actuated joint of {mech.name}"
+    ).items():
+        values[names.index(joint)] = number[0]
     return values
 
 
@@ -379,47 +450,12 @@ def _task_values(mech: Mechanism, words: list[str], what: str) -> dict[str, floa
             finite number; the message names the word and the task's coordinates.
     """
     dofs = _task_dofs(mech, what)
-    values: dict[str, float] = {}
-    for word in words:
-        name, sep, text = word.partition("=")
-        if not sep or name not in dofs:
-            raise InvalidInput(
-                f"{what} {word!r}: write NAME=VALUE with NAME a task coordinate of {mech.name}, "
-                f"one of {list(dofs)}"
-            )
-        if name in values:
-            raise InvalidInput(f"{what} {word!r}: {name!r} is given twice")
-        try:
-            value = float(text)
-        except ValueError:
-            raise InvalidInput(f"{what} {word!r}: {text!r} is not a number") from None
-        if not np.isfinite(value):
-            raise InvalidInput(f"{what} {word!r}: {text!r} is not a finite number")
-        values[name] = value
-    return values
-
-
-MODE_SIGNS = {"+": 1, "+1": 1, "1": 1, "-": -1, "-1": -1}
-"""The words of a working-mode sign in ``--mode`` (comma-separated, one per square leg)."""
-
-
-def _mode_signs(mech: Mechanism, text: str | None) -> tuple[int, ...] | None:
-    """The working mode written as ``+,-,...`` (None: not given).
-
-    Raises:
-        InvalidInput: a word that is not a sign, or not one sign per square leg.
-    """
-    if text is None:
-        return None
-    n = sum(leg.square for leg in mech.legs)
-    words = [w.strip() for w in text.split(",")]
-    if len(words) != n or any(w not in MODE_SIGNS for w in words):
-        example = ",".join("+-"[k % 2] for k in range(n))
-        raise InvalidInput(
-            f"--mode {text!r}: give {n} signs (+ or -), comma-separated, one per leg of {mech.name}, "
-            f"e.g. --mode={example}"
-        )
-    return tuple(MODE_SIGNS[w] for w in words)
+    return {
+        k: v[0]
+        for k, v in _assignments(
+            words, what, f"{dofs[0]}=0.1", dofs, f"a task coordinate of {mech.name}"
+        ).items()
+    }
 
 
 def _mode_text(mode: tuple[int, ...] | None) -> str:
@@ -471,7 +507,7 @@ def ik_command(
             raise InvalidInput(
                 f"missing task coordinates {missing}: give every one of {list(dofs)} as NAME=VALUE"
             )
-        sol = inverse_kinematics(mech, [values[d] for d in dofs], mode=_mode_signs(mech, mode))
+        sol = inverse_kinematics(mech, [values[d] for d in dofs], mode=_mode_signs(mode, mech))
         actuators, working = sol.actuators, sol.mode
         closure = float(np.max(np.abs(mech.closure_residual(sol.q)), initial=0.0))
     kinds = {n: joint_type(mech.model, mech.model.getJointId(n)) for n in mech.joint_names}
@@ -678,7 +714,7 @@ def map_command(
         for d, v in values.items():
             pose[dofs.index(d)] = v
         (a, va), (b, vb) = ranges.items()
-        grid = workspace_map(mech, (a, b), (va, vb), pose, mode=_mode_signs(mech, mode))
+        grid = workspace_map(mech, (a, b), (va, vb), pose, mode=_mode_signs(mode, mech))
     _write_map_csv(path, mech, grid, metrics)
     units = _task_units(mech)
     table = Table(title=escape(f"{mech.name}: workspace map over {a} and {b}"), show_header=False)
@@ -758,28 +794,6 @@ def _regenerate(study: Study, mechanism: str | None, out: Path, case_words: list
     return shlex.join(["plm-pin", "report", study.name, *chosen, *case_words, "--out", str(out)])
 
 
-def _named_numbers(text: str, option: str) -> dict[str, float]:
-    """``NAME=VALUE,NAME=VALUE`` as a dict [m, rad].
-
-    Raises:
-        InvalidInput: an item without ``=``, a repeated name, a value that is not a finite number.
-    """
-    out: dict[str, float] = {}
-    for item in text.split(","):
-        name, sep, value = item.strip().partition("=")
-        if not sep or not name:
-            raise InvalidInput(
-                f"{option} {text!r}: write NAME=VALUE items, comma-separated (e.g. x=0.01,y=0.08)"
-            )
-        if name in out:
-            raise InvalidInput(f"{option} {text!r}: {name!r} is given twice")
-        number = _numbers(value, f"{option} {item!r}")
-        if len(number) != 1 or not np.isfinite(number[0]):
-            raise InvalidInput(f"{option} {item!r}: {value!r} is not a finite number")
-        out[name] = number[0]
-    return out
-
-
 def _study_case(
     load_text: str | None, pose_text: str | None, mode_text: str | None, ranges: dict[str, str | None]
 ) -> tuple[StudyCase, list[str]]:
@@ -795,17 +809,13 @@ def _study_case(
         if not np.all(np.isfinite(load_values)):
             raise InvalidInput(f"--load {load_text!r}: the values must be finite numbers [N, N m]")
         words += ["--load", load_text]
-    pose = {} if pose_text is None else _named_numbers(pose_text, "--pose")
+    pose = {}
     if pose_text is not None:
+        items = _assignments(pose_text.split(","), "--pose", "--pose x=0.01,y=0.08")
+        pose = {name: v[0] for name, v in items.items()}
         words += ["--pose", pose_text]
-    mode = None
+    mode = _mode_signs(mode_text)
     if mode_text is not None:
-        parts = [w.strip() for w in mode_text.split(",")]
-        if any(w not in MODE_SIGNS for w in parts):
-            raise InvalidInput(
-                f"--mode {mode_text!r}: give one sign (+ or -) per leg, comma-separated, e.g. --mode=+,-"
-            )
-        mode = tuple(MODE_SIGNS[w] for w in parts)
         words += [f"--mode={mode_text}"]
     values = {}
     for axis, text in ranges.items():
@@ -945,22 +955,18 @@ def _pose_configuration(mech: Mechanism, pose: list[str]) -> np.ndarray:
         if not dofs:
             raise InvalidInput(f"--pose {pose[0]!r}: {mech.name} has no task; give JOINT=VALUE items")
         return np.array(inverse_kinematics(mech, _numbers(pose[0], "--pose")).q)
+    names = [*mech.joint_names, *(d for d in dofs if d not in mech.joint_names)]
+    kind = f"a joint or task coordinate of {mech.name}"
+    items = _assignments(pose, "--pose", f"--pose {names[0]}=0.1", names, kind, vectors=True)
     joints: dict[str, float | list[float]] = {}
     task: dict[str, float] = {}
-    for item in pose:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise InvalidInput(f"--pose {item!r}: expected NAME=VALUE (or one comma-separated task pose)")
-        numbers = _numbers(value, f"--pose {item!r}")
+    for (name, numbers), word in zip(items.items(), pose, strict=True):
         if name in mech.joint_names:
             joints[name] = numbers[0] if len(numbers) == 1 else numbers
-        elif name in dofs and len(numbers) == 1:
+        elif len(numbers) == 1:
             task[name] = numbers[0]
         else:
-            raise InvalidInput(
-                f"--pose {item!r}: {name!r} is neither a joint nor a task coordinate (one number); "
-                f"joints are {list(mech.joint_names)}, task coordinates are {list(dofs)}"
-            )
+            raise InvalidInput(f"--pose {word!r}: the task coordinate {name!r} takes one number")
     if joints and task:
         raise InvalidInput("--pose mixes joints and task coordinates; give one kind only")
     if task:

@@ -515,7 +515,7 @@ def test_fk_bad_assignment_is_one_error_line():
     """`fk fourbar crank=1` names the valid actuator joints in one error line."""
     result = runner.invoke(app, ["fk", "fourbar", "crank=1"])
     _assert_clean_failure(
-        result, "actuator assignment 'crank=1': write JOINT=VALUE with JOINT one of ['crank_pivot']"
+        result, "actuator 'crank=1': 'crank' is not an actuated joint of fourbar, one of ['crank_pivot']"
     )
 
 
@@ -578,10 +578,12 @@ def test_ik_fourbar_crank_is_the_circle_intersection():
         ),
         (
             ["x=0", "y=0.08", "rz=0", "z=1"],
-            "task coordinate 'z=1': write NAME=VALUE with NAME a task coordinate of harada2011_3d4m, "
-            "one of ['x', 'y', 'rz']",
+            "task coordinate 'z=1': 'z' is not a task coordinate of harada2011_3d4m, one of ['x', 'y', 'rz']",
         ),
-        (["x=0", "y=0.08", "rz=zero"], "task coordinate 'rz=zero': 'zero' is not a number"),
+        (["x=0", "y=0.08", "rz=zero"], "task coordinate 'rz=zero': 'zero' is not a finite number"),
+        (["x=0", "y=0.08", "rz=0", "x=1"], "task coordinate 'x=1': 'x' is given twice"),
+        (["x=0", "y=0.08", "rz=inf"], "task coordinate 'rz=inf': 'inf' is not a finite number"),
+        (["x=0", "y=0.08", "=1"], "task coordinate '=1': write NAME=VALUE, e.g. x=0.1"),
         (
             ["x=0", "y=0.08", "rz=0", "--mode=+,-"],
             "--mode '+,-': give 4 signs (+ or -), comma-separated, one per leg of harada2011_3d4m, "
@@ -790,7 +792,12 @@ def test_report_load_on_the_fourbar_rocker_reaches_the_statics(tmp_path):
         ),
         (
             ["harada2011_3d4m", "--pose", "x:1"],
-            "--pose 'x:1': write NAME=VALUE items, comma-separated (e.g. x=0.01,y=0.08)",
+            "--pose 'x:1': write NAME=VALUE, e.g. --pose x=0.01,y=0.08",
+        ),
+        (["harada2011_3d4m", "--pose", "x=1,x=2"], "--pose 'x=2': 'x' is given twice"),
+        (
+            ["harada2011_3d4m", "--mode=+,x"],
+            "--mode '+,x': give one sign (+ or -) per leg, comma-separated, e.g. --mode=+,-",
         ),
         (["harada2011_3d4m", "--mode=+,-"], "--mode must hold 4 signs (+1 or -1), one per leg; got (1, -1)"),
         (

@@ -600,8 +600,16 @@ def test_view_animate_moves_a_users_mechanism_in_the_overview(tmp_path):
             ["fivebar", "--pose", "x=0.1", "--pose", "left_motor=1"],
             "--pose mixes joints and task coordinates",
         ),
-        (["fivebar", "--pose", "foo=1"], "--pose 'foo=1': 'foo' is neither a joint nor a task coordinate"),
-        (["fivebar", "--pose", "x=abc"], "--pose 'x=abc': expected comma-separated numbers, got 'abc'"),
+        (
+            ["fivebar", "--pose", "foo=1"],
+            "--pose 'foo=1': 'foo' is not a joint or task coordinate of fivebar, one",
+        ),
+        (
+            ["fivebar", "--pose", "x=abc"],
+            "--pose 'x=abc': 'abc' is not a finite number or finite numbers, comma",
+        ),
+        (["fivebar", "--pose", "x=1,2"], "--pose 'x=1,2': the task coordinate 'x' takes one number"),
+        (["fivebar", "--pose", "x=1", "--pose", "x=2"], "--pose 'x=2': 'x' is given twice"),
         (["fivebar", "--html", "{tmp}", "--port", "7000"], "--html writes a page that needs no server"),
         (["fivebar", "--html", "{tmp}"], "is a folder; give a file name"),
         (["fivebar", "--zmq-url", "tcp://10.0.0.1:6000"], "zmq_url must be tcp://127.0.0.1:PORT"),
