@@ -304,6 +304,39 @@ MODE_SIGNS = {"+": 1, "+1": 1, "1": 1, "-": -1, "-1": -1}
 """The words of a working-mode sign in ``--mode`` (comma-separated, one per square leg)."""
 
 
+def _named_words(
+    words: Sequence[str],
+    what: str,
+    example: str,
+    names: Sequence[str] | None = None,
+    kind: str = "a valid name",
+) -> dict[str, tuple[str, str]]:
+    """``NAME=VALUE`` words as ``{name: (word, value text)}``, in their order: every shell assignment.
+
+    Args:
+        words: the words, one assignment each.
+        what: the argument or option they come from, which starts every message.
+        example: a valid use, quoted where a word is malformed.
+        names: the valid names, listed where a word names another (None: any name, checked later).
+        kind: what the valid names are, in the message (e.g. ``"a task coordinate of fivebar"``).
+
+    Raises:
+        InvalidInput: a word without ``=`` or name, an unknown or repeated name; the message
+            names the word.
+    """
+    out: dict[str, tuple[str, str]] = {}
+    for word in words:
+        name, sep, text = word.strip().partition("=")
+        if not sep or not name:
+            raise InvalidInput(f"{what} {word!r}: write NAME=VALUE, e.g. {example}")
+        if names is not None and name not in names:
+            raise InvalidInput(f"{what} {word!r}: {name!r} is not {kind}, one of {list(names)}")
+        if name in out:
+            raise InvalidInput(f"{what} {word!r}: {name!r} is given twice")
+        out[name] = (word, text)
+    return out
+
+
 def _assignments(
     words: Sequence[str],
     what: str,
@@ -313,30 +346,23 @@ def _assignments(
     *,
     vectors: bool = False,
 ) -> dict[str, list[float]]:
-    """``NAME=VALUE`` words as ``{name: values}``, in their order [m, rad]: every shell assignment.
+    """``NAME=VALUE`` words as ``{name: numbers}`` [m, rad].
 
     Args:
         words: the words, one assignment each.
         what: the argument or option they come from, which starts every message.
         example: a valid use, quoted where a word is malformed.
-        names: the valid names, listed where a word names another (None: any name, checked later).
-        kind: what the valid names are, in the message (e.g. ``"a task coordinate of fivebar"``).
+        names: the valid names (None: any name, checked later).
+        kind: what the valid names are, in the message.
         vectors: VALUE may be several comma-separated numbers (a joint with several entries);
             otherwise exactly one.
 
     Raises:
-        InvalidInput: a word without ``=`` or name, an unknown or repeated name, a value that is
-            not a finite number (or comma-separated finite numbers); the message names the word.
+        InvalidInput: as :func:`_named_words`, or a value that is not a finite number (or
+            comma-separated finite numbers).
     """
     out: dict[str, list[float]] = {}
-    for word in words:
-        name, sep, text = word.strip().partition("=")
-        if not sep or not name:
-            raise InvalidInput(f"{what} {word!r}: write NAME=VALUE, e.g. {example}")
-        if names is not None and name not in names:
-            raise InvalidInput(f"{what} {word!r}: {name!r} is not {kind}, one of {list(names)}")
-        if name in out:
-            raise InvalidInput(f"{what} {word!r}: {name!r} is given twice")
+    for name, (word, text) in _named_words(words, what, example, names, kind).items():
         try:
             values = [float(v) for v in (text.split(",") if vectors else [text])]
         except ValueError:
@@ -570,8 +596,10 @@ RyOption = Annotated[str | None, _axis_option("ry")]
 RzOption = Annotated[str | None, _axis_option("rz")]
 
 
-def _grid_range(text: str, option: str) -> np.ndarray:
+def _grid_range(text: str, option: str, joiner: str = " ") -> np.ndarray:
     """The values ``START:STOP:COUNT`` stands for: COUNT evenly spaced from START to STOP.
+
+    ``option`` and ``joiner`` write the example of the message (``--x -0.05:0.05:21``).
 
     Raises:
         InvalidInput: naming the option, the text and what is wrong with it.
@@ -598,18 +626,34 @@ def _grid_range(text: str, option: str) -> np.ndarray:
             problem = "COUNT must be at least 2"
     if problem is not None:
         raise InvalidInput(
-            f"{option} {text!r}: {problem}; write START:STOP:COUNT (e.g. {option} -0.05:0.05:21)"
+            f"{option} {text!r}: {problem}; write START:STOP:COUNT (e.g. {option}{joiner}-0.05:0.05:21)"
         )
     return np.linspace(start, stop, count)
 
 
-def _slice_ranges(mech: Mechanism, given: dict[str, str | None]) -> dict[str, np.ndarray]:
+def _slice_ranges(
+    mech: Mechanism, given: dict[str, str | None], over: Sequence[str] = ()
+) -> dict[str, np.ndarray]:
     """The varied task coordinates and their values, in the task's order (empty when none given).
 
+    Args:
+        mech: the mechanism.
+        given: the text of each option ``--x`` ... ``--rz`` (None: not given).
+        over: ``--over NAME=START:STOP:COUNT`` words, for any task coordinate (a joint task's too).
+
     Raises:
-        InvalidInput: a malformed range, or a coordinate the task does not have.
+        InvalidInput: a malformed range, a coordinate given twice, or one the task does not have.
     """
     ranges = {a: _grid_range(text, f"--{a}") for a, text in given.items() if text is not None}
+    if over:
+        dofs = _task_dofs(mech, "--over")
+        words = _named_words(
+            over, "--over", f"--over {dofs[0]}=-0.1:0.1:21", dofs, f"a task coordinate of {mech.name}"
+        )
+        for name, (word, text) in words.items():
+            if name in ranges:
+                raise InvalidInput(f"--over {word!r}: {name!r} is also varied by --{name}; give it one way")
+            ranges[name] = _grid_range(text, f"--over {name}", "=")
     if not ranges:
         return {}
     dofs = _task_dofs(mech, " ".join(f"--{a}" for a in ranges))
@@ -691,19 +735,25 @@ def map_command(
     metric: Annotated[
         str, typer.Option("--metric", help=f"comma-separated, among {', '.join(POSE_METRICS)}, or all")
     ] = "manipulability",
+    over: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--over",
+            help="vary any task coordinate NAME=START:STOP:COUNT, e.g. a joint of a joint task "
+            "(--over elbow=-1:1:21), repeatable",
+        ),
+    ] = None,
     mode: ModeOption = None,
     force: Annotated[bool, typer.Option("--force", help="overwrite an existing CSV file")] = False,
 ) -> None:
     """A workspace map over two task coordinates, written as CSV (one row per pose) and summarised."""
     mech = _load(target)
     with _reported():
-        ranges = _slice_ranges(mech, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz})
+        ranges = _slice_ranges(mech, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz}, over or [])
         dofs = _task_dofs(mech, "map")
         if len(ranges) != 2:
-            raise InvalidInput(
-                f"a map varies two task coordinates: give two of {[f'--{d}' for d in dofs if d in AXES]}, "
-                f"got {len(ranges)}"
-            )
+            options = [f"--{d}" if d in AXES else f"--over {d}=..." for d in dofs]
+            raise InvalidInput(f"a map varies two task coordinates: give two of {options}, got {len(ranges)}")
         values = _task_values(mech, fixed or [], "--fixed")
         both = [d for d in values if d in ranges]
         if both:

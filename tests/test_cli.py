@@ -651,6 +651,84 @@ def test_map_csv_has_a_row_per_pose_with_the_api_metrics(tmp_path):
     assert re.search(r"working mode\s*│\s*\+,-,\+,-", result.stdout)
 
 
+def _joint_task_fivebar(folder: Path) -> Path:
+    """The fivebar preset with a joint task: its two elbow angles; returns the URDF."""
+    from plm_pin.models.registry import urdf_folder
+
+    for suffix in (".urdf", ".plm.yaml"):
+        (folder / f"fivebar{suffix}").write_text((urdf_folder() / f"fivebar{suffix}").read_text())
+    sidecar = folder / "fivebar.plm.yaml"
+    data = yaml.safe_load(sidecar.read_text())
+    data["end_effector"] = {"joints": ["left_elbow", "right_elbow"]}
+    sidecar.write_text(yaml.safe_dump(data))
+    return folder / "fivebar.urdf"
+
+
+def test_map_over_joint_task_coordinates(tmp_path):
+    """`map --over left_elbow=... --over right_elbow=...`: w = |det dc/dx| by central differences of IK."""
+    from plm_pin.kinematics import inverse_kinematics
+
+    urdf = _joint_task_fivebar(tmp_path)
+    out = tmp_path / "map.csv"
+    args = ["map", str(urdf), "--over", "left_elbow=-1.4:-1.2:3", "--over", "right_elbow=1.4:1.5:2"]
+    result = runner.invoke(app, [*args, "--csv", str(out)])
+    assert result.exit_code == 0, result.output
+    header, rows = _read_map(out)
+    assert header[:3] == ["left_elbow [rad]", "right_elbow [rad]", "reachable"]
+    assert header[3].startswith("manipulability [")
+    mech = plm_pin.load(urdf)
+    h = 1e-6
+    k = 0
+    for a in (-1.4, -1.3, -1.2):
+        for b in (1.4, 1.5):
+            x = np.array([a, b])
+            assert rows[k, :2] == pytest.approx(x, abs=1e-15) and rows[k, 2] == 1
+
+            def actuators(x):
+                return mech.actuator_positions(inverse_kinematics(mech, x).q)
+
+            jac = np.column_stack(
+                [(actuators(x + h * e) - actuators(x - h * e)) / (2 * h) for e in np.eye(2)]
+            )
+            assert rows[k, 3] == pytest.approx(abs(np.linalg.det(jac)), rel=1e-6)
+            k += 1
+
+
+@pytest.mark.parametrize(
+    ("over", "message"),
+    [
+        (
+            ["--over", "left_elbow=-1.4:-1.2:3"],
+            "a map varies two task coordinates: give two of "
+            "['--over left_elbow=...', '--over right_elbow=...'], got 1",
+        ),
+        (
+            ["--over", "foo=0:1:2", "--over", "left_elbow=0:1:2"],
+            "--over 'foo=0:1:2': 'foo' is not a task coordinate of fivebar, "
+            "one of ['left_elbow', 'right_elbow']",
+        ),
+        (
+            ["--over", "left_elbow=0:1:2", "--over", "left_elbow=0:1:3"],
+            "--over 'left_elbow=0:1:3': 'left_elbow' is given twice",
+        ),
+        (
+            ["--over", "left_elbow 0:1:2"],
+            "--over 'left_elbow 0:1:2': write NAME=VALUE, e.g. --over left_elbow=-0.1:0.1:21",
+        ),
+        (
+            ["--over", "left_elbow=1:0:2", "--over", "right_elbow=0:1:2"],
+            "--over left_elbow '1:0:2': START must be below STOP; write START:STOP:COUNT "
+            "(e.g. --over left_elbow=-0.05:0.05:21)",
+        ),
+    ],
+)
+def test_map_over_refuses_bad_words_in_one_line(tmp_path, over, message):
+    urdf = _joint_task_fivebar(tmp_path)
+    out = tmp_path / "map.csv"
+    _assert_clean_failure(runner.invoke(app, ["map", str(urdf), *over, "--csv", str(out)]), message)
+    assert not out.exists()
+
+
 def test_map_refuses_to_overwrite_without_force(tmp_path):
     """An existing CSV is kept (one error line) unless --force; with --force it is replaced."""
     out = tmp_path / "map.csv"
