@@ -938,14 +938,17 @@ def report(
             )
     except PlmError as exc:
         raise _fail(exc) from None
+    loaded: dict[str, Mechanism] = {}  # loaded once: the studies reuse them
     for _, chosen in runs:
         if chosen is not None:
-            mech = _load(chosen)  # a broken description fails here, with the loader's message
+            loaded[chosen] = mech = _load(
+                chosen
+            )  # a broken description fails here, with the loader's message
             if not case.empty:
                 from .report.overview import overview_case
 
                 with _reported():
-                    overview_case(mech, case)  # a bad case fails here, in one line
+                    overview_case(mech, case)  # a bad case fails here, in one line; solved once
     try:
         root = output_folder(out)
     except PlmError as exc:
@@ -966,6 +969,7 @@ def report(
                     command=_regenerate(study, chosen, out, case_words),
                     observer=_show_step(progress, task, study.name),
                     case=case if study.takes_case else None,
+                    loaded=loaded.get(chosen) if chosen is not None else None,
                 )
                 path = write_report(result, root)
             except PlmError as exc:

@@ -856,6 +856,31 @@ def test_report_load_on_the_fourbar_rocker_reaches_the_statics(tmp_path):
     assert rows[0][2] != pytest.approx(static_forces(mech, q).f_c[0], abs=1e-3)  # the load counts
 
 
+def test_report_with_a_pose_loads_and_solves_once(tmp_path, monkeypatch):
+    """`report fourbar --pose rz=1.8`: the shell's check loads and solves; the study reuses both."""
+    from plm_pin.report import overview, study
+
+    loads, solves = [], []
+
+    def counted_load(*args, **kwargs):
+        loads.append(args)
+        return plm_pin.load(*args, **kwargs)
+
+    def counted_ik(mech, x, *args, **kwargs):
+        solves.append(np.array(x, dtype=float))
+        return inverse_kinematics(mech, x, *args, **kwargs)
+
+    from plm_pin.kinematics import inverse_kinematics
+
+    monkeypatch.setattr(study, "load", counted_load)
+    monkeypatch.setattr(overview, "inverse_kinematics", counted_ik)
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", "fourbar", "--pose", "rz=1.8", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert loads == []  # the study got the shell's mechanism
+    assert sum(x.shape == (1,) and x[0] == 1.8 for x in solves) == 1
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [

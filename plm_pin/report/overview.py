@@ -13,7 +13,9 @@ simulation take the load, every section the pose and working mode, the slice the
 from __future__ import annotations
 
 import itertools
+import weakref
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -177,14 +179,38 @@ def load_names(mech: Mechanism) -> list[str]:
     return [("m" if d.startswith("r") else "f") + d[-1] for d in mech.task.dofs]
 
 
+_solved: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[Any, ...], OverviewCase]] = (
+    weakref.WeakKeyDictionary()
+)
+"""The last case solved for each mechanism, with its key: the shell checks a case, then the study reads it."""
+
+
 def overview_case(mech: Mechanism, case: StudyCase) -> OverviewCase:
     """Check ``case`` against ``mech`` and solve its pose (inverse kinematics in its working mode).
+
+    The answer is kept for ``mech`` (while it lives): asked again for the same case, the
+    pose is not solved again.
 
     Raises:
         InvalidInput: a load of the wrong size, unknown pose or slice coordinates, more than two
             varied coordinates, a malformed working mode, or a case given to a mechanism without task.
         PoseUnreachable: a pose the inverse kinematics cannot reach (in the working mode).
     """
+    key = (
+        case.load,
+        tuple(sorted(case.pose.items())),
+        case.mode,
+        tuple(sorted((name, tuple(v)) for name, v in case.ranges.items())),
+    )
+    kept = _solved.get(mech)
+    if kept is not None and kept[0] == key:
+        return kept[1]
+    checked = _check_case(mech, case)
+    _solved[mech] = (key, checked)
+    return checked
+
+
+def _check_case(mech: Mechanism, case: StudyCase) -> OverviewCase:
     dofs = tuple(mech.task.dofs) if mech.task is not None else ()
     if not dofs and not case.empty:
         raise InvalidInput(
