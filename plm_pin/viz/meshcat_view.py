@@ -78,7 +78,7 @@ _ARROW = 0.006
 _DASH = 0.03
 _RAIL = 0.01
 _EDGE = 0.008
-_POINT = 0.015
+_POINT = 0.03
 _MIN_EXTENT = 1e-3  # [m]
 
 _VISUAL = pin.GeometryType.VISUAL
@@ -681,9 +681,9 @@ class MeshcatViewer:
             node.delete()
             return
         mg = require_meshcat().geometry
-        rgb = int(255 * color[0]) * 65536 + int(255 * color[1]) * 256 + int(255 * color[2])
-        material = mg.PointsMaterial(size=self.size * _POINT, color=rgb)
-        node.set_object(mg.PointsGeometry(points.T.astype(np.float32)), material)
+        colors = np.tile(np.array(color[:3], dtype=np.float32)[:, None], (1, len(points)))  # one per point
+        geometry = mg.PointsGeometry(points.T.astype(np.float32), color=colors)
+        node.set_object(mg.Points(geometry, mg.PointsMaterial(size=self.size * _POINT)))
 
     def show_workspace(self, grid: WorkspaceSlice) -> np.ndarray:
         """Overlay the boundary of a workspace slice: the task frame's origin at its boundary poses.
