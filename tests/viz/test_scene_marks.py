@@ -23,6 +23,7 @@ from plm_pin.viz.legend import (
     ENTRIES,
     PLATFORM_COLOR,
     RAIL_COLOR,
+    SINGULAR_COLORS,
     SKELETON_COLOR,
     VIRTUAL_COLOR,
     LegendEntry,
@@ -275,4 +276,14 @@ def test_singular_point_overlay_sits_at_each_points_task_pose():
         np.testing.assert_allclose(points[:, :2], expected, atol=1e-7)
     scene = Scene(viewer.static_html())
     for kind in {p.kind for p in found}:
-        assert f"{root(mech)}/overlays/singular/{kind}" in scene.objects
+        attributes = scene.objects[f"{root(mech)}/overlays/singular/{kind}"]["geometries"][0]["data"][
+            "attributes"
+        ]
+        positions, colors = (points_attribute(attributes, name) for name in ("position", "color"))
+        np.testing.assert_allclose(positions, drawn[kind], atol=1e-6)  # float32 in the page
+        np.testing.assert_allclose(colors, np.tile(SINGULAR_COLORS[kind][:3], (len(positions), 1)), atol=1e-7)
+
+
+def points_attribute(attributes: dict, name: str) -> np.ndarray:
+    """A meshcat point-cloud attribute (an ``Ext`` of float32 data, one row of 3 per point)."""
+    return np.frombuffer(attributes[name]["array"].data, dtype=np.float32).reshape(-1, 3)
