@@ -40,6 +40,7 @@ from ..viz import (
     plot_sweep,
 )
 from ..workspace import (
+    SingularPoint,
     WorkspaceSlice,
     manipulability,
     manipulability_unit,
@@ -262,10 +263,11 @@ def run(ctx: StudyContext) -> None:
     square = mech.task is not None and len(mech.task.dofs) == mech.mobility
     _mobility(ctx.section("Mobility and redundancy"), mech, square, case)
     section = ctx.section("Workspace slice: manipulability and singularities")
-    grid = None
+    grid: WorkspaceSlice | None = None
+    loci: list[SingularPoint] = []
     if square:
         ctx.step(f"{mech.name}: workspace slice")
-        grid = _workspace(section, mech, case)
+        grid, loci = _workspace(section, mech, case)
     else:
         section.text(NEEDS_SQUARE_TASK.format(what="No workspace slice"))
     ctx.step(f"{mech.name}: static forces at {where}")
@@ -282,7 +284,7 @@ def run(ctx: StudyContext) -> None:
     title = "released under gravity" + ("" if case.wrench is None else " and the load")
     _simulation(ctx.section(f"Short simulation: {title}"), mech, case)
     ctx.step(f"{mech.name}: 3D scene")
-    _scene(ctx.section("3D view"), mech, forces, case)
+    _scene(ctx.section("3D view"), mech, forces, case, grid, loci)
 
 
 def _mobility(section: Section, mech: Mechanism, square: bool, case: OverviewCase) -> None:
@@ -414,7 +416,9 @@ def _transmission(section: Section, mech: Mechanism, q: np.ndarray, at: str) -> 
     )
 
 
-def _workspace(section: Section, mech: Mechanism, case: OverviewCase) -> WorkspaceSlice:
+def _workspace(
+    section: Section, mech: Mechanism, case: OverviewCase
+) -> tuple[WorkspaceSlice, list[SingularPoint]]:
     assert mech.task is not None
     dofs = mech.task.dofs
     x0 = task_pose(mech, case.q)
@@ -517,7 +521,7 @@ def _workspace(section: Section, mech: Mechanism, case: OverviewCase) -> Workspa
                 for p in loci
             ],
         )
-    return grid
+    return grid, loci
 
 
 PRELOAD_STEPS = 5
@@ -816,7 +820,14 @@ def _internal_range(section: Section, mech: Mechanism, sol: StaticForces, case: 
     )
 
 
-def _scene(section: Section, mech: Mechanism, forces: StaticForces | None, case: OverviewCase) -> None:
+def _scene(
+    section: Section,
+    mech: Mechanism,
+    forces: StaticForces | None,
+    case: OverviewCase,
+    grid: WorkspaceSlice | None,
+    loci: list[SingularPoint],
+) -> None:
     viewer = MeshcatViewer(mech, static=True)
     q = case.q
     if forces is None:
@@ -833,4 +844,9 @@ def _scene(section: Section, mech: Mechanism, forces: StaticForces | None, case:
             f"The mechanism at {case.where} with its static forces ({scale:.3g} m/N); "
             "closure points in green."
         )
-    section.scene(viewer.static_html(), caption, {"q": q, "arrows": arrows, "scale": scale})
+    data: dict[str, Any] = {"q": q, "arrows": arrows, "scale": scale}
+    if grid is not None and mech.task_frame_id is not None:  # the slice's overlays, at the task frame
+        data["workspace_boundary"] = viewer.show_workspace(grid)
+        data["singular_points"] = viewer.show_singular_points(loci)
+        caption += " Dots: the task frame at the boundary of the workspace slice and at its singular points."
+    section.scene(viewer.static_html(), caption, data)
