@@ -83,7 +83,7 @@ class Rail:
 
 
 def prismatic_rails(model: pin.Model) -> list[Rail]:
-    """The rail of every one-axis prismatic joint with finite limits, in joint order.
+    """The rail of every one-axis prismatic joint with a finite stroke, in joint order.
 
     The joint frame moves by ``q * a`` along its axis ``a`` (the linear part of its motion
     subspace), from its placement in the parent joint's frame.
@@ -95,7 +95,7 @@ def prismatic_rails(model: pin.Model) -> list[Rail]:
             continue
         lower = float(model.lowerPositionLimit[joint.idx_q])
         upper = float(model.upperPositionLimit[joint.idx_q])
-        if not (np.isfinite(lower) and np.isfinite(upper) and upper > lower):
+        if not (np.isfinite(upper - lower) and upper > lower):  # Pinocchio's default: +-max, no rail
             continue
         data = joint.createData()
         joint.calc(data, pin.neutral(model))

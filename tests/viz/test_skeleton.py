@@ -98,3 +98,30 @@ def test_platform_outline_closes_through_the_attachment_points():
     ring = rings[0]
     np.testing.assert_allclose(ring[0], ring[-1], atol=1e-15)  # closed
     np.testing.assert_allclose(np.sort(ring[:-1], axis=0), np.sort(corners, axis=0), atol=1e-9)
+
+
+def test_no_rail_without_a_finite_stroke():
+    """A slider at Pinocchio's default limits (+-max double) has no rail; an inclined one spans its limits."""
+    import pinocchio as pin
+
+    from plm_pin.viz.skeleton import prismatic_rails
+
+    model = pin.Model()
+    model.addJoint(0, pin.JointModelPX(), pin.SE3.Identity(), "free_slider")
+    axis = np.array([0.6, 0.8, 0.0])
+    placement = pin.SE3(np.eye(3), np.array([0.1, 0.2, 0.3]))
+    model.addJoint(
+        0,
+        pin.JointModelPrismaticUnaligned(axis),
+        placement,
+        "inclined",
+        np.zeros(1),
+        np.zeros(1),
+        np.array([-0.5]),
+        np.array([1.5]),
+    )
+    rails = prismatic_rails(model)
+    assert [r.joint for r in rails] == ["inclined"]
+    np.testing.assert_allclose(rails[0].start, placement.translation - 0.5 * axis, atol=1e-15)
+    np.testing.assert_allclose(rails[0].end, placement.translation + 1.5 * axis, atol=1e-15)
+    assert rails[0].length == pytest.approx(2.0, abs=1e-15)
