@@ -253,6 +253,19 @@ def test_presets_modes_contain_every_multistart_mode(name):
         assert any(same_assembly(mech, q, s.q) for s in modes)
 
 
+def test_redundant_actuators_that_disagree_have_no_mode():
+    """The 3D4M's fourth actuator moved off the value its three others imply: no assembly (proven)."""
+    mech = preset("harada2011_3d4m")
+    c = mech.actuator_positions(mech.q_ref)
+    modes = forward_kinematics(mech, c)
+    assert modes.complete and len(modes) >= 1
+    form, _ = plm_pin.kinematics.homotopy.prepared(mech)
+    ((a, _, _),) = form.checked
+    c[a] += 0.05
+    with pytest.raises(plm_pin.PoseUnreachable, match="complex roots is real"):
+        forward_kinematics(mech, c)
+
+
 def test_without_polynomial_form_multistart_is_used_and_said_once(monkeypatch):
     """A mechanism the homotopy refuses falls back to multi-start: warned once, not complete, modes found."""
     import plm_pin.kinematics.forward as forward
