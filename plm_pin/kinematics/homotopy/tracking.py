@@ -5,7 +5,8 @@ The homotopy moves the parameters on a straight line between two complex points,
 actuator values and the offsets added to the equations (:mod:`.generic` uses the offsets;
 a forward-kinematics call keeps them at zero). A path follows
 :math:`\dot x = -F_x^{-1} (F_p \dot p + \dot b)`: a fourth-order Runge-Kutta predictor, then
-at most :data:`CORRECTOR_STEPS` Newton corrections, accepted when they contract; the step
+at most :data:`CORRECTOR_STEPS` Newton corrections, accepted when they contract and stopped
+when a correction, or the next one predicted from the contraction, is small; the step
 doubles after three accepted steps in a row and halves on a rejected one.
 
 Endgame: a path whose norm passes :data:`HOMOTOPY_DIVERGED_NORM` goes to infinity (the target has
@@ -166,10 +167,12 @@ def track(
                     break
                 for i in range(n):
                     y[i] += d[i]
-                last = nd
-                if nd <= HOMOTOPY_CORRECTOR_TOL * (1.0 + _norm(y)):
+                # converged: this correction is small, or the next one will be (contraction nd / last)
+                small = HOMOTOPY_CORRECTOR_TOL * (1.0 + _norm(y))
+                if nd <= small or (last < np.inf and nd * (nd / last) <= small):
                     converged = True
                     break
+                last = nd
             ok = converged or last <= 1e-6 * (1.0 + _norm(y))
         if ok:
             x[:] = y
