@@ -365,18 +365,31 @@ def parameter_intervals(form: PolynomialForm, actuators: np.ndarray) -> np.ndarr
     return pi
 
 
-def newton_size(form: PolynomialForm, x: np.ndarray, pi: np.ndarray) -> float:
-    r"""Size of the Newton enclosure at ``x``: the largest :math:`|Y F([\tilde x])|` (float bound).
+@njit(cache=True)
+def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> float:
+    r"""Size of the Newton enclosure at ``x``: the largest :math:`|Y F([\tilde x])|` (a float bound).
 
     The Krawczyk box must hold this (the root lies about one Newton step away, plus the rounding
     of :math:`F`, magnified by the conditioning), and should not be much larger (the interval
     Jacobian over a wide box stops the contraction). A fixed width fails one way or the other on
-    an ill-conditioned root.
+    an ill-conditioned root. Infinite when the Jacobian is singular.
     """
-    args = form.kernel_args()
-    Fx, Jx = interval_system(_point(np.asarray(x, dtype=float)), pi, *args)
-    Y = np.linalg.inv(0.5 * (Jx[:, :, 0] + Jx[:, :, 1]))
-    return float(np.max(np.abs(Y) @ np.max(np.abs(Fx), axis=1)))
+    n = x.shape[0]
+    Fx, Jx = interval_system(_point(x), pi, *args)
+    Jmid = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            Jmid[i, j] = 0.5 * (Jx[i, j, 0] + Jx[i, j, 1])
+    if np.linalg.matrix_rank(Jmid) < n:
+        return np.inf
+    Y = np.linalg.inv(Jmid)
+    out = 0.0
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += abs(Y[i, j]) * max(abs(Fx[j, 0]), abs(Fx[j, 1]))
+        out = max(out, acc)
+    return out
 
 
 def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float | None:
@@ -388,10 +401,7 @@ def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float
     pi = parameter_intervals(form, actuators)
     args = form.kernel_args()
     x = np.asarray(x, dtype=float)
-    try:
-        size = max(newton_size(form, x, pi), float(np.finfo(float).eps))
-    except np.linalg.LinAlgError:
-        return None
+    size = max(newton_size(x, pi, args), float(np.finfo(float).eps))
     for growth in BOX_GROWTH:
         radius = growth * size
         if not radius <= HOMOTOPY_MAX_BOX_RTOL:
