@@ -207,7 +207,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
             singular += 1
             continue
         x = canonical(form, x)
-        if any(np.abs(x - y).max() <= HOMOTOPY_SAME_ROOT_RTOL * scale for y in roots):
+        if roots and np.abs(np.array(roots) - x).max(axis=1).min() <= HOMOTOPY_SAME_ROOT_RTOL * scale:
             collided += 1
         else:
             roots.append(x)
