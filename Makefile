@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.plm-pin-installed
 REPORTS ?= reports
 
-.PHONY: all setup test test-fast browser report docs lint format bench urdf clear-notebooks clean
+.PHONY: all setup test test-fast browser phcpack report docs lint format bench urdf clear-notebooks clean
 
 all: test
 
@@ -22,7 +22,7 @@ setup: $(STAMP)
 # `report all` and each module fixture (docs build, wheel venv) run once, the longest first.
 PYTEST := OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -n 2
 
-test: $(STAMP) browser
+test: $(STAMP) browser phcpack
 	$(PYTEST)
 
 # The browser check (tests/report/test_browser.py) drives Debian's chromium with chromium-driver.
@@ -41,6 +41,22 @@ browser:
 	  elif ! { $$sudo apt-get update -qq && $$sudo env DEBIAN_FRONTEND=noninteractive \
 	      apt-get install -y -qq --no-install-recommends $(BROWSER_PACKAGES) >/dev/null; }; then \
 	    echo "make: installing $(BROWSER_PACKAGES) failed; the browser check will fail" >&2; fi; \
+	fi
+
+# The PHCpack oracle of the complete forward kinematics (tests/kinematics/homotopy/phc_stewart.py, a
+# slow test) runs in Debian's python3-phcpy, with the system python3 (not the venv). Installed here
+# when missing, as the browser packages are; otherwise the oracle test is skipped (it fails on CI).
+phcpack:
+	@if ! /usr/bin/python3 -c "import phcpy" >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" -eq 0 ]; then sudo=; \
+	  elif command -v sudo >/dev/null && sudo -n true 2>/dev/null; then sudo="sudo -n"; \
+	  else echo "make: python3-phcpy missing and no root: the PHCpack oracle test is skipped;" \
+	    "sudo apt-get install python3-phcpy" >&2; exit 0; fi; \
+	  if ! command -v apt-get >/dev/null; then \
+	    echo "make: no apt-get: the PHCpack oracle test is skipped" >&2; \
+	  elif ! { $$sudo apt-get update -qq && $$sudo env DEBIAN_FRONTEND=noninteractive \
+	      apt-get install -y -qq --no-install-recommends python3-phcpy >/dev/null; }; then \
+	    echo "make: installing python3-phcpy failed; the PHCpack oracle test is skipped" >&2; fi; \
 	fi
 
 test-fast: $(STAMP)

@@ -50,6 +50,7 @@ __all__ = [
     "HOMOTOPY_CORRECTOR_TOL",
     "HOMOTOPY_DIVERGED_NORM",
     "HOMOTOPY_ENTRY_TOL",
+    "HOMOTOPY_MAX_BOX_RTOL",
     "HOMOTOPY_REAL_RTOL",
     "HOMOTOPY_ROOT_RTOL",
     "HOMOTOPY_SAME_ROOT_RTOL",
@@ -509,6 +510,9 @@ HOMOTOPY_DIVERGED_NORM = 1e8
 
 HOMOTOPY_CORRECTOR_TOL = 1e-9
 """[-] Relative Newton correction at which a homotopy corrector step is accepted."""
+
+HOMOTOPY_MAX_BOX_RTOL = 1e-6
+"""[-] Largest relative half-width of a Krawczyk box (a root certified farther out is not certified)."""
 
 FK_SAME_MODE_TOL = 1e-7
 """[m, rad] Largest task-coordinate difference of two forward-kinematics solutions of one assembly mode."""
