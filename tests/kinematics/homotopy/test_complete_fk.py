@@ -195,14 +195,14 @@ def test_stewart_platform_has_40_roots_and_every_real_mode_closes():
 def test_stewart_real_modes_equal_phcpack():
     """PHCpack's real solutions of the independently written leg equations are exactly our modes.
 
-    PHCpack runs in Debian's python3-phcpy (``make phcpack`` installs it): skipped where it is
+    PHCpack runs in Debian's python3-phcpy (``make test`` installs it): skipped where it is
     missing, except on CI, where the oracle must run.
     """
     probe = None
     if shutil.which("/usr/bin/python3") is not None:
         probe = subprocess.run(["/usr/bin/python3", "-c", "import phcpy"], capture_output=True, check=False)
     if probe is None or probe.returncode:
-        why = "phcpy is not installed for the system python (make phcpack, or apt-get install python3-phcpy)"
+        why = "phcpy is not installed for the system python (make test installs it, or apt-get install python3-phcpy)"
         if os.environ.get("CI"):
             pytest.fail(why)
         pytest.skip(why)
