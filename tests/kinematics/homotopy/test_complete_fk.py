@@ -202,7 +202,7 @@ def test_stewart_real_modes_equal_phcpack():
     if shutil.which("/usr/bin/python3") is not None:
         probe = subprocess.run(["/usr/bin/python3", "-c", "import phcpy"], capture_output=True, check=False)
     if probe is None or probe.returncode:
-        why = "phcpy is not installed for the system python (make test installs it, or apt-get install python3-phcpy)"
+        why = "phcpy is not installed for the system python (make test, or apt-get install python3-phcpy)"
         if os.environ.get("CI"):
             pytest.fail(why)
         pytest.skip(why)
