@@ -7,7 +7,7 @@ inverse-kinematics continuation never crosses a chunk boundary). A chunk holds a
 ``chunk`` poses (:data:`DEFAULT_CHUNK`), never less than one parameter point.
 
 On several workers, chunks of one point that would leave workers idle in the last round
-(3 points on 2 workers: the third alone) are split into one *share* per worker
+(3 points on 2 workers: the third alone) are split into one *share* per worker thread
 (:class:`~plm_pin.sweep.metrics.PointEvaluation`): every share solves the point's whole grid,
 the metrics that analyse each reached pose or line independently (orientation ranges, static
 forces, stiffness) take every n-th of them, and the shares are merged into the point before
@@ -273,7 +273,7 @@ def on_dask(client: Client, spec: SweepSpec, chunks: Sequence[Chunk]) -> Iterato
             key=f"plm-pin-sweep-{run}-{chunk.first}-{chunk.share[0]}",
             pure=False,
         ): chunk
-        for chunk in split_chunks(spec, chunks, len(client.scheduler_info()["workers"]))
+        for chunk in split_chunks(spec, chunks, max(1, sum(client.nthreads().values())))
     }
 
     def outcomes() -> Iterator[Outcome]:
