@@ -156,7 +156,7 @@ def test_local_default_starts_a_cluster_for_large_sweeps_with_the_same_results(
 
 
 SPLIT = ["manipulability", "singularity", "min_manipulability", "orientation_range", "peak_force"]
-"""Grid metrics (share 0 alone) beside split ones: per line (orientation_range), per reached pose (peak_force)."""
+"""Grid metrics (share 0 alone) beside split ones: per line (orientation_range), per pose (peak_force)."""
 
 
 @pytest.mark.parametrize("shares", [2, 3])
