@@ -16,6 +16,7 @@ LAYERS = (
     "_version",
     "_io",
     "_lazy",
+    "_linalg",
     "_yaml",
     "tolerances",
     "results",

@@ -31,6 +31,7 @@ rotation axis (``"line"``). Unreached poses hold NaN (``-1`` in codes, False in 
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -284,6 +285,8 @@ class Metric:
         options: names of the :data:`OPTIONS` it uses (``ik_tol`` is used by all).
         compute: the variables' values at one parameter point.
         required: the options among ``options`` that have no default and must be given.
+        split: whether its per-pose work divides into shares (:attr:`PointEvaluation.share`):
+            independent analyses of each reached pose or line, not the continuation over the grid.
     """
 
     name: str
@@ -292,6 +295,7 @@ class Metric:
     options: tuple[str, ...]
     compute: Callable[[PointEvaluation], dict[str, np.ndarray]]
     required: tuple[str, ...] = ()
+    split: bool = False
 
 
 @dataclass(frozen=True)
@@ -322,13 +326,28 @@ class PointEvaluation:
         mech: the mechanism built at this point.
         mode: the reference configuration's working mode, kept by every analysis (None if
             a leg is singular there: the continuation's seed decides).
+        share: ``(k, n)``: this evaluation computes the k-th of n shares of the point. The
+            grid's continuation runs whole in every share (so every pose is solved by the same
+            calls); the metrics that split (:attr:`Metric.split`) analyse only the reached poses
+            or lines whose rank is k modulo n and leave the others at their fill values; the
+            others are computed by share 0 alone. ``(0, 1)``: the whole point.
     """
 
-    def __init__(self, spec: PoseGrid, mech: Mechanism) -> None:
-        """Prepare the evaluation of the metrics on ``mech`` over ``spec``'s grid."""
+    def __init__(self, spec: PoseGrid, mech: Mechanism, share: tuple[int, int] = (0, 1)) -> None:
+        """Prepare the evaluation of the metrics on ``mech`` over ``spec``'s grid (its ``share``)."""
         self.spec = spec
         self.mech = mech
         self.mode = guess_mode(mech, None)
+        self.share = share
+
+    def computes(self, metric: Metric) -> bool:
+        """Whether this share computes ``metric`` (every share its part of a split one; share 0 the rest)."""
+        return metric.split or self.share[0] == 0
+
+    def owned(self, n: int) -> np.ndarray:
+        """Which of ``n`` work items (reached poses or lines, in order) this share analyses."""
+        k, shares = self.share
+        return np.arange(n) % shares == k
 
     def option(self, name: str) -> Any:
         """A checked option of the sweep (defaults filled in)."""
@@ -349,13 +368,25 @@ class PointEvaluation:
             self.mech, spec.axes, spec.values, self.base, mode=self.mode, tol=self.option("ik_tol")
         )
 
+    @functools.cached_property
+    def share_grid(self) -> WorkspaceSlice:
+        """:attr:`grid` reaching only this share's reached poses (what the split per-pose analyses visit)."""
+        grid = self.grid
+        if self.share[1] == 1:
+            return grid
+        reachable = np.zeros_like(grid.reachable)
+        reachable.flat[np.flatnonzero(grid.reachable)[self.owned(int(np.count_nonzero(grid.reachable)))]] = (
+            True
+        )
+        return dataclasses.replace(grid, reachable=reachable)
+
     def over(self) -> tuple[int, ...]:
         """Positions of the pose axes a reduction runs over."""
         return tuple(self.spec.axes.index(a) for a in self.spec.reduced_over)
 
     def static_peak(self, solve: Callable[[np.ndarray, ArrayLike | None], float]) -> np.ndarray:
         """``max over the wrench set of solve(q, wrench)`` at every reached pose (NaN elsewhere)."""
-        grid = self.grid
+        grid = self.share_grid
         out = np.full(grid.shape, np.nan)
         wrenches = self.option("wrenches") or (None,)
         for index in zip(*np.nonzero(grid.reachable), strict=True):
@@ -401,7 +432,10 @@ def _orientation_range(ev: PointEvaluation) -> dict[str, np.ndarray]:
         "orientation_upper_end": np.full(shape, -1, dtype=np.int8),
     }
     reference = ev.option("reference")
-    for index in np.ndindex(*shape):
+    owned = ev.owned(math.prod(shape))
+    for flat, index in enumerate(np.ndindex(*shape)):
+        if not owned[flat]:
+            continue
         pose = ev.base.copy()
         for a, i in zip(others, index, strict=True):
             pose[dofs.index(a)] = spec.values[spec.axes.index(a)][i]
@@ -455,7 +489,7 @@ def _preload(ev: PointEvaluation) -> dict[str, np.ndarray]:
 def _stiffness(ev: PointEvaluation) -> dict[str, np.ndarray]:
     smap = stiffness_map(
         ev.mech,
-        ev.grid,
+        ev.share_grid,
         direction=ev.option("compliance_direction"),
         gravity=ev.option("gravity"),
         internal=ev.option("internal"),
@@ -576,6 +610,7 @@ METRICS: dict[str, Metric] = {
             ),
             ("rotation_axis", "reference", "xtol", "singularity_tol"),
             _orientation_range,
+            split=True,
         ),
         Metric(
             "peak_force",
@@ -584,6 +619,7 @@ METRICS: dict[str, Metric] = {
             (Variable("peak_force", FORCE_UNIT, "static peak actuator force over the wrench set"),),
             ("wrenches", "gravity", "objective"),
             _peak_force,
+            split=True,
         ),
         Metric(
             "preload",
@@ -593,6 +629,7 @@ METRICS: dict[str, Metric] = {
             (Variable("preload", "N", "internal preload needed over the wrench set"),),
             ("wrenches", "gravity", "compression", "preload_links"),
             _preload,
+            split=True,
         ),
         Metric(
             "stiffness",
@@ -618,6 +655,7 @@ METRICS: dict[str, Metric] = {
             ),
             ("gravity", "internal", "compliance_direction"),
             _stiffness,
+            split=True,
         ),
         Metric(
             "accuracy",
