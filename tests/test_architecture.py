@@ -35,6 +35,7 @@ LAYERS = (
     "stiffness",
     "families",
     "sweep",
+    "optimize",
     "viz",
     "report",
     "cli",
