@@ -33,6 +33,7 @@ from .._yaml import YamlRefused, load_yaml, read_head
 from ..exceptions import InvalidInput
 from ..sweep.config import UNITS, import_mechanism, values_of
 from .problem import FORMAT, Problem, make_problem
+from .search import search_settings
 
 KEYS = (
     "format", "mechanism", "base", "variables", "poses", "pose",
@@ -62,7 +63,7 @@ def _variables(raw: Any) -> Any:
 
 
 def problem_from_config(config: Any, source: str = "<config>") -> tuple[Problem, dict[str, Any]]:
-    """The problem a configuration mapping describes, and its search settings.
+    """The problem a configuration mapping describes, and its search settings (checked, defaults filled in).
 
     Raises:
         InvalidInput: an unknown key, a malformed entry, or anything :func:`make_problem` refuses;
@@ -87,6 +88,7 @@ def problem_from_config(config: Any, source: str = "<config>") -> tuple[Problem,
         poses = config["poses"]
         if isinstance(poses, Mapping):
             poses = {k: values_of(f"poses.{k}", v) for k, v in poses.items()}
+        settings = search_settings(**search)
         problem = make_problem(
             import_mechanism(config["mechanism"]),
             _variables(config["variables"]),
@@ -99,7 +101,7 @@ def problem_from_config(config: Any, source: str = "<config>") -> tuple[Problem,
         )
     except InvalidInput as exc:
         raise InvalidInput(f"{source}: {exc}") from None
-    return problem, dict(search)
+    return problem, settings
 
 
 def load_config(path: str | Path) -> tuple[Problem, dict[str, Any]]:

@@ -172,7 +172,14 @@ def _nsga2(problem: Problem, generations: Generations, settings: Mapping[str, An
     minimize(Pareto(), NSGA2(pop_size=size), ("n_gen", settings["generations"]), seed=settings["seed"])
 
 
-def _settings(method: str, generations: int, population: int, seed: int, tol: float) -> dict[str, Any]:
+def search_settings(
+    method: str = "de", generations: int = 50, population: int = 10, seed: int = 0, tol: float = DE_TOL
+) -> dict[str, Any]:
+    """The search settings checked, defaults filled in (the arguments of :func:`run_problem`).
+
+    Raises:
+        InvalidInput: an unknown method, a count below 1, a seed that is no integer, a negative tol.
+    """
     if method not in METHODS:
         raise InvalidInput(f"unknown method {short(method)}; methods are {list(METHODS)}")
     for name, value in (("generations", generations), ("population", population)):
@@ -200,7 +207,7 @@ def run_problem(
 ) -> OptimizationResult:
     """Search a checked problem (see :func:`plm_pin.optimize.optimize` for the arguments)."""
     began = time.perf_counter()
-    settings = _settings(method, generations, population, seed, tol)
+    settings = search_settings(method, generations, population, seed, tol)
     check_execution(scheduler, workers)
     if progress is not None and not callable(progress):
         raise InvalidInput(
