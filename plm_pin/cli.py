@@ -1,4 +1,4 @@
-"""The ``plm-pin`` command line: list presets, inspect and check descriptions, write reports, run sweeps, optimise."""
+"""The ``plm-pin`` command line: presets, inspecting and checking descriptions, reports, sweeps, optimising."""
 
 from __future__ import annotations
 
@@ -1235,12 +1235,12 @@ def optimize_command(
         problem, search = load_optimize_config(config)
         if out.exists() and not out.is_dir():
             raise InvalidInput(f"--out {out}: is a file; give a folder")
+        failure = None
         try:
             result = run_problem(problem, **search, store=out, scheduler=scheduler, workers=workers)
-            failure = None
         except NoFeasibleDesign as exc:
+            assert isinstance(exc.partial, OptimizationResult)
             result, failure = exc.partial, exc
-        assert isinstance(result, OptimizationResult)
         with atomic_path(out / "designs.csv") as tmp:
             result.table().to_csv(tmp, index=False)
         summary = {
@@ -1259,8 +1259,8 @@ def optimize_command(
     best = ", ".join(f"{k} = {v}" for k, v in result.parameters().items())
     objectives = ", ".join(f"{k} = {v:.6g}" for k, v in result.best.objectives.items())
     console.print(
-        f"wrote {out}: {len(result.evaluations)} designs ({result.computed} computed now, {result.elapsed:.1f} s); "
-        f"best {best}: {objectives}",
+        f"wrote {out}: {len(result.evaluations)} designs ({result.computed} computed now, "
+        f"{result.elapsed:.1f} s); best {best}: {objectives}",
         markup=False,
         highlight=False,
         soft_wrap=True,

@@ -8,7 +8,7 @@ import pytest
 from plm_pin import InvalidInput, NoFeasibleDesign
 from plm_pin.optimize import make_problem, optimize, run_problem
 
-from .fivebar_closed_form import best_gci
+from .fivebar_closed_form import best_gci, condition_numbers
 
 X = np.linspace(-0.05, 0.05, 5)
 Y = np.linspace(0.2, 0.26, 5)
@@ -99,3 +99,49 @@ def test_moving_mass_is_the_bars_mass() -> None:
 
     ev = evaluate_design(problem, (0.15, 0.2))
     assert ev.objectives["moving_mass"] == pytest.approx(2.0 * (2 * 0.15 + 2 * 0.2), rel=1e-12)
+
+
+@pytest.mark.slow
+def test_nsga2_front_of_gci_and_mass_is_not_dominated_by_the_brute_force_grid() -> None:
+    """Each front design's GCI and mass agree with the closed forms; no grid design beats one by 2 % in both."""
+    pytest.importorskip("pymoo")
+    result = optimize(
+        "fivebar",
+        BOUNDS,
+        {"x": X[::2], "y": Y[::2]},
+        ["gci", "moving_mass"],
+        method="nsga2",
+        generations=15,
+        population=8,
+        seed=2,
+    )
+    front = result.pareto()
+    assert len(front) >= 3
+    xx, yy = np.meshgrid(X[::2], Y[::2], indexing="ij")
+    grid = []
+    for p in np.linspace(0.06, 0.3, 61):
+        for d in np.linspace(0.15, 0.35, 51):
+            c = condition_numbers(0.2, p, d, xx, yy)
+            if c is not None:
+                grid.append((np.mean(1.0 / c), 2.0 * 2.0 * (p + d)))
+    grid_values = np.array(grid)
+    for design in front:
+        p, d = design.x
+        c = condition_numbers(0.2, p, d, xx, yy)
+        assert c is not None
+        assert design.objectives["gci"] == pytest.approx(np.mean(1.0 / c), rel=1e-9)
+        assert design.objectives["moving_mass"] == pytest.approx(4.0 * (p + d), rel=1e-12)
+        better = (grid_values[:, 0] > 1.02 * design.objectives["gci"]) & (
+            grid_values[:, 1] < design.objectives["moving_mass"] / 1.02
+        )
+        assert not np.any(better), design
+
+
+@pytest.mark.slow
+def test_designs_evaluated_on_two_dask_workers_equal_those_of_one_process() -> None:
+    """The same seed on a local cluster of 2 processes evaluates the same designs, bit for bit."""
+    pytest.importorskip("distributed")
+    here = _small(None)
+    there = make_problem("fivebar", BOUNDS, {"x": X[::2], "y": Y[::2]}, ["gci", "moving_mass"])
+    cluster = run_problem(there, generations=4, population=4, seed=3, workers=2)
+    assert cluster.table().equals(here.table())  # type: ignore[attr-defined]
