@@ -1,4 +1,4 @@
-"""The ``plm-pin`` command line: presets, inspecting and checking descriptions, reports, sweeps, optimising."""
+"""The ``plm-pin`` command line: presets, checking descriptions, reports, sweeps, optimisation."""
 
 from __future__ import annotations
 

@@ -103,7 +103,7 @@ def test_moving_mass_is_the_bars_mass() -> None:
 
 @pytest.mark.slow
 def test_nsga2_front_of_gci_and_mass_is_not_dominated_by_the_brute_force_grid() -> None:
-    """Each front design's GCI and mass agree with the closed forms; no grid design beats one by 2 % in both."""
+    """Front designs' GCI and mass agree with the closed forms; no grid design beats one by 2 % in both."""
     pytest.importorskip("pymoo")
     result = optimize(
         "fivebar",
