@@ -43,6 +43,7 @@ from .optimize import OptimizationResult, run_problem
 from .optimize import load_config as load_optimize_config
 from .report import Animation, Study, StudyCase, find_study, run_study, study_names, write_index, write_report
 from .report.animation import parse_case
+from .report.optimization import optimization_report
 from .report.render import require_renderer
 from .report.study import compute_animation, studies_hint
 from .report.writer import output_folder
@@ -1222,12 +1223,17 @@ def optimize_command(
     workers: Annotated[
         int | None, typer.Option("--workers", min=1, help="local Dask processes (default: this process only)")
     ] = None,
+    report: Annotated[
+        bool, typer.Option("--report/--no-report", help="write the report page OUT/optimization/report.html")
+    ] = True,
 ) -> None:
     """Choose a mechanism's dimensions; a re-run on the same folder resumes from its checkpoints.
 
     Every generation is checkpointed in OUT/generations (Parquet) before the search goes on;
     at the end every evaluated design is written to OUT/designs.csv and the best and start
-    designs to OUT/summary.json. A folder holding another optimisation is refused. When no
+    designs to OUT/summary.json, and the report page (best designs beside the start design,
+    constraint verdicts, convergence, Pareto front, a 3D scene of the best design) to
+    OUT/optimization/report.html. A folder holding another optimisation is refused. When no
     design meets every constraint, the constraint none met is named (exit code 1) and the
     designs are still written.
     """
@@ -1252,6 +1258,9 @@ def optimize_command(
             "computed": result.computed,
         }
         atomic_write_text(out / "summary.json", json.dumps(summary, indent=2, default=float) + "\n")
+        if report:
+            command = shlex.join(["plm-pin", "optimize", str(config), "--out", str(out)])
+            write_report(optimization_report(result, command), out)
     except (PlmError, ImportError) as exc:
         raise _fail(exc) from None
     if failure is not None:

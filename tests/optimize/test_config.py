@@ -78,3 +78,16 @@ def test_cli_writes_every_design_and_the_summary(tmp_path: Path) -> None:
     assert summary["best"]["parameters"]["proximal"] == pytest.approx(best["proximal"])
     again = CliRunner().invoke(app, ["optimize", str(EXAMPLE), "--out", str(tmp_path / "run")])
     assert again.exit_code == 0 and "0 computed now" in again.output
+
+
+def test_cli_report_lists_the_start_and_best_designs_of_the_table(tmp_path: Path) -> None:
+    """The report's designs table holds the start design and the best design of designs.csv."""
+    result = CliRunner().invoke(app, ["optimize", str(EXAMPLE), "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    report = json.loads((tmp_path / "optimization" / "results.json").read_text())
+    (table,) = [b for s in report["sections"] for b in s["blocks"] if b.get("title") == "Designs"]
+    rows = {row[0]: row for row in table["rows"]}
+    designs = pd.read_csv(tmp_path / "designs.csv")
+    best = designs.loc[designs["score"].idxmin()]
+    assert rows["start"][1:3] == [0.15, 0.2]  # the preset's proximal and distal
+    assert rows["best 1"][1:3] == pytest.approx([best["proximal"], best["distal"]], rel=1e-12)
