@@ -1231,7 +1231,7 @@ def optimize_command(
 
     Every generation is checkpointed in OUT/generations (Parquet) before the search goes on;
     at the end every evaluated design is written to OUT/designs.csv and the best and start
-    designs to OUT/summary.json, and the report page (best designs beside the start design,
+    designs to summary.json in OUT, and the report page (best designs beside the start design,
     constraint verdicts, convergence, Pareto front, a 3D scene of the best design) to
     OUT/optimization/report.html. A folder holding another optimisation is refused. When no
     design meets every constraint, the constraint none met is named (exit code 1) and the
