@@ -91,6 +91,7 @@ EXTRAS = {
     "xarray": "sweep",
     "pyarrow": "sweep",
     "pandas": "sweep",
+    "pymoo": "optimize",
     "example_robot_data": "erd",
 }
 """The optional extra of plm-pin that provides each optional top-level module."""
