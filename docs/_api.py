@@ -38,6 +38,7 @@ PACKAGES = (
     "plm_pin.dynamics",
     "plm_pin.stiffness",
     "plm_pin.sweep",
+    "plm_pin.optimize",
     "plm_pin.viz",
     "plm_pin.report",
     "plm_pin.schemas",

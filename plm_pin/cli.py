@@ -1,4 +1,4 @@
-"""The ``plm-pin`` command line: list presets, inspect and check descriptions, write reports, run sweeps."""
+"""The ``plm-pin`` command line: presets, checking descriptions, reports, sweeps, optimisation."""
 
 from __future__ import annotations
 
@@ -30,18 +30,21 @@ from rich.progress import (
 from rich.table import Table
 from typer.core import TyperGroup
 
-from ._io import atomic_path
+from ._io import atomic_path, atomic_write_text
 from ._version import __version__
 from .core.diagnostics import findings, mobility_text
 from .core.mechanism import Mechanism, joint_type
-from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
+from .exceptions import ClosureNotSatisfied, InvalidInput, NoFeasibleDesign, PlmError
 from .export import export_mjcf
 from .kinematics import error_bound, error_model, forward_kinematics, inverse_kinematics, task_pose
 from .kinematics.reference import reference_findings, reference_report
 from .loading import load
 from .models.registry import PRESETS
+from .optimize import OptimizationResult, run_problem
+from .optimize import load_config as load_optimize_config
 from .report import Animation, Study, StudyCase, find_study, run_study, study_names, write_index, write_report
 from .report.animation import parse_case
+from .report.optimization import optimization_report
 from .report.render import require_renderer
 from .report.study import compute_animation, studies_hint
 from .report.writer import output_folder
@@ -90,6 +93,7 @@ EXTRAS = {
     "xarray": "sweep",
     "pyarrow": "sweep",
     "pandas": "sweep",
+    "pymoo": "optimize",
     "example_robot_data": "erd",
 }
 """The optional extra of plm-pin that provides each optional top-level module."""
@@ -1391,3 +1395,72 @@ def sweep_command(
 
 if __name__ == "__main__":  # pragma: no cover
     main()
+
+
+@app.command("optimize")
+def optimize_command(
+    config: Annotated[
+        Path,
+        typer.Argument(
+            help="optimisation configuration (YAML); format: the user guide's Design optimisation page "
+            "(docs/guide/optimize.md) and the JSON Schema plm_pin/schemas/plm-pin-optimize.schema.json"
+        ),
+    ],
+    out: Annotated[Path, typer.Option("--out", help="output folder: checkpoints and the result")],
+    scheduler: Annotated[
+        str | None, typer.Option("--scheduler", help="Dask scheduler tcp://HOST:8786 (default: this machine)")
+    ] = None,
+    workers: Annotated[
+        int | None, typer.Option("--workers", min=1, help="local Dask processes (default: this process only)")
+    ] = None,
+    report: Annotated[
+        bool, typer.Option("--report/--no-report", help="write the report page OUT/optimization/report.html")
+    ] = True,
+) -> None:
+    """Choose a mechanism's dimensions; a re-run on the same folder resumes from its checkpoints.
+
+    Every generation is checkpointed in OUT/generations (Parquet) before the search goes on;
+    at the end every evaluated design is written to OUT/designs.csv and the best and start
+    designs to summary.json in OUT, and the report page (best designs beside the start design,
+    constraint verdicts, convergence, Pareto front, a 3D scene of the best design) to
+    OUT/optimization/report.html. A folder holding another optimisation is refused. When no
+    design meets every constraint, the constraint none met is named (exit code 1) and the
+    designs are still written.
+    """
+    try:
+        problem, search = load_optimize_config(config)
+        if out.exists() and not out.is_dir():
+            raise InvalidInput(f"--out {out}: is a file; give a folder")
+        failure = None
+        try:
+            result = run_problem(problem, **search, store=out, scheduler=scheduler, workers=workers)
+        except NoFeasibleDesign as exc:
+            assert isinstance(exc.partial, OptimizationResult)
+            result, failure = exc.partial, exc
+        with atomic_path(out / "designs.csv") as tmp:
+            result.table().to_csv(tmp, index=False)
+        summary = {
+            "mechanism": problem.spec.label,
+            "feasible": failure is None,
+            "start": {"parameters": result.parameters(result.start), "objectives": result.start.objectives},
+            "best": {"parameters": result.parameters(), "objectives": result.best.objectives},
+            "designs": len(result.evaluations),
+            "computed": result.computed,
+        }
+        atomic_write_text(out / "summary.json", json.dumps(summary, indent=2, default=float) + "\n")
+        if report:
+            command = shlex.join(["plm-pin", "optimize", str(config), "--out", str(out)])
+            write_report(optimization_report(result, command), out)
+    except (PlmError, ImportError) as exc:
+        raise _fail(exc) from None
+    if failure is not None:
+        raise _fail(failure)
+    best = ", ".join(f"{k} = {v}" for k, v in result.parameters().items())
+    objectives = ", ".join(f"{k} = {v:.6g}" for k, v in result.best.objectives.items())
+    console.print(
+        f"wrote {out}: {len(result.evaluations)} designs ({result.computed} computed now, "
+        f"{result.elapsed:.1f} s); best {best}: {objectives}",
+        markup=False,
+        highlight=False,
+        soft_wrap=True,
+    )

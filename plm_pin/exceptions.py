@@ -230,3 +230,19 @@ class JointLimitExceeded(PoseUnreachable):
         super().__init__(message)
         self.violations = violations
         self.q = q
+
+
+class NoFeasibleDesign(PartialResultError):
+    """No design of an optimisation met every constraint (:mod:`plm_pin.optimize`).
+
+    Attributes:
+        constraint: the level of the constraint hierarchy that no design met (the furthest
+            any design got to).
+        violation: the smallest relative violation of that level among the designs [-].
+        partial: the :class:`~plm_pin.optimize.OptimizationResult`, every design evaluated.
+    """
+
+    def __init__(self, message: str, constraint: str, violation: float, partial: object) -> None:
+        self.constraint = constraint
+        self.violation = violation
+        super().__init__(message, partial)

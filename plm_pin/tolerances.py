@@ -35,6 +35,7 @@ __all__ = [
     "DECOUPLING_RTOL",
     "DEFLECTION_CLOSURE_TOL",
     "DEFLECTION_RTOL",
+    "DE_TOL",
     "ENERGY_ROUND_OFF_RTOL",
     "ENERGY_RTOL",
     "EQUAL_RODS_TOL",
@@ -516,3 +517,7 @@ HOMOTOPY_MAX_BOX_RTOL = 1e-6
 
 FK_SAME_MODE_TOL = 1e-7
 """[m, rad] Largest task-coordinate difference of two forward-kinematics solutions of one assembly mode."""
+
+DE_TOL = 0.01
+"""[-] Relative spread of a differential-evolution population's scores at which the search stops
+(SciPy's ``tol``: std <= DE_TOL * |mean|)."""

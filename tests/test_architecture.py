@@ -37,6 +37,7 @@ LAYERS = (
     "stiffness",
     "families",
     "sweep",
+    "optimize",
     "viz",
     "report",
     "cli",

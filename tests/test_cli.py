@@ -315,7 +315,7 @@ def test_no_arguments_shows_help():
 
 
 def test_help_texts_point_to_files_that_hold_what_they_promise():
-    """Each command's --help names only files of the checkout; sweep's names its guide page and schema."""
+    """Each command's --help names only files of the checkout; sweep and optimize name guide and schema."""
     repo = Path(__file__).resolve().parents[1]
     commands = [c.name or c.callback.__name__ for c in app.registered_commands]
     assert "sweep" in commands
@@ -326,7 +326,8 @@ def test_help_texts_point_to_files_that_hold_what_they_promise():
         texts[command] = " ".join(result.output.split())
     named = {c: re.findall(r"[\w.-]+(?:/[\w.-]+)+\.(?:md|json|yaml)\b", t) for c, t in texts.items()}  # paths
     assert {c: [f for f in files if not (repo / f).is_file()] for c, files in named.items() if files} == {
-        "sweep": []
+        "sweep": [],
+        "optimize": [],
     }
     assert [c for c, t in texts.items() if "README" in t] == []
     assert "docs/guide/sweeps.md" in named["sweep"]
@@ -334,6 +335,9 @@ def test_help_texts_point_to_files_that_hold_what_they_promise():
     assert (
         "format: plm-pin-sweep/1" in sweeps and "plm-pin-sweep.schema.json" in sweeps
     )  # the format is there
+    assert "docs/guide/optimize.md" in named["optimize"]
+    guide = (repo / "docs" / "guide" / "optimize.md").read_text(encoding="utf-8")
+    assert "format: plm-pin-optimize/1" in guide and "plm-pin-optimize.schema.json" in guide
 
 
 SWEEP_CONFIG = """\

@@ -3,7 +3,9 @@
 - ``plm-pin-sidecar.schema.json``: the closure sidecar ``<name>.plm.yaml`` (format ``plm-pin/1``,
   :mod:`plm_pin.description.sidecar`);
 - ``plm-pin-sweep.schema.json``: the sweep configuration of ``plm-pin sweep``
-  (format ``plm-pin-sweep/1``, :mod:`plm_pin.sweep.config`).
+  (format ``plm-pin-sweep/1``, :mod:`plm_pin.sweep.config`);
+- ``plm-pin-optimize.schema.json``: the optimisation configuration of ``plm-pin optimize``
+  (format ``plm-pin-optimize/1``, :mod:`plm_pin.optimize.config`).
 
 An editor with a YAML language server picks a schema up from a first line such as
 ``# yaml-language-server: $schema=path/to/plm-pin-sidecar.schema.json``. The schemas check
@@ -22,7 +24,11 @@ from ..exceptions import InvalidInput
 _FOLDER = Path(__file__).resolve().parent
 """Folder holding the schema files (shipped in the wheel)."""
 
-SCHEMAS = {"sidecar": "plm-pin-sidecar.schema.json", "sweep": "plm-pin-sweep.schema.json"}
+SCHEMAS = {
+    "sidecar": "plm-pin-sidecar.schema.json",
+    "sweep": "plm-pin-sweep.schema.json",
+    "optimize": "plm-pin-optimize.schema.json",
+}
 """Schema name -> file name in this package's folder."""
 
 

@@ -47,7 +47,7 @@ UNITS = {"deg": math.pi / 180.0, "rad": 1.0, "mm": 1e-3, "m": 1.0}
 """Units a list of values may be given in, and their factor to SI."""
 
 
-def _values(where: str, raw: Any) -> Any:
+def values_of(where: str, raw: Any) -> Any:
     """A list of values from its YAML form: a list, or ``{linspace: ...}`` / ``{values: ...}`` with a unit."""
     if not isinstance(raw, Mapping):
         return raw
@@ -83,7 +83,12 @@ def _values(where: str, raw: Any) -> Any:
         raise InvalidInput(f"{where}: values in {unit} must be numbers, got {short(values)}") from None
 
 
-def _mechanism(raw: Any) -> Any:
+def import_mechanism(raw: Any) -> Any:
+    """A configuration's ``mechanism``: a preset name or a path as given, a ``module:function`` imported.
+
+    Raises:
+        InvalidInput: not a non-empty string, or a builder that cannot be imported.
+    """
     if not isinstance(raw, str) or not raw:
         raise InvalidInput(
             "mechanism must be a preset name, a description path or a builder 'module:function', "
@@ -121,12 +126,12 @@ def spec_from_config(config: Any, source: str = "<config>") -> tuple[SweepSpec, 
                 raise InvalidInput(f"missing key {short(required)}")
         raw_params = config.get("parameters")
         if isinstance(raw_params, Mapping):
-            parameters: Any = {k: _values(f"parameters.{k}", v) for k, v in raw_params.items()}
+            parameters: Any = {k: values_of(f"parameters.{k}", v) for k, v in raw_params.items()}
         else:
             parameters = raw_params
         poses = config["poses"]
         if isinstance(poses, Mapping):
-            poses = {k: _values(f"poses.{k}", v) for k, v in poses.items()}
+            poses = {k: values_of(f"poses.{k}", v) for k, v in poses.items()}
         options = config.get("options") or {}
         if not isinstance(options, Mapping):
             raise InvalidInput(f"options must be a mapping, got {short(options)}")
@@ -134,7 +139,7 @@ def spec_from_config(config: Any, source: str = "<config>") -> tuple[SweepSpec, 
         if chunk is not None and (isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1):
             raise InvalidInput(f"chunk must be a positive number of poses per task, got {short(chunk)}")
         spec = make_spec(
-            _mechanism(config["mechanism"]),
+            import_mechanism(config["mechanism"]),
             parameters,
             poses,
             config["metrics"],

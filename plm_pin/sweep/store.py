@@ -76,6 +76,75 @@ def _digest(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
+def lock_folder(root: Path, what: str = "sweep") -> Any:
+    """Take the lock of a checkpoint folder (a :class:`filelock.FileLock`), or say who holds it.
+
+    Args:
+        root: the folder (it exists).
+        what: the kind of run using it, in the message (``"sweep"``, ``"optimisation"``).
+
+    Raises:
+        StoreLocked: another process holds the folder (the message names its pid and host).
+    """
+    filelock = require("filelock")
+    lock = filelock.FileLock(root / LOCK, timeout=0)
+    owner = root / f"{LOCK}.owner"
+    try:
+        lock.acquire()
+    except filelock.Timeout:
+        try:
+            holder = json.loads(owner.read_text(encoding="utf-8"))
+            who = f"process {holder['pid']} on {holder['host']} since {holder['since']}"
+        except (OSError, ValueError, KeyError, TypeError):
+            who = "another process"
+        raise StoreLocked(
+            f"{root} is in use by another {what} ({short(who, quote=False)}): wait for it to end, "
+            "or give another folder",
+            root,
+            who,
+        ) from None
+    since = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    holder = {"pid": os.getpid(), "host": socket.gethostname(), "since": since}
+    atomic_write_text(owner, json.dumps(holder))
+    return lock
+
+
+def unlock_folder(root: Path, lock: Any) -> None:
+    """Release a lock taken by :func:`lock_folder`."""
+    (root / f"{LOCK}.owner").unlink(missing_ok=True)
+    lock.release()
+
+
+def check_manifest(root: Path, document: dict[str, Any], what: str = "sweep") -> None:
+    """Check that ``root``'s manifest names the run ``document`` describes, or write it there.
+
+    Args:
+        root: the folder.
+        document: the manifest: ``format``, ``key`` (SHA-256 of ``spec``), ``spec``, ...
+        what: the kind of run, in the message.
+
+    Raises:
+        StoreMismatch: the manifest names another run (the message says which fields differ).
+        InvalidInput: the manifest is unreadable.
+    """
+    manifest = root / MANIFEST
+    key = document["key"]
+    if manifest.exists():
+        found_key, found_spec = _read_manifest(manifest)
+        if found_key != key:
+            ours = document["spec"]
+            fields = tuple(k for k in sorted(set(ours) | set(found_spec)) if ours.get(k) != found_spec.get(k))
+            raise StoreMismatch(
+                f"{root} holds the checkpoints of another {what} (key {found_key[:12]}, this one "
+                f"{key[:12]}; they differ in {short(list(fields))}): give another folder, or delete "
+                "it to start again",
+                root,
+                fields,
+            )
+    else:
+        atomic_write_text(manifest, json.dumps(document, indent=2) + "\n")
+
+
 class SweepStore:
     """Checkpoints of one sweep in a folder (created if needed), locked while open.
 
@@ -101,7 +170,7 @@ class SweepStore:
             raise InvalidInput(f"checkpoint folder {self.root} is a file; give a folder")
         self.chunks = self.root / CHUNKS
         self.chunks.mkdir(parents=True, exist_ok=True)
-        self._lock = self._acquire()
+        self._lock = lock_folder(self.root)
         try:
             self._open_manifest()
         except BaseException:
@@ -110,35 +179,10 @@ class SweepStore:
         for stale in [*self.chunks.glob(".*.tmp"), *self.root.glob(f".{MANIFEST}.*.tmp")]:
             stale.unlink(missing_ok=True)  # left by an interrupted write: never a finished chunk
 
-    def _acquire(self) -> Any:
-        """Take the folder's lock, or say who holds it."""
-        filelock = require("filelock")
-        lock = filelock.FileLock(self.root / LOCK, timeout=0)
-        owner = self.root / f"{LOCK}.owner"
-        try:
-            lock.acquire()
-        except filelock.Timeout:
-            try:
-                holder = json.loads(owner.read_text(encoding="utf-8"))
-                who = f"process {holder['pid']} on {holder['host']} since {holder['since']}"
-            except (OSError, ValueError, KeyError, TypeError):
-                who = "another process"
-            raise StoreLocked(
-                f"{self.root} is in use by another sweep ({short(who, quote=False)}): wait for it to end, "
-                "or give another folder",
-                self.root,
-                who,
-            ) from None
-        since = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-        holder = {"pid": os.getpid(), "host": socket.gethostname(), "since": since}
-        atomic_write_text(owner, json.dumps(holder))
-        return lock
-
     def close(self) -> None:
         """Release the folder's lock (idempotent)."""
         if self._lock is not None:
-            (self.root / f"{LOCK}.owner").unlink(missing_ok=True)
-            self._lock.release()
+            unlock_folder(self.root, self._lock)
             self._lock = None
 
     def __enter__(self) -> SweepStore:
@@ -152,25 +196,8 @@ class SweepStore:
     def _open_manifest(self) -> None:
         """Check the manifest names this sweep, or write it."""
         spec = self.spec
-        manifest = self.root / MANIFEST
         document = {"format": FORMAT, "key": self.key, "spec": spec.to_dict(), "source": spec.source}
-        if manifest.exists():
-            found_key, found_spec = _read_manifest(manifest)
-            if found_key != self.key:
-                ours = document["spec"]
-                assert isinstance(ours, dict)
-                fields = tuple(
-                    k for k in sorted(set(ours) | set(found_spec)) if ours.get(k) != found_spec.get(k)
-                )
-                raise StoreMismatch(
-                    f"{self.root} holds the checkpoints of another sweep (key {found_key[:12]}, this one "
-                    f"{self.key[:12]}; they differ in {short(list(fields))}): give another folder, or delete "
-                    "it to start again",
-                    self.root,
-                    fields,
-                )
-        else:
-            atomic_write_text(manifest, json.dumps(document, indent=2) + "\n")
+        check_manifest(self.root, document)
 
     def load(self) -> list[ChunkValues]:
         """Every finished chunk of this sweep (files that do not belong are skipped with a warning)."""

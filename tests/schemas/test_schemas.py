@@ -194,8 +194,8 @@ def _schema_accepts(schema: dict[str, Any], data: Any) -> bool:
 
 
 def test_schemas_are_valid_draft_2020_12():
-    """Both files are themselves valid JSON Schemas (draft 2020-12)."""
-    for name in ("sidecar", "sweep"):
+    """The files are themselves valid JSON Schemas (draft 2020-12)."""
+    for name in ("sidecar", "sweep", "optimize"):
         jsonschema.Draft202012Validator.check_schema(load_schema(name))
 
 
@@ -287,5 +287,7 @@ def test_sweep_schema_lists_the_reader_keys():
 
 def test_unknown_schema_names_the_choices():
     """schema_path of an unknown name raises InvalidInput listing the schemas."""
-    with pytest.raises(InvalidInput, match=r"unknown schema 'x'; schemas are \['sidecar', 'sweep'\]"):
+    with pytest.raises(
+        InvalidInput, match=r"unknown schema 'x'; schemas are \['optimize', 'sidecar', 'sweep'\]"
+    ):
         schema_path("x")
