@@ -28,6 +28,7 @@ LAYERS = (
     "core",
     "loading",
     "export",
+    "kernels",
     "kinematics",
     "statics",
     "workspace",

@@ -19,6 +19,7 @@ from ..core.closures import closure_rows as _closure_rows
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import TaskTarget, check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
+from ..kernels import kernel_of
 from ..results import Result, unit
 from ..tolerances import BRANCH_TOL
 from .forward import same_assembly
@@ -75,20 +76,27 @@ def _solve(
     tol: float,
     closures: tuple[Closure, ...] | None = None,
 ) -> np.ndarray:
-    """Newton from ``guess`` (:func:`plm_pin.core.assembly.newton`), LM when it stalls.
+    """Newton from ``guess`` (:func:`plm_pin.core.assembly.newton`; on the kernels for all closures), else LM.
 
     Raises:
         ClosureNotSatisfied: when neither reaches ``tol``.
     """
+    all_free = free.size == mech.nv
+    kernel = kernel_of(mech) if closures is None else None
     ws = mech._thread_workspace()
     chosen = mech.closures if closures is None else closures
-    all_free = free.size == mech.nv
-    if closures is None:
-        r, A = ws.residual, ws.jacobian
+    fast: tuple[np.ndarray, object] | None
+    if kernel is not None:
+        fast = kernel.newton(guess, None if all_free else free, tol, target)
     else:
-        n = _closure_rows(chosen) + target.size
-        r, A = np.empty(n), np.empty((n, mech.nv))
-    fast = newton(mech.model, ws.data, chosen, guess, None if all_free else free, r, A, tol=tol, extra=target)
+        if closures is None:
+            r, A = ws.residual, ws.jacobian
+        else:
+            n = _closure_rows(chosen) + target.size
+            r, A = np.empty(n), np.empty((n, mech.nv))
+        fast = newton(
+            mech.model, ws.data, chosen, guess, None if all_free else free, r, A, tol=tol, extra=target
+        )
     if fast is not None:
         return fast[0]
     return assemble(
@@ -234,16 +242,23 @@ def _from_guess(
 ) -> IKSolution | None:
     """The solution in the basin of ``guess`` (default: the reference configuration), or None.
 
-    Newton first; its last pass gives the residual of the solution. Levenberg-Marquardt when
+    Newton first (on the compiled kernels where :func:`~plm_pin.kernels.kernel_of` serves the
+    mechanism); its last pass gives the residual of the solution. Levenberg-Marquardt when
     Newton stalls.
     """
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     ws = mech._thread_workspace()
-    fast = newton(
-        mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
-    )
-    if fast is not None:
-        return _solution_from_residual(mech, target, fast[0], ws.residual)
+    kernel = kernel_of(mech)
+    if kernel is not None:
+        solved = kernel.newton(q0, None, tol, target)
+        if solved is not None:
+            return _solution_from_residual(mech, target, *solved)
+    else:
+        fast = newton(
+            mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
+        )
+        if fast is not None:
+            return _solution_from_residual(mech, target, fast[0], ws.residual)
     try:
         q = assemble(
             mech.model,
