@@ -70,6 +70,13 @@ def _quat_matrix(x: float, y: float, z: float, w: float, out: np.ndarray) -> Non
 
 
 @njit(cache=True, inline="always")
+def _identity(out: np.ndarray) -> None:
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = 1.0 if i == j else 0.0
+
+
+@njit(cache=True, inline="always")
 def _mm3(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
     for i in range(3):
         for j in range(3):
@@ -82,14 +89,23 @@ def _mv3(A: np.ndarray, v: np.ndarray, out: np.ndarray) -> None:
         out[i] = A[i, 0] * v[0] + A[i, 1] * v[1] + A[i, 2] * v[2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def forward(
-    k: KernelArrays, q: np.ndarray, oR: np.ndarray, op: np.ndarray, Sw: np.ndarray, Sv: np.ndarray
+    k: KernelArrays,
+    q: np.ndarray,
+    oR: np.ndarray,
+    op: np.ndarray,
+    Sw: np.ndarray,
+    Sv: np.ndarray,
+    columns: bool,
+    mats: np.ndarray,
+    vecs: np.ndarray,
 ) -> None:
     """World placements of every joint ``oR`` (nj, 3, 3), ``op`` (nj, 3) and their velocity columns.
 
     ``Sw`` (nv, 3) and ``Sv`` (nv, 3) receive each column's world angular velocity and the
-    linear velocity of the point at the world origin.
+    linear velocity of the point at the world origin (only with ``columns``). ``mats`` (>= 3, 3, 3)
+    and ``vecs`` (>= 14, 3) are scratch.
     """
     parents, kinds, place_R, place_p, axis, axis2, idx_q, idx_v = (
         k.parents,
@@ -101,15 +117,12 @@ def forward(
         k.idx_q,
         k.idx_v,
     )
-    oR[0] = np.eye(3)
+    _identity(oR[0])
     op[0] = 0.0
-    Rj = np.empty((3, 3))
-    R2 = np.empty((3, 3))
-    R1 = np.empty((3, 3))
-    pj = np.zeros(3)
-    t = np.empty(3)
-    sw = np.empty((6, 3))  # local angular parts of the joint's columns
-    sv = np.empty((6, 3))  # local linear parts
+    Rj, R2, R1 = mats[0], mats[1], mats[2]
+    pj, t = vecs[0], vecs[1]
+    sw = vecs[2:8]  # local angular parts of the joint's columns
+    sv = vecs[8:14]  # local linear parts
     for j in range(1, parents.shape[0]):
         kind, iq = kinds[j], idx_q[j]
         a = axis[j]
@@ -124,7 +137,7 @@ def forward(
             _rodrigues(a, q[iq], q[iq + 1], Rj)
             sw[0] = a
         elif kind == PRISMATIC:
-            Rj[:] = np.eye(3)
+            _identity(Rj)
             pj[:] = a * q[iq]
             sv[0] = a
         elif kind == SPHERICAL:
@@ -141,7 +154,7 @@ def forward(
                 sw[3 + i, i] = 1.0
         elif kind == PLANAR:
             c, s = q[iq + 2], q[iq + 3]
-            Rj[:] = np.eye(3)
+            _identity(Rj)
             Rj[0, 0], Rj[0, 1], Rj[1, 0], Rj[1, 1] = c, -s, s, c
             pj[0], pj[1] = q[iq], q[iq + 1]
             n = 3
@@ -164,6 +177,8 @@ def forward(
         _mm3(R1, Rj, oR[j])
         _mv3(R1, pj, op[j])
         op[j] += t
+        if not columns:
+            continue
         R = oR[j]
         p = op[j]
         for c in range(n):
@@ -177,7 +192,7 @@ def forward(
             Sv[col, 2] = t[2] - (w[0] * p[1] - w[1] * p[0])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def frames(k: KernelArrays, oR: np.ndarray, op: np.ndarray, fR: np.ndarray, fp: np.ndarray) -> None:
     """World placements ``fR`` (nf, 3, 3), ``fp`` (nf, 3) of the kernel's frames from the joints'."""
     f_joint, f_R, f_p = k.f_joint, k.f_R, k.f_p
@@ -188,7 +203,7 @@ def frames(k: KernelArrays, oR: np.ndarray, op: np.ndarray, fR: np.ndarray, fp: 
         fp[f] += op[j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def frame_jacobian(
     k: KernelArrays, f: int, fp: np.ndarray, Sw: np.ndarray, Sv: np.ndarray, out: np.ndarray
 ) -> None:
@@ -279,7 +294,7 @@ def _wrap(a: float) -> float:
     return math.pi - (math.pi - a) % (2.0 * math.pi)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def closure_rows(
     k: KernelArrays,
     fR: np.ndarray,
@@ -289,18 +304,18 @@ def closure_rows(
     r: np.ndarray,
     A: np.ndarray,
     jac: bool,
+    mats: np.ndarray,
+    vecs: np.ndarray,
+    jacs: np.ndarray,
 ) -> None:
-    """Closure residual into ``r`` (m,) and, with ``jac``, its Jacobian into ``A`` (m, nv)."""
+    """Closure residual into ``r`` (m,) and, with ``jac``, its Jacobian into ``A`` (m, nv).
+
+    Scratch: ``mats`` (>= 5, 3, 3), ``vecs`` (>= 18, 3), ``jacs`` (>= 2, 6, nv).
+    """
     c_kind, c_a, c_b, c_row, c_axis, c_E = k.c_kind, k.c_a, k.c_b, k.c_row, k.c_axis, k.c_E
     nv = A.shape[1]
-    Ja = np.empty((6, nv))
-    Jb = np.empty((6, nv))
-    M = np.empty((3, 3))
-    G = np.zeros((3, 3))
-    u = np.empty(3)
-    v = np.empty(3)
-    w = np.empty(3)
-    lg = np.empty(3)
+    Ja, Jb, M, G = jacs[0], jacs[1], mats[3], mats[4]
+    u, v, w, lg = vecs[14], vecs[15], vecs[16], vecs[17]
     for i in range(c_kind.shape[0]):
         kind, fa, fb, s = c_kind[i], c_a[i], c_b[i], c_row[i]
         Ra, Rb = fR[fa], fR[fb]
@@ -359,18 +374,20 @@ def closure_rows(
                     )
 
 
-@njit(cache=True)
-def task_pose(k: KernelArrays, q: np.ndarray, fR: np.ndarray, fp: np.ndarray, out: np.ndarray) -> None:
-    """Task coordinates (:meth:`plm_pin.core.task.Task.pose_from_data`) into ``out`` (n_task,)."""
+@njit(cache=True, inline="always")
+def task_pose(
+    k: KernelArrays, q: np.ndarray, fR: np.ndarray, fp: np.ndarray, out: np.ndarray, ang: np.ndarray
+) -> None:
+    """Task coordinates (:meth:`plm_pin.core.task.Task.pose_from_data`) into ``out`` (n_task,).
+
+    ``ang`` (3,) is scratch.
+    """
     t_kind, t_frame, t_rows, t_jq, t_jkind = k.t_kind, k.t_frame, k.t_rows, k.t_jq, k.t_jkind
     if t_kind == FRAME_TASK:
-        full = np.empty(6)
-        full[:3] = fp[t_frame]
-        ang = np.empty(3)
         rpy(fR[t_frame], ang)
-        full[3:] = ang
         for i in range(t_rows.shape[0]):
-            out[i] = full[t_rows[i]]
+            row = t_rows[i]
+            out[i] = fp[t_frame, row] if row < 3 else ang[row - 3]
     elif t_kind == JOINT_TASK:
         for i in range(t_jq.shape[0]):
             iq = t_jq[i]
@@ -382,7 +399,7 @@ def task_pose(k: KernelArrays, q: np.ndarray, fR: np.ndarray, fp: np.ndarray, ou
                 out[i] = q[iq]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def task_rows(
     k: KernelArrays,
     q: np.ndarray,
@@ -395,12 +412,18 @@ def task_rows(
     r: np.ndarray,
     A: np.ndarray,
     jac: bool,
+    mats: np.ndarray,
+    vecs: np.ndarray,
+    jacs: np.ndarray,
 ) -> None:
-    """Task target rows (:class:`plm_pin.core.task.TaskTarget`) into ``r`` (n_task,), Jacobian into ``A``."""
+    """Task target rows (:class:`plm_pin.core.task.TaskTarget`) into ``r`` (n_task,), Jacobian into ``A``.
+
+    Scratch: ``mats`` (>= 8, 3, 3), ``vecs`` (>= 20, 3), ``jacs`` (>= 3, 6, nv).
+    """
     t_kind, t_frame, t_rows, t_jv = k.t_kind, k.t_frame, k.t_rows, k.t_jv
     n = r.shape[0]
     if t_kind == JOINT_TASK:
-        task_pose(k, q, fR, fp, r)
+        task_pose(k, q, fR, fp, r, vecs[18])
         for i in range(n):
             d = r[i] - x[i]
             r[i] = d if k.t_jkind[i] == PRISMATIC else _wrap(d)
@@ -409,7 +432,7 @@ def task_rows(
                 A[i, t_jv[i]] = 1.0
         return
     nv = A.shape[1]
-    J = np.empty((6, nv))
+    J = jacs[2]
     if jac:
         frame_jacobian(k, t_frame, fp, Sw, Sv, J)
     R = fR[t_frame]
@@ -427,10 +450,8 @@ def task_rows(
             A[i] = J[row]
     if n_ang == 0:
         return
-    lg = np.empty(3)
-    M = np.empty((3, 3))
+    lg, M, E, G = vecs[19], mats[5], mats[6], mats[7]
     if n_ang == 3:  # log3(R R*^T), Jacobian Jlog3(E) E^T J_w
-        E = np.empty((3, 3))
         for a_ in range(3):
             for b_ in range(3):
                 E[a_, b_] = R[a_, 0] * R_star[b_, 0] + R[a_, 1] * R_star[b_, 1] + R[a_, 2] * R_star[b_, 2]
@@ -438,7 +459,6 @@ def task_rows(
         r[n_lin : n_lin + 3] = lg
         if jac:
             jlog3(theta, lg, M)
-            G = np.empty((3, 3))
             for a_ in range(3):
                 for b_ in range(3):
                     G[a_, b_] = M[a_, 0] * E[b_, 0] + M[a_, 1] * E[b_, 1] + M[a_, 2] * E[b_, 2]
@@ -462,7 +482,7 @@ def task_rows(
                 A[i, c] = M[e, 0] * J[3, c] + M[e, 1] * J[4, c] + M[e, 2] * J[5, c]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def evaluate(
     k: KernelArrays,
     q: np.ndarray,
@@ -478,23 +498,39 @@ def evaluate(
     fp: np.ndarray,
     Sw: np.ndarray,
     Sv: np.ndarray,
+    mats: np.ndarray,
+    vecs: np.ndarray,
+    jacs: np.ndarray,
 ) -> None:
-    """Residual ``[phi; task]`` into ``r`` and (``jac``) its Jacobian into ``A``, from ``q``."""
-    forward(k, q, oR, op, Sw, Sv)
+    """Residual ``[phi; task]`` into ``r`` and (``jac``) its Jacobian into ``A``, from ``q``.
+
+    Scratch: ``mats`` (8, 3, 3), ``vecs`` (24, 3), ``jacs`` (3, 6, nv) (:func:`scratch`).
+    """
+    forward(k, q, oR, op, Sw, Sv, jac, mats, vecs)
     frames(k, oR, op, fR, fp)
     m = k.m
-    closure_rows(k, fR, fp, Sw, Sv, r[:m], A[:m], jac)
+    closure_rows(k, fR, fp, Sw, Sv, r[:m], A[:m], jac, mats, vecs, jacs)
     if with_task:
-        task_rows(k, q, fR, fp, Sw, Sv, x, R_star, r[m:], A[m:], jac)
+        task_rows(k, q, fR, fp, Sw, Sv, x, R_star, r[m:], A[m:], jac, mats, vecs, jacs)
 
 
 @njit(cache=True)
-def integrate(k: KernelArrays, q: np.ndarray, v: np.ndarray, out: np.ndarray) -> None:
-    """Pinocchio's ``integrate``: ``out`` = ``q`` moved by the tangent vector ``v`` (joint by joint)."""
+def scratch(nv: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The scratch arrays of :func:`evaluate` and :func:`integrate`: ``mats``, ``vecs``, ``jacs``."""
+    return np.empty((8, 3, 3)), np.empty((24, 3)), np.empty((3, 6, nv))
+
+
+@njit(cache=True, inline="always")
+def integrate(
+    k: KernelArrays, q: np.ndarray, v: np.ndarray, out: np.ndarray, mats: np.ndarray, vecs: np.ndarray
+) -> None:
+    """Pinocchio's ``integrate``: ``out`` = ``q`` moved by the tangent vector ``v`` (joint by joint).
+
+    Scratch: ``mats`` (>= 1, 3, 3), ``vecs`` (>= 2, 3).
+    """
     kinds, idx_q, idx_v = k.kinds, k.idx_q, k.idx_v
     out[:] = q
-    R0 = np.empty((3, 3))
-    t = np.empty(3)
+    R0, t, p = mats[0], vecs[0], vecs[1]
     for j in range(1, kinds.shape[0]):
         kind, iq, iv = kinds[j], idx_q[j], idx_v[j]
         if kind == REVOLUTE or kind == PRISMATIC:
@@ -539,15 +575,15 @@ def integrate(k: KernelArrays, q: np.ndarray, v: np.ndarray, out: np.ndarray) ->
             )
             if kind == FREE_FLYER:
                 _quat_matrix(x, y, z, w, R0)
-                wv = np.array([w0, w1, w2])
                 if th > 1e-8:
                     c1 = (1.0 - math.cos(th)) / (th * th)
                     c2 = (th - math.sin(th)) / (th * th * th)
                 else:
                     c1, c2 = 0.5 - th * th / 24.0, 1.0 / 6.0 - th * th / 120.0
-                lin = np.array([v[iv], v[iv + 1], v[iv + 2]])
-                wxl = np.cross(wv, lin)
-                p = lin + c1 * wxl + c2 * np.cross(wv, wxl)
+                l0, l1, l2 = v[iv], v[iv + 1], v[iv + 2]
+                a0, a1, a2 = w1 * l2 - w2 * l1, w2 * l0 - w0 * l2, w0 * l1 - w1 * l0  # w x lin
+                b0, b1, b2 = w1 * a2 - w2 * a1, w2 * a0 - w0 * a2, w0 * a1 - w1 * a0  # w x (w x lin)
+                p[0], p[1], p[2] = l0 + c1 * a0 + c2 * b0, l1 + c1 * a1 + c2 * b1, l2 + c1 * a2 + c2 * b2
                 _mv3(R0, p, t)
                 for d in range(3):
                     out[iq + d] = q[iq + d] + t[d]
@@ -593,7 +629,6 @@ def _cholesky_back(L: np.ndarray, b: np.ndarray) -> None:
 @njit(cache=True)
 def newton(
     k: KernelArrays,
-    q0: np.ndarray,
     free: np.ndarray,
     x: np.ndarray,
     R_star: np.ndarray,
@@ -605,10 +640,12 @@ def newton(
     chord_ratio: float,
     q: np.ndarray,
     r: np.ndarray,
+    pose: np.ndarray,
 ) -> int:
     """:func:`plm_pin.core.assembly.newton` (with polish) moving the ``free`` columns: iterations, or -1.
 
-    On success ``q`` holds the solution and ``r`` its residual ``[phi; task]``.
+    ``q`` holds the start; on success it holds the solution, ``r`` its residual ``[phi; task]``
+    and ``pose`` its task coordinates (:func:`task_pose`).
     """
     nj, nv, nf = k.parents.shape[0], k.nv, k.f_joint.shape[0]
     n, nfree = r.shape[0], free.shape[0]
@@ -620,17 +657,18 @@ def newton(
     oR, op = np.empty((nj, 3, 3)), np.empty((nj, 3))
     fR, fp = np.empty((max(nf, 1), 3, 3)), np.empty((max(nf, 1), 3))
     Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
-    q_next = np.empty(q0.shape[0])
-    q[:] = q0
+    mats, vecs, jacs = scratch(nv)
+    q_next = np.empty(q.shape[0])
     factorised = fresh = polished = False
     err_prev = np.inf
     for iteration in range(max_iterations + 1):
-        evaluate(k, q, x, R_star, with_task, r, A, False, oR, op, fR, fp, Sw, Sv)
+        evaluate(k, q, x, R_star, with_task, r, A, False, oR, op, fR, fp, Sw, Sv, mats, vecs, jacs)
         err = 0.0
         for i in range(n):
             err = max(err, abs(r[i]))
         if err <= tol:
             if polished or err < round_off:
+                task_pose(k, q, fR, fp, pose, vecs[18])
                 return iteration
             polished = True
             refresh = not factorised
@@ -643,9 +681,7 @@ def newton(
         else:
             return -1
         if refresh:
-            closure_rows(k, fR, fp, Sw, Sv, r[: k.m], A[: k.m], True)
-            if with_task:
-                task_rows(k, q, fR, fp, Sw, Sv, x, R_star, r[k.m :], A[k.m :], True)
+            evaluate(k, q, x, R_star, with_task, r, A, True, oR, op, fR, fp, Sw, Sv, mats, vecs, jacs)
             for i in range(n):
                 for c in range(nfree):
                     Af[i, c] = A[i, free[c]]
@@ -670,7 +706,7 @@ def newton(
         for c in range(nfree):
             step[free[c]] = -b[c]
         fresh = refresh
-        integrate(k, q, step, q_next)
+        integrate(k, q, step, q_next, mats, vecs)
         q[:] = q_next
         err_prev = err
     return -1

@@ -12,11 +12,13 @@ from __future__ import annotations
 import os
 import warnings
 import weakref
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
+from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
 from ..core.closures import Closure
 from ..core.task import FrameTask, Task, TaskTarget
 from ..tolerances import ROUND_OFF
@@ -39,101 +41,85 @@ class Kernel:
         n_task: number of task rows (0 without a task).
     """
 
-    def __init__(self, arrays: KernelArrays, frame_ids: tuple[int, ...], n_task: int, nq: int) -> None:
+    def __init__(self, arrays: KernelArrays, frame_ids: tuple[int, ...], n_task: int) -> None:
         """Wrap ``arrays`` (see :func:`build_arrays`)."""
         self.arrays = arrays
         self.frame_ids = frame_ids
         self.n_task = n_task
-        self._nq = nq
+        self._all = np.arange(arrays.nv)
 
     @classmethod
     def build(cls, model: pin.Model, closures: tuple[Closure, ...], task: Task | None) -> Kernel:
         """The kernel of ``model`` with ``closures`` and ``task`` (every joint must be supported)."""
         arrays = build_arrays(model, closures, task)
-        return cls(
-            arrays, tuple(kernel_frames(closures, task)), task.size if task is not None else 0, model.nq
-        )
+        return cls(arrays, tuple(kernel_frames(closures, task)), task.size if task is not None else 0)
 
     def _buffers(self) -> tuple[np.ndarray, ...]:
+        """Joint and frame placements, velocity columns, then the scratch of :func:`.compiled.evaluate`."""
         nj, nf, nv = self.arrays.parents.size, max(self.arrays.f_joint.size, 1), self.arrays.nv
+        empty = np.empty
         return (
-            np.empty((nj, 3, 3)),
-            np.empty((nj, 3)),
-            np.empty((nf, 3, 3)),
-            np.empty((nf, 3)),
-            np.empty((nv, 3)),
-            np.empty((nv, 3)),
+            empty((nj, 3, 3)),
+            empty((nj, 3)),
+            empty((nf, 3, 3)),
+            empty((nf, 3)),
+            empty((nv, 3)),
+            empty((nv, 3)),
         )
 
     @staticmethod
     def _target_arrays(target: TaskTarget | None) -> tuple[np.ndarray, np.ndarray]:
         """The target coordinates and, with all three angles selected, the target rotation."""
         if target is None:
-            return np.zeros(0), np.eye(3)
+            return _NO_TARGET, _EYE
         task = target.task
-        R = np.eye(3)
         if isinstance(task, FrameTask) and len(task.angular) == 3:
             angles = np.empty(3)
             angles[list(task.angular)] = target.x[len(task.linear) :]
-            R = pin.rpy.rpyToMatrix(angles)
-        return np.asarray(target.x, dtype=float), R
+            return target.x, pin.rpy.rpyToMatrix(angles)
+        return target.x, _EYE
 
     def placements(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """World rotations and translations of every joint (nj, 3, 3), (nj, 3) and kernel frame (nf, ...)."""
-        from . import compiled
-
+        compiled = _compiled()
         oR, op, fR, fp, Sw, Sv = self._buffers()
-        compiled.forward(self.arrays, np.asarray(q, dtype=float), oR, op, Sw, Sv)
+        mats, vecs, _ = compiled.scratch(self.arrays.nv)
+        compiled.forward(self.arrays, np.asarray(q, dtype=float), oR, op, Sw, Sv, False, mats, vecs)
         compiled.frames(self.arrays, oR, op, fR, fp)
         return oR, op, fR, fp
 
     def rows(self, q: np.ndarray, target: TaskTarget | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Residual ``[phi; task target]`` (m + n,) and its Jacobian (m + n, nv) at ``q``."""
-        from . import compiled
-
+        compiled = _compiled()
         x, R = self._target_arrays(target)
         n = self.arrays.m + (target.size if target is not None else 0)
         r, A = np.empty(n), np.empty((n, self.arrays.nv))
-        oR, op, fR, fp, Sw, Sv = self._buffers()
-        compiled.evaluate(
-            self.arrays, np.asarray(q, float), x, R, target is not None, r, A, True, oR, op, fR, fp, Sw, Sv
-        )
+        scratch = compiled.scratch(self.arrays.nv)
+        args = (np.asarray(q, float), x, R, target is not None, r, A, True, *self._buffers(), *scratch)
+        compiled.evaluate(self.arrays, *args)
         return r, A
-
-    def task_pose(self, q: np.ndarray) -> np.ndarray:
-        """Task coordinates at ``q`` (:meth:`plm_pin.core.task.Task.pose_from_data`), shape (n_task,)."""
-        from . import compiled
-
-        oR, op, fR, fp, Sw, Sv = self._buffers()
-        q = np.asarray(q, dtype=float)
-        compiled.forward(self.arrays, q, oR, op, Sw, Sv)
-        compiled.frames(self.arrays, oR, op, fR, fp)
-        out = np.empty(self.n_task)
-        compiled.task_pose(self.arrays, q, fR, fp, out)
-        return out
 
     def newton(
         self, q0: np.ndarray, free: np.ndarray | None, tol: float, target: TaskTarget | None = None
-    ) -> tuple[np.ndarray, np.ndarray] | None:
-        """:func:`plm_pin.core.assembly.newton` on the kernels: ``(q, residual)``, or None when it stalls.
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """:func:`plm_pin.core.assembly.newton` on the kernels, or None when it stalls.
 
         Args:
             q0: starting configuration, shape (nq,).
             free: velocity columns allowed to move (None: all).
             tol: target largest absolute residual [m, rad].
             target: task rows solved with the closures.
-        """
-        from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
-        from . import compiled
 
+        Returns:
+            The configuration, its residual ``[phi; task target]`` and its task coordinates
+            (:meth:`plm_pin.core.task.Task.pose_from_data`, empty without a task).
+        """
         x, R = self._target_arrays(target)
-        cols = np.arange(self.arrays.nv) if free is None else np.asarray(free, dtype=np.int64)
-        q = np.empty(self._nq)
+        q, pose = np.array(q0, dtype=float), np.empty(self.n_task)
         r = np.empty(self.arrays.m + (target.size if target is not None else 0))
-        iterations = compiled.newton(
+        iterations = _compiled().newton(
             self.arrays,
-            np.asarray(q0, dtype=float),
-            cols,
+            self._all if free is None else free,
             x,
             R,
             target is not None,
@@ -144,8 +130,23 @@ class Kernel:
             CHORD_RATIO,
             q,
             r,
+            pose,
         )
-        return None if iterations < 0 else (q, r)
+        return None if iterations < 0 else (q, r, pose)
+
+
+_NO_TARGET = np.zeros(0)
+_EYE = np.eye(3)
+_COMPILED: list[ModuleType] = []
+
+
+def _compiled() -> ModuleType:
+    """The compiled module (imports numba; its functions compile on first call, cached on disk)."""
+    if not _COMPILED:
+        from . import compiled
+
+        _COMPILED.append(compiled)
+    return _COMPILED[0]
 
 
 _KERNELS: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[Closure, ...], Kernel | None]] = (
@@ -164,14 +165,21 @@ def kernels_enabled() -> bool:
     """Whether the kernels may be used: ``PLM_PIN_KERNELS`` is not ``0`` and numba imports."""
     if os.environ.get(SWITCH, "1").strip() == "0":
         return False
-    try:
-        import numba  # noqa: F401
-    except ImportError:
-        _warn_once(
-            "numba", "numba is not installed: kinematics runs on the Pinocchio path (slower, same results)"
-        )
-        return False
+    if not _NUMBA:
+        try:
+            import numba  # noqa: F401
+        except ImportError:
+            _warn_once(
+                "numba",
+                "numba is not installed: kinematics runs on the Pinocchio path (same results, slower)",
+            )
+            return False
+        _NUMBA.append(True)
     return True
+
+
+_NUMBA: list[bool] = []
+"""Holds True once numba imported."""
 
 
 def kernel_of(mech: Mechanism) -> Kernel | None:

@@ -217,9 +217,9 @@ def _close(
     if kernel is not None:
         solved = kernel.newton(start, free, tol)
         if solved is not None:
-            q, r = solved
+            q, r, x = solved
             q.setflags(write=False)
-            return q, float(np.abs(r).max()) if r.size else 0.0, kernel.task_pose(q)
+            return q, float(np.abs(r).max()) if r.size else 0.0, x
     ws = mech._thread_workspace()
     r_phi, A_phi = ws.closure_rows
     fast = (

@@ -6,6 +6,7 @@ import functools
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -85,7 +86,7 @@ def _solve(
     kernel = kernel_of(mech) if closures is None else None
     ws = mech._thread_workspace()
     chosen = mech.closures if closures is None else closures
-    fast: tuple[np.ndarray, object] | None
+    fast: tuple[Any, ...] | None
     if kernel is not None:
         fast = kernel.newton(guess, None if all_free else free, tol, target)
     else:
@@ -252,7 +253,7 @@ def _from_guess(
     if kernel is not None:
         solved = kernel.newton(q0, None, tol, target)
         if solved is not None:
-            return _solution_from_residual(mech, target, *solved)
+            return _solution_from_residual(mech, target, solved[0], solved[1])
     else:
         fast = newton(
             mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
