@@ -130,13 +130,13 @@ def _solution_from_residual(mech: Mechanism, target: TaskTarget, q: np.ndarray, 
     placements, the same mode); a configuration inside every limit is kept as it is.
     """
     model = mech.model
-    if np.all(model.lowerPositionLimit <= q) and np.all(q <= model.upperPositionLimit):
+    if (model.lowerPositionLimit <= q).all() and (q <= model.upperPositionLimit).all():
         q, violations = np.array(q), {}  # nothing to shift, nothing outside
     else:
         q = wrap_into_limits(mech, q)
         violations = limit_violations(mech, q)
     q.setflags(write=False)
-    residual_norm = float(np.max(np.abs(r))) if r.size else 0.0
+    residual_norm = float(abs(r).max()) if r.size else 0.0
     return IKSolution(q, target.x.copy(), residual_norm, violations, mech)
 
 
@@ -248,8 +248,8 @@ def _from_guess(
     Newton stalls.
     """
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    ws = mech._thread_workspace()
     kernel = kernel_of(mech)
+    ws = mech._thread_workspace()
     if kernel is not None:
         solved = kernel.newton(q0, None, tol, target)
         if solved is not None:
