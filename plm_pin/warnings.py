@@ -68,4 +68,4 @@ class IncompleteSearchWarning(PlmWarning):
 
 
 class KernelFallbackWarning(PlmWarning):
-    """The compiled kinematics kernels cannot serve a mechanism (a joint type, no numba): the Pinocchio path runs."""
+    """The compiled kernels cannot serve a mechanism (a joint type, no numba): the Pinocchio path runs."""

@@ -638,11 +638,12 @@ def newton(
     max_iterations: int,
     stall_ratio: float,
     chord_ratio: float,
+    polish: bool,
     q: np.ndarray,
     r: np.ndarray,
     pose: np.ndarray,
 ) -> int:
-    """:func:`plm_pin.core.assembly.newton` (with polish) moving the ``free`` columns: iterations, or -1.
+    """:func:`plm_pin.core.assembly.newton` moving the ``free`` columns: iterations, or -1.
 
     ``q`` holds the start; on success it holds the solution, ``r`` its residual ``[phi; task]``
     and ``pose`` its task coordinates (:func:`task_pose`).
@@ -659,7 +660,8 @@ def newton(
     Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
     mats, vecs, jacs = scratch(nv)
     q_next = np.empty(q.shape[0])
-    factorised = fresh = polished = False
+    factorised = fresh = False
+    polished = not polish
     err_prev = np.inf
     for iteration in range(max_iterations + 1):
         evaluate(k, q, x, R_star, with_task, r, A, False, oR, op, fR, fp, Sw, Sv, mats, vecs, jacs)
@@ -674,7 +676,7 @@ def newton(
             refresh = not factorised
         elif iteration == max_iterations:
             return -1
-        elif err < chord_ratio * err_prev:
+        elif polish and err < chord_ratio * err_prev:
             refresh = not factorised
         elif err < stall_ratio * err_prev or not fresh:
             refresh = True

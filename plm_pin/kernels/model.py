@@ -100,7 +100,12 @@ class Kernel:
         return r, A
 
     def newton(
-        self, q0: np.ndarray, free: np.ndarray | None, tol: float, target: TaskTarget | None = None
+        self,
+        q0: np.ndarray,
+        free: np.ndarray | None,
+        tol: float,
+        target: TaskTarget | None = None,
+        polish: bool = True,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """:func:`plm_pin.core.assembly.newton` on the kernels, or None when it stalls.
 
@@ -109,6 +114,7 @@ class Kernel:
             free: velocity columns allowed to move (None: all).
             tol: target largest absolute residual [m, rad].
             target: task rows solved with the closures.
+            polish: take the polishing step once within ``tol``.
 
         Returns:
             The configuration, its residual ``[phi; task target]`` and its task coordinates
@@ -128,6 +134,7 @@ class Kernel:
             NEWTON_MAX_ITERATIONS,
             STALL_RATIO,
             CHORD_RATIO,
+            polish,
             q,
             r,
             pose,

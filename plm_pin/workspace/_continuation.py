@@ -43,6 +43,7 @@ from ..core.legs import Leg, ik_jacobian_from_data, working_mode_from_data
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import Task, TaskTarget
 from ..exceptions import InvalidInput, PoseUnreachable
+from ..kernels import Kernel, kernel_of
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import check_mode, inverse_kinematics
 from ..kinematics.working_mode import start_configuration
@@ -67,6 +68,7 @@ class IKEvaluator:
     mobility: int
     actuated_v: np.ndarray
     linear_q: bool
+    kernel: Kernel | None = None
     _data: pin.Data | None = field(default=None, repr=False)
 
     @classmethod
@@ -81,6 +83,7 @@ class IKEvaluator:
             mobility=mech.mobility,
             actuated_v=np.asarray(mech.actuated_v_indices),
             linear_q=all(model.joints[j].nq == model.joints[j].nv for j in range(1, model.njoints)),
+            kernel=kernel_of(mech),
         )
 
     def __post_init__(self) -> None:
@@ -90,7 +93,7 @@ class IKEvaluator:
         self._A = np.empty((self.m + self.task.size, self.nv))  # its Jacobian
 
     def __getstate__(self) -> dict[str, Any]:
-        keep = ("model", "closures", "task", "legs", "mobility", "actuated_v", "linear_q")
+        keep = ("model", "closures", "task", "legs", "mobility", "actuated_v", "linear_q", "kernel")
         return {k: self.__dict__[k] for k in keep}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -116,11 +119,18 @@ class IKEvaluator:
         :func:`plm_pin.core.assembly.newton` without its polishing step: the attempt
         ends when an iteration does not reduce the residual by the factor
         :data:`~plm_pin.core.assembly.STALL_RATIO`, or after
-        :data:`~plm_pin.core.assembly.NEWTON_MAX_ITERATIONS`. On success the data holds
-        the joint Jacobians and frame placements at the returned configuration (read them
-        with :meth:`jacobian`).
+        :data:`~plm_pin.core.assembly.NEWTON_MAX_ITERATIONS`; on the compiled kernels where
+        they serve the mechanism. On success the data holds the joint Jacobians and frame
+        placements at the returned configuration (read them with :meth:`jacobian`).
         """
         target = TaskTarget(self.task, x)
+        if self.kernel is not None:
+            solved = self.kernel.newton(q0, None, tol, target, polish=False)
+            if solved is None:
+                return None
+            pin.computeJointJacobians(self.model, self.data, solved[0])
+            pin.updateFramePlacements(self.model, self.data)
+            return solved[0]
         found = newton(
             self.model,
             self.data,

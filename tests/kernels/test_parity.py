@@ -6,6 +6,7 @@ holding every supported joint type with every closure type and both kinds of fra
 
 from __future__ import annotations
 
+import itertools
 import warnings
 
 import numpy as np
@@ -84,7 +85,7 @@ def test_rows_and_placements_match_pinocchio(name, rng):
 
 @pytest.mark.parametrize("name", [*preset_names(), *CORPUS])
 def test_newton_matches_pinocchio_newton(name, rng):
-    """IK (task fixed, all columns free) and FK (actuators fixed): the same answer or the same stall."""
+    """IK (task fixed, all columns free) and FK (actuators fixed), polished or not: same answer or stall."""
     mech = _mechanism(name)
     kernel = kernel_of(mech)
     assert kernel is not None
@@ -98,11 +99,20 @@ def test_newton_matches_pinocchio_newton(name, rng):
             pin.framesForwardKinematics(model, data, q)
             x = task.pose_from_data(data)
             cases.append((None, TaskTarget(task, x)))
-        for free, target in cases:
-            got = kernel.newton(mech.q_ref, free, mech.closure_tol, target)
+        for (free, target), polish in itertools.product(cases, (True, False)):
+            got = kernel.newton(mech.q_ref, free, mech.closure_tol, target, polish)
             r, A = np.empty(n), np.empty((n, mech.nv))
             want = newton(
-                model, data, mech.closures, mech.q_ref, free, r, A, tol=mech.closure_tol, extra=target
+                model,
+                data,
+                mech.closures,
+                mech.q_ref,
+                free,
+                r,
+                A,
+                tol=mech.closure_tol,
+                extra=target,
+                polish=polish,
             )
             assert (got is None) == (want is None)
             if got is not None and want is not None:
