@@ -712,3 +712,86 @@ def newton(
         q[:] = q_next
         err_prev = err
     return -1
+
+
+@njit(cache=True)
+def batch_newton(
+    k: KernelArrays,
+    Q: np.ndarray,
+    X: np.ndarray,
+    R_stars: np.ndarray,
+    tol: float,
+    max_iterations: int,
+    stall: float,
+    ok: np.ndarray,
+    A_out: np.ndarray,
+    R_out: np.ndarray,
+) -> None:
+    """Gauss-Newton on closures and task at each pose of a batch, from its row of ``Q`` (solved in place).
+
+    Every iteration takes a fresh Jacobian; a pose fails when its residual does not fall
+    below ``stall`` times the previous one, when the normal matrix is not positive definite,
+    or after ``max_iterations``; no polishing step. Where a pose converges, ``ok`` is True,
+    ``A_out`` holds the inverse-kinematics Jacobian (closure rows, then the task frame's
+    world-aligned twist rows) and ``R_out`` the world rotation of every joint.
+
+    Args:
+        k: the kernel arrays (a frame task).
+        Q: starting configurations, solved in place, shape (B, nq).
+        X: task targets, shape (B, n_task).
+        R_stars: target rotations of tasks with all three angles (else any), shape (B, 3, 3).
+        tol: residual tolerance [m, rad].
+        max_iterations: iteration cap.
+        stall: the residual ratio below which an iteration must go.
+        ok: out, shape (B,).
+        A_out: out, shape (B, m + n_task, nv).
+        R_out: out, shape (B, nj, 3, 3).
+    """
+    nj, nv, nf, m = k.parents.shape[0], k.nv, k.f_joint.shape[0], k.m
+    n = m + X.shape[1]
+    A = np.empty((n, nv))
+    r = np.empty(n)
+    N = np.empty((nv, nv))
+    b = np.empty(nv)
+    oR, op = np.empty((nj, 3, 3)), np.empty((nj, 3))
+    fR, fp = np.empty((max(nf, 1), 3, 3)), np.empty((max(nf, 1), 3))
+    Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
+    mats, vecs, jacs = scratch(nv)
+    q_next = np.empty(Q.shape[1])
+    for p in range(Q.shape[0]):
+        q = Q[p]
+        ok[p] = False
+        err_prev = np.inf
+        for iteration in range(max_iterations + 1):
+            evaluate(k, q, X[p], R_stars[p], True, r, A, True, oR, op, fR, fp, Sw, Sv, mats, vecs, jacs)
+            err = 0.0
+            for i in range(n):
+                err = max(err, abs(r[i]))
+            if err <= tol:
+                ok[p] = True
+                A_out[p, :m] = A[:m]
+                frame_jacobian(k, k.t_frame, fp, Sw, Sv, jacs[2])
+                for i in range(n - m):
+                    A_out[p, m + i] = jacs[2][k.t_rows[i]]
+                R_out[p] = oR
+                break
+            if math.isnan(err) or not err < stall * err_prev or iteration == max_iterations:
+                break
+            for a_ in range(nv):
+                s = 0.0
+                for i in range(n):
+                    s += A[i, a_] * r[i]
+                b[a_] = s
+                for c in range(a_ + 1):
+                    s = 0.0
+                    for i in range(n):
+                        s += A[i, a_] * A[i, c]
+                    N[a_, c] = s
+                    N[c, a_] = s
+            if not _cholesky_solve(N, b):
+                break
+            for c in range(nv):
+                b[c] = -b[c]
+            integrate(k, q, b, q_next, mats, vecs)
+            q[:] = q_next
+            err_prev = err

@@ -141,6 +141,35 @@ class Kernel:
         )
         return None if iterations < 0 else (q, r, pose)
 
+    def batch_newton(
+        self, Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float, max_iterations: int, stall: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Gauss-Newton at each pose of a batch (:func:`.compiled.batch_newton`; a frame task).
+
+        Args:
+            Q: starting configurations, shape (B, nq).
+            X: task targets, shape (B, n_task).
+            R_stars: their rotations where the task holds all three angles (else ignored), (B, 3, 3).
+            tol: residual tolerance [m, rad].
+            max_iterations: iteration cap.
+            stall: a pose whose residual does not fall below ``stall`` times the previous one fails.
+
+        Returns:
+            Configurations (B, nq), which converged (B,), the inverse-kinematics Jacobian
+            ``[J_phi; J_x]`` (task twist rows) at each (B, m + n_task, nv) and the joint
+            rotations there (B, njoints, 3, 3); the last two meaningful where converged.
+        """
+        a = self.arrays
+        B = Q.shape[0]
+        q = np.array(Q, dtype=float)
+        X = np.ascontiguousarray(X, dtype=float)
+        R_stars = np.ascontiguousarray(R_stars, dtype=float)
+        ok = np.zeros(B, dtype=np.bool_)
+        A = np.full((B, a.m + X.shape[1], a.nv), np.nan)
+        R = np.full((B, a.parents.size, 3, 3), np.nan)
+        _compiled().batch_newton(a, q, X, R_stars, tol, max_iterations, stall, ok, A, R)
+        return q, ok, A, R
+
 
 _NO_TARGET = np.zeros(0)
 _EYE = np.eye(3)
