@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.plm-pin-installed
 REPORTS ?= reports
 
-.PHONY: all setup test test-fast browser report docs lint format bench urdf clear-notebooks clean
+.PHONY: all setup test test-fast system-packages report docs lint format bench urdf clear-notebooks clean
 
 all: test
 
@@ -22,25 +22,28 @@ setup: $(STAMP)
 # `report all` and each module fixture (docs build, wheel venv) run once, the longest first.
 PYTEST := OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -n 2
 
-test: $(STAMP) browser
+test: $(STAMP) system-packages
 	$(PYTEST)
 
-# The browser check (tests/report/test_browser.py) drives Debian's chromium with chromium-driver.
-# Installed here when missing, as root or with passwordless sudo; otherwise the check fails and
-# says how to install them (PLM_PIN_SKIP_BROWSER=1 skips it on purpose, except on CI).
-BROWSER_PACKAGES := chromium chromium-driver fonts-liberation
-browser:
-	@if { [ "$$PLM_PIN_SKIP_BROWSER" != 1 ] || [ -n "$$CI" ]; } \
-	    && ! { command -v chromium && command -v chromedriver; } >/dev/null; then \
+# Debian packages some tests drive, installed here when missing (as root or with passwordless sudo):
+# chromium with chromium-driver for the browser checks (tests/report/test_browser.py, the live
+# inspector), and python3-phcpy, PHCpack for the system python3, the independent oracle of the complete
+# forward kinematics (tests/kinematics/homotopy/phc_stewart.py). When they cannot be installed,
+# the make step says so and the checks fail on CI; elsewhere PLM_PIN_SKIP_BROWSER=1 skips the browser
+# checks on purpose and the PHCpack oracle is skipped where phcpy is missing.
+SYSTEM_PACKAGES := chromium chromium-driver fonts-liberation python3-phcpy
+system-packages:
+	@if ! { command -v chromium && command -v chromedriver && /usr/bin/python3 -c "import phcpy"; } \
+	    >/dev/null 2>&1; then \
 	  if [ "$$(id -u)" -eq 0 ]; then sudo=; \
 	  elif command -v sudo >/dev/null && sudo -n true 2>/dev/null; then sudo="sudo -n"; \
-	  else echo "make: chromium/chromedriver missing and no root: the browser check will fail;" \
-	    "sudo apt-get install $(BROWSER_PACKAGES)" >&2; exit 0; fi; \
+	  else echo "make: chromium, chromedriver or python3-phcpy missing and no root: their checks will" \
+	    "fail or be skipped; sudo apt-get install $(SYSTEM_PACKAGES)" >&2; exit 0; fi; \
 	  if ! command -v apt-get >/dev/null; then \
-	    echo "make: no apt-get: install chromium and chromedriver yourself; the browser check will fail" >&2; \
+	    echo "make: no apt-get: install $(SYSTEM_PACKAGES) yourself; their checks will fail or be skipped" >&2; \
 	  elif ! { $$sudo apt-get update -qq && $$sudo env DEBIAN_FRONTEND=noninteractive \
-	      apt-get install -y -qq --no-install-recommends $(BROWSER_PACKAGES) >/dev/null; }; then \
-	    echo "make: installing $(BROWSER_PACKAGES) failed; the browser check will fail" >&2; fi; \
+	      apt-get install -y -qq --no-install-recommends $(SYSTEM_PACKAGES) >/dev/null; }; then \
+	    echo "make: installing $(SYSTEM_PACKAGES) failed; their checks will fail or be skipped" >&2; fi; \
 	fi
 
 test-fast: $(STAMP)

@@ -108,6 +108,10 @@ SWEEP_CASES: dict[str, dict[str, Any]] = {
     "orientation range (3D3M, 12 plate sizes x 20 heights x 81 angles)": _sweep_case(
         "harada2011_3d3m", 81, 80.0, ["orientation_range"]
     ),
+    "orientation range, 3 points on 2 workers: the third split (3D3M, 3 plate sizes x 20 x 81)": {
+        **_sweep_case("harada2011_3d3m", 81, 80.0, ["orientation_range"]),
+        "parameters": {"half_plate": [0.03, 0.045, 0.06]},
+    },
 }
 """The design sweeps timed by :func:`sweep_benchmark` (arguments of :func:`plm_pin.sweep.make_spec`)."""
 
@@ -505,7 +509,64 @@ def run() -> list[dict[str, object]]:
     rows.extend(capability_benchmark())
     rows.extend(map_throughput())
     rows.extend(stiffness_benchmark())
+    rows.extend(inspect_benchmark())
+    rows.extend(import_benchmark())
     return rows
+
+
+def inspect_benchmark() -> list[dict[str, object]]:
+    """Cost of one live-inspector update on the 3D4M (target: 50 ms), state function alone (no drawing).
+
+    A slider step from the reference: the task frame 1 mm along x, or slider 1 by 1 mm; every
+    readout (margins, manipulability, ellipse, statics, stiffness) included.
+    """
+    from plm_pin.viz.inspect_state import inspect_state, inspect_update
+
+    mech = load("harada2011_3d4m")
+    state = inspect_state(mech)
+    changes = {
+        "inspect_update (task x +1 mm, all readouts)": {"task": {"x": float(state.x[0]) + 1e-3}},
+        "inspect_update (slider1 +1 mm, all readouts)": {
+            "actuators": {"slider1": float(state.actuators[0]) + 1e-3}
+        },
+    }
+    return [
+        {
+            "mechanism": mech.name,
+            "case": case,
+            "seconds_per_call": _per_call(functools.partial(inspect_update, state, change)),
+        }
+        for case, change in changes.items()
+    ]
+
+
+IMPORT_ROUNDS = 9
+"""Fresh interpreters per import timed (alternating plm_pin and its floor; the best of each is kept)."""
+
+
+def _import_seconds(modules: str) -> float:
+    """Wall time of ``import <modules>`` in a fresh interpreter (its start-up left out) [s]."""
+    code = f"import time; t = time.perf_counter(); import {modules}; print(time.perf_counter() - t)"
+    root = str(Path(__file__).resolve().parents[1])  # this checkout's plm_pin
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, (root, os.environ.get("PYTHONPATH"))))}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    return float(out.stdout)
+
+
+def import_benchmark() -> list[dict[str, object]]:
+    """``import plm_pin`` beside its floor ``import numpy, pinocchio``, fresh interpreters in alternation."""
+    ours, floor = math.inf, math.inf
+    for _ in range(IMPORT_ROUNDS):
+        ours = min(ours, _import_seconds("plm_pin"))
+        floor = min(floor, _import_seconds("numpy, pinocchio"))
+    return [
+        {
+            "mechanism": "-",
+            "case": "import plm_pin [floor: import numpy, pinocchio]",
+            "seconds_per_call": ours,
+            "floor_seconds_per_call": floor,
+        }
+    ]
 
 
 def stiffness_benchmark() -> list[dict[str, object]]:
@@ -923,14 +984,22 @@ def fourbar_mjcf(integrator: str = "Euler", solref: float | None = None) -> str:
 
 
 def mujoco_fourbar_row(
-    q0: np.ndarray, integrator: str = "Euler", solref: float | None = None, crank_1s: float | None = None
+    q0: np.ndarray,
+    integrator: str = "Euler",
+    solref: float | None = None,
+    crank_1s: float | None = None,
+    output: float = SIM_OUTPUT,
 ) -> dict[str, object]:
-    """The four-bar in MuJoCo from ``q0`` at rest: closure error and energy drift at the output times."""
+    """The four-bar in MuJoCo from ``q0`` at rest: closure error and energy drift at the output times.
+
+    ``output``: the sampling step [s] (energy and sites computed there, a multiple of :data:`SIM_STEP`).
+    """
     softness = "soft connect (defaults)" if solref is None else f"connect solref {solref:g}"
+    every = "" if output == SIM_OUTPUT else f", {output * 1e3:g} ms outputs"
     row: dict[str, object] = {
         "engine": "MuJoCo",
         "mechanism": "fourbar",
-        "case": f"{SIM_DURATION:g} s passive, {integrator} {SIM_STEP * 1e3:g} ms, {softness}",
+        "case": f"{SIM_DURATION:g} s passive, {integrator} {SIM_STEP * 1e3:g} ms, {softness}{every}",
     }
     try:
         import mujoco  # optional: pip install mujoco (dev extra)
@@ -941,8 +1010,8 @@ def mujoco_fourbar_row(
     data = mujoco.MjData(model)
     data.qpos[:] = q0
     mujoco.mj_forward(model, data)
-    per_sample = round(SIM_OUTPUT / SIM_STEP)
-    n_samples = round(SIM_DURATION / SIM_OUTPUT)
+    per_sample = round(output / SIM_STEP)
+    n_samples = round(SIM_DURATION / output)
     tips = [model.site("coupler_tip").id, model.site("rocker_tip").id]
     energy: list[float] = []
     kinetic: list[float] = []
@@ -963,7 +1032,7 @@ def mujoco_fourbar_row(
         sample()
     seconds = time.perf_counter() - start
     steps = n_samples * per_sample
-    at_1s = round(1.0 / SIM_OUTPUT)
+    at_1s = round(1.0 / output)
     return {
         **row,
         "crank_error_1s": None if crank_1s is None else abs(crank[at_1s] - crank_1s),
@@ -1021,20 +1090,51 @@ def simulation_benchmark() -> list[dict[str, object]]:
     ]
     # the ratio to MuJoCo RK4 from the best of SIM_ROUNDS alternating runs of both (one run each
     # swings by 2x on a shared machine)
+    rows[0], rows[4] = _best_pair(
+        lambda: _simulation_row(four, str(rows[0]["case"]), crank, **passive),
+        lambda: mujoco_fourbar_row(four.q_ref, "RK4", 0.002, crank_1s=crank),
+        (rows[0], rows[4]),
+    )
+    _cost_ratios([r for r in rows if r["mechanism"] == "fourbar"], rows[4])
+    # every output at 1 ms: the per-sample cost (projection, closure forces, energy) dominates
+    fine = _best_pair(
+        lambda: _simulation_row(
+            four,
+            f"{SIM_DURATION:g} s passive, default, {SIM_STEP * 1e3:g} ms outputs",
+            crank,
+            duration=SIM_DURATION,
+            dt=SIM_STEP,
+        ),
+        lambda: mujoco_fourbar_row(four.q_ref, "RK4", 0.002, crank_1s=crank, output=SIM_STEP),
+    )
+    _cost_ratios(list(fine), fine[1])
+    return [*rows, *fine]
+
+
+Row = dict[str, object]
+
+
+def _best_pair(
+    ours: Callable[[], Row], theirs: Callable[[], Row], first: tuple[Row, Row] | None = None
+) -> tuple[Row, Row]:
+    """The fastest of :data:`SIM_ROUNDS` alternating runs of each (``first``: the first round's rows)."""
+    best = first or (ours(), theirs())
     for _ in range(SIM_ROUNDS - 1):
-        for k, again in (
-            (0, lambda: _simulation_row(four, str(rows[0]["case"]), crank, **passive)),
-            (4, lambda: mujoco_fourbar_row(four.q_ref, "RK4", 0.002, crank_1s=crank)),
-        ):
-            row = again()
-            if float(row.get("seconds", math.inf)) < float(rows[k].get("seconds", math.inf)):  # type: ignore[arg-type]
-                rows[k] = row
-    reference = rows[4].get("seconds_per_simulated_second")
+        again = (ours(), theirs())
+        best = tuple(  # type: ignore[assignment]
+            new if float(new.get("seconds", math.inf)) < float(old.get("seconds", math.inf)) else old  # type: ignore[arg-type]
+            for new, old in zip(again, best, strict=True)
+        )
+    return best
+
+
+def _cost_ratios(rows: list[Row], reference: Row) -> None:
+    """Set ``cost_vs_mujoco_rk4``: each row's cost per simulated second over ``reference``'s."""
+    base = reference.get("seconds_per_simulated_second")
     for r in rows:
         cost = r.get("seconds_per_simulated_second")
-        if isinstance(reference, float) and isinstance(cost, float) and r["mechanism"] == "fourbar":
-            r["cost_vs_mujoco_rk4"] = cost / reference
-    return rows
+        if isinstance(base, float) and isinstance(cost, float):
+            r["cost_vs_mujoco_rk4"] = cost / base
 
 
 def _simulation_line(r: dict[str, object]) -> str:
@@ -1076,14 +1176,19 @@ def sweep_benchmark(cases: dict[str, dict[str, Any]] | None = None) -> list[dict
     """Poses per second of design sweeps: in one process, and on a 2-worker Dask LocalCluster.
 
     The cluster (2 single-threaded processes on 127.0.0.1) is started once; its start-up time
-    is reported apart and the sweeps on it are timed without it. Each sweep runs once (wall time).
+    is reported apart and the sweeps on it are timed without it. Each sweep runs once (wall time),
+    after an untimed run of its first two parameter points on the same executor (the imports
+    and first calls of a fresh worker, about a second, are not the sweep's cost).
     """
     from plm_pin.sweep import make_spec, run_spec
     from plm_pin.sweep.execution import local_cluster
 
     rows: list[dict[str, object]] = []
-    specs = {case: make_spec(**kwargs) for case, kwargs in (cases or SWEEP_CASES).items()}
+    chosen = cases or SWEEP_CASES
+    specs = {case: make_spec(**kwargs) for case, kwargs in chosen.items()}
+    warm = {case: make_spec(**_first_points(kwargs, 2)) for case, kwargs in chosen.items()}
     for case, spec in specs.items():
+        run_spec(warm[case], workers=1)
         result = run_spec(spec, workers=1)
         rows.append(_sweep_row(case, "1 process", result.elapsed, spec.n_points * spec.n_poses))
     try:
@@ -1092,14 +1197,22 @@ def sweep_benchmark(cases: dict[str, dict[str, Any]] | None = None) -> list[dict
             startup = time.perf_counter() - start
             for case, spec in specs.items():
                 chunk = max(1, spec.n_points * spec.n_poses // 12)  # 12 tasks: both workers busy to the end
+                run_spec(warm[case], scheduler=client, chunk=1)  # one point per worker
                 result = run_spec(spec, scheduler=client, chunk=chunk)
                 rows.append(_sweep_row(case, "2 Dask workers", result.elapsed, spec.n_points * spec.n_poses))
+                one = next(r for r in rows if r["case"] == case and r["executor"] == "1 process")
+                rows[-1]["speedup"] = float(one["seconds"]) / result.elapsed  # type: ignore[arg-type]
         rows.append(
             {"case": "Dask LocalCluster start-up (2 worker processes)", "executor": "-", "seconds": startup}
         )
     except ImportError as exc:
         rows.append({"case": f"Dask not available: {exc}", "executor": "-", "seconds": None})
     return rows
+
+
+def _first_points(kwargs: dict[str, Any], n: int) -> dict[str, Any]:
+    """A sweep case (arguments of ``make_spec``) cut to the first ``n`` values of each varied parameter."""
+    return {**kwargs, "parameters": {k: list(v)[:n] for k, v in kwargs["parameters"].items()}}
 
 
 def _sweep_row(case: str, executor: str, seconds: float, poses: int) -> dict[str, object]:
@@ -1115,10 +1228,12 @@ def _sweep_row(case: str, executor: str, seconds: float, poses: int) -> dict[str
 def _sweep_line(r: dict[str, object]) -> str:
     rate = r.get("poses_per_second")
     seconds = r.get("seconds")
+    speedup = r.get("speedup")
     return (
         f"| {r['case']} | {r['executor']} | {r.get('poses', '-')} "
         f"| {f'{seconds:.2f}' if isinstance(seconds, float) else '-'} "
-        f"| {f'{rate:.0f}' if isinstance(rate, float) else '-'} |"
+        f"| {f'{rate:.0f}' if isinstance(rate, float) else '-'} "
+        f"| {f'{speedup:.2f}x' if isinstance(speedup, float) else '-'} |"
     )
 
 
@@ -1220,8 +1335,8 @@ def markdown(results: dict[str, Any], level: int = 1, title: str = "plm_pin benc
             "One run each (wall time), results identical on both executors (tested). The cluster's start-up "
             "is timed apart.",
             "",
-            "| sweep | executor | poses | seconds | poses per second |",
-            "|---|---|---|---|---|",
+            "| sweep | executor | poses | seconds | poses per second | vs 1 process |",
+            "|---|---|---|---|---|---|",
         ]
         lines += [_sweep_line(r) for r in results["sweep"]]
     if results.get("notes"):

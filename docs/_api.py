@@ -33,6 +33,7 @@ PACKAGES = (
     "plm_pin.families.star_triangle",
     "plm_pin.models",
     "plm_pin.export",
+    "plm_pin.legs",
     "plm_pin.workspace",
     "plm_pin.statics",
     "plm_pin.dynamics",

@@ -1,5 +1,14 @@
-"""plm_pin: analysis of parallel link mechanisms (closed kinematic chains) on Pinocchio."""
+"""plm_pin: analysis of parallel link mechanisms (closed kinematic chains) on Pinocchio.
 
+:func:`load`, :func:`build_mechanism` and :func:`export_mjcf` are imported on first use
+(their description readers and writers stay off ``import plm_pin``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ._lazy import lazy_exports
 from ._version import __version__
 from .core.mechanism import Mechanism
 from .exceptions import (
@@ -21,8 +30,10 @@ from .exceptions import (
     TrajectoryError,
     ViewerError,
 )
-from .export import export_mjcf
-from .loading import build_mechanism, load
+
+if TYPE_CHECKING:
+    from .export import export_mjcf
+    from .loading import build_mechanism, load
 
 __all__ = [
     "AllocationInfeasible",
@@ -48,3 +59,7 @@ __all__ = [
     "export_mjcf",
     "load",
 ]
+
+__getattr__, __dir__ = lazy_exports(
+    __name__, {"build_mechanism": ".loading", "export_mjcf": ".export", "load": ".loading"}
+)

@@ -7,9 +7,10 @@ import csv
 import json
 import shlex
 import sys
+import threading
 import warnings
 import webbrowser
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -35,7 +36,7 @@ from .core.diagnostics import findings, mobility_text
 from .core.mechanism import Mechanism, joint_type
 from .exceptions import ClosureNotSatisfied, InvalidInput, PlmError
 from .export import export_mjcf
-from .kinematics import forward_kinematics, inverse_kinematics, task_pose
+from .kinematics import error_bound, error_model, forward_kinematics, inverse_kinematics, task_pose
 from .kinematics.reference import reference_findings, reference_report
 from .loading import load
 from .models.registry import PRESETS
@@ -46,6 +47,7 @@ from .report.study import compute_animation, studies_hint
 from .report.writer import output_folder
 from .sweep import load_config, run_spec
 from .sweep.execution import DEFAULT_CHUNK
+from .viz.inspect_server import Inspector
 from .viz.meshcat_server import MeshcatServer
 from .viz.meshcat_view import MeshcatViewer, SceneStatus
 from .warnings import PlmWarning
@@ -300,18 +302,115 @@ def check(
     )
 
 
+MODE_SIGNS = {"+": 1, "+1": 1, "1": 1, "-": -1, "-1": -1}
+"""The words of a working-mode sign in ``--mode`` (comma-separated, one per square leg)."""
+
+
+def _named_words(
+    words: Sequence[str],
+    what: str,
+    example: str,
+    names: Sequence[str] | None = None,
+    kind: str = "a valid name",
+) -> dict[str, tuple[str, str]]:
+    """``NAME=VALUE`` words as ``{name: (word, value text)}``, in their order: every shell assignment.
+
+    Args:
+        words: the words, one assignment each.
+        what: the argument or option they come from, which starts every message.
+        example: a valid use, quoted where a word is malformed.
+        names: the valid names, listed where a word names another (None: any name, checked later).
+        kind: what the valid names are, in the message (e.g. ``"a task coordinate of fivebar"``).
+
+    Raises:
+        InvalidInput: a word without ``=`` or name, an unknown or repeated name; the message
+            names the word.
+    """
+    out: dict[str, tuple[str, str]] = {}
+    for word in words:
+        name, sep, text = word.strip().partition("=")
+        if not sep or not name:
+            raise InvalidInput(f"{what} {word!r}: write NAME=VALUE, e.g. {example}")
+        if names is not None and name not in names:
+            raise InvalidInput(f"{what} {word!r}: {name!r} is not {kind}, one of {list(names)}")
+        if name in out:
+            raise InvalidInput(f"{what} {word!r}: {name!r} is given twice")
+        out[name] = (word, text)
+    return out
+
+
+def _assignments(
+    words: Sequence[str],
+    what: str,
+    example: str,
+    names: Sequence[str] | None = None,
+    kind: str = "a valid name",
+    *,
+    vectors: bool = False,
+) -> dict[str, list[float]]:
+    """``NAME=VALUE`` words as ``{name: numbers}`` [m, rad].
+
+    Args:
+        words: the words, one assignment each.
+        what: the argument or option they come from, which starts every message.
+        example: a valid use, quoted where a word is malformed.
+        names: the valid names (None: any name, checked later).
+        kind: what the valid names are, in the message.
+        vectors: VALUE may be several comma-separated numbers (a joint with several entries);
+            otherwise exactly one.
+
+    Raises:
+        InvalidInput: as :func:`_named_words`, or a value that is not a finite number (or
+            comma-separated finite numbers).
+    """
+    out: dict[str, list[float]] = {}
+    for name, (word, text) in _named_words(words, what, example, names, kind).items():
+        try:
+            values = [float(v) for v in (text.split(",") if vectors else [text])]
+        except ValueError:
+            values = [float("nan")]
+        if not np.all(np.isfinite(values)):
+            number = "a finite number or finite numbers, comma-separated" if vectors else "a finite number"
+            raise InvalidInput(f"{what} {word!r}: {text!r} is not {number}")
+        out[name] = values
+    return out
+
+
+def _mode_signs(text: str | None, mech: Mechanism | None = None) -> tuple[int, ...] | None:
+    """The working mode ``--mode`` writes as ``+,-,...`` (None: not given).
+
+    Args:
+        text: the option's value.
+        mech: the mechanism, whose square legs each take a sign (None: counted later).
+
+    Raises:
+        InvalidInput: a word that is not a sign, or (with ``mech``) not one sign per square leg.
+    """
+    if text is None:
+        return None
+    words = [w.strip() for w in text.split(",")]
+    n = sum(leg.square for leg in mech.legs) if mech is not None else len(words)
+    if len(words) != n or any(w not in MODE_SIGNS for w in words):
+        if mech is None:
+            how = "give one sign (+ or -) per leg, comma-separated, e.g. --mode=+,-"
+        else:
+            example = ",".join("+-"[k % 2] for k in range(n))
+            how = (
+                f"give {n} signs (+ or -), comma-separated, one per leg of {mech.name}, e.g. --mode={example}"
+            )
+        raise InvalidInput(f"--mode {text!r}: {how}")
+    return tuple(MODE_SIGNS[w] for w in words)
+
+
 def _actuator_values(mech: Mechanism, assignments: list[str]) -> np.ndarray:
-    """Actuator positions from ``joint=value`` words, the others at their reference value."""
+    """Actuator positions from ``JOINT=VALUE`` words, the others at their reference value."""
     values = mech.actuator_positions(mech.q_ref).copy()
     names = [a.joint for a in mech.actuators]
-    for word in assignments:
-        joint, sep, text = word.partition("=")
-        if not sep or joint not in names:
-            raise InvalidInput(f"actuator assignment {word!r}: write JOINT=VALUE with JOINT one of {names}")
-        try:
-            values[names.index(joint)] = float(text)
-        except ValueError:
-            raise InvalidInput(f"actuator assignment {word!r}: {text!r} is not a number") from None
+    example = f"{names[0]}=0.1" if names else "JOINT=0.1"
+    for joint, number in _assignments(
+        assignments, "actuator", example, names, f"an actuated joint of {mech.name}"
+    ).items():
+        values[names.index(joint)] = number[0]
     return values
 
 
@@ -379,47 +478,12 @@ def _task_values(mech: Mechanism, words: list[str], what: str) -> dict[str, floa
             finite number; the message names the word and the task's coordinates.
     """
     dofs = _task_dofs(mech, what)
-    values: dict[str, float] = {}
-    for word in words:
-        name, sep, text = word.partition("=")
-        if not sep or name not in dofs:
-            raise InvalidInput(
-                f"{what} {word!r}: write NAME=VALUE with NAME a task coordinate of {mech.name}, "
-                f"one of {list(dofs)}"
-            )
-        if name in values:
-            raise InvalidInput(f"{what} {word!r}: {name!r} is given twice")
-        try:
-            value = float(text)
-        except ValueError:
-            raise InvalidInput(f"{what} {word!r}: {text!r} is not a number") from None
-        if not np.isfinite(value):
-            raise InvalidInput(f"{what} {word!r}: {text!r} is not a finite number")
-        values[name] = value
-    return values
-
-
-MODE_SIGNS = {"+": 1, "+1": 1, "1": 1, "-": -1, "-1": -1}
-"""The words of a working-mode sign in ``--mode`` (comma-separated, one per square leg)."""
-
-
-def _mode_signs(mech: Mechanism, text: str | None) -> tuple[int, ...] | None:
-    """The working mode written as ``+,-,...`` (None: not given).
-
-    Raises:
-        InvalidInput: a word that is not a sign, or not one sign per square leg.
-    """
-    if text is None:
-        return None
-    n = sum(leg.square for leg in mech.legs)
-    words = [w.strip() for w in text.split(",")]
-    if len(words) != n or any(w not in MODE_SIGNS for w in words):
-        example = ",".join("+-"[k % 2] for k in range(n))
-        raise InvalidInput(
-            f"--mode {text!r}: give {n} signs (+ or -), comma-separated, one per leg of {mech.name}, "
-            f"e.g. --mode={example}"
-        )
-    return tuple(MODE_SIGNS[w] for w in words)
+    return {
+        k: v[0]
+        for k, v in _assignments(
+            words, what, f"{dofs[0]}=0.1", dofs, f"a task coordinate of {mech.name}"
+        ).items()
+    }
 
 
 def _mode_text(mode: tuple[int, ...] | None) -> str:
@@ -471,7 +535,7 @@ def ik_command(
             raise InvalidInput(
                 f"missing task coordinates {missing}: give every one of {list(dofs)} as NAME=VALUE"
             )
-        sol = inverse_kinematics(mech, [values[d] for d in dofs], mode=_mode_signs(mech, mode))
+        sol = inverse_kinematics(mech, [values[d] for d in dofs], mode=_mode_signs(mode, mech))
         actuators, working = sol.actuators, sol.mode
         closure = float(np.max(np.abs(mech.closure_residual(sol.q)), initial=0.0))
     kinds = {n: joint_type(mech.model, mech.model.getJointId(n)) for n in mech.joint_names}
@@ -514,6 +578,91 @@ def ik_command(
     console.print(table)
 
 
+def _length_and_angle(text: str) -> tuple[float, float]:
+    """``--tol LENGTH,ANGLE`` as two numbers >= 0 [m, rad].
+
+    Raises:
+        InvalidInput: not two comma-separated finite numbers >= 0.
+    """
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 2 or not all(np.isfinite(v) and v >= 0 for v in values):
+        given = f"--tol {text!r}" if text else "--tol is required"
+        raise InvalidInput(
+            f"{given}: write LENGTH,ANGLE, the tolerance of every placement translation and "
+            "prismatic actuator offset [m] and of every placement rotation and revolute actuator offset "
+            "[rad], e.g. --tol 1e-5,1e-4"
+        )
+    return values[0], values[1]
+
+
+@app.command("accuracy")
+def accuracy_command(
+    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
+    assignments: Annotated[
+        list[str] | None,
+        typer.Argument(help="task coordinates NAME=VALUE (m or rad); the others at the reference pose"),
+    ] = None,
+    tol: Annotated[
+        str,
+        typer.Option(
+            "--tol",
+            help="LENGTH,ANGLE: tolerance of every joint and closure-frame placement and actuator offset, "
+            "[m] for translations and prismatic actuators, [rad] for rotations and revolute ones",
+        ),
+    ] = "",
+    top: Annotated[int, typer.Option("--top", min=1, help="largest contributions listed per coordinate")] = 3,
+    mode: ModeOption = None,
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of a table")] = False,
+) -> None:
+    """Pose error bound for manufacturing tolerances: worst case, RMS and the largest contributions."""
+    mech = _load(target)
+    with _reported():
+        length, angle = _length_and_angle(tol)
+        dofs = _task_dofs(mech, "accuracy")
+        values = _task_values(mech, assignments or [], "task coordinate")
+        if values or mode is not None:
+            x = task_pose(mech, mech.q_ref)
+            for dof, value in values.items():
+                x[dofs.index(dof)] = value
+            q = np.asarray(inverse_kinematics(mech, x, mode=_mode_signs(mode, mech)).q)
+        else:
+            q = np.asarray(mech.q_ref)
+        model = error_model(mech)
+        bound = error_bound(mech, q, model.tolerances(length, angle))
+    if as_json:
+        out = {
+            "mechanism": mech.name,
+            "x": dict(zip(dofs, task_pose(mech, q).tolist(), strict=True)),
+            **bound.to_dict(),
+            "length_tolerance": length,
+            "angle_tolerance": angle,
+        }
+        console.print_json(json.dumps(out))
+        return
+    units = _task_units(mech)
+    pose = ", ".join(f"{d}={v:.6g}" for d, v in zip(dofs, task_pose(mech, q), strict=True))
+    title = f"{mech.name} at {pose}: pose error for tolerances {length:g} m, {angle:g} rad"
+    table = Table(title=escape(title))
+    for col in ("coordinate", "worst case", "rms", "unit", "largest contributions (|S| tol)"):
+        table.add_column(col, justify="right" if col in ("worst case", "rms") else "left")
+    for k, dof in enumerate(dofs):
+        share = ", ".join(f"{name} {value:.3g}" for name, value in bound.contributions(k, top))
+        table.add_row(dof, f"{bound.worst_case[k]:.4g}", f"{bound.rms[k]:.4g}", units[dof], escape(share))
+    console.print(table)
+    opened = int(np.sum(bound.sensitivity.mismatch * bound.tolerances > mech.assembled_tol))
+    console.print(
+        f"{model.size} parameters: {len(model.joints)} joint placements and {len(model.frames)} closure "
+        f"frames x 6 (x y z [m], rx ry rz [rad]), {len(model.actuators)} actuator offsets; {opened} of "
+        "them, at their tolerance, open the rigid loops (their effect is a least-squares fit)",
+        markup=False,
+        highlight=False,
+        soft_wrap=True,
+    )
+
+
 AXES = ("x", "y", "z", "rx", "ry", "rz")
 """The task coordinates a slice can vary: options ``--x START:STOP:COUNT`` of ``map`` and ``report``."""
 
@@ -534,8 +683,10 @@ RyOption = Annotated[str | None, _axis_option("ry")]
 RzOption = Annotated[str | None, _axis_option("rz")]
 
 
-def _grid_range(text: str, option: str) -> np.ndarray:
+def _grid_range(text: str, option: str, joiner: str = " ") -> np.ndarray:
     """The values ``START:STOP:COUNT`` stands for: COUNT evenly spaced from START to STOP.
+
+    ``option`` and ``joiner`` write the example of the message (``--x -0.05:0.05:21``).
 
     Raises:
         InvalidInput: naming the option, the text and what is wrong with it.
@@ -562,18 +713,34 @@ def _grid_range(text: str, option: str) -> np.ndarray:
             problem = "COUNT must be at least 2"
     if problem is not None:
         raise InvalidInput(
-            f"{option} {text!r}: {problem}; write START:STOP:COUNT (e.g. {option} -0.05:0.05:21)"
+            f"{option} {text!r}: {problem}; write START:STOP:COUNT (e.g. {option}{joiner}-0.05:0.05:21)"
         )
     return np.linspace(start, stop, count)
 
 
-def _slice_ranges(mech: Mechanism, given: dict[str, str | None]) -> dict[str, np.ndarray]:
+def _slice_ranges(
+    mech: Mechanism, given: dict[str, str | None], over: Sequence[str] = ()
+) -> dict[str, np.ndarray]:
     """The varied task coordinates and their values, in the task's order (empty when none given).
 
+    Args:
+        mech: the mechanism.
+        given: the text of each option ``--x`` ... ``--rz`` (None: not given).
+        over: ``--over NAME=START:STOP:COUNT`` words, for any task coordinate (a joint task's too).
+
     Raises:
-        InvalidInput: a malformed range, or a coordinate the task does not have.
+        InvalidInput: a malformed range, a coordinate given twice, or one the task does not have.
     """
     ranges = {a: _grid_range(text, f"--{a}") for a, text in given.items() if text is not None}
+    if over:
+        dofs = _task_dofs(mech, "--over")
+        words = _named_words(
+            over, "--over", f"--over {dofs[0]}=-0.1:0.1:21", dofs, f"a task coordinate of {mech.name}"
+        )
+        for name, (word, text) in words.items():
+            if name in ranges:
+                raise InvalidInput(f"--over {word!r}: {name!r} is also varied by --{name}; give it one way")
+            ranges[name] = _grid_range(text, f"--over {name}", "=")
     if not ranges:
         return {}
     dofs = _task_dofs(mech, " ".join(f"--{a}" for a in ranges))
@@ -655,19 +822,25 @@ def map_command(
     metric: Annotated[
         str, typer.Option("--metric", help=f"comma-separated, among {', '.join(POSE_METRICS)}, or all")
     ] = "manipulability",
+    over: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--over",
+            help="vary any task coordinate NAME=START:STOP:COUNT, e.g. a joint of a joint task "
+            "(--over elbow=-1:1:21), repeatable",
+        ),
+    ] = None,
     mode: ModeOption = None,
     force: Annotated[bool, typer.Option("--force", help="overwrite an existing CSV file")] = False,
 ) -> None:
     """A workspace map over two task coordinates, written as CSV (one row per pose) and summarised."""
     mech = _load(target)
     with _reported():
-        ranges = _slice_ranges(mech, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz})
+        ranges = _slice_ranges(mech, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz}, over or [])
         dofs = _task_dofs(mech, "map")
         if len(ranges) != 2:
-            raise InvalidInput(
-                f"a map varies two task coordinates: give two of {[f'--{d}' for d in dofs if d in AXES]}, "
-                f"got {len(ranges)}"
-            )
+            options = [f"--{d}" if d in AXES else f"--over {d}=..." for d in dofs]
+            raise InvalidInput(f"a map varies two task coordinates: give two of {options}, got {len(ranges)}")
         values = _task_values(mech, fixed or [], "--fixed")
         both = [d for d in values if d in ranges]
         if both:
@@ -678,7 +851,7 @@ def map_command(
         for d, v in values.items():
             pose[dofs.index(d)] = v
         (a, va), (b, vb) = ranges.items()
-        grid = workspace_map(mech, (a, b), (va, vb), pose, mode=_mode_signs(mech, mode))
+        grid = workspace_map(mech, (a, b), (va, vb), pose, mode=_mode_signs(mode, mech))
     _write_map_csv(path, mech, grid, metrics)
     units = _task_units(mech)
     table = Table(title=escape(f"{mech.name}: workspace map over {a} and {b}"), show_header=False)
@@ -758,28 +931,6 @@ def _regenerate(study: Study, mechanism: str | None, out: Path, case_words: list
     return shlex.join(["plm-pin", "report", study.name, *chosen, *case_words, "--out", str(out)])
 
 
-def _named_numbers(text: str, option: str) -> dict[str, float]:
-    """``NAME=VALUE,NAME=VALUE`` as a dict [m, rad].
-
-    Raises:
-        InvalidInput: an item without ``=``, a repeated name, a value that is not a finite number.
-    """
-    out: dict[str, float] = {}
-    for item in text.split(","):
-        name, sep, value = item.strip().partition("=")
-        if not sep or not name:
-            raise InvalidInput(
-                f"{option} {text!r}: write NAME=VALUE items, comma-separated (e.g. x=0.01,y=0.08)"
-            )
-        if name in out:
-            raise InvalidInput(f"{option} {text!r}: {name!r} is given twice")
-        number = _numbers(value, f"{option} {item!r}")
-        if len(number) != 1 or not np.isfinite(number[0]):
-            raise InvalidInput(f"{option} {item!r}: {value!r} is not a finite number")
-        out[name] = number[0]
-    return out
-
-
 def _study_case(
     load_text: str | None, pose_text: str | None, mode_text: str | None, ranges: dict[str, str | None]
 ) -> tuple[StudyCase, list[str]]:
@@ -795,17 +946,13 @@ def _study_case(
         if not np.all(np.isfinite(load_values)):
             raise InvalidInput(f"--load {load_text!r}: the values must be finite numbers [N, N m]")
         words += ["--load", load_text]
-    pose = {} if pose_text is None else _named_numbers(pose_text, "--pose")
+    pose = {}
     if pose_text is not None:
+        items = _assignments(pose_text.split(","), "--pose", "--pose x=0.01,y=0.08")
+        pose = {name: v[0] for name, v in items.items()}
         words += ["--pose", pose_text]
-    mode = None
+    mode = _mode_signs(mode_text)
     if mode_text is not None:
-        parts = [w.strip() for w in mode_text.split(",")]
-        if any(w not in MODE_SIGNS for w in parts):
-            raise InvalidInput(
-                f"--mode {mode_text!r}: give one sign (+ or -) per leg, comma-separated, e.g. --mode=+,-"
-            )
-        mode = tuple(MODE_SIGNS[w] for w in parts)
         words += [f"--mode={mode_text}"]
     values = {}
     for axis, text in ranges.items():
@@ -878,14 +1025,17 @@ def report(
             )
     except PlmError as exc:
         raise _fail(exc) from None
+    loaded: dict[str, Mechanism] = {}  # loaded once: the studies reuse them
     for _, chosen in runs:
         if chosen is not None:
-            mech = _load(chosen)  # a broken description fails here, with the loader's message
+            loaded[chosen] = mech = _load(
+                chosen
+            )  # a broken description fails here, with the loader's message
             if not case.empty:
                 from .report.overview import overview_case
 
                 with _reported():
-                    overview_case(mech, case)  # a bad case fails here, in one line
+                    overview_case(mech, case)  # a bad case fails here, in one line; solved once
     try:
         root = output_folder(out)
     except PlmError as exc:
@@ -906,6 +1056,7 @@ def report(
                     command=_regenerate(study, chosen, out, case_words),
                     observer=_show_step(progress, task, study.name),
                     case=case if study.takes_case else None,
+                    loaded=loaded.get(chosen) if chosen is not None else None,
                 )
                 path = write_report(result, root)
             except PlmError as exc:
@@ -945,22 +1096,18 @@ def _pose_configuration(mech: Mechanism, pose: list[str]) -> np.ndarray:
         if not dofs:
             raise InvalidInput(f"--pose {pose[0]!r}: {mech.name} has no task; give JOINT=VALUE items")
         return np.array(inverse_kinematics(mech, _numbers(pose[0], "--pose")).q)
+    names = [*mech.joint_names, *(d for d in dofs if d not in mech.joint_names)]
+    kind = f"a joint or task coordinate of {mech.name}"
+    items = _assignments(pose, "--pose", f"--pose {names[0]}=0.1", names, kind, vectors=True)
     joints: dict[str, float | list[float]] = {}
     task: dict[str, float] = {}
-    for item in pose:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise InvalidInput(f"--pose {item!r}: expected NAME=VALUE (or one comma-separated task pose)")
-        numbers = _numbers(value, f"--pose {item!r}")
+    for (name, numbers), word in zip(items.items(), pose, strict=True):
         if name in mech.joint_names:
             joints[name] = numbers[0] if len(numbers) == 1 else numbers
-        elif name in dofs and len(numbers) == 1:
+        elif len(numbers) == 1:
             task[name] = numbers[0]
         else:
-            raise InvalidInput(
-                f"--pose {item!r}: {name!r} is neither a joint nor a task coordinate (one number); "
-                f"joints are {list(mech.joint_names)}, task coordinates are {list(dofs)}"
-            )
+            raise InvalidInput(f"--pose {word!r}: the task coordinate {name!r} takes one number")
     if joints and task:
         raise InvalidInput("--pose mixes joints and task coordinates; give one kind only")
     if task:
@@ -1129,6 +1276,48 @@ def view(
         except KeyboardInterrupt:
             return
     raise _fail(PlmError(f"the meshcat server stopped unexpectedly (exit code {code})"))
+
+
+@app.command("inspect")
+def inspect_command(
+    target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
+    port: Annotated[
+        int | None, typer.Option("--port", help="port of the control page (default: first free from 7200)")
+    ] = None,
+    open_browser: Annotated[
+        bool, typer.Option("--open/--no-open", help="open the control page in a browser")
+    ] = False,
+    ignore: IgnoreOption = "",
+) -> None:
+    """Inspect a mechanism live (127.0.0.1 only): drag its task or actuators, switch modes, read forces.
+
+    Serves a control page beside the meshcat scene until Ctrl-C.
+    """
+    mech = _load(target, ignore)
+    try:
+        inspector = Inspector(mech, port=port, source=target)
+    except PlmError as exc:
+        raise _fail(exc) from None
+    try:
+        if port is not None and inspector.address is not None and inspector.address[1] != port:
+            errors.print(
+                f"[yellow]warning:[/] port {port} is busy; serving on {inspector.address[1]} instead",
+                highlight=False,
+            )
+        console.print(f"{mech.name}: {inspector.url}", markup=False, highlight=False, soft_wrap=True)
+        console.print(
+            f"meshcat scene: {inspector.viewer.url}\nCtrl-C stops the inspector",
+            markup=False,
+            highlight=False,
+            soft_wrap=True,
+        )
+        if open_browser:
+            inspector.open()
+        threading.Event().wait()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        inspector.close()
 
 
 RESULT = "result.nc"

@@ -15,6 +15,7 @@ This module imports nothing from plm_pin.
 """
 
 __all__ = [
+    "ACTUATED_SINGULAR_RTOL",
     "ASSEMBLED_TOL",
     "ASSEMBLY_RCOND",
     "ATTACHMENT_ATOL",
@@ -49,6 +50,7 @@ __all__ = [
     "HOMOTOPY_CORRECTOR_TOL",
     "HOMOTOPY_DIVERGED_NORM",
     "HOMOTOPY_ENTRY_TOL",
+    "HOMOTOPY_MAX_BOX_RTOL",
     "HOMOTOPY_REAL_RTOL",
     "HOMOTOPY_ROOT_RTOL",
     "HOMOTOPY_SAME_ROOT_RTOL",
@@ -57,6 +59,7 @@ __all__ = [
     "IDLE_RTOL",
     "ILL_CONDITIONED_MARGIN",
     "INERTIA_RTOL",
+    "INSPECT_EDGE_TOL",
     "INTERNAL_TIE_RTOL",
     "INVERSE_RTOL",
     "KNOT_TOL",
@@ -239,12 +242,19 @@ BATCH_LOG3_SERIES_ANGLE = 1e-4
 SINGULARITY_TOL = 1e-6
 """[-] Default margin at or below which a configuration counts as singular."""
 
+INSPECT_EDGE_TOL = 1e-6
+"""[-] Fraction of a move within which the live inspector finds the edge it stops at (workspace, singular)."""
+
 INVERSE_RTOL = 1e-12
 r"""[-] :math:`T` is singular (S, J_ce undefined) when :math:`\sigma_{min}(T) \le` INVERSE_RTOL x
 :math:`|J_x|`.
 
 Relative to the whole task Jacobian (:math:`|J_x| = \sigma_{max}(J_x)`), not to :math:`T` itself,
 whose ratio is 1 for any 1 x 1 :math:`T` (see :mod:`plm_pin.kinematics.singularity`)."""
+
+ACTUATED_SINGULAR_RTOL = 1e-8
+r"""[-] The actuators fix the configuration (the accuracy sensitivity exists) unless the smallest
+singular value of :math:`[J_\phi; S_a]` is at most this times its largest (a direct, type 2, singularity)."""
 
 LIMIT_TOL = 1e-9
 """[m or rad] A joint within this distance of its range respects it."""
@@ -500,6 +510,9 @@ HOMOTOPY_DIVERGED_NORM = 1e8
 
 HOMOTOPY_CORRECTOR_TOL = 1e-9
 """[-] Relative Newton correction at which a homotopy corrector step is accepted."""
+
+HOMOTOPY_MAX_BOX_RTOL = 1e-6
+"""[-] Largest relative half-width of a Krawczyk box (a root certified farther out is not certified)."""
 
 FK_SAME_MODE_TOL = 1e-7
 """[m, rad] Largest task-coordinate difference of two forward-kinematics solutions of one assembly mode."""

@@ -515,7 +515,7 @@ def test_fk_bad_assignment_is_one_error_line():
     """`fk fourbar crank=1` names the valid actuator joints in one error line."""
     result = runner.invoke(app, ["fk", "fourbar", "crank=1"])
     _assert_clean_failure(
-        result, "actuator assignment 'crank=1': write JOINT=VALUE with JOINT one of ['crank_pivot']"
+        result, "actuator 'crank=1': 'crank' is not an actuated joint of fourbar, one of ['crank_pivot']"
     )
 
 
@@ -578,10 +578,12 @@ def test_ik_fourbar_crank_is_the_circle_intersection():
         ),
         (
             ["x=0", "y=0.08", "rz=0", "z=1"],
-            "task coordinate 'z=1': write NAME=VALUE with NAME a task coordinate of harada2011_3d4m, "
-            "one of ['x', 'y', 'rz']",
+            "task coordinate 'z=1': 'z' is not a task coordinate of harada2011_3d4m, one of ['x', 'y', 'rz']",
         ),
-        (["x=0", "y=0.08", "rz=zero"], "task coordinate 'rz=zero': 'zero' is not a number"),
+        (["x=0", "y=0.08", "rz=zero"], "task coordinate 'rz=zero': 'zero' is not a finite number"),
+        (["x=0", "y=0.08", "rz=0", "x=1"], "task coordinate 'x=1': 'x' is given twice"),
+        (["x=0", "y=0.08", "rz=inf"], "task coordinate 'rz=inf': 'inf' is not a finite number"),
+        (["x=0", "y=0.08", "=1"], "task coordinate '=1': write NAME=VALUE, e.g. x=0.1"),
         (
             ["x=0", "y=0.08", "rz=0", "--mode=+,-"],
             "--mode '+,-': give 4 signs (+ or -), comma-separated, one per leg of harada2011_3d4m, "
@@ -647,6 +649,84 @@ def test_map_csv_has_a_row_per_pose_with_the_api_metrics(tmp_path):
             k += 1
     assert re.search(r"poses\s*│\s*3 x 4 = 12", result.stdout)
     assert re.search(r"working mode\s*│\s*\+,-,\+,-", result.stdout)
+
+
+def _joint_task_fivebar(folder: Path) -> Path:
+    """The fivebar preset with a joint task: its two elbow angles; returns the URDF."""
+    from plm_pin.models.registry import urdf_folder
+
+    for suffix in (".urdf", ".plm.yaml"):
+        (folder / f"fivebar{suffix}").write_text((urdf_folder() / f"fivebar{suffix}").read_text())
+    sidecar = folder / "fivebar.plm.yaml"
+    data = yaml.safe_load(sidecar.read_text())
+    data["end_effector"] = {"joints": ["left_elbow", "right_elbow"]}
+    sidecar.write_text(yaml.safe_dump(data))
+    return folder / "fivebar.urdf"
+
+
+def test_map_over_joint_task_coordinates(tmp_path):
+    """`map --over left_elbow=... --over right_elbow=...`: w = |det dc/dx| by central differences of IK."""
+    from plm_pin.kinematics import inverse_kinematics
+
+    urdf = _joint_task_fivebar(tmp_path)
+    out = tmp_path / "map.csv"
+    args = ["map", str(urdf), "--over", "left_elbow=-1.4:-1.2:3", "--over", "right_elbow=1.4:1.5:2"]
+    result = runner.invoke(app, [*args, "--csv", str(out)])
+    assert result.exit_code == 0, result.output
+    header, rows = _read_map(out)
+    assert header[:3] == ["left_elbow [rad]", "right_elbow [rad]", "reachable"]
+    assert header[3].startswith("manipulability [")
+    mech = plm_pin.load(urdf)
+    h = 1e-6
+    k = 0
+    for a in (-1.4, -1.3, -1.2):
+        for b in (1.4, 1.5):
+            x = np.array([a, b])
+            assert rows[k, :2] == pytest.approx(x, abs=1e-15) and rows[k, 2] == 1
+
+            def actuators(x):
+                return mech.actuator_positions(inverse_kinematics(mech, x).q)
+
+            jac = np.column_stack(
+                [(actuators(x + h * e) - actuators(x - h * e)) / (2 * h) for e in np.eye(2)]
+            )
+            assert rows[k, 3] == pytest.approx(abs(np.linalg.det(jac)), rel=1e-6)
+            k += 1
+
+
+@pytest.mark.parametrize(
+    ("over", "message"),
+    [
+        (
+            ["--over", "left_elbow=-1.4:-1.2:3"],
+            "a map varies two task coordinates: give two of "
+            "['--over left_elbow=...', '--over right_elbow=...'], got 1",
+        ),
+        (
+            ["--over", "foo=0:1:2", "--over", "left_elbow=0:1:2"],
+            "--over 'foo=0:1:2': 'foo' is not a task coordinate of fivebar, "
+            "one of ['left_elbow', 'right_elbow']",
+        ),
+        (
+            ["--over", "left_elbow=0:1:2", "--over", "left_elbow=0:1:3"],
+            "--over 'left_elbow=0:1:3': 'left_elbow' is given twice",
+        ),
+        (
+            ["--over", "left_elbow 0:1:2"],
+            "--over 'left_elbow 0:1:2': write NAME=VALUE, e.g. --over left_elbow=-0.1:0.1:21",
+        ),
+        (
+            ["--over", "left_elbow=1:0:2", "--over", "right_elbow=0:1:2"],
+            "--over left_elbow '1:0:2': START must be below STOP; write START:STOP:COUNT "
+            "(e.g. --over left_elbow=-0.05:0.05:21)",
+        ),
+    ],
+)
+def test_map_over_refuses_bad_words_in_one_line(tmp_path, over, message):
+    urdf = _joint_task_fivebar(tmp_path)
+    out = tmp_path / "map.csv"
+    _assert_clean_failure(runner.invoke(app, ["map", str(urdf), *over, "--csv", str(out)]), message)
+    assert not out.exists()
 
 
 def test_map_refuses_to_overwrite_without_force(tmp_path):
@@ -776,6 +856,31 @@ def test_report_load_on_the_fourbar_rocker_reaches_the_statics(tmp_path):
     assert rows[0][2] != pytest.approx(static_forces(mech, q).f_c[0], abs=1e-3)  # the load counts
 
 
+def test_report_with_a_pose_loads_and_solves_once(tmp_path, monkeypatch):
+    """`report fourbar --pose rz=1.8`: the shell's check loads and solves; the study reuses both."""
+    from plm_pin.report import overview, study
+
+    loads, solves = [], []
+
+    def counted_load(*args, **kwargs):
+        loads.append(args)
+        return plm_pin.load(*args, **kwargs)
+
+    def counted_ik(mech, x, *args, **kwargs):
+        solves.append(np.array(x, dtype=float))
+        return inverse_kinematics(mech, x, *args, **kwargs)
+
+    from plm_pin.kinematics import inverse_kinematics
+
+    monkeypatch.setattr(study, "load", counted_load)
+    monkeypatch.setattr(overview, "inverse_kinematics", counted_ik)
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", "fourbar", "--pose", "rz=1.8", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert loads == []  # the study got the shell's mechanism
+    assert sum(x.shape == (1,) and x[0] == 1.8 for x in solves) == 1
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
@@ -790,7 +895,12 @@ def test_report_load_on_the_fourbar_rocker_reaches_the_statics(tmp_path):
         ),
         (
             ["harada2011_3d4m", "--pose", "x:1"],
-            "--pose 'x:1': write NAME=VALUE items, comma-separated (e.g. x=0.01,y=0.08)",
+            "--pose 'x:1': write NAME=VALUE, e.g. --pose x=0.01,y=0.08",
+        ),
+        (["harada2011_3d4m", "--pose", "x=1,x=2"], "--pose 'x=2': 'x' is given twice"),
+        (
+            ["harada2011_3d4m", "--mode=+,x"],
+            "--mode '+,x': give one sign (+ or -) per leg, comma-separated, e.g. --mode=+,-",
         ),
         (["harada2011_3d4m", "--mode=+,-"], "--mode must hold 4 signs (+1 or -1), one per leg; got (1, -1)"),
         (
@@ -817,7 +927,7 @@ def test_shell_guide_examples_run(tmp_path, monkeypatch):
 
     page = Path(__file__).resolve().parents[1] / "docs" / "guide" / "shell.md"
     commands = re.findall(r"^\$ plm-pin (.+)$", page.read_text(encoding="utf-8"), flags=re.M)
-    assert {c.split()[0] for c in commands} == {"ik", "fk", "map", "report"}
+    assert {c.split()[0] for c in commands} == {"ik", "fk", "accuracy", "map", "report"}
     monkeypatch.chdir(tmp_path)
     for command in commands:
         result = runner.invoke(app, shlex.split(command))
@@ -874,3 +984,58 @@ def test_help_texts_keep_their_units_in_brackets():
     assert "how far the description's loops close [m, rad]" in check
     export = " ".join(CliRunner().invoke(app, ["export", "--help"], terminal_width=200).output.split())
     assert "MuJoCo step [s]" in export
+
+
+def _elbow(O: np.ndarray, P: np.ndarray, outward: float, proximal: float, distal: float) -> np.ndarray:
+    """The five-bar elbow on circles (O, proximal) and (P, distal), on the side ``outward`` (-1 or +1)."""
+    d = float(np.linalg.norm(P - O))
+    a = (proximal**2 - distal**2 + d**2) / (2 * d)
+    h = math.sqrt(proximal**2 - a**2)
+    mid = O + a * (P - O) / d
+    normal = np.array([-(P - O)[1], (P - O)[0]]) / d
+    return max((mid + h * normal, mid - h * normal), key=lambda E: outward * E[0])
+
+
+def test_accuracy_fivebar_bound_is_the_closed_form_of_the_leg_constraints():
+    """`accuracy fivebar x= y= --tol t,0`: each leg keeps the tip on its distal circle, (P - E).(dP - w) = 0.
+
+    ``w`` is the leg tip's displacement by an error at fixed joint angles: a motor or elbow placement
+    error moves it by the error (rotated into the parent link), a tip-frame error by the error in the
+    distal link's axes; errors along z move nothing in the plane and the angle tolerance is 0.
+    """
+    base, proximal, distal, t = 0.2, 0.15, 0.2, 2e-5  # the builder's defaults, kept by the preset
+    P = np.array([0.03, 0.24])
+    result = runner.invoke(app, ["accuracy", "fivebar", "x=0.03", "y=0.24", f"--tol={t},0", "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    columns = []
+    A = []
+    for k, (O, outward) in enumerate(((np.array([-base / 2, 0.0]), -1.0), (np.array([base / 2, 0.0]), 1.0))):
+        E = _elbow(O, P, outward, proximal, distal)
+        A.append(P - E)
+        a, phi = math.atan2(*(E - O)[::-1]), math.atan2(*(P - E)[::-1])
+        for rotation in (0.0, a, phi):  # the motor's, the elbow's and the tip frame's placement axes
+            for e in np.eye(2):
+                w = (
+                    np.array(
+                        [[math.cos(rotation), -math.sin(rotation)], [math.sin(rotation), math.cos(rotation)]]
+                    )
+                    @ e
+                )
+                rhs = np.zeros(2)
+                rhs[k] = (P - E) @ w
+                columns.append(rhs)
+    S = np.linalg.solve(np.array(A), np.array(columns).T)
+    assert data["worst_case"] == pytest.approx(np.abs(S).sum(axis=1) * t, rel=1e-8)
+    assert data["rms"] == pytest.approx(np.sqrt((S**2).sum(axis=1)) * t, rel=1e-8)
+    assert data["length_tolerance"] == t and data["angle_tolerance"] == 0.0
+    table = runner.invoke(app, ["accuracy", "fivebar", "x=0.03", "y=0.24", f"--tol={t},0"])
+    assert table.exit_code == 0 and "38 parameters" in table.stdout
+
+
+@pytest.mark.parametrize("tol", ["", "1e-5", "1e-5,-1", "a,b"])
+def test_accuracy_refuses_a_malformed_tolerance(tol):
+    args = ["accuracy", "fivebar"] + ([f"--tol={tol}"] if tol else [])
+    result = runner.invoke(app, args)
+    assert result.exit_code == 1
+    assert "LENGTH,ANGLE" in result.output

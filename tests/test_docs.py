@@ -78,6 +78,7 @@ def test_docs_have_the_pages_the_user_needs(site):
         "guide/singularities",
         "guide/statics",
         "guide/stiffness",
+        "guide/accuracy",
         "guide/mujoco",
         "guide/cad-and-mujoco",
         "guide/any-robot",

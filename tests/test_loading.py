@@ -55,7 +55,7 @@ def test_unknown_parameter_and_preset_are_refused_with_the_valid_names():
         f"{list(builder_parameters(build_2prrrp))}"
     )
     assert "'rod_lengths', 'half_plate'" in str(err.value)
-    with pytest.raises(plm_pin.InvalidInput, match=r"unknown preset 'harada'; presets are \['enferadi"):
+    with pytest.raises(plm_pin.InvalidInput, match=r"unknown preset 'harada'; presets are \['delta', 'enf"):
         build_mechanism("harada")
     with pytest.raises(plm_pin.InvalidInput, match="expected a preset name or a builder callable, got 3"):
         build_mechanism(3)  # type: ignore[arg-type]

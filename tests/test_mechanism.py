@@ -27,6 +27,11 @@ EXPECTED = {
     "enferadi2017_star_triangle": (3, 0),
     "zhao2011_8pss": (6, 2),
     "zhao2011_6pss": (6, 0),
+    # Chebychev-Grubler: the planar 3-RPR 3 (x, y, rz), a 6-UPS 6 (six 6-DOF legs on a rigid
+    # platform), the Delta 3 (each parallelogram blocks two rotations of the platform)
+    "planar_3rpr": (3, 0),
+    "stewart_6ups": (6, 0),
+    "delta": (3, 0),
 }
 
 

@@ -14,6 +14,7 @@ GUIDE_PAGES = (
     "singularities",
     "statics",
     "stiffness",
+    "accuracy",
     "viewer",
     "dynamics",
     "simulation",
@@ -21,6 +22,7 @@ GUIDE_PAGES = (
     "mujoco",
     "cad-and-mujoco",
     "any-robot",
+    "legs",
 )
 """The docs/guide pages whose examples were the README's (each in a namespace of its own)."""
 

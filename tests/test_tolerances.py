@@ -26,11 +26,15 @@ STEPS = {
     "_MIN_EXTENT",
     "_ROD",
     "_ARROW",
+    "_RAIL",
+    "_EDGE",
+    "CAMERA_NEAR",
     "CHORD_RATIO",
 }
 """Small module constants that are steps, sizes or rates, not tolerances: time steps [s], the
 adaptive step below which an integrator is stuck [s], a finite-difference step [m, rad], viewer
-sizes [m], and the rate of convergence that lets a Newton iteration keep its factorisation."""
+sizes [m] and the camera's near plane [-], and the rate of convergence that lets a Newton
+iteration keep its factorisation."""
 
 
 def _sources() -> list[Path]:

@@ -122,7 +122,7 @@ def check_finite_result(mech: Mechanism, what: str, **arrays: np.ndarray) -> Non
         DescriptionError: when a body's inertia is not finite (see :func:`check_finite_model`).
         InvalidInput: otherwise, naming the arrays with non-finite entries.
     """
-    bad = [name for name, arr in arrays.items() if not np.all(np.isfinite(arr))]
+    bad = [name for name, arr in arrays.items() if not np.isfinite(arr).all()]  # the method: no wrapper
     if not bad:
         return
     check_finite_model(mech)

@@ -160,7 +160,8 @@ def build_model(description: Description) -> pin.Model:
     one :class:`~plm_pin.warnings.MissingLimitsWarning` (see :func:`open_missing_limits`).
 
     Raises:
-        DescriptionError: when Pinocchio rejects the URDF.
+        DescriptionError: when Pinocchio rejects the URDF, or a frame the sidecar names is the
+            name of several frames (a joint and a link named alike).
         FrameNotFound: when the sidecar names a frame or joint the model lacks.
     """
     label = str(description.urdf_path) if description.urdf_path else "<urdf>"
@@ -176,6 +177,7 @@ def build_model(description: Description) -> pin.Model:
         for name in closure.frames:
             if not model.existFrame(name):
                 raise FrameNotFound(name, frames, "frame", f"{side}: closure {short(closure.name)}")
+            _unique_frame(model, name, f"{side}: closure {short(closure.name)}")
         bodies = {model.frames[model.getFrameId(name)].parentJoint for name in closure.frames}
         if len(bodies) == 1:
             raise DescriptionError(
@@ -185,8 +187,10 @@ def build_model(description: Description) -> pin.Model:
                 side,
             )
     task = sidecar.task
-    if task is not None and task.frame is not None and not model.existFrame(task.frame):
-        raise FrameNotFound(task.frame, frames, "frame", f"{side}: end_effector")
+    if task is not None and task.frame is not None:
+        if not model.existFrame(task.frame):
+            raise FrameNotFound(task.frame, frames, "frame", f"{side}: end_effector")
+        _unique_frame(model, task.frame, f"{side}: end_effector")
     joints = list(model.names)[1:]
     for joint in task.joints if task is not None else ():
         if not model.existJointName(joint):
@@ -217,6 +221,21 @@ def build_model(description: Description) -> pin.Model:
     model.gravity.linear = np.array(sidecar.gravity, dtype=float)
     open_missing_limits(model, label)
     return model
+
+
+def _unique_frame(model: pin.Model, name: str, where: str) -> None:
+    """Refuse a sidecar frame name that several frames of the model carry (a joint and a link of one name).
+
+    Raises:
+        DescriptionError: naming the frame, the kinds of frames carrying it and ``where`` it is used.
+    """
+    kinds = [str(f.type).split(".")[-1].lower() for f in model.frames if f.name == name]
+    if len(kinds) > 1:
+        raise DescriptionError(
+            f"frame {short(name)} is ambiguous: {len(kinds)} frames of the model carry that name "
+            f"({', '.join(kinds)}: a joint and a link named alike); rename the link or the joint",
+            where,
+        )
 
 
 def build_visual_model(model: pin.Model, description: Description) -> pin.GeometryModel:

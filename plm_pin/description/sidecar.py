@@ -36,15 +36,16 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-import yaml
-
 from .._arguments import repeated
+from .._lazy import lazy_module
 from .._text import short
 from .._yaml import YamlRefused, load_yaml
 from ..exceptions import DescriptionError
 from ..tolerances import AXIS_MIN
 from ._numbers import number
 from .compliance import ComplianceSpec, parse_compliance
+
+yaml = lazy_module("yaml")  # safe_dump: imported when a sidecar is written
 
 FORMAT = "plm-pin/1"
 SIDECAR_SUFFIX_DEFAULT = ".plm.yaml"

@@ -47,6 +47,51 @@ def transform(xyz: Vec3 = (0.0, 0.0, 0.0), rpy: Vec3 = (0.0, 0.0, 0.0)) -> np.nd
     return T
 
 
+def universal_frame_rpy(direction: Vec3 | np.ndarray) -> Vec3:
+    r"""Roll-pitch-yaw [rad] of a frame whose z axis is ``direction`` (unit), yaw 0.
+
+    :math:`R_y(\beta) R_x(\alpha) \hat z = (s_\beta c_\alpha, -s_\alpha, c_\beta c_\alpha)`.
+    """
+    ex, ey, ez = (float(c) for c in direction)
+    return (math.atan2(-ey, math.hypot(ex, ez)) + 0.0, math.atan2(ex, ez) + 0.0, 0.0)
+
+
+def universal_angles(strut: np.ndarray, frame_rpy: Sequence[float]) -> tuple[float, float]:
+    r"""Universal-joint angles :math:`(\alpha, \beta)` [rad] that point the strut along ``strut``.
+
+    The strut's z axis is :math:`R_\rho R_x(\alpha) R_y(\beta) \hat z` with :math:`R_\rho`
+    the universal joint's frame; with :math:`d = R_\rho^T w = (s_\beta, -s_\alpha c_\beta,
+    c_\alpha c_\beta)`: :math:`\beta = \arcsin d_x`, :math:`\alpha = \operatorname{atan2}(-d_y, d_z)`.
+    """
+    d = transform(rpy=frame_rpy)[:3, :3].T @ np.asarray(strut, dtype=float)
+    return math.atan2(-d[1], d[2]) + 0.0, math.asin(max(-1.0, min(1.0, float(d[0])))) + 0.0
+
+
+def frame_rpy(x_axis: Vec3 | np.ndarray, z_axis: Vec3 | np.ndarray) -> Vec3:
+    """Roll-pitch-yaw [rad] of the frame whose z axis is ``z_axis`` and whose x axis is ``x_axis``.
+
+    ``z_axis`` is normalised; ``x_axis`` is made normal to it (its component along ``z_axis`` removed).
+
+    Raises:
+        DescriptionError: a zero ``z_axis``, or an ``x_axis`` along it.
+    """
+    z = np.asarray(z_axis, dtype=float)
+    x = np.asarray(x_axis, dtype=float)
+    nz = float(np.linalg.norm(z))
+    if not nz > 0.0:
+        raise DescriptionError(f"frame_rpy: the z axis must be a non-zero vector, got {tuple(z_axis)}")
+    z = z / nz
+    x = x - float(x @ z) * z
+    nx = float(np.linalg.norm(x))
+    if not nx > 0.0:
+        raise DescriptionError(f"frame_rpy: the x axis {tuple(x_axis)} lies along the z axis {tuple(z_axis)}")
+    x = x / nx
+    R = np.column_stack([x, np.cross(z, x), z])
+    pitch = math.asin(max(-1.0, min(1.0, -float(R[2, 0]))))
+    roll = math.atan2(float(R[2, 1]), float(R[2, 2]))
+    return (roll + 0.0, pitch + 0.0, math.atan2(float(R[1, 0]), float(R[0, 0])) + 0.0)
+
+
 def material(kind: str) -> yourdfpy.Material:
     """A named colour material (one of :data:`COLORS`)."""
     return yourdfpy.Material(name=kind, color=yourdfpy.Color(rgba=np.array(COLORS[kind])))

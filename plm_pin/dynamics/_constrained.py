@@ -77,6 +77,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
+from .._linalg import lu_solve
 from ..core import closures as _closures
 from ..core.assembly import assemble
 from ..core.closures import Closure
@@ -335,7 +336,7 @@ class ClosedChainDynamics:
         K[:nv, :nv] = M
         K[:nv, nv:] = -W.T
         K[nv:, :nv] = W
-        return np.linalg.solve(K, np.concatenate([top, bottom]))
+        return lu_solve(K, np.concatenate([top, bottom]))
 
     def residual_from_data(self) -> np.ndarray:
         """Closure residual (m,) from the frame placements in ``self.data``."""
@@ -370,7 +371,7 @@ class ClosedChainDynamics:
         if w is not None:
             rhs += w
         if not self.closures:
-            return np.linalg.solve(M, rhs), np.zeros(0)
+            return lu_solve(M, rhs), np.zeros(0)
         gamma = _closures.drift_from_data(model, data, self.closures)
         Ur, sr, W = self._reduced_rows(J, (q, v)) if rows is None else rows
         sol = self._saddle(M, W, rhs, -(Ur.T @ gamma) / sr)

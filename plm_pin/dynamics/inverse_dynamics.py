@@ -33,6 +33,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._arguments import check_tolerance, flag, load_arguments, mapping, repeated
+from .._linalg import det_sign
 from .._text import short
 from ..core import closures as _closures
 from ..core.checks import check_finite_model, check_samples_assembled
@@ -425,7 +426,7 @@ def _run(
             if (
                 kinematics.J_task is not None
             ):  # a sign change of det J_ce between samples: a direct singularity
-                sign = float(np.sign(np.linalg.det(C)) * np.sign(np.linalg.det(kinematics.J_task[i] @ N)))
+                sign = det_sign(C) * det_sign(kinematics.J_task[i] @ N)
                 if sign * previous_sign < 0:
                     raise SingularConfiguration(
                         f"det J_ce changed sign after t = {trajectory.t[i - 1]:.9g} s: the trajectory "

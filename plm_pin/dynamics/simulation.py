@@ -75,6 +75,7 @@ from numpy.typing import ArrayLike
 from scipy.integrate import DOP853
 
 from .._arguments import as_vector, optional_name, physical_effort, positive, real_numbers, sample_count
+from .._linalg import lu_solve
 from ..core.mechanism import Mechanism
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
 from ..results import Result, unit
@@ -273,7 +274,7 @@ class _Run:
         """Chart rate of ``q = q0 + delta``: the velocity ``v`` pulled back to ``delta``."""
         if self.euclidean:
             return v
-        return np.linalg.solve(pin.dIntegrate(self.model, q0, delta, pin.ArgumentPosition.ARG1), v)
+        return lu_solve(pin.dIntegrate(self.model, q0, delta, pin.ArgumentPosition.ARG1), v)
 
     def _accel(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         return self.dyn.acceleration(q, v, self.tau(t, q, v))

@@ -56,6 +56,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._arguments import as_vector, check_tolerance
+from .._linalg import lu_solve
 from ..core.checks import check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
@@ -150,7 +151,7 @@ class TaskSpaceDynamics(Result):
         Args:
             f_x: generalized task force, e.g. :math:`J_{ce}^T f_c` [N, N m], shape (n_task,).
         """
-        return np.linalg.solve(self.M_x, check_task_vector(f_x, len(self.dofs), "f_x") - self.h_x - self.g_x)
+        return lu_solve(self.M_x, check_task_vector(f_x, len(self.dofs), "f_x") - self.h_x - self.g_x)
 
     def to_dict(self) -> dict[str, object]:
         """Plain data for JSON, with the units of ``M_x`` (row-major) and of the force rows."""

@@ -72,6 +72,7 @@ from numpy.typing import ArrayLike
 
 from .._arguments import check_tolerance, positive, real_numbers, signs
 from .._lazy import lazy_module
+from .._linalg import LU, det_sign
 from .._text import short
 from ..core import closures as _closures
 from ..core.mechanism import Mechanism, require_task
@@ -541,9 +542,10 @@ def task_trajectory(
         except (PoseUnreachable, SingularConfiguration) as exc:
             raise rec.stop("task", k, exc) from exc
         T_r = J_r @ jac.N  # (n_task, mobility)
-        v = jac.N @ np.linalg.solve(T_r, xd_all[k])
+        lu = LU(T_r)
+        v = jac.N @ lu.solve(xd_all[k])
         a_p = particular_acceleration(mech, sol.q, v, jac.J_phi)
-        a = a_p + jac.N @ np.linalg.solve(T_r, xdd_all[k] - rows.drift(mech.data) - J_r @ a_p)
+        a = a_p + jac.N @ lu.solve(xdd_all[k] - rows.drift(mech.data) - J_r @ a_p)
         rec.record(k, sol.q, v, a, jac.J_x, sol.actuators)
     return rec.result()
 
@@ -613,7 +615,7 @@ def actuator_trajectory(
     act = mech.actuated_v_indices
     square = mech.n_actuators == mech.mobility
     N_prev: np.ndarray | None = None
-    det_sign = 0.0
+    path_sign = 0.0
     for k in range(ts.shape[0]):
         try:
             fixed = dict(zip(names, c_all[k].tolist(), strict=True))
@@ -622,16 +624,16 @@ def actuator_trajectory(
             _check_regular(mech, jac, singularity_tol, "direct")
             N = jac.N  # (nv, mobility)
             if square:  # orient N along the path; det C must then keep its sign
-                if N_prev is not None and np.linalg.det(N_prev.T @ N) < 0.0:
+                if N_prev is not None and det_sign(N_prev.T @ N) < 0.0:
                     N = N.copy()
                     N[:, 0] *= -1.0
-                sign = float(np.sign(np.linalg.det(N[act])))
-                if det_sign and sign != det_sign:
+                sign = det_sign(N[act])
+                if path_sign and sign != path_sign:
                     raise SingularConfiguration(
                         f"det C changed sign after t = {ts[k - 1]:.9g} s: the path crossed a direct "
                         "(type 2) singularity and the assembly mode changed"
                     )
-                det_sign, N_prev = sign, N
+                path_sign, N_prev = sign, N
             C = N[act]  # (n_act, mobility)
             v = N @ _fit(C, cd_all[k], consistency_tol, "rates", names)
             a_p = particular_acceleration(mech, q, v, jac.J_phi)

@@ -1,4 +1,4 @@
-"""Closed-chain kinematics of a Mechanism: IK, FK, Jacobians, modes, singularities, limits, paths, reference.
+"""Closed-chain kinematics of a Mechanism: IK, FK, Jacobians, accuracy, modes, singularities, limits, paths.
 
 Generic: any mechanism with a sidecar; the Mechanism and what it is made of (closures, task,
 legs, assembly) are in :mod:`plm_pin.core`. Family-specific modes and planners (the 2-PRRRP's) are in
@@ -6,6 +6,7 @@ legs, assembly) are in :mod:`plm_pin.core`. Family-specific modes and planners (
 """
 
 from ..core.task import TaskTarget
+from .accuracy import ErrorBound, ErrorModel, Sensitivity, error_bound, error_model, sensitivity
 from .forward import FKSolution, forward_kinematics, same_assembly, task_pose
 from .inverse import IKSolution, inverse_kinematics, working_modes
 from .jacobians import ClosedChainJacobians, closed_chain_jacobians
@@ -17,18 +18,23 @@ from .working_mode import guess_mode, working_mode
 
 __all__ = [
     "ClosedChainJacobians",
+    "ErrorBound",
+    "ErrorModel",
     "FKSolution",
     "IKSolution",
     "ModeEdge",
     "ModeGraph",
     "ModeNode",
     "ReferenceReport",
+    "Sensitivity",
     "SingularityReport",
     "TaskTarget",
     "TrackedPath",
     "choose_reference",
     "classify",
     "closed_chain_jacobians",
+    "error_bound",
+    "error_model",
     "follow_targets",
     "forward_kinematics",
     "guess_mode",
@@ -36,6 +42,7 @@ __all__ = [
     "redundancy_margin",
     "reference_report",
     "same_assembly",
+    "sensitivity",
     "task_pose",
     "track_actuator_path",
     "working_mode",

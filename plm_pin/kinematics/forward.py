@@ -113,7 +113,7 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
     roots = [(r.x, True) for r in res.real] + [(x, False) for x in res.uncertified]  # kept: complete=False
     complete = res.complete
     for xr, certified in roots:
-        q = to_configuration(form, mech, xr, c)
+        q = _with_actuators(mech, to_configuration(form, mech, xr, c[form.parameters]), c)
         if form.eliminated_v.size:  # the legs reduced to distances: find their angles again
             q = _fit_eliminated(mech, q, form.eliminated_v, tol)
         try:

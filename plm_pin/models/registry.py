@@ -1,8 +1,9 @@
-"""The registry of named presets: the papers' mechanisms and small classic chains.
+"""The registry of named presets: the papers' mechanisms, classic chains, textbook ones from leg types.
 
 Each preset names its builder as a ``"module:function"`` string, imported when the preset is
 built (:attr:`Preset.builder`), so the registry (read by :func:`plm_pin.load`) imports no
-mechanism family: loading a shipped preset reads its committed URDF and never runs a builder.
+mechanism family nor :mod:`plm_pin.legs`: loading a shipped preset reads its committed URDF and
+never runs a builder.
 """
 
 from __future__ import annotations
@@ -229,6 +230,16 @@ _ZHAO2011_NOTES = (
 )
 
 
+def _ring(
+    radius: float, degrees: tuple[float, ...], z: float = 0.0
+) -> tuple[tuple[float, float, float], ...]:
+    """Points at ``degrees`` on a horizontal circle of ``radius`` [m] at height ``z`` [m]."""
+    return tuple(
+        (radius * math.cos(math.radians(a)) + 0.0, radius * math.sin(math.radians(a)) + 0.0, z)
+        for a in degrees
+    )
+
+
 PRESETS: dict[str, Preset] = {
     p.name: p
     for p in sorted(
@@ -322,6 +333,78 @@ PRESETS: dict[str, Preset] = {
                     "Gravity 9.81 m/s^2 along -y; reference pose x = 0, y = 0.10 m, theta = 0, "
                     "assembly mode [+ +], working modes (- + - +).",
                     _PRRRP_LAYERS,
+                ),
+            ),
+            Preset(
+                "delta",
+                "plm_pin.legs.delta:build_delta",
+                _frozen(
+                    base=_ring(0.20, (0.0, 120.0, 240.0)),
+                    platform=_ring(0.05, (0.0, 120.0, 240.0)),
+                    arm=0.30,
+                    forearm=0.60,
+                    width=0.08,
+                    pose=(0.0, 0.0, -0.50),
+                    density=0.5,
+                    platform_mass=0.3,
+                ),
+                "plm_pin: a Clavel Delta built from leg types (plm_pin.legs.delta)",
+                3,
+                3,
+                "spatial Delta, 3 driven arms and 3 parallelograms (6 ball-ended rods), x-y-z platform",
+                (
+                    "Dimensions ours (a textbook Delta): pivots on a 0.20 m circle, platform points on "
+                    "0.05 m, arms 0.30 m, rods 0.60 m, parallelograms 0.08 m wide; reference 0.50 m below "
+                    "the base.",
+                    "Rods and arms 0.5 kg/m, platform 0.3 kg; no torque limits.",
+                ),
+            ),
+            Preset(
+                "planar_3rpr",
+                "plm_pin.legs.planar:build_planar",
+                _frozen(
+                    leg="RPR",
+                    base=tuple((x, y) for x, y, _ in _ring(0.30, (90.0, 210.0, 330.0))),
+                    platform=tuple((x, y) for x, y, _ in _ring(0.15, (30.0, 150.0, 270.0))),
+                    pose=(0.0, 0.0, 0.0),
+                    stroke=(0.10, 0.40),
+                    density=1.0,
+                    platform_mass=1.0,
+                    gravity=(0.0, 0.0, -9.81),
+                ),
+                "plm_pin: a planar 3-RPR built from leg types (plm_pin.legs.planar)",
+                3,
+                3,
+                "planar 3-RPR, 3 driven cylinders between a base and a platform triangle, x-y-rz platform",
+                (
+                    "Dimensions ours: base hinges on a 0.30 m circle at 90, 210 and 330 deg, platform "
+                    "hinges on 0.15 m at 30, 150 and 270 deg (turned by 60 deg: with both triangles alike "
+                    "the legs of the centred pose meet in the centre, a direct singularity); cylinders "
+                    "0.10-0.40 m.",
+                    "Horizontal plane (gravity along -z); cylinders 1 kg/m, platform 1 kg; no force limits.",
+                ),
+            ),
+            Preset(
+                "stewart_6ups",
+                "plm_pin.legs.hexapod:build_hexapod",
+                _frozen(
+                    leg="UPS",
+                    base=_ring(0.50, (-10.0, 10.0, 110.0, 130.0, 230.0, 250.0)),
+                    platform=_ring(0.30, (-50.0, 50.0, 70.0, 170.0, 190.0, 290.0)),
+                    pose=(0.0, 0.0, 0.80, 0.0, 0.0, 0.0),
+                    stroke=(0.50, 1.20),
+                    density=2.0,
+                    platform_mass=5.0,
+                ),
+                "plm_pin: a Gough-Stewart 6-UPS built from leg types (plm_pin.legs.hexapod)",
+                6,
+                6,
+                "spatial Gough-Stewart platform, 6 driven legs (universal joint, cylinder, ball)",
+                (
+                    "Dimensions ours (a textbook 6-6 platform): base joints on a 0.50 m circle in pairs "
+                    "20 deg apart, platform joints on 0.30 m, offset by 60 deg; reference 0.80 m above the "
+                    "base, level; legs 0.50-1.20 m.",
+                    "Cylinders and pistons 2 kg/m, platform 5 kg; no force limits.",
                 ),
             ),
             Preset(

@@ -13,7 +13,9 @@ simulation take the load, every section the pose and working mode, the slice the
 from __future__ import annotations
 
 import itertools
+import weakref
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -38,6 +40,7 @@ from ..viz import (
     plot_sweep,
 )
 from ..workspace import (
+    SingularPoint,
     WorkspaceSlice,
     manipulability,
     manipulability_unit,
@@ -177,14 +180,38 @@ def load_names(mech: Mechanism) -> list[str]:
     return [("m" if d.startswith("r") else "f") + d[-1] for d in mech.task.dofs]
 
 
+_solved: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[Any, ...], OverviewCase]] = (
+    weakref.WeakKeyDictionary()
+)
+"""The last case solved for each mechanism, with its key: the shell checks a case, then the study reads it."""
+
+
 def overview_case(mech: Mechanism, case: StudyCase) -> OverviewCase:
     """Check ``case`` against ``mech`` and solve its pose (inverse kinematics in its working mode).
+
+    The answer is kept for ``mech`` (while it lives): asked again for the same case, the
+    pose is not solved again.
 
     Raises:
         InvalidInput: a load of the wrong size, unknown pose or slice coordinates, more than two
             varied coordinates, a malformed working mode, or a case given to a mechanism without task.
         PoseUnreachable: a pose the inverse kinematics cannot reach (in the working mode).
     """
+    key = (
+        case.load,
+        tuple(sorted(case.pose.items())),
+        case.mode,
+        tuple(sorted((name, tuple(v)) for name, v in case.ranges.items())),
+    )
+    kept = _solved.get(mech)
+    if kept is not None and kept[0] == key:
+        return kept[1]
+    checked = _check_case(mech, case)
+    _solved[mech] = (key, checked)
+    return checked
+
+
+def _check_case(mech: Mechanism, case: StudyCase) -> OverviewCase:
     dofs = tuple(mech.task.dofs) if mech.task is not None else ()
     if not dofs and not case.empty:
         raise InvalidInput(
@@ -236,10 +263,11 @@ def run(ctx: StudyContext) -> None:
     square = mech.task is not None and len(mech.task.dofs) == mech.mobility
     _mobility(ctx.section("Mobility and redundancy"), mech, square, case)
     section = ctx.section("Workspace slice: manipulability and singularities")
-    grid = None
+    grid: WorkspaceSlice | None = None
+    loci: list[SingularPoint] = []
     if square:
         ctx.step(f"{mech.name}: workspace slice")
-        grid = _workspace(section, mech, case)
+        grid, loci = _workspace(section, mech, case)
     else:
         section.text(NEEDS_SQUARE_TASK.format(what="No workspace slice"))
     ctx.step(f"{mech.name}: static forces at {where}")
@@ -256,7 +284,7 @@ def run(ctx: StudyContext) -> None:
     title = "released under gravity" + ("" if case.wrench is None else " and the load")
     _simulation(ctx.section(f"Short simulation: {title}"), mech, case)
     ctx.step(f"{mech.name}: 3D scene")
-    _scene(ctx.section("3D view"), mech, forces, case)
+    _scene(ctx.section("3D view"), mech, forces, case, grid, loci)
 
 
 def _mobility(section: Section, mech: Mechanism, square: bool, case: OverviewCase) -> None:
@@ -388,7 +416,9 @@ def _transmission(section: Section, mech: Mechanism, q: np.ndarray, at: str) -> 
     )
 
 
-def _workspace(section: Section, mech: Mechanism, case: OverviewCase) -> WorkspaceSlice:
+def _workspace(
+    section: Section, mech: Mechanism, case: OverviewCase
+) -> tuple[WorkspaceSlice, list[SingularPoint]]:
     assert mech.task is not None
     dofs = mech.task.dofs
     x0 = task_pose(mech, case.q)
@@ -491,7 +521,7 @@ def _workspace(section: Section, mech: Mechanism, case: OverviewCase) -> Workspa
                 for p in loci
             ],
         )
-    return grid
+    return grid, loci
 
 
 PRELOAD_STEPS = 5
@@ -790,7 +820,14 @@ def _internal_range(section: Section, mech: Mechanism, sol: StaticForces, case: 
     )
 
 
-def _scene(section: Section, mech: Mechanism, forces: StaticForces | None, case: OverviewCase) -> None:
+def _scene(
+    section: Section,
+    mech: Mechanism,
+    forces: StaticForces | None,
+    case: OverviewCase,
+    grid: WorkspaceSlice | None,
+    loci: list[SingularPoint],
+) -> None:
     viewer = MeshcatViewer(mech, static=True)
     q = case.q
     if forces is None:
@@ -807,4 +844,9 @@ def _scene(section: Section, mech: Mechanism, forces: StaticForces | None, case:
             f"The mechanism at {case.where} with its static forces ({scale:.3g} m/N); "
             "closure points in green."
         )
-    section.scene(viewer.static_html(), caption, {"q": q, "arrows": arrows, "scale": scale})
+    data: dict[str, Any] = {"q": q, "arrows": arrows, "scale": scale}
+    if grid is not None and mech.task_frame_id is not None:  # the slice's overlays, at the task frame
+        data["workspace_boundary"] = viewer.show_workspace(grid)
+        data["singular_points"] = viewer.show_singular_points(loci)
+        caption += " Dots: the task frame at the boundary of the workspace slice and at its singular points."
+    section.scene(viewer.static_html(), caption, data)

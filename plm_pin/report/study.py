@@ -208,10 +208,15 @@ class StudyContext:
         target: str | Path | None,
         observer: Callable[[str], None] | None = None,
         case: StudyCase | None = None,
+        loaded: Mechanism | None = None,
     ) -> None:
-        """Start an empty report for ``study`` on ``target`` and ``case``; ``observer`` receives the steps."""
+        """Start an empty report for ``study`` on ``target`` and ``case``; ``observer`` receives the steps.
+
+        ``loaded`` is ``target`` already loaded (by the caller): :meth:`load` returns it.
+        """
         self.study = study
         self.target = target
+        self._loaded = loaded
         self.case = StudyCase() if case is None else case
         self._observer = observer
         self._sections: list[Section] = []
@@ -230,7 +235,12 @@ class StudyContext:
         chosen = self.target if target is None else target
         if chosen is None:
             raise InvalidInput(f"study {self.study.name!r} takes no mechanism; give one to ctx.load")
-        mech = chosen if isinstance(chosen, Mechanism) else load(chosen)
+        if isinstance(chosen, Mechanism):
+            mech = chosen
+        elif target is None and self._loaded is not None:
+            mech = self._loaded
+        else:
+            mech = load(chosen)
         mech.summary()  # mobility now, inside the study's error handling
         self._mechanisms.setdefault(mech.name, _describe(mech, chosen))
         return mech
@@ -271,6 +281,7 @@ def run_study(
     command: str = "",
     observer: Callable[[str], None] | None = None,
     case: StudyCase | None = None,
+    loaded: Mechanism | None = None,
 ) -> StudyResult:
     """Run a study in memory and return its report (nothing is written).
 
@@ -282,6 +293,8 @@ def run_study(
         command: the shell command that writes this report, shown in it.
         observer: called with each step's description (for a progress display).
         case: the load, pose, working mode and slice to study (a study with ``TAKES_CASE``).
+        loaded: ``mechanism`` already loaded by the caller (e.g. to check ``case`` first), used
+            instead of loading it again.
 
     Raises:
         InvalidInput: a mechanism given to a study that takes none, a case to a study that
@@ -294,7 +307,7 @@ def run_study(
         raise InvalidInput(
             f"study {study.name!r} takes no load, pose, working mode or slice ranges; the overview does"
         )
-    ctx = StudyContext(study, study.mechanism if mechanism is None else mechanism, observer, case)
+    ctx = StudyContext(study, study.mechanism if mechanism is None else mechanism, observer, case, loaded)
     start = time.perf_counter()
     generated = datetime.now(timezone.utc).isoformat(timespec="seconds")
     with warnings.catch_warnings(record=True) as caught:

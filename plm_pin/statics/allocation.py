@@ -32,6 +32,7 @@ import numpy as np
 import proxsuite
 
 from .._arguments import nonfinite_indices, real_numbers
+from .._linalg import lu_solve
 from ..exceptions import AllocationInfeasible, InvalidInput, PlmError
 from ..results import Result, unit
 from ..tolerances import FEASIBILITY_RTOL, QP_EPS, QP_INFEASIBILITY_EPS
@@ -181,7 +182,7 @@ def _unconstrained(f_p: np.ndarray, G: np.ndarray, W: np.ndarray) -> np.ndarray:
     WG = W @ G
     if G.shape[1] == 1:  # one internal force (3D4M): a scalar
         return np.array([-(WG[:, 0] @ f_p) / (G[:, 0] @ WG[:, 0])])
-    return np.linalg.solve(G.T @ WG, -(WG.T @ f_p))
+    return lu_solve(G.T @ WG, -(WG.T @ f_p))
 
 
 def _min_norm(
@@ -376,7 +377,7 @@ def _polish(
     K[n:, :n] = Da
     b = np.concatenate([-g, rhs])
     try:
-        sol = np.linalg.solve(K, b)
+        sol = lu_solve(K, b)
     except np.linalg.LinAlgError:  # a degenerate active set: the least-squares solution
         sol = np.linalg.lstsq(K, b, rcond=None)[0]
     y_pol = sol[:n]

@@ -220,7 +220,7 @@ class StaticBalance(Result):
 
     def residual(self, f_c: np.ndarray, lam: np.ndarray) -> float:
         r"""Equilibrium residual :math:`\|B f_c + J_\phi^T \lambda - \tau\|_\infty` [N, N m]."""
-        return float(np.max(np.abs(self.generalized(f_c) + self.J_phi.T @ lam - self.tau), initial=0.0))
+        return float(abs(self.generalized(f_c) + self.J_phi.T @ lam - self.tau).max(initial=0.0))
 
     def scale(self, f_c: np.ndarray) -> float:
         """Largest generalized force in the balance, for relative tolerances [N, N m]."""

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._arguments import effort_limits, finite_number, load_arguments, mapping, real_numbers
+from .._linalg import lu_solve
 from .._text import short
 from ..core.checks import check_finite_result
 from ..core.mechanism import Mechanism
@@ -251,7 +252,7 @@ class AllocationRule:
         WG = self.weights @ G
         if G.shape[1] == 1:  # one internal force (3D4M): a scalar
             return P - G @ ((WG.T @ P) / float(G[:, 0] @ WG[:, 0]))
-        return P - G @ np.linalg.solve(G.T @ WG, WG.T @ P)
+        return P - G @ lu_solve(G.T @ WG, WG.T @ P)
 
 
 def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule) -> StaticForces:
@@ -447,4 +448,4 @@ def _internal_from_links(mech: Mechanism, balance: StaticBalance, targets: Mappi
         raise InvalidInput(
             f"the internal forces do not load the links {list(targets)} independently; choose others"
         )
-    return np.linalg.solve(R, np.array([float(v) for v in targets.values()])) if k else np.zeros(0)
+    return lu_solve(R, np.array([float(v) for v in targets.values()])) if k else np.zeros(0)

@@ -30,6 +30,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._linalg import lu_solve
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
@@ -100,7 +101,7 @@ def transmission(mech: Mechanism, q: ArrayLike) -> Transmission:
             f"{mech.name}: the actuators cannot drive the task here (a dead centre, direct singularity): "
             f"the actuator rates per motion have singular values {s_C.tolist()}"
         )
-    ratio = jac.T @ np.linalg.inv(jac.C)  # (n_task, n_act)
+    ratio = lu_solve(jac.C.T, jac.T.T).T  # (n_task, n_act): T C^-1
     S = jac.S  # (nv, n_task); raises at an inverse singularity
     n = task.size
     F = np.empty((mech.n_actuators, n))

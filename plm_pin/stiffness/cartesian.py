@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .._arguments import as_vector
+from .._linalg import lu_solve
 from ..core.closures import jacobian_from_data
 from ..core.mechanism import Mechanism, require_task
 from ..description.compliance import ComplianceSpec
@@ -250,7 +251,7 @@ def stiffness(
         mech, q, wrench, frame, gravity=gravity, internal=internal, forces=forces, compliance=compliance
     )
     B, T, H, terms, unresisted = condense(state)
-    HiT = np.linalg.solve(H, T.T)
+    HiT = lu_solve(H, T.T)
     C = T @ HiT
     s = np.linalg.svd(C, compute_uv=False)
     if s.size == 0 or s[-1] <= TASK_COMPLIANCE_RTOL * s[0]:

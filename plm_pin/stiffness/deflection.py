@@ -25,6 +25,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._arguments import count, optional_name, real_numbers
+from .._linalg import lu_solve
 from ..core.mechanism import Mechanism, require_frame_task
 from ..description.compliance import ComplianceSpec
 from ..exceptions import InvalidInput, SingularConfiguration
@@ -128,7 +129,7 @@ def deflection(
     B, T, H, _, _ = condense(state)
     pin.computeJointJacobians(model, data, state.q)
     J_w = pin.getFrameJacobian(model, data, extra.frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-    linear = T @ np.linalg.solve(H, B.T @ (J_w.T @ extra.wrench))
+    linear = T @ lu_solve(H, B.T @ (J_w.T @ extra.wrench))
     load = _add(state.load, extra, cmech)
     K_s = cm.stiffness_matrix
     q0, qk = state.q, state.q.copy()

@@ -6,10 +6,17 @@ wherever the chunk runs: results do not depend on the chunking or on the executo
 inverse-kinematics continuation never crosses a chunk boundary). A chunk holds about
 ``chunk`` poses (:data:`DEFAULT_CHUNK`), never less than one parameter point.
 
+On several workers, chunks of one point that would leave workers idle in the last round
+(3 points on 2 workers: the third alone) are split into one *share* per worker thread
+(:class:`~plm_pin.sweep.metrics.PointEvaluation`): every share solves the point's whole grid,
+the metrics that analyse each reached pose or line independently (orientation ranges, static
+forces, stiffness) take every n-th of them, and the shares are merged into the point before
+it is reported. The values are those of the whole point, bit for bit.
+
 Execution, by ``scheduler``:
 
 - None: in this process when the work is small (fewer than :data:`IN_PROCESS_MAX` poses,
-  one chunk, or ``workers=1``), else on a :class:`distributed.LocalCluster` of ``workers``
+  one chunk of whole points, or ``workers=1``), else on a :class:`distributed.LocalCluster` of ``workers``
   single-threaded processes (default: all CPUs) bound to 127.0.0.1;
 - an address ``tcp://host:8786``: a running Dask scheduler (``dask scheduler``, with
   ``dask worker tcp://host:8786`` on each machine, plm_pin installed there);
@@ -80,9 +87,11 @@ class Chunk:
 
     Attributes:
         points: their flat indices, increasing.
+        share: ``(k, n)``: the k-th of n shares of its one point (``(0, 1)``: whole points).
     """
 
     points: tuple[int, ...]
+    share: tuple[int, int] = (0, 1)
 
     @property
     def first(self) -> int:
@@ -110,16 +119,20 @@ class ChunkValues:
     errors: dict[int, str]
 
 
-def evaluate_point(spec: SweepSpec, index: int) -> dict[str, np.ndarray]:
-    """Every variable of the sweep at one parameter point: build the mechanism, run the metrics."""
-    ev = PointEvaluation(spec.pose_grid(), spec.build(index))
+def evaluate_point(spec: SweepSpec, index: int, share: tuple[int, int] = (0, 1)) -> dict[str, np.ndarray]:
+    """The variables of the sweep at one parameter point (or a share of it): build, run the metrics.
+
+    A variable a share does not compute is left out (its fill values stand).
+    """
+    ev = PointEvaluation(spec.pose_grid(), spec.build(index), share)
     out: dict[str, np.ndarray] = {}
     for name in spec.metrics:
-        out.update(METRICS[name].compute(ev))
+        if ev.computes(METRICS[name]):
+            out.update(METRICS[name].compute(ev))
     return out
 
 
-def evaluate_chunk(spec: SweepSpec, points: Sequence[int]) -> ChunkValues:
+def evaluate_chunk(spec: SweepSpec, points: Sequence[int], share: tuple[int, int] = (0, 1)) -> ChunkValues:
     """Evaluate the parameter points of a chunk, in order (the task a worker runs).
 
     A point that raises gets fill values and its error message; the others go on.
@@ -132,13 +145,76 @@ def evaluate_chunk(spec: SweepSpec, points: Sequence[int]) -> ChunkValues:
     errors: dict[int, str] = {}
     for k, index in enumerate(points):
         try:
-            point = evaluate_point(spec, int(index))
+            point = evaluate_point(spec, int(index), share)
         except Exception as exc:  # reported with the point's parameters; the sweep goes on
             errors[int(index)] = f"{type(exc).__name__}: {exc}"
             continue
-        for v in variables:
-            values[v.name][k] = point[v.name]
+        for name, value in point.items():
+            values[name][k] = value
     return ChunkValues(np.asarray(points, dtype=np.int64), values, errors)
+
+
+def merge_shares(spec: SweepSpec, shares: Sequence[ChunkValues]) -> ChunkValues:
+    """One point's values from its shares: each entry from the share that computed it.
+
+    A share leaves what it does not compute at the fill value, and an entry its owner computed
+    as the fill value (an unreached pose) is the fill value in every share.
+    """
+    values = {}
+    for v in spec.variables():
+        merged = shares[0].values[v.name].copy()
+        for other in shares[1:]:
+            value = other.values[v.name]
+            filled = np.isnan(value) if v.dtype == "float64" else value == v.fill
+            merged[~filled] = value[~filled]
+        values[v.name] = merged
+    errors = {p: m for share in reversed(shares) for p, m in share.errors.items()}
+    return ChunkValues(shares[0].points, values, errors)
+
+
+def split_chunks(spec: SweepSpec, chunks: Sequence[Chunk], workers: int) -> list[Chunk]:
+    """``chunks`` with the one-point chunks of the last, incomplete round split into ``workers`` shares.
+
+    Nothing is split on one worker, when the rounds are complete, or when no metric splits.
+    """
+    last = len(chunks) % workers
+    if workers == 1 or not last or not any(METRICS[m].split for m in spec.metrics):
+        return list(chunks)
+    out = list(chunks[: len(chunks) - last])
+    for chunk in chunks[len(chunks) - last :]:
+        if len(chunk.points) == 1:
+            out.extend(Chunk(chunk.points, (k, workers)) for k in range(workers))
+        else:
+            out.append(chunk)
+    return out
+
+
+def _merged(spec: SweepSpec, outcomes: Iterator[Outcome]) -> Iterator[Outcome]:
+    """``outcomes`` with the shares of a point gathered into the point (reported once, when complete).
+
+    A share that fails fails its point (once; the point's other shares are then dropped).
+    """
+    pending: dict[int, list[ChunkValues]] = {}
+    failed: set[int] = set()
+    for chunk, outcome in outcomes:
+        n = chunk.share[1]
+        if n == 1:
+            yield chunk, outcome
+            continue
+        point = chunk.first
+        if point in failed:
+            continue
+        whole = Chunk(chunk.points)
+        if isinstance(outcome, BaseException):
+            failed.add(point)
+            pending.pop(point, None)
+            yield whole, outcome
+            continue
+        parts = pending.setdefault(point, [])
+        parts.append(outcome)
+        if len(parts) == n:
+            del pending[point]
+            yield whole, merge_shares(spec, parts)
 
 
 def points_per_chunk(spec: SweepSpec, chunk: int) -> int:
@@ -190,11 +266,17 @@ def on_dask(client: Client, spec: SweepSpec, chunks: Sequence[Chunk]) -> Iterato
     run = uuid.uuid4().hex[:8]
     futures = {
         client.submit(
-            evaluate_chunk, shared, chunk.points, key=f"plm-pin-sweep-{run}-{chunk.first}", pure=False
+            evaluate_chunk,
+            shared,
+            chunk.points,
+            chunk.share,
+            key=f"plm-pin-sweep-{run}-{chunk.first}-{chunk.share[0]}",
+            pure=False,
         ): chunk
-        for chunk in chunks
+        for chunk in split_chunks(spec, chunks, max(1, sum(client.nthreads().values())))
     }
-    try:
+
+    def outcomes() -> Iterator[Outcome]:
         for future in distributed.as_completed(futures, loop=client.loop):
             chunk = futures[future]
             try:
@@ -202,6 +284,9 @@ def on_dask(client: Client, spec: SweepSpec, chunks: Sequence[Chunk]) -> Iterato
             except Exception as exc:  # a lost worker, an unpicklable value: reported, the rest go on
                 yield chunk, exc
             future.release()
+
+    try:
+        yield from _merged(spec, outcomes())
     finally:
         client.cancel(list(futures))
 
@@ -319,7 +404,9 @@ def run_chunks(
     if not chunks:
         return
     if scheduler is None:
-        n = min(workers or os.cpu_count() or 1, len(chunks))
+        n = workers or os.cpu_count() or 1
+        if not any(METRICS[m].split for m in spec.metrics):  # whole points: one task each at most
+            n = min(n, len(chunks))
         poses = sum(len(c.points) for c in chunks) * spec.n_poses
         if n == 1 or poses < IN_PROCESS_MAX:
             yield from in_process(spec, chunks)

@@ -17,6 +17,9 @@ mechanism), over the sweep's pose grid; none re-derives a formula:
   (:meth:`plm_pin.workspace.WorkspaceSlice.within_limits`);
 - ``peak_force`` and ``preload`` call :func:`plm_pin.statics.static_forces` at every reached
   pose, for every wrench of the set;
+- ``accuracy`` calls :func:`plm_pin.workspace.accuracy_over` at the grid's configurations: the
+  worst-case pose error for the tolerances ``length_tolerance`` [m] and ``angle_tolerance`` [rad]
+  on every geometric parameter (:mod:`plm_pin.kinematics.accuracy`), and its largest over ``over``;
 - ``stiffness`` calls :func:`plm_pin.stiffness.stiffness` and
   :func:`plm_pin.stiffness.natural_frequencies` at every reached pose (the mechanism's
   sidecar compliance, gravity and the internal preload ``internal``).
@@ -28,6 +31,7 @@ rotation axis (``"line"``). Unreached poses hold NaN (``-1`` in codes, False in 
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Callable, Mapping, Sequence
@@ -40,6 +44,7 @@ from numpy.typing import ArrayLike
 from .._text import short
 from ..core.mechanism import Mechanism
 from ..exceptions import AllocationInfeasible, InvalidInput, SingularConfiguration
+from ..kinematics.accuracy import error_model
 from ..kinematics.forward import task_pose
 from ..kinematics.singularity import KINDS
 from ..kinematics.working_mode import guess_mode
@@ -49,7 +54,7 @@ from ..statics.allocation import OBJECTIVES
 from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
 from ..tolerances import SINGULARITY_TOL
-from ..workspace import WorkspaceSlice, workspace_grid
+from ..workspace import WorkspaceSlice, accuracy_over, workspace_grid
 from ..workspace.manipulability import Manipulability
 from ..workspace.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
 
@@ -148,6 +153,12 @@ def _names(name: str, value: Any) -> tuple[str, ...] | None:
     return tuple(value)
 
 
+def _nonnegative(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 <= value < math.inf:
+        raise InvalidInput(f"option {name!r} must be a finite number >= 0, got {short(value)}")
+    return float(value)
+
+
 def _objective(name: str, value: Any) -> str:
     if value not in OBJECTIVES:
         raise InvalidInput(f"option {name!r} must be one of {list(OBJECTIVES)}, got {short(value)}")
@@ -241,6 +252,18 @@ OPTIONS: dict[str, Option] = {
             _internal,
         ),
         Option(
+            "length_tolerance",
+            None,
+            "accuracy: tolerance of every placement translation and prismatic actuator offset [m] (required)",
+            _nonnegative,
+        ),
+        Option(
+            "angle_tolerance",
+            None,
+            "accuracy: tolerance of every placement rotation and revolute actuator offset [rad] (required)",
+            _nonnegative,
+        ),
+        Option(
             "compliance_direction",
             None,
             "direction in the task's translation coordinates of compliance_along (default: the first one)",
@@ -261,6 +284,9 @@ class Metric:
         variables: the result variables it fills.
         options: names of the :data:`OPTIONS` it uses (``ik_tol`` is used by all).
         compute: the variables' values at one parameter point.
+        required: the options among ``options`` that have no default and must be given.
+        split: whether its per-pose work divides into shares (:attr:`PointEvaluation.share`):
+            independent analyses of each reached pose or line, not the continuation over the grid.
     """
 
     name: str
@@ -268,6 +294,8 @@ class Metric:
     variables: tuple[Variable, ...]
     options: tuple[str, ...]
     compute: Callable[[PointEvaluation], dict[str, np.ndarray]]
+    required: tuple[str, ...] = ()
+    split: bool = False
 
 
 @dataclass(frozen=True)
@@ -298,13 +326,28 @@ class PointEvaluation:
         mech: the mechanism built at this point.
         mode: the reference configuration's working mode, kept by every analysis (None if
             a leg is singular there: the continuation's seed decides).
+        share: ``(k, n)``: this evaluation computes the k-th of n shares of the point. The
+            grid's continuation runs whole in every share (so every pose is solved by the same
+            calls); the metrics that split (:attr:`Metric.split`) analyse only the reached poses
+            or lines whose rank is k modulo n and leave the others at their fill values; the
+            others are computed by share 0 alone. ``(0, 1)``: the whole point.
     """
 
-    def __init__(self, spec: PoseGrid, mech: Mechanism) -> None:
-        """Prepare the evaluation of the metrics on ``mech`` over ``spec``'s grid."""
+    def __init__(self, spec: PoseGrid, mech: Mechanism, share: tuple[int, int] = (0, 1)) -> None:
+        """Prepare the evaluation of the metrics on ``mech`` over ``spec``'s grid (its ``share``)."""
         self.spec = spec
         self.mech = mech
         self.mode = guess_mode(mech, None)
+        self.share = share
+
+    def computes(self, metric: Metric) -> bool:
+        """Whether this share computes ``metric`` (every share its part of a split one; share 0 the rest)."""
+        return metric.split or self.share[0] == 0
+
+    def owned(self, n: int) -> np.ndarray:
+        """Which of ``n`` work items (reached poses or lines, in order) this share analyses."""
+        k, shares = self.share
+        return np.arange(n) % shares == k
 
     def option(self, name: str) -> Any:
         """A checked option of the sweep (defaults filled in)."""
@@ -325,13 +368,25 @@ class PointEvaluation:
             self.mech, spec.axes, spec.values, self.base, mode=self.mode, tol=self.option("ik_tol")
         )
 
+    @functools.cached_property
+    def share_grid(self) -> WorkspaceSlice:
+        """:attr:`grid` reaching only this share's reached poses (what the split per-pose analyses visit)."""
+        grid = self.grid
+        if self.share[1] == 1:
+            return grid
+        reachable = np.zeros_like(grid.reachable)
+        reachable.flat[np.flatnonzero(grid.reachable)[self.owned(int(np.count_nonzero(grid.reachable)))]] = (
+            True
+        )
+        return dataclasses.replace(grid, reachable=reachable)
+
     def over(self) -> tuple[int, ...]:
         """Positions of the pose axes a reduction runs over."""
         return tuple(self.spec.axes.index(a) for a in self.spec.reduced_over)
 
     def static_peak(self, solve: Callable[[np.ndarray, ArrayLike | None], float]) -> np.ndarray:
         """``max over the wrench set of solve(q, wrench)`` at every reached pose (NaN elsewhere)."""
-        grid = self.grid
+        grid = self.share_grid
         out = np.full(grid.shape, np.nan)
         wrenches = self.option("wrenches") or (None,)
         for index in zip(*np.nonzero(grid.reachable), strict=True):
@@ -377,7 +432,10 @@ def _orientation_range(ev: PointEvaluation) -> dict[str, np.ndarray]:
         "orientation_upper_end": np.full(shape, -1, dtype=np.int8),
     }
     reference = ev.option("reference")
-    for index in np.ndindex(*shape):
+    owned = ev.owned(math.prod(shape))
+    for flat, index in enumerate(np.ndindex(*shape)):
+        if not owned[flat]:
+            continue
         pose = ev.base.copy()
         for a, i in zip(others, index, strict=True):
             pose[dofs.index(a)] = spec.values[spec.axes.index(a)][i]
@@ -431,12 +489,24 @@ def _preload(ev: PointEvaluation) -> dict[str, np.ndarray]:
 def _stiffness(ev: PointEvaluation) -> dict[str, np.ndarray]:
     smap = stiffness_map(
         ev.mech,
-        ev.grid,
+        ev.share_grid,
         direction=ev.option("compliance_direction"),
         gravity=ev.option("gravity"),
         internal=ev.option("internal"),
     )
     return {name: np.array(smap.variable(name)) for name in STIFFNESS_VARIABLES}
+
+
+def _accuracy(ev: PointEvaluation) -> dict[str, np.ndarray]:
+    tol = error_model(ev.mech).tolerances(ev.option("length_tolerance"), ev.option("angle_tolerance"))
+    amap = accuracy_over(ev.mech, ev.grid, tol)
+    position, angle = amap.worst_position, amap.worst_angle  # NaN where unreached: fmax ignores it
+    return {
+        "position_error": position,
+        "angle_error": angle,
+        "max_position_error": np.asarray(np.fmax.reduce(position, axis=ev.over())),
+        "max_angle_error": np.asarray(np.fmax.reduce(angle, axis=ev.over())),
+    }
 
 
 _W = "Yoshikawa manipulability w = sqrt(det(J_ce^T J_ce)) (Harada 2011 eq. (13)); 0 at a direct singularity"
@@ -540,6 +610,7 @@ METRICS: dict[str, Metric] = {
             ),
             ("rotation_axis", "reference", "xtol", "singularity_tol"),
             _orientation_range,
+            split=True,
         ),
         Metric(
             "peak_force",
@@ -548,6 +619,7 @@ METRICS: dict[str, Metric] = {
             (Variable("peak_force", FORCE_UNIT, "static peak actuator force over the wrench set"),),
             ("wrenches", "gravity", "objective"),
             _peak_force,
+            split=True,
         ),
         Metric(
             "preload",
@@ -557,6 +629,7 @@ METRICS: dict[str, Metric] = {
             (Variable("preload", "N", "internal preload needed over the wrench set"),),
             ("wrenches", "gravity", "compression", "preload_links"),
             _preload,
+            split=True,
         ),
         Metric(
             "stiffness",
@@ -582,6 +655,27 @@ METRICS: dict[str, Metric] = {
             ),
             ("gravity", "internal", "compliance_direction"),
             _stiffness,
+            split=True,
+        ),
+        Metric(
+            "accuracy",
+            "worst-case first-order pose error for tolerances length_tolerance / angle_tolerance on "
+            "every joint placement, closure frame placement and actuator offset "
+            "(plm_pin.kinematics.accuracy), largest over the task coordinates in m and in rad; NaN where "
+            "unreached or singular",
+            (
+                Variable("position_error", "m", "worst-case error of the task's coordinates in m"),
+                Variable("angle_error", "rad", "worst-case error of the task's coordinates in rad"),
+                Variable(
+                    "max_position_error", "m", "largest position_error over the axes 'over'", axes="reduced"
+                ),
+                Variable(
+                    "max_angle_error", "rad", "largest angle_error over the axes 'over'", axes="reduced"
+                ),
+            ),
+            ("length_tolerance", "angle_tolerance", "over"),
+            _accuracy,
+            required=("length_tolerance", "angle_tolerance"),
         ),
         Metric(
             "within_limits",
@@ -623,6 +717,10 @@ def check_options(metrics: Sequence[str], given: Mapping[str, Any]) -> dict[str,
         InvalidInput: an unknown option, one no chosen metric uses, or a bad value.
     """
     used = metric_options(metrics)
+    for m in metrics:
+        missing = [o for o in METRICS[m].required if o not in given]
+        if missing:
+            raise InvalidInput(f"metric {m!r} needs the options {missing} (no default); give them in options")
     for name in given:
         if name not in OPTIONS:
             raise InvalidInput(f"unknown option {name!r}; options are {sorted(OPTIONS)}")

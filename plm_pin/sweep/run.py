@@ -152,7 +152,7 @@ def sweep(
     mechanism is built (:func:`plm_pin.build_mechanism`), or taken as given, and the
     metrics of :data:`plm_pin.sweep.METRICS` are evaluated over the pose grid in the
     working mode of its reference configuration. Results do not depend on ``chunk``,
-    ``workers`` or ``scheduler``: each parameter point is computed whole, by the same calls,
+    ``workers`` or ``scheduler``: each parameter point is computed by the same calls,
     wherever it runs. A Mechanism given (or a single point's, built here for the checks) is
     shipped to Dask workers pickled with the sweep, never rebuilt there; several points are
     built by the workers (:mod:`plm_pin.sweep.execution` says why, with measurements).

@@ -27,10 +27,12 @@ import urllib.parse
 import weakref
 import webbrowser
 from collections.abc import Sequence
+from pathlib import Path
 from types import ModuleType
 from typing import IO, Any
 
 from ..exceptions import InvalidInput, ViewerError
+from .legend import ENTRIES, with_legend
 
 LOCALHOST = "127.0.0.1"
 """The only address a server started here listens on."""
@@ -340,12 +342,26 @@ def _recorder_class() -> type:
 
 
 def _local_bridge(port: int) -> Any:
-    """The meshcat server bridge with its web page served on 127.0.0.1 only (ZeroMQ already is)."""
+    """The meshcat server bridge with its web page served on 127.0.0.1 only (ZeroMQ already is).
+
+    The page is meshcat's with the legend of every mark a viewer draws (:mod:`plm_pin.viz.legend`).
+    """
     zmqserver = importlib.import_module("meshcat.servers.zmqserver")
+    web = importlib.import_module("tornado.web")
+    routing = importlib.import_module("tornado.routing")
+    viewer_page = Path(zmqserver.VIEWER_ROOT, zmqserver.VIEWER_HTML).read_text(encoding="utf-8")
+    page = with_legend(viewer_page, list(ENTRIES.values()))
+
+    class ViewerPage(web.RequestHandler):  # type: ignore[name-defined]
+        def get(self) -> None:
+            self.set_header("Cache-Control", "no-store, no-cache, must-revalidate, max-age=0")
+            self.write(page)
 
     class LocalBridge(zmqserver.ZMQWebSocketBridge):  # type: ignore[name-defined]
         def make_app(self) -> Any:
             app = super().make_app()
+            rule = routing.Rule(routing.PathMatches(r"/static/(?:index\.html)?"), ViewerPage)
+            app.wildcard_router.rules.insert(0, app.wildcard_router.process_rule(rule))  # before the files
             app.listen = functools.partial(app.listen, address=LOCALHOST)  # tornado's default: all
             return app
 

@@ -4,14 +4,23 @@ A :class:`MeshcatViewer` draws one mechanism under ``/meshcat/plm_pin/<name>`` o
 with Pinocchio's ``MeshcatVisualizer``:
 
 - its visual geometry, or, when it has none, a skeleton: rods between joint origins and
-  from each joint to its frames, balls at the joints;
+  from each joint to its frames, balls at the joints, thin dashed lines from the base
+  origin to the joints on the base (not links);
+- the rail of each prismatic joint (its stroke between its limits, along its axis) and the
+  platform as a closed polygon through its attachment points (:mod:`plm_pin.viz.skeleton`);
 - triads at the joint frames and the task frame (x red, y green, z blue);
 - a ball at both frames of every closure, green when the closure holds at the displayed
   configuration, magenta when its residual exceeds :data:`VIEW_OPEN_TOL`;
 - the geometry recoloured when :func:`plm_pin.kinematics.classify` finds the configuration
   singular (one colour per kind, :data:`SINGULAR_COLORS`);
 - force arrows of a static case (:meth:`MeshcatViewer.show_forces`);
-- motions as meshcat animations (:meth:`MeshcatViewer.animate`).
+- motions as meshcat animations (:meth:`MeshcatViewer.animate`);
+- overlays: the boundary of a workspace slice (:meth:`MeshcatViewer.show_workspace`) and
+  singular points (:meth:`MeshcatViewer.show_singular_points`);
+- a legend of these colours and marks over the page (:mod:`plm_pin.viz.legend`).
+
+The camera looks at the centre of the box around the mechanism's frame origins, from the
+distance at which the box fills :data:`FILL_FRACTION` of the view's height.
 
 The scene goes to a meshcat server on 127.0.0.1 (see :mod:`plm_pin.viz.meshcat_server`) or,
 with ``static=True``, stays in memory; either way :meth:`MeshcatViewer.static_html` returns
@@ -39,27 +48,23 @@ from ..exceptions import FrameNotFound, InvalidInput
 from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
 from ..tolerances import PLANE_NORMAL_TOL, VIEW_MIN_LENGTH, VIEW_OPEN_TOL
+from ..workspace import SingularPoint, WorkspaceSlice
 from .force_figure import ForceArrow
+from .legend import (
+    CLOSED_COLOR,
+    ENTRIES,
+    FORCE_COLOR,
+    OPEN_COLOR,
+    PLATFORM_COLOR,
+    RAIL_COLOR,
+    SINGULAR_COLORS,
+    SKELETON_COLOR,
+    VIRTUAL_COLOR,
+    WORKSPACE_COLOR,
+    with_legend,
+)
 from .meshcat_server import MeshcatServer, ServerWindow, StaticWindow, require_meshcat
-
-CLOSED_COLOR = (0.1, 0.7, 0.2, 1.0)
-"""RGBA of the markers of a closure that holds."""
-
-OPEN_COLOR = (1.0, 0.0, 1.0, 1.0)
-"""RGBA of the markers of a closure that does not hold."""
-
-SINGULAR_COLORS: Mapping[str, tuple[float, float, float, float]] = {
-    "constraint": (0.95, 0.8, 0.1, 1.0),
-    "inverse": (1.0, 0.5, 0.0, 1.0),
-    "direct": (0.85, 0.1, 0.1, 1.0),
-}
-"""RGBA of the whole mechanism at a singularity, by kind (the first kind found wins)."""
-
-SKELETON_COLOR = (0.45, 0.5, 0.6, 1.0)
-"""RGBA of the rods and balls drawn for a mechanism without visual geometry."""
-
-FORCE_COLOR = 0x1F5FBF
-"""Colour of force arrows (0xRRGGBB)."""
+from .skeleton import platform_polygon, prismatic_rails
 
 ANIMATION_FPS = 30
 """Frame rate of meshcat animation clips [1/s] (key times are not rounded to it)."""
@@ -70,6 +75,10 @@ _ROD = 0.006
 _BALL = 0.012
 _AXIS = 0.08
 _ARROW = 0.006
+_DASH = 0.03
+_RAIL = 0.01
+_EDGE = 0.008
+_POINT = 0.03
 _MIN_EXTENT = 1e-3  # [m]
 
 _VISUAL = pin.GeometryType.VISUAL
@@ -111,23 +120,53 @@ def _segment(name: str) -> str:
     return name.replace("/", "_") or "_"
 
 
-def _extent(mech: Mechanism) -> tuple[float, np.ndarray]:
-    """Largest side of the box around the frame origins [m], and the box's centre [m], shape (3,).
+def _frame_box(mech: Mechanism) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper corners of the box around the frame origins [m], each shape (3,).
 
     At the reference guess (no assembly needed).
     """
     data = mech.model.createData()
     pin.framesForwardKinematics(mech.model, data, mech.reference_guess())
     points = np.array([M.translation for M in data.oMf])  # (n_frames, 3)
-    size = max(float(np.max(np.ptp(points, axis=0))), _MIN_EXTENT)
-    return size, 0.5 * (points.min(axis=0) + points.max(axis=0))
+    return points.min(axis=0), points.max(axis=0)
 
 
 CAMERA_DIRECTION = np.array([0.6, 2.0, 1.0]) / np.linalg.norm([0.6, 2.0, 1.0])
 """Where the camera looks from, in meshcat's turned camera frame (y up): world (0.6, -1, 2), normalised."""
 
-CAMERA_DISTANCE = 2.0
-"""Camera distance from the mechanism's centre, in mechanism sizes [-]."""
+FILL_FRACTION = 0.8
+"""Share of the view's height the mechanism fills [-]: the sphere around its bounding box is seen
+under this share of the half-height (in tangent of the angle from the view's axis)."""
+
+CAMERA_FOV = 75.0
+"""Vertical field of view of meshcat's default camera [deg]."""
+
+CAMERA_NEAR = 0.01
+"""Near clipping plane of the camera, in camera distances [-]."""
+
+GRID_CELL = 0.25
+"""Side of a cell of the ground grid, in mechanism sizes [-] (meshcat's grid: 40 cells of 0.5 m)."""
+
+
+def camera_distance(lower: ArrayLike, upper: ArrayLike, fill: float = FILL_FRACTION) -> float:
+    """Distance [m] from the centre of box ``lower``..``upper`` [m] at which it fills ``fill`` of the view.
+
+    The sphere around the box (radius ``r``, the half-diagonal) is tangent to the cone of
+    half-angle ``a = atan(fill tan(fov / 2))`` around the view's axis, with :data:`CAMERA_FOV`:
+    ``d = r / sin(a)``, so the whole box is in view whatever the direction. A box smaller than
+    1 mm is taken as 1 mm wide.
+
+    Raises:
+        InvalidInput: corners that are not 3 finite numbers each, or ``fill`` outside (0, 1].
+    """
+    lo, hi = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+    if lo.shape != (3,) or hi.shape != (3,) or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise InvalidInput("lower and upper must be 3 finite numbers each [m]")
+    if not (isinstance(fill, numbers.Real) and 0.0 < fill <= 1.0):
+        raise InvalidInput(f"fill must be in (0, 1], got {fill!r}")
+    radius = max(0.5 * float(np.linalg.norm(hi - lo)), 0.5 * _MIN_EXTENT)
+    return radius / float(np.sin(np.arctan(float(fill) * np.tan(np.radians(CAMERA_FOV) / 2.0))))
+
 
 PLANAR_TILT = 0.05
 """Tilt of the camera off a planar mechanism's normal [rad-ish]: keeps the orbit controls off their pole."""
@@ -185,11 +224,30 @@ def _along(offset: np.ndarray) -> pin.SE3:
     return pin.SE3(rotation, 0.5 * offset)
 
 
+def _rod(name: str, parent: int, start: np.ndarray, end: np.ndarray, radius: float) -> pin.GeometryObject:
+    """A cylinder from ``start`` to ``end`` [m], fixed in joint ``parent``'s frame."""
+    import coal
+
+    offset = end - start
+    placement = _along(offset)
+    placement.translation = placement.translation + start
+    return pin.GeometryObject(name, parent, placement, coal.Cylinder(radius, float(np.linalg.norm(offset))))
+
+
+def _dashes(name: str, end: np.ndarray, size: float) -> list[pin.GeometryObject]:
+    """A thin dashed line from the base origin to ``end`` [m]: dashes and gaps about ``size * _DASH`` long."""
+    length = float(np.linalg.norm(end))
+    count = max(1, int(length / (2.0 * size * _DASH)))
+    step = end / (2 * count - 1)  # dash, gap, ..., dash
+    return [_rod(f"{name}/{k}", 0, 2 * k * step, (2 * k + 1) * step, 0.5 * size * _ROD) for k in range(count)]
+
+
 def _skeleton(model: pin.Model, size: float) -> list[pin.GeometryObject]:
     """Rods from each joint origin to its child joints and frames, and a ball at each joint.
 
     A rod is fixed in its parent joint's frame, so it moves (and animates) with it; it is
-    named after the first child found at its end.
+    named after the first child found at its end. From the base origin, where no link is,
+    the lines are thin and dashed (``virtual/<child>``).
     """
     import coal
 
@@ -204,19 +262,47 @@ def _skeleton(model: pin.Model, size: float) -> list[pin.GeometryObject]:
         )
         for j in range(1, model.njoints)
     ]
+    for ball in objects:
+        ball.meshColor = np.array(SKELETON_COLOR)
     names: set[str] = set()
     for (parent, end), child in ends.items():
         offset = np.array(end)
         length = float(np.linalg.norm(offset))
         if length <= VIEW_MIN_LENGTH:
             continue
-        name = f"links/{_segment(child)}"
+        name = f"{'virtual' if parent == 0 else 'links'}/{_segment(child)}"
         while name in names:  # a frame may share a joint's name
             name += "_"
         names.add(name)
-        objects.append(pin.GeometryObject(name, parent, _along(offset), coal.Cylinder(size * _ROD, length)))
-    for obj in objects:
-        obj.meshColor = np.array(SKELETON_COLOR)
+        if parent == 0:
+            for dash in _dashes(name, offset, size):
+                dash.meshColor = np.array(VIRTUAL_COLOR)
+                objects.append(dash)
+            continue
+        rod = _rod(name, parent, np.zeros(3), offset, size * _ROD)
+        rod.meshColor = np.array(SKELETON_COLOR)
+        objects.append(rod)
+    return objects
+
+
+def _guides(mech: Mechanism, size: float) -> list[pin.GeometryObject]:
+    """Rails of the prismatic joints (``rails/<joint>``) and the platform's closed polygon (``platform/<k>``).
+
+    A rail is fixed in the prismatic joint's parent frame; the polygon's edge ``k`` runs from
+    attachment point ``k`` to the next (the last to the first), fixed in the platform's frame.
+    """
+    objects = []
+    for rail in prismatic_rails(mech.model):
+        obj = _rod(f"rails/{_segment(rail.joint)}", rail.parent, rail.start, rail.end, size * _RAIL)
+        obj.meshColor = np.array(RAIL_COLOR)
+        objects.append(obj)
+    platform = platform_polygon(mech)
+    if platform is not None:
+        ring = platform.points
+        for k in range(len(ring)):
+            obj = _rod(f"platform/{k}", platform.joint, ring[k], ring[(k + 1) % len(ring)], size * _EDGE)
+            obj.meshColor = np.array(PLATFORM_COLOR)
+            objects.append(obj)
     return objects
 
 
@@ -292,6 +378,46 @@ def _check_arrows(
     return out
 
 
+def boundary_mask(reachable: ArrayLike) -> np.ndarray:
+    """The boundary of a slice's reachable region: reachable points next to an unreachable one or on the edge.
+
+    Neighbours are the points one step away along one axis (4 in a 2-D grid, 2 in a 1-D one).
+
+    Args:
+        reachable: whether each grid point was reached, any number of dimensions.
+
+    Returns:
+        Boolean array of the same shape.
+    """
+    inside = np.asarray(reachable, dtype=bool)
+    padded = np.pad(inside, 1, constant_values=False)
+    interior = padded.copy()
+    for axis in range(inside.ndim):
+        for step in (1, -1):
+            interior &= np.roll(padded, step, axis=axis)
+    return inside & ~interior[tuple(slice(1, -1) for _ in range(inside.ndim))]
+
+
+def task_origins(mech: Mechanism, qs: ArrayLike) -> np.ndarray:
+    """World position [m] of the task frame's origin at each configuration, shape (n, 3).
+
+    Raises:
+        InvalidInput: ``mech`` has no frame task, or ``qs`` is not of shape (n, nq).
+    """
+    fid = mech.task_frame_id
+    if fid is None:
+        raise InvalidInput(f"{mech.name} has no task frame to place overlay points at")
+    arr = np.asarray(qs, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != mech.nq:
+        raise InvalidInput(f"configurations must have shape (n, {mech.nq}), got {arr.shape}")
+    data = mech.model.createData()
+    out = np.empty((arr.shape[0], 3))
+    for k, q in enumerate(arr):
+        pin.framesForwardKinematics(mech.model, data, q)
+        out[k] = data.oMf[fid].translation
+    return out
+
+
 def _check_motion(mech: Mechanism, qs: ArrayLike, times: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     q_arr = np.asarray(qs, dtype=float)
     t_arr = np.asarray(times, dtype=float)
@@ -362,23 +488,26 @@ class MeshcatViewer:
         self._window = window
         self._vis = meshcat.Visualizer(window=window)
         self.root = f"plm_pin/{_segment(mech.name)}"
-        self.size, centre = _extent(mech)
+        lower, upper = _frame_box(mech)
+        self.size = max(float(np.max(upper - lower)), _MIN_EXTENT)
         # meshcat's camera orbits the world origin from (3, 0, 1) m: too far for a 0.3 m table and
         # off-centre for a mechanism away from the origin. Shift the scene (and the grid and world
         # axes with it) so that the mechanism's centre is at the orbit point, scale the world axes
-        # to the mechanism, and look at twice its size: from above and in front, or, for a planar
-        # mechanism, from its plane's normal.
+        # and the grid's cells to the mechanism, and look from the distance at which it fills the
+        # view: from above and in front, or, for a planar mechanism, from its plane's normal.
         shift = np.eye(4)
-        shift[:3, 3] = -centre
-        for path in ("/meshcat", "/Grid"):
-            self._vis[path].set_transform(shift)
-        axes = shift.copy()
-        axes[:3, :3] *= AXES_SCALE * self.size / 0.5
-        self._vis["/Axes"].set_transform(axes)
-        self._vis["/Cameras/default/rotated/<object>"].set_property(
-            "position", (CAMERA_DISTANCE * self.size * _camera_direction(mech)).tolist()
-        )
+        shift[:3, 3] = -0.5 * (lower + upper)
+        self._vis["/meshcat"].set_transform(shift)
+        for path, scale in (("/Grid", GRID_CELL * self.size / 0.5), ("/Axes", AXES_SCALE * self.size / 0.5)):
+            scaled = shift.copy()
+            scaled[:3, :3] *= scale
+            self._vis[path].set_transform(scaled)
+        self.camera_distance = camera_distance(lower, upper)
+        camera = self._vis["/Cameras/default/rotated/<object>"]
+        camera.set_property("position", (self.camera_distance * _camera_direction(mech)).tolist())
+        camera.set_property("near", CAMERA_NEAR * self.camera_distance)  # meshcat's 0.01 m cuts a small part
         self._animated = False
+        self._overlays: set[str] = set()
         self._build(frames)
 
     def _build(self, frames: bool) -> None:
@@ -388,9 +517,9 @@ class MeshcatViewer:
         geometry = mech.visual_model.copy()
         for obj in geometry.geometryObjects:
             obj.name = _segment(obj.name)
-        if geometry.ngeoms == 0:
-            for obj in _skeleton(mech.model, size):
-                geometry.addGeometryObject(obj)
+        skeleton = geometry.ngeoms == 0
+        for obj in (*(_skeleton(mech.model, size) if skeleton else ()), *_guides(mech, size)):
+            geometry.addGeometryObject(obj)
         markers = _closure_markers(mech, size)
         for _, ball in markers.values():
             geometry.addGeometryObject(ball)
@@ -411,6 +540,19 @@ class MeshcatViewer:
             for obj in geometry.geometryObjects
         }
         self._shown = dict(self._colors)  # colours on screen
+        drawn = {name.split("/", 1)[0] for name in self._colors}
+        self._marks = [  # the legend's keys for what is drawn, in the legend's order
+            key
+            for key, shown in (
+                ("link", skeleton),
+                ("virtual", "virtual" in drawn),
+                ("rail", "rails" in drawn),
+                ("platform", "platform" in drawn),
+                ("closed", bool(markers)),
+                ("open", bool(markers)),
+            )
+            if shown
+        ]
 
     # ---------------------------------------------------------------- scene
     @property
@@ -423,9 +565,20 @@ class MeshcatViewer:
         self._window.open()
         return self
 
+    @property
+    def legend(self) -> list[str]:
+        """Keys of :data:`plm_pin.viz.legend.ENTRIES` of what the scene draws, in the legend's order.
+
+        The singularity kinds are listed when the mechanism has a task; forces and overlays
+        once shown.
+        """
+        kinds = list(SINGULAR_COLORS) if self.mech.task_compiled is not None else []
+        keys = [*self._marks, *sorted(self._overlays & {"force", "workspace"}), *kinds]
+        return [key for key in ENTRIES if key in keys]
+
     def static_html(self) -> str:
-        """The scene as one self-contained HTML page: the configuration or animation last shown."""
-        return str(self._vis.static_html())
+        """The scene as one self-contained HTML page (what was shown last), with its legend."""
+        return with_legend(str(self._vis.static_html()), [ENTRIES[key] for key in self.legend])
 
     def write_html(self, path: str | Path) -> Path:
         """Write :meth:`static_html` to ``path`` atomically (its folder must exist); returns the path."""
@@ -454,6 +607,7 @@ class MeshcatViewer:
             self._vis.set_animation(require_meshcat().animation.Animation(), play=False)
             self._animated = False
         self._vis[f"{self.root}/forces"].delete()
+        self._overlays.discard("force")
         self._viz.display(qa)
         return status
 
@@ -465,7 +619,8 @@ class MeshcatViewer:
             if closure is not None:
                 color = OPEN_COLOR if closure in status.open_closures else CLOSED_COLOR
             else:
-                color = SINGULAR_COLORS[kinds[0]] if kinds else self._colors[obj.name]
+                fixed = obj.name.startswith(("rails/", "virtual/"))  # the base keeps its colours
+                color = SINGULAR_COLORS[kinds[0]] if kinds and not fixed else self._colors[obj.name]
             if color != self._shown[obj.name]:
                 self._viz.loadViewerGeometryObject(obj, _VISUAL, np.array(color))
                 self._shown[obj.name] = color
@@ -515,7 +670,69 @@ class MeshcatViewer:
             ):
                 node[part].set_object(mg.Cylinder(height, radiusTop=top, radiusBottom=bottom), material)
                 node[part].set_transform(pin.SE3(rotation, point + centre * u).homogeneous)
+            self._overlays.add("force")
         return status
+
+    # ------------------------------------------------------------ overlays
+    def _points(self, path: str, points: np.ndarray, color: tuple[float, ...]) -> None:
+        """Draw ``points`` [m], shape (n, 3), as dots under ``<root>/overlays/<path>`` (none: delete it)."""
+        node = self._vis[f"{self.root}/overlays/{path}"]
+        if points.size == 0:
+            node.delete()
+            return
+        mg = require_meshcat().geometry
+        colors = np.tile(np.array(color[:3], dtype=np.float32)[:, None], (1, len(points)))  # one per point
+        geometry = mg.PointsGeometry(points.T.astype(np.float32), color=colors)
+        node.set_object(mg.Points(geometry, mg.PointsMaterial(size=self.size * _POINT)))
+
+    def show_workspace(self, grid: WorkspaceSlice) -> np.ndarray:
+        """Overlay the boundary of a workspace slice: the task frame's origin at its boundary poses.
+
+        The boundary poses are the reachable grid points next to an unreachable one or on the
+        grid's edge (:func:`boundary_mask`); they stay shown (over later configurations and
+        motions) until :meth:`clear_overlays` or another slice.
+
+        Args:
+            grid: a slice of this mechanism (:func:`plm_pin.workspace.workspace_map` or
+                :func:`~plm_pin.workspace.workspace_sweep`).
+
+        Returns:
+            The points drawn [m], shape (n, 3), in the world frame.
+
+        Raises:
+            InvalidInput: a slice whose configurations do not fit this mechanism.
+        """
+        points = task_origins(self.mech, grid.q[boundary_mask(grid.reachable)])
+        self._points("workspace", points, WORKSPACE_COLOR)
+        self._overlays.add("workspace")
+        return points
+
+    def show_singular_points(self, points: Sequence[SingularPoint]) -> dict[str, np.ndarray]:
+        """Overlay singular points (e.g. :func:`plm_pin.workspace.singular_loci`), coloured by kind.
+
+        Each point is the task frame's origin at its configuration, in the colour of its kind
+        (:data:`SINGULAR_COLORS`); they stay shown until :meth:`clear_overlays` or other points.
+
+        Args:
+            points: the singular points of this mechanism.
+
+        Returns:
+            The points drawn per kind [m], shape (n, 3) each, in the world frame.
+
+        Raises:
+            InvalidInput: a point whose configuration does not fit this mechanism.
+        """
+        out = {}
+        for kind, color in SINGULAR_COLORS.items():
+            qs = [p.q for p in points if p.kind == kind]
+            out[kind] = task_origins(self.mech, np.array(qs).reshape(len(qs), self.mech.nq))
+            self._points(f"singular/{kind}", out[kind], color)
+        return out
+
+    def clear_overlays(self) -> None:
+        """Remove the workspace boundary and the singular points."""
+        self._vis[f"{self.root}/overlays"].delete()
+        self._overlays.discard("workspace")
 
     def animate(
         self, qs: ArrayLike, times: ArrayLike, *, play: bool = True, repetitions: int = 1

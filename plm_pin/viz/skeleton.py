@@ -1,20 +1,24 @@
-"""A mechanism drawn as its planar skeleton: segments from each joint to its children and closure frames.
+"""A mechanism's skeleton: links between joints, rails of prismatic joints, the platform's polygon.
 
-Used for snapshots of a motion (Harada 2011, Figs. 11 and 13: the table every 0.2 s) and
-under the force arrows of :func:`~plm_pin.viz.plot_static_forces`. matplotlib is imported
-only when drawing.
+The geometry (:func:`skeleton_segments`, :func:`prismatic_rails`, :func:`platform_polygon`)
+is shared by the planar figures here and the meshcat scenes of
+:mod:`plm_pin.viz.meshcat_view`. :func:`plot_skeletons` draws snapshots of a motion
+(Harada 2011, Figs. 11 and 13: the table every 0.2 s) and the mechanism under the force
+arrows of :func:`~plm_pin.viz.plot_static_forces`. matplotlib is imported only when drawing.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from ..core.mechanism import Mechanism
+from ..core.mechanism import Mechanism, joint_type
 from ..exceptions import InvalidInput
+from ..tolerances import VIEW_MIN_LENGTH
 from .figures import _axes
 
 if TYPE_CHECKING:
@@ -56,6 +60,104 @@ def skeleton_segments(mech: Mechanism, data: pin.Data) -> list[tuple[np.ndarray,
     return segments
 
 
+@dataclass(frozen=True)
+class Rail:
+    """The stroke of a prismatic joint: the segment its joint frame's origin runs along between its limits.
+
+    Attributes:
+        joint: the prismatic joint's name.
+        parent: the id of its parent joint (0: the base), whose frame the ends are given in.
+        start: the origin's position at the lower limit, in the parent joint's frame [m], shape (3,).
+        end: the origin's position at the upper limit, in the parent joint's frame [m], shape (3,).
+    """
+
+    joint: str
+    parent: int
+    start: np.ndarray
+    end: np.ndarray
+
+    @property
+    def length(self) -> float:
+        """The stroke [m]: upper minus lower limit."""
+        return float(np.linalg.norm(self.end - self.start))
+
+
+def prismatic_rails(model: pin.Model) -> list[Rail]:
+    """The rail of every one-axis prismatic joint with a finite stroke, in joint order.
+
+    The joint frame moves by ``q * a`` along its axis ``a`` (the linear part of its motion
+    subspace), from its placement in the parent joint's frame.
+    """
+    out = []
+    for j in range(1, model.njoints):
+        joint = model.joints[j]
+        if joint_type(model, j) != "prismatic" or joint.nq != 1:
+            continue
+        lower = float(model.lowerPositionLimit[joint.idx_q])
+        upper = float(model.upperPositionLimit[joint.idx_q])
+        if not (np.isfinite(upper - lower) and upper > lower):  # Pinocchio's default: +-max, no rail
+            continue
+        data = joint.createData()
+        joint.calc(data, pin.neutral(model))
+        axis = np.asarray(data.S).reshape(6, -1)[:3, 0]  # in the joint frame
+        placement = model.jointPlacements[j]
+        along = placement.rotation @ axis
+        start = placement.translation + lower * along
+        end = placement.translation + upper * along
+        out.append(Rail(model.names[j], int(model.parents[j]), start, end))
+    return out
+
+
+@dataclass(frozen=True)
+class Platform:
+    """The polygon through a platform's attachment points, in the platform joint's frame.
+
+    Attributes:
+        joint: the id of the joint carrying the platform (the task frame's joint).
+        points: the attachment points [m], shape (k, 3), k >= 3, in order around their centroid;
+            the polygon closes from the last back to the first.
+    """
+
+    joint: int
+    points: np.ndarray
+
+
+def platform_polygon(mech: Mechanism) -> Platform | None:
+    """The platform of ``mech`` as a closed polygon, None when it has fewer than 3 attachment points.
+
+    The platform is the body of the task frame; its attachment points are where the legs
+    hold it: its closure frames, the origins of the joints it carries, and its own joint's
+    origin when that joint hangs on a leg (not on the base). The points are ordered by
+    angle in their best-fitting plane; points in one line make no polygon.
+    """
+    fid = mech.task_frame_id
+    if fid is None:
+        return None
+    model = mech.model
+    joint = int(model.frames[fid].parentJoint)
+    if joint == 0:
+        return None
+    frames = [f for c in mech.closures for f in c.frame_ids if model.frames[f].parentJoint == joint]
+    points = [model.frames[f].placement.translation for f in frames]
+    children = [k for k in range(1, model.njoints) if model.parents[k] == joint]
+    points += [model.jointPlacements[k].translation for k in children]
+    if model.parents[joint] != 0:
+        points.append(np.zeros(3))
+    unique: list[np.ndarray] = []
+    for p in points:
+        if all(np.linalg.norm(p - u) > VIEW_MIN_LENGTH for u in unique):
+            unique.append(np.array(p, dtype=float))
+    if len(unique) < 3:
+        return None
+    arr = np.array(unique)
+    centred = arr - arr.mean(axis=0)
+    _, sv, vt = np.linalg.svd(centred)
+    if sv[1] <= VIEW_MIN_LENGTH * max(sv[0], 1.0):
+        return None
+    angles = np.arctan2(centred @ vt[1], centred @ vt[0])
+    return Platform(joint, arr[np.argsort(angles)])
+
+
 def plot_skeletons(
     mech: Mechanism,
     qs: ArrayLike,
@@ -67,7 +169,8 @@ def plot_skeletons(
     """Draw the mechanism's skeleton at each configuration of ``qs``, later ones darker.
 
     Links are segments between joints (and closure frames); joints on the base, such as
-    sliders on their stator, are squares.
+    sliders on their stator, are squares; rails (:func:`prismatic_rails`) are wide light
+    bands (``lw=5``) and the platform (:func:`platform_polygon`) a closed outline.
 
     Args:
         mech: the mechanism.
@@ -95,8 +198,17 @@ def plot_skeletons(
     data = mech.model.createData()
     shades = np.linspace(0.75, 0.0, len(configs)) if len(configs) > 1 else [0.0]
     grounded = [j for j in range(1, mech.model.njoints) if mech.model.parents[j] == 0]
-    for q, shade in zip(configs, shades, strict=True):
+    rails = prismatic_rails(mech.model)
+    platform = platform_polygon(mech)
+    for k, (q, shade) in enumerate(zip(configs, shades, strict=True)):
         pin.framesForwardKinematics(mech.model, data, q)
+        for rail in (r for r in rails if k == 0 or r.parent > 0):  # rails on the base drawn once
+            a, b = (data.oMi[rail.parent].act(p) for p in (rail.start, rail.end))
+            axes.plot([a[i], b[i]], [a[j], b[j]], color="0.85", lw=5, solid_capstyle="butt", zorder=0)
+        if platform is not None:
+            ring = np.array([data.oMi[platform.joint].act(p) for p in platform.points])
+            ring = np.vstack([ring, ring[:1]])
+            axes.plot(ring[:, i], ring[:, j], color=str(shade), lw=0.8)
         for a, b in skeleton_segments(mech, data):
             axes.plot([a[i], b[i]], [a[j], b[j]], color=str(shade), lw=1.2, solid_capstyle="round")
         # joints on the base (sliders on their stator, cranks' pivots) as squares

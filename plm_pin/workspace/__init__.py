@@ -1,5 +1,6 @@
-"""Analyses over the workspace: manipulability, workspace maps and singular loci."""
+"""Analyses over the workspace: manipulability, workspace maps, accuracy maps and singular loci."""
 
+from .accuracy import AccuracyMap, accuracy_map, accuracy_over
 from .manipulability import (
     POSE_METRICS,
     Manipulability,
@@ -13,10 +14,13 @@ from .singular_loci import SingularPoint, singular_loci, singular_points, singul
 
 __all__ = [
     "POSE_METRICS",
+    "AccuracyMap",
     "Manipulability",
     "OrientationRange",
     "SingularPoint",
     "WorkspaceSlice",
+    "accuracy_map",
+    "accuracy_over",
     "manipulability",
     "manipulability_at",
     "manipulability_unit",

@@ -180,6 +180,31 @@ def test_unknown_end_effector_frame_is_refused(fourbar):
         plm_pin.load(fourbar)
 
 
+_SAME_NAMES = """<robot name="r"><link name="base"/><link name="a"/><link name="b"/>
+<joint name="a" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
+<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+<joint name="j2" type="revolute"><parent link="base"/><child link="b"/><origin xyz="1 0 0"/>
+<axis xyz="0 0 1"/>
+<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"""
+
+
+@pytest.mark.parametrize(
+    ("sidecar", "where"),
+    [
+        ("closures: [{name: c, frames: [a, b], type: point}]", "closure 'c'"),
+        ("end_effector: {frame: a, task: [rz]}", "end_effector"),
+    ],
+)
+def test_a_frame_name_carried_by_a_joint_and_a_link_is_refused(sidecar, where):
+    """A sidecar frame naming a joint and a link alike: a DescriptionError (not Pinocchio's ValueError)."""
+    description = description_from_text(_SAME_NAMES, f"format: plm-pin/1\n{sidecar}\n")
+    with pytest.raises(
+        DescriptionError, match=rf"{where}: frame 'a' is ambiguous: 2 frames .*joint, body"
+    ) as info:
+        build_model(description)
+    assert not isinstance(info.value, FrameNotFound)
+
+
 def test_unknown_actuated_joint_lists_the_joints(fourbar):
     """An actuated joint the model lacks raises FrameNotFound of kind joint listing the joints."""
     sidecar = _edit_sidecar(fourbar, actuation=[{"joint": "crank_motor"}])

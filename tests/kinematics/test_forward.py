@@ -170,7 +170,7 @@ def test_actuators_without_assembly_raise_pose_unreachable():
     with pytest.raises(
         PoseUnreachable,
         match=r"^harada2011_3d4m: no assembly with actuators at \[-0\.3, 0\.0, 0\.05, 0\.1\]: the closures "
-        r"have no real solution \(none of the 16 complex roots is real and closes every loop\)$",
+        r"have no real solution \(none of the 8 complex roots is real and closes every loop\)$",
     ):
         forward_kinematics(mech, [-0.3, 0.0, 0.05, 0.1])
     with pytest.raises(

@@ -32,12 +32,15 @@ ZHAO2011 = PRESETS["zhao2011_8pss"].parameters  # Zhao 2011 Tables 1-3, eq. (19)
 # locus theta = -asin(y / (l + r_t)) of eq. (11.4) is kept at least 2 deg away, the four-bar's
 # rocker stays inside its range [1.633, 2.68] rad).
 OFFSETS: dict[str, list[tuple[float, float]]] = {
+    "delta": [(-0.05, 0.05)] * 3,
     "enferadi2017_star_triangle": [(-0.05, 0.05), (-0.05, 0.05), (-0.3, 0.3)],
     "fivebar": [(-0.03, 0.03)] * 2,
     "fourbar": [(-0.05, 0.5)],
     "harada2011_3d3m": [(-0.02, 0.02), (0.0, 0.02), (-0.05, 0.17)],
     "harada2011_3d4m": [(-0.02, 0.02), (-0.02, 0.02), (-0.2, 0.2)],
     "harada2015_asymmetric": [(-0.02, 0.02), (-0.02, 0.02), (-0.2, 0.2)],
+    "planar_3rpr": [(-0.03, 0.03), (-0.03, 0.03), (-0.2, 0.2)],
+    "stewart_6ups": [(-0.05, 0.05)] * 3 + [(-0.1, 0.1)] * 3,
     "zhao2011_6pss": [(-0.05, 0.05)] * 6,
     "zhao2011_8pss": [(-0.05, 0.05)] * 6,
 }

@@ -34,12 +34,15 @@ EPS = 1e-6
 
 # a pose offset from the reference per preset [m, rad], inside the workspace and regular
 OFFSET = {
+    "delta": [0.03, -0.02, 0.04],
     "enferadi2017_star_triangle": [0.03, -0.04, 0.2],
     "fivebar": [0.02, -0.01],
     "fourbar": [0.2],
     "harada2011_3d3m": [0.01, 0.01, 0.1],
     "harada2011_3d4m": [0.01, -0.02, 0.15],
     "harada2015_asymmetric": [-0.01, 0.02, -0.15],
+    "planar_3rpr": [0.02, -0.01, 0.1],
+    "stewart_6ups": [0.03, -0.02, 0.04, 0.03, -0.02, 0.04],
     "zhao2011_6pss": [0.03, -0.02, -0.04, 0.03, -0.02, 0.04],
     "zhao2011_8pss": [-0.02, 0.03, 0.04, -0.03, 0.02, 0.05],
 }

@@ -16,6 +16,9 @@ ISSUE_PRESETS = {
     "zhao2011_6pss",
     "fourbar",
     "fivebar",
+    "planar_3rpr",
+    "stewart_6ups",
+    "delta",
 }
 
 
@@ -48,9 +51,10 @@ def test_parameters_are_read_only():
         PRESETS["fourbar"].parameters["crank"] = 1.0  # type: ignore[index]
 
 
-def test_every_builder_path_names_a_family_builder():
-    """Each preset's builder_path 'module:function' imports that function from a family's builder."""
+def test_every_builder_path_names_a_family_or_leg_builder():
+    """Each preset's builder_path 'module:function' imports that function from a family's or a leg builder."""
     for p in PRESETS.values():
         module, _, function = p.builder_path.partition(":")
-        assert module.startswith("plm_pin.families.") and module.endswith(".builder")
+        family = module.startswith("plm_pin.families.") and module.endswith(".builder")
+        assert family or (module.startswith("plm_pin.legs.") and function.startswith("build_"))
         assert p.builder.__module__ == module and p.builder.__name__ == function

@@ -41,13 +41,28 @@ CHROMIUM_ARGS = (
 )
 
 
+LEGEND_SHOWN = """
+const legend = document.getElementById('plm-pin-legend');
+if (!legend) return 'no legend';
+const r = legend.getBoundingClientRect();
+if (r.width < 50 || r.height < 20 || r.left < 0 || r.top < 0 || r.bottom > window.innerHeight) {
+    return `legend of ${r.width} x ${r.height} px at (${r.left}, ${r.top}), outside the view`;
+}
+legend.style.pointerEvents = 'auto';  // hit-test it: what is on top at its centre
+const top = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+legend.style.pointerEvents = 'none';
+return legend.contains(top) ? '' : `legend covered by ${top ? top.tagName : 'nothing'}`;
+"""
+"""Empty when the scene's legend is on screen, in the view and on top of the canvas; else what is wrong."""
+
 HIDE_HELPERS = """
-document.querySelectorAll('.dg').forEach(e => e.style.display = 'none');
+document.querySelectorAll('.dg, #plm-pin-legend').forEach(e => e.style.display = 'none');
 for (const path of ['/Grid', '/Axes']) {
     viewer.handle_command({type: 'set_property', path: path, property: 'visible', value: false});
 }
 """
-"""Hide meshcat's controls, floor grid and world axes: what is left on the background is the mechanism."""
+"""Hide meshcat's controls, our legend, the floor grid and world axes: what is left on the background is the
+mechanism."""
 
 
 def _executables() -> tuple[str, str]:
@@ -151,12 +166,13 @@ def _drawn_on_background(png: bytes) -> tuple[int, float]:
 
 
 def _check_canvas(driver: Any, where: str) -> None:
-    """The current frame has a WebGL canvas showing a mechanism on meshcat's background."""
+    """The current frame has a WebGL canvas showing a mechanism on meshcat's background, and the legend."""
     from selenium.webdriver.common.by import By
 
     canvas = _wait(driver, f"the 3D canvas of {where}", lambda: driver.find_elements(By.TAG_NAME, "canvas"))[
         0
     ]
+    assert driver.execute_script(LEGEND_SHOWN) == "", f"{where}: {driver.execute_script(LEGEND_SHOWN)}"
     driver.execute_script(HIDE_HELPERS)
     size = driver.execute_script("return [arguments[0].width, arguments[0].height]", canvas)
     assert min(size) > 100, f"{where}: canvas of {size} pixels"

@@ -103,6 +103,29 @@ def test_overview_map_figure_and_scene(fivebar_overview):
     assert scene.data["arrows"] and scene.data["scale"] > 0
 
 
+def test_overview_scene_overlays_the_slice_boundary_and_singular_points(fivebar_overview):
+    """The 3D view's dots: the slice's boundary poses (brute-force neighbours) and its singular points."""
+    from tests.viz.test_scene_marks import brute_force_boundary
+
+    _, result = fivebar_overview
+    figure = next(iter(_blocks(result, "figure").values()))
+    data = figure.data["slice"]
+    xs, ys = (np.asarray(v) for v in data["values"])
+    edge = brute_force_boundary(np.asarray(data["reachable"], dtype=bool))
+    scene = next(
+        b for caption, b in _blocks(result, "scene").items() if caption.startswith("The mechanism at")
+    )
+    expected = [(xs[i], ys[j]) for i, j in zip(*np.nonzero(edge), strict=True)]
+    np.testing.assert_allclose(scene.data["workspace_boundary"][:, :2], expected, atol=1e-9)
+    points = figure.data["singular_points"]
+    for kind, drawn in scene.data["singular_points"].items():
+        found = [p["x"] for p in points if p["kind"] == kind]
+        np.testing.assert_allclose(drawn[:, :2], np.reshape(found, (-1, 2)), atol=1e-7)
+    assert sum(len(v) for v in scene.data["singular_points"].values()) == len(points) > 0
+    legend = scene.html[scene.html.index('id="plm-pin-legend"') :]
+    assert "workspace boundary" in legend and "direct singularity (type 2)" in legend
+
+
 def test_overview_without_task_skips_the_slice(user_fivebar):
     """Without end effector: mobility, statics and the 3D view still; the slice section says why not."""
     sidecar = user_fivebar.with_name("fivebar.plm.yaml")

@@ -153,3 +153,49 @@ def test_local_default_starts_a_cluster_for_large_sweeps_with_the_same_results(
         "chunks",
         "manifest.json",
     ]  # .lock: the store lock (filelock)
+
+
+SPLIT = ["manipulability", "singularity", "min_manipulability", "orientation_range", "peak_force"]
+"""Grid metrics (share 0 alone) beside split ones: per line (orientation_range), per pose (peak_force)."""
+
+
+@pytest.mark.parametrize("shares", [2, 3])
+def test_shares_of_a_point_merge_into_the_whole_point_bit_for_bit(shares):
+    """Each share computes every n-th line or reached pose; merged, they equal the unsplit point."""
+    spec = make_spec(**small(metrics=SPLIT, poses={"y": [0.05, 0.11], "rz": THETAS[::4]}))
+    whole = execution.evaluate_chunk(spec, (1,))
+    parts = [execution.evaluate_chunk(spec, (1,), (k, shares)) for k in range(shares)]
+    assert not any(
+        np.array_equal(p.values["peak_force"], whole.values["peak_force"], equal_nan=True) for p in parts
+    )
+    merged = execution.merge_shares(spec, parts)
+    assert merged.values.keys() == whole.values.keys()
+    for name, value in whole.values.items():
+        np.testing.assert_array_equal(merged.values[name], value, err_msg=name)
+
+
+def test_only_the_last_incomplete_round_of_one_point_chunks_is_split():
+    """3 points on 2 workers: two whole, the third in two shares; complete rounds or no split metric: none."""
+    spec = make_spec(**small(metrics=SPLIT))
+    chunks = plan_chunks(np.zeros(3, dtype=bool), 1)
+    split = execution.split_chunks(spec, chunks, 2)
+    assert [(c.points, c.share) for c in split] == [
+        ((0,), (0, 1)),
+        ((1,), (0, 1)),
+        ((2,), (0, 2)),
+        ((2,), (1, 2)),
+    ]
+    assert execution.split_chunks(spec, chunks, 3) == chunks
+    assert execution.split_chunks(spec, chunks, 1) == chunks
+    grid_only = make_spec(**small(metrics=["manipulability"], options={}))
+    assert execution.split_chunks(grid_only, chunks, 2) == chunks
+
+
+@pytest.mark.slow
+def test_three_points_on_two_workers_split_the_third_and_give_the_local_results(cluster):
+    """The third point runs as two shares on the 2-worker cluster; the dataset equals the in-process one."""
+    args = small(metrics=SPLIT, parameters={"half_plate": [0.03, 0.035, 0.05]})
+    local = sweep(**args, chunk=1)
+    remote = sweep(**args, chunk=1, scheduler=cluster.scheduler_address)
+    xr.testing.assert_identical(remote.dataset, local.dataset)
+    assert sorted(remote.computed) == [(0, 0), (1, 1), (2, 2)]

@@ -9,7 +9,8 @@ import pytest
 
 from analyses import _harada2011_paper as paper
 from plm_pin import build_mechanism
-from plm_pin.kinematics import classify, inverse_kinematics
+from plm_pin.exceptions import InvalidInput
+from plm_pin.kinematics import classify, error_bound, error_model, inverse_kinematics
 from plm_pin.statics import static_forces
 from plm_pin.sweep import METRICS, sweep
 from plm_pin.workspace import manipulability, orientation_range
@@ -196,3 +197,28 @@ def test_stiffness_without_gravity_is_k_j_ce_t_j_ce_of_the_paper():
         assert got == pytest.approx(1.0 / np.linalg.eigvalsh(C[:2, :2]).max(), rel=1e-9)
         assert ds.compliance_along.values[0, i, 0] == pytest.approx(C[1, 1], rel=1e-9)
         assert np.isfinite(ds.lowest_frequency.values[0, i, 0])
+
+
+def test_accuracy_is_the_error_bound_at_the_reached_poses_and_needs_its_tolerances():
+    """position_error is the largest bound of error_bound() after inverse_kinematics; tolerances required.
+
+    The reduced variable is its largest over the poses.
+    """
+    xs, ys = [-0.02, 0.03], [0.22, 0.26, 0.6]  # y = 0.6 m is out of reach
+    options = {"length_tolerance": 1e-5, "angle_tolerance": 1e-4}
+    ds = sweep("fivebar", {"base": [0.2, 0.22]}, {"x": xs, "y": ys}, ["accuracy"], options=options).dataset
+    for base in (0.2, 0.22):
+        mech = build_mechanism("fivebar", {"base": base})
+        tol = error_model(mech).tolerances(1e-5, 1e-4)
+        for x in xs:
+            for y in ys[:2]:
+                q = inverse_kinematics(mech, [x, y]).q
+                expected = error_bound(mech, q, tol).worst_case.max()
+                at = {"base": base, "x": x, "y": y}
+                assert ds.position_error.sel(at).item() == pytest.approx(expected, rel=1e-9)
+        assert np.isnan(ds.position_error.sel(base=base, y=0.6)).all()
+        assert np.isnan(ds.angle_error.sel(base=base)).all()  # the task has no angle
+        worst = np.nanmax(ds.position_error.sel(base=base).values)
+        assert ds.max_position_error.sel(base=base).item() == pytest.approx(worst)
+    with pytest.raises(InvalidInput, match="needs the options"):
+        sweep("fivebar", None, {"x": xs, "y": ys}, ["accuracy"], options={"length_tolerance": 1e-5})

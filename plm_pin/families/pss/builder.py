@@ -161,26 +161,6 @@ def pss_inverse_kinematics(
     return out
 
 
-def universal_frame_rpy(direction: Sequence[float]) -> Vec3:
-    r"""Roll-pitch-yaw [rad] of a frame whose z axis is ``direction`` (unit), yaw 0.
-
-    :math:`R_y(\beta) R_x(\alpha) \hat z = (s_\beta c_\alpha, -s_\alpha, c_\beta c_\alpha)`.
-    """
-    ex, ey, ez = (float(c) for c in direction)
-    return (math.atan2(-ey, math.hypot(ex, ez)) + 0.0, math.atan2(ex, ez) + 0.0, 0.0)
-
-
-def universal_angles(strut: np.ndarray, frame_rpy: Sequence[float]) -> tuple[float, float]:
-    r"""Universal-joint angles :math:`(\alpha, \beta)` [rad] that point the strut along ``strut``.
-
-    The strut's z axis is :math:`R_\rho R_x(\alpha) R_y(\beta) \hat z` with :math:`R_\rho`
-    the universal joint's frame; with :math:`d = R_\rho^T w = (s_\beta, -s_\alpha c_\beta,
-    c_\alpha c_\beta)`: :math:`\beta = \arcsin d_x`, :math:`\alpha = \operatorname{atan2}(-d_y, d_z)`.
-    """
-    d = u.transform(rpy=frame_rpy)[:3, :3].T @ np.asarray(strut, dtype=float)
-    return math.atan2(-d[1], d[2]) + 0.0, math.asin(max(-1.0, min(1.0, float(d[0])))) + 0.0
-
-
 # ---------------------------------------------------------------- builder
 def build_pss(
     *,
@@ -294,7 +274,7 @@ def build_pss(
         B = tuple(float(c) for c in guide_points[i - 1])
         e = tuple(float(c) for c in guide_directions[i - 1])
         l = float(strut_lengths[i - 1])
-        rho = universal_frame_rpy(e)
+        rho = u.universal_frame_rpy(e)
         rail_mid = tuple(b + 0.5 * (stroke[0] + stroke[1]) * c for b, c in zip(B, e, strict=True))
         base_visuals.append(u.cylinder_visual(0.015, stroke[1] - stroke[0], "base", rail_mid, rho))
         links.append(
@@ -326,7 +306,7 @@ def build_pss(
         )
         closures.append(ClosureSpec(f"strut{i}_platform", (f"strut{i}_tip", f"platform_p{i}"), "point"))
         q, w = ik[i]
-        alpha, beta = universal_angles(w, rho)
+        alpha, beta = u.universal_angles(w, rho)
         reference[f"slider{i}"] = (q,)
         reference[f"u{i}a"] = (alpha,)
         reference[f"u{i}b"] = (beta,)

@@ -22,10 +22,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...tolerances import HOMOTOPY_MAX_BOX_RTOL
 from .form import FREE_FLYER, PRISMATIC, PRISMATIC_PARAM, REVOLUTE, REVOLUTE_PARAM, SPHERICAL, PolynomialForm
 
-BOX_RADII = (1e-9, 1e-7, 1e-11)
-"""Relative half-widths of the boxes tried, in order (times 1 + abs(x))."""
+BOX_GROWTH = (4.0, 64.0, 1024.0)
+"""Half-widths of the boxes tried, in order, as multiples of the Newton enclosure's size."""
 
 
 @njit(cache=True, inline="always")
@@ -364,11 +365,47 @@ def parameter_intervals(form: PolynomialForm, actuators: np.ndarray) -> np.ndarr
     return pi
 
 
+@njit(cache=True)
+def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> float:
+    r"""Size of the Newton enclosure at ``x``: the largest :math:`|Y F([\tilde x])|` (a float bound).
+
+    The Krawczyk box must hold this (the root lies about one Newton step away, plus the rounding
+    of :math:`F`, magnified by the conditioning), and should not be much larger (the interval
+    Jacobian over a wide box stops the contraction). A fixed width fails one way or the other on
+    an ill-conditioned root. Infinite when the Jacobian is singular.
+    """
+    n = x.shape[0]
+    Fx, Jx = interval_system(_point(x), pi, *args)
+    Jmid = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            Jmid[i, j] = 0.5 * (Jx[i, j, 0] + Jx[i, j, 1])
+    if np.linalg.matrix_rank(Jmid) < n:
+        return np.inf
+    Y = np.linalg.inv(Jmid)
+    out = 0.0
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += abs(Y[i, j]) * max(abs(Fx[j, 0]), abs(Fx[j, 1]))
+        out = max(out, acc)
+    return out
+
+
 def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float | None:
-    """Half-width (relative, times 1 + abs(x)) of a box around real ``x`` proven to hold one root, or None."""
+    """Half-width (relative, times 1 + abs(x)) of a box around real ``x`` proven to hold one root, or None.
+
+    The boxes tried are :data:`BOX_GROWTH` times the Newton enclosure's size (:func:`newton_size`),
+    at most :data:`~plm_pin.tolerances.HOMOTOPY_MAX_BOX_RTOL`.
+    """
     pi = parameter_intervals(form, actuators)
     args = form.kernel_args()
-    for radius in BOX_RADII:
-        if krawczyk(np.asarray(x, dtype=float), radius, pi, args):
+    x = np.asarray(x, dtype=float)
+    size = max(newton_size(x, pi, args), float(np.finfo(float).eps))
+    for growth in BOX_GROWTH:
+        radius = growth * size
+        if not radius <= HOMOTOPY_MAX_BOX_RTOL:
+            break
+        if krawczyk(x, radius, pi, args):
             return radius
     return None

@@ -15,128 +15,211 @@ from numba import njit
 
 from .form import FREE_FLYER, PRISMATIC, PRISMATIC_PARAM, REVOLUTE, REVOLUTE_PARAM, SPHERICAL, PolynomialForm
 
+FAST = {"contract", "reassoc", "nsz", "arcp"}
+"""LLVM fast-math flags of the kernels: reassociation and fused multiply-adds, but NaN and infinity
+kept (a path going to infinity must be seen)."""
+
 
 @njit(cache=True, inline="always")
-def _mm(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Product of two small complex matrices by plain loops (BLAS calls cost more at 4 x 4)."""
-    m, k, n = A.shape[0], A.shape[1], B.shape[1]
-    out = np.zeros((m, n), dtype=np.complex128)
-    for i in range(m):
-        for r in range(k):
-            a = A[i, r]
-            if a != 0:
-                for j in range(n):
-                    out[i, j] += a * B[r, j]
-    return out
-
-
-@njit(cache=True)
-def _quaternion(w: complex, x: complex, y: complex, z: complex, R: np.ndarray, dR: np.ndarray) -> None:
-    """Homogeneous quadratic rotation of a quaternion into ``R`` and its 4 derivatives into ``dR``."""
-    R[0, 0], R[0, 1], R[0, 2] = w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)
-    R[1, 0], R[1, 1], R[1, 2] = 2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)
-    R[2, 0], R[2, 1], R[2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z
+def _quaternion(
+    w: complex, x: complex, y: complex, z: complex, X: np.ndarray, i: int, dX: np.ndarray, d: int
+) -> None:
+    """Quadratic rotation of a quaternion into ``X[i, :3, :3]``, its 4 derivatives into ``dX[d:d + 4]``."""
+    X[i, 0, 0], X[i, 0, 1], X[i, 0, 2] = (
+        w * w + x * x - y * y - z * z,
+        2 * (x * y - w * z),
+        2 * (x * z + w * y),
+    )
+    X[i, 1, 0], X[i, 1, 1], X[i, 1, 2] = (
+        2 * (x * y + w * z),
+        w * w - x * x + y * y - z * z,
+        2 * (y * z - w * x),
+    )
+    X[i, 2, 0], X[i, 2, 1], X[i, 2, 2] = (
+        2 * (x * z - w * y),
+        2 * (y * z + w * x),
+        w * w - x * x - y * y + z * z,
+    )
     # d/dw, d/dx, d/dy, d/dz
-    dR[0, 0, 0], dR[0, 0, 1], dR[0, 0, 2] = 2 * w, -2 * z, 2 * y
-    dR[0, 1, 0], dR[0, 1, 1], dR[0, 1, 2] = 2 * z, 2 * w, -2 * x
-    dR[0, 2, 0], dR[0, 2, 1], dR[0, 2, 2] = -2 * y, 2 * x, 2 * w
-    dR[1, 0, 0], dR[1, 0, 1], dR[1, 0, 2] = 2 * x, 2 * y, 2 * z
-    dR[1, 1, 0], dR[1, 1, 1], dR[1, 1, 2] = 2 * y, -2 * x, -2 * w
-    dR[1, 2, 0], dR[1, 2, 1], dR[1, 2, 2] = 2 * z, 2 * w, -2 * x
-    dR[2, 0, 0], dR[2, 0, 1], dR[2, 0, 2] = -2 * y, 2 * x, 2 * w
-    dR[2, 1, 0], dR[2, 1, 1], dR[2, 1, 2] = 2 * x, 2 * y, 2 * z
-    dR[2, 2, 0], dR[2, 2, 1], dR[2, 2, 2] = -2 * w, 2 * z, -2 * y
-    dR[3, 0, 0], dR[3, 0, 1], dR[3, 0, 2] = -2 * z, -2 * w, 2 * x
-    dR[3, 1, 0], dR[3, 1, 1], dR[3, 1, 2] = 2 * w, -2 * z, 2 * y
-    dR[3, 2, 0], dR[3, 2, 1], dR[3, 2, 2] = 2 * x, 2 * y, 2 * z
+    dX[d, 0, 0], dX[d, 0, 1], dX[d, 0, 2] = 2 * w, -2 * z, 2 * y
+    dX[d, 1, 0], dX[d, 1, 1], dX[d, 1, 2] = 2 * z, 2 * w, -2 * x
+    dX[d, 2, 0], dX[d, 2, 1], dX[d, 2, 2] = -2 * y, 2 * x, 2 * w
+    dX[d + 1, 0, 0], dX[d + 1, 0, 1], dX[d + 1, 0, 2] = 2 * x, 2 * y, 2 * z
+    dX[d + 1, 1, 0], dX[d + 1, 1, 1], dX[d + 1, 1, 2] = 2 * y, -2 * x, -2 * w
+    dX[d + 1, 2, 0], dX[d + 1, 2, 1], dX[d + 1, 2, 2] = 2 * z, 2 * w, -2 * x
+    dX[d + 2, 0, 0], dX[d + 2, 0, 1], dX[d + 2, 0, 2] = -2 * y, 2 * x, 2 * w
+    dX[d + 2, 1, 0], dX[d + 2, 1, 1], dX[d + 2, 1, 2] = 2 * x, 2 * y, 2 * z
+    dX[d + 2, 2, 0], dX[d + 2, 2, 1], dX[d + 2, 2, 2] = -2 * w, 2 * z, -2 * y
+    dX[d + 3, 0, 0], dX[d + 3, 0, 1], dX[d + 3, 0, 2] = -2 * z, -2 * w, 2 * x
+    dX[d + 3, 1, 0], dX[d + 3, 1, 1], dX[d + 3, 1, 2] = 2 * w, -2 * z, 2 * y
+    dX[d + 3, 2, 0], dX[d + 3, 2, 1], dX[d + 3, 2, 2] = 2 * x, 2 * y, 2 * z
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
+def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
+    """``out[o] = A[a] @ B[b]`` for stacks of complex 4 x 4 matrices, by plain loops.
+
+    Every matrix here is a homogeneous transform (last row 0 0 0 1) or a derivative of one (last
+    row 0), so the last rows' first three entries are zero and are not multiplied (43 products
+    instead of 64). Indices rather than views: a view costs a reference count in the compiled
+    code, and the kernels take hundreds of products per evaluation.
+    """
+    for i in range(3):
+        for j in range(3):
+            out[o, i, j] = A[a, i, 0] * B[b, 0, j] + A[a, i, 1] * B[b, 1, j] + A[a, i, 2] * B[b, 2, j]
+        t = A[a, i, 0] * B[b, 0, 3] + A[a, i, 1] * B[b, 1, 3] + A[a, i, 2] * B[b, 2, 3]
+        out[o, i, 3] = t + A[a, i, 3] * B[b, 3, 3]
+    for j in range(3):
+        out[o, 3, j] = 0.0
+    out[o, 3, 3] = A[a, 3, 3] * B[b, 3, 3]
 
 
 @njit(cache=True, inline="always")
-def _mm_into(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
-    """``out = A @ B`` for small complex matrices, by plain loops (no allocation)."""
-    m, k, n = A.shape[0], A.shape[1], B.shape[1]
-    for i in range(m):
-        for j in range(n):
-            acc = 0j
-            for r in range(k):
-                acc += A[i, r] * B[r, j]
-            out[i, j] = acc
+def _copy_into(A: np.ndarray, a: int, out: np.ndarray, o: int) -> None:
+    """``out[o] = A[a]`` for stacks of 4 x 4 matrices."""
+    for i in range(4):
+        for j in range(4):
+            out[o, i, j] = A[a, i, j]
 
 
 @njit(cache=True, inline="always")
-def _skew_entry(a: np.ndarray, r: int, k: int) -> float:
-    """Entry (r, k) of the cross-product matrix of ``a``."""
+def _skew_entry(axis: np.ndarray, i: int, r: int, k: int) -> float:
+    """Entry (r, k) of the cross-product matrix of ``axis[i]``."""
     if r == k:
         return 0.0
     if r == 0:
-        return -a[2] if k == 1 else a[1]
+        return -axis[i, 2] if k == 1 else axis[i, 1]
     if r == 1:
-        return a[2] if k == 0 else -a[0]
-    return -a[1] if k == 0 else a[0]
+        return axis[i, 2] if k == 0 else -axis[i, 0]
+    return -axis[i, 1] if k == 0 else axis[i, 0]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def _local(
-    kind: int, axis: np.ndarray, fixed: np.ndarray, v: np.ndarray, X: np.ndarray, dX: np.ndarray
-) -> int:
-    r"""Local transform of one joint from its coordinates ``v`` into ``X``, derivatives into ``dX``.
+    kind: int,
+    axis: np.ndarray,
+    fixed: np.ndarray,
+    i: int,
+    v: np.ndarray,
+    o: int,
+    X: np.ndarray,
+    dX: np.ndarray,
+) -> None:
+    r"""Local transform of joint ``i`` from ``v[o:]`` into ``X[i]``, its derivatives into ``dX[7 i:]``.
 
-    Returns the number of coordinates (derivatives written). A revolute joint about the unit
-    axis :math:`a`: :math:`R = I + s K + (1 - c) K^2`, :math:`K = [a]_\times`,
-    :math:`K^2 = a a^T - (a^T a) I`.
+    A revolute joint about the unit axis :math:`a`: :math:`R = I + s K + (1 - c) K^2`,
+    :math:`K = [a]_\times`, :math:`K^2 = a a^T - (a^T a) I`.
     """
-    X[:, :] = 0.0
-    X[3, 3] = 1.0
-    if kind == REVOLUTE or kind == REVOLUTE_PARAM:
-        if kind == REVOLUTE:
-            c, s = v[0], v[1]
-        else:
-            c, s = np.cos(v[0]), np.sin(v[0])
-        aa = axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2]
-        dX[0] = 0.0
-        if kind == REVOLUTE:
-            dX[1] = 0.0
-        for r in range(3):
-            for k in range(3):
-                K = _skew_entry(axis, r, k)
-                K2 = axis[r] * axis[k] - (aa if r == k else 0.0)
-                X[r, k] = (1.0 if r == k else 0.0) + s * K + (1.0 - c) * K2
-                if kind == REVOLUTE:
-                    dX[0, r, k] = -K2
-                    dX[1, r, k] = K
-                else:
-                    dX[0, r, k] = c * K + s * K2
-        return 2 if kind == REVOLUTE else 1
-    if kind == PRISMATIC or kind == PRISMATIC_PARAM:
-        dX[0] = 0.0
-        for r in range(3):
-            X[r, r] = 1.0
-            X[r, 3] = v[0] * axis[r]
-            dX[0, r, 3] = axis[r]
-        return 1
-    if kind == SPHERICAL or kind == FREE_FLYER:
-        t = 3 if kind == FREE_FLYER else 0
-        dX[: t + 4] = 0.0
-        _quaternion(v[t], v[t + 1], v[t + 2], v[t + 3], X[:3, :3], dX[t : t + 4, :3, :3])
-        for r in range(t):
-            X[r, 3] = v[r]
-            dX[r, r, 3] = 1.0
-        return t + 4
+    d = 7 * i
     for r in range(4):
         for k in range(4):
-            X[r, k] = fixed[r, k]
-    return 0
+            X[i, r, k] = 0.0
+    X[i, 3, 3] = 1.0
+    if kind == REVOLUTE or kind == REVOLUTE_PARAM:
+        if kind == REVOLUTE:
+            c, s = v[o], v[o + 1]
+        else:
+            c, s = np.cos(v[o]), np.sin(v[o])
+        aa = axis[i, 0] * axis[i, 0] + axis[i, 1] * axis[i, 1] + axis[i, 2] * axis[i, 2]
+        for r in range(3):
+            for k in range(3):
+                K = _skew_entry(axis, i, r, k)
+                K2 = axis[i, r] * axis[i, k] - (aa if r == k else 0.0)
+                X[i, r, k] = (1.0 if r == k else 0.0) + s * K + (1.0 - c) * K2
+                if kind == REVOLUTE:
+                    dX[d, r, k] = -K2
+                    dX[d + 1, r, k] = K
+                else:
+                    dX[d, r, k] = c * K + s * K2
+        return
+    if kind == PRISMATIC or kind == PRISMATIC_PARAM:
+        for r in range(3):
+            X[i, r, r] = 1.0
+            X[i, r, 3] = v[o] * axis[i, r]
+            dX[d, r, 3] = axis[i, r]
+        return
+    if kind == SPHERICAL or kind == FREE_FLYER:
+        t = 3 if kind == FREE_FLYER else 0
+        _quaternion(v[o + t], v[o + t + 1], v[o + t + 2], v[o + t + 3], X, i, dX, d + t)
+        for r in range(t):
+            X[i, r, 3] = v[o + r]
+            dX[d + r, r, 3] = 1.0
+        return
+    for r in range(4):
+        for k in range(4):
+            X[i, r, k] = fixed[i, r, k]
 
 
 @njit(cache=True)
+def workspace(
+    n: int,
+    npar: int,
+    parent: np.ndarray,
+    kind: np.ndarray,
+    offset: np.ndarray,
+    placement: np.ndarray,
+    frame_joint: np.ndarray,
+    n_entries: int,
+) -> tuple:
+    """The buffers :func:`system` writes into, allocated once per batch of evaluations.
+
+    Also the static structure: the derivative column of each joint, the number of its coordinates,
+    and which columns a closure frame depends on (a column off a frame's path stays zero, as do
+    the entries of a derivative matrix a joint kind never writes).
+    """
+    k, nf, nc = kind.shape[0], frame_joint.shape[0], n + npar
+    ncoord = np.zeros(k, dtype=np.int64)
+    col = np.zeros(k, dtype=np.int64)
+    for i in range(k):
+        kd = kind[i]
+        col[i] = n + offset[i] if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM else offset[i]
+        if kd == REVOLUTE:
+            ncoord[i] = 2
+        elif kd == SPHERICAL:
+            ncoord[i] = 4
+        elif kd == FREE_FLYER:
+            ncoord[i] = 7
+        elif kd == PRISMATIC or kd == PRISMATIC_PARAM or kd == REVOLUTE_PARAM:
+            ncoord[i] = 1
+    on_path = np.zeros((nf, nc), dtype=np.bool_)
+    for f in range(nf):
+        i = frame_joint[f]
+        while i >= 0:
+            for c in range(ncoord[i]):
+                on_path[f, col[i] + c] = True
+            i = parent[i]
+    c16 = np.complex128
+    return (
+        ncoord,
+        col,
+        on_path,
+        placement.astype(c16),  # M: joint placements
+        np.zeros((k, 4, 4), dtype=c16),  # X: local transforms
+        np.zeros((7 * k, 4, 4), dtype=c16),  # dX: their derivatives, 7 per joint
+        np.zeros((k, 4, 4), dtype=c16),  # T: world transform after the joint
+        np.zeros((k, 4, 4), dtype=c16),  # A: world transform of the joint frame before X_j
+        np.zeros((k, 4, 4), dtype=c16),  # MX: M_j X_j
+        np.zeros((7 * k, 4, 4), dtype=c16),  # AdX: A_j dX_j, shared by the frames below joint j
+        np.zeros((nf, 4, 4), dtype=c16),  # Tf: closure frames
+        np.zeros((nf * nc, 4, 4), dtype=c16),  # dTf: their derivatives, nc per frame (zero off the path)
+        np.zeros(n_entries, dtype=c16),  # e
+        np.zeros((n_entries, nc), dtype=c16),  # de
+        np.zeros(n, dtype=c16),  # F
+        np.zeros((n, nc), dtype=c16),  # J = [F_x F_p]
+        np.zeros((2, 4, 4), dtype=c16),  # S: suffix products (two slots)
+        np.zeros((3, 3), dtype=c16),  # E
+    )
+
+
+@njit(cache=True, fastmath=FAST)
 def _entries(
     x: np.ndarray,
     p: np.ndarray,
+    ws: tuple,
     parent: np.ndarray,
     kind: np.ndarray,
     offset: np.ndarray,
     axis: np.ndarray,
-    placement: np.ndarray,
     fixed: np.ndarray,
     frame_joint: np.ndarray,
     frame_placement: np.ndarray,
@@ -145,74 +228,59 @@ def _entries(
     closure_axis: np.ndarray,
     closure_length2: np.ndarray,
     entry_offset: np.ndarray,
-    n_entries: int,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Closure entries (m,) and their derivatives along (x, p), shape (m, n + n_params)."""
-    n, npar, k = x.shape[0], p.shape[0], kind.shape[0]
-    nc = n + npar
-    Xs = np.zeros((k, 4, 4), dtype=np.complex128)
-    dXs = np.zeros((k, 7, 4, 4), dtype=np.complex128)
-    ncoord = np.zeros(k, dtype=np.int64)
-    col = np.zeros(k, dtype=np.int64)  # first derivative column of each joint
-    T = np.zeros((k, 4, 4), dtype=np.complex128)  # world transform after the joint
-    A = np.zeros((k, 4, 4), dtype=np.complex128)  # world transform of the joint frame before X_j
-    MX = np.zeros((k, 4, 4), dtype=np.complex128)  # M_j X_j
-    AdX = np.zeros((k, 7, 4, 4), dtype=np.complex128)  # A_j dX_j, shared by the frames below joint j
-    Mc = placement.astype(np.complex128)
+) -> None:
+    """Closure entries ``e`` (m,) and their derivatives ``de`` along (x, p) (m, n + n_params), into ``ws``."""
+    ncoord, col, on_path, M, X, dX, T, A, MX, AdX, Tf, dTf, e, de, _, _, S, E = ws
+    k = kind.shape[0]
+    nc = de.shape[1]
     for i in range(k):
         kd = kind[i]
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
-            v = p[offset[i] : offset[i] + 1]
-            col[i] = n + offset[i]
+            _local(kd, axis, fixed, i, p, offset[i], X, dX)
         else:
-            v = x[offset[i] : offset[i] + 7]
-            col[i] = offset[i]
-        ncoord[i] = _local(kd, axis[i], fixed[i], v, Xs[i], dXs[i])
+            _local(kd, axis, fixed, i, x, offset[i], X, dX)
         if parent[i] >= 0:
-            _mm_into(T[parent[i]], Mc[i], A[i])
+            _mm_into(T, parent[i], M, i, A, i)
         else:
-            A[i] = Mc[i]
-        _mm_into(A[i], Xs[i], T[i])
-        _mm_into(Mc[i], Xs[i], MX[i])
+            _copy_into(M, i, A, i)
+        _mm_into(A, i, X, i, T, i)
+        _mm_into(M, i, X, i, MX, i)
         for c in range(ncoord[i]):
-            _mm_into(A[i], dXs[i, c], AdX[i, c])
+            _mm_into(A, i, dX, 7 * i + c, AdX, 7 * i + c)
     nf = frame_joint.shape[0]
-    Tf = np.zeros((nf, 4, 4), dtype=np.complex128)
-    dTf = np.zeros((nf, nc, 4, 4), dtype=np.complex128)
-    S = np.empty((4, 4), dtype=np.complex128)
-    S2 = np.empty((4, 4), dtype=np.complex128)
     for f in range(nf):
         for r in range(4):
             for q in range(4):
-                S[r, q] = frame_placement[f, r, q]
+                S[0, r, q] = frame_placement[f, r, q]
         i = frame_joint[f]
         if i >= 0:
-            _mm_into(T[i], S, Tf[f])
+            _mm_into(T, i, S, 0, Tf, f)
         else:
-            Tf[f] = S
+            _copy_into(S, 0, Tf, f)
         while i >= 0:
             for c in range(ncoord[i]):
-                _mm_into(AdX[i, c], S, dTf[f, col[i] + c])
-            _mm_into(MX[i], S, S2)
-            S[:, :] = S2
+                _mm_into(AdX, 7 * i + c, S, 0, dTf, f * nc + col[i] + c)
+            _mm_into(MX, i, S, 0, S, 1)
+            _copy_into(S, 1, S, 0)
             i = parent[i]
-    e = np.zeros(n_entries, dtype=np.complex128)
-    de = np.zeros((n_entries, nc), dtype=np.complex128)
-    E = np.empty((3, 3), dtype=np.complex128)
     for c in range(closure_kind.shape[0]):
         a, b, o = closure_frames[c, 0], closure_frames[c, 1], entry_offset[c]
         if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2
             e[o] = -closure_length2[c]
+            for j in range(nc):
+                de[o, j] = 0.0
             for r in range(3):
                 d = Tf[b, r, 3] - Tf[a, r, 3]
                 e[o] += d * d
                 for j in range(nc):
-                    de[o, j] += 2.0 * d * (dTf[b, j, r, 3] - dTf[a, j, r, 3])
+                    if on_path[a, j] or on_path[b, j]:
+                        de[o, j] += 2.0 * d * (dTf[b * nc + j, r, 3] - dTf[a * nc + j, r, 3])
             continue
         for r in range(3):
             e[o + r] = Tf[b, r, 3] - Tf[a, r, 3]
             for j in range(nc):
-                de[o + r, j] = dTf[b, j, r, 3] - dTf[a, j, r, 3]
+                if on_path[a, j] or on_path[b, j]:
+                    de[o + r, j] = dTf[b * nc + j, r, 3] - dTf[a * nc + j, r, 3]
         if closure_kind[c] == 0:
             continue
         # E = R_A^T R_B and its derivatives dR_A^T R_B + R_A^T dR_B, entry by entry
@@ -222,20 +290,26 @@ def _entries(
                 for t in range(3):
                     acc += Tf[a, t, r] * Tf[b, t, q]
                 E[r, q] = acc
-        u = closure_axis[c]
         if closure_kind[c] == 1:
             for r in range(3):
                 for q in range(3):
                     e[o + 3 + 3 * r + q] = E[r, q] - (1.0 if r == q else 0.0)
         else:
             for r in range(3):
-                e[o + 3 + r] = E[r, 0] * u[0] + E[r, 1] * u[1] + E[r, 2] * u[2] - u[r]
+                e[o + 3 + r] = (
+                    E[r, 0] * closure_axis[c, 0]
+                    + E[r, 1] * closure_axis[c, 1]
+                    + E[r, 2] * closure_axis[c, 2]
+                    - closure_axis[c, r]
+                )
         for j in range(nc):
+            if not (on_path[a, j] or on_path[b, j]):
+                continue
             for r in range(3):
                 for q in range(3):
                     acc = 0j
                     for t in range(3):
-                        acc += dTf[a, j, t, r] * Tf[b, t, q] + Tf[a, t, r] * dTf[b, j, t, q]
+                        acc += dTf[a * nc + j, t, r] * Tf[b, t, q] + Tf[a, t, r] * dTf[b * nc + j, t, q]
                     E[r, q] = acc
             if closure_kind[c] == 1:
                 for r in range(3):
@@ -243,15 +317,19 @@ def _entries(
                         de[o + 3 + 3 * r + q, j] = E[r, q]
             else:
                 for r in range(3):
-                    de[o + 3 + r, j] = E[r, 0] * u[0] + E[r, 1] * u[1] + E[r, 2] * u[2]
-    return e, de
+                    de[o + 3 + r, j] = (
+                        E[r, 0] * closure_axis[c, 0]
+                        + E[r, 1] * closure_axis[c, 1]
+                        + E[r, 2] * closure_axis[c, 2]
+                    )
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FAST)
 def system(
     x: np.ndarray,
     p: np.ndarray,
     b: np.ndarray,
+    ws: tuple,
     parent: np.ndarray,
     kind: np.ndarray,
     offset: np.ndarray,
@@ -268,17 +346,20 @@ def system(
     combination: np.ndarray,
     unit_offsets: np.ndarray,
     unit_sizes: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Square system :math:`F(x; p) + b`, its Jacobians along x (n, n) and p (n, n_params)."""
-    n, npar = x.shape[0], p.shape[0]
-    e, de = _entries(
+) -> tuple[np.ndarray, np.ndarray]:
+    r"""Square system :math:`F(x; p) + b` (n,) and its Jacobian :math:`[F_x\ F_p]` (n, n + n_params).
+
+    Both are buffers of ``ws`` (:func:`workspace`), overwritten by the next call (and ``J`` may be
+    factored in place by the caller).
+    """
+    _entries(
         x,
         p,
+        ws,
         parent,
         kind,
         offset,
         axis,
-        placement,
         fixed,
         frame_joint,
         frame_placement,
@@ -287,35 +368,57 @@ def system(
         closure_axis,
         closure_length2,
         entry_offset,
-        combination.shape[1],
     )
-    F = np.zeros(n, dtype=np.complex128)
-    J = np.zeros((n, n + npar), dtype=np.complex128)
-    nu = unit_offsets.shape[0]
+    e, de, F, J = ws[12], ws[13], ws[14], ws[15]
+    nu, m, nc = unit_offsets.shape[0], e.shape[0], J.shape[1]
     for u in range(nu):
         o = unit_offsets[u]
         acc = -1.0 + 0j
+        for j in range(nc):  # (the caller may have factored J in place)
+            J[u, j] = 0.0
         for r in range(unit_sizes[u]):
             acc += x[o + r] * x[o + r]
             J[u, o + r] = 2.0 * x[o + r]
-        F[u] = acc
-    C = combination.astype(np.complex128)
-    F[nu:] = _mm(C, e.reshape(-1, 1)).ravel()
-    J[nu:] = _mm(C, de)
-    F += b
-    return F, J[:, :n].copy(), J[:, n:].copy()
+        F[u] = acc + b[u]
+    for i in range(combination.shape[0]):
+        acc = b[nu + i]
+        for r in range(m):
+            acc += combination[i, r] * e[r]
+        F[nu + i] = acc
+        for j in range(nc):
+            acc = 0j
+            for r in range(m):
+                w = combination[i, r]
+                if w != 0.0:
+                    acc += w * de[r, j]
+            J[nu + i, j] = acc
+    return F, J
+
+
+def _workspace(form: PolynomialForm) -> tuple:
+    return workspace(
+        form.n,
+        form.n_params,
+        form.parent,
+        form.kind,
+        form.offset,
+        form.placement,
+        form.frame_joint,
+        form.n_entries,
+    )
 
 
 def closure_entries(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Closure entries at complex ``x``, ``p`` (m,) and their derivatives along (x, p), (m, n + n_params)."""
-    return _entries(
+    ws = _workspace(form)
+    _entries(
         np.asarray(x, dtype=np.complex128),
         np.asarray(p, dtype=np.complex128),
+        ws,
         form.parent,
         form.kind,
         form.offset,
         form.axis,
-        form.placement,
         form.fixed,
         form.frame_joint,
         form.frame_placement,
@@ -324,8 +427,8 @@ def closure_entries(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> tuple
         form.closure_axis,
         form.closure_length2,
         form.entry_offset,
-        form.n_entries,
     )
+    return ws[12], ws[13]
 
 
 def evaluate(
@@ -333,6 +436,11 @@ def evaluate(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Square system at complex ``x``, ``p`` (plus offsets ``b``): F (n,), F_x (n, n), F_p (n, n_params)."""
     bb = np.zeros(form.n, dtype=np.complex128) if b is None else np.asarray(b, dtype=np.complex128)
-    return system(
-        np.asarray(x, dtype=np.complex128), np.asarray(p, dtype=np.complex128), bb, *form.kernel_args()
+    F, J = system(
+        np.asarray(x, dtype=np.complex128),
+        np.asarray(p, dtype=np.complex128),
+        bb,
+        _workspace(form),
+        *form.kernel_args(),
     )
+    return F, J[:, : form.n].copy(), J[:, form.n :].copy()

@@ -41,6 +41,11 @@ class PolynomialForm:
         unit_offsets: first unknown of each unit block (revolute 2, quaternion 4), shape (n_unit,).
         unit_sizes: 2 or 4 per unit block, shape (n_unit,).
         n_params: number of parameters (actuators).
+        parameters: the actuators that are parameters (indices into the mechanism's actuators),
+            shape (n_params,): all of them, or as many as the mobility for redundant actuation.
+        checked: the other actuators, left unknowns and checked against their values afterwards:
+            per actuator its index, its first unknown and 1 for a revolute (c, s) pair, 0 for a
+            prismatic displacement, shape (r, 3).
         degrees: degree of each equation of the square system, shape (n,).
         eliminated_v: velocity indices of the joints of the eliminated legs (set by the polish).
         digest: hex digest of all of the above (the cache key of the generic solve).
@@ -67,6 +72,8 @@ class PolynomialForm:
     unit_offsets: np.ndarray
     unit_sizes: np.ndarray
     n_params: int
+    parameters: np.ndarray
+    checked: np.ndarray
     degrees: np.ndarray
     eliminated_v: np.ndarray
     digest: str

@@ -97,8 +97,13 @@ def _joint_kind(jm: pin.JointModel) -> tuple[int, np.ndarray]:
     raise NotPolynomial(f"joint kind {name} has no polynomial form")
 
 
-def polynomial_form(mech: Mechanism) -> PolynomialForm:
+def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) -> PolynomialForm:
     """The polynomial form of ``mech``'s closures with its actuators as parameters.
+
+    Args:
+        mech: the mechanism.
+        parameters: the actuators (indices) taken as parameters, all by default; the others
+            (redundant actuation) stay unknowns of the system (:attr:`PolynomialForm.checked`).
 
     Raises:
         NotPolynomial: a loop joint of another kind, or fewer independent closure entries
@@ -109,10 +114,12 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
     closures = [c for c in mech.closures if not c.spec.name.startswith(GAUGE_PREFIX)]
     if not closures:
         raise NotPolynomial("no closures")
-    actuated = {a.joint_id: i for i, a in enumerate(mech.actuators)}
+    chosen = tuple(range(mech.n_actuators)) if parameters is None else tuple(parameters)
+    actuated = {mech.actuators[a].joint_id: i for i, a in enumerate(chosen)}
+    all_actuated = {a.joint_id: i for i, a in enumerate(mech.actuators)}
     data = model.createData()
     pin.framesForwardKinematics(model, data, mech.q_ref)
-    legs = _distance_legs(mech, data, closures, actuated, set(gauges))
+    legs = _distance_legs(mech, data, closures, all_actuated, set(gauges))
     anchors: list[tuple[int, pin.SE3]] = []  # (parent joint, placement in it) of each closure point
 
     def anchor(joint: int, placement: pin.SE3) -> int:
@@ -138,7 +145,7 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
             j = model.parents[j]
     joints = np.array(sorted(keep), dtype=int)
     index = {int(j): i for i, j in enumerate(joints)}
-    if set(actuated) - keep:
+    if set(all_actuated) - keep:
         raise NotPolynomial("an actuated joint carries no closure")
     eliminated = sorted({int(j) for leg in legs.values() for j in leg[4]} - keep)
     k = len(joints)
@@ -151,6 +158,7 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
     block_degree = np.zeros(k, dtype=np.int64)
     n = 0
     unit_offsets, unit_sizes = [], []
+    checked: list[tuple[int, int, int]] = []  # redundant actuators left unknowns
     for i, j in enumerate(joints.tolist()):
         jm, name = model.joints[j], model.names[j]
         parent[i] = index.get(int(model.parents[j]), -1)
@@ -179,6 +187,10 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
             unit_offsets.append(quat)
             unit_sizes.append(4)
             block_degree[i] = 2
+        if j in all_actuated:
+            if kind[i] not in (REVOLUTE, PRISMATIC):
+                raise NotPolynomial(f"actuated joint {name} is neither revolute nor prismatic")
+            checked.append((all_actuated[j], n, int(kind[i] == REVOLUTE)))
         n += _SIZES[int(kind[i])]
     order = sorted(used)
     frame_joint = np.array([index.get(anchors[a][0], -1) for a in order], dtype=np.int64)
@@ -232,7 +244,9 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
         n_unit=n_unit,
         unit_offsets=np.array(unit_offsets, dtype=np.int64),
         unit_sizes=np.array(unit_sizes, dtype=np.int64),
-        n_params=mech.n_actuators,
+        n_params=len(chosen),
+        parameters=np.array(chosen, dtype=np.int64),
+        checked=np.array(checked, dtype=np.int64).reshape(-1, 3),
         degrees=np.zeros(n, dtype=np.int64),
         eliminated_v=np.array([model.joints[j].idx_v for j in eliminated], dtype=np.int64),
         digest="",
@@ -251,7 +265,8 @@ def polynomial_form(mech: Mechanism) -> PolynomialForm:
         h.update(np.ascontiguousarray(arr).tobytes())
     for arr in (closure_frames, closure_axis, closure_length2, combination):
         h.update(np.ascontiguousarray(arr).tobytes())
-    h.update(f"{n} {n_unit} {mech.n_actuators} {SEED}".encode())
+    key = str(mech.n_actuators) if parameters is None else str(chosen)  # (all actuators: as before)
+    h.update(f"{n} {n_unit} {key} {SEED}".encode())
     object.__setattr__(form, "combination", combination)
     object.__setattr__(form, "degrees", degrees)
     object.__setattr__(form, "digest", h.hexdigest())

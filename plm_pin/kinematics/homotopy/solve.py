@@ -29,7 +29,7 @@ from ...tolerances import (
 )
 from .form import PolynomialForm
 from .generic import GenericSolution, canonical, generic_solution
-from .polynomial import from_configuration, polynomial_form
+from .polynomial import NotPolynomial, from_configuration, polynomial_form
 
 
 @dataclass(frozen=True)
@@ -56,6 +56,8 @@ class HomotopySolve:
         real: certified real roots that solve the full closure system (one per quaternion-sign orbit).
         uncertified: real roots of the full system whose Krawczyk test failed (kept, not proven).
         spurious: real roots of the square system only (the random combination's).
+        elsewhere: real assemblies at other values of the actuators left unknowns (redundant
+            actuation, :attr:`PolynomialForm.checked`).
         diverged: paths that went to infinity.
         singular: paths that ended at a singular root.
         failed: paths the tracker lost.
@@ -67,6 +69,7 @@ class HomotopySolve:
     real: tuple[RealRoot, ...]
     uncertified: tuple[np.ndarray, ...]
     spurious: int
+    elsewhere: int
     diverged: int
     singular: int
     failed: int
@@ -107,11 +110,44 @@ def prepared(mech: Mechanism) -> tuple[PolynomialForm, GenericSolution]:
     """
     hit = _FORMS.get(mech)
     if hit is None:
-        form = polynomial_form(mech)
-        seed = (from_configuration(form, mech, mech.q_ref), mech.actuator_positions(mech.q_ref))
-        hit = (form, generic_solution(form, seed=seed))
+        subset = parameter_actuators(mech)
+        if subset is not None:  # redundant actuation: as many parameters as the mobility
+            try:
+                hit = _prepare(mech, subset)
+            except NotPolynomial:
+                hit = None
+        hit = hit or _prepare(mech, None)
         _FORMS[mech] = hit
     return hit
+
+
+def _prepare(mech: Mechanism, subset: tuple[int, ...] | None) -> _Prepared:
+    form = polynomial_form(mech, subset)
+    c = mech.actuator_positions(mech.q_ref)[form.parameters]
+    return form, generic_solution(form, seed=(from_configuration(form, mech, mech.q_ref), c))
+
+
+def parameter_actuators(mech: Mechanism) -> tuple[int, ...] | None:
+    """For redundant actuation, the actuators (as many as the mobility) taken as parameters, else None.
+
+    Of the subsets of that size, the one whose values best fix the configuration at the reference
+    pose: the largest smallest singular value of the closure null space's actuator rows. The
+    other actuators stay unknowns, so the system has fewer spurious roots (half the paths on the
+    Harada 3D4M), and are checked against their values afterwards.
+    """
+    import itertools
+
+    k = mech.mobility
+    if mech.n_actuators <= k or k <= 0:
+        return None
+    vt = np.linalg.svd(mech.closure_jacobian(mech.q_ref))[2]
+    null = vt[vt.shape[0] - k :].T  # (nv, k): the closed chain's velocities at the reference
+    rows = null[mech.actuated_v_indices]
+    best = max(
+        itertools.combinations(range(mech.n_actuators), k),
+        key=lambda sub: float(np.linalg.svd(rows[list(sub)], compute_uv=False)[-1]),
+    )
+    return tuple(int(a) for a in best)
 
 
 def _real_newton(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -127,6 +163,19 @@ def _real_newton(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> np.ndarr
     return x
 
 
+def _off_actuators(form: PolynomialForm, x: np.ndarray, values: np.ndarray) -> bool:
+    """Whether real root ``x`` puts an actuator left unknown off its value ``values[a]``."""
+    scale = HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(x).max())
+    for a, o, revolute in form.checked:
+        if revolute:
+            off = max(abs(x[o] - np.cos(values[a])), abs(x[o + 1] - np.sin(values[a])))
+        else:
+            off = abs(x[o] - values[a])
+        if off > scale:
+            return True
+    return False
+
+
 def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     """Track every generic solution of ``mech`` to ``actuators`` and certify the real ends.
 
@@ -138,7 +187,8 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     from .tracking import DIVERGED, REACHED, track_all
 
     form, gen = prepared(mech)
-    p1 = np.asarray(actuators, dtype=np.complex128)
+    values = np.asarray(actuators, dtype=float)
+    p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
     X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args())
     roots: list[np.ndarray] = []
@@ -157,13 +207,13 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
             singular += 1
             continue
         x = canonical(form, x)
-        if any(np.abs(x - y).max() <= HOMOTOPY_SAME_ROOT_RTOL * scale for y in roots):
+        if roots and np.abs(np.array(roots) - x).max(axis=1).min() <= HOMOTOPY_SAME_ROOT_RTOL * scale:
             collided += 1
         else:
             roots.append(x)
     real: list[RealRoot] = []
     uncertified: list[np.ndarray] = []
-    spurious = 0
+    spurious = elsewhere = 0
     pr = np.real(p1)
     for x in roots:
         if np.abs(x.imag).max() > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(x).max()):
@@ -172,6 +222,9 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         entries, _ = closure_entries(form, xr, pr)
         if np.abs(entries).max() > HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(xr).max()):
             spurious += 1
+            continue
+        if _off_actuators(form, xr, values):
+            elsewhere += 1
             continue
         radius = certify(form, xr, pr)
         if radius is None:
@@ -184,6 +237,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         real=tuple(real),
         uncertified=tuple(uncertified),
         spurious=spurious,
+        elsewhere=elsewhere,
         diverged=diverged,
         singular=singular,
         failed=failed,

@@ -5,7 +5,8 @@ The homotopy moves the parameters on a straight line between two complex points,
 actuator values and the offsets added to the equations (:mod:`.generic` uses the offsets;
 a forward-kinematics call keeps them at zero). A path follows
 :math:`\dot x = -F_x^{-1} (F_p \dot p + \dot b)`: a fourth-order Runge-Kutta predictor, then
-at most :data:`CORRECTOR_STEPS` Newton corrections, accepted when they contract; the step
+at most :data:`CORRECTOR_STEPS` Newton corrections, accepted when they contract and stopped
+when a correction, or the next one predicted from the contraction, is small; the step
 doubles after three accepted steps in a row and halves on a rejected one.
 
 Endgame: a path whose norm passes :data:`HOMOTOPY_DIVERGED_NORM` goes to infinity (the target has
@@ -22,7 +23,7 @@ import numpy as np
 from numba import njit
 
 from ...tolerances import HOMOTOPY_CORRECTOR_TOL, HOMOTOPY_DIVERGED_NORM
-from .evaluation import system
+from .evaluation import system, workspace
 
 REACHED, DIVERGED, FAILED = 0, 1, 2
 """Path end codes: reached t = 1, went to infinity, tracker failure."""
@@ -35,10 +36,12 @@ FINAL_NEWTON = 4
 
 
 @njit(cache=True)
-def solve_linear(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Solve ``A y = b`` (complex, square) by LU with partial pivoting (``A`` is overwritten)."""
+def solve_linear(A: np.ndarray, y: np.ndarray) -> bool:
+    """Solve ``A z = y`` (complex, square) in place by LU with partial pivoting: ``y`` becomes ``z``.
+
+    ``A`` is overwritten. Returns False (and ``y`` NaN) when a pivot is exactly zero.
+    """
     n = A.shape[0]
-    y = b.copy()
     for k in range(n):
         piv, best = k, abs(A[k, k])
         for r in range(k + 1, n):
@@ -46,7 +49,7 @@ def solve_linear(A: np.ndarray, b: np.ndarray) -> np.ndarray:
                 piv, best = r, abs(A[r, k])
         if best == 0.0:
             y[:] = np.nan
-            return y
+            return False
         if piv != k:
             for c in range(n):
                 A[k, c], A[piv, c] = A[piv, c], A[k, c]
@@ -63,86 +66,136 @@ def solve_linear(A: np.ndarray, b: np.ndarray) -> np.ndarray:
         for c in range(k + 1, n):
             acc -= A[k, c] * y[c]
         y[k] = acc / A[k, k]
-    return y
+    return True
 
 
 @njit(cache=True)
-def _velocity(x, p, b, dp, db, args):  # type: ignore[no-untyped-def]
-    _, Jx, Jp = system(x, p, b, *args)
-    rhs = -db.copy()
-    for i in range(Jp.shape[0]):
-        for j in range(Jp.shape[1]):
-            rhs[i] -= Jp[i, j] * dp[j]
-    return solve_linear(Jx, rhs)
+def _velocity(x, p, b, dp, db, ws, args, out):  # type: ignore[no-untyped-def]
+    """``out`` = the path's tangent dx/dt at (x, p, b)."""
+    _, J = system(x, p, b, ws, *args)
+    n = x.shape[0]
+    for i in range(n):
+        acc = -db[i]
+        for j in range(dp.shape[0]):
+            acc -= J[i, n + j] * dp[j]
+        out[i] = acc
+    solve_linear(J[:, :n], out)
 
 
 @njit(cache=True)
-def _newton(x, p, b, args):  # type: ignore[no-untyped-def]
-    F, Jx, _ = system(x, p, b, *args)
-    return solve_linear(Jx, -F)
+def _newton(x, p, b, ws, args, out):  # type: ignore[no-untyped-def]
+    """``out`` = the Newton step at (x, p, b)."""
+    F, J = system(x, p, b, ws, *args)
+    for i in range(x.shape[0]):
+        out[i] = -F[i]
+    solve_linear(J[:, : x.shape[0]], out)
+
+
+@njit(cache=True)
+def _at(t: float, a0: np.ndarray, da: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """``out = a0 + t da``."""
+    for i in range(a0.shape[0]):
+        out[i] = a0[i] + t * da[i]
+    return out
+
+
+@njit(cache=True)
+def _norm(v: np.ndarray) -> float:
+    acc = 0.0
+    for i in range(v.shape[0]):
+        acc += v[i].real * v[i].real + v[i].imag * v[i].imag
+    return np.sqrt(acc)
 
 
 @njit(cache=True)
 def track(
-    x0: np.ndarray, p0: np.ndarray, b0: np.ndarray, p1: np.ndarray, b1: np.ndarray, args: tuple
+    x0: np.ndarray,
+    p0: np.ndarray,
+    b0: np.ndarray,
+    p1: np.ndarray,
+    b1: np.ndarray,
+    ws: tuple,
+    args: tuple,
 ) -> tuple[np.ndarray, int, int]:
     """Track one solution ``x0`` of the system at ``(p0, b0)`` to ``(p1, b1)``.
+
+    ``ws`` is the evaluation workspace (:func:`~.evaluation.workspace`); the path's own buffers are
+    allocated once here, so no step allocates.
 
     Returns:
         The end point, its code (REACHED, DIVERGED, FAILED) and the number of steps.
     """
+    n = x0.shape[0]
     x = x0.copy()
+    y = np.empty_like(x)
+    xs = np.empty_like(x)
+    d = np.empty_like(x)
+    k1, k2, k3, k4 = np.empty_like(x), np.empty_like(x), np.empty_like(x), np.empty_like(x)
     dp, db = p1 - p0, b1 - b0
+    pt, bt = np.empty_like(p0), np.empty_like(b0)
     t, h = 0.0, 0.1
     steps, streak = 0, 0
+    norm0 = _norm(x0)
     while t < 1.0:
         if steps > 5000:
             return x, FAILED, steps
         h = min(h, 1.0 - t)
         steps += 1
         # RK4 predictor
-        k1 = _velocity(x, p0 + t * dp, b0 + t * db, dp, db, args)
-        k2 = _velocity(x + 0.5 * h * k1, p0 + (t + 0.5 * h) * dp, b0 + (t + 0.5 * h) * db, dp, db, args)
-        k3 = _velocity(x + 0.5 * h * k2, p0 + (t + 0.5 * h) * dp, b0 + (t + 0.5 * h) * db, dp, db, args)
-        k4 = _velocity(x + h * k3, p0 + (t + h) * dp, b0 + (t + h) * db, dp, db, args)
-        y = x + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        pt, bt = p0 + (t + h) * dp, b0 + (t + h) * db
-        ok = bool(np.all(np.isfinite(y)))
+        _velocity(x, _at(t, p0, dp, pt), _at(t, b0, db, bt), dp, db, ws, args, k1)
+        th = t + 0.5 * h
+        for i in range(n):
+            xs[i] = x[i] + 0.5 * h * k1[i]
+        _velocity(xs, _at(th, p0, dp, pt), _at(th, b0, db, bt), dp, db, ws, args, k2)
+        for i in range(n):
+            xs[i] = x[i] + 0.5 * h * k2[i]
+        _velocity(xs, pt, bt, dp, db, ws, args, k3)
+        for i in range(n):
+            xs[i] = x[i] + h * k3[i]
+        _velocity(xs, _at(t + h, p0, dp, pt), _at(t + h, b0, db, bt), dp, db, ws, args, k4)
+        ok = True
+        for i in range(n):
+            y[i] = x[i] + (h / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            ok = ok and np.isfinite(y[i].real) and np.isfinite(y[i].imag)
         last: float = np.inf
         if ok:
             converged = False
             for _ in range(CORRECTOR_STEPS):
-                d = _newton(y, pt, bt, args)
-                nd = float(np.linalg.norm(d))
+                _newton(y, pt, bt, ws, args, d)
+                nd = _norm(d)
                 if not np.isfinite(nd) or nd > 0.5 * last:
                     break
-                y += d
-                last = nd
-                if nd <= HOMOTOPY_CORRECTOR_TOL * (1.0 + np.linalg.norm(y)):
+                for i in range(n):
+                    y[i] += d[i]
+                # converged: this correction is small, or the next one will be (contraction nd / last)
+                small = HOMOTOPY_CORRECTOR_TOL * (1.0 + _norm(y))
+                if nd <= small or (last < np.inf and nd * (nd / last) <= small):
                     converged = True
                     break
-            ok = converged or last <= 1e-6 * (1.0 + float(np.linalg.norm(y)))
+                last = nd
+            ok = converged or last <= 1e-6 * (1.0 + _norm(y))
         if ok:
-            x = y
+            x[:] = y
             t += h
             streak += 1
             if streak >= 3:
                 h = min(2.0 * h, MAX_STEP)
                 streak = 0
-            if np.linalg.norm(x) > HOMOTOPY_DIVERGED_NORM:
+            if _norm(x) > HOMOTOPY_DIVERGED_NORM:
                 return x, DIVERGED, steps
         else:
             h *= 0.5
             streak = 0
             if h < MIN_STEP:
-                if np.linalg.norm(x) > 1e3 * (1.0 + np.linalg.norm(x0)):
+                if _norm(x) > 1e3 * (1.0 + norm0):
                     return x, DIVERGED, steps
                 return x, FAILED, steps
     for _ in range(FINAL_NEWTON):
-        d = _newton(x, p1, b1, args)
-        if not np.all(np.isfinite(d)):
+        _newton(x, p1, b1, ws, args, d)
+        if not np.isfinite(_norm(d)):
             break
-        x = x + d
+        for i in range(n):
+            x[i] += d[i]
     return x, REACHED, steps
 
 
@@ -152,9 +205,20 @@ def track_all(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Track every row of ``X0`` (shape (N, n)): end points (N, n), codes (N,), steps (N,)."""
     N = X0.shape[0]
+    parent, kind, offset, placement, frame_joint, combination = (
+        args[0],
+        args[1],
+        args[2],
+        args[4],
+        args[6],
+        args[13],
+    )
+    ws = workspace(
+        X0.shape[1], p0.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1]
+    )
     out = np.empty_like(X0)
     codes = np.empty(N, dtype=np.int64)
     steps = np.empty(N, dtype=np.int64)
     for i in range(N):
-        out[i], codes[i], steps[i] = track(X0[i], p0, b0, p1, b1, args)
+        out[i], codes[i], steps[i] = track(X0[i], p0, b0, p1, b1, ws, args)
     return out, codes, steps

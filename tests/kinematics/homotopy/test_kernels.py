@@ -19,6 +19,7 @@ from plm_pin.kinematics.homotopy.certify import _matmul, certify
 from plm_pin.kinematics.homotopy.evaluation import evaluate
 from plm_pin.kinematics.homotopy.generic import solve_generic
 from plm_pin.kinematics.homotopy.polynomial import from_configuration, to_configuration
+from plm_pin.kinematics.homotopy.solve import parameter_actuators
 from tests.conftest import preset
 
 NAMES = ["fourbar", "harada2011_3d4m", "enferadi2017_star_triangle", "zhao2011_6pss"]
@@ -53,6 +54,29 @@ def test_reference_pose_solves_the_system_and_round_trips(name):
     assert np.abs(evaluate(form, x, c)[0]).max() <= 1e-14
     q = to_configuration(form, mech, x, c)
     assert np.abs(from_configuration(form, mech, q) - x).max() <= 1e-14
+
+
+@pytest.mark.parametrize("name", ["harada2011_3d4m", "harada2015_asymmetric"])
+def test_redundant_actuation_takes_as_many_parameters_as_the_mobility(name):
+    """A redundant preset: mobility-many actuators are parameters, the rest unknowns equal to their values.
+
+    The reference root solves the reduced system; the actuators left unknown (sliders) hold their reference
+    displacements; and a subset that fixes the configuration gives a non-singular Jacobian there.
+    """
+    mech = preset(name)
+    subset = parameter_actuators(mech)
+    assert subset is not None and len(subset) == mech.mobility < mech.n_actuators
+    form = polynomial_form(mech, subset)
+    assert form.n_params == mech.mobility and len(form.checked) == mech.n_actuators - mech.mobility
+    x = from_configuration(form, mech, mech.q_ref)
+    c = mech.actuator_positions(mech.q_ref)
+    F, Jx, _ = evaluate(form, x, c[form.parameters])
+    assert np.abs(F).max() <= 1e-14
+    assert np.linalg.matrix_rank(Jx) == form.n
+    for a, o, revolute in form.checked:  # Harada's sliders: prismatic
+        assert revolute == 0 and mech.actuators[a].kind == "prismatic"
+        assert abs(x[o] - c[a]) <= 1e-14
+    assert parameter_actuators(preset("harada2011_3d3m")) is None  # not redundant: every actuator
 
 
 def test_krawczyk_certifies_a_root_and_refuses_a_shifted_point():

@@ -1,0 +1,142 @@
+"""The live inspector's page server: 127.0.0.1 only, the state function behind its JSON, stopped by Ctrl-C.
+
+The server and the CLI run for real (meshcat subprocesses, sockets); the browser drives the
+page in tests/report/test_browser.py.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import urllib.error
+import urllib.request
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from plm_pin.viz import Inspector, inspect, inspect_update
+from plm_pin.viz.meshcat_server import LOCALHOST
+from tests.conftest import preset
+from tests.viz.test_meshcat_view import listening_addresses
+
+REPO = Path(__file__).resolve().parents[2]
+TIMEOUT = 60.0
+"""Longest wait for a request or a process [s]."""
+
+
+def _get(url: str) -> dict:
+    with urllib.request.urlopen(url, timeout=TIMEOUT) as reply:
+        return json.loads(reply.read())
+
+
+def _post(url: str, change: object) -> tuple[int, dict]:
+    request = urllib.request.Request(url, data=json.dumps(change).encode(), method="POST")
+    try:
+        with urllib.request.urlopen(request, timeout=TIMEOUT) as reply:
+            return reply.status, json.loads(reply.read())
+    except urllib.error.HTTPError as exc:
+        return exc.code, json.loads(exc.read())
+
+
+@pytest.fixture(scope="module")
+def inspector():
+    running = inspect(preset("fourbar"))
+    yield running
+    running.close()
+
+
+def test_page_listens_on_localhost_only_and_serves_the_page(inspector):
+    """The control page binds 127.0.0.1 alone and serves its HTML with the scene's address in the state."""
+    host, port = inspector.address
+    assert host == LOCALHOST
+    if Path("/proc/net/tcp").exists():
+        assert listening_addresses(port) == {LOCALHOST}
+    with urllib.request.urlopen(inspector.url, timeout=TIMEOUT) as reply:
+        assert b'id="scene"' in reply.read()
+    state = _get(inspector.url + "state")
+    assert state["scene"] == inspector.viewer.url
+    assert state["dofs"] == ["rz"]
+
+
+def test_update_endpoint_answers_what_inspect_update_gives(inspector):
+    """A posted change returns the state the state function computes from the same state and change."""
+    before = inspector.state
+    goal = float(before.x[0]) + 0.05
+    status, data = _post(inspector.url + "update", {"task": {"rz": goal}})
+    assert status == 200
+    expected = inspect_update(before, {"task": {"rz": goal}})
+    np.testing.assert_allclose(data["q"], expected.q, atol=1e-12)
+    assert data["manipulability"] == pytest.approx(expected.manipulability)
+    assert inspector.state.x[0] == pytest.approx(goal)
+
+
+@pytest.mark.parametrize(
+    "path, body, code, words",
+    [
+        ("update", {"task": {"x": 1.0}}, 400, "is not one of"),
+        ("update", [1, 2], 400, "mapping"),
+        ("nowhere", {}, 404, "no such endpoint"),
+    ],
+)
+def test_bad_requests_answer_the_reason(inspector, path, body, code, words):
+    """A malformed change answers 400 with the state function's message; an unknown path 404."""
+    status, data = _post(inspector.url + path, body)
+    assert status == code and words in data["error"]
+
+
+@pytest.mark.parametrize("headers", [{"Origin": "http://example.com"}, {"Host": "evil.example:80"}])
+def test_requests_from_other_origins_or_hosts_are_refused(inspector, headers):
+    """A post from another site's page, or naming another host (DNS rebinding): 403, nothing changed."""
+    before = inspector.state
+    body = json.dumps({"task": {"rz": 2.0}}).encode()
+    request = urllib.request.Request(inspector.url + "update", data=body, method="POST", headers=headers)
+    with pytest.raises(urllib.error.HTTPError) as refused:
+        urllib.request.urlopen(request, timeout=TIMEOUT)
+    assert refused.value.code == 403
+    assert inspector.state is before
+
+
+def test_close_stops_the_page():
+    """After close() nothing listens on the page's port."""
+    running = Inspector(preset("fourbar"))
+    port = running.address[1]
+    running.close()
+    running.close()
+    with pytest.raises(OSError):
+        urllib.request.urlopen(f"http://{LOCALHOST}:{port}/state", timeout=TIMEOUT)
+
+
+@pytest.mark.slow
+def test_cli_serves_on_localhost_and_ends_with_ctrl_c():
+    """`plm-pin inspect` prints its page, answers on 127.0.0.1 only, exits 0 on SIGINT, frees the port."""
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    process = subprocess.Popen(
+        [sys.executable, "-m", "plm_pin", "inspect", "fourbar"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    try:
+        assert process.stdout is not None
+        line = process.stdout.readline()  # bounded by the inspector's own start-up time-outs
+        assert line.startswith("fourbar: http://127.0.0.1:"), line + (
+            process.stderr.read() if process.stderr else ""
+        )
+        url = line.split(": ", 1)[1].strip()
+        port = int(url.rsplit(":", 1)[1].strip("/"))
+        assert _get(url + "state")["source"] == "fourbar"
+        if Path("/proc/net/tcp").exists():
+            assert listening_addresses(port) == {LOCALHOST}
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=TIMEOUT) == 0
+        if Path("/proc/net/tcp").exists():
+            assert listening_addresses(port) == set()
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
