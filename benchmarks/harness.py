@@ -4,7 +4,8 @@ Run with ``make bench`` (or ``python -m benchmarks.harness --out reports/bench``
 in the checkout, not in the installed package. A
 benchmark measures; correctness is asserted by the test suite, never here. Besides the
 cost per call of loading, closures, assembly, kinematics and manipulability for every
-preset, it times the 3D4M's kinematics beside their Pinocchio floor (:class:`Floor`) and
+preset, it times the 3D4M's kinematics beside their Pinocchio floor (:class:`Floor`), on the compiled
+kernels and on the Pinocchio path, with the kernels' first compile and cache load, and
 PlaCo's (in its own venv), the force capability and internal-force range beside theirs
 (:func:`capability_floor`, :func:`internal_range_floor`), records the wall time of a
 10^5-pose manipulability map of ``harada2011_3d4m`` on one core beside Harada's vectorised
@@ -27,6 +28,7 @@ import platform
 import shutil
 import subprocess
 import sys
+import tempfile
 import time
 import timeit
 from collections.abc import Callable
@@ -42,11 +44,12 @@ import proxsuite
 from analyses._zhao2011_paper import ZHAO2011_TRAJECTORY_DURATION, zhao2011_trajectory
 from plm_pin.core.closures import jacobian_from_data as closure_jacobian_from_data
 from plm_pin.core.mechanism import Mechanism
-from plm_pin.core.task import FrameTask
+from plm_pin.core.task import FrameTask, TaskTarget
 from plm_pin.dynamics.inverse_dynamics import inverse_dynamics
 from plm_pin.dynamics.simulation import SimulationResult, simulate
 from plm_pin.dynamics.trajectory import task_trajectory
 from plm_pin.families.classic import build_fourbar
+from plm_pin.kernels import SWITCH, kernel_of
 from plm_pin.kinematics import (
     classify,
     closed_chain_jacobians,
@@ -255,6 +258,82 @@ def kinematics_benchmark() -> list[dict[str, object]]:
     return rows
 
 
+KERNEL_FIRST_CALL = """
+import sys, time
+from plm_pin import load
+from plm_pin.core.task import TaskTarget
+from plm_pin.kernels import kernel_of
+from plm_pin.kinematics import task_pose
+mech = load("harada2011_3d4m")
+target = TaskTarget(mech.task_compiled, task_pose(mech, mech.q_ref) + 1e-3)
+start = time.perf_counter()
+kernel_of(mech).newton(mech.q_ref, None, mech.closure_tol, target)
+print(time.perf_counter() - start)
+"""
+"""Times the first kernel Newton of a fresh process: numba's import and the compile or the cache load."""
+
+
+def kernel_benchmark() -> list[dict[str, object]]:
+    """The compiled kernels on the 3D4M: IK and FK on both paths beside the floor, compile and load times.
+
+    The kernel rows of :func:`kinematics_benchmark` are the public functions; here the same calls
+    with ``PLM_PIN_KERNELS=0`` (the Pinocchio path) and the kernel Newton alone, each timed in
+    alternation with :class:`Floor`. The first call of a fresh process is timed twice in a
+    subprocess with an empty numba cache folder (the compile) and again with it filled (the load).
+    """
+    mech = load("harada2011_3d4m")
+    floor = Floor(mech)
+    q = mech.q_ref
+    x = task_pose(mech, q) + 1e-3
+    c = mech.actuator_positions(inverse_kinematics(mech, x, q).q)
+    kernel, task = kernel_of(mech), mech.task_compiled
+    assert kernel is not None and task is not None, "the kernels are off (PLM_PIN_KERNELS=0 or no numba)"
+    target = TaskTarget(task, x)
+    rows: list[dict[str, object]] = []
+
+    def pinocchio_path(fn: Callable[[], object]) -> object:
+        os.environ[SWITCH] = "0"
+        try:
+            return fn()
+        finally:
+            del os.environ[SWITCH]
+
+    cases: dict[str, tuple[Callable[[], object], Callable[[], object]]] = {
+        "kernel Newton alone (IK, from q_ref, 1e-3 m/rad off)": (
+            functools.partial(kernel.newton, q, None, mech.closure_tol, target),
+            functools.partial(floor.ik, q, x),
+        ),
+        "inverse_kinematics on the Pinocchio path (PLM_PIN_KERNELS=0)": (
+            functools.partial(pinocchio_path, functools.partial(inverse_kinematics, mech, x, q)),
+            functools.partial(floor.ik, q, x),
+        ),
+        "forward_kinematics, one mode, on the Pinocchio path (PLM_PIN_KERNELS=0)": (
+            functools.partial(
+                pinocchio_path, functools.partial(forward_kinematics, mech, c, q, all_modes=False)
+            ),
+            functools.partial(floor.fk, q, c),
+        ),
+    }
+    for case, (fn, low) in cases.items():
+        ours, least = _paired(fn, low)
+        rows.append(
+            {"mechanism": mech.name, "case": case, "seconds_per_call": ours, "floor_seconds_per_call": least}
+        )
+    with tempfile.TemporaryDirectory() as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+        for case in (
+            "kernels: first call of a process, compiling (empty cache)",
+            "kernels: first call, from the disk cache",
+        ):
+            out = subprocess.run(
+                [sys.executable, "-c", KERNEL_FIRST_CALL], env=env, capture_output=True, text=True, check=True
+            )
+            rows.append(
+                {"mechanism": mech.name, "case": case, "seconds_per_call": float(out.stdout.split()[-1])}
+            )
+    return rows
+
+
 PLACO_VENV = Path(os.environ.get("PLM_PIN_PLACO_VENV", ".venv-placo"))
 """Virtual environment of PlaCo (pip ``placo`` pins an older Pinocchio than plm_pin's): made on first use."""
 
@@ -424,6 +503,7 @@ def run() -> list[dict[str, object]]:
         for case, fn in cases.items():
             rows.append({"mechanism": name, "case": case, "seconds_per_call": _per_call(fn)})
     rows.extend(kinematics_benchmark())
+    rows.extend(kernel_benchmark())
     rows.extend(complete_fk_benchmark())
     rows.extend(allocation_benchmark())
     rows.extend(capability_benchmark())

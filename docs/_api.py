@@ -23,6 +23,7 @@ PACKAGES = (
     "plm_pin",
     "plm_pin.description",
     "plm_pin.core",
+    "plm_pin.kernels",
     "plm_pin.kinematics",
     "plm_pin.kinematics.homotopy",
     "plm_pin.families",

@@ -9,6 +9,7 @@ __all__ = [
     "IgnoredElementWarning",
     "IllConditionedWarning",
     "IncompleteSearchWarning",
+    "KernelFallbackWarning",
     "MissingLimitsWarning",
     "MissingMeshWarning",
     "PlmWarning",
@@ -64,3 +65,7 @@ class AmbiguousRankWarning(PlmWarning):
 
 class IncompleteSearchWarning(PlmWarning):
     """A search for every solution (every assembly mode) cannot prove it found them all."""
+
+
+class KernelFallbackWarning(PlmWarning):
+    """The compiled kernels cannot serve a mechanism (a joint type, no numba): the Pinocchio path runs."""

@@ -30,6 +30,7 @@ LAYERS = (
     "loading",
     "export",
     "legs",
+    "kernels",
     "kinematics",
     "statics",
     "workspace",

@@ -15,6 +15,7 @@ from ..core.assembly import assemble, newton
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
+from ..kernels import kernel_of
 from ..results import Result, unit
 from ..tolerances import FK_SAME_MODE_TOL, SAME_ASSEMBLY_TOL
 from ..warnings import IncompleteSearchWarning
@@ -203,18 +204,29 @@ def task_pose(mech: Mechanism, q: ArrayLike) -> np.ndarray:
 def _close(
     mech: Mechanism, start: np.ndarray, free: np.ndarray, tol: float
 ) -> tuple[np.ndarray, float, np.ndarray]:
-    """Close the loops moving the ``free`` columns: Newton first, LM when it stalls.
+    """Close the loops moving the ``free`` columns: Newton first (on the kernels where they serve), else LM.
 
     Returns:
         The configuration (read-only), its largest closure residual and its task pose
-        (empty without a task), from the solver's last Pinocchio pass.
+        (empty without a task), from the solver's last pass.
 
     Raises:
         ClosureNotSatisfied: when neither reaches ``tol``.
     """
+    kernel = kernel_of(mech)
+    if kernel is not None:
+        solved = kernel.newton(start, free, tol)
+        if solved is not None:
+            q, r, x = solved
+            q.setflags(write=False)
+            return q, float(np.abs(r).max()) if r.size else 0.0, x
     ws = mech._thread_workspace()
     r_phi, A_phi = ws.closure_rows
-    fast = newton(mech.model, ws.data, mech.closures, start, free, r_phi, A_phi, tol=tol)
+    fast = (
+        None
+        if kernel is not None
+        else newton(mech.model, ws.data, mech.closures, start, free, r_phi, A_phi, tol=tol)
+    )
     if fast is None:
         asm = assemble(mech.model, ws.data, mech.closures, start, free, tol=tol, max_iterations=60)
         q, residual_norm = asm.q, asm.residual_norm

@@ -6,6 +6,7 @@ import functools
 import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -19,6 +20,7 @@ from ..core.closures import closure_rows as _closure_rows
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import TaskTarget, check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
+from ..kernels import kernel_of
 from ..results import Result, unit
 from ..tolerances import BRANCH_TOL
 from .forward import same_assembly
@@ -75,20 +77,27 @@ def _solve(
     tol: float,
     closures: tuple[Closure, ...] | None = None,
 ) -> np.ndarray:
-    """Newton from ``guess`` (:func:`plm_pin.core.assembly.newton`), LM when it stalls.
+    """Newton from ``guess`` (:func:`plm_pin.core.assembly.newton`; on the kernels for all closures), else LM.
 
     Raises:
         ClosureNotSatisfied: when neither reaches ``tol``.
     """
+    all_free = free.size == mech.nv
+    kernel = kernel_of(mech) if closures is None else None
     ws = mech._thread_workspace()
     chosen = mech.closures if closures is None else closures
-    all_free = free.size == mech.nv
-    if closures is None:
-        r, A = ws.residual, ws.jacobian
+    fast: tuple[Any, ...] | None
+    if kernel is not None:
+        fast = kernel.newton(guess, None if all_free else free, tol, target)
     else:
-        n = _closure_rows(chosen) + target.size
-        r, A = np.empty(n), np.empty((n, mech.nv))
-    fast = newton(mech.model, ws.data, chosen, guess, None if all_free else free, r, A, tol=tol, extra=target)
+        if closures is None:
+            r, A = ws.residual, ws.jacobian
+        else:
+            n = _closure_rows(chosen) + target.size
+            r, A = np.empty(n), np.empty((n, mech.nv))
+        fast = newton(
+            mech.model, ws.data, chosen, guess, None if all_free else free, r, A, tol=tol, extra=target
+        )
     if fast is not None:
         return fast[0]
     return assemble(
@@ -121,13 +130,13 @@ def _solution_from_residual(mech: Mechanism, target: TaskTarget, q: np.ndarray, 
     placements, the same mode); a configuration inside every limit is kept as it is.
     """
     model = mech.model
-    if np.all(model.lowerPositionLimit <= q) and np.all(q <= model.upperPositionLimit):
+    if (model.lowerPositionLimit <= q).all() and (q <= model.upperPositionLimit).all():
         q, violations = np.array(q), {}  # nothing to shift, nothing outside
     else:
         q = wrap_into_limits(mech, q)
         violations = limit_violations(mech, q)
     q.setflags(write=False)
-    residual_norm = float(np.max(np.abs(r))) if r.size else 0.0
+    residual_norm = float(abs(r).max()) if r.size else 0.0
     return IKSolution(q, target.x.copy(), residual_norm, violations, mech)
 
 
@@ -234,16 +243,23 @@ def _from_guess(
 ) -> IKSolution | None:
     """The solution in the basin of ``guess`` (default: the reference configuration), or None.
 
-    Newton first; its last pass gives the residual of the solution. Levenberg-Marquardt when
+    Newton first (on the compiled kernels where :func:`~plm_pin.kernels.kernel_of` serves the
+    mechanism); its last pass gives the residual of the solution. Levenberg-Marquardt when
     Newton stalls.
     """
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
+    kernel = kernel_of(mech)
     ws = mech._thread_workspace()
-    fast = newton(
-        mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
-    )
-    if fast is not None:
-        return _solution_from_residual(mech, target, fast[0], ws.residual)
+    if kernel is not None:
+        solved = kernel.newton(q0, None, tol, target)
+        if solved is not None:
+            return _solution_from_residual(mech, target, solved[0], solved[1])
+    else:
+        fast = newton(
+            mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
+        )
+        if fast is not None:
+            return _solution_from_residual(mech, target, fast[0], ws.residual)
     try:
         q = assemble(
             mech.model,

@@ -41,12 +41,13 @@ from ..core import closures as _closures
 from ..core.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO, newton
 from ..core.legs import Leg, ik_jacobian_from_data, working_mode_from_data
 from ..core.mechanism import Mechanism, require_task
-from ..core.task import Task, TaskTarget
+from ..core.task import FrameTask, Task, TaskTarget
 from ..exceptions import InvalidInput, PoseUnreachable
+from ..kernels import Kernel, kernel_of
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import check_mode, inverse_kinematics
 from ..kinematics.working_mode import start_configuration
-from ._batch import BatchKinematics, batch_modes, batch_newton, square_task_metrics
+from ._batch import BatchKinematics, batch_modes, batch_newton, rpy_matrix, square_task_metrics
 from .manipulability import batch_metrics
 
 ndimage = lazy_module("scipy.ndimage")  # label: the unreached regions of a grid
@@ -67,6 +68,7 @@ class IKEvaluator:
     mobility: int
     actuated_v: np.ndarray
     linear_q: bool
+    kernel: Kernel | None = None
     _data: pin.Data | None = field(default=None, repr=False)
 
     @classmethod
@@ -81,6 +83,7 @@ class IKEvaluator:
             mobility=mech.mobility,
             actuated_v=np.asarray(mech.actuated_v_indices),
             linear_q=all(model.joints[j].nq == model.joints[j].nv for j in range(1, model.njoints)),
+            kernel=kernel_of(mech),
         )
 
     def __post_init__(self) -> None:
@@ -90,7 +93,7 @@ class IKEvaluator:
         self._A = np.empty((self.m + self.task.size, self.nv))  # its Jacobian
 
     def __getstate__(self) -> dict[str, Any]:
-        keep = ("model", "closures", "task", "legs", "mobility", "actuated_v", "linear_q")
+        keep = ("model", "closures", "task", "legs", "mobility", "actuated_v", "linear_q", "kernel")
         return {k: self.__dict__[k] for k in keep}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
@@ -116,11 +119,18 @@ class IKEvaluator:
         :func:`plm_pin.core.assembly.newton` without its polishing step: the attempt
         ends when an iteration does not reduce the residual by the factor
         :data:`~plm_pin.core.assembly.STALL_RATIO`, or after
-        :data:`~plm_pin.core.assembly.NEWTON_MAX_ITERATIONS`. On success the data holds
-        the joint Jacobians and frame placements at the returned configuration (read them
-        with :meth:`jacobian`).
+        :data:`~plm_pin.core.assembly.NEWTON_MAX_ITERATIONS`; on the compiled kernels where
+        they serve the mechanism. On success the data holds the joint Jacobians and frame
+        placements at the returned configuration (read them with :meth:`jacobian`).
         """
         target = TaskTarget(self.task, x)
+        if self.kernel is not None:
+            solved = self.kernel.newton(q0, None, tol, target, polish=False)
+            if solved is None:
+                return None
+            pin.computeJointJacobians(self.model, self.data, solved[0])
+            pin.updateFramePlacements(self.model, self.data)
+            return solved[0]
         found = newton(
             self.model,
             self.data,
@@ -534,13 +544,27 @@ def _walk_rows(
         if not rows:
             break
         row, col = np.concatenate(rows), np.concatenate(cols)
-        q, ok, A, R = batch_newton(
-            kin, np.concatenate(guesses), poses[row, col], tol, NEWTON_MAX_ITERATIONS, STALL_RATIO
-        )
+        q, ok, A, R = _batch_solve(ev, kin, np.concatenate(guesses), poses[row, col], tol)
         modes = batch_modes(A[ok], ev.legs, kin.turns(R[ok], ev.legs))
         fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
         keep = np.flatnonzero(ok)[fits]
         state.accept_batch(row[keep] * n1 + col[keep], q[keep], modes[fits], A[keep], metrics)
+
+
+def _batch_solve(
+    ev: IKEvaluator, kin: BatchKinematics, guesses: np.ndarray, X: np.ndarray, tol: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``batch_newton`` at ``X`` from ``guesses`` (:mod:`._batch`), on the kernels if they serve."""
+    if ev.kernel is None or not isinstance(ev.task, FrameTask):
+        return batch_newton(kin, guesses, X, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
+    R_stars = np.broadcast_to(np.eye(3), (X.shape[0], 3, 3))
+    if len(ev.task.angular) == 3:
+        rpy = np.empty((X.shape[0], 3))
+        rpy[:, list(ev.task.angular)] = X[:, len(ev.task.linear) :]
+        R_stars = rpy_matrix(rpy)
+    return ev.kernel.batch_newton(
+        kin.normalized(guesses), X, R_stars, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO
+    )
 
 
 def _seed(

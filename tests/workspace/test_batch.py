@@ -183,7 +183,8 @@ def test_row_batched_8pss_map_equals_the_point_by_point_map(monkeypatch, axes, s
         x0[dofs.index(a)] + np.linspace(-h, h, n) for a, h, n in zip(axes, span, shape, strict=True)
     )
     calls = []
-    monkeypatch.setattr(_continuation, "batch_newton", lambda *a: calls.append(1) or batch_newton(*a))
+    solve = _continuation._batch_solve
+    monkeypatch.setattr(_continuation, "_batch_solve", lambda *a: calls.append(1) or solve(*a))
     batched = workspace_map(mech, axes, values, workers=1)
     assert calls  # the rows went through the batch
     monkeypatch.setattr(_continuation.BatchKinematics, "from_parts", classmethod(lambda cls, *a: None))

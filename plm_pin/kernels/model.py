@@ -1,0 +1,243 @@
+"""A mechanism's kernel: the constant arrays the compiled kernels read, built once from the Pinocchio model.
+
+:func:`kernel_of` returns the :class:`Kernel` of a mechanism (built at first use and kept
+with it), or None when the kernels cannot serve it: a joint type they do not handle (said
+once per mechanism by a :class:`~plm_pin.warnings.KernelFallbackWarning`), numba missing
+(said once), or the environment variable ``PLM_PIN_KERNELS=0``. The callers then take the
+Pinocchio path, which gives the same results.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+import weakref
+from types import ModuleType
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+
+from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
+from ..core.closures import Closure
+from ..core.task import FrameTask, Task, TaskTarget
+from ..tolerances import ROUND_OFF
+from ..warnings import KernelFallbackWarning
+from .arrays import KernelArrays, build_arrays, kernel_frames, unsupported_joints
+
+if TYPE_CHECKING:
+    from ..core.mechanism import Mechanism
+
+SWITCH = "PLM_PIN_KERNELS"
+"""Environment variable: ``0`` turns the kernels off (every caller takes the Pinocchio path)."""
+
+
+class Kernel:
+    """A mechanism's compiled kinematics: placements, closure and task rows, Newton.
+
+    Attributes:
+        arrays: the constant arrays (:class:`KernelArrays`).
+        frame_ids: Pinocchio frame index of each kernel frame (closure frames, then the task frame).
+        n_task: number of task rows (0 without a task).
+    """
+
+    def __init__(self, arrays: KernelArrays, frame_ids: tuple[int, ...], n_task: int) -> None:
+        """Wrap ``arrays`` (see :func:`build_arrays`)."""
+        self.arrays = arrays
+        self.frame_ids = frame_ids
+        self.n_task = n_task
+        self._all = np.arange(arrays.nv)
+
+    @classmethod
+    def build(cls, model: pin.Model, closures: tuple[Closure, ...], task: Task | None) -> Kernel:
+        """The kernel of ``model`` with ``closures`` and ``task`` (every joint must be supported)."""
+        arrays = build_arrays(model, closures, task)
+        return cls(arrays, tuple(kernel_frames(closures, task)), task.size if task is not None else 0)
+
+    def _buffers(self) -> tuple[np.ndarray, ...]:
+        """Joint and frame placements, velocity columns, then the scratch of :func:`.compiled.evaluate`."""
+        nj, nf, nv = self.arrays.parents.size, max(self.arrays.f_joint.size, 1), self.arrays.nv
+        empty = np.empty
+        return (
+            empty((nj, 3, 3)),
+            empty((nj, 3)),
+            empty((nf, 3, 3)),
+            empty((nf, 3)),
+            empty((nv, 3)),
+            empty((nv, 3)),
+        )
+
+    @staticmethod
+    def _target_arrays(target: TaskTarget | None) -> tuple[np.ndarray, np.ndarray]:
+        """The target coordinates and, with all three angles selected, the target rotation."""
+        if target is None:
+            return _NO_TARGET, _EYE
+        task = target.task
+        if isinstance(task, FrameTask) and len(task.angular) == 3:
+            angles = np.empty(3)
+            angles[list(task.angular)] = target.x[len(task.linear) :]
+            return target.x, pin.rpy.rpyToMatrix(angles)
+        return target.x, _EYE
+
+    def placements(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """World rotations and translations of every joint (nj, 3, 3), (nj, 3) and kernel frame (nf, ...)."""
+        compiled = _compiled()
+        oR, op, fR, fp, Sw, Sv = self._buffers()
+        mats, vecs, _ = compiled.scratch(self.arrays.nv)
+        compiled.forward(self.arrays, np.asarray(q, dtype=float), oR, op, Sw, Sv, False, mats, vecs)
+        compiled.frames(self.arrays, oR, op, fR, fp)
+        return oR, op, fR, fp
+
+    def rows(self, q: np.ndarray, target: TaskTarget | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Residual ``[phi; task target]`` (m + n,) and its Jacobian (m + n, nv) at ``q``."""
+        compiled = _compiled()
+        x, R = self._target_arrays(target)
+        n = self.arrays.m + (target.size if target is not None else 0)
+        r, A = np.empty(n), np.empty((n, self.arrays.nv))
+        scratch = compiled.scratch(self.arrays.nv)
+        args = (np.asarray(q, float), x, R, target is not None, r, A, True, *self._buffers(), *scratch)
+        compiled.evaluate(self.arrays, *args)
+        return r, A
+
+    def newton(
+        self,
+        q0: np.ndarray,
+        free: np.ndarray | None,
+        tol: float,
+        target: TaskTarget | None = None,
+        polish: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """:func:`plm_pin.core.assembly.newton` on the kernels, or None when it stalls.
+
+        Args:
+            q0: starting configuration, shape (nq,).
+            free: velocity columns allowed to move (None: all).
+            tol: target largest absolute residual [m, rad].
+            target: task rows solved with the closures.
+            polish: take the polishing step once within ``tol``.
+
+        Returns:
+            The configuration, its residual ``[phi; task target]`` and its task coordinates
+            (:meth:`plm_pin.core.task.Task.pose_from_data`, empty without a task).
+        """
+        x, R = self._target_arrays(target)
+        q, pose = np.array(q0, dtype=float), np.empty(self.n_task)
+        r = np.empty(self.arrays.m + (target.size if target is not None else 0))
+        iterations = _compiled().newton(
+            self.arrays,
+            self._all if free is None else free,
+            x,
+            R,
+            target is not None,
+            tol,
+            ROUND_OFF,
+            NEWTON_MAX_ITERATIONS,
+            STALL_RATIO,
+            CHORD_RATIO,
+            polish,
+            q,
+            r,
+            pose,
+        )
+        return None if iterations < 0 else (q, r, pose)
+
+    def batch_newton(
+        self, Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float, max_iterations: int, stall: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Gauss-Newton at each pose of a batch (:func:`.compiled.batch_newton`; a frame task).
+
+        Args:
+            Q: starting configurations, shape (B, nq).
+            X: task targets, shape (B, n_task).
+            R_stars: their rotations where the task holds all three angles (else ignored), (B, 3, 3).
+            tol: residual tolerance [m, rad].
+            max_iterations: iteration cap.
+            stall: a pose whose residual does not fall below ``stall`` times the previous one fails.
+
+        Returns:
+            Configurations (B, nq), which converged (B,), the inverse-kinematics Jacobian
+            ``[J_phi; J_x]`` (task twist rows) at each (B, m + n_task, nv) and the joint
+            rotations there (B, njoints, 3, 3); the last two meaningful where converged.
+        """
+        a = self.arrays
+        B = Q.shape[0]
+        q = np.array(Q, dtype=float)
+        X = np.ascontiguousarray(X, dtype=float)
+        R_stars = np.ascontiguousarray(R_stars, dtype=float)
+        ok = np.zeros(B, dtype=np.bool_)
+        A = np.full((B, a.m + X.shape[1], a.nv), np.nan)
+        R = np.full((B, a.parents.size, 3, 3), np.nan)
+        _compiled().batch_newton(a, q, X, R_stars, tol, max_iterations, stall, ok, A, R)
+        return q, ok, A, R
+
+
+_NO_TARGET = np.zeros(0)
+_EYE = np.eye(3)
+_COMPILED: list[ModuleType] = []
+
+
+def _compiled() -> ModuleType:
+    """The compiled module (imports numba; its functions compile on first call, cached on disk)."""
+    if not _COMPILED:
+        from . import compiled
+
+        _COMPILED.append(compiled)
+    return _COMPILED[0]
+
+
+_KERNELS: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[Closure, ...], Kernel | None]] = (
+    weakref.WeakKeyDictionary()
+)
+_WARNED: set[str] = set()
+
+
+def _warn_once(key: str, message: str) -> None:
+    if key not in _WARNED:
+        _WARNED.add(key)
+        warnings.warn(message, KernelFallbackWarning, stacklevel=4)
+
+
+def kernels_enabled() -> bool:
+    """Whether the kernels may be used: ``PLM_PIN_KERNELS`` is not ``0`` and numba imports."""
+    if os.environ.get(SWITCH, "1").strip() == "0":
+        return False
+    if not _NUMBA:
+        try:
+            import numba  # noqa: F401
+        except ImportError:
+            _warn_once(
+                "numba",
+                "numba is not installed: kinematics runs on the Pinocchio path (same results, slower)",
+            )
+            return False
+        _NUMBA.append(True)
+    return True
+
+
+_NUMBA: list[bool] = []
+"""Holds True once numba imported."""
+
+
+def kernel_of(mech: Mechanism) -> Kernel | None:
+    """The compiled kernel of ``mech``, or None where the Pinocchio path must run (see the module).
+
+    Built at first use from the model, the closures and the task, then kept with the mechanism.
+    """
+    if not kernels_enabled():
+        return None
+    closures = mech.closures  # the model is final (idle gauges added) once they are compiled
+    hit = _KERNELS.get(mech)
+    if hit is not None and hit[0] is closures:
+        return hit[1]
+    missing = unsupported_joints(mech.model)
+    kernel = None
+    if missing:
+        _warn_once(
+            f"joints:{mech.name}",
+            f"{mech.name}: the compiled kernels do not handle the joints {', '.join(missing)}; "
+            "kinematics runs on the Pinocchio path (slower, same results)",
+        )
+    else:
+        kernel = Kernel.build(mech.model, closures, mech.task_compiled)
+    _KERNELS[mech] = (closures, kernel)
+    return kernel
