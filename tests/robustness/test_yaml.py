@@ -191,7 +191,7 @@ def test_the_c_parser_is_used_where_pyyaml_has_it():
     from plm_pin import _yaml
 
     expected = yaml.CSafeLoader if getattr(yaml, "__with_libyaml__", False) else yaml.SafeLoader
-    assert _yaml._Loader is expected
+    assert _yaml._loader() is expected
     assert load_yaml("a: [1, 2]\nb: &x {c: 1}\nd: *x\n") == {"a": [1, 2], "b": {"c": 1}, "d": {"c": 1}}
 
 
