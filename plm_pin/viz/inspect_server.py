@@ -33,6 +33,7 @@ from ..exceptions import PlmError
 from ..results import plain
 from .inspect_state import InspectState, inspect_state, inspect_update
 from .inspect_widget import InspectorPanel
+from .legend import ELLIPSE_COLOR, ELLIPSE_OPACITY, ENTRIES, STIFFNESS_COLOR, legend_html
 from .meshcat_server import LOCALHOST, MeshcatServer, ServerWindow, free_port, require_meshcat
 from .meshcat_view import MeshcatViewer
 
@@ -44,12 +45,6 @@ SLIDER_SPAN = 0.5
 
 ELLIPSE_SIZE = 0.3
 """Largest drawn semi-axis of the velocity ellipse, in mechanism sizes [-] (the shape is to scale)."""
-
-ELLIPSE_COLOR = 0x2E8B57
-"""Colour of the velocity ellipse (0xRRGGBB)."""
-
-STIFFNESS_COLOR = 0x8A2BE2
-"""Colour of the smallest-stiffness axis (0xRRGGBB)."""
 
 MAX_BODY = 1 << 16
 """Largest request body the page may send [bytes]."""
@@ -94,6 +89,7 @@ class Inspector:
         self._window = ServerWindow(self.viewer.server.zmq_url, self.viewer.server.web_url)
         self._vis = require_meshcat().Visualizer(window=self._window)
         self.ranges = _ranges(self.state, self.viewer.size)
+        self._drawn: set[str] = set()  # the inspector's own marks on screen (legend keys)
         self._draw()
         self._http: ThreadingHTTPServer | None = None
         self.url = ""
@@ -131,7 +127,14 @@ class Inspector:
             "ranges": plain(self.ranges),
             "scene": self.viewer.url,
             "mechanism": self.state.mech.name,
+            "legend": legend_html([ENTRIES[key] for key in self.legend]),
         }
+
+    @property
+    def legend(self) -> list[str]:
+        """Keys of :data:`plm_pin.viz.legend.ENTRIES` of what the scene shows now, in the legend's order."""
+        keys = {*self.viewer.legend, *self._drawn}
+        return [key for key in ENTRIES if key in keys]
 
     def open(self) -> Inspector:
         """Open the control page in a web browser; returns the inspector."""
@@ -169,19 +172,23 @@ class Inspector:
             frame[:3, 3] = origin
             node["ellipse"].set_object(
                 mg.Ellipsoid(drawn),
-                mg.MeshLambertMaterial(color=ELLIPSE_COLOR, opacity=0.35, transparent=True),
+                mg.MeshLambertMaterial(color=ELLIPSE_COLOR, opacity=ELLIPSE_OPACITY, transparent=True),
             )
             node["ellipse"].set_transform(frame)
+            self._drawn.add("ellipse")
         else:
             node["ellipse"].delete()
+            self._drawn.discard("ellipse")
         if math.isfinite(state.stiffness):
             half = 0.5 * ELLIPSE_SIZE * self.viewer.size * state.stiffness_axis
             points = np.column_stack([origin - half, origin + half])
             node["stiffness"].set_object(
                 mg.Line(mg.PointsGeometry(points), mg.LineBasicMaterial(color=STIFFNESS_COLOR, linewidth=4))
             )
+            self._drawn.add("stiffness")
         else:
             node["stiffness"].delete()
+            self._drawn.discard("stiffness")
 
     def panel(self) -> InspectorPanel:
         """The Jupyter panel: ipywidgets controls and readouts beside the inline scene.

@@ -16,6 +16,7 @@ import pytest
 from plm_pin.kinematics import classify, inverse_kinematics
 from plm_pin.statics import static_forces
 from plm_pin.viz import Inspector, inspect
+from plm_pin.viz.legend import ENTRIES
 from plm_pin.workspace import manipulability
 from tests.conftest import preset
 from tests.report.test_browser import _check_canvas, _console_errors, _open, _pixels, _wait, browser  # noqa: F401
@@ -51,6 +52,32 @@ def _scene_png(driver: Any) -> bytes:
         driver.switch_to.default_content()
 
 
+LEGEND_IN_VIEW = """
+const legend = document.querySelector('#legend #plm-pin-legend');
+if (!legend) return 'no legend in the panel';
+legend.scrollIntoView();
+const r = legend.getBoundingClientRect();
+if (r.width < 50 || r.height < 20 || r.top < 0 || r.bottom > window.innerHeight) {
+    return `legend of ${r.width} x ${r.height} px at (${r.left}, ${r.top}), outside the view`;
+}
+legend.style.pointerEvents = 'auto';
+const top = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+return legend.contains(top) ? '' : `legend covered by ${top ? top.tagName : 'nothing'}`;
+"""
+"""Empty when the panel's legend is in view once scrolled to and nothing covers it; else what is wrong."""
+
+
+def _check_legend(driver: Any, inspector: Inspector) -> None:
+    """The panel shows the legend of what the scene draws: singularity colours, closure marks, the ellipse."""
+    assert driver.execute_script(LEGEND_IN_VIEW) == ""
+    text = driver.execute_script("return document.querySelector('#legend #plm-pin-legend').innerText")
+    expected = [ENTRIES[key].label for key in inspector.legend]
+    assert text.split("\n") == expected
+    for key in ("direct", "inverse", "constraint", "closed", "ellipse"):
+        assert ENTRIES[key].label in expected
+    driver.execute_script("document.getElementById('panel').scrollTop = 0")
+
+
 def test_drag_a_slider_and_switch_a_mode(browser, table):  # noqa: F811 (the imported fixture)
     """A drag of the x slider moves the pose; the readouts are the API's there; a mode switch redraws."""
     from selenium.webdriver.common.action_chains import ActionChains
@@ -61,6 +88,7 @@ def test_drag_a_slider_and_switch_a_mode(browser, table):  # noqa: F811 (the imp
     mode = table.state.working_mode
     _open(browser, table.url)
     _wait(browser, "the first state", lambda: _settled(browser, table))
+    _check_legend(browser, table)
     before_png = _scene_png(browser)
     x0 = float(table.state.x[0])
 

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from plm_pin.viz import Inspector, inspect, inspect_update
+from plm_pin.viz.legend import ENTRIES
 from plm_pin.viz.meshcat_server import LOCALHOST
 from tests.conftest import preset
 from tests.viz.test_meshcat_view import listening_addresses
@@ -60,6 +61,9 @@ def test_page_listens_on_localhost_only_and_serves_the_page(inspector):
     state = _get(inspector.url + "state")
     assert state["scene"] == inspector.viewer.url
     assert state["dofs"] == ["rz"]
+    assert inspector.legend == [k for k in ENTRIES if k in {*inspector.viewer.legend}]  # no ellipse: rz only
+    for key in inspector.legend:
+        assert ENTRIES[key].label in state["legend"]
 
 
 def test_update_endpoint_answers_what_inspect_update_gives(inspector):
