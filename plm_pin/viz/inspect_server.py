@@ -2,7 +2,8 @@
 
 :func:`inspect` draws the mechanism in meshcat (:class:`~plm_pin.viz.MeshcatViewer`, coloured
 at singularities as every scene is) with the velocity ellipse at the task frame and, when the
-description has a compliance section, the axis of the smallest stiffness; and serves a small
+description has a compliance section, the axis of the smallest stiffness, and the actuator
+forces as arrows along the prismatic actuators (scaled as the page's bars); and serves a small
 page (the standard library's :class:`http.server.ThreadingHTTPServer`, bound to 127.0.0.1
 only) with sliders for the task coordinates and the actuators, working- and assembly-mode
 selectors, the load and the preload, the readouts and force bars, and meshcat's page beside
@@ -31,6 +32,7 @@ import pinocchio as pin
 from ..core.mechanism import Mechanism
 from ..exceptions import PlmError
 from ..results import plain
+from .force_figure import actuator_arrows
 from .inspect_state import InspectState, inspect_state, inspect_update
 from .inspect_widget import InspectorPanel
 from .legend import ELLIPSE_COLOR, ELLIPSE_OPACITY, ENTRIES, STIFFNESS_COLOR, legend_html
@@ -45,6 +47,9 @@ SLIDER_SPAN = 0.5
 
 ELLIPSE_SIZE = 0.3
 """Largest drawn semi-axis of the velocity ellipse, in mechanism sizes [-] (the shape is to scale)."""
+
+FORCE_SIZE = 0.3
+"""Length of the longest force arrow, in mechanism sizes [-]: the largest of the forces and finite limits."""
 
 MAX_BODY = 1 << 16
 """Largest request body the page may send [bytes]."""
@@ -152,7 +157,11 @@ class Inspector:
     def _draw(self) -> None:
         """Place the mechanism, the ellipse and the stiffness axis at the state."""
         state, mech = self.state, self.state.mech
-        self.viewer.display(state.q)
+        arrows = actuator_arrows(mech, state.q, state.forces) if np.all(np.isfinite(state.forces)) else []
+        if any(np.any(a.force != 0.0) for a in arrows):
+            self.viewer.show_forces(state.q, arrows, force_scale(state, self.viewer.size))
+        else:
+            self.viewer.display(state.q)
         mg = require_meshcat().geometry
         node = self._vis[f"{self.viewer.root}/inspect"]
         data = mech.model.createData()
@@ -207,6 +216,16 @@ class Inspector:
 
     def __repr__(self) -> str:
         return f"Inspector({self.state.mech.name!r}, {self.url or self.viewer.url!r})"
+
+
+def force_scale(state: InspectState, size: float) -> float:
+    """Arrow length per force [m/N]: the largest force or finite limit is :data:`FORCE_SIZE` sizes long.
+
+    As the page's bars, which are scaled to the same largest value.
+    """
+    values = np.abs(np.concatenate([state.forces, state.force_limits.ravel()]))
+    largest = float(np.max(values[np.isfinite(values)], initial=0.0))
+    return FORCE_SIZE * size / largest if largest > 0.0 else 1.0
 
 
 def _normal(axis: np.ndarray) -> np.ndarray:

@@ -144,3 +144,42 @@ def test_cli_serves_on_localhost_and_ends_with_ctrl_c():
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+def test_actuator_forces_are_drawn_as_arrows_along_the_prismatic_axes():
+    """Under a load, one arrow per prismatic actuator: at its joint, along its axis, as long as its force."""
+    import pinocchio as pin
+
+    from plm_pin.statics import static_forces
+    from plm_pin.viz.inspect_server import FORCE_SIZE
+    from tests.viz.test_meshcat_view import Scene
+
+    mech = preset("harada2011_3d4m")
+    running = Inspector(mech, page=False)
+    try:
+        state = running.update({"load": [3.0, -2.0, 0.5]})
+        scene = Scene(running._window.get_scene())
+    finally:
+        running.close()
+    forces = static_forces(mech, state.q, (3.0, -2.0, 0.5), limits=None).f_c
+    data = mech.model.createData()
+    pin.computeJointJacobians(mech.model, data, state.q)
+    lengths = {}
+    for act, f in zip(mech.actuators, forces, strict=True):
+        assert act.kind == "prismatic"
+        node = f"/meshcat/plm_pin/{mech.name}/forces/f_c {act.joint}"
+        shaft, head = scene.transforms[f"{node}/shaft"], scene.transforms[f"{node}/head"]
+        h_shaft, h_head = (scene.geometry(f"{node}/{p}")["height"] for p in ("shaft", "head"))
+        np.testing.assert_allclose(
+            shaft[:3, 3] - 0.5 * h_shaft * shaft[:3, 1], data.oMi[act.joint_id].translation, atol=1e-12
+        )
+        J = pin.getJointJacobian(mech.model, data, act.joint_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        axis = J[:3, mech.model.joints[act.joint_id].idx_v]
+        np.testing.assert_allclose(shaft[:3, 1], np.sign(f) * axis / np.linalg.norm(axis), atol=1e-9)
+        np.testing.assert_allclose(head[:3, 1], shaft[:3, 1], atol=1e-12)
+        lengths[act.joint] = (h_shaft + h_head, abs(f))
+    longest = max(length for length, _ in lengths.values())
+    assert longest <= FORCE_SIZE * running.viewer.size * (1 + 1e-9)
+    ratios = [length / f for length, f in lengths.values()]
+    np.testing.assert_allclose(ratios, ratios[0], rtol=1e-9)  # one scale for every arrow
+    assert "force" in running.legend
