@@ -17,7 +17,7 @@ import pytest
 from plm_pin import InvalidInput
 from plm_pin.kinematics import classify, forward_kinematics, inverse_kinematics, same_assembly, working_modes
 from plm_pin.models import PRESETS
-from plm_pin.statics import static_forces
+from plm_pin.statics import internal_force_range, static_forces
 from plm_pin.stiffness import stiffness
 from plm_pin.viz.inspect_state import InspectState, inspect_state, inspect_update
 from plm_pin.workspace import manipulability
@@ -175,6 +175,38 @@ def test_preload_adds_forces_that_balance_nothing(table):
     assert np.linalg.norm(extra) == pytest.approx(50.0)
 
 
+def test_limits_give_the_internal_force_range_of_statics_and_its_ends_saturate(table):
+    """Without limits in the description no range; with limits given, statics' range, whose ends saturate.
+
+    Brute force on the ends: the forces preloaded to an end keep within the limits with one
+    at a bound, and a little beyond the end one force passes its bound.
+    """
+    assert table.internal_range.size == 0 and np.isinf(table.force_limits).all()
+    mech, load = table.mech, [3.0, -2.0, 0.5]
+    limits = [[-200.0, 150.0], [-120.0, 200.0], [None, 180.0], [-160.0, 90.0]]
+    bounds = np.array([[-np.inf if v is None else v for v in pair] for pair in limits])
+    partial = inspect_update(table, {"load": load, "limits": limits})
+    assert partial.internal_range.size == 0 and any("finite effort limits" in n for n in partial.notes)
+    limits[2][0] = -170.0
+    bounds[2, 0] = -170.0
+    state = inspect_update(table, {"load": load, "limits": limits})
+    np.testing.assert_array_equal(state.force_limits, bounds)
+    expected = internal_force_range(mech, state.q, load, limits=bounds)
+    np.testing.assert_allclose(
+        state.internal_range, np.column_stack([expected.lower, expected.upper]), rtol=1e-9
+    )
+    span = float(np.diff(state.internal_range[0])[0])
+    assert span > 0.0
+    for end, outward in zip(state.internal_range[0], (-1.0, 1.0), strict=True):
+        at = inspect_update(state, {"preload": [float(end)]}).forces
+        slack = np.minimum(at - bounds[:, 0], bounds[:, 1] - at)
+        assert slack.min() == pytest.approx(0.0, abs=1e-6 * span) and slack.min() > -1e-6 * span
+        beyond = inspect_update(state, {"preload": [float(end) + outward * 1e-3 * span]}).forces
+        assert np.min(np.minimum(beyond - bounds[:, 0], bounds[:, 1] - beyond)) < 0.0
+    back = inspect_update(state, {"limits": None})
+    assert back.internal_range.size == 0 and np.isinf(back.force_limits).all()
+
+
 def test_velocity_ellipse_matches_finite_differences(table):
     """Along each ellipse axis a task step moves the actuators by step / radius (rotation held)."""
     mech = table.mech
@@ -207,6 +239,9 @@ def test_copy_pose_texts_rebuild_the_pose(table):
         ({"assembly_mode": 0}, "find_modes"),
         ({"load": [1.0]}, "3 finite numbers"),
         ({"working_mode": [1, 1]}, "mode must hold 4 signs"),
+        ({"limits": [[-1.0, 1.0]]}, "one \\[lower, upper\\] pair per actuator \\(4\\)"),
+        ({"limits": [["a", 1.0]] * 4}, "numbers or None"),
+        ({"limits": [[2.0, 1.0]] * 4}, "lower <= upper"),
     ],
 )
 def test_bad_changes_are_refused_by_name(table, change, words):
