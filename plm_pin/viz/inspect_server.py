@@ -36,7 +36,7 @@ from .force_figure import actuator_arrows
 from .inspect_state import InspectState, inspect_state, inspect_update
 from .inspect_widget import InspectorPanel
 from .legend import ELLIPSE_COLOR, ELLIPSE_OPACITY, ENTRIES, STIFFNESS_COLOR, legend_html
-from .meshcat_server import LOCALHOST, MeshcatServer, ServerWindow, free_port, require_meshcat
+from .meshcat_server import LOCALHOST, MeshcatServer, ServerWindow, first_free, require_meshcat
 from .meshcat_view import MeshcatViewer
 
 PAGE_PORT = 7200
@@ -99,8 +99,8 @@ class Inspector:
         self._http: ThreadingHTTPServer | None = None
         self.url = ""
         if page:
-            self._http = ThreadingHTTPServer(
-                (LOCALHOST, free_port(PAGE_PORT if port is None else port)), _Page
+            self._http = first_free(
+                PAGE_PORT if port is None else port, lambda p: ThreadingHTTPServer((LOCALHOST, p), _Page)
             )
             self._http.inspector = self  # type: ignore[attr-defined]
             self.url = f"http://{LOCALHOST}:{self._http.server_address[1]}/"
@@ -147,12 +147,22 @@ class Inspector:
         return self
 
     def close(self) -> None:
-        """Stop serving the page and drawing (idempotent); the meshcat server stops with the process."""
+        """Stop serving the page and close the drawing connections (idempotent).
+
+        The meshcat server is this process's shared one: it stops with the process.
+        """
         self._window.close()
+        self.viewer.close()
         if self._http is not None:
             self._http.shutdown()
             self._http.server_close()
             self._http = None
+
+    def __enter__(self) -> Inspector:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
     def _draw(self) -> None:
         """Place the mechanism, the ellipse and the stiffness axis at the state."""
@@ -340,7 +350,8 @@ def inspect(mech: Mechanism, *, port: int | None = None, source: str | None = No
         source: the name or path ``mech`` was loaded from, for the "copy pose" texts.
 
     Returns:
-        The running inspector; :meth:`Inspector.close` stops its page.
+        The running inspector; :meth:`Inspector.close` (or a ``with`` block) stops its page
+        and closes its connections.
 
     Raises:
         ViewerError: meshcat missing, or no server or port.

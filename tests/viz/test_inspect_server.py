@@ -183,3 +183,22 @@ def test_actuator_forces_are_drawn_as_arrows_along_the_prismatic_axes():
     ratios = [length / f for length, f in lengths.values()]
     np.testing.assert_allclose(ratios, ratios[0], rtol=1e-9)  # one scale for every arrow
     assert "force" in running.legend
+
+
+def test_closed_inspector_leaves_no_socket_open_at_exit():
+    """A closed inspector (its page, its connections and its viewer's) leaves no unclosed socket at exit."""
+    code = (
+        "from plm_pin.viz import inspect\nfrom tests.conftest import preset\n"
+        "with inspect(preset('fourbar')) as running:\n"
+        "    running.update({'task': {'rz': float(running.state.x[0]) + 0.01}})\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-X", "dev", "-W", "always::ResourceWarning", "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT,
+        cwd=REPO,
+        env={**os.environ, "PYTHONPATH": str(REPO)},
+    )
+    assert done.returncode == 0, done.stderr
+    assert "ResourceWarning" not in done.stderr
