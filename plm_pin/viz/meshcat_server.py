@@ -363,7 +363,7 @@ def _local_bridge(port: int) -> Any:
     zmqserver = importlib.import_module("meshcat.servers.zmqserver")
     web = importlib.import_module("tornado.web")
     routing = importlib.import_module("tornado.routing")
-    zmqserver.DEFAULT_FILESERVER_PORT = port  # where meshcat's search starts (this process serves one bridge)
+    zmqserver.DEFAULT_FILESERVER_PORT = port  # type: ignore[attr-defined]  # where meshcat's search starts
     viewer_page = Path(zmqserver.VIEWER_ROOT, zmqserver.VIEWER_HTML).read_text(encoding="utf-8")
     page = with_legend(viewer_page, list(ENTRIES.values()))
 
