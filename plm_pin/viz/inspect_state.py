@@ -20,6 +20,10 @@ change (no I/O: the browser panel, the Jupyter panel and the tests call the same
 - ``{"preload": [...]}``: the internal forces of a redundantly actuated mechanism, in the
   internal basis [N, N m] (``None``: the minimum-norm forces).
 
+The assembly modes found are kept: after a move they are followed to the new actuator
+positions (each closed with the actuators fixed, in the steps of the move), so that the
+selector still lists them; a mode that cannot be followed is dropped.
+
 A move that would leave the workspace (no assembly, a joint limit), cross a singularity
 (a sign change of :math:`\det T` or :math:`\det C` along the move, or of the working mode)
 or reach one (a margin at :data:`~plm_pin.tolerances.SINGULARITY_TOL`) stops at its edge,
@@ -51,7 +55,7 @@ from ..kinematics.working_mode import working_mode
 from ..results import Result, unit
 from ..statics import actuator_limits, internal_force_range, static_forces
 from ..stiffness import stiffness
-from ..tolerances import INSPECT_EDGE_TOL, SINGULARITY_TOL
+from ..tolerances import INSPECT_EDGE_TOL, SAME_ASSEMBLY_TOL, SINGULARITY_TOL
 from ..workspace.manipulability import manipulability_from_jacobians
 
 CHANGES = ("task", "actuators", "working_mode", "find_modes", "assembly_mode", "load", "limits", "preload")
@@ -84,8 +88,9 @@ class InspectState(Result):
         working_modes: the working modes found at the last search (:func:`inspect_state` or
             ``find_modes``).
         assembly_modes: configurations of the assembly modes found at the last ``find_modes``,
-            shape (k, nq) (empty before).
-        assembly_index: which of them is displayed (None: none found, or moved since).
+            followed to the current actuator positions since, shape (k, nq) (empty before).
+        assembly_index: which of them is displayed (None: none found, or the configuration
+            shown is not among them).
         load: wrench on the task frame, one value per task coordinate [N, N m].
         preload: internal-force coordinates asked for, or None for the minimum-norm forces [N, N m].
         stopped: why the last change was not applied in full ('' when it was).
@@ -220,13 +225,12 @@ def inspect_update(state: InspectState, change: Mapping[str, object]) -> Inspect
     q, stopped = state.q, ""
     if "task" in change:
         q, stopped = _move_task(state, change["task"])
-        index = None
     if "actuators" in change:
         q, stopped = _move_actuators(state, change["actuators"])
-        index = None
     if "working_mode" in change:
         q, stopped = _switch_working_mode(mech, q, change["working_mode"])
-        index = None
+    if q is not state.q and len(found):
+        found, index = _retrack(mech, found, state.actuators, q)
     if change.get("find_modes"):
         modes = tuple(s.mode for s in working_modes(mech, task_pose(mech, q), guess=q))
         fk = forward_kinematics(mech, mech.actuator_positions(q), q, all_modes=True)
@@ -464,6 +468,37 @@ def _move_actuators(state: InspectState, value: object) -> tuple[np.ndarray, str
 
     n = _steps(delta, rotational, _size(mech, state.q))
     return _track(mech, state.q, n, solve, ("constraint", "direct"), keep_mode=False)
+
+
+def _retrack(
+    mech: Mechanism, found: np.ndarray, start: np.ndarray, q: np.ndarray
+) -> tuple[np.ndarray, int | None]:
+    """The assembly modes ``found`` at actuator positions ``start``, followed to those of ``q``.
+
+    Each mode is closed with the first DOF-many actuators fixed, in the steps a move between
+    the two positions takes; a mode whose loops do not close, whose other actuators end
+    elsewhere than ``q``'s, or that falls onto another mode is dropped. Returns the modes
+    and the index of ``q``'s among them (None when it is not one of them).
+    """
+    names = tuple(a.joint for a in mech.actuators)
+    goal = mech.actuator_positions(q)
+    fixed = names[: mech.mobility]
+    rotational = np.array([a.kind != "prismatic" for a in mech.actuators])
+    n = _steps(goal - start, rotational, _size(mech, q))
+    kept: list[np.ndarray] = []
+    for mode in found:
+        current = mode
+        try:
+            for k in range(1, n + 1):
+                at = start + k / n * (goal - start)
+                current = mech.assemble(current, fixed=dict(zip(fixed, at, strict=False))).q
+        except ClosureNotSatisfied:
+            continue
+        elsewhere = np.max(np.abs(mech.actuator_positions(current) - goal)) > SAME_ASSEMBLY_TOL
+        if not elsewhere and not any(same_assembly(mech, current, other) for other in kept):
+            kept.append(np.array(current))
+    index = next((i for i, other in enumerate(kept) if same_assembly(mech, other, q)), None)
+    return np.array(kept).reshape(len(kept), mech.nq), index
 
 
 def _switch_working_mode(mech: Mechanism, q: np.ndarray, value: object) -> tuple[np.ndarray, str]:

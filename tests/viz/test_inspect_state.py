@@ -151,6 +151,30 @@ def test_assembly_modes_are_forward_kinematics_all_modes(table):
     assert not np.allclose(chosen.x, table.x, atol=1e-6)
 
 
+@pytest.mark.parametrize(
+    "name, change", [("harada2011_3d4m", {"actuators": {"slider1": 0.012}}), ("fivebar", None)]
+)
+def test_assembly_modes_are_kept_and_followed_after_a_move(name, change):
+    """After a move the modes found are FK's at the new actuator positions, the one shown marked."""
+    mech = preset(name)
+    found = inspect_update(inspect_state(mech), {"find_modes": True})
+    assert len(found.assembly_modes) >= 2
+    if change is None:  # move the first actuator a little
+        first = mech.actuators[0].joint
+        change = {"actuators": {first: float(found.actuators[0]) + 0.05}}
+    else:
+        change = {"actuators": {k: float(found.actuators[0]) + v for k, v in change["actuators"].items()}}
+    moved = inspect_update(found, change)
+    assert not moved.stopped
+    assert not np.allclose(moved.actuators, found.actuators)
+    fk = forward_kinematics(mech, moved.actuators, moved.q, all_modes=True)
+    assert len(moved.assembly_modes) == len(fk)
+    for sol in fk:
+        assert sum(same_assembly(mech, sol.q, m) for m in moved.assembly_modes) == 1
+    assert moved.assembly_index is not None
+    assert same_assembly(mech, moved.assembly_modes[moved.assembly_index], moved.q)
+
+
 def test_load_forces_do_virtual_work_against_the_load(table):
     """The forces a load adds do the work the load does on every small IK motion: f . dc = -w . dx."""
     mech = table.mech
