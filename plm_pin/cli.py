@@ -936,12 +936,20 @@ def _regenerate(study: Study, mechanism: str | None, out: Path, case_words: list
 
 
 def _study_case(
-    load_text: str | None, pose_text: str | None, mode_text: str | None, ranges: dict[str, str | None]
+    load_text: str | None,
+    pose_text: str | None,
+    mode_text: str | None,
+    ranges: dict[str, str | None],
+    over: Sequence[str] = (),
 ) -> tuple[StudyCase, list[str]]:
     """The case the ``report`` options ask for, and the options as words (for the regenerate command).
 
+    ``over`` holds ``--over NAME=START:STOP:COUNT`` words: a range of any task coordinate (a
+    joint task's too), as ``map`` takes them.
+
     Raises:
-        InvalidInput: malformed numbers, pose items, signs or ranges (names are checked by the study).
+        InvalidInput: malformed numbers, pose items, signs or ranges, a coordinate varied
+            twice (names are checked by the study).
     """
     words: list[str] = []
     load_values = None
@@ -963,6 +971,11 @@ def _study_case(
         if text is not None:
             values[axis] = tuple(float(v) for v in _grid_range(text, f"--{axis}"))
             words += [f"--{axis}", text]
+    for name, (word, text) in _named_words(over, "--over", "--over elbow=-1:1:21").items():
+        if name in values:
+            raise InvalidInput(f"--over {word!r}: {name!r} is also varied by --{name}; give it one way")
+        values[name] = tuple(float(v) for v in _grid_range(text, f"--over {name}", "="))
+        words += ["--over", word]
     return StudyCase(load=load_values, pose=pose, mode=mode, ranges=values), words
 
 
@@ -1009,6 +1022,14 @@ def report(
     rx: RxOption = None,
     ry: RyOption = None,
     rz: RzOption = None,
+    over: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--over",
+            help="overview: a slice range of any task coordinate NAME=START:STOP:COUNT, e.g. a joint of a "
+            "joint task (--over elbow=-1:1:21), repeatable",
+        ),
+    ] = None,
 ) -> None:
     """Write study reports: per study a self-contained HTML page and results.json, then index.html.
 
@@ -1020,7 +1041,7 @@ def report(
     try:
         runs = _report_runs(target, mechanism)
         case, case_words = _study_case(
-            load_text, pose_text, mode, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz}
+            load_text, pose_text, mode, {"x": x, "y": y, "z": z, "rx": rx, "ry": ry, "rz": rz}, over or []
         )
         if not case.empty and not all(study.takes_case for study, _ in runs):
             raise InvalidInput(

@@ -1043,3 +1043,42 @@ def test_accuracy_refuses_a_malformed_tolerance(tol):
     result = runner.invoke(app, args)
     assert result.exit_code == 1
     assert "LENGTH,ANGLE" in result.output
+
+
+def test_report_over_a_joint_task_slices_those_joints(tmp_path):
+    """`report FIVEBAR --over left_elbow=... --over right_elbow=...`: the slice is over those joint values."""
+    urdf = _joint_task_fivebar(tmp_path)
+    out = tmp_path / "reports"
+    args = ["report", str(urdf), "--over", "left_elbow=-1.4:-1.2:3", "--over", "right_elbow=1.4:1.5:2"]
+    result = runner.invoke(app, [*args, "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    data = _report_json(out, "overview-fivebar")
+    grid = next(
+        b["data"]["slice"] for s in data["sections"] for b in s["blocks"] if "slice" in b.get("data", {})
+    )
+    assert grid["axes"] == ["left_elbow", "right_elbow"]
+    np.testing.assert_allclose(grid["values"][0], [-1.4, -1.3, -1.2], atol=1e-15)
+    np.testing.assert_allclose(grid["values"][1], [1.4, 1.5], atol=1e-15)
+    assert "--over left_elbow=-1.4:-1.2:3 --over right_elbow=1.4:1.5:2" in json.dumps(data)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (
+            ["fourbar", "--over", "rz=0:1:2", "--rz", "0:1:3"],
+            "--over 'rz=0:1:2': 'rz' is also varied by --rz",
+        ),
+        (
+            ["fourbar", "--over", "crank=0:1:2"],
+            "--over crank: 'crank' is not a task coordinate of fourbar; they are ['rz']",
+        ),
+        (["fourbar", "--over", "rz=1:0:2"], "--over rz '1:0:2': START must be below STOP"),
+    ],
+)
+def test_report_bad_over_is_one_error_line(tmp_path, args, message):
+    """A coordinate varied twice, unknown or with a bad range: one error line naming it, nothing written."""
+    out = tmp_path / "reports"
+    result = runner.invoke(app, ["report", *args, "--out", str(out)])
+    assert result.exit_code != 0 and message in result.output
+    assert not out.exists()

@@ -23,10 +23,11 @@ Vec3 = Sequence[float]
 COLORS: dict[str, tuple[float, float, float, float]] = {
     "base": (0.55, 0.57, 0.60, 1.0),
     "slider": (0.20, 0.45, 0.80, 1.0),
-    "rod": (0.85, 0.55, 0.15, 1.0),
+    "rod": (0.80, 0.82, 0.86, 1.0),  # light steel: no yellow, orange or red, the scene's singularity colours
     "plate": (0.30, 0.70, 0.35, 1.0),
     "joint": (0.35, 0.35, 0.35, 1.0),
 }
+"""RGBA of the builders' visuals by part; none near the scene's singularity colours (a test checks)."""
 
 
 def transform(xyz: Vec3 = (0.0, 0.0, 0.0), rpy: Vec3 = (0.0, 0.0, 0.0)) -> np.ndarray:

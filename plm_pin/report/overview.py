@@ -21,6 +21,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..core.mechanism import Mechanism
+from ..description.sidecar import TASK_DOFS
 from ..dynamics import SimulationResult, decoupling_check, simulate
 from ..exceptions import InvalidInput, PlmError, SimulationFailed, SingularConfiguration
 from ..kinematics import classify, forward_kinematics, inverse_kinematics, task_pose
@@ -226,7 +227,8 @@ def _check_case(mech: Mechanism, case: StudyCase) -> OverviewCase:
                 f"--load: give {len(dofs)} finite numbers, one per task coordinate "
                 f"({','.join(load_names(mech))}) [N, N m], got {list(case.load)}"
             )
-    for option, name in (*(("--pose", n) for n in case.pose), *((f"--{n}", n) for n in case.ranges)):
+    slices = ((f"--{n}" if n in TASK_DOFS else f"--over {n}", n) for n in case.ranges)
+    for option, name in (*(("--pose", n) for n in case.pose), *slices):
         if name not in dofs:
             raise InvalidInput(
                 f"{option}: {name!r} is not a task coordinate of {mech.name}; they are {list(dofs)}"

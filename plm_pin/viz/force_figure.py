@@ -56,18 +56,43 @@ class ForceArrow:
     force: np.ndarray
 
 
+def actuator_arrows(mech: Mechanism, q: ArrayLike, f_c: ArrayLike) -> list[ForceArrow]:
+    """Arrows of the actuator forces ``f_c`` [N, N m] at ``q``: one per prismatic actuator, along its axis.
+
+    A revolute actuator's torque has no arrow.
+
+    Raises:
+        InvalidInput: a malformed ``q`` or ``f_c`` not of one value per actuator.
+    """
+    qa = mech.check_q(q)
+    forces = np.asarray(f_c, dtype=float)
+    if forces.shape != (mech.n_actuators,):
+        raise InvalidInput(
+            f"f_c must hold one force per actuator ({mech.n_actuators}), got shape {forces.shape}"
+        )
+    data = mech.model.createData()
+    pin.forwardKinematics(mech.model, data, qa)
+    return _actuator_arrows(mech, data, forces)
+
+
+def _actuator_arrows(mech: Mechanism, data: pin.Data, f_c: np.ndarray) -> list[ForceArrow]:
+    """The actuator arrows with the joints placed in ``data``."""
+    out = []
+    for act, f in zip(mech.actuators, f_c, strict=True):
+        if act.kind != "prismatic":
+            continue
+        S = np.asarray(data.joints[act.joint_id].S).reshape(6, -1)
+        axis = data.oMi[act.joint_id].rotation @ S[:3, 0]
+        out.append(ForceArrow("f_c", act.joint, data.oMi[act.joint_id].translation.copy(), float(f) * axis))
+    return out
+
+
 def force_arrows(sol: StaticForces) -> list[ForceArrow]:
     """The arrows of a static solution (actuator, slider normal, link axial and load forces)."""
     mech = sol.mechanism
     model, data = mech.model, mech.data
     pin.framesForwardKinematics(model, data, sol.balance.q)
-    out = []
-    for act, f in zip(mech.actuators, sol.f_c, strict=True):
-        if act.kind != "prismatic":
-            continue
-        S = np.asarray(data.joints[act.joint_id].S).reshape(6, -1)
-        axis = data.oMi[act.joint_id].rotation @ S[:3, 0]
-        out.append(ForceArrow("f_c", act.joint, data.oMi[act.joint_id].translation.copy(), f * axis))
+    out = _actuator_arrows(mech, data, sol.f_c)
     for joint, normal in sol.slider_normal_forces().items():
         jid = model.getJointId(joint)
         out.append(ForceArrow("f_n", joint, data.oMi[jid].translation.copy(), normal.copy()))

@@ -2,7 +2,8 @@
 
 :func:`inspect` draws the mechanism in meshcat (:class:`~plm_pin.viz.MeshcatViewer`, coloured
 at singularities as every scene is) with the velocity ellipse at the task frame and, when the
-description has a compliance section, the axis of the smallest stiffness; and serves a small
+description has a compliance section, the axis of the smallest stiffness, and the actuator
+forces as arrows along the prismatic actuators (scaled as the page's bars); and serves a small
 page (the standard library's :class:`http.server.ThreadingHTTPServer`, bound to 127.0.0.1
 only) with sliders for the task coordinates and the actuators, working- and assembly-mode
 selectors, the load and the preload, the readouts and force bars, and meshcat's page beside
@@ -31,9 +32,11 @@ import pinocchio as pin
 from ..core.mechanism import Mechanism
 from ..exceptions import PlmError
 from ..results import plain
+from .force_figure import actuator_arrows
 from .inspect_state import InspectState, inspect_state, inspect_update
 from .inspect_widget import InspectorPanel
-from .meshcat_server import LOCALHOST, MeshcatServer, ServerWindow, free_port, require_meshcat
+from .legend import ELLIPSE_COLOR, ELLIPSE_OPACITY, ENTRIES, STIFFNESS_COLOR, legend_html
+from .meshcat_server import LOCALHOST, MeshcatServer, ServerWindow, first_free, require_meshcat
 from .meshcat_view import MeshcatViewer
 
 PAGE_PORT = 7200
@@ -45,11 +48,8 @@ SLIDER_SPAN = 0.5
 ELLIPSE_SIZE = 0.3
 """Largest drawn semi-axis of the velocity ellipse, in mechanism sizes [-] (the shape is to scale)."""
 
-ELLIPSE_COLOR = 0x2E8B57
-"""Colour of the velocity ellipse (0xRRGGBB)."""
-
-STIFFNESS_COLOR = 0x8A2BE2
-"""Colour of the smallest-stiffness axis (0xRRGGBB)."""
+FORCE_SIZE = 0.3
+"""Length of the longest force arrow, in mechanism sizes [-]: the largest of the forces and finite limits."""
 
 MAX_BODY = 1 << 16
 """Largest request body the page may send [bytes]."""
@@ -94,12 +94,13 @@ class Inspector:
         self._window = ServerWindow(self.viewer.server.zmq_url, self.viewer.server.web_url)
         self._vis = require_meshcat().Visualizer(window=self._window)
         self.ranges = _ranges(self.state, self.viewer.size)
+        self._drawn: set[str] = set()  # the inspector's own marks on screen (legend keys)
         self._draw()
         self._http: ThreadingHTTPServer | None = None
         self.url = ""
         if page:
-            self._http = ThreadingHTTPServer(
-                (LOCALHOST, free_port(PAGE_PORT if port is None else port)), _Page
+            self._http = first_free(
+                PAGE_PORT if port is None else port, lambda p: ThreadingHTTPServer((LOCALHOST, p), _Page)
             )
             self._http.inspector = self  # type: ignore[attr-defined]
             self.url = f"http://{LOCALHOST}:{self._http.server_address[1]}/"
@@ -131,7 +132,14 @@ class Inspector:
             "ranges": plain(self.ranges),
             "scene": self.viewer.url,
             "mechanism": self.state.mech.name,
+            "legend": legend_html([ENTRIES[key] for key in self.legend]),
         }
+
+    @property
+    def legend(self) -> list[str]:
+        """Keys of :data:`plm_pin.viz.legend.ENTRIES` of what the scene shows now, in the legend's order."""
+        keys = {*self.viewer.legend, *self._drawn}
+        return [key for key in ENTRIES if key in keys]
 
     def open(self) -> Inspector:
         """Open the control page in a web browser; returns the inspector."""
@@ -139,17 +147,31 @@ class Inspector:
         return self
 
     def close(self) -> None:
-        """Stop serving the page and drawing (idempotent); the meshcat server stops with the process."""
+        """Stop serving the page and close the drawing connections (idempotent).
+
+        The meshcat server is this process's shared one: it stops with the process.
+        """
         self._window.close()
+        self.viewer.close()
         if self._http is not None:
             self._http.shutdown()
             self._http.server_close()
             self._http = None
 
+    def __enter__(self) -> Inspector:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
     def _draw(self) -> None:
         """Place the mechanism, the ellipse and the stiffness axis at the state."""
         state, mech = self.state, self.state.mech
-        self.viewer.display(state.q)
+        arrows = actuator_arrows(mech, state.q, state.forces) if np.all(np.isfinite(state.forces)) else []
+        if any(np.any(a.force != 0.0) for a in arrows):
+            self.viewer.show_forces(state.q, arrows, force_scale(state, self.viewer.size))
+        else:
+            self.viewer.display(state.q)
         mg = require_meshcat().geometry
         node = self._vis[f"{self.viewer.root}/inspect"]
         data = mech.model.createData()
@@ -169,19 +191,23 @@ class Inspector:
             frame[:3, 3] = origin
             node["ellipse"].set_object(
                 mg.Ellipsoid(drawn),
-                mg.MeshLambertMaterial(color=ELLIPSE_COLOR, opacity=0.35, transparent=True),
+                mg.MeshLambertMaterial(color=ELLIPSE_COLOR, opacity=ELLIPSE_OPACITY, transparent=True),
             )
             node["ellipse"].set_transform(frame)
+            self._drawn.add("ellipse")
         else:
             node["ellipse"].delete()
+            self._drawn.discard("ellipse")
         if math.isfinite(state.stiffness):
             half = 0.5 * ELLIPSE_SIZE * self.viewer.size * state.stiffness_axis
             points = np.column_stack([origin - half, origin + half])
             node["stiffness"].set_object(
                 mg.Line(mg.PointsGeometry(points), mg.LineBasicMaterial(color=STIFFNESS_COLOR, linewidth=4))
             )
+            self._drawn.add("stiffness")
         else:
             node["stiffness"].delete()
+            self._drawn.discard("stiffness")
 
     def panel(self) -> InspectorPanel:
         """The Jupyter panel: ipywidgets controls and readouts beside the inline scene.
@@ -200,6 +226,16 @@ class Inspector:
 
     def __repr__(self) -> str:
         return f"Inspector({self.state.mech.name!r}, {self.url or self.viewer.url!r})"
+
+
+def force_scale(state: InspectState, size: float) -> float:
+    """Arrow length per force [m/N]: the largest force or finite limit is :data:`FORCE_SIZE` sizes long.
+
+    As the page's bars, which are scaled to the same largest value.
+    """
+    values = np.abs(np.concatenate([state.forces, state.force_limits.ravel()]))
+    largest = float(np.max(values[np.isfinite(values)], initial=0.0))
+    return FORCE_SIZE * size / largest if largest > 0.0 else 1.0
 
 
 def _normal(axis: np.ndarray) -> np.ndarray:
@@ -314,7 +350,8 @@ def inspect(mech: Mechanism, *, port: int | None = None, source: str | None = No
         source: the name or path ``mech`` was loaded from, for the "copy pose" texts.
 
     Returns:
-        The running inspector; :meth:`Inspector.close` stops its page.
+        The running inspector; :meth:`Inspector.close` (or a ``with`` block) stops its page
+        and closes its connections.
 
     Raises:
         ViewerError: meshcat missing, or no server or port.

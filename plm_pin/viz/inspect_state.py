@@ -15,8 +15,14 @@ change (no I/O: the browser panel, the Jupyter panel and the tests call the same
   positions (:func:`~plm_pin.kinematics.forward_kinematics` with ``all_modes``);
 - ``{"assembly_mode": i}``: the ``i``-th assembly mode found;
 - ``{"load": [...]}``: the wrench on the task frame, one value per task coordinate [N, N m];
+- ``{"limits": [[lower, upper], ...]}``: the actuators' effort limits, one pair per actuator
+  [N, N m] (``None`` in a pair: no limit on that side; ``None`` for all: the description's);
 - ``{"preload": [...]}``: the internal forces of a redundantly actuated mechanism, in the
   internal basis [N, N m] (``None``: the minimum-norm forces).
+
+The assembly modes found are kept: after a move they are followed to the new actuator
+positions (each closed with the actuators fixed, in the steps of the move), so that the
+selector still lists them; a mode that cannot be followed is dropped.
 
 A move that would leave the workspace (no assembly, a joint limit), cross a singularity
 (a sign change of :math:`\det T` or :math:`\det C` along the move, or of the working mode)
@@ -49,10 +55,10 @@ from ..kinematics.working_mode import working_mode
 from ..results import Result, unit
 from ..statics import actuator_limits, internal_force_range, static_forces
 from ..stiffness import stiffness
-from ..tolerances import INSPECT_EDGE_TOL, SINGULARITY_TOL
+from ..tolerances import INSPECT_EDGE_TOL, SAME_ASSEMBLY_TOL, SINGULARITY_TOL
 from ..workspace.manipulability import manipulability_from_jacobians
 
-CHANGES = ("task", "actuators", "working_mode", "find_modes", "assembly_mode", "load", "preload")
+CHANGES = ("task", "actuators", "working_mode", "find_modes", "assembly_mode", "load", "limits", "preload")
 """The keys a change may hold, applied in this order."""
 
 MOVE_STEP = 0.05
@@ -82,8 +88,9 @@ class InspectState(Result):
         working_modes: the working modes found at the last search (:func:`inspect_state` or
             ``find_modes``).
         assembly_modes: configurations of the assembly modes found at the last ``find_modes``,
-            shape (k, nq) (empty before).
-        assembly_index: which of them is displayed (None: none found, or moved since).
+            followed to the current actuator positions since, shape (k, nq) (empty before).
+        assembly_index: which of them is displayed (None: none found, or the configuration
+            shown is not among them).
         load: wrench on the task frame, one value per task coordinate [N, N m].
         preload: internal-force coordinates asked for, or None for the minimum-norm forces [N, N m].
         stopped: why the last change was not applied in full ('' when it was).
@@ -97,8 +104,10 @@ class InspectState(Result):
             rate], descending; empty at an inverse singularity or without a translation.
         ellipse_axes: their world directions, one per row, shape (k, 3).
         forces: actuator forces holding gravity and the load [N, N m] (NaN when not held).
-        force_limits: each actuator's effort limits (lower, upper), infinite where none, shape (n_act, 2).
-        internal_range: admissible range of each internal force, shape (k, 2) [N, N m]; empty
+        force_limits: each actuator's effort limits (lower, upper), infinite where none, shape
+            (n_act, 2): the description's, or those of the last ``limits`` change.
+        internal_range: admissible range of each internal force under these limits
+            (:func:`~plm_pin.statics.internal_force_range`), shape (k, 2) [N, N m]; empty
             without redundancy or finite limits.
         stiffness: smallest translational eigen-stiffness [N/m] (NaN without a compliance section).
         stiffness_axis: its world direction, shape (3,) (zeros without).
@@ -184,9 +193,17 @@ def inspect_state(mech: Mechanism, q: ArrayLike | None = None, *, source: str | 
     x = task_pose(mech, qa)
     source = mech.name if source is None else str(source)
     modes = tuple(s.mode for s in working_modes(mech, x, guess=qa))
-    return _readouts(
-        mech, qa, _Given(source, modes, np.zeros((0, mech.nq)), None, np.zeros(task.size), None, "")
+    given = _Given(
+        source,
+        modes,
+        np.zeros((0, mech.nq)),
+        None,
+        np.zeros(task.size),
+        actuator_limits(mech, "description"),
+        None,
+        "",
     )
+    return _readouts(mech, qa, given)
 
 
 def inspect_update(state: InspectState, change: Mapping[str, object]) -> InspectState:
@@ -194,8 +211,8 @@ def inspect_update(state: InspectState, change: Mapping[str, object]) -> Inspect
 
     Raises:
         InvalidInput: an unknown key, an unknown task coordinate or actuator, malformed values,
-            a working mode of the wrong size, an assembly mode not found, a preload on a
-            mechanism without internal forces.
+            a working mode of the wrong size, an assembly mode not found, malformed limits, a
+            preload on a mechanism without internal forces.
     """
     if not isinstance(change, Mapping):
         raise InvalidInput(f"change must be a mapping with keys among {list(CHANGES)}, got {change!r}")
@@ -204,17 +221,16 @@ def inspect_update(state: InspectState, change: Mapping[str, object]) -> Inspect
         raise InvalidInput(f"change keys {unknown} are unknown; valid keys are {list(CHANGES)}")
     mech = state.mech
     modes, found, index = state.working_modes, state.assembly_modes, state.assembly_index
-    load, preload = state.load, state.preload
+    load, limits, preload = state.load, state.force_limits, state.preload
     q, stopped = state.q, ""
     if "task" in change:
         q, stopped = _move_task(state, change["task"])
-        index = None
     if "actuators" in change:
         q, stopped = _move_actuators(state, change["actuators"])
-        index = None
     if "working_mode" in change:
         q, stopped = _switch_working_mode(mech, q, change["working_mode"])
-        index = None
+    if q is not state.q and len(found):
+        found, index = _retrack(mech, found, state.actuators, q)
     if change.get("find_modes"):
         modes = tuple(s.mode for s in working_modes(mech, task_pose(mech, q), guess=q))
         fk = forward_kinematics(mech, mech.actuator_positions(q), q, all_modes=True)
@@ -230,9 +246,12 @@ def inspect_update(state: InspectState, change: Mapping[str, object]) -> Inspect
         q, index = found[asked], asked
     if "load" in change:
         load = _vector(change["load"], state.load.size, "load", "N, N m")
+    if "limits" in change:
+        limits = _limits(mech, change["limits"])
     if "preload" in change:
         preload = _preload(mech, change["preload"])
-    return _readouts(mech, np.array(q), _Given(state.source, modes, found, index, load, preload, stopped))
+    given = _Given(state.source, modes, found, index, load, limits, preload, stopped)
+    return _readouts(mech, np.array(q), given)
 
 
 # ----------------------------------------------------------------------------- moves
@@ -261,6 +280,26 @@ def _named_values(value: object, names: tuple[str, ...], what: str) -> dict[str,
         if not math.isfinite(out[key]):
             raise InvalidInput(f"{what}[{key!r}] must be a finite number, got {v!r}")
     return out
+
+
+def _limits(mech: Mechanism, value: object) -> np.ndarray:
+    """Effort limits (n_act, 2) from one ``[lower, upper]`` pair per actuator, ``None`` for no limit."""
+    if value is None:
+        return actuator_limits(mech, "description")
+    n = mech.n_actuators
+    pairs = value if isinstance(value, list | tuple) else []
+    if len(pairs) != n or not all(isinstance(p, list | tuple) and len(p) == 2 for p in pairs):
+        raise InvalidInput(
+            f"limits must hold one [lower, upper] pair per actuator ({n}) [N, N m], None for no limit "
+            f"(or None for the description's), got {value!r}"
+        )
+    try:
+        arr = np.array(
+            [[-math.inf if a is None else a, math.inf if b is None else b] for a, b in pairs], float
+        )
+    except (TypeError, ValueError):
+        raise InvalidInput(f"limits must be numbers or None [N, N m], got {value!r}") from None
+    return actuator_limits(mech, arr)
 
 
 def _preload(mech: Mechanism, value: object) -> np.ndarray | None:
@@ -431,6 +470,37 @@ def _move_actuators(state: InspectState, value: object) -> tuple[np.ndarray, str
     return _track(mech, state.q, n, solve, ("constraint", "direct"), keep_mode=False)
 
 
+def _retrack(
+    mech: Mechanism, found: np.ndarray, start: np.ndarray, q: np.ndarray
+) -> tuple[np.ndarray, int | None]:
+    """The assembly modes ``found`` at actuator positions ``start``, followed to those of ``q``.
+
+    Each mode is closed with the first DOF-many actuators fixed, in the steps a move between
+    the two positions takes; a mode whose loops do not close, whose other actuators end
+    elsewhere than ``q``'s, or that falls onto another mode is dropped. Returns the modes
+    and the index of ``q``'s among them (None when it is not one of them).
+    """
+    names = tuple(a.joint for a in mech.actuators)
+    goal = mech.actuator_positions(q)
+    fixed = names[: mech.mobility]
+    rotational = np.array([a.kind != "prismatic" for a in mech.actuators])
+    n = _steps(goal - start, rotational, _size(mech, q))
+    kept: list[np.ndarray] = []
+    for mode in found:
+        current = mode
+        try:
+            for k in range(1, n + 1):
+                at = start + k / n * (goal - start)
+                current = mech.assemble(current, fixed=dict(zip(fixed, at, strict=False))).q
+        except ClosureNotSatisfied:
+            continue
+        elsewhere = np.max(np.abs(mech.actuator_positions(current) - goal)) > SAME_ASSEMBLY_TOL
+        if not elsewhere and not any(same_assembly(mech, current, other) for other in kept):
+            kept.append(np.array(current))
+    index = next((i for i, other in enumerate(kept) if same_assembly(mech, other, q)), None)
+    return np.array(kept).reshape(len(kept), mech.nq), index
+
+
 def _switch_working_mode(mech: Mechanism, q: np.ndarray, value: object) -> tuple[np.ndarray, str]:
     mode = check_mode(mech, signs(value, "working_mode"))
     if mode is None:
@@ -451,6 +521,7 @@ class _Given(NamedTuple):
     assembly_modes: np.ndarray
     assembly_index: int | None
     load: np.ndarray
+    force_limits: np.ndarray
     preload: np.ndarray | None
     stopped: str
 
@@ -467,21 +538,22 @@ def _readouts(mech: Mechanism, q: np.ndarray, given: _Given) -> InspectState:
     manip = manipulability_from_jacobians(jac, SINGULARITY_TOL)
     notes: list[str] = []
     radii, axes = _ellipse(task.dofs, manip.J_ce)
-    load, preload = given.load, given.preload
-    n = mech.n_actuators
-    limits = actuator_limits(mech, "description")
-    forces = np.full(n, np.nan)
+    load, preload, limits = given.load, given.preload, given.force_limits
+    forces = np.full(mech.n_actuators, np.nan)
     internal = np.zeros((0, 2))
     try:
         forces = static_forces(mech, q, load, limits=None, internal=preload).f_c
-        if mech.redundancy > 0:
-            if np.isfinite(limits).all():
-                r = internal_force_range(mech, q, load)
-                internal = np.column_stack([r.lower, r.upper])
-            else:
-                notes.append("internal-force range: the description gives no effort limits")
     except PlmError as exc:
         notes.append(f"statics: {exc}")
+    if mech.redundancy > 0 and np.all(np.isfinite(forces)):
+        if np.isfinite(limits).all():
+            try:
+                r = internal_force_range(mech, q, load, limits=limits)
+                internal = np.column_stack([r.lower, r.upper])
+            except PlmError as exc:
+                notes.append(f"internal-force range: {exc}")
+        else:
+            notes.append("internal-force range: give every actuator finite effort limits")
     k_min, k_axis = math.nan, np.zeros(3)
     if mech.sidecar.compliance is not None:
         try:
@@ -507,7 +579,6 @@ def _readouts(mech: Mechanism, q: np.ndarray, given: _Given) -> InspectState:
         ellipse_radii=radii,
         ellipse_axes=axes,
         forces=forces,
-        force_limits=limits,
         internal_range=internal,
         stiffness=k_min,
         stiffness_axis=k_axis,

@@ -51,6 +51,11 @@ def _text(value: object) -> str:
     return html.escape(str(value))
 
 
+def _number(value: float) -> str:
+    """A limit as the text of its entry: blank when infinite (no limit)."""
+    return f"{value:.9g}" if math.isfinite(value) else ""
+
+
 def _signs(mode: tuple[int, ...]) -> str:
     return ",".join("+" if s > 0 else "-" if s < 0 else "0" for s in mode)
 
@@ -91,6 +96,7 @@ class InspectorPanel:
         assembly_mode: the assembly-mode selector (filled by the "find modes" button).
         find_modes: the button that searches every working and assembly mode.
         load: one entry per task coordinate [N, N m].
+        limits: one (lower, upper) pair of entries per actuator [N, N m], blank for no limit.
         readouts: the readouts (HTML).
         widget: the whole panel (an ``ipywidgets.HBox``).
     """
@@ -123,6 +129,16 @@ class InspectorPanel:
         self.load = [w.FloatText(value=0.0, description=f"load {d}", layout=layout) for d in state.dofs]
         for box in self.load:
             box.observe(lambda _: self._send({"load": [b.value for b in self.load]}), names="value")
+        self.limits = {
+            a: tuple(
+                w.Text(_number(v), placeholder="none", description=f"{a} {side}", continuous_update=False)
+                for side, v in zip(("min", "max"), pair, strict=True)
+            )
+            for a, pair in zip(state.actuator_names, state.force_limits, strict=True)
+        }
+        for pair in self.limits.values():
+            for box in pair:
+                box.observe(lambda _: self._send_limits(), names="value")
         self.readouts = w.HTML()
         self.error = w.HTML()
         controls = w.VBox(
@@ -134,6 +150,8 @@ class InspectorPanel:
                 self.working_mode,
                 w.HBox([self.assembly_mode, self.find_modes]),
                 *self.load,
+                w.HTML("<b>actuator effort limits [N, N m]</b>"),
+                *(w.HBox(list(pair)) for pair in self.limits.values()),
                 self.error,
                 self.readouts,
             ]
@@ -169,6 +187,24 @@ class InspectorPanel:
     def _on_assembly_mode(self, change: Mapping[str, Any]) -> None:
         if change["new"] is not None:
             self._send({"assembly_mode": change["new"]})
+
+    def _send_limits(self) -> None:
+        """Send the limits entries; one that is not a number is named in the error line."""
+        pairs = []
+        for name, boxes in self.limits.items():
+            pair = []
+            for box in boxes:
+                text = box.value.strip()
+                try:
+                    pair.append(float(text) if text else None)
+                except ValueError:
+                    self.error.value = (
+                        f'<span style="color: #b00">limits of {html.escape(name)}: '
+                        f"{html.escape(text)!r} is not a number (blank: no limit)</span>"
+                    )
+                    return
+            pairs.append(pair)
+        self._send({"limits": pairs})
 
     def _send(self, change: Mapping[str, object]) -> None:
         if self._quiet:

@@ -47,6 +47,15 @@ WORKSPACE_COLOR: RGBA = (0.0, 0.6, 0.6, 1.0)
 FORCE_COLOR = 0x1F5FBF
 """Colour of force arrows (0xRRGGBB)."""
 
+ELLIPSE_COLOR = 0x2E8B57
+"""Colour of the inspector's velocity ellipse (0xRRGGBB), drawn at :data:`ELLIPSE_OPACITY`."""
+
+ELLIPSE_OPACITY = 0.35
+"""Opacity of the inspector's velocity ellipse [-]."""
+
+STIFFNESS_COLOR = 0x8A2BE2
+"""Colour of the inspector's smallest-stiffness axis (0xRRGGBB)."""
+
 ELEMENT_ID = "plm-pin-legend"
 """``id`` of the legend's ``<div>`` in a page."""
 
@@ -70,8 +79,8 @@ MARKS = ("ball", "rod", "dashed", "band", "outline", "arrow", "dot")
 """Swatch shapes of :class:`LegendEntry`."""
 
 
-def _hex(rgb: int) -> RGBA:
-    return ((rgb >> 16 & 255) / 255, (rgb >> 8 & 255) / 255, (rgb & 255) / 255, 1.0)
+def _hex(rgb: int, alpha: float = 1.0) -> RGBA:
+    return ((rgb >> 16 & 255) / 255, (rgb >> 8 & 255) / 255, (rgb & 255) / 255, alpha)
 
 
 ENTRIES: Mapping[str, LegendEntry] = {
@@ -86,9 +95,11 @@ ENTRIES: Mapping[str, LegendEntry] = {
     "platform": LegendEntry("platform", PLATFORM_COLOR, "outline"),
     "force": LegendEntry("force", _hex(FORCE_COLOR), "arrow"),
     "workspace": LegendEntry("workspace boundary", WORKSPACE_COLOR, "dot"),
+    "ellipse": LegendEntry("velocity ellipse", _hex(ELLIPSE_COLOR, ELLIPSE_OPACITY), "band"),
+    "stiffness": LegendEntry("softest axis (smallest stiffness)", _hex(STIFFNESS_COLOR), "rod"),
 }
-"""Every mark a :class:`~plm_pin.viz.MeshcatViewer` draws, by key; singular kinds colour the
-mechanism and the singular points alike."""
+"""Every mark a :class:`~plm_pin.viz.MeshcatViewer` or the live inspector draws, by key; singular
+kinds colour the mechanism and the singular points alike."""
 
 _SWATCH = {
     "ball": "width:10px;height:10px;border-radius:50%;background:{c}",

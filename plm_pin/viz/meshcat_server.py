@@ -17,7 +17,6 @@ import importlib
 import ipaddress
 import os
 import queue
-import socket
 import subprocess
 import sys
 import tempfile
@@ -26,10 +25,10 @@ import time
 import urllib.parse
 import weakref
 import webbrowser
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from types import ModuleType
-from typing import IO, Any
+from typing import IO, Any, TypeVar
 
 from ..exceptions import InvalidInput, ViewerError
 from .legend import ENTRIES, with_legend
@@ -54,6 +53,8 @@ PARENT_CHECK_MS = 1000
 
 VIZ_EXTRA = "pip install 'plm-pin[viz]'"
 
+T = TypeVar("T")
+
 
 def require_meshcat() -> ModuleType:
     """Import meshcat, or raise :class:`ViewerError` saying how to install it."""
@@ -65,25 +66,33 @@ def require_meshcat() -> ModuleType:
         ) from None
 
 
-def free_port(start: int, attempts: int = PORT_ATTEMPTS) -> int:
-    """The first port from ``start`` on which nothing listens on 127.0.0.1.
+def check_port(port: int) -> int:
+    """Return ``port`` after checking it is a port number.
+
+    Raises:
+        InvalidInput: when ``port`` is not in 1..65535.
+    """
+    if not 1 <= port <= 65535:
+        raise InvalidInput(f"port must be in 1..65535, got {port}")
+    return port
+
+
+def first_free(start: int, bind: Callable[[int], T], attempts: int = PORT_ATTEMPTS) -> T:
+    """``bind(port)`` on the first port from ``start`` where it does not raise :class:`OSError`.
+
+    The bind itself is the test, so that no other process can take the port between a check
+    and the bind.
 
     Raises:
         InvalidInput: when ``start`` is not a port number.
         ViewerError: when the ``attempts`` ports from ``start`` are all busy.
     """
-    if not 1 <= start <= 65535:
-        raise InvalidInput(f"port must be in 1..65535, got {start}")
-    last = min(start + attempts, 65536)
+    last = min(check_port(start) + attempts, 65536)
     for port in range(start, last):
-        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
-            if os.name != "nt":  # as tornado does: a port in TIME_WAIT is free, a listening one is not
-                probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-            try:
-                probe.bind((LOCALHOST, port))
-            except OSError:
-                continue
-            return port
+        try:
+            return bind(port)
+        except OSError:
+            continue
     raise ViewerError(f"ports {start} to {last - 1} on {LOCALHOST} are all busy; choose another with --port")
 
 
@@ -92,7 +101,8 @@ class MeshcatServer:
 
     Attributes:
         requested_port: the web port asked for, or None.
-        port: the web port served (the next free one when the requested port is busy).
+        port: the web port served (the next free one when the requested port is busy: the
+            server binds the first port it can from the requested one up).
         zmq_url: address of the drawing commands (``tcp://127.0.0.1:...``).
         web_url: address of the page (``http://127.0.0.1:.../static/``).
     """
@@ -106,10 +116,10 @@ class MeshcatServer:
         """
         require_meshcat()
         self.requested_port = port
-        self.port = free_port(DEFAULT_PORT if port is None else port)
+        start = check_port(DEFAULT_PORT if port is None else port)
         log = tempfile.TemporaryFile()
         process = subprocess.Popen(
-            [sys.executable, "-m", __name__, "--port", str(self.port), "--parent", str(os.getpid())],
+            [sys.executable, "-m", __name__, "--port", str(start), "--parent", str(os.getpid())],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE,
             stderr=log,
@@ -129,6 +139,7 @@ class MeshcatServer:
             raise
         self.zmq_url = lines[0].removeprefix("zmq_url=")
         self.web_url = lines[1].removeprefix("web_url=")
+        self.port = int(urllib.parse.urlsplit(self.web_url).port or start)
 
     @property
     def moved(self) -> bool:
@@ -344,11 +355,15 @@ def _recorder_class() -> type:
 def _local_bridge(port: int) -> Any:
     """The meshcat server bridge with its web page served on 127.0.0.1 only (ZeroMQ already is).
 
+    The page is served on the first port from ``port`` up that can be bound (meshcat's own
+    search, binding each port in turn, as it does for the ZeroMQ port).
+
     The page is meshcat's with the legend of every mark a viewer draws (:mod:`plm_pin.viz.legend`).
     """
     zmqserver = importlib.import_module("meshcat.servers.zmqserver")
     web = importlib.import_module("tornado.web")
     routing = importlib.import_module("tornado.routing")
+    zmqserver.DEFAULT_FILESERVER_PORT = port  # type: ignore[attr-defined]  # where meshcat's search starts
     viewer_page = Path(zmqserver.VIEWER_ROOT, zmqserver.VIEWER_HTML).read_text(encoding="utf-8")
     page = with_legend(viewer_page, list(ENTRIES.values()))
 
@@ -365,7 +380,7 @@ def _local_bridge(port: int) -> Any:
             app.listen = functools.partial(app.listen, address=LOCALHOST)  # tornado's default: all
             return app
 
-    return LocalBridge(host=LOCALHOST, port=port)
+    return LocalBridge(host=LOCALHOST)
 
 
 def main(argv: Sequence[str] | None = None) -> None:
@@ -375,7 +390,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     goes to stderr) and serves until terminated.
     """
     parser = argparse.ArgumentParser(prog=f"python -m {__name__}", description=main.__doc__)
-    parser.add_argument("--port", type=int, required=True, help="web port")
+    parser.add_argument("--port", type=int, required=True, help="first web port tried")
     parser.add_argument("--parent", type=int, help="stop when this process is gone (its pid)")
     args = parser.parse_args(argv)
     bridge = _local_bridge(args.port)

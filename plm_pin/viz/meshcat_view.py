@@ -565,6 +565,19 @@ class MeshcatViewer:
         self._window.open()
         return self
 
+    def close(self) -> None:
+        """Close the connection to the server (idempotent); the server and its page keep running.
+
+        A ``with MeshcatViewer(...) as viewer:`` block closes it at its end.
+        """
+        self._window.close()
+
+    def __enter__(self) -> MeshcatViewer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
     @property
     def legend(self) -> list[str]:
         """Keys of :data:`plm_pin.viz.legend.ENTRIES` of what the scene draws, in the legend's order.

@@ -16,9 +16,17 @@ import pytest
 from plm_pin.kinematics import classify, inverse_kinematics
 from plm_pin.statics import static_forces
 from plm_pin.viz import Inspector, inspect
+from plm_pin.viz.legend import ENTRIES
 from plm_pin.workspace import manipulability
 from tests.conftest import preset
-from tests.report.test_browser import _check_canvas, _console_errors, _open, _pixels, _wait, browser  # noqa: F401
+from tests.report.test_browser import (
+    _check_canvas,
+    _console_errors,
+    _open,
+    _pixels,
+    _wait,
+    browser,  # noqa: F401 (a fixture)
+)
 
 pytestmark = pytest.mark.slow
 
@@ -40,15 +48,47 @@ def _number(driver: Any, element_id: str) -> float:
     return float(driver.execute_script(f"return document.getElementById('{element_id}').textContent"))
 
 
-def _scene_png(driver: Any) -> bytes:
+def _scene_png(driver: Any, first: bool = True) -> bytes:
+    """A screenshot of the scene's canvas; the first time, after checking it draws and has its legend.
+
+    The check hides meshcat's controls, the legend, grid and axes (as the report tests do), and
+    they stay hidden: later screenshots compare the mechanism alone.
+    """
     from selenium.webdriver.common.by import By
 
     driver.switch_to.frame(driver.find_element(By.ID, "scene"))
     try:
-        _check_canvas(driver, "the inspector's scene")
+        if first:
+            _check_canvas(driver, "the inspector's scene")
         return driver.find_element(By.TAG_NAME, "canvas").screenshot_as_png
     finally:
         driver.switch_to.default_content()
+
+
+LEGEND_IN_VIEW = """
+const legend = document.querySelector('#legend #plm-pin-legend');
+if (!legend) return 'no legend in the panel';
+legend.scrollIntoView();
+const r = legend.getBoundingClientRect();
+if (r.width < 50 || r.height < 20 || r.top < 0 || r.bottom > window.innerHeight) {
+    return `legend of ${r.width} x ${r.height} px at (${r.left}, ${r.top}), outside the view`;
+}
+legend.style.pointerEvents = 'auto';
+const top = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+return legend.contains(top) ? '' : `legend covered by ${top ? top.tagName : 'nothing'}`;
+"""
+"""Empty when the panel's legend is in view once scrolled to and nothing covers it; else what is wrong."""
+
+
+def _check_legend(driver: Any, inspector: Inspector) -> None:
+    """The panel shows the legend of what the scene draws: singularity colours, closure marks, the ellipse."""
+    assert driver.execute_script(LEGEND_IN_VIEW) == ""
+    text = driver.execute_script("return document.querySelector('#legend #plm-pin-legend').innerText")
+    expected = [ENTRIES[key].label for key in inspector.legend]
+    assert text.split("\n") == expected
+    for key in ("direct", "inverse", "constraint", "closed", "ellipse"):
+        assert ENTRIES[key].label in expected
+    driver.execute_script("document.getElementById('panel').scrollTop = 0")
 
 
 def test_drag_a_slider_and_switch_a_mode(browser, table):  # noqa: F811 (the imported fixture)
@@ -61,6 +101,7 @@ def test_drag_a_slider_and_switch_a_mode(browser, table):  # noqa: F811 (the imp
     mode = table.state.working_mode
     _open(browser, table.url)
     _wait(browser, "the first state", lambda: _settled(browser, table))
+    _check_legend(browser, table)
     before_png = _scene_png(browser)
     x0 = float(table.state.x[0])
 
@@ -92,7 +133,7 @@ def test_drag_a_slider_and_switch_a_mode(browser, table):  # noqa: F811 (the imp
     )
     switched = inverse_kinematics(mech, x, sol.q, mode=other)
     np.testing.assert_allclose(browser.execute_script("return state.q"), switched.q, atol=1e-8)
-    changed = np.max(np.abs(_pixels(_scene_png(browser)) - _pixels(before_png)), axis=2) > 40
+    changed = np.max(np.abs(_pixels(_scene_png(browser, first=False)) - _pixels(before_png)), axis=2) > 40
     assert np.count_nonzero(changed) > 100  # the legs moved on screen
 
     rz = browser.find_element(By.ID, "task-rz")

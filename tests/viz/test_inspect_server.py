@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from plm_pin.viz import Inspector, inspect, inspect_update
+from plm_pin.viz.legend import ENTRIES
 from plm_pin.viz.meshcat_server import LOCALHOST
 from tests.conftest import preset
 from tests.viz.test_meshcat_view import listening_addresses
@@ -60,6 +61,9 @@ def test_page_listens_on_localhost_only_and_serves_the_page(inspector):
     state = _get(inspector.url + "state")
     assert state["scene"] == inspector.viewer.url
     assert state["dofs"] == ["rz"]
+    assert inspector.legend == [k for k in ENTRIES if k in {*inspector.viewer.legend}]  # no ellipse: rz only
+    for key in inspector.legend:
+        assert ENTRIES[key].label in state["legend"]
 
 
 def test_update_endpoint_answers_what_inspect_update_gives(inspector):
@@ -140,3 +144,61 @@ def test_cli_serves_on_localhost_and_ends_with_ctrl_c():
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+def test_actuator_forces_are_drawn_as_arrows_along_the_prismatic_axes():
+    """Under a load, one arrow per prismatic actuator: at its joint, along its axis, as long as its force."""
+    import pinocchio as pin
+
+    from plm_pin.statics import static_forces
+    from plm_pin.viz.inspect_server import FORCE_SIZE
+    from tests.viz.test_meshcat_view import Scene
+
+    mech = preset("harada2011_3d4m")
+    running = Inspector(mech, page=False)
+    try:
+        state = running.update({"load": [3.0, -2.0, 0.5]})
+        scene = Scene(running._window.get_scene())
+    finally:
+        running.close()
+    forces = static_forces(mech, state.q, (3.0, -2.0, 0.5), limits=None).f_c
+    data = mech.model.createData()
+    pin.computeJointJacobians(mech.model, data, state.q)
+    lengths = {}
+    for act, f in zip(mech.actuators, forces, strict=True):
+        assert act.kind == "prismatic"
+        node = f"/meshcat/plm_pin/{mech.name}/forces/f_c {act.joint}"
+        shaft, head = scene.transforms[f"{node}/shaft"], scene.transforms[f"{node}/head"]
+        h_shaft, h_head = (scene.geometry(f"{node}/{p}")["height"] for p in ("shaft", "head"))
+        np.testing.assert_allclose(
+            shaft[:3, 3] - 0.5 * h_shaft * shaft[:3, 1], data.oMi[act.joint_id].translation, atol=1e-12
+        )
+        J = pin.getJointJacobian(mech.model, data, act.joint_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        axis = J[:3, mech.model.joints[act.joint_id].idx_v]
+        np.testing.assert_allclose(shaft[:3, 1], np.sign(f) * axis / np.linalg.norm(axis), atol=1e-9)
+        np.testing.assert_allclose(head[:3, 1], shaft[:3, 1], atol=1e-12)
+        lengths[act.joint] = (h_shaft + h_head, abs(f))
+    longest = max(length for length, _ in lengths.values())
+    assert longest <= FORCE_SIZE * running.viewer.size * (1 + 1e-9)
+    ratios = [length / f for length, f in lengths.values()]
+    np.testing.assert_allclose(ratios, ratios[0], rtol=1e-9)  # one scale for every arrow
+    assert "force" in running.legend
+
+
+def test_closed_inspector_leaves_no_socket_open_at_exit():
+    """A closed inspector (its page, its connections and its viewer's) leaves no unclosed socket at exit."""
+    code = (
+        "from plm_pin.viz import inspect\nfrom tests.conftest import preset\n"
+        "with inspect(preset('fourbar')) as running:\n"
+        "    running.update({'task': {'rz': float(running.state.x[0]) + 0.01}})\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-X", "dev", "-W", "always::ResourceWarning", "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=TIMEOUT,
+        cwd=REPO,
+        env={**os.environ, "PYTHONPATH": str(REPO)},
+    )
+    assert done.returncode == 0, done.stderr
+    assert "ResourceWarning" not in done.stderr

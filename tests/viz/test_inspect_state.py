@@ -17,7 +17,7 @@ import pytest
 from plm_pin import InvalidInput
 from plm_pin.kinematics import classify, forward_kinematics, inverse_kinematics, same_assembly, working_modes
 from plm_pin.models import PRESETS
-from plm_pin.statics import static_forces
+from plm_pin.statics import internal_force_range, static_forces
 from plm_pin.stiffness import stiffness
 from plm_pin.viz.inspect_state import InspectState, inspect_state, inspect_update
 from plm_pin.workspace import manipulability
@@ -151,6 +151,30 @@ def test_assembly_modes_are_forward_kinematics_all_modes(table):
     assert not np.allclose(chosen.x, table.x, atol=1e-6)
 
 
+@pytest.mark.parametrize(
+    "name, change", [("harada2011_3d4m", {"actuators": {"slider1": 0.012}}), ("fivebar", None)]
+)
+def test_assembly_modes_are_kept_and_followed_after_a_move(name, change):
+    """After a move the modes found are FK's at the new actuator positions, the one shown marked."""
+    mech = preset(name)
+    found = inspect_update(inspect_state(mech), {"find_modes": True})
+    assert len(found.assembly_modes) >= 2
+    if change is None:  # move the first actuator a little
+        first = mech.actuators[0].joint
+        change = {"actuators": {first: float(found.actuators[0]) + 0.05}}
+    else:
+        change = {"actuators": {k: float(found.actuators[0]) + v for k, v in change["actuators"].items()}}
+    moved = inspect_update(found, change)
+    assert not moved.stopped
+    assert not np.allclose(moved.actuators, found.actuators)
+    fk = forward_kinematics(mech, moved.actuators, moved.q, all_modes=True)
+    assert len(moved.assembly_modes) == len(fk)
+    for sol in fk:
+        assert sum(same_assembly(mech, sol.q, m) for m in moved.assembly_modes) == 1
+    assert moved.assembly_index is not None
+    assert same_assembly(mech, moved.assembly_modes[moved.assembly_index], moved.q)
+
+
 def test_load_forces_do_virtual_work_against_the_load(table):
     """The forces a load adds do the work the load does on every small IK motion: f . dc = -w . dx."""
     mech = table.mech
@@ -173,6 +197,38 @@ def test_preload_adds_forces_that_balance_nothing(table):
     J_ce = manipulability(table.mech, table.q).J_ce
     np.testing.assert_allclose(J_ce.T @ extra, 0.0, atol=1e-9)
     assert np.linalg.norm(extra) == pytest.approx(50.0)
+
+
+def test_limits_give_the_internal_force_range_of_statics_and_its_ends_saturate(table):
+    """Without limits in the description no range; with limits given, statics' range, whose ends saturate.
+
+    Brute force on the ends: the forces preloaded to an end keep within the limits with one
+    at a bound, and a little beyond the end one force passes its bound.
+    """
+    assert table.internal_range.size == 0 and np.isinf(table.force_limits).all()
+    mech, load = table.mech, [3.0, -2.0, 0.5]
+    limits = [[-200.0, 150.0], [-120.0, 200.0], [None, 180.0], [-160.0, 90.0]]
+    bounds = np.array([[-np.inf if v is None else v for v in pair] for pair in limits])
+    partial = inspect_update(table, {"load": load, "limits": limits})
+    assert partial.internal_range.size == 0 and any("finite effort limits" in n for n in partial.notes)
+    limits[2][0] = -170.0
+    bounds[2, 0] = -170.0
+    state = inspect_update(table, {"load": load, "limits": limits})
+    np.testing.assert_array_equal(state.force_limits, bounds)
+    expected = internal_force_range(mech, state.q, load, limits=bounds)
+    np.testing.assert_allclose(
+        state.internal_range, np.column_stack([expected.lower, expected.upper]), rtol=1e-9
+    )
+    span = float(np.diff(state.internal_range[0])[0])
+    assert span > 0.0
+    for end, outward in zip(state.internal_range[0], (-1.0, 1.0), strict=True):
+        at = inspect_update(state, {"preload": [float(end)]}).forces
+        slack = np.minimum(at - bounds[:, 0], bounds[:, 1] - at)
+        assert slack.min() == pytest.approx(0.0, abs=1e-6 * span) and slack.min() > -1e-6 * span
+        beyond = inspect_update(state, {"preload": [float(end) + outward * 1e-3 * span]}).forces
+        assert np.min(np.minimum(beyond - bounds[:, 0], bounds[:, 1] - beyond)) < 0.0
+    back = inspect_update(state, {"limits": None})
+    assert back.internal_range.size == 0 and np.isinf(back.force_limits).all()
 
 
 def test_velocity_ellipse_matches_finite_differences(table):
@@ -207,6 +263,9 @@ def test_copy_pose_texts_rebuild_the_pose(table):
         ({"assembly_mode": 0}, "find_modes"),
         ({"load": [1.0]}, "3 finite numbers"),
         ({"working_mode": [1, 1]}, "mode must hold 4 signs"),
+        ({"limits": [[-1.0, 1.0]]}, "one \\[lower, upper\\] pair per actuator \\(4\\)"),
+        ({"limits": [["a", 1.0]] * 4}, "numbers or None"),
+        ({"limits": [[2.0, 1.0]] * 4}, "lower <= upper"),
     ],
 )
 def test_bad_changes_are_refused_by_name(table, change, words):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from plm_pin.viz import inspect, inspect_update
+from plm_pin.viz import Inspector, InspectorPanel, inspect, inspect_update
 from tests.conftest import preset
 
 
@@ -36,3 +36,25 @@ def test_mode_selectors_switch_the_configuration(panel):
     np.testing.assert_allclose(panel.inspector.state.x, state.x, atol=1e-9)
     panel.find_modes.click()
     assert len(panel.assembly_mode.options) == len(panel.inspector.state.assembly_modes) >= 2
+
+
+def test_limits_entries_show_the_internal_force_range(panel):
+    """Blank limits: no range; finite limits typed in: the range the state function gives for them."""
+    fresh = Inspector(preset("harada2011_3d4m"), page=False, server=panel.inspector.viewer.server)
+    try:
+        _check_limits(fresh.panel())
+    finally:
+        fresh.close()
+
+
+def _check_limits(panel: InspectorPanel) -> None:
+    assert all(box.value == "" for pair in panel.limits.values() for box in pair)
+    for lo, hi in panel.limits.values():
+        lo.value, hi.value = "-200", "200"
+    state = panel.inspector.state
+    np.testing.assert_array_equal(state.force_limits, np.tile([-200.0, 200.0], (4, 1)))
+    assert state.internal_range.shape == (1, 2), state.notes
+    ((lo, hi),) = state.internal_range
+    assert f"{lo:.6g} .. {hi:.6g}" in panel.readouts.value
+    panel.limits["slider1"][0].value = "lots"
+    assert "is not a number" in panel.error.value

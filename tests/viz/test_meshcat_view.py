@@ -31,7 +31,7 @@ from plm_pin.viz.meshcat_server import (
     PARENT_CHECK_MS,
     ServerWindow,
     check_local_url,
-    free_port,
+    first_free,
     require_meshcat,
 )
 from plm_pin.viz.meshcat_view import CLOSED_COLOR, OPEN_COLOR, SINGULAR_COLORS, SKELETON_COLOR, shared_server
@@ -446,22 +446,49 @@ def test_server_that_does_not_start_in_time_is_stopped(monkeypatch):
     assert process.returncode is not None
 
 
-def test_free_port_skips_a_busy_port():
-    """A port someone listens on (127.0.0.1) is skipped; a bad port number is refused."""
+def _listen(port: int) -> socket.socket:
+    """A socket listening on 127.0.0.1:``port`` (OSError when it is taken)."""
+    sock = socket.socket()
+    try:
+        sock.bind((LOCALHOST, port))
+    except OSError:
+        sock.close()
+        raise
+    sock.listen()
+    return sock
+
+
+def test_first_free_binds_past_a_busy_port():
+    """A port someone listens on (127.0.0.1) is skipped by binding the next; a bad port number is refused."""
     with socket.socket() as busy:
         busy.bind((LOCALHOST, 0))
         busy.listen()
         port = busy.getsockname()[1]
-        assert free_port(port, attempts=1000) > port
+        with first_free(port, _listen, attempts=1000) as bound:
+            assert bound.getsockname()[1] > port
         with pytest.raises(ViewerError, match=f"ports {port} to {port} on 127.0.0.1 are all busy"):
-            free_port(port, attempts=1)
+            first_free(port, _listen, attempts=1)
     with pytest.raises(InvalidInput, match=re.escape("port must be in 1..65535, got 0")):
-        free_port(0)
+        first_free(0, _listen)
+
+
+def test_server_started_on_a_busy_port_serves_on_the_next():
+    """The server binds past a port taken after any check could be made: the port is found by binding it."""
+    with socket.socket() as busy:
+        busy.bind((LOCALHOST, 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        with MeshcatServer(port) as server:
+            assert server.port > port and server.moved
+            assert server.web_url == f"http://{LOCALHOST}:{server.port}/static/"
+            assert listening_addresses(server.port) <= {LOCALHOST}
 
 
 def test_silent_server_times_out_with_a_clear_error():
     """A zmq_url nobody answers raises ViewerError after the time-out instead of hanging."""
-    url = f"tcp://{LOCALHOST}:{free_port(6500)}"
+    with socket.socket() as probe:  # a port nobody listens on
+        probe.bind((LOCALHOST, 0))
+        url = f"tcp://{LOCALHOST}:{probe.getsockname()[1]}"
     with pytest.raises(
         ViewerError, match=re.escape(f"the meshcat server at {url} did not answer within 0.2 s")
     ):

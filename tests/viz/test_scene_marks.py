@@ -17,6 +17,7 @@ import pytest
 from plm_pin.core.mechanism import Mechanism
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics.reference import task_pose
+from plm_pin.models import PRESETS
 from plm_pin.viz import MeshcatViewer, scene_html
 from plm_pin.viz.legend import (
     ELEMENT_ID,
@@ -287,3 +288,18 @@ def test_singular_point_overlay_sits_at_each_points_task_pose():
 def points_attribute(attributes: dict, name: str) -> np.ndarray:
     """A meshcat point-cloud attribute (an ``Ext`` of float32 data, one row of 3 per point)."""
     return np.frombuffer(attributes[name]["array"].data, dtype=np.float32).reshape(-1, 3)
+
+
+CLASH_DISTANCE = 0.3
+"""Least RGB distance of a preset's visual colour to a singularity colour [-] (the old orange rods: 0.22)."""
+
+
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_preset_colours_are_not_singularity_colours(name):
+    """No visual of a preset has a colour near yellow, orange or red: a regular pose never looks singular."""
+    mech = preset(name)
+    colours = {tuple(np.round(obj.meshColor[:3], 6)) for obj in mech.visual_model.geometryObjects}
+    assert colours
+    for colour in colours:
+        for kind, singular in SINGULAR_COLORS.items():
+            assert np.linalg.norm(np.subtract(colour, singular[:3])) > CLASH_DISTANCE, (colour, kind)
