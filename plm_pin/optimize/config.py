@@ -31,7 +31,7 @@ from typing import Any
 from .._text import short
 from .._yaml import YamlRefused, load_yaml, read_head
 from ..exceptions import InvalidInput
-from ..sweep.config import UNITS, import_mechanism, values_of
+from ..sweep.config import UNITS, check_header, import_mechanism, values_of
 from .problem import FORMAT, Problem, make_problem
 from .search import search_settings
 
@@ -70,18 +70,9 @@ def problem_from_config(config: Any, source: str = "<config>") -> tuple[Problem,
             the message starts with ``source``.
     """
     try:
-        if not isinstance(config, Mapping):
-            raise InvalidInput(
-                f"an optimisation configuration is a mapping of {list(KEYS)}, got {short(config)}"
-            )
-        unknown = [k for k in config if k not in KEYS]
-        if unknown:
-            raise InvalidInput(f"unknown key(s) {short(unknown)}; keys are {list(KEYS)}")
-        if "format" in config and config["format"] != FORMAT:
-            raise InvalidInput(f"format {short(config['format'])} is not {short(FORMAT)}")
-        for required in ("mechanism", "variables", "poses"):
-            if required not in config:
-                raise InvalidInput(f"missing key {short(required)}")
+        check_header(
+            config, "an optimisation configuration", KEYS, FORMAT, ("mechanism", "variables", "poses")
+        )
         search = config.get("search") or {}
         if not isinstance(search, Mapping) or any(k not in SEARCH for k in search):
             raise InvalidInput(f"search must be a mapping of {list(SEARCH)}, got {short(search)}")

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import importlib
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -104,6 +104,31 @@ def import_mechanism(raw: Any) -> Any:
     return builder
 
 
+def check_header(config: Any, what: str, keys: Sequence[str], form: str, required: Sequence[str]) -> None:
+    """Check the top level of a configuration mapping: a mapping, known keys, its format, required keys.
+
+    Args:
+        config: the configuration as read.
+        what: what it is, for the messages (``"a sweep configuration"``).
+        keys: the keys it may have.
+        form: the ``format`` value it must carry when it gives one.
+        required: the keys it must have.
+
+    Raises:
+        InvalidInput: the first of these it fails, naming the key and the valid choices.
+    """
+    if not isinstance(config, Mapping):
+        raise InvalidInput(f"{what} is a mapping of {list(keys)}, got {type(config).__name__}")
+    unknown = [k for k in config if k not in keys]
+    if unknown:
+        raise InvalidInput(f"unknown key(s) {short(unknown)}; keys are {list(keys)}")
+    if "format" in config and config["format"] != form:
+        raise InvalidInput(f"format {short(config['format'])} is not {short(form)}")
+    for key in required:
+        if key not in config:
+            raise InvalidInput(f"missing key {short(key)}")
+
+
 def spec_from_config(config: Any, source: str = "<config>") -> tuple[SweepSpec, int | None]:
     """The sweep a configuration mapping describes, and its ``chunk`` (None when not given).
 
@@ -112,18 +137,7 @@ def spec_from_config(config: Any, source: str = "<config>") -> tuple[SweepSpec, 
             the message starts with ``source``.
     """
     try:
-        if not isinstance(config, Mapping):
-            raise InvalidInput(
-                f"a sweep configuration is a mapping of {list(KEYS)}, got {type(config).__name__}"
-            )
-        unknown = [k for k in config if k not in KEYS]
-        if unknown:
-            raise InvalidInput(f"unknown key(s) {short(unknown)}; keys are {list(KEYS)}")
-        if "format" in config and config["format"] != FORMAT:
-            raise InvalidInput(f"format {short(config['format'])} is not {short(FORMAT)}")
-        for required in ("mechanism", "poses", "metrics"):
-            if required not in config:
-                raise InvalidInput(f"missing key {short(required)}")
+        check_header(config, "a sweep configuration", KEYS, FORMAT, ("mechanism", "poses", "metrics"))
         raw_params = config.get("parameters")
         if isinstance(raw_params, Mapping):
             parameters: Any = {k: values_of(f"parameters.{k}", v) for k, v in raw_params.items()}
