@@ -43,8 +43,9 @@ VARIABLES = {"strut_lengths": {"bounds": [0.8, 1.4], "repeat": 8}}
 CONSTRAINTS = {"reach": 1.0, "singularity_margin": 0.01, "joint_limits": 1.0}
 """The constraint hierarchy."""
 
-SEARCH: dict[str, Any] = {"generations": 30, "population": 8, "seed": 2011, "tol": 0.0}
-"""Differential evolution settings (seeded; tol 0: all generations, the GCI varies little with l)."""
+SEARCH: dict[str, Any] = {"generations": 15, "population": 6, "seed": 2011, "tol": 0.0}
+"""Differential evolution settings (seeded; tol 0: all generations, the GCI varies little with l; the
+convergence figure shows the best score within 1e-4 of its final value from the sixth generation on)."""
 
 
 def run(ctx: StudyContext) -> None:
