@@ -252,12 +252,15 @@ def interval_system(
     de = np.zeros((m, n, 2))
     for c in range(closure_kind.shape[0]):
         a, b, o = closure_frames[c, 0], closure_frames[c, 1], entry_offset[c]
-        if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2
+        if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2, L^2 = |p_L|^2 for an actuated strut L
             acc = np.empty(2)
             acc[0], acc[1] = -closure_length2[c], -closure_length2[c]
+            g = closure_frames[c, 2]
             for r in range(3):
                 d = _add(Tf[b, r, 3], _neg(Tf[a, r, 3]))
                 acc = _add(acc, _mul(d, d))
+                if g >= 0:  # the strut hangs from the world on a parameter: no x-derivative
+                    acc = _add(acc, _neg(_mul(Tf[g, r, 3], Tf[g, r, 3])))
                 for j in range(n):
                     dd = _add(dTf[b, j, r, 3], _neg(dTf[a, j, r, 3]))
                     de[o, j] = _add(de[o, j], 2.0 * _mul(d, dd))

@@ -265,8 +265,9 @@ def _entries(
             i = parent[i]
     for c in range(closure_kind.shape[0]):
         a, b, o = closure_frames[c, 0], closure_frames[c, 1], entry_offset[c]
-        if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2
+        if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2, L^2 = |p_L|^2 for an actuated strut L
             e[o] = -closure_length2[c]
+            g = closure_frames[c, 2]
             for j in range(nc):
                 de[o, j] = 0.0
             for r in range(3):
@@ -275,6 +276,11 @@ def _entries(
                 for j in range(nc):
                     if on_path[a, j] or on_path[b, j]:
                         de[o, j] += 2.0 * d * (dTf[b * nc + j, r, 3] - dTf[a * nc + j, r, 3])
+                if g >= 0:
+                    e[o] -= Tf[g, r, 3] * Tf[g, r, 3]
+                    for j in range(nc):
+                        if on_path[g, j]:
+                            de[o, j] -= 2.0 * Tf[g, r, 3] * dTf[g * nc + j, r, 3]
             continue
         for r in range(3):
             e[o + r] = Tf[b, r, 3] - Tf[a, r, 3]
