@@ -320,14 +320,16 @@ def interval_system(
 
 
 @njit(cache=True)
-def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple) -> bool:
-    """Whether the box ``x +- radius (1 + abs(x))`` provably holds exactly one root (Krawczyk test)."""
+def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.ndarray) -> bool:
+    """Whether the box ``x +- radius (1 + abs(x))`` provably holds exactly one root (Krawczyk test).
+
+    ``Fx`` is the enclosure of F at the point ``x`` (:func:`interval_system`), shape (n, 2).
+    """
     n = x.shape[0]
     box = np.empty((n, 2))
     for i in range(n):
         r = radius * (1.0 + abs(x[i]))
         box[i, 0], box[i, 1] = _dn(x[i] - r), _up(x[i] + r)
-    Fx, _ = interval_system(_point(x), pi, *args)
     _, JX = interval_system(box, pi, *args)
     Jmid = np.empty((n, n))
     for i in range(n):
@@ -369,13 +371,14 @@ def parameter_intervals(form: PolynomialForm, actuators: np.ndarray) -> np.ndarr
 
 
 @njit(cache=True)
-def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> float:
+def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> tuple[float, np.ndarray]:
     r"""Size of the Newton enclosure at ``x``: the largest :math:`|Y F([\tilde x])|` (a float bound).
 
     The Krawczyk box must hold this (the root lies about one Newton step away, plus the rounding
     of :math:`F`, magnified by the conditioning), and should not be much larger (the interval
     Jacobian over a wide box stops the contraction). A fixed width fails one way or the other on
-    an ill-conditioned root. Infinite when the Jacobian is singular.
+    an ill-conditioned root. Infinite when the Jacobian is singular. Also returns the enclosure of
+    F at ``x`` (the Krawczyk test's).
     """
     n = x.shape[0]
     Fx, Jx = interval_system(_point(x), pi, *args)
@@ -384,7 +387,7 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> float:
         for j in range(n):
             Jmid[i, j] = 0.5 * (Jx[i, j, 0] + Jx[i, j, 1])
     if np.linalg.matrix_rank(Jmid) < n:
-        return np.inf
+        return np.inf, Fx
     Y = np.linalg.inv(Jmid)
     out = 0.0
     for i in range(n):
@@ -392,7 +395,7 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> float:
         for j in range(n):
             acc += abs(Y[i, j]) * max(abs(Fx[j, 0]), abs(Fx[j, 1]))
         out = max(out, acc)
-    return out
+    return out, Fx
 
 
 def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float | None:
@@ -404,11 +407,12 @@ def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float
     pi = parameter_intervals(form, actuators)
     args = form.kernel_args()
     x = np.asarray(x, dtype=float)
-    size = max(newton_size(x, pi, args), float(np.finfo(float).eps))
+    size, Fx = newton_size(x, pi, args)
+    size = max(size, float(np.finfo(float).eps))
     for growth in BOX_GROWTH:
         radius = growth * size
         if not radius <= HOMOTOPY_MAX_BOX_RTOL:
             break
-        if krawczyk(x, radius, pi, args):
+        if krawczyk(x, radius, pi, args, Fx):
             return radius
     return None
