@@ -32,7 +32,8 @@ Closure entries (the residuals of :mod:`plm_pin.core.closures` written polynomia
   closure point B at distance L from O: a universal or spherical joint then a strut, as in
   Stewart-Gough legs): :math:`|p_B - O|^2 - L^2` (1 entry, twice the degree of B's path);
   the leg's revolutes leave the system, which removes the two mirror angle sets of each
-  universal joint from the count.
+  universal joint from the count. With an actuated prismatic strut (U-P-S, S-P-S legs),
+  :math:`L^2 = |c + q e|^2` is given by the actuator :math:`q` (:func:`_distance_legs`).
 
 Entries that vanish identically (the out-of-plane rows of a planar chain) are dropped;
 the rest are combined by a fixed random matrix :math:`C` (seeded) into as many equations
