@@ -339,28 +339,35 @@ PLACO_VENV = Path(os.environ.get("PLM_PIN_PLACO_VENV", ".venv-placo"))
 
 
 def complete_fk_benchmark() -> list[dict[str, object]]:
-    """Every assembly mode of a 3-RPR with 6 real modes: certified homotopy beside 48-start multi-start.
+    """Every assembly mode: certified homotopy beside 48-start multi-start.
 
-    The 6-6 platform case is the zhao2011_6pss preset's rows (40 roots) in :func:`run`.
+    On a 3-RPR with 6 real modes and a general (irregular) 6-UPS Gough-Stewart platform (40 roots).
+    The presets' rows (the 6-PUS and 8-PSS: 40 roots) are in :func:`run`.
     """
     import tempfile
 
     from tests.kinematics.homotopy.rpr import rpr_files  # the test suite's 3-RPR (URDF + sidecar)
-    from tests.kinematics.homotopy.test_complete_fk import RPR_BASE, RPR_PLATE, RPR_RHO
+    from tests.kinematics.homotopy.test_complete_fk import RPR_BASE, RPR_PLATE, RPR_RHO, _general_stewart
 
     rows: list[dict[str, object]] = []
     with tempfile.TemporaryDirectory() as folder:
-        mech = load(rpr_files(Path(folder), RPR_BASE, RPR_PLATE))
-        forward_kinematics(mech, RPR_RHO)  # the generic solve, once (cached on disk)
-        for case, method in (("48 starts", "multi-start"), ("certified homotopy", "auto")):
-            fn = functools.partial(forward_kinematics, mech, RPR_RHO, all_modes=True, method=method)
-            rows.append(
-                {
-                    "mechanism": "3-RPR (6 real modes)",
-                    "case": f"forward_kinematics (all_modes=True, {case})",
-                    "seconds_per_call": _per_call(fn),
-                }
-            )
+        rpr = load(rpr_files(Path(folder), RPR_BASE, RPR_PLATE))
+        stewart = _general_stewart(Path(folder))
+        cases = (
+            ("3-RPR (6 real modes)", rpr, RPR_RHO),
+            ("general 6-UPS Gough-Stewart (40 roots)", stewart, stewart.actuator_positions(stewart.q_ref)),
+        )
+        for name, mech, c in cases:
+            forward_kinematics(mech, c)  # the generic solve, once (cached on disk)
+            for case, method in (("48 starts", "multi-start"), ("certified homotopy", "auto")):
+                fn = functools.partial(forward_kinematics, mech, c, all_modes=True, method=method)
+                rows.append(
+                    {
+                        "mechanism": name,
+                        "case": f"forward_kinematics (all_modes=True, {case})",
+                        "seconds_per_call": _per_call(fn),
+                    }
+                )
     return rows
 
 

@@ -252,12 +252,15 @@ def interval_system(
     de = np.zeros((m, n, 2))
     for c in range(closure_kind.shape[0]):
         a, b, o = closure_frames[c, 0], closure_frames[c, 1], entry_offset[c]
-        if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2
+        if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2, L^2 = |p_L|^2 for an actuated strut L
             acc = np.empty(2)
             acc[0], acc[1] = -closure_length2[c], -closure_length2[c]
+            g = closure_frames[c, 2]
             for r in range(3):
                 d = _add(Tf[b, r, 3], _neg(Tf[a, r, 3]))
                 acc = _add(acc, _mul(d, d))
+                if g >= 0:  # the strut hangs from the world on a parameter: no x-derivative
+                    acc = _add(acc, _neg(_mul(Tf[g, r, 3], Tf[g, r, 3])))
                 for j in range(n):
                     dd = _add(dTf[b, j, r, 3], _neg(dTf[a, j, r, 3]))
                     de[o, j] = _add(de[o, j], 2.0 * _mul(d, dd))
@@ -317,14 +320,16 @@ def interval_system(
 
 
 @njit(cache=True)
-def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple) -> bool:
-    """Whether the box ``x +- radius (1 + abs(x))`` provably holds exactly one root (Krawczyk test)."""
+def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.ndarray) -> bool:
+    """Whether the box ``x +- radius (1 + abs(x))`` provably holds exactly one root (Krawczyk test).
+
+    ``Fx`` is the enclosure of F at the point ``x`` (:func:`interval_system`), shape (n, 2).
+    """
     n = x.shape[0]
     box = np.empty((n, 2))
     for i in range(n):
         r = radius * (1.0 + abs(x[i]))
         box[i, 0], box[i, 1] = _dn(x[i] - r), _up(x[i] + r)
-    Fx, _ = interval_system(_point(x), pi, *args)
     _, JX = interval_system(box, pi, *args)
     Jmid = np.empty((n, n))
     for i in range(n):
@@ -366,13 +371,14 @@ def parameter_intervals(form: PolynomialForm, actuators: np.ndarray) -> np.ndarr
 
 
 @njit(cache=True)
-def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> float:
+def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> tuple[float, np.ndarray]:
     r"""Size of the Newton enclosure at ``x``: the largest :math:`|Y F([\tilde x])|` (a float bound).
 
     The Krawczyk box must hold this (the root lies about one Newton step away, plus the rounding
     of :math:`F`, magnified by the conditioning), and should not be much larger (the interval
     Jacobian over a wide box stops the contraction). A fixed width fails one way or the other on
-    an ill-conditioned root. Infinite when the Jacobian is singular.
+    an ill-conditioned root. Infinite when the Jacobian is singular. Also returns the enclosure of
+    F at ``x`` (the Krawczyk test's).
     """
     n = x.shape[0]
     Fx, Jx = interval_system(_point(x), pi, *args)
@@ -381,7 +387,7 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> float:
         for j in range(n):
             Jmid[i, j] = 0.5 * (Jx[i, j, 0] + Jx[i, j, 1])
     if np.linalg.matrix_rank(Jmid) < n:
-        return np.inf
+        return np.inf, Fx
     Y = np.linalg.inv(Jmid)
     out = 0.0
     for i in range(n):
@@ -389,7 +395,7 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> float:
         for j in range(n):
             acc += abs(Y[i, j]) * max(abs(Fx[j, 0]), abs(Fx[j, 1]))
         out = max(out, acc)
-    return out
+    return out, Fx
 
 
 def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float | None:
@@ -401,11 +407,12 @@ def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float
     pi = parameter_intervals(form, actuators)
     args = form.kernel_args()
     x = np.asarray(x, dtype=float)
-    size = max(newton_size(x, pi, args), float(np.finfo(float).eps))
+    size, Fx = newton_size(x, pi, args)
+    size = max(size, float(np.finfo(float).eps))
     for growth in BOX_GROWTH:
         radius = growth * size
         if not radius <= HOMOTOPY_MAX_BOX_RTOL:
             break
-        if krawczyk(x, radius, pi, args):
+        if krawczyk(x, radius, pi, args, Fx):
             return radius
     return None

@@ -30,9 +30,11 @@ class PolynomialForm:
         frame_joint: index in ``joints`` of the joint carrying each closure point (-1: world), shape (f,).
         frame_placement: closure frame placement in its joint, shape (f, 4, 4).
         closure_kind: 0 point, 1 weld, 2 revolute, 3 distance (an eliminated leg), shape (nc,).
-        closure_frames: indices of frames A and B per closure, shape (nc, 2).
+        closure_frames: indices of frames A and B per closure, and of the frame L whose distance
+            to the world origin is the length of a distance closure on an actuated strut (-1
+            otherwise), shape (nc, 3).
         closure_axis: revolute closure axis in B's frame, shape (nc, 3).
-        closure_length2: squared length of each distance closure [m^2], shape (nc,).
+        closure_length2: squared length of each distance closure on a rigid strut [m^2], shape (nc,).
         entry_offset: first entry of each closure, shape (nc,).
         n_entries: total closure entries.
         combination: the random matrix :math:`C`, shape (n - n_unit, n_entries).

@@ -11,7 +11,8 @@ solutions, and new ones appear until none is left to find. The loops stop after
 :data:`STALE_LOOPS` loops in a row without a new solution. Tracking every solution from
 :math:`(p_0, b_0)` to :math:`(p_0, 0)` then gives the solutions of the closures at the generic
 parameter :math:`p_0` (paths to infinity or to singular ends dropped), and
-:data:`CHECK_LOOPS` further loops in :math:`p` alone at :math:`b = 0` must find nothing new.
+:data:`CHECK_LOOPS` loops in a row in :math:`p` alone at :math:`b = 0`, each bringing every path back,
+must find nothing new (they find the roots the offset family missed).
 
 The reference assembly as a seed: the random start of the offset family can fail on every loop
 (its paths lost, or all of them going to infinity as :math:`b \to 0`), as for a planar
@@ -47,13 +48,14 @@ from .polynomial import SEED, NotPolynomial
 
 STALE_LOOPS = 20
 """Monodromy loops in a row without a new solution before the generic solve stops."""
-CHECK_LOOPS = 2
-"""Loops in the actuator parameters alone that must find no new solution."""
+CHECK_LOOPS = 10
+"""Loops in a row in the actuator parameters alone (offsets zero), each bringing every path back,
+that must find no new solution before the generic solve ends."""
 OFFSET_STEP = 0.1
 """Size of the random offsets of the seeded loops, as a move of the unknowns (unit rows of the Jacobian)."""
 MAX_SOLUTIONS = 200
 """Generic counts above this are not solved (the mechanism falls back to multi-start)."""
-CACHE_VERSION = 3
+CACHE_VERSION = 4
 """Version of the stored generic solves (part of the file name: a new algorithm starts afresh)."""
 
 
@@ -205,9 +207,16 @@ def solve_generic(form: PolynomialForm, seed: tuple[np.ndarray, np.ndarray] | No
         elif len(back) == len(roots):  # only a loop that brought every path back counts as stale
             stale += 1
         roots = more
-    for _ in range(CHECK_LOOPS):
+    stale = tries = 0
+    while stale < CHECK_LOOPS and tries < 20 * CHECK_LOOPS:  # loops in p alone, at b = 0
         loops += 1
-        more = _merge(roots, canonical(form, _loop(form, roots, p0, zero, rng, vary_b=False)))
+        tries += 1
+        back = canonical(form, _loop(form, roots, p0, zero, rng, vary_b=False))
+        more = _merge(roots, back)
+        if len(more) > len(roots):
+            stale = 0
+        elif len(back) == len(roots):  # only a loop that brought every path back counts as stale
+            stale += 1
         roots = more
     symmetry = 2 ** int(np.sum(form.unit_sizes == 4))
     return GenericSolution(p=p0, x=roots, loops=loops, symmetry=symmetry)

@@ -32,7 +32,8 @@ Closure entries (the residuals of :mod:`plm_pin.core.closures` written polynomia
   closure point B at distance L from O: a universal or spherical joint then a strut, as in
   Stewart-Gough legs): :math:`|p_B - O|^2 - L^2` (1 entry, twice the degree of B's path);
   the leg's revolutes leave the system, which removes the two mirror angle sets of each
-  universal joint from the count.
+  universal joint from the count. With an actuated prismatic strut (U-P-S, S-P-S legs),
+  :math:`L^2 = |c + q e|^2` is given by the actuator :math:`q` (:func:`_distance_legs`).
 
 Entries that vanish identically (the out-of-plane rows of a planar chain) are dropped;
 the rest are combined by a fixed random matrix :math:`C` (seeded) into as many equations
@@ -44,6 +45,7 @@ and the random combination, add spurious solutions that this filter removes).
 from __future__ import annotations
 
 import hashlib
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -119,35 +121,39 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
     all_actuated = {a.joint_id: i for i, a in enumerate(mech.actuators)}
     data = model.createData()
     pin.framesForwardKinematics(model, data, mech.q_ref)
-    legs = _distance_legs(mech, data, closures, all_actuated, set(gauges))
+    legs = _distance_legs(mech, data, closures, all_actuated, set(actuated), set(gauges))
     anchors: list[tuple[int, pin.SE3]] = []  # (parent joint, placement in it) of each closure point
 
     def anchor(joint: int, placement: pin.SE3) -> int:
         anchors.append((joint, placement))
         return len(anchors) - 1
 
-    rows = []  # (code, anchor A, anchor B, axis, squared length)
+    rows = []  # (code, anchor A, anchor B, axis, squared length, length anchor or -1)
     for c in closures:
         fa, fb = (anchor(model.frames[f].parentJoint, model.frames[f].placement) for f in c.frame_ids)
         if c.name in legs:
-            side, joint, placement, length2, _ = legs[c.name]
-            fa, fb = anchor(joint, placement), fb if side == 0 else fa
-            rows.append((3, fa, fb, np.zeros(3), length2))
+            leg = legs[c.name]
+            fa, fb = anchor(leg.carrier, leg.centre), fb if leg.side == 0 else fa
+            fl = -1 if leg.strut is None else anchor(leg.strut, leg.strut_point)
+            rows.append((3, fa, fb, np.zeros(3), leg.length2, fl))
         else:
             code = {"point": 0, "weld": 1, "revolute": 2}[c.spec.type]
-            rows.append((code, fa, fb, c.axis if c.axis is not None else np.zeros(3), 0.0))
-    used = {a for r in rows for a in r[1:3]}
+            rows.append((code, fa, fb, c.axis if c.axis is not None else np.zeros(3), 0.0, -1))
+    used = {a for r in rows for a in (r[1], r[2], r[5]) if a >= 0}
+    struts = {leg.strut for leg in legs.values() if leg.strut is not None}
     keep: set[int] = set()
     for a in used:
         j = anchors[a][0]
         while j > 0:
             keep.add(j)
+            if j in struts:  # an actuated strut hangs from the world in the form (its length alone counts)
+                break
             j = model.parents[j]
     joints = np.array(sorted(keep), dtype=int)
     index = {int(j): i for i, j in enumerate(joints)}
     if set(all_actuated) - keep:
         raise NotPolynomial("an actuated joint carries no closure")
-    eliminated = sorted({int(j) for leg in legs.values() for j in leg[4]} - keep)
+    eliminated = sorted({int(j) for leg in legs.values() for j in leg.joints} - keep)
     k = len(joints)
     parent = np.full(k, -1, dtype=np.int64)
     kind = np.zeros(k, dtype=np.int64)
@@ -161,7 +167,7 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
     checked: list[tuple[int, int, int]] = []  # redundant actuators left unknowns
     for i, j in enumerate(joints.tolist()):
         jm, name = model.joints[j], model.names[j]
-        parent[i] = index.get(int(model.parents[j]), -1)
+        parent[i] = -1 if j in struts else index.get(int(model.parents[j]), -1)
         placement[i] = _homogeneous(model.jointPlacements[j])
         fixed[i] = _homogeneous(model.jointPlacements[j].inverse() * data.liMi[j])
         if j in actuated:
@@ -196,7 +202,10 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
     frame_joint = np.array([index.get(anchors[a][0], -1) for a in order], dtype=np.int64)
     frame_placement = np.array([_homogeneous(anchors[a][1]) for a in order])
     closure_kind = np.array([r[0] for r in rows], dtype=np.int64)
-    closure_frames = np.array([[order.index(r[1]), order.index(r[2])] for r in rows], dtype=np.int64)
+    closure_frames = np.array(
+        [[order.index(r[1]), order.index(r[2]), order.index(r[5]) if r[5] >= 0 else -1] for r in rows],
+        dtype=np.int64,
+    )
     closure_axis = np.array([r[3] for r in rows])
     closure_length2 = np.array([r[4] for r in rows])
     sizes = [_ENTRIES[int(r[0])] for r in rows]
@@ -216,9 +225,9 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
         path_degree.append(d)
     entry_degree = np.zeros(n_entries, dtype=np.int64)
     for k in range(len(rows)):
-        a, b = closure_frames[k]
+        a, b, _ = closure_frames[k]
         start = entry_offset[k]
-        if closure_kind[k] == 3:  # a squared distance
+        if closure_kind[k] == 3:  # a squared distance (the strut's length is a parameter: degree 0)
             entry_degree[start] = 2 * max(path_degree[a], path_degree[b])
             continue
         entry_degree[start : start + 3] = max(path_degree[a], path_degree[b])
@@ -273,20 +282,40 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
     return form
 
 
+@dataclass(frozen=True)
+class _Leg:
+    """A closure reduced to a distance (see :func:`_distance_legs`)."""
+
+    side: int  # the closure side the leg ends on
+    carrier: int  # the joint carrying O
+    centre: pin.SE3  # O's placement in it
+    length2: float  # L^2 [m^2] of a rigid strut (0 with an actuated one)
+    joints: list[int]  # the concurrent joints, eliminated
+    strut: int | None  # the actuated prismatic joint between O and the closure point, if any
+    strut_point: pin.SE3  # the closure point relative to O along the strut (in the form, from the world)
+
+
 def _distance_legs(
-    mech: Mechanism, data: pin.Data, closures: list, actuated: dict[int, int], gauged: set[str]
-) -> dict[str, tuple[int, int, pin.SE3, float, list[int]]]:
-    """Point closures whose one side ends in revolute joints meeting at one point O.
+    mech: Mechanism,
+    data: pin.Data,
+    closures: list,
+    actuated: dict[int, int],
+    parameters: set[int],
+    gauged: set[str],
+) -> dict[str, _Leg]:
+    r"""Point closures whose one side ends in joints meeting at one point O, then a strut.
 
-    Such a side (a universal or spherical joint made of revolutes, then a rigid strut to the
-    closure point) holds its closure point at a fixed distance L from O, whatever its angles;
-    the closure reduces to :math:`|p_B - O|^2 - L^2 = 0` (degree 2 in the other side's
-    unknowns) and the side's revolutes leave the system (their angles are found again by the
-    polish). O is fixed in the body above the revolutes.
-
-    Returns:
-        Per closure name: (side of the leg, joint carrying O, O's placement in it, L^2 [m^2],
-        the eliminated joints).
+    Such a side (a universal or spherical joint, made of revolutes or a spherical joint, then a
+    strut to the closure point) holds its closure point at a distance from O that its angles do
+    not change: a constant L for a rigid strut; for a strut through an actuated prismatic joint
+    (a parameter, as the U-P-S legs of a Gough-Stewart platform), :math:`|c + q e|` with
+    :math:`c` the closure point at :math:`q = 0` relative to O and :math:`e` the slide's
+    direction, both fixed in the body above the slide. The closure reduces to
+    :math:`|p_B - O|^2 - L^2 = 0` (degree 2 in the other side's unknowns), with
+    :math:`L^2 = |c + q e|^2` for the actuated strut (in the form, the slide hangs from the world
+    and its closure point is placed at :math:`c`, so that the point's norm is the length). The
+    concurrent joints leave the system (their angles are found again by the polish). O is fixed
+    in the body above them.
     """
     model = mech.model
     others: dict[str, set[int]] = {}
@@ -309,22 +338,26 @@ def _distance_legs(
             continue
         for side in (0, 1):
             f = c.frame_ids[side]
-            block, j = [], model.frames[f].parentJoint
+            j, strut = model.frames[f].parentJoint, None
+            if j in parameters and _kind_or_none(model.joints[j]) == PRISMATIC:
+                strut, j = j, model.parents[j]
+            block = []
             while j > 0 and j not in actuated and model.names[j] not in gauged:
-                try:
-                    kind = _joint_kind(model.joints[j])[0]
-                except NotPolynomial:
-                    break
-                if kind != REVOLUTE:
+                if _kind_or_none(model.joints[j]) not in (REVOLUTE, SPHERICAL):
                     break
                 block.append(j)
                 j = model.parents[j]
-            if not block or any(set(block) & chain for name, chain in others.items() if name != c.name):
+            mine = set(block) | ({strut} if strut is not None else set())
+            if not block or any(mine & chain for name, chain in others.items() if name != c.name):
                 continue
             lines = []
             for b in block:
-                _, ax = _joint_kind(model.joints[b])
-                lines.append((data.oMi[b].translation, data.oMi[b].rotation @ ax))
+                kind, ax = _joint_kind(model.joints[b])
+                R = data.oMi[b].rotation
+                for u in [ax] if kind == REVOLUTE else list(np.eye(3)):  # a ball: three axes through it
+                    lines.append((data.oMi[b].translation, R @ u))
+            if len(lines) < 2:  # one revolute: O alone is not fixed (the point circles about the axis)
+                continue
             # least-squares meeting point of the axes
             A = sum(np.eye(3) - np.outer(u, u) for _, u in lines)
             rhs = sum((np.eye(3) - np.outer(u, u)) @ p for p, u in lines)
@@ -334,16 +367,25 @@ def _distance_legs(
                 > CONCURRENT_AXES_TOL
             ):
                 continue
-            if len(block) == 1:  # one revolute: O alone is not fixed (the point circles about the axis)
-                continue
             top = block[-1]
             carrier = int(model.parents[top])
             frame_of_top = data.oMi[carrier] * model.jointPlacements[top]
-            placement = model.jointPlacements[top] * pin.SE3(np.eye(3), frame_of_top.actInv(O))
-            length2 = float(np.sum((data.oMf[f].translation - O) ** 2))
-            out[c.name] = (side, carrier, placement, length2, block)
+            centre = model.jointPlacements[top] * pin.SE3(np.eye(3), frame_of_top.actInv(O))
+            length2, strut_point = float(np.sum((data.oMf[f].translation - O) ** 2)), pin.SE3.Identity()
+            if strut is not None:  # |c + q e|^2: the point at q = 0, relative to O, in the slide's parent
+                F, M = model.frames[f].placement, model.jointPlacements[strut]
+                o = data.oMi[block[0]].actInv(O)
+                length2, strut_point = 0.0, pin.SE3(F.rotation, F.translation - M.rotation.T @ o)
+            out[c.name] = _Leg(side, carrier, centre, length2, block, strut, strut_point)
             break
     return out
+
+
+def _kind_or_none(jm: pin.JointModel) -> int | None:
+    try:
+        return _joint_kind(jm)[0]
+    except NotPolynomial:
+        return None
 
 
 def _live_entries(form: PolynomialForm) -> np.ndarray:

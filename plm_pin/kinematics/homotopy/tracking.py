@@ -36,10 +36,11 @@ FINAL_NEWTON = 4
 
 
 @njit(cache=True)
-def solve_linear(A: np.ndarray, y: np.ndarray) -> bool:
-    """Solve ``A z = y`` (complex, square) in place by LU with partial pivoting: ``y`` becomes ``z``.
+def solve_linear(A: np.ndarray, y: np.ndarray, z: np.ndarray | None = None) -> bool:
+    """Solve ``A u = y`` (complex, square) in place by LU with partial pivoting: ``y`` becomes ``u``.
 
-    ``A`` is overwritten. Returns False (and ``y`` NaN) when a pivot is exactly zero.
+    ``A`` is overwritten. A second right-hand side ``z`` is solved with the same factors. Returns
+    False (and ``y``, ``z`` NaN) when a pivot is exactly zero.
     """
     n = A.shape[0]
     for k in range(n):
@@ -49,11 +50,15 @@ def solve_linear(A: np.ndarray, y: np.ndarray) -> bool:
                 piv, best = r, abs(A[r, k])
         if best == 0.0:
             y[:] = np.nan
+            if z is not None:
+                z[:] = np.nan
             return False
         if piv != k:
             for c in range(n):
                 A[k, c], A[piv, c] = A[piv, c], A[k, c]
             y[k], y[piv] = y[piv], y[k]
+            if z is not None:
+                z[k], z[piv] = z[piv], z[k]
         inv = 1.0 / A[k, k]
         for r in range(k + 1, n):
             f = A[r, k] * inv
@@ -61,11 +66,18 @@ def solve_linear(A: np.ndarray, y: np.ndarray) -> bool:
                 for c in range(k + 1, n):
                     A[r, c] -= f * A[k, c]
                 y[r] -= f * y[k]
+                if z is not None:
+                    z[r] -= f * z[k]
     for k in range(n - 1, -1, -1):
         acc = y[k]
         for c in range(k + 1, n):
             acc -= A[k, c] * y[c]
         y[k] = acc / A[k, k]
+        if z is not None:
+            acc = z[k]
+            for c in range(k + 1, n):
+                acc -= A[k, c] * z[c]
+            z[k] = acc / A[k, k]
     return True
 
 
@@ -89,6 +101,20 @@ def _newton(x, p, b, ws, args, out):  # type: ignore[no-untyped-def]
     for i in range(x.shape[0]):
         out[i] = -F[i]
     solve_linear(J[:, : x.shape[0]], out)
+
+
+@njit(cache=True)
+def _newton_velocity(x, p, b, dp, db, ws, args, out, velocity):  # type: ignore[no-untyped-def]
+    """``out`` = the Newton step and ``velocity`` = the path's tangent at (x, p, b), one factorisation."""
+    F, J = system(x, p, b, ws, *args)
+    n = x.shape[0]
+    for i in range(n):
+        out[i] = -F[i]
+        acc = -db[i]
+        for j in range(dp.shape[0]):
+            acc -= J[i, n + j] * dp[j]
+        velocity[i] = acc
+    solve_linear(J[:, :n], out, velocity)
 
 
 @njit(cache=True)
@@ -131,6 +157,8 @@ def track(
     xs = np.empty_like(x)
     d = np.empty_like(x)
     k1, k2, k3, k4 = np.empty_like(x), np.empty_like(x), np.empty_like(x), np.empty_like(x)
+    v = np.empty_like(x)  # the tangent at the last corrector's point
+    fresh = False  # whether k1 holds the tangent at x (from the corrector of the step that reached it)
     dp, db = p1 - p0, b1 - b0
     pt, bt = np.empty_like(p0), np.empty_like(b0)
     t, h = 0.0, 0.1
@@ -142,7 +170,8 @@ def track(
         h = min(h, 1.0 - t)
         steps += 1
         # RK4 predictor
-        _velocity(x, _at(t, p0, dp, pt), _at(t, b0, db, bt), dp, db, ws, args, k1)
+        if not fresh:
+            _velocity(x, _at(t, p0, dp, pt), _at(t, b0, db, bt), dp, db, ws, args, k1)
         th = t + 0.5 * h
         for i in range(n):
             xs[i] = x[i] + 0.5 * h * k1[i]
@@ -161,7 +190,7 @@ def track(
         if ok:
             converged = False
             for _ in range(CORRECTOR_STEPS):
-                _newton(y, pt, bt, ws, args, d)
+                _newton_velocity(y, pt, bt, dp, db, ws, args, d, v)
                 nd = _norm(d)
                 if not np.isfinite(nd) or nd > 0.5 * last:
                     break
@@ -174,8 +203,10 @@ def track(
                     break
                 last = nd
             ok = converged or last <= 1e-6 * (1.0 + _norm(y))
-        if ok:
+        if ok:  # the next step's first tangent: the last corrector's, a correction below tolerance away
             x[:] = y
+            k1[:] = v
+            fresh = True
             t += h
             streak += 1
             if streak >= 3:
@@ -184,6 +215,7 @@ def track(
             if _norm(x) > HOMOTOPY_DIVERGED_NORM:
                 return x, DIVERGED, steps
         else:
+            fresh = True  # k1 (at x) still holds
             h *= 0.5
             streak = 0
             if h < MIN_STEP:

@@ -24,6 +24,7 @@ from scipy.optimize import brentq
 import plm_pin
 from plm_pin.kinematics import forward_kinematics, same_assembly
 from plm_pin.kinematics.forward import FKModes
+from plm_pin.legs import hexapod
 from plm_pin.warnings import ReferenceWarning
 from tests.conftest import preset
 
@@ -170,12 +171,13 @@ def _stewart_geometry(mech: plm_pin.Mechanism) -> dict[str, list]:
 
 
 def _platform_poses(mech: plm_pin.Mechanism, modes: FKModes) -> list[np.ndarray]:
-    j = mech.model.joints[mech.model.getJointId("platform_floating")]
+    """The platform joint's world pose of each mode: position and rotation matrix, shape (12,)."""
+    model, data = mech.model, mech.model.createData()
+    j = model.getJointId("platform_floating")
     out = []
     for s in modes:
-        q = s.q[j.idx_q : j.idx_q + 7]
-        R = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
-        out.append(np.concatenate([q[:3], R.ravel()]))
+        pin.forwardKinematics(model, data, s.q)
+        out.append(np.concatenate([data.oMi[j].translation, data.oMi[j].rotation.ravel()]))
     return out
 
 
@@ -227,6 +229,101 @@ def test_stewart_real_modes_equal_phcpack():
     _match(_platform_poses(mech, modes), expected, 1e-8)
 
 
+# A general (non-symmetric, non-planar) 6-6 Gough-Stewart platform: irregular points
+_SG_RNG = np.random.default_rng(7)
+_SG_ANGLES = np.sort(_SG_RNG.uniform(0, 2 * np.pi, (2, 6)), axis=1)
+SG_BASE = np.c_[
+    0.5 * np.cos(_SG_ANGLES[0]) * _SG_RNG.uniform(0.8, 1.2, 6),
+    0.5 * np.sin(_SG_ANGLES[0]) * _SG_RNG.uniform(0.8, 1.2, 6),
+    _SG_RNG.uniform(-0.05, 0.05, 6),
+]
+SG_PLATFORM = np.c_[
+    0.3 * np.cos(_SG_ANGLES[1]) * _SG_RNG.uniform(0.8, 1.2, 6),
+    0.3 * np.sin(_SG_ANGLES[1]) * _SG_RNG.uniform(0.8, 1.2, 6),
+    _SG_RNG.uniform(-0.05, 0.05, 6),
+]
+SG_POSE = (0.02, -0.03, 0.8, 0.05, -0.04, 0.1)
+
+
+def _general_stewart(folder: Path) -> plm_pin.Mechanism:
+    return plm_pin.load(hexapod("UPS", SG_BASE.tolist(), SG_PLATFORM.tolist(), folder=folder, pose=SG_POSE))
+
+
+def _leg_lengths(mech: plm_pin.Mechanism, q: np.ndarray) -> np.ndarray:
+    """|p + R b_i - a_i| from the platform pose at ``q`` alone (the closed form of a UPS leg's length)."""
+    model, data = mech.model, mech.model.createData()
+    pin.forwardKinematics(model, data, q)
+    M = data.oMi[model.getJointId("platform_floating")]
+    b = np.array(
+        [model.frames[model.getFrameId(f"platform_p{i}")].placement.translation for i in range(1, 7)]
+    )
+    return np.linalg.norm(M.translation + b @ M.rotation.T - SG_BASE, axis=1)
+
+
+def test_general_stewart_ups_legs_reduce_to_distances_40_roots(tmp_path):
+    """A 6-UPS with irregular points: 40 generic roots, complete, every mode certified, at its leg lengths."""
+    mech = _general_stewart(tmp_path)
+    form, _ = plm_pin.kinematics.homotopy.prepared(mech)
+    assert form.n == 7 and list(form.closure_kind) == [3] * 6  # the platform pose alone; six distances
+    c = mech.actuator_positions(mech.q_ref)
+    modes = forward_kinematics(mech, c)
+    assert modes.method == "homotopy" and modes.complete and modes.generic_count == 40
+    assert modes.certified == len(modes) >= 2
+    assert any(same_assembly(mech, s.q, mech.q_ref) for s in modes)
+    for i, s in enumerate(modes):
+        np.testing.assert_allclose(_leg_lengths(mech, s.q), c, rtol=0, atol=1e-10)
+        assert not any(same_assembly(mech, s.q, t.q) for t in modes[:i])
+
+
+def _phcpack(geometry: dict[str, list]) -> dict[str, list]:
+    """PHCpack's solutions of the 6-6 leg equations (skipped where phcpy is missing, except on CI)."""
+    probe = None
+    if shutil.which("/usr/bin/python3") is not None:
+        probe = subprocess.run(["/usr/bin/python3", "-c", "import phcpy"], capture_output=True, check=False)
+    if probe is None or probe.returncode:
+        why = "phcpy is not installed for the system python (make phcpack, or apt-get install python3-phcpy)"
+        if os.environ.get("CI"):
+            pytest.fail(why)
+        pytest.skip(why)
+    run = subprocess.run(
+        ["/usr/bin/python3", str(HERE / "phc_stewart.py")],
+        input=json.dumps(geometry),
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=1800,
+    )
+    return json.loads(run.stdout.strip().splitlines()[-1])
+
+
+def _phc_poses(phc: dict[str, list]) -> list[np.ndarray]:
+    expected: list[np.ndarray] = []
+    for x, y, z, w, qx, qy, qz in phc["real"]:
+        R = pin.Quaternion(w, qx, qy, qz).normalized().toRotationMatrix()
+        pose = np.concatenate([[x, y, z], R.ravel()])
+        if not any(np.abs(pose - e).max() < 1e-6 for e in expected):
+            expected.append(pose)
+    return expected
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("shift", [0.0, 0.01, 0.03])
+def test_general_stewart_ups_real_modes_equal_phcpack(tmp_path, shift):
+    """PHCpack: 80 signed-quaternion solutions (40 poses), its real ones exactly our modes."""
+    mech = _general_stewart(tmp_path)
+    c = mech.actuator_positions(mech.q_ref) + shift * np.array([1.0, -1.0, 0.5, 0.0, -0.5, 1.0])
+    phc = _phcpack({"A": SG_BASE.tolist(), "B": SG_PLATFORM.tolist(), "L": c.tolist()})
+    assert phc["total"] == 80
+    expected = _phc_poses(phc)
+    if not expected:  # no real assembly: proven by the homotopy too
+        with pytest.raises(plm_pin.PoseUnreachable, match="none of the 40 complex roots is real"):
+            forward_kinematics(mech, c)
+        return
+    modes = forward_kinematics(mech, c)
+    assert modes.complete and modes.generic_count == 40
+    _match(_platform_poses(mech, modes), expected, 1e-8)
+
+
 @pytest.mark.parametrize(
     "name",
     [
@@ -237,6 +334,7 @@ def test_stewart_real_modes_equal_phcpack():
         "harada2015_asymmetric",
         "enferadi2017_star_triangle",
         "zhao2011_6pss",
+        "stewart_6ups",
     ],
 )
 def test_presets_modes_contain_every_multistart_mode(name):

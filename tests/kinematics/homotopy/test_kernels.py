@@ -22,7 +22,7 @@ from plm_pin.kinematics.homotopy.polynomial import from_configuration, to_config
 from plm_pin.kinematics.homotopy.solve import parameter_actuators
 from tests.conftest import preset
 
-NAMES = ["fourbar", "harada2011_3d4m", "enferadi2017_star_triangle", "zhao2011_6pss"]
+NAMES = ["fourbar", "harada2011_3d4m", "enferadi2017_star_triangle", "zhao2011_6pss", "stewart_6ups"]
 
 
 @pytest.mark.parametrize("name", NAMES)
