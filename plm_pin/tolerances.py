@@ -520,4 +520,4 @@ FK_SAME_MODE_TOL = 1e-7
 
 DE_TOL = 0.01
 """[-] Relative spread of a differential-evolution population's scores at which the search stops
-(SciPy's ``tol``: std <= DE_TOL * |mean|)."""
+(SciPy's ``tol``: std <= DE_TOL * abs(mean))."""

@@ -113,10 +113,47 @@ def add_optimization(ctx: StudyContext, result: OptimizationResult, title: str =
         "first feasible design are left out.",
         {"best_score": [_number(float(v)) for v in curve]},
     )
+    _design_space(ctx, result, best[0] if best else None, title)
     if len(problem.objectives) >= 2:
         _pareto(ctx, result, title)
     if best:
         _scene(ctx, result, best[0], title)
+
+
+def _design_space(
+    ctx: StudyContext, result: OptimizationResult, best: DesignEvaluation | None, title: str
+) -> None:
+    """Every evaluated design in its first two variables, marked by the level it stopped at.
+
+    With one variable the designs are plotted against their evaluation order; the best is circled.
+    """
+    from matplotlib.figure import Figure
+
+    names = result.problem.names
+    x = np.array([e.x for e in result.evaluations], dtype=float).reshape(len(result.evaluations), -1)
+    second = x[:, 1] if x.shape[1] > 1 else np.arange(len(x), dtype=float)
+    fig = Figure(figsize=(5.0, 4.0))
+    ax = fig.subplots()
+    levels = [*result.problem.levels, "feasible"]
+    for k, level in enumerate(levels):
+        mask = np.array([(e.failed or "feasible") == level for e in result.evaluations])
+        if mask.any():
+            ax.scatter(x[mask, 0], second[mask], s=10, color=f"C{k % 10}", label=f"{level} ({mask.sum()})")
+    if best is not None:
+        bx = best.x[1] if x.shape[1] > 1 else second[result.evaluations.index(best)]
+        ax.scatter([best.x[0]], [bx], s=120, facecolors="none", edgecolors="k", label="best")
+    ax.set_xlabel(names[0])
+    ax.set_ylabel(names[1] if x.shape[1] > 1 else "design number (evaluation order)")
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
+    ctx.section(_heading(title, "the designs evaluated")).figure(
+        fig,
+        "Every evaluated design, coloured by the first constraint level it violates (feasible: none), "
+        "the best design circled"
+        + ("." if x.shape[1] > 1 else "; one variable, so plotted against the evaluation order.")
+        + (f" Variables beyond {names[0]} and {names[1]} are not shown." if x.shape[1] > 2 else ""),
+        {"x": x.tolist(), "failed": [e.failed for e in result.evaluations]},
+    )
 
 
 def _pareto(ctx: StudyContext, result: OptimizationResult, title: str) -> None:
