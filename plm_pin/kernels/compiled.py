@@ -1,8 +1,10 @@
 r"""The compiled kernels: tree forward kinematics, closure and task rows, Newton, with numba.
 
-Every function reads the constant arrays of a :class:`~plm_pin.kernels.model.Kernel` (passed
-as ``k``) and works in place on caller-owned buffers, so a call allocates nothing
-but its small temporaries. The conventions are Pinocchio's:
+The entry points take a :class:`~plm_pin.kernels.model.Kernel`'s arrays packed into one integer
+and one float array (:func:`.arrays.pack`; two arrays to unbox per call) and read them back as
+views (:func:`unpack`, passed on as ``k``); the inner functions work in place on buffers
+allocated once per call, by index arithmetic on 3 x 3 matrices held as 9-tuples (no views,
+no temporaries in the loops over joints and columns). The conventions are Pinocchio's:
 
 .. math:: {}^0M_j = {}^0M_{\lambda(j)}\, M_j^{place}\, M_j(q_j), \qquad
           {}^0M_f = {}^0M_{j(f)}\, M_f^{place},
@@ -37,7 +39,7 @@ NO_TASK, FRAME_TASK, JOINT_TASK = 0, 1, 2
 
 @njit(cache=True)
 def unpack(ints: np.ndarray, floats: np.ndarray) -> KernelArrays:
-    """The :class:`KernelArrays` held by the packed ``ints`` and ``floats`` (:func:`.arrays.pack`), as views."""
+    """The :class:`KernelArrays` held by ``ints`` and ``floats`` (:func:`.arrays.pack`), as views."""
     nj, nf, nc, nv = ints[0], ints[1], ints[2], ints[3]
     o, g = HEADER, HEADER + len(INT_FIELDS) + 1
     return KernelArrays(
@@ -75,7 +77,7 @@ def unpack(ints: np.ndarray, floats: np.ndarray) -> KernelArrays:
 # 3 x 3 matrices are 9-tuples of floats (row-major) and vectors 3-tuples: no arrays, no views.
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _rot(x: float, y: float, z: float, c: float, s: float) -> tuple:
     """Rotation about the unit axis ``(x, y, z)`` of cosine ``c`` and sine ``s``."""
     t = 1.0 - c
@@ -92,7 +94,7 @@ def _rot(x: float, y: float, z: float, c: float, s: float) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _quat(x: float, y: float, z: float, w: float) -> tuple:
     """Rotation of the unit quaternion ``(x, y, z, w)`` (Pinocchio's order)."""
     tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
@@ -112,7 +114,7 @@ def _quat(x: float, y: float, z: float, w: float) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mul(A: tuple, B: tuple) -> tuple:
     """``A B``."""
     return (
@@ -128,7 +130,7 @@ def _mul(A: tuple, B: tuple) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mul_t(A: tuple, B: tuple) -> tuple:
     """``A B^T``."""
     return (
@@ -144,7 +146,7 @@ def _mul_t(A: tuple, B: tuple) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _t_mul(A: tuple, B: tuple) -> tuple:
     """``A^T B``."""
     return (
@@ -160,13 +162,13 @@ def _t_mul(A: tuple, B: tuple) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mv(A: tuple, x: float, y: float, z: float) -> tuple:
     """``A (x, y, z)``."""
     return (A[0] * x + A[1] * y + A[2] * z, A[3] * x + A[4] * y + A[5] * z, A[6] * x + A[7] * y + A[8] * z)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _get(M: np.ndarray, i: int) -> tuple:
     """``M[i]`` (a stack of 3 x 3 matrices) as a 9-tuple."""
     return (
@@ -182,7 +184,7 @@ def _get(M: np.ndarray, i: int) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _put(M: np.ndarray, i: int, T: tuple) -> None:
     """``M[i] = T``."""
     M[i, 0, 0], M[i, 0, 1], M[i, 0, 2] = T[0], T[1], T[2]
@@ -193,12 +195,12 @@ def _put(M: np.ndarray, i: int, T: tuple) -> None:
 _EYE9 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _column(
     W: tuple, p: tuple, wx: float, wy: float, wz: float, vx: float, vy: float, vz: float,
     Sw: np.ndarray, Sv: np.ndarray, col: int,
 ) -> None:  # fmt: skip
-    """Velocity column ``col`` of a joint at world rotation ``W`` and origin ``p``, local motion ``(w, v)``."""
+    """Velocity column ``col`` of a joint at world rotation ``W``, origin ``p``, local motion ``(w, v)``."""
     w0, w1, w2 = _mv(W, wx, wy, wz)
     t0, t1, t2 = _mv(W, vx, vy, vz)
     Sw[col, 0], Sw[col, 1], Sw[col, 2] = w0, w1, w2
@@ -207,7 +209,7 @@ def _column(
     Sv[col, 2] = t2 - (w0 * p[1] - w1 * p[0])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def forward(
     k: KernelArrays,
     q: np.ndarray,
@@ -296,7 +298,7 @@ def forward(
             _column(W, p, axis2[j, 0], axis2[j, 1], axis2[j, 2], 0.0, 0.0, 0.0, Sw, Sv, col + 1)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def frames(k: KernelArrays, oR: np.ndarray, op: np.ndarray, fR: np.ndarray, fp: np.ndarray) -> None:
     """World placements ``fR`` (nf, 3, 3), ``fp`` (nf, 3) of the kernel's frames from the joints'."""
     f_joint, f_R, f_p = k.f_joint, k.f_R, k.f_p
@@ -308,9 +310,9 @@ def frames(k: KernelArrays, oR: np.ndarray, op: np.ndarray, fR: np.ndarray, fp: 
         fp[f, 0], fp[f, 1], fp[f, 2] = t0 + op[j, 0], t1 + op[j, 1], t2 + op[j, 2]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _linear(Sw: np.ndarray, Sv: np.ndarray, c: int, x: float, y: float, z: float) -> tuple:
-    """Velocity of the point ``(x, y, z)`` under velocity column ``c``: :math:`v_o + \\omega \\times p`."""
+    r"""Velocity of the point ``(x, y, z)`` under velocity column ``c``: :math:`v_o + \omega \times p`."""
     w0, w1, w2 = Sw[c, 0], Sw[c, 1], Sw[c, 2]
     return Sv[c, 0] + w1 * z - w2 * y, Sv[c, 1] + w2 * x - w0 * z, Sv[c, 2] + w0 * y - w1 * x
 
@@ -331,7 +333,7 @@ def frame_jacobian(
                 out[d, c] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def log3(R: tuple) -> tuple:
     """Pinocchio's ``log3`` of ``R``: the angle [rad] and the rotation vector ``(theta, r0, r1, r2)``."""
     tr = R[0] + R[4] + R[8]
@@ -359,7 +361,7 @@ def log3(R: tuple) -> tuple:
     return theta, t * (R[7] - R[5]), t * (R[2] - R[6]), t * (R[3] - R[1])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def jlog3(theta: float, r0: float, r1: float, r2: float) -> tuple:
     r"""Pinocchio's ``Jlog3`` at ``r`` (angle ``theta``): :math:`\alpha I + [r]_\times / 2 + \beta r r^T`."""
     if theta < 1e-4:  # Taylor series, error below 1e-17
@@ -384,7 +386,7 @@ def jlog3(theta: float, r0: float, r1: float, r2: float) -> tuple:
     )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def rpy(R: tuple) -> tuple:
     """Pinocchio's ``rpy.matrixToRpy`` of ``R``: ``(roll, pitch, yaw)``."""
     m = math.sqrt(R[7] * R[7] + R[8] * R[8])
@@ -394,16 +396,16 @@ def rpy(R: tuple) -> tuple:
     return math.atan2(R[7], R[8]), p, math.atan2(R[3], R[0])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _wrap(a: float) -> float:
     return math.pi - (math.pi - a) % (2.0 * math.pi)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _angular_rows(
     k: KernelArrays, fa: int, fb: int, G: tuple, n_rows: int, first: int, Sw: np.ndarray, A: np.ndarray
 ) -> None:
-    """Rows ``first``... of ``A``: the first ``n_rows`` rows of ``G`` (3 x 3) times the angular part of J_B - J_A."""
+    """Rows ``first``... of ``A``: ``n_rows`` rows of ``G`` (3 x 3) times the angular rows of J_B - J_A."""
     support = k.support
     for c in range(A.shape[1]):
         s = support[fb, c] - support[fa, c]
@@ -412,7 +414,7 @@ def _angular_rows(
             A[first + e, c] = G[3 * e] * w0 + G[3 * e + 1] * w1 + G[3 * e + 2] * w2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def closure_rows(
     k: KernelArrays,
     fR: np.ndarray,
@@ -497,7 +499,7 @@ def closure_rows(
                 _angular_rows(k, fa, fb, G, 2, s + 3, Sw, A)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def task_pose(k: KernelArrays, q: np.ndarray, fR: np.ndarray, fp: np.ndarray, out: np.ndarray) -> None:
     """Task coordinates (:meth:`plm_pin.core.task.Task.pose_from_data`) into ``out`` (n_task,)."""
     t_kind, t_frame, t_rows, t_jq, t_jkind = k.t_kind, k.t_frame, k.t_rows, k.t_jq, k.t_jkind
@@ -517,7 +519,7 @@ def task_pose(k: KernelArrays, q: np.ndarray, fR: np.ndarray, fp: np.ndarray, ou
                 out[i] = q[iq]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def task_rows(
     k: KernelArrays,
     q: np.ndarray,
@@ -531,7 +533,7 @@ def task_rows(
     A: np.ndarray,
     jac: bool,
 ) -> None:
-    """Task target rows (:class:`plm_pin.core.task.TaskTarget`) into ``r[m:]``, their Jacobian into ``A[m:]``."""
+    """Task target rows (:class:`plm_pin.core.task.TaskTarget`) into ``r[m:]``, Jacobian into ``A[m:]``."""
     t_kind, t_frame, t_rows, t_jv, t_jkind, support = (
         k.t_kind,
         k.t_frame,
@@ -618,7 +620,7 @@ def task_rows(
                     A[m + i, c] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def evaluate(
     k: KernelArrays,
     q: np.ndarray,
@@ -678,7 +680,7 @@ def rows(
     evaluate(k, q, x, R_star, with_task, r, A, True, oR, op, fR, fp, np.empty((nv, 3)), np.empty((nv, 3)))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def integrate(k: KernelArrays, q: np.ndarray, v: np.ndarray, out: np.ndarray) -> None:
     """Pinocchio's ``integrate``: ``out`` = ``q`` moved by the tangent vector ``v`` (joint by joint)."""
     kinds, idx_q, idx_v = k.kinds, k.idx_q, k.idx_v

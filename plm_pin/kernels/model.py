@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 import warnings
-import weakref
 from types import ModuleType
 from typing import TYPE_CHECKING
 
@@ -21,7 +20,7 @@ import pinocchio as pin
 from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
 from ..core.closures import Closure
 from ..core.task import FrameTask, Task, TaskTarget
-from ..tolerances import ROUND_OFF
+from ..tolerances import FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, ROUND_OFF
 from ..warnings import KernelFallbackWarning
 from .arrays import KernelArrays, build_arrays, kernel_frames, pack, unsupported_joints
 
@@ -181,6 +180,32 @@ class Kernel:
         _compiled().batch_newton(self.ints, self.floats, q, X, R_stars, tol, max_iterations, stall, ok, A, R)
         return q, ok, A, R
 
+    def map_metrics(
+        self, A: np.ndarray, actuated_v: np.ndarray, mobility: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Map metrics of stacked Jacobians ``A = [J_phi; J_x]`` (B, m + k, nv), compiled (:mod:`.metrics`).
+
+        Returns:
+            The metrics (B, 5) in the order of :data:`.metrics.METRIC_NAMES`, and whether each
+            pose passed the acceptance tests (B,) (the others' rows are meaningless).
+        """
+        from . import metrics
+
+        B = A.shape[0]
+        out, good = np.full((B, len(metrics.METRIC_NAMES)), np.nan), np.zeros(B, dtype=np.bool_)
+        metrics.square_metrics(
+            np.ascontiguousarray(A, dtype=float),
+            self.arrays.m,
+            np.asarray(actuated_v, dtype=np.int64),
+            mobility,
+            FACTOR_RCOND,
+            GRAM_RTOL,
+            INVERSE_RTOL,
+            out,
+            good,
+        )
+        return out, good
+
 
 _NO_TARGET = np.zeros(0)
 _EYE = np.eye(3)
@@ -196,9 +221,6 @@ def _compiled() -> ModuleType:
     return _COMPILED[0]
 
 
-_KERNELS: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[Closure, ...], Kernel | None]] = (
-    weakref.WeakKeyDictionary()
-)
 _WARNED: set[str] = set()
 
 
@@ -237,7 +259,7 @@ def kernel_of(mech: Mechanism) -> Kernel | None:
     if not kernels_enabled():
         return None
     closures = mech.closures  # the model is final (idle gauges added) once they are compiled
-    hit = _KERNELS.get(mech)
+    hit = vars(mech).get(_CACHE)
     if hit is not None and hit[0] is closures:
         return hit[1]
     missing = unsupported_joints(mech.model)
@@ -250,5 +272,9 @@ def kernel_of(mech: Mechanism) -> Kernel | None:
         )
     else:
         kernel = Kernel.build(mech.model, closures, mech.task_compiled)
-    _KERNELS[mech] = (closures, kernel)
+    vars(mech)[_CACHE] = (closures, kernel)
     return kernel
+
+
+_CACHE = "_kernel"
+"""Attribute of a mechanism holding its closures and their kernel (or None)."""
