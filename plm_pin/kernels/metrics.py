@@ -22,7 +22,7 @@ METRIC_NAMES = ("manipulability", "condition_number", "constraint_margin", "inve
 """The columns of :func:`square_metrics`' output, in order."""
 
 
-JACOBI_MAX = 6
+JACOBI_MAX = 12
 """Largest Gram matrix whose eigenvalues are found by Jacobi rotations (beyond, LAPACK is cheaper)."""
 
 

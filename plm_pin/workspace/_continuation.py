@@ -397,7 +397,7 @@ def _metrics_for(ev: IKEvaluator, kin: BatchKinematics | None = None) -> Metrics
 
     def metrics(A: np.ndarray) -> dict[str, np.ndarray]:
         if ev.task.size == ev.mobility and ev.m:
-            if ev.kernel is not None:
+            if ev.kernel is not None and arrow is None:  # with the arrow, numpy's block solve is cheaper
                 return compiled_square_task_metrics(ev.kernel, A, ev.m, ev.actuated_v, ev.mobility)
             return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility, arrow)
         return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility)
