@@ -63,6 +63,8 @@ class KernelArrays(NamedTuple):
         t_jv: their velocity indices, shape (n_task,).
         m: closure rows.
         nv: velocity size.
+        lower: lower position limits of the model, shape (nq,).
+        upper: upper position limits, shape (nq,).
     """
 
     parents: np.ndarray
@@ -91,6 +93,47 @@ class KernelArrays(NamedTuple):
     t_jv: np.ndarray
     m: int
     nv: int
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+HEADER = 8
+"""Leading entries of the packed integers: nj, nf, nc, nv, m, t_kind, t_frame, n_task."""
+
+INT_FIELDS = (
+    "parents", "kinds", "idx_q", "idx_v", "f_joint", "support", "c_kind", "c_a", "c_b", "c_row",
+    "t_rows", "t_jq", "t_jkind", "t_jv",
+)  # fmt: skip
+"""The integer arrays, in their packed order (``support`` as 0 and 1)."""
+
+FLOAT_FIELDS = ("place_R", "place_p", "axis", "axis2", "f_R", "f_p", "c_axis", "c_E", "lower", "upper")
+"""The float arrays, in their packed order."""
+
+
+def pack(arrays: KernelArrays) -> tuple[np.ndarray, np.ndarray]:
+    """``arrays`` as one integer and one float array (what :func:`.compiled.unpack` reads back as views).
+
+    The integers start with :data:`HEADER` sizes, then the start offsets of the
+    :data:`INT_FIELDS` in the integers and of the :data:`FLOAT_FIELDS` in the floats (each
+    list closed by its end), then the integer arrays; a compiled call then unboxes two arrays.
+    """
+    ints = [np.asarray(getattr(arrays, f), dtype=np.int64).reshape(-1) for f in INT_FIELDS]
+    floats = [np.asarray(getattr(arrays, f), dtype=float).reshape(-1) for f in FLOAT_FIELDS]
+    start = HEADER + len(INT_FIELDS) + len(FLOAT_FIELDS) + 2
+    int_ends = start + np.cumsum([0] + [a.size for a in ints])
+    float_ends = np.cumsum([0] + [a.size for a in floats])
+    header = [
+        arrays.parents.size,
+        arrays.f_joint.size,
+        arrays.c_kind.size,
+        arrays.nv,
+        arrays.m,
+        arrays.t_kind,
+        arrays.t_frame,
+        arrays.t_rows.size + arrays.t_jq.size,
+    ]
+    packed = np.concatenate([np.array(header, dtype=np.int64), int_ends, float_ends, *ints]).astype(np.int64)
+    return packed, np.concatenate(floats)
 
 
 def _ints(values: list[int]) -> np.ndarray:
@@ -185,4 +228,6 @@ def build_arrays(model: pin.Model, closures: tuple[Closure, ...], task: Task | N
         t_jv,
         closures[-1].rows.stop if closures else 0,
         nv,
+        np.array(model.lowerPositionLimit, dtype=float),
+        np.array(model.upperPositionLimit, dtype=float),
     )

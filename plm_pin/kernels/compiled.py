@@ -1,8 +1,10 @@
 r"""The compiled kernels: tree forward kinematics, closure and task rows, Newton, with numba.
 
-Every function reads the constant arrays of a :class:`~plm_pin.kernels.model.Kernel` (passed
-as ``k``) and works in place on caller-owned buffers, so a call allocates nothing
-but its small temporaries. The conventions are Pinocchio's:
+The entry points take a :class:`~plm_pin.kernels.model.Kernel`'s arrays packed into one integer
+and one float array (:func:`.arrays.pack`; two arrays to unbox per call) and read them back as
+views (:func:`unpack`, passed on as ``k``); the inner functions work in place on buffers
+allocated once per call, by index arithmetic on 3 x 3 matrices held as 9-tuples (no views,
+no temporaries in the loops over joints and columns). The conventions are Pinocchio's:
 
 .. math:: {}^0M_j = {}^0M_{\lambda(j)}\, M_j^{place}\, M_j(q_j), \qquad
           {}^0M_f = {}^0M_{j(f)}\, M_f^{place},
@@ -25,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .arrays import KernelArrays
+from .arrays import HEADER, INT_FIELDS, KernelArrays
 
 # joint kinds (see plm_pin.kernels.model)
 REVOLUTE, PRISMATIC, REVOLUTE_UNBOUNDED, SPHERICAL, FREE_FLYER, PLANAR, UNIVERSAL = 1, 2, 3, 4, 5, 6, 7
@@ -35,58 +37,176 @@ POINT, REVOLUTE_CLOSURE, WELD, TWIST = 0, 1, 2, 3
 NO_TASK, FRAME_TASK, JOINT_TASK = 0, 1, 2
 
 
+@njit(cache=True)
+def unpack(ints: np.ndarray, floats: np.ndarray) -> KernelArrays:
+    """The :class:`KernelArrays` held by ``ints`` and ``floats`` (:func:`.arrays.pack`), as views."""
+    nj, nf, nc, nv = ints[0], ints[1], ints[2], ints[3]
+    o, g = HEADER, HEADER + len(INT_FIELDS) + 1
+    return KernelArrays(
+        ints[ints[o] : ints[o + 1]],
+        ints[ints[o + 1] : ints[o + 2]],
+        floats[ints[g] : ints[g + 1]].reshape((nj, 3, 3)),
+        floats[ints[g + 1] : ints[g + 2]].reshape((nj, 3)),
+        floats[ints[g + 2] : ints[g + 3]].reshape((nj, 3)),
+        floats[ints[g + 3] : ints[g + 4]].reshape((nj, 3)),
+        ints[ints[o + 2] : ints[o + 3]],
+        ints[ints[o + 3] : ints[o + 4]],
+        ints[ints[o + 4] : ints[o + 5]],
+        floats[ints[g + 4] : ints[g + 5]].reshape((nf, 3, 3)),
+        floats[ints[g + 5] : ints[g + 6]].reshape((nf, 3)),
+        ints[ints[o + 5] : ints[o + 6]].reshape((nf, nv)),
+        ints[ints[o + 6] : ints[o + 7]],
+        ints[ints[o + 7] : ints[o + 8]],
+        ints[ints[o + 8] : ints[o + 9]],
+        ints[ints[o + 9] : ints[o + 10]],
+        floats[ints[g + 6] : ints[g + 7]].reshape((nc, 3)),
+        floats[ints[g + 7] : ints[g + 8]].reshape((nc, 3, 2)),
+        ints[5],
+        ints[6],
+        ints[ints[o + 10] : ints[o + 11]],
+        ints[ints[o + 11] : ints[o + 12]],
+        ints[ints[o + 12] : ints[o + 13]],
+        ints[ints[o + 13] : ints[o + 14]],
+        ints[4],
+        nv,
+        floats[ints[g + 8] : ints[g + 9]],
+        floats[ints[g + 9] : ints[g + 10]],
+    )
+
+
+# 3 x 3 matrices are 9-tuples of floats (row-major) and vectors 3-tuples: no arrays, no views.
+
+
 @njit(cache=True, inline="always")
-def _rodrigues(a: np.ndarray, c: float, s: float, out: np.ndarray) -> None:
-    """Rotation about the unit axis ``a`` of cosine ``c`` and sine ``s``, into ``out`` (3, 3)."""
+def _rot(x: float, y: float, z: float, c: float, s: float) -> tuple:
+    """Rotation about the unit axis ``(x, y, z)`` of cosine ``c`` and sine ``s``."""
     t = 1.0 - c
-    x, y, z = a[0], a[1], a[2]
-    out[0, 0] = c + t * x * x
-    out[0, 1] = t * x * y - s * z
-    out[0, 2] = t * x * z + s * y
-    out[1, 0] = t * x * y + s * z
-    out[1, 1] = c + t * y * y
-    out[1, 2] = t * y * z - s * x
-    out[2, 0] = t * x * z - s * y
-    out[2, 1] = t * y * z + s * x
-    out[2, 2] = c + t * z * z
+    return (
+        c + t * x * x,
+        t * x * y - s * z,
+        t * x * z + s * y,
+        t * x * y + s * z,
+        c + t * y * y,
+        t * y * z - s * x,
+        t * x * z - s * y,
+        t * y * z + s * x,
+        c + t * z * z,
+    )
 
 
 @njit(cache=True, inline="always")
-def _quat_matrix(x: float, y: float, z: float, w: float, out: np.ndarray) -> None:
-    """Rotation of the unit quaternion ``(x, y, z, w)`` (Pinocchio's order), into ``out`` (3, 3)."""
+def _quat(x: float, y: float, z: float, w: float) -> tuple:
+    """Rotation of the unit quaternion ``(x, y, z, w)`` (Pinocchio's order)."""
     tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
     twx, twy, twz = tx * w, ty * w, tz * w
     txx, txy, txz = tx * x, ty * x, tz * x
     tyy, tyz, tzz = ty * y, tz * y, tz * z
-    out[0, 0] = 1.0 - (tyy + tzz)
-    out[0, 1] = txy - twz
-    out[0, 2] = txz + twy
-    out[1, 0] = txy + twz
-    out[1, 1] = 1.0 - (txx + tzz)
-    out[1, 2] = tyz - twx
-    out[2, 0] = txz - twy
-    out[2, 1] = tyz + twx
-    out[2, 2] = 1.0 - (txx + tyy)
+    return (
+        1.0 - (tyy + tzz),
+        txy - twz,
+        txz + twy,
+        txy + twz,
+        1.0 - (txx + tzz),
+        tyz - twx,
+        txz - twy,
+        tyz + twx,
+        1.0 - (txx + tyy),
+    )
 
 
 @njit(cache=True, inline="always")
-def _identity(out: np.ndarray) -> None:
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = 1.0 if i == j else 0.0
+def _mul(A: tuple, B: tuple) -> tuple:
+    """``A B``."""
+    return (
+        A[0] * B[0] + A[1] * B[3] + A[2] * B[6],
+        A[0] * B[1] + A[1] * B[4] + A[2] * B[7],
+        A[0] * B[2] + A[1] * B[5] + A[2] * B[8],
+        A[3] * B[0] + A[4] * B[3] + A[5] * B[6],
+        A[3] * B[1] + A[4] * B[4] + A[5] * B[7],
+        A[3] * B[2] + A[4] * B[5] + A[5] * B[8],
+        A[6] * B[0] + A[7] * B[3] + A[8] * B[6],
+        A[6] * B[1] + A[7] * B[4] + A[8] * B[7],
+        A[6] * B[2] + A[7] * B[5] + A[8] * B[8],
+    )
 
 
 @njit(cache=True, inline="always")
-def _mm3(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+def _mul_t(A: tuple, B: tuple) -> tuple:
+    """``A B^T``."""
+    return (
+        A[0] * B[0] + A[1] * B[1] + A[2] * B[2],
+        A[0] * B[3] + A[1] * B[4] + A[2] * B[5],
+        A[0] * B[6] + A[1] * B[7] + A[2] * B[8],
+        A[3] * B[0] + A[4] * B[1] + A[5] * B[2],
+        A[3] * B[3] + A[4] * B[4] + A[5] * B[5],
+        A[3] * B[6] + A[4] * B[7] + A[5] * B[8],
+        A[6] * B[0] + A[7] * B[1] + A[8] * B[2],
+        A[6] * B[3] + A[7] * B[4] + A[8] * B[5],
+        A[6] * B[6] + A[7] * B[7] + A[8] * B[8],
+    )
 
 
 @njit(cache=True, inline="always")
-def _mv3(A: np.ndarray, v: np.ndarray, out: np.ndarray) -> None:
-    for i in range(3):
-        out[i] = A[i, 0] * v[0] + A[i, 1] * v[1] + A[i, 2] * v[2]
+def _t_mul(A: tuple, B: tuple) -> tuple:
+    """``A^T B``."""
+    return (
+        A[0] * B[0] + A[3] * B[3] + A[6] * B[6],
+        A[0] * B[1] + A[3] * B[4] + A[6] * B[7],
+        A[0] * B[2] + A[3] * B[5] + A[6] * B[8],
+        A[1] * B[0] + A[4] * B[3] + A[7] * B[6],
+        A[1] * B[1] + A[4] * B[4] + A[7] * B[7],
+        A[1] * B[2] + A[4] * B[5] + A[7] * B[8],
+        A[2] * B[0] + A[5] * B[3] + A[8] * B[6],
+        A[2] * B[1] + A[5] * B[4] + A[8] * B[7],
+        A[2] * B[2] + A[5] * B[5] + A[8] * B[8],
+    )
+
+
+@njit(cache=True, inline="always")
+def _mv(A: tuple, x: float, y: float, z: float) -> tuple:
+    """``A (x, y, z)``."""
+    return (A[0] * x + A[1] * y + A[2] * z, A[3] * x + A[4] * y + A[5] * z, A[6] * x + A[7] * y + A[8] * z)
+
+
+@njit(cache=True, inline="always")
+def _get(M: np.ndarray, i: int) -> tuple:
+    """``M[i]`` (a stack of 3 x 3 matrices) as a 9-tuple."""
+    return (
+        M[i, 0, 0],
+        M[i, 0, 1],
+        M[i, 0, 2],
+        M[i, 1, 0],
+        M[i, 1, 1],
+        M[i, 1, 2],
+        M[i, 2, 0],
+        M[i, 2, 1],
+        M[i, 2, 2],
+    )
+
+
+@njit(cache=True, inline="always")
+def _put(M: np.ndarray, i: int, T: tuple) -> None:
+    """``M[i] = T``."""
+    M[i, 0, 0], M[i, 0, 1], M[i, 0, 2] = T[0], T[1], T[2]
+    M[i, 1, 0], M[i, 1, 1], M[i, 1, 2] = T[3], T[4], T[5]
+    M[i, 2, 0], M[i, 2, 1], M[i, 2, 2] = T[6], T[7], T[8]
+
+
+_EYE9 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+
+
+@njit(cache=True, inline="always")
+def _column(
+    W: tuple, p: tuple, wx: float, wy: float, wz: float, vx: float, vy: float, vz: float,
+    Sw: np.ndarray, Sv: np.ndarray, col: int,
+) -> None:  # fmt: skip
+    """Velocity column ``col`` of a joint at world rotation ``W``, origin ``p``, local motion ``(w, v)``."""
+    w0, w1, w2 = _mv(W, wx, wy, wz)
+    t0, t1, t2 = _mv(W, vx, vy, vz)
+    Sw[col, 0], Sw[col, 1], Sw[col, 2] = w0, w1, w2
+    Sv[col, 0] = t0 - (w1 * p[2] - w2 * p[1])
+    Sv[col, 1] = t1 - (w2 * p[0] - w0 * p[2])
+    Sv[col, 2] = t2 - (w0 * p[1] - w1 * p[0])
 
 
 @njit(cache=True, inline="always")
@@ -98,16 +218,13 @@ def forward(
     Sw: np.ndarray,
     Sv: np.ndarray,
     columns: bool,
-    mats: np.ndarray,
-    vecs: np.ndarray,
 ) -> None:
     """World placements of every joint ``oR`` (nj, 3, 3), ``op`` (nj, 3) and their velocity columns.
 
     ``Sw`` (nv, 3) and ``Sv`` (nv, 3) receive each column's world angular velocity and the
-    linear velocity of the point at the world origin (only with ``columns``). ``mats`` (>= 3, 3, 3)
-    and ``vecs`` (>= 14, 3) are scratch.
+    linear velocity of the point at the world origin (only with ``columns``).
     """
-    parents, kinds, place_R, place_p, axis, axis2, idx_q, idx_v = (
+    parents, kinds, place_R, place_p, axis, axis2, idx_q = (
         k.parents,
         k.kinds,
         k.place_R,
@@ -115,81 +232,70 @@ def forward(
         k.axis,
         k.axis2,
         k.idx_q,
-        k.idx_v,
     )
-    _identity(oR[0])
-    op[0] = 0.0
-    Rj, R2, R1 = mats[0], mats[1], mats[2]
-    pj, t = vecs[0], vecs[1]
-    sw = vecs[2:8]  # local angular parts of the joint's columns
-    sv = vecs[8:14]  # local linear parts
+    _put(oR, 0, _EYE9)
+    op[0, 0] = op[0, 1] = op[0, 2] = 0.0
     for j in range(1, parents.shape[0]):
         kind, iq = kinds[j], idx_q[j]
-        a = axis[j]
-        pj[:] = 0.0
-        sw[:] = 0.0
-        sv[:] = 0.0
-        n = 1
+        ax, ay, az = axis[j, 0], axis[j, 1], axis[j, 2]
+        px = py = pz = 0.0
+        u0 = u1 = u2 = 0.0  # a universal joint's first axis, seen after its second rotation
         if kind == REVOLUTE:
-            _rodrigues(a, math.cos(q[iq]), math.sin(q[iq]), Rj)
-            sw[0] = a
+            Rj = _rot(ax, ay, az, math.cos(q[iq]), math.sin(q[iq]))
         elif kind == REVOLUTE_UNBOUNDED:
-            _rodrigues(a, q[iq], q[iq + 1], Rj)
-            sw[0] = a
+            Rj = _rot(ax, ay, az, q[iq], q[iq + 1])
         elif kind == PRISMATIC:
-            _identity(Rj)
-            pj[:] = a * q[iq]
-            sv[0] = a
+            Rj = _EYE9
+            px, py, pz = ax * q[iq], ay * q[iq], az * q[iq]
         elif kind == SPHERICAL:
-            _quat_matrix(q[iq], q[iq + 1], q[iq + 2], q[iq + 3], Rj)
-            n = 3
-            for i in range(3):
-                sw[i, i] = 1.0
+            Rj = _quat(q[iq], q[iq + 1], q[iq + 2], q[iq + 3])
         elif kind == FREE_FLYER:
-            pj[0], pj[1], pj[2] = q[iq], q[iq + 1], q[iq + 2]
-            _quat_matrix(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6], Rj)
-            n = 6
-            for i in range(3):
-                sv[i, i] = 1.0
-                sw[3 + i, i] = 1.0
+            px, py, pz = q[iq], q[iq + 1], q[iq + 2]
+            Rj = _quat(q[iq + 3], q[iq + 4], q[iq + 5], q[iq + 6])
         elif kind == PLANAR:
             c, s = q[iq + 2], q[iq + 3]
-            _identity(Rj)
-            Rj[0, 0], Rj[0, 1], Rj[1, 0], Rj[1, 1] = c, -s, s, c
-            pj[0], pj[1] = q[iq], q[iq + 1]
-            n = 3
-            sv[0, 0] = 1.0
-            sv[1, 1] = 1.0
-            sw[2, 2] = 1.0
+            Rj = (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+            px, py = q[iq], q[iq + 1]
         else:  # UNIVERSAL
-            b = axis2[j]
-            _rodrigues(a, math.cos(q[iq]), math.sin(q[iq]), R1)
-            _rodrigues(b, math.cos(q[iq + 1]), math.sin(q[iq + 1]), R2)
-            _mm3(R1, R2, Rj)
-            n = 2
-            for i in range(3):
-                sw[0, i] = R2[0, i] * a[0] + R2[1, i] * a[1] + R2[2, i] * a[2]
-            sw[1] = b
+            R2 = _rot(axis2[j, 0], axis2[j, 1], axis2[j, 2], math.cos(q[iq + 1]), math.sin(q[iq + 1]))
+            Rj = _mul(_rot(ax, ay, az, math.cos(q[iq]), math.sin(q[iq])), R2)
+            u0 = R2[0] * ax + R2[3] * ay + R2[6] * az
+            u1 = R2[1] * ax + R2[4] * ay + R2[7] * az
+            u2 = R2[2] * ax + R2[5] * ay + R2[8] * az
         par = parents[j]
-        _mm3(oR[par], place_R[j], R1)  # parent's world rotation times the placement
-        _mv3(oR[par], place_p[j], t)
-        t += op[par]
-        _mm3(R1, Rj, oR[j])
-        _mv3(R1, pj, op[j])
-        op[j] += t
+        P = _get(oR, par)
+        PR = _mul(P, _get(place_R, j))  # parent's world rotation times the placement
+        t0, t1, t2 = _mv(P, place_p[j, 0], place_p[j, 1], place_p[j, 2])
+        W = _mul(PR, Rj)
+        _put(oR, j, W)
+        d0, d1, d2 = _mv(PR, px, py, pz)
+        p = (d0 + t0 + op[par, 0], d1 + t1 + op[par, 1], d2 + t2 + op[par, 2])
+        op[j, 0], op[j, 1], op[j, 2] = p
         if not columns:
             continue
-        R = oR[j]
-        p = op[j]
-        for c in range(n):
-            col = idx_v[j] + c
-            _mv3(R, sw[c], t)
-            Sw[col] = t
-            _mv3(R, sv[c], t)
-            w = Sw[col]
-            Sv[col, 0] = t[0] - (w[1] * p[2] - w[2] * p[1])
-            Sv[col, 1] = t[1] - (w[2] * p[0] - w[0] * p[2])
-            Sv[col, 2] = t[2] - (w[0] * p[1] - w[1] * p[0])
+        col = k.idx_v[j]
+        if kind == REVOLUTE or kind == REVOLUTE_UNBOUNDED:
+            _column(W, p, ax, ay, az, 0.0, 0.0, 0.0, Sw, Sv, col)
+        elif kind == PRISMATIC:
+            _column(W, p, 0.0, 0.0, 0.0, ax, ay, az, Sw, Sv, col)
+        elif kind == SPHERICAL:
+            _column(W, p, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, Sw, Sv, col)
+            _column(W, p, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, Sw, Sv, col + 1)
+            _column(W, p, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, Sw, Sv, col + 2)
+        elif kind == FREE_FLYER:
+            _column(W, p, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, Sw, Sv, col)
+            _column(W, p, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, Sw, Sv, col + 1)
+            _column(W, p, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, Sw, Sv, col + 2)
+            _column(W, p, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, Sw, Sv, col + 3)
+            _column(W, p, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, Sw, Sv, col + 4)
+            _column(W, p, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, Sw, Sv, col + 5)
+        elif kind == PLANAR:
+            _column(W, p, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, Sw, Sv, col)
+            _column(W, p, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, Sw, Sv, col + 1)
+            _column(W, p, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, Sw, Sv, col + 2)
+        else:  # UNIVERSAL
+            _column(W, p, u0, u1, u2, 0.0, 0.0, 0.0, Sw, Sv, col)
+            _column(W, p, axis2[j, 0], axis2[j, 1], axis2[j, 2], 0.0, 0.0, 0.0, Sw, Sv, col + 1)
 
 
 @njit(cache=True, inline="always")
@@ -198,33 +304,39 @@ def frames(k: KernelArrays, oR: np.ndarray, op: np.ndarray, fR: np.ndarray, fp: 
     f_joint, f_R, f_p = k.f_joint, k.f_R, k.f_p
     for f in range(f_joint.shape[0]):
         j = f_joint[f]
-        _mm3(oR[j], f_R[f], fR[f])
-        _mv3(oR[j], f_p[f], fp[f])
-        fp[f] += op[j]
+        R = _get(oR, j)
+        _put(fR, f, _mul(R, _get(f_R, f)))
+        t0, t1, t2 = _mv(R, f_p[f, 0], f_p[f, 1], f_p[f, 2])
+        fp[f, 0], fp[f, 1], fp[f, 2] = t0 + op[j, 0], t1 + op[j, 1], t2 + op[j, 2]
 
 
 @njit(cache=True, inline="always")
+def _linear(Sw: np.ndarray, Sv: np.ndarray, c: int, x: float, y: float, z: float) -> tuple:
+    r"""Velocity of the point ``(x, y, z)`` under velocity column ``c``: :math:`v_o + \omega \times p`."""
+    w0, w1, w2 = Sw[c, 0], Sw[c, 1], Sw[c, 2]
+    return Sv[c, 0] + w1 * z - w2 * y, Sv[c, 1] + w2 * x - w0 * z, Sv[c, 2] + w0 * y - w1 * x
+
+
+@njit(cache=True)
 def frame_jacobian(
     k: KernelArrays, f: int, fp: np.ndarray, Sw: np.ndarray, Sv: np.ndarray, out: np.ndarray
 ) -> None:
     """World-aligned Jacobian (6, nv) of kernel frame ``f`` (linear rows first), into ``out``."""
     support = k.support
-    p = fp[f]
+    x, y, z = fp[f, 0], fp[f, 1], fp[f, 2]
     for c in range(out.shape[1]):
         if support[f, c]:
-            w = Sw[c]
-            out[0, c] = Sv[c, 0] + w[1] * p[2] - w[2] * p[1]
-            out[1, c] = Sv[c, 1] + w[2] * p[0] - w[0] * p[2]
-            out[2, c] = Sv[c, 2] + w[0] * p[1] - w[1] * p[0]
-            out[3, c], out[4, c], out[5, c] = w[0], w[1], w[2]
+            out[0, c], out[1, c], out[2, c] = _linear(Sw, Sv, c, x, y, z)
+            out[3, c], out[4, c], out[5, c] = Sw[c, 0], Sw[c, 1], Sw[c, 2]
         else:
-            out[:, c] = 0.0
+            for d in range(6):
+                out[d, c] = 0.0
 
 
-@njit(cache=True)
-def log3(R: np.ndarray, out: np.ndarray) -> float:
-    """Pinocchio's ``log3`` of ``R`` into ``out`` (3,); returns the angle [rad]."""
-    tr = R[0, 0] + R[1, 1] + R[2, 2]
+@njit(cache=True, inline="always")
+def log3(R: tuple) -> tuple:
+    """Pinocchio's ``log3`` of ``R``: the angle [rad] and the rotation vector ``(theta, r0, r1, r2)``."""
+    tr = R[0] + R[4] + R[8]
     if tr >= 3.0:
         theta = 0.0
     elif tr <= -1.0:
@@ -234,25 +346,23 @@ def log3(R: np.ndarray, out: np.ndarray) -> float:
     if theta >= math.pi - 1e-2:  # near a half turn: from the diagonal (Pinocchio's branch)
         cphi = math.cos(theta - math.pi)
         beta = theta * theta / (1.0 + cphi)
-        for i in range(3):
-            d = (R[i, i] + cphi) * beta
-            out[i] = math.sqrt(d) if d > 0.0 else 0.0
-        if not R[2, 1] > R[1, 2]:
-            out[0] = -out[0]
-        if not R[0, 2] > R[2, 0]:
-            out[1] = -out[1]
-        if not R[1, 0] > R[0, 1]:
-            out[2] = -out[2]
-        return theta
+        d0, d1, d2 = (R[0] + cphi) * beta, (R[4] + cphi) * beta, (R[8] + cphi) * beta
+        r0 = math.sqrt(d0) if d0 > 0.0 else 0.0
+        r1 = math.sqrt(d1) if d1 > 0.0 else 0.0
+        r2 = math.sqrt(d2) if d2 > 0.0 else 0.0
+        if not R[7] > R[5]:
+            r0 = -r0
+        if not R[2] > R[6]:
+            r1 = -r1
+        if not R[3] > R[1]:
+            r2 = -r2
+        return theta, r0, r1, r2
     t = 0.5 * (theta / math.sin(theta) if theta > 1e-8 else 1.0)
-    out[0] = t * (R[2, 1] - R[1, 2])
-    out[1] = t * (R[0, 2] - R[2, 0])
-    out[2] = t * (R[1, 0] - R[0, 1])
-    return theta
+    return theta, t * (R[7] - R[5]), t * (R[2] - R[6]), t * (R[3] - R[1])
 
 
-@njit(cache=True)
-def jlog3(theta: float, r: np.ndarray, out: np.ndarray) -> None:
+@njit(cache=True, inline="always")
+def jlog3(theta: float, r0: float, r1: float, r2: float) -> tuple:
     r"""Pinocchio's ``Jlog3`` at ``r`` (angle ``theta``): :math:`\alpha I + [r]_\times / 2 + \beta r r^T`."""
     if theta < 1e-4:  # Taylor series, error below 1e-17
         t2 = theta * theta
@@ -263,35 +373,45 @@ def jlog3(theta: float, r: np.ndarray, out: np.ndarray) -> None:
         st_1mct = st / (1.0 - ct)
         alpha = 0.5 * theta * st_1mct
         beta = 1.0 / (theta * theta) - st_1mct / (2.0 * theta)
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = beta * r[i] * r[j]
-        out[i, i] += alpha
-    out[0, 1] -= 0.5 * r[2]
-    out[0, 2] += 0.5 * r[1]
-    out[1, 0] += 0.5 * r[2]
-    out[1, 2] -= 0.5 * r[0]
-    out[2, 0] -= 0.5 * r[1]
-    out[2, 1] += 0.5 * r[0]
+    return (
+        alpha + beta * r0 * r0,
+        beta * r0 * r1 - 0.5 * r2,
+        beta * r0 * r2 + 0.5 * r1,
+        beta * r1 * r0 + 0.5 * r2,
+        alpha + beta * r1 * r1,
+        beta * r1 * r2 - 0.5 * r0,
+        beta * r2 * r0 - 0.5 * r1,
+        beta * r2 * r1 + 0.5 * r0,
+        alpha + beta * r2 * r2,
+    )
 
 
-@njit(cache=True)
-def rpy(R: np.ndarray, out: np.ndarray) -> None:
-    """Pinocchio's ``rpy.matrixToRpy`` of ``R`` into ``out`` (3,)."""
-    m = math.sqrt(R[2, 1] * R[2, 1] + R[2, 2] * R[2, 2])
-    p = math.atan2(-R[2, 0], m)
+@njit(cache=True, inline="always")
+def rpy(R: tuple) -> tuple:
+    """Pinocchio's ``rpy.matrixToRpy`` of ``R``: ``(roll, pitch, yaw)``."""
+    m = math.sqrt(R[7] * R[7] + R[8] * R[8])
+    p = math.atan2(-R[6], m)
     if abs(abs(p) - 0.5 * math.pi) < 0.001:
-        r = 0.0
-        y = math.atan2(-R[0, 1], R[1, 1])
-    else:
-        y = math.atan2(R[1, 0], R[0, 0])
-        r = math.atan2(R[2, 1], R[2, 2])
-    out[0], out[1], out[2] = r, p, y
+        return 0.0, p, math.atan2(-R[1], R[4])
+    return math.atan2(R[7], R[8]), p, math.atan2(R[3], R[0])
 
 
 @njit(cache=True, inline="always")
 def _wrap(a: float) -> float:
     return math.pi - (math.pi - a) % (2.0 * math.pi)
+
+
+@njit(cache=True, inline="always")
+def _angular_rows(
+    k: KernelArrays, fa: int, fb: int, G: tuple, n_rows: int, first: int, Sw: np.ndarray, A: np.ndarray
+) -> None:
+    """Rows ``first``... of ``A``: ``n_rows`` rows of ``G`` (3 x 3) times the angular rows of J_B - J_A."""
+    support = k.support
+    for c in range(A.shape[1]):
+        s = support[fb, c] - support[fa, c]
+        w0, w1, w2 = s * Sw[c, 0], s * Sw[c, 1], s * Sw[c, 2]
+        for e in range(n_rows):
+            A[first + e, c] = G[3 * e] * w0 + G[3 * e + 1] * w1 + G[3 * e + 2] * w2
 
 
 @njit(cache=True, inline="always")
@@ -304,87 +424,87 @@ def closure_rows(
     r: np.ndarray,
     A: np.ndarray,
     jac: bool,
-    mats: np.ndarray,
-    vecs: np.ndarray,
-    jacs: np.ndarray,
 ) -> None:
-    """Closure residual into ``r`` (m,) and, with ``jac``, its Jacobian into ``A`` (m, nv).
-
-    Scratch: ``mats`` (>= 5, 3, 3), ``vecs`` (>= 18, 3), ``jacs`` (>= 2, 6, nv).
-    """
-    c_kind, c_a, c_b, c_row, c_axis, c_E = k.c_kind, k.c_a, k.c_b, k.c_row, k.c_axis, k.c_E
+    """Closure residual into ``r[:m]`` and, with ``jac``, its Jacobian into ``A[:m]`` (nv columns)."""
+    c_kind, c_a, c_b, c_row, c_axis, c_E, support = (
+        k.c_kind,
+        k.c_a,
+        k.c_b,
+        k.c_row,
+        k.c_axis,
+        k.c_E,
+        k.support,
+    )
     nv = A.shape[1]
-    Ja, Jb, M, G = jacs[0], jacs[1], mats[3], mats[4]
-    u, v, w, lg = vecs[14], vecs[15], vecs[16], vecs[17]
     for i in range(c_kind.shape[0]):
         kind, fa, fb, s = c_kind[i], c_a[i], c_b[i], c_row[i]
-        Ra, Rb = fR[fa], fR[fb]
-        E = c_E[i]
-        if jac:
-            frame_jacobian(k, fa, fp, Sw, Sv, Ja)
-            frame_jacobian(k, fb, fp, Sw, Sv, Jb)
         if kind != TWIST:
-            for d in range(3):
-                r[s + d] = fp[fb, d] - fp[fa, d]
-                if jac:
-                    for c in range(nv):
-                        A[s + d, c] = Jb[d, c] - Ja[d, c]
+            ax, ay, az = fp[fa, 0], fp[fa, 1], fp[fa, 2]
+            bx, by, bz = fp[fb, 0], fp[fb, 1], fp[fb, 2]
+            r[s], r[s + 1], r[s + 2] = bx - ax, by - ay, bz - az
+            if jac:
+                for c in range(nv):
+                    sa, sb = support[fa, c], support[fb, c]
+                    if sa and sb:  # the column moves both: omega x (p_B - p_A)
+                        w0, w1, w2 = Sw[c, 0], Sw[c, 1], Sw[c, 2]
+                        dx, dy, dz = bx - ax, by - ay, bz - az
+                        A[s, c], A[s + 1, c], A[s + 2, c] = (
+                            w1 * dz - w2 * dy,
+                            w2 * dx - w0 * dz,
+                            w0 * dy - w1 * dx,
+                        )
+                    elif sb:
+                        A[s, c], A[s + 1, c], A[s + 2, c] = _linear(Sw, Sv, c, bx, by, bz)
+                    elif sa:
+                        v0, v1, v2 = _linear(Sw, Sv, c, ax, ay, az)
+                        A[s, c], A[s + 1, c], A[s + 2, c] = -v0, -v1, -v2
+                    else:
+                        A[s, c] = A[s + 1, c] = A[s + 2, c] = 0.0
         if kind == POINT:
             continue
-        n_rot = 1
+        Ra, Rb = _get(fR, fa), _get(fR, fb)
         if kind == WELD:
-            n_rot = 3
-            for a_ in range(3):
-                for b_ in range(3):
-                    M[a_, b_] = Ra[0, a_] * Rb[0, b_] + Ra[1, a_] * Rb[1, b_] + Ra[2, a_] * Rb[2, b_]
-            theta = log3(M, lg)
-            r[s + 3 : s + 6] = lg
-            if jac:
-                jlog3(theta, lg, M)
-                for a_ in range(3):  # G = Jlog3 R_B^T
-                    for b_ in range(3):
-                        G[a_, b_] = M[a_, 0] * Rb[b_, 0] + M[a_, 1] * Rb[b_, 1] + M[a_, 2] * Rb[b_, 2]
+            theta, l0, l1, l2 = log3(_t_mul(Ra, Rb))
+            r[s + 3], r[s + 4], r[s + 5] = l0, l1, l2
+            if jac:  # Jlog3 R_B^T
+                _angular_rows(k, fa, fb, _mul_t(jlog3(theta, l0, l1, l2), Rb), 3, s + 3, Sw, A)
         elif kind == TWIST:
-            _mv3(Ra, E[:, 1], u)  # x = R_A e2
-            _mv3(Rb, E[:, 0], v)  # y = R_B e1
-            r[s] = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
-            G[0, 0] = v[1] * u[2] - v[2] * u[1]  # (y x x)^T
-            G[0, 1] = v[2] * u[0] - v[0] * u[2]
-            G[0, 2] = v[0] * u[1] - v[1] * u[0]
-        else:  # revolute: E^T R_A^T R_B u, G = -E^T R_A^T [R_B u]x
-            n_rot = 2
-            _mv3(Rb, c_axis[i], w)
-            for d in range(3):
-                v[d] = Ra[0, d] * w[0] + Ra[1, d] * w[1] + Ra[2, d] * w[2]
+            u0, u1, u2 = _mv(Ra, c_E[i, 0, 1], c_E[i, 1, 1], c_E[i, 2, 1])  # x = R_A e2
+            v0, v1, v2 = _mv(Rb, c_E[i, 0, 0], c_E[i, 1, 0], c_E[i, 2, 0])  # y = R_B e1
+            r[s] = u0 * v0 + u1 * v1 + u2 * v2
+            if jac:  # (y x x)^T
+                G = (v1 * u2 - v2 * u1, v2 * u0 - v0 * u2, v0 * u1 - v1 * u0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+                _angular_rows(k, fa, fb, G, 1, s, Sw, A)
+        else:  # revolute: E^T R_A^T R_B u, rows -(R_A E_e x R_B u)^T
+            w0, w1, w2 = _mv(Rb, c_axis[i, 0], c_axis[i, 1], c_axis[i, 2])
+            v0 = Ra[0] * w0 + Ra[3] * w1 + Ra[6] * w2
+            v1 = Ra[1] * w0 + Ra[4] * w1 + Ra[7] * w2
+            v2 = Ra[2] * w0 + Ra[5] * w1 + Ra[8] * w2
             for e in range(2):
-                r[s + 3 + e] = E[0, e] * v[0] + E[1, e] * v[1] + E[2, e] * v[2]
-                _mv3(Ra, E[:, e], u)  # row e of E^T R_A^T, as a vector R_A E e
-                # -(R_A E_e)^T [w]x = (w x R_A E_e)^T ... = -(u x w)^T... row: (u x w)^T negated
-                G[e, 0] = -(u[1] * w[2] - u[2] * w[1])
-                G[e, 1] = -(u[2] * w[0] - u[0] * w[2])
-                G[e, 2] = -(u[0] * w[1] - u[1] * w[0])
-        if jac:
-            first = s if kind == TWIST else s + 3
-            for e in range(n_rot):
-                for c in range(nv):
-                    A[first + e, c] = (
-                        G[e, 0] * (Jb[3, c] - Ja[3, c])
-                        + G[e, 1] * (Jb[4, c] - Ja[4, c])
-                        + G[e, 2] * (Jb[5, c] - Ja[5, c])
-                    )
+                r[s + 3 + e] = c_E[i, 0, e] * v0 + c_E[i, 1, e] * v1 + c_E[i, 2, e] * v2
+            if jac:
+                a0, a1, a2 = _mv(Ra, c_E[i, 0, 0], c_E[i, 1, 0], c_E[i, 2, 0])
+                b0, b1, b2 = _mv(Ra, c_E[i, 0, 1], c_E[i, 1, 1], c_E[i, 2, 1])
+                G = (
+                    -(a1 * w2 - a2 * w1),
+                    -(a2 * w0 - a0 * w2),
+                    -(a0 * w1 - a1 * w0),
+                    -(b1 * w2 - b2 * w1),
+                    -(b2 * w0 - b0 * w2),
+                    -(b0 * w1 - b1 * w0),
+                    0.0,
+                    0.0,
+                    0.0,
+                )
+                _angular_rows(k, fa, fb, G, 2, s + 3, Sw, A)
 
 
 @njit(cache=True, inline="always")
-def task_pose(
-    k: KernelArrays, q: np.ndarray, fR: np.ndarray, fp: np.ndarray, out: np.ndarray, ang: np.ndarray
-) -> None:
-    """Task coordinates (:meth:`plm_pin.core.task.Task.pose_from_data`) into ``out`` (n_task,).
-
-    ``ang`` (3,) is scratch.
-    """
+def task_pose(k: KernelArrays, q: np.ndarray, fR: np.ndarray, fp: np.ndarray, out: np.ndarray) -> None:
+    """Task coordinates (:meth:`plm_pin.core.task.Task.pose_from_data`) into ``out`` (n_task,)."""
     t_kind, t_frame, t_rows, t_jq, t_jkind = k.t_kind, k.t_frame, k.t_rows, k.t_jq, k.t_jkind
     if t_kind == FRAME_TASK:
-        rpy(fR[t_frame], ang)
+        ang = rpy(_get(fR, t_frame))
         for i in range(t_rows.shape[0]):
             row = t_rows[i]
             out[i] = fp[t_frame, row] if row < 3 else ang[row - 3]
@@ -412,74 +532,92 @@ def task_rows(
     r: np.ndarray,
     A: np.ndarray,
     jac: bool,
-    mats: np.ndarray,
-    vecs: np.ndarray,
-    jacs: np.ndarray,
 ) -> None:
-    """Task target rows (:class:`plm_pin.core.task.TaskTarget`) into ``r`` (n_task,), Jacobian into ``A``.
-
-    Scratch: ``mats`` (>= 8, 3, 3), ``vecs`` (>= 20, 3), ``jacs`` (>= 3, 6, nv).
-    """
-    t_kind, t_frame, t_rows, t_jv = k.t_kind, k.t_frame, k.t_rows, k.t_jv
-    n = r.shape[0]
+    """Task target rows (:class:`plm_pin.core.task.TaskTarget`) into ``r[m:]``, Jacobian into ``A[m:]``."""
+    t_kind, t_frame, t_rows, t_jv, t_jkind, support = (
+        k.t_kind,
+        k.t_frame,
+        k.t_rows,
+        k.t_jv,
+        k.t_jkind,
+        k.support,
+    )
+    m, nv = k.m, A.shape[1]
+    n = r.shape[0] - m
     if t_kind == JOINT_TASK:
-        task_pose(k, q, fR, fp, r, vecs[18])
         for i in range(n):
-            d = r[i] - x[i]
-            r[i] = d if k.t_jkind[i] == PRISMATIC else _wrap(d)
+            iq = k.t_jq[i]
+            if t_jkind[i] == REVOLUTE:
+                d = _wrap(q[iq]) - x[i]
+            elif t_jkind[i] == REVOLUTE_UNBOUNDED:
+                d = math.atan2(q[iq + 1], q[iq]) - x[i]
+            else:
+                d = q[iq] - x[i]
+            r[m + i] = d if t_jkind[i] == PRISMATIC else _wrap(d)
             if jac:
-                A[i, :] = 0.0
-                A[i, t_jv[i]] = 1.0
+                for c in range(nv):
+                    A[m + i, c] = 0.0
+                A[m + i, t_jv[i]] = 1.0
         return
-    nv = A.shape[1]
-    J = jacs[2]
-    if jac:
-        frame_jacobian(k, t_frame, fp, Sw, Sv, J)
-    R = fR[t_frame]
+    f = t_frame
+    px, py, pz = fp[f, 0], fp[f, 1], fp[f, 2]
     n_lin = 0
-    n_ang = 0
     for i in range(n):
         if t_rows[i] < 3:
             n_lin += 1
-        else:
-            n_ang += 1
     for i in range(n_lin):
         row = t_rows[i]
-        r[i] = fp[t_frame, row] - x[i]
+        r[m + i] = fp[f, row] - x[i]
         if jac:
-            A[i] = J[row]
+            for c in range(nv):
+                A[m + i, c] = _linear(Sw, Sv, c, px, py, pz)[row] if support[f, c] else 0.0
+    n_ang = n - n_lin
     if n_ang == 0:
         return
-    lg, M, E, G = vecs[19], mats[5], mats[6], mats[7]
+    R = _get(fR, f)
+    first = m + n_lin
     if n_ang == 3:  # log3(R R*^T), Jacobian Jlog3(E) E^T J_w
-        for a_ in range(3):
-            for b_ in range(3):
-                E[a_, b_] = R[a_, 0] * R_star[b_, 0] + R[a_, 1] * R_star[b_, 1] + R[a_, 2] * R_star[b_, 2]
-        theta = log3(E, lg)
-        r[n_lin : n_lin + 3] = lg
+        E = _mul_t(
+            R,
+            (
+                R_star[0, 0],
+                R_star[0, 1],
+                R_star[0, 2],
+                R_star[1, 0],
+                R_star[1, 1],
+                R_star[1, 2],
+                R_star[2, 0],
+                R_star[2, 1],
+                R_star[2, 2],
+            ),
+        )
+        theta, l0, l1, l2 = log3(E)
+        r[first], r[first + 1], r[first + 2] = l0, l1, l2
         if jac:
-            jlog3(theta, lg, M)
-            for a_ in range(3):
-                for b_ in range(3):
-                    G[a_, b_] = M[a_, 0] * E[b_, 0] + M[a_, 1] * E[b_, 1] + M[a_, 2] * E[b_, 2]
-            for e in range(3):
-                for c in range(nv):
-                    A[n_lin + e, c] = G[e, 0] * J[3, c] + G[e, 1] * J[4, c] + G[e, 2] * J[5, c]
+            G = _mul_t(jlog3(theta, l0, l1, l2), E)
+            for c in range(nv):
+                if support[f, c]:
+                    w0, w1, w2 = Sw[c, 0], Sw[c, 1], Sw[c, 2]
+                    for e in range(3):
+                        A[first + e, c] = G[3 * e] * w0 + G[3 * e + 1] * w1 + G[3 * e + 2] * w2
+                else:
+                    A[first, c] = A[first + 1, c] = A[first + 2, c] = 0.0
         return
-    rpy(R, lg)
+    ang = rpy(R)
     for i in range(n_lin, n):
-        r[i] = _wrap(lg[t_rows[i] - 3] - x[i])
+        r[m + i] = _wrap(ang[t_rows[i] - 3] - x[i])
     if jac:  # rows of the world roll-pitch-yaw Jacobian inverse times J_w
-        sp, cp = math.sin(lg[1]), math.cos(lg[1])
-        sy, cy = math.sin(lg[2]), math.cos(lg[2])
+        sp, cp = math.sin(ang[1]), math.cos(ang[1])
+        sy, cy = math.sin(ang[2]), math.cos(ang[2])
         tp = sp / cp
-        M[0, 0], M[0, 1], M[0, 2] = cy / cp, sy / cp, 0.0
-        M[1, 0], M[1, 1], M[1, 2] = -sy, cy, 0.0
-        M[2, 0], M[2, 1], M[2, 2] = cy * tp, sy * tp, 1.0
+        M = (cy / cp, sy / cp, 0.0, -sy, cy, 0.0, cy * tp, sy * tp, 1.0)
         for i in range(n_lin, n):
             e = t_rows[i] - 3
             for c in range(nv):
-                A[i, c] = M[e, 0] * J[3, c] + M[e, 1] * J[4, c] + M[e, 2] * J[5, c]
+                if support[f, c]:
+                    A[m + i, c] = M[3 * e] * Sw[c, 0] + M[3 * e + 1] * Sw[c, 1] + M[3 * e + 2] * Sw[c, 2]
+                else:
+                    A[m + i, c] = 0.0
 
 
 @njit(cache=True, inline="always")
@@ -498,39 +636,55 @@ def evaluate(
     fp: np.ndarray,
     Sw: np.ndarray,
     Sv: np.ndarray,
-    mats: np.ndarray,
-    vecs: np.ndarray,
-    jacs: np.ndarray,
 ) -> None:
-    """Residual ``[phi; task]`` into ``r`` and (``jac``) its Jacobian into ``A``, from ``q``.
-
-    Scratch: ``mats`` (8, 3, 3), ``vecs`` (24, 3), ``jacs`` (3, 6, nv) (:func:`scratch`).
-    """
-    forward(k, q, oR, op, Sw, Sv, jac, mats, vecs)
+    """Residual ``[phi; task]`` into ``r`` and (``jac``) its Jacobian into ``A``, from ``q``."""
+    forward(k, q, oR, op, Sw, Sv, jac)
     frames(k, oR, op, fR, fp)
-    m = k.m
-    closure_rows(k, fR, fp, Sw, Sv, r[:m], A[:m], jac, mats, vecs, jacs)
+    closure_rows(k, fR, fp, Sw, Sv, r, A, jac)
     if with_task:
-        task_rows(k, q, fR, fp, Sw, Sv, x, R_star, r[m:], A[m:], jac, mats, vecs, jacs)
+        task_rows(k, q, fR, fp, Sw, Sv, x, R_star, r, A, jac)
 
 
 @njit(cache=True)
-def scratch(nv: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The scratch arrays of :func:`evaluate` and :func:`integrate`: ``mats``, ``vecs``, ``jacs``."""
-    return np.empty((8, 3, 3)), np.empty((24, 3)), np.empty((3, 6, nv))
+def placements(
+    ints: np.ndarray,
+    floats: np.ndarray,
+    q: np.ndarray,
+    oR: np.ndarray,
+    op: np.ndarray,
+    fR: np.ndarray,
+    fp: np.ndarray,
+) -> None:
+    """World placements of every joint and kernel frame at ``q`` (:func:`forward`, :func:`frames`)."""
+    k = unpack(ints, floats)
+    Sw = np.empty((0, 3))
+    forward(k, q, oR, op, Sw, Sw, False)
+    frames(k, oR, op, fR, fp)
+
+
+@njit(cache=True)
+def rows(
+    ints: np.ndarray,
+    floats: np.ndarray,
+    q: np.ndarray,
+    x: np.ndarray,
+    R_star: np.ndarray,
+    with_task: bool,
+    r: np.ndarray,
+    A: np.ndarray,
+) -> None:
+    """:func:`evaluate` with its Jacobian, on the packed arrays."""
+    k = unpack(ints, floats)
+    nj, nf, nv = k.parents.shape[0], max(k.f_joint.shape[0], 1), k.nv
+    oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
+    evaluate(k, q, x, R_star, with_task, r, A, True, oR, op, fR, fp, np.empty((nv, 3)), np.empty((nv, 3)))
 
 
 @njit(cache=True, inline="always")
-def integrate(
-    k: KernelArrays, q: np.ndarray, v: np.ndarray, out: np.ndarray, mats: np.ndarray, vecs: np.ndarray
-) -> None:
-    """Pinocchio's ``integrate``: ``out`` = ``q`` moved by the tangent vector ``v`` (joint by joint).
-
-    Scratch: ``mats`` (>= 1, 3, 3), ``vecs`` (>= 2, 3).
-    """
+def integrate(k: KernelArrays, q: np.ndarray, v: np.ndarray, out: np.ndarray) -> None:
+    """Pinocchio's ``integrate``: ``out`` = ``q`` moved by the tangent vector ``v`` (joint by joint)."""
     kinds, idx_q, idx_v = k.kinds, k.idx_q, k.idx_v
     out[:] = q
-    R0, t, p = mats[0], vecs[0], vecs[1]
     for j in range(1, kinds.shape[0]):
         kind, iq, iv = kinds[j], idx_q[j], idx_v[j]
         if kind == REVOLUTE or kind == PRISMATIC:
@@ -574,7 +728,6 @@ def integrate(
                 nw / nrm,
             )
             if kind == FREE_FLYER:
-                _quat_matrix(x, y, z, w, R0)
                 if th > 1e-8:
                     c1 = (1.0 - math.cos(th)) / (th * th)
                     c2 = (th - math.sin(th)) / (th * th * th)
@@ -583,10 +736,12 @@ def integrate(
                 l0, l1, l2 = v[iv], v[iv + 1], v[iv + 2]
                 a0, a1, a2 = w1 * l2 - w2 * l1, w2 * l0 - w0 * l2, w0 * l1 - w1 * l0  # w x lin
                 b0, b1, b2 = w1 * a2 - w2 * a1, w2 * a0 - w0 * a2, w0 * a1 - w1 * a0  # w x (w x lin)
-                p[0], p[1], p[2] = l0 + c1 * a0 + c2 * b0, l1 + c1 * a1 + c2 * b1, l2 + c1 * a2 + c2 * b2
-                _mv3(R0, p, t)
-                for d in range(3):
-                    out[iq + d] = q[iq + d] + t[d]
+                t0, t1, t2 = _mv(
+                    _quat(x, y, z, w), l0 + c1 * a0 + c2 * b0, l1 + c1 * a1 + c2 * b1, l2 + c1 * a2 + c2 * b2
+                )
+                out[iq] = q[iq] + t0
+                out[iq + 1] = q[iq + 1] + t1
+                out[iq + 2] = q[iq + 2] + t2
 
 
 @njit(cache=True)
@@ -628,7 +783,8 @@ def _cholesky_back(L: np.ndarray, b: np.ndarray) -> None:
 
 @njit(cache=True)
 def newton(
-    k: KernelArrays,
+    ints: np.ndarray,
+    floats: np.ndarray,
     free: np.ndarray,
     x: np.ndarray,
     R_star: np.ndarray,
@@ -642,35 +798,41 @@ def newton(
     q: np.ndarray,
     r: np.ndarray,
     pose: np.ndarray,
+    info: np.ndarray,
 ) -> int:
     """:func:`plm_pin.core.assembly.newton` moving the ``free`` columns: iterations, or -1.
 
-    ``q`` holds the start; on success it holds the solution, ``r`` its residual ``[phi; task]``
-    and ``pose`` its task coordinates (:func:`task_pose`).
+    ``q`` holds the start; on success it holds the solution, ``r`` its residual ``[phi; task]``,
+    ``pose`` its task coordinates (:func:`task_pose`) and ``info`` (2,) the largest absolute
+    residual and 1.0 if ``q`` is within the model's position limits (else 0.0).
     """
-    nj, nv, nf = k.parents.shape[0], k.nv, k.f_joint.shape[0]
+    k = unpack(ints, floats)
+    nj, nv, nf = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1)
     n, nfree = r.shape[0], free.shape[0]
     A = np.empty((n, nv))
     Af = np.empty((n, nfree))
     N = np.empty((nfree, nfree))
     b = np.empty(nfree)
     step = np.zeros(nv)
-    oR, op = np.empty((nj, 3, 3)), np.empty((nj, 3))
-    fR, fp = np.empty((max(nf, 1), 3, 3)), np.empty((max(nf, 1), 3))
+    oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
     Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
-    mats, vecs, jacs = scratch(nv)
     q_next = np.empty(q.shape[0])
     factorised = fresh = False
     polished = not polish
     err_prev = np.inf
     for iteration in range(max_iterations + 1):
-        evaluate(k, q, x, R_star, with_task, r, A, False, oR, op, fR, fp, Sw, Sv, mats, vecs, jacs)
+        evaluate(k, q, x, R_star, with_task, r, A, False, oR, op, fR, fp, Sw, Sv)
         err = 0.0
         for i in range(n):
             err = max(err, abs(r[i]))
         if err <= tol:
             if polished or err < round_off:
-                task_pose(k, q, fR, fp, pose, vecs[18])
+                task_pose(k, q, fR, fp, pose)
+                inside = 1.0
+                for i in range(q.shape[0]):
+                    if not k.lower[i] <= q[i] <= k.upper[i]:
+                        inside = 0.0
+                info[0], info[1] = err, inside
                 return iteration
             polished = True
             refresh = not factorised
@@ -683,7 +845,7 @@ def newton(
         else:
             return -1
         if refresh:
-            evaluate(k, q, x, R_star, with_task, r, A, True, oR, op, fR, fp, Sw, Sv, mats, vecs, jacs)
+            evaluate(k, q, x, R_star, with_task, r, A, True, oR, op, fR, fp, Sw, Sv)
             for i in range(n):
                 for c in range(nfree):
                     Af[i, c] = A[i, free[c]]
@@ -708,7 +870,7 @@ def newton(
         for c in range(nfree):
             step[free[c]] = -b[c]
         fresh = refresh
-        integrate(k, q, step, q_next, mats, vecs)
+        integrate(k, q, step, q_next)
         q[:] = q_next
         err_prev = err
     return -1
@@ -716,7 +878,8 @@ def newton(
 
 @njit(cache=True)
 def batch_newton(
-    k: KernelArrays,
+    ints: np.ndarray,
+    floats: np.ndarray,
     Q: np.ndarray,
     X: np.ndarray,
     R_stars: np.ndarray,
@@ -736,7 +899,8 @@ def batch_newton(
     world-aligned twist rows) and ``R_out`` the world rotation of every joint.
 
     Args:
-        k: the kernel arrays (a frame task).
+        ints: the packed integer arrays of the kernel (a frame task).
+        floats: its packed float arrays.
         Q: starting configurations, solved in place, shape (B, nq).
         X: task targets, shape (B, n_task).
         R_stars: target rotations of tasks with all three angles (else any), shape (B, 3, 3).
@@ -747,32 +911,33 @@ def batch_newton(
         A_out: out, shape (B, m + n_task, nv).
         R_out: out, shape (B, nj, 3, 3).
     """
-    nj, nv, nf, m = k.parents.shape[0], k.nv, k.f_joint.shape[0], k.m
+    k = unpack(ints, floats)
+    nj, nv, nf, m = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1), k.m
     n = m + X.shape[1]
     A = np.empty((n, nv))
     r = np.empty(n)
     N = np.empty((nv, nv))
     b = np.empty(nv)
-    oR, op = np.empty((nj, 3, 3)), np.empty((nj, 3))
-    fR, fp = np.empty((max(nf, 1), 3, 3)), np.empty((max(nf, 1), 3))
+    J = np.empty((6, nv))
+    oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
     Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
-    mats, vecs, jacs = scratch(nv)
     q_next = np.empty(Q.shape[1])
     for p in range(Q.shape[0]):
         q = Q[p]
         ok[p] = False
         err_prev = np.inf
         for iteration in range(max_iterations + 1):
-            evaluate(k, q, X[p], R_stars[p], True, r, A, True, oR, op, fR, fp, Sw, Sv, mats, vecs, jacs)
+            evaluate(k, q, X[p], R_stars[p], True, r, A, True, oR, op, fR, fp, Sw, Sv)
             err = 0.0
             for i in range(n):
                 err = max(err, abs(r[i]))
             if err <= tol:
                 ok[p] = True
                 A_out[p, :m] = A[:m]
-                frame_jacobian(k, k.t_frame, fp, Sw, Sv, jacs[2])
+                frame_jacobian(k, k.t_frame, fp, Sw, Sv, J)
                 for i in range(n - m):
-                    A_out[p, m + i] = jacs[2][k.t_rows[i]]
+                    for c in range(nv):
+                        A_out[p, m + i, c] = J[k.t_rows[i], c]
                 R_out[p] = oR
                 break
             if math.isnan(err) or not err < stall * err_prev or iteration == max_iterations:
@@ -792,6 +957,14 @@ def batch_newton(
                 break
             for c in range(nv):
                 b[c] = -b[c]
-            integrate(k, q, b, q_next, mats, vecs)
+            integrate(k, q, b, q_next)
             q[:] = q_next
             err_prev = err
+
+
+@njit(cache=True)
+def integrate_packed(
+    ints: np.ndarray, floats: np.ndarray, q: np.ndarray, v: np.ndarray, out: np.ndarray
+) -> None:
+    """:func:`integrate` on the packed arrays."""
+    integrate(unpack(ints, floats), q, v, out)

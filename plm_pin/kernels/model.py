@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 import warnings
-import weakref
 from types import ModuleType
 from typing import TYPE_CHECKING
 
@@ -21,9 +20,9 @@ import pinocchio as pin
 from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
 from ..core.closures import Closure
 from ..core.task import FrameTask, Task, TaskTarget
-from ..tolerances import ROUND_OFF
+from ..tolerances import FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, ROUND_OFF
 from ..warnings import KernelFallbackWarning
-from .arrays import KernelArrays, build_arrays, kernel_frames, unsupported_joints
+from .arrays import KernelArrays, build_arrays, kernel_frames, pack, unsupported_joints
 
 if TYPE_CHECKING:
     from ..core.mechanism import Mechanism
@@ -37,6 +36,8 @@ class Kernel:
 
     Attributes:
         arrays: the constant arrays (:class:`KernelArrays`).
+        ints: the integer arrays packed into one (:func:`.arrays.pack`), as the compiled calls take them.
+        floats: the float arrays packed into one.
         frame_ids: Pinocchio frame index of each kernel frame (closure frames, then the task frame).
         n_task: number of task rows (0 without a task).
     """
@@ -44,6 +45,7 @@ class Kernel:
     def __init__(self, arrays: KernelArrays, frame_ids: tuple[int, ...], n_task: int) -> None:
         """Wrap ``arrays`` (see :func:`build_arrays`)."""
         self.arrays = arrays
+        self.ints, self.floats = pack(arrays)
         self.frame_ids = frame_ids
         self.n_task = n_task
         self._all = np.arange(arrays.nv)
@@ -53,19 +55,6 @@ class Kernel:
         """The kernel of ``model`` with ``closures`` and ``task`` (every joint must be supported)."""
         arrays = build_arrays(model, closures, task)
         return cls(arrays, tuple(kernel_frames(closures, task)), task.size if task is not None else 0)
-
-    def _buffers(self) -> tuple[np.ndarray, ...]:
-        """Joint and frame placements, velocity columns, then the scratch of :func:`.compiled.evaluate`."""
-        nj, nf, nv = self.arrays.parents.size, max(self.arrays.f_joint.size, 1), self.arrays.nv
-        empty = np.empty
-        return (
-            empty((nj, 3, 3)),
-            empty((nj, 3)),
-            empty((nf, 3, 3)),
-            empty((nf, 3)),
-            empty((nv, 3)),
-            empty((nv, 3)),
-        )
 
     @staticmethod
     def _target_arrays(target: TaskTarget | None) -> tuple[np.ndarray, np.ndarray]:
@@ -81,23 +70,24 @@ class Kernel:
 
     def placements(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """World rotations and translations of every joint (nj, 3, 3), (nj, 3) and kernel frame (nf, ...)."""
-        compiled = _compiled()
-        oR, op, fR, fp, Sw, Sv = self._buffers()
-        mats, vecs, _ = compiled.scratch(self.arrays.nv)
-        compiled.forward(self.arrays, np.asarray(q, dtype=float), oR, op, Sw, Sv, False, mats, vecs)
-        compiled.frames(self.arrays, oR, op, fR, fp)
+        nj, nf = self.arrays.parents.size, max(self.arrays.f_joint.size, 1)
+        oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
+        _compiled().placements(self.ints, self.floats, np.asarray(q, dtype=float), oR, op, fR, fp)
         return oR, op, fR, fp
 
     def rows(self, q: np.ndarray, target: TaskTarget | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Residual ``[phi; task target]`` (m + n,) and its Jacobian (m + n, nv) at ``q``."""
-        compiled = _compiled()
         x, R = self._target_arrays(target)
         n = self.arrays.m + (target.size if target is not None else 0)
         r, A = np.empty(n), np.empty((n, self.arrays.nv))
-        scratch = compiled.scratch(self.arrays.nv)
-        args = (np.asarray(q, float), x, R, target is not None, r, A, True, *self._buffers(), *scratch)
-        compiled.evaluate(self.arrays, *args)
+        _compiled().rows(self.ints, self.floats, np.asarray(q, float), x, R, target is not None, r, A)
         return r, A
+
+    def integrate(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Pinocchio's ``integrate``: ``q`` moved by the tangent vector ``v``."""
+        out = np.empty(len(q))
+        _compiled().integrate_packed(self.ints, self.floats, np.asarray(q, float), np.asarray(v, float), out)
+        return out
 
     def newton(
         self,
@@ -120,11 +110,28 @@ class Kernel:
             The configuration, its residual ``[phi; task target]`` and its task coordinates
             (:meth:`plm_pin.core.task.Task.pose_from_data`, empty without a task).
         """
+        solved = self.solve(q0, free, tol, target, polish)
+        return None if solved is None else solved[:3]
+
+    def solve(
+        self,
+        q0: np.ndarray,
+        free: np.ndarray | None,
+        tol: float,
+        target: TaskTarget | None = None,
+        polish: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
+        """:meth:`newton`, with the largest absolute residual and whether the solution is within limits.
+
+        Returns:
+            ``(q, residual, pose, residual_norm, within_limits)``, or None when Newton stalls.
+        """
         x, R = self._target_arrays(target)
-        q, pose = np.array(q0, dtype=float), np.empty(self.n_task)
+        q, pose, info = np.array(q0, dtype=float), np.empty(self.n_task), np.empty(2)
         r = np.empty(self.arrays.m + (target.size if target is not None else 0))
         iterations = _compiled().newton(
-            self.arrays,
+            self.ints,
+            self.floats,
             self._all if free is None else free,
             x,
             R,
@@ -138,8 +145,11 @@ class Kernel:
             q,
             r,
             pose,
+            info,
         )
-        return None if iterations < 0 else (q, r, pose)
+        if iterations < 0:
+            return None
+        return q, r, pose, float(info[0]), bool(info[1])
 
     def batch_newton(
         self, Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float, max_iterations: int, stall: float
@@ -167,8 +177,34 @@ class Kernel:
         ok = np.zeros(B, dtype=np.bool_)
         A = np.full((B, a.m + X.shape[1], a.nv), np.nan)
         R = np.full((B, a.parents.size, 3, 3), np.nan)
-        _compiled().batch_newton(a, q, X, R_stars, tol, max_iterations, stall, ok, A, R)
+        _compiled().batch_newton(self.ints, self.floats, q, X, R_stars, tol, max_iterations, stall, ok, A, R)
         return q, ok, A, R
+
+    def map_metrics(
+        self, A: np.ndarray, actuated_v: np.ndarray, mobility: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Map metrics of stacked Jacobians ``A = [J_phi; J_x]`` (B, m + k, nv), compiled (:mod:`.metrics`).
+
+        Returns:
+            The metrics (B, 5) in the order of :data:`.metrics.METRIC_NAMES`, and whether each
+            pose passed the acceptance tests (B,) (the others' rows are meaningless).
+        """
+        from . import metrics
+
+        B = A.shape[0]
+        out, good = np.full((B, len(metrics.METRIC_NAMES)), np.nan), np.zeros(B, dtype=np.bool_)
+        metrics.square_metrics(
+            np.ascontiguousarray(A, dtype=float),
+            self.arrays.m,
+            np.asarray(actuated_v, dtype=np.int64),
+            mobility,
+            FACTOR_RCOND,
+            GRAM_RTOL,
+            INVERSE_RTOL,
+            out,
+            good,
+        )
+        return out, good
 
 
 _NO_TARGET = np.zeros(0)
@@ -185,9 +221,6 @@ def _compiled() -> ModuleType:
     return _COMPILED[0]
 
 
-_KERNELS: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[Closure, ...], Kernel | None]] = (
-    weakref.WeakKeyDictionary()
-)
 _WARNED: set[str] = set()
 
 
@@ -226,7 +259,7 @@ def kernel_of(mech: Mechanism) -> Kernel | None:
     if not kernels_enabled():
         return None
     closures = mech.closures  # the model is final (idle gauges added) once they are compiled
-    hit = _KERNELS.get(mech)
+    hit = vars(mech).get(_CACHE)
     if hit is not None and hit[0] is closures:
         return hit[1]
     missing = unsupported_joints(mech.model)
@@ -239,5 +272,9 @@ def kernel_of(mech: Mechanism) -> Kernel | None:
         )
     else:
         kernel = Kernel.build(mech.model, closures, mech.task_compiled)
-    _KERNELS[mech] = (closures, kernel)
+    vars(mech)[_CACHE] = (closures, kernel)
     return kernel
+
+
+_CACHE = "_kernel"
+"""Attribute of a mechanism holding its closures and their kernel (or None)."""

@@ -162,6 +162,12 @@ def _fit_eliminated(mech: Mechanism, q: np.ndarray, columns: np.ndarray, tol: fl
 
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
     out = q.copy()
+    simple = vars(mech).get(_ONE_COORDINATE)
+    if simple is None:  # whether every actuated joint has one coordinate (read once per mechanism)
+        simple = vars(mech)[_ONE_COORDINATE] = all(mech.model.nqs[a.joint_id] == 1 for a in mech.actuators)
+    if simple:
+        out[mech.actuated_q_indices] = c
+        return out
     nqs = mech.model.nqs
     for a, value in zip(mech.actuators, c, strict=True):
         if nqs[a.joint_id] == 1:
@@ -169,6 +175,10 @@ def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray
         else:  # an unbounded revolute: (cos, sin)
             mech.set_joint(out, a.joint, value)
     return out
+
+
+_ONE_COORDINATE = "_actuators_one_coordinate"
+"""Attribute of a mechanism: whether each actuated joint has one configuration coordinate."""
 
 
 def frame_distance(mech: Mechanism, q1: np.ndarray, q2: np.ndarray) -> float:
@@ -215,11 +225,11 @@ def _close(
     """
     kernel = kernel_of(mech)
     if kernel is not None:
-        solved = kernel.newton(start, free, tol)
+        solved = kernel.solve(start, free, tol)
         if solved is not None:
-            q, r, x = solved
+            q, _, x, residual_norm, _ = solved
             q.setflags(write=False)
-            return q, float(np.abs(r).max()) if r.size else 0.0, x
+            return q, residual_norm, x
     ws = mech._thread_workspace()
     r_phi, A_phi = ws.closure_rows
     fast = (

@@ -206,9 +206,10 @@ def inverse_kinematics(
         )
     xa = check_task_vector(x, task.size)
     target = TaskTarget(task, xa)
+    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     if mode is not None:
         check_mode(mech, mode)
-        first = _from_guess(mech, target, guess, tol)
+        first = _from_guess(mech, target, q0, tol)
         if first is not None and first.mode == tuple(mode):
             return _within_limits(mech, first, respect_limits)
         for sol in working_modes(mech, xa, guess=guess, tol=tol):
@@ -217,7 +218,6 @@ def inverse_kinematics(
         raise PoseUnreachable(
             f"{mech.name}: no inverse-kinematics solution in working mode {tuple(mode)} at x = {xa.tolist()}"
         )
-    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     solution = _from_guess(mech, target, q0, tol)
     if solution is not None:
         return _within_limits(mech, solution, respect_limits)
@@ -238,22 +238,23 @@ def _within_limits(mech: Mechanism, sol: IKSolution, respect_limits: bool) -> IK
     return sol
 
 
-def _from_guess(
-    mech: Mechanism, target: TaskTarget, guess: ArrayLike | None, tol: float
-) -> IKSolution | None:
-    """The solution in the basin of ``guess`` (default: the reference configuration), or None.
+def _from_guess(mech: Mechanism, target: TaskTarget, q0: np.ndarray, tol: float) -> IKSolution | None:
+    """The solution in the basin of the (checked) configuration ``q0``, or None.
 
     Newton first (on the compiled kernels where :func:`~plm_pin.kernels.kernel_of` serves the
-    mechanism); its last pass gives the residual of the solution. Levenberg-Marquardt when
-    Newton stalls.
+    mechanism: they also give the residual norm and whether the solution is within limits);
+    its last pass gives the residual of the solution. Levenberg-Marquardt when Newton stalls.
     """
-    q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     kernel = kernel_of(mech)
     ws = mech._thread_workspace()
     if kernel is not None:
-        solved = kernel.newton(q0, None, tol, target)
+        solved = kernel.solve(q0, None, tol, target)
         if solved is not None:
-            return _solution_from_residual(mech, target, solved[0], solved[1])
+            q, _, _, residual_norm, inside = solved
+            if inside:  # nothing to shift, nothing outside
+                q.setflags(write=False)
+                return IKSolution(q, target.x.copy(), residual_norm, {}, mech)
+            return _solution_from_residual(mech, target, q, solved[1])
     else:
         fast = newton(
             mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target

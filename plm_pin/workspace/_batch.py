@@ -31,6 +31,7 @@ import pinocchio as pin
 from ..core.closures import Closure
 from ..core.legs import Leg
 from ..core.task import FrameTask, Task, wrap_angle
+from ..kernels import Kernel
 from ..tolerances import BATCH_LOG3_SERIES_ANGLE, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL
 from .manipulability import batch_metrics
 
@@ -647,6 +648,25 @@ def _squared_singular_values(M: np.ndarray) -> np.ndarray:
     G = M @ np.swapaxes(M, -1, -2) if M.shape[-2] <= M.shape[-1] else np.swapaxes(M, -1, -2) @ M
     lam = np.linalg.eigvalsh(G)[..., ::-1][..., : min(M.shape[-2:])]
     return np.maximum(lam, 0.0)
+
+
+def compiled_square_task_metrics(
+    kernel: Kernel, A: np.ndarray, m: int, actuated_v: np.ndarray, mobility: int
+) -> dict[str, np.ndarray]:
+    """:func:`square_task_metrics` pose by pose on the compiled kernel (:meth:`Kernel.map_metrics`).
+
+    The poses that fail its acceptance tests get
+    :func:`~plm_pin.workspace.manipulability.batch_metrics` (SVD), as in the numpy path.
+    """
+    from ..kernels.metrics import METRIC_NAMES
+
+    values, good = kernel.map_metrics(A, actuated_v, mobility)
+    out = {name: values[:, i].copy() for i, name in enumerate(METRIC_NAMES)}
+    if not good.all():
+        bad = ~good
+        for name, v in batch_metrics(A[bad, :m], A[bad, m:], actuated_v, mobility).items():
+            out[name][bad] = v
+    return out
 
 
 def square_task_metrics(

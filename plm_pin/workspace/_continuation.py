@@ -47,7 +47,14 @@ from ..kernels import Kernel, kernel_of
 from ..kinematics.forward import task_pose
 from ..kinematics.inverse import check_mode, inverse_kinematics
 from ..kinematics.working_mode import start_configuration
-from ._batch import BatchKinematics, batch_modes, batch_newton, rpy_matrix, square_task_metrics
+from ._batch import (
+    BatchKinematics,
+    batch_modes,
+    batch_newton,
+    compiled_square_task_metrics,
+    rpy_matrix,
+    square_task_metrics,
+)
 from .manipulability import batch_metrics
 
 ndimage = lazy_module("scipy.ndimage")  # label: the unreached regions of a grid
@@ -390,6 +397,8 @@ def _metrics_for(ev: IKEvaluator, kin: BatchKinematics | None = None) -> Metrics
 
     def metrics(A: np.ndarray) -> dict[str, np.ndarray]:
         if ev.task.size == ev.mobility and ev.m:
+            if ev.kernel is not None and arrow is None:  # with the arrow, numpy's block solve is cheaper
+                return compiled_square_task_metrics(ev.kernel, A, ev.m, ev.actuated_v, ev.mobility)
             return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility, arrow)
         return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility)
 

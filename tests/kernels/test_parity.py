@@ -18,7 +18,7 @@ from plm_pin.core import closures as C
 from plm_pin.core.assembly import newton
 from plm_pin.core.task import TaskTarget, compile_task
 from plm_pin.description.sidecar import ClosureSpec
-from plm_pin.kernels import Kernel, compiled, kernel_of
+from plm_pin.kernels import Kernel, kernel_of
 from plm_pin.kernels.arrays import JOINT_KINDS, unsupported_joints
 from plm_pin.kinematics import forward_kinematics, inverse_kinematics
 from plm_pin.models import preset_names
@@ -176,8 +176,7 @@ def test_every_joint_and_closure_type(dofs, rng):
             target = TaskTarget(task, task.pose_from_data(data) + rng.normal(scale=0.1, size=task.size))
         _check_rows(kernel, model, closures, q, target)
         v = rng.normal(scale=0.7, size=model.nv)
-        moved = np.empty(model.nq)
-        compiled.integrate(kernel.arrays, q, v, moved, *compiled.scratch(model.nv)[:2])
+        moved = kernel.integrate(q, v)
         pin.framesForwardKinematics(model, data, moved)
         placed = [M.copy() for M in data.oMi]
         pin.framesForwardKinematics(model, data, pin.integrate(model, q, v))

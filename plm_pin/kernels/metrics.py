@@ -1,0 +1,235 @@
+r"""Compiled map metrics: :func:`plm_pin.workspace._batch.square_task_metrics` pose by pose, in numba.
+
+For each stacked Jacobian :math:`A = [J_\phi; J_x]` of a batch, the velocity map :math:`S`
+(:math:`A S = [0; I]` where :math:`A` is square, else :math:`A^T A S = J_x^T`) by an LU with
+partial pivoting, its orthonormal basis :math:`N` by Gram-Schmidt (twice), :math:`T = J_x N`
+and its inverse, :math:`C = N_a`, and the squared singular values of :math:`C T^{-1}`,
+:math:`C`, :math:`J_\phi`, :math:`T^{-1}` and :math:`J_x` as the eigenvalues of their smaller
+Gram matrices (cyclic Jacobi rotations on the small ones, accurate to round-off of the Gram's
+norm; LAPACK on the large ones). The same
+values and the same acceptance tests as the numpy path; a pose that fails them is flagged for
+that path's SVD. numba is imported only here; the functions compile on first use (cached on disk).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+METRIC_NAMES = ("manipulability", "condition_number", "constraint_margin", "inverse_margin", "direct_margin")
+"""The columns of :func:`square_metrics`' output, in order."""
+
+
+JACOBI_MAX = 12
+"""Largest Gram matrix whose eigenvalues are found by Jacobi rotations (beyond, LAPACK is cheaper)."""
+
+
+@njit(cache=True)
+def _lu_solve(M: np.ndarray, B: np.ndarray) -> bool:
+    """Solve ``M X = B`` in place (``B`` becomes ``X``; ``M`` its LU); False on a zero pivot."""
+    n, r = M.shape[0], B.shape[1]
+    for j in range(n):
+        p, best = j, abs(M[j, j])
+        for i in range(j + 1, n):
+            if abs(M[i, j]) > best:
+                p, best = i, abs(M[i, j])
+        if not best > 0.0:
+            return False
+        if p != j:
+            for c in range(n):
+                M[j, c], M[p, c] = M[p, c], M[j, c]
+            for c in range(r):
+                B[j, c], B[p, c] = B[p, c], B[j, c]
+        for i in range(j + 1, n):
+            f = M[i, j] / M[j, j]
+            M[i, j] = f
+            for c in range(j + 1, n):
+                M[i, c] -= f * M[j, c]
+            for c in range(r):
+                B[i, c] -= f * B[j, c]
+    for c in range(r):
+        for i in range(n - 1, -1, -1):
+            s = B[i, c]
+            for t in range(i + 1, n):
+                s -= M[i, t] * B[t, c]
+            B[i, c] = s / M[i, i]
+    return True
+
+
+@njit(cache=True)
+def _gram_eigenvalues(M: np.ndarray, G: np.ndarray, out: np.ndarray) -> int:
+    """Squared singular values of ``M`` (r, c), descending, into ``out``; returns min(r, c).
+
+    Eigenvalues of the smaller Gram matrix (in the scratch ``G``) by cyclic Jacobi rotations
+    up to :data:`JACOBI_MAX` rows, LAPACK's ``eigvalsh`` above, clipped at zero.
+    """
+    r, c = M.shape
+    n = min(r, c)
+    for a in range(n):
+        for b in range(a + 1):
+            s = 0.0
+            if r <= c:
+                for t in range(c):
+                    s += M[a, t] * M[b, t]
+            else:
+                for t in range(r):
+                    s += M[t, a] * M[t, b]
+            G[a, b] = s
+            G[b, a] = s
+    if n > JACOBI_MAX:
+        values = np.linalg.eigvalsh(np.ascontiguousarray(G[:n, :n]))
+        for a in range(n):
+            out[a] = max(values[n - 1 - a], 0.0)
+        return n
+    eps = np.finfo(np.float64).eps
+    for _ in range(64):
+        off = 0.0
+        total = 0.0
+        for a in range(n):
+            total += G[a, a] * G[a, a]
+            for b in range(a + 1, n):
+                off += G[a, b] * G[a, b]
+        if off <= eps * eps * (total + off):
+            break
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                if G[p, q] == 0.0:
+                    continue
+                theta = (G[q, q] - G[p, p]) / (2.0 * G[p, q])
+                t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
+                cs = 1.0 / math.sqrt(t * t + 1.0)
+                sn = t * cs
+                for i in range(n):
+                    gp, gq = G[i, p], G[i, q]
+                    G[i, p], G[i, q] = cs * gp - sn * gq, sn * gp + cs * gq
+                for i in range(n):
+                    gp, gq = G[p, i], G[q, i]
+                    G[p, i], G[q, i] = cs * gp - sn * gq, sn * gp + cs * gq
+    for a in range(n):
+        out[a] = max(G[a, a], 0.0)
+    out[:n].sort()
+    out[:n] = out[:n][::-1].copy()
+    return n
+
+
+@njit(cache=True)
+def square_metrics(
+    A: np.ndarray,
+    m: int,
+    actuated_v: np.ndarray,
+    mobility: int,
+    factor_rcond: float,
+    gram_rtol: float,
+    inverse_rtol: float,
+    out: np.ndarray,
+    good: np.ndarray,
+) -> None:
+    """The map metrics of each stacked Jacobian ``A[p] = [J_phi; J_x]`` (B, m + k, nv), k = ``mobility``.
+
+    Args:
+        A: stacked Jacobians, shape (B, m + k, nv).
+        m: closure rows.
+        actuated_v: velocity indices of the actuators, shape (n_act,).
+        mobility: DOF (= k).
+        factor_rcond: smallest accepted ratio of the velocity map's QR diagonal.
+        gram_rtol: smallest accepted ratio of squared singular values (the Gram's accuracy).
+        inverse_rtol: smallest accepted inverse margin.
+        out: the metrics (:data:`METRIC_NAMES`), shape (B, 5).
+        good: out, whether the pose passed every test (else its row of ``out`` is meaningless).
+    """
+    B, n, nv = A.shape
+    k, na = mobility, actuated_v.shape[0]
+    square = n == nv
+    M = np.empty((nv, nv))
+    S = np.empty((nv, k))
+    N = np.empty((nv, k))
+    d = np.empty(k)
+    T = np.empty((k, k))
+    T_inv = np.empty((k, k))
+    C = np.empty((na, k))
+    CT = np.empty((na, k))
+    big = max(n, nv)
+    G = np.empty((big, big))
+    s_ce, s_c, s_phi, s_t, s_x = np.empty(big), np.empty(big), np.empty(big), np.empty(big), np.empty(big)
+    rank = nv - k
+    for p in range(B):
+        good[p] = False
+        Ap = A[p]
+        if square:  # A S = [0; I]
+            M[:, :] = Ap
+            S[:, :] = 0.0
+            for j in range(k):
+                S[m + j, j] = 1.0
+        else:  # A^T A S = J_x^T
+            for a in range(nv):
+                for b in range(a + 1):
+                    s = 0.0
+                    for i in range(n):
+                        s += Ap[i, a] * Ap[i, b]
+                    M[a, b] = s
+                    M[b, a] = s
+                for j in range(k):
+                    S[a, j] = Ap[m + j, a]
+        if not _lu_solve(M, S) or not np.isfinite(S).all():
+            continue
+        for j in range(k):  # Gram-Schmidt, twice
+            for c in range(nv):
+                N[c, j] = S[c, j]
+            for _ in range(2):
+                for i in range(j):
+                    s = 0.0
+                    for c in range(nv):
+                        s += N[c, i] * N[c, j]
+                    for c in range(nv):
+                        N[c, j] -= s * N[c, i]
+            s = 0.0
+            for c in range(nv):
+                s += N[c, j] * N[c, j]
+            d[j] = math.sqrt(s)
+            if d[j] > 0.0:
+                for c in range(nv):
+                    N[c, j] /= d[j]
+        if not d.min() > factor_rcond * d.max():
+            continue
+        for a in range(k):
+            for b in range(k):
+                s = 0.0
+                for c in range(nv):
+                    s += Ap[m + a, c] * N[c, b]
+                T[a, b] = s
+                T_inv[a, b] = 1.0 if a == b else 0.0
+        if not _lu_solve(T, T_inv):
+            continue
+        for a in range(na):
+            for b in range(k):
+                C[a, b] = N[actuated_v[a], b]
+        for a in range(na):
+            for b in range(k):
+                s = 0.0
+                for c in range(k):
+                    s += C[a, c] * T_inv[c, b]
+                CT[a, b] = s
+        n_ce = _gram_eigenvalues(CT, G, s_ce)
+        n_c = _gram_eigenvalues(C, G, s_c)
+        _gram_eigenvalues(Ap[:m], G, s_phi)
+        _gram_eigenvalues(T_inv, G, s_t)
+        _gram_eigenvalues(Ap[m:], G, s_x)
+        inverse = 1.0 / (math.sqrt(s_t[0]) * math.sqrt(s_x[0]))
+        if not (
+            inverse > inverse_rtol
+            and s_ce[n_ce - 1] > gram_rtol * s_ce[0]
+            and s_c[n_c - 1] > gram_rtol * s_c[0]
+            and s_phi[rank - 1] > gram_rtol * s_phi[0]
+        ):
+            continue
+        w = 1.0
+        for i in range(n_ce):
+            w *= math.sqrt(s_ce[i])
+        out[p, 0] = w
+        out[p, 1] = math.sqrt(s_ce[0]) / math.sqrt(s_ce[n_ce - 1])
+        out[p, 2] = math.sqrt(s_phi[rank - 1] / s_phi[0])
+        out[p, 3] = inverse
+        out[p, 4] = math.sqrt(s_c[n_c - 1])
+        good[p] = True
