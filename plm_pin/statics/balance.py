@@ -48,6 +48,7 @@ from ..core.checks import check_assembled, check_finite_model, check_finite_resu
 from ..core.mechanism import Mechanism
 from ..core.task import FrameTask, JointTask
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
+from ..kernels import kernels_enabled
 from ..results import Result, unit
 from ..tolerances import EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL, STATICS_SINGULAR_RTOL
 
@@ -281,11 +282,11 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
     model, closures = mech.model, mech.closures
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
-    J_phi = _closures.jacobian_from_data(model, data, closures)
-    if (
-        closures
-        and not np.max(np.abs(_closures.residual_from_placements(data, closures))) <= mech.assembled_tol
-    ):
+    if not closures:
+        return np.empty((0, model.nv))
+    bound = _closures.BoundClosures(data, closures)
+    J_phi = bound.jacobian(model, np.empty((bound.rows, model.nv)))
+    if not np.max(np.abs(bound.residual(np.empty(bound.rows)))) <= mech.assembled_tol:
         check_assembled(mech, q)  # raises, with the residual and the worst closure
     return J_phi
 
@@ -443,9 +444,21 @@ def balance_factors(
     The QR (or SVD) of :math:`J_\phi` (:func:`closure_factors`), then the small SVD of
     :math:`C = B^T N`, which decides direct singularities with ``singular_rtol``.
 
+    The common case (closure rows clearly of full rank, a load the actuators hold) runs as one
+    compiled call when the kernels are enabled (:func:`~plm_pin.kernels.kernels_enabled`);
+    the same factorisation, to round-off.
+
     Raises:
         SingularConfiguration: as :func:`static_balance`.
     """
+    if kernels_enabled():
+        from . import _compiled
+
+        status, *factors = _compiled.factor(
+            J_phi, act_v, tau, singular_rtol, mech.closure_tol, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL
+        )
+        if status == _compiled.OK:
+            return BalanceFactors(*factors)
     N, lambda_map = closure_factors(J_phi, singular_rtol, mech.closure_tol)
     C = N[act_v]  # (n_act, nullity)
     b = N.T @ tau  # (nullity,)
