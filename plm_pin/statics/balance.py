@@ -34,6 +34,7 @@ the internal-force space (see :func:`oriented_internal_basis`); with one interna
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from types import ModuleType
 from typing import NamedTuple
 
 import numpy as np
@@ -436,6 +437,10 @@ class BalanceFactors(NamedTuple):
     G: np.ndarray
 
 
+_COMPILED: list[ModuleType] = []
+"""Holds :mod:`plm_pin.statics._compiled` once imported (it imports numba)."""
+
+
 def balance_factors(
     mech: Mechanism, J_phi: np.ndarray, act_v: np.ndarray, tau: np.ndarray, singular_rtol: float
 ) -> BalanceFactors:
@@ -452,12 +457,14 @@ def balance_factors(
         SingularConfiguration: as :func:`static_balance`.
     """
     if kernels_enabled():
-        from . import _compiled
+        if not _COMPILED:
+            from . import _compiled
 
-        status, *factors = _compiled.factor(
+            _COMPILED.append(_compiled)
+        status, *factors = _COMPILED[0].factor(
             J_phi, act_v, tau, singular_rtol, mech.closure_tol, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL
         )
-        if status == _compiled.OK:
+        if status == 0:  # _compiled.OK
             return BalanceFactors(*factors)
     N, lambda_map = closure_factors(J_phi, singular_rtol, mech.closure_tol)
     C = N[act_v]  # (n_act, nullity)
