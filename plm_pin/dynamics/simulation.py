@@ -385,9 +385,9 @@ class _Run:
                     if not np.isfinite(y).all():
                         raise _NonFinite("the state became non-finite")
                     if times[k] <= solver.t:
-                        dense = solver.dense_output()
-                        while k < times.size and times[k] <= solver.t:
-                            yk = dense(float(times[k]))
+                        stop = int(np.searchsorted(times, solver.t, side="right"))  # samples k..stop-1
+                        dense = np.ascontiguousarray(solver.dense_output()(times[k:stop]).T)  # one pass
+                        for yk in dense:
                             qk = yk[:nv] if euclidean else pin.integrate(model, origin, yk[:nv])
                             p = self.project(qk, yk[nv:], solver.h_abs or max_step)
                             self.record(k, p.q, p.v, max(drift, p.before), p.after, p.rows, p.jacobian)
