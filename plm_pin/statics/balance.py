@@ -33,6 +33,7 @@ the internal-force space (see :func:`oriented_internal_basis`); with one interna
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field
 from types import ModuleType
 from typing import NamedTuple
@@ -440,6 +441,11 @@ class BalanceFactors(NamedTuple):
 _COMPILED: list[ModuleType] = []
 """Holds :mod:`plm_pin.statics._compiled` once imported (it imports numba)."""
 
+_LAST: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[bytes, bytes, float, float], BalanceFactors]] = (
+    weakref.WeakKeyDictionary()
+)
+"""Each mechanism's last compiled factorisation, keyed by J_phi, the actuated velocities, the tolerances."""
+
 
 def balance_factors(
     mech: Mechanism, J_phi: np.ndarray, act_v: np.ndarray, tau: np.ndarray, singular_rtol: float
@@ -451,21 +457,35 @@ def balance_factors(
 
     The common case (closure rows clearly of full rank, a load the actuators hold) runs as one
     compiled call when the kernels are enabled (:func:`~plm_pin.kernels.kernels_enabled`);
-    the same factorisation, to round-off.
+    the same factorisation, to round-off. Its last result is kept with the mechanism and
+    reused for the next load at the same :math:`J_\phi` (the load cases of one
+    configuration), after checking that the actuators hold that load too.
 
     Raises:
         SingularConfiguration: as :func:`static_balance`.
     """
     if kernels_enabled():
+        key = (J_phi.tobytes(), act_v.tobytes(), singular_rtol, mech.closure_tol)
+        last = _LAST.get(mech)
+        if last is not None and last[0] == key:
+            factors = last[1]
+            unheld = factors.N[:, factors.C.shape[0] - factors.G.shape[1] :]  # motions C does not hold
+            if not unheld.size or abs(unheld.T @ tau).max() <= EQUILIBRIUM_RTOL * max(
+                abs(tau).max(initial=0.0), 1e-300
+            ):
+                return factors
         if not _COMPILED:
             from . import _compiled
 
             _COMPILED.append(_compiled)
-        status, *factors = _COMPILED[0].factor(
+        status, *arrays = _COMPILED[0].factor(
             J_phi, act_v, tau, singular_rtol, mech.closure_tol, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL
         )
         if status == 0:  # _compiled.OK
-            return BalanceFactors(*factors)
+            for arr in arrays:
+                arr.setflags(write=False)  # shared by the load cases of this configuration
+            _LAST[mech] = (key, BalanceFactors(*arrays))
+            return _LAST[mech][1]
     N, lambda_map = closure_factors(J_phi, singular_rtol, mech.closure_tol)
     C = N[act_v]  # (n_act, nullity)
     b = N.T @ tau  # (nullity,)
