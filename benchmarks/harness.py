@@ -621,9 +621,11 @@ def balance_floor(mech: Mechanism, data: pin.Data, q: np.ndarray, v: np.ndarray,
 def allocation_benchmark() -> list[dict[str, object]]:
     """Bounded and min-peak static allocation, trajectory and inverse dynamics per sample (3D4M, 8-PSS).
 
-    The default paths (static forces, inverse dynamics per sample) print beside their floor
-    (:func:`balance_floor`), timed in alternation; the default of :func:`inverse_dynamics` computes
-    the forces, closure forces, internal coordinates and the term split; the body split on request.
+    The default paths (static forces at one pose, where the factorisation is reused from the
+    call before, and along the trajectory, where it is not; inverse dynamics per sample) print
+    beside their floor (:func:`balance_floor`), timed in alternation; the default of
+    :func:`inverse_dynamics` computes the forces, closure forces, internal coordinates and the
+    term split; the body split on request.
     """
     rows: list[dict[str, object]] = []
     profiles: dict[str, tuple[Callable[[float], Any], float]] = {
@@ -675,11 +677,26 @@ def allocation_benchmark() -> list[dict[str, object]]:
             for qi, vi, ai in zip(traj.q, traj.v, traj.a, strict=True):
                 balance_floor(mech, data, qi, vi, ai)
 
+        def statics_along(traj: Any = traj, mech: Mechanism = mech) -> None:
+            for qi in traj.q:
+                static_forces(mech, qi)
+
+        def floor_along(
+            traj: Any = traj, data: pin.Data = data, mech: Mechanism = mech, rest: np.ndarray = rest
+        ) -> None:
+            for qi in traj.q:
+                balance_floor(mech, data, qi, rest, rest)
+
         floored: dict[str, tuple[Callable[[], object], Callable[[], object], int]] = {
             "static_forces (gravity, min-norm: the default)": (
                 functools.partial(static_forces, mech, q),
                 functools.partial(balance_floor, mech, data, q, rest, rest),
                 1,
+            ),
+            "static_forces along the trajectory (a new pose each call: no factorisation reused)": (
+                statics_along,
+                floor_along,
+                51,
             ),
             "inverse_dynamics (default: forces, closure forces, term split), per sample": (
                 functools.partial(inverse_dynamics, mech, traj),

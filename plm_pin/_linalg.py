@@ -1,4 +1,4 @@
-"""Square linear systems by LU (LAPACK ``getrf`` / ``getrs`` / ``gesv``), and the sign of a determinant.
+"""Square solves by LU (LAPACK ``getrf`` / ``getrs`` / ``gesv``), the sign of a determinant, a thin SVD.
 
 ``numpy.linalg.solve`` costs about 9 us on a 9 x 9 system (its generalized-ufunc machinery), the
 LAPACK driver 2.5 us. Solves here raise ``numpy.linalg.LinAlgError`` on an exactly singular matrix,
@@ -12,7 +12,7 @@ import numpy as np
 
 from ._lazy import lazy_module
 
-lapack = lazy_module("scipy.linalg.lapack")  # dgesv, dgetrf, dgetrs
+lapack = lazy_module("scipy.linalg.lapack")  # dgesv, dgetrf, dgetrs, dgesdd
 
 
 def _singular(info: int, what: str) -> None:
@@ -79,3 +79,17 @@ class LU:
 def det_sign(A: np.ndarray) -> float:
     """The sign of ``det A`` for a square ``A`` from its LU factors: +1.0, -1.0, or 0.0 when singular."""
     return LU(A).det_sign()
+
+
+def thin_svd(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``U, s, Vt`` of ``numpy.linalg.svd(A, full_matrices=False)`` by one LAPACK ``gesdd`` call.
+
+    For the small matrices of a per-sample loop, where numpy's wrapper costs more than the
+    factorisation; numpy's (its own driver) where ``gesdd`` does not converge.
+    """
+    if A.size:
+        U, s, Vt, info = lapack.dgesdd(A, full_matrices=0)
+        if info == 0:
+            return U, s, Vt
+    U, s, Vt = np.linalg.svd(A, full_matrices=False)
+    return U, s, Vt

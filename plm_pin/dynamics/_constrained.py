@@ -77,7 +77,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from .._linalg import lu_solve
+from .._linalg import lu_solve, thin_svd
 from ..core import closures as _closures
 from ..core.assembly import assemble
 from ..core.closures import Closure
@@ -131,6 +131,7 @@ class Projection(NamedTuple):
         before: closure distance before the projection [m, rad].
         after: closure distance of ``q`` [m, rad].
         rows: the reduced closure rows at ``q``, or None when the projection did not need them.
+        jacobian: the closure Jacobian at ``q`` (None without closures), shape (m, nv).
     """
 
     q: np.ndarray
@@ -138,6 +139,7 @@ class Projection(NamedTuple):
     before: float
     after: float
     rows: ReducedRows | None
+    jacobian: np.ndarray | None = None
 
 
 class ClosureDistance:
@@ -253,7 +255,7 @@ class ClosedChainDynamics:
             the independent rows whose singular value vanishes (a constraint singularity),
             shape (m, d); d = 0 away from one.
         """
-        U, s, Vt = np.linalg.svd(J, full_matrices=False)
+        U, s, Vt = thin_svd(J)
         r = self.rank
         kept = r
         if r and s[r - 1] <= RANK_RTOL * max(s[0], 1.0):
@@ -419,11 +421,17 @@ class ClosedChainDynamics:
         return direct
 
     def solve(
-        self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, rows: ReducedRows | None = None
+        self,
+        q: np.ndarray,
+        v: np.ndarray,
+        tau: np.ndarray,
+        rows: ReducedRows | None = None,
+        jacobian: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Joint accelerations (nv,) and closure forces (m,) [N, N m] with the chosen solver.
 
-        ``rows``: the reduced closure rows at ``q`` when already known (from :meth:`project`).
+        ``rows``: the reduced closure rows at ``q`` when already known (from :meth:`project`);
+        else ``jacobian``, the closure Jacobian at ``q`` when known (likewise).
         Where Pinocchio's iterations do not converge, both come from the KKT solve.
         """
         a = self._pinocchio_acceleration(q, v, tau) if self.solver == "pinocchio" else None
@@ -434,7 +442,9 @@ class ClosedChainDynamics:
         model, pdata = self.model, self._pin_data
         pin.computeJointJacobians(model, pdata, q)
         force = pin.getConstraintsJacobian(model, pdata, self._cms, self._cds).T @ pdata.lambda_c  # (nv,)
-        Ur, sr, W = self._reduced_rows(self._closure_terms(q)[1], (q, v)) if rows is None else rows
+        if rows is None:
+            rows = self._reduced_rows(self._closure_terms(q)[1] if jacobian is None else jacobian, (q, v))
+        Ur, sr, W = rows
         return a, Ur @ ((W @ force) / sr)
 
     def project(self, q: np.ndarray, v: np.ndarray, tol: float, velocity_tol: float = 0.0) -> Projection:
@@ -477,13 +487,13 @@ class ClosedChainDynamics:
                 phi, J = self._closure_terms(q)
                 after = self.distance(phi)
         elif np.max(np.abs(J @ v)) <= velocity_tol:
-            return Projection(q, v, before, after, None)
+            return Projection(q, v, before, after, None, J)
         rows, lost = self._split(J)
         M = pin.crba(model, data, q)
         v = v + self._saddle(M, rows.W, np.zeros(model.nv), -(rows.W @ v))[: model.nv]
         if lost.shape[1]:
             self._check_through(q, v, lost, rows.W, J)
-        return Projection(q, v, before, after, rows)
+        return Projection(q, v, before, after, rows, J)
 
     def stage_rates(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         r"""Rates of an integrator's stage, taken at its projection onto the closures.

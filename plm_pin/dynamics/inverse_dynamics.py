@@ -352,13 +352,14 @@ class _Kinematics:
         J_load = np.empty((n, 6, model.nv)) if frame_id is not None else None
         J_task = np.empty((n, task.size, model.nv)) if square and task is not None else None
         worst = np.zeros(n)  # largest closure residual of each sample
+        bound = _closures.BoundClosures(data, closures) if closures else None  # live views: bound once
+        phi = np.empty(m)
         for i, q in enumerate(trajectory.q):
             pin.computeJointJacobians(model, data, q)
             pin.updateFramePlacements(model, data)
-            if closures:
-                phi = _closures.residual_from_placements(data, closures)
-                worst[i] = np.max(np.abs(phi))
-                _closures.jacobian_from_data(model, data, closures, J_phi[i])
+            if bound is not None:
+                worst[i] = abs(bound.residual(phi)).max()
+                bound.jacobian(model, J_phi[i])
             if J_load is not None:
                 J_load[i] = pin.getFrameJacobian(model, data, frame_id, _LWA)
             if J_task is not None and task is not None:

@@ -385,12 +385,12 @@ class _Run:
                     if not np.isfinite(y).all():
                         raise _NonFinite("the state became non-finite")
                     if times[k] <= solver.t:
-                        dense = solver.dense_output()
-                        while k < times.size and times[k] <= solver.t:
-                            yk = dense(float(times[k]))
+                        stop = int(np.searchsorted(times, solver.t, side="right"))  # samples k..stop-1
+                        dense = np.ascontiguousarray(solver.dense_output()(times[k:stop]).T)  # one pass
+                        for yk in dense:
                             qk = yk[:nv] if euclidean else pin.integrate(model, origin, yk[:nv])
                             p = self.project(qk, yk[nv:], solver.h_abs or max_step)
-                            self.record(k, p.q, p.v, max(drift, p.before), p.after, p.rows)
+                            self.record(k, p.q, p.v, max(drift, p.before), p.after, p.rows, p.jacobian)
                             k, drift = k + 1, 0.0
                     t = solver.t
                     q = y[:nv] if euclidean else pin.integrate(model, origin, y[:nv])
@@ -488,22 +488,25 @@ class _Run:
         drift: float,
         distance: float | None = None,
         rows: ReducedRows | None = None,
+        jacobian: np.ndarray | None = None,
     ) -> None:
         """Store sample ``k`` of the projected state with its accelerations, forces, energy and pose.
 
-        ``distance`` and ``rows``: the closure distance and reduced closure rows at ``q`` when
-        the projection computed them. A passive run's energy is guarded.
+        ``distance``, ``rows`` and ``jacobian``: the closure distance, reduced closure rows and
+        closure Jacobian at ``q`` when the projection computed them (it leaves the frame
+        placements of ``q`` in the data). A passive run's energy is guarded.
         """
         self.q[k], self.v[k] = q, v
-        self.residual[k] = self.distance(q) if distance is None else distance
+        if distance is None or not self.mech.closures:
+            distance = self.distance(q)  # the frame placements of q in the data
+        self.residual[k] = distance
         self.drift[k] = drift
-        self.a[k], self.lam[k] = self.dyn.solve(q, v, self.tau(float(self.times[k]), q, v), rows)
+        self.a[k], self.lam[k] = self.dyn.solve(q, v, self.tau(float(self.times[k]), q, v), rows, jacobian)
         if not (np.isfinite(self.a[k]).all() and np.isfinite(self.lam[k]).all()):
             raise _NonFinite("the accelerations or closure forces became non-finite")
         if self.x is not None:
             task = self.mech.task_compiled
             assert task is not None
-            pin.framesForwardKinematics(self.model, self.data, q)
             self.x[k] = task.pose_from_data(self.data)
         self.energy[k] = self.dyn.energy(q, v)
         if self.passive:

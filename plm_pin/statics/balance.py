@@ -33,7 +33,9 @@ the internal-force space (see :func:`oriented_internal_basis`); with one interna
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, field
+from types import ModuleType
 from typing import NamedTuple
 
 import numpy as np
@@ -48,6 +50,7 @@ from ..core.checks import check_assembled, check_finite_model, check_finite_resu
 from ..core.mechanism import Mechanism
 from ..core.task import FrameTask, JointTask
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
+from ..kernels import kernels_enabled
 from ..results import Result, unit
 from ..tolerances import EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL, STATICS_SINGULAR_RTOL
 
@@ -281,11 +284,11 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
     model, closures = mech.model, mech.closures
     pin.computeJointJacobians(model, data, q)
     pin.updateFramePlacements(model, data)
-    J_phi = _closures.jacobian_from_data(model, data, closures)
-    if (
-        closures
-        and not np.max(np.abs(_closures.residual_from_placements(data, closures))) <= mech.assembled_tol
-    ):
+    if not closures:
+        return np.empty((0, model.nv))
+    bound = _closures.BoundClosures(data, closures)
+    J_phi = bound.jacobian(model, np.empty((bound.rows, model.nv)))
+    if not np.max(np.abs(bound.residual(np.empty(bound.rows)))) <= mech.assembled_tol:
         check_assembled(mech, q)  # raises, with the residual and the worst closure
     return J_phi
 
@@ -435,6 +438,15 @@ class BalanceFactors(NamedTuple):
     G: np.ndarray
 
 
+_COMPILED: list[ModuleType] = []
+"""Holds :mod:`plm_pin.statics._compiled` once imported (it imports numba)."""
+
+_LAST: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[bytes, bytes, float, float], BalanceFactors]] = (
+    weakref.WeakKeyDictionary()
+)
+"""Each mechanism's last compiled factorisation, keyed by J_phi, the actuated velocities, the tolerances."""
+
+
 def balance_factors(
     mech: Mechanism, J_phi: np.ndarray, act_v: np.ndarray, tau: np.ndarray, singular_rtol: float
 ) -> BalanceFactors:
@@ -443,9 +455,37 @@ def balance_factors(
     The QR (or SVD) of :math:`J_\phi` (:func:`closure_factors`), then the small SVD of
     :math:`C = B^T N`, which decides direct singularities with ``singular_rtol``.
 
+    The common case (closure rows clearly of full rank, a load the actuators hold) runs as one
+    compiled call when the kernels are enabled (:func:`~plm_pin.kernels.kernels_enabled`);
+    the same factorisation, to round-off. Its last result is kept with the mechanism and
+    reused for the next load at the same :math:`J_\phi` (the load cases of one
+    configuration), after checking that the actuators hold that load too.
+
     Raises:
         SingularConfiguration: as :func:`static_balance`.
     """
+    if kernels_enabled():
+        key = (J_phi.tobytes(), act_v.tobytes(), singular_rtol, mech.closure_tol)
+        last = _LAST.get(mech)
+        if last is not None and last[0] == key:
+            factors = last[1]
+            unheld = factors.N[:, factors.C.shape[0] - factors.G.shape[1] :]  # motions C does not hold
+            if not unheld.size or abs(unheld.T @ tau).max() <= EQUILIBRIUM_RTOL * max(
+                abs(tau).max(initial=0.0), 1e-300
+            ):
+                return factors
+        if not _COMPILED:
+            from . import _compiled
+
+            _COMPILED.append(_compiled)
+        status, *arrays = _COMPILED[0].factor(
+            J_phi, act_v, tau, singular_rtol, mech.closure_tol, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL
+        )
+        if status == 0:  # _compiled.OK
+            for arr in arrays:
+                arr.setflags(write=False)  # shared by the load cases of this configuration
+            _LAST[mech] = (key, BalanceFactors(*arrays))
+            return _LAST[mech][1]
     N, lambda_map = closure_factors(J_phi, singular_rtol, mech.closure_tol)
     C = N[act_v]  # (n_act, nullity)
     b = N.T @ tau  # (nullity,)
