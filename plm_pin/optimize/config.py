@@ -31,7 +31,7 @@ from typing import Any
 from .._text import short
 from .._yaml import YamlRefused, load_yaml, read_head
 from ..exceptions import InvalidInput
-from ..sweep.config import UNITS, check_header, import_mechanism, values_of
+from ..sweep.config import UNITS, check_header, import_mechanism, mechanism_beside, values_of
 from .problem import FORMAT, Problem, make_problem
 from .search import search_settings
 
@@ -110,4 +110,4 @@ def load_config(path: str | Path) -> tuple[Problem, dict[str, Any]]:
         config = load_yaml(text)
     except YamlRefused as exc:
         raise InvalidInput(f"{p}: not valid YAML ({exc})") from None
-    return problem_from_config(config, str(p))
+    return problem_from_config(mechanism_beside(config, p.parent), str(p))

@@ -104,6 +104,18 @@ def import_mechanism(raw: Any) -> Any:
     return builder
 
 
+def mechanism_beside(config: Any, folder: Path) -> Any:
+    """The configuration with a relative description path in ``mechanism`` read from ``folder``.
+
+    A path written in a configuration file names a file beside that file, wherever the command
+    runs; a preset name, a builder ``module:function`` or an absolute path is left as it is.
+    """
+    raw = config.get("mechanism") if isinstance(config, Mapping) else None
+    if isinstance(raw, str) and raw and not Path(raw).is_absolute() and (folder / raw).exists():
+        return {**config, "mechanism": str(folder / raw)}
+    return config
+
+
 def check_header(config: Any, what: str, keys: Sequence[str], form: str, required: Sequence[str]) -> None:
     """Check the top level of a configuration mapping: a mapping, known keys, its format, required keys.
 
@@ -181,4 +193,4 @@ def load_config(path: str | Path) -> tuple[SweepSpec, int | None]:
         config = load_yaml(text)
     except YamlRefused as exc:
         raise InvalidInput(f"{p}: not valid YAML ({exc})") from None
-    return spec_from_config(config, str(p))
+    return spec_from_config(mechanism_beside(config, p.parent), str(p))

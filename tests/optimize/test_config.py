@@ -91,3 +91,29 @@ def test_cli_report_lists_the_start_and_best_designs_of_the_table(tmp_path: Path
     best = designs.loc[designs["score"].idxmin()]
     assert rows["start"][1:3] == [0.15, 0.2]  # the preset's proximal and distal
     assert rows["best 1"][1:3] == pytest.approx([best["proximal"], best["distal"]], rel=1e-12)
+
+
+def test_a_description_path_is_read_beside_the_configuration_file(tmp_path: Path, monkeypatch) -> None:
+    """``mechanism: m/arm.urdf`` names the file beside the configuration, wherever the command runs."""
+    from plm_pin.legs import planar
+    from plm_pin.optimize.config import load_config as load_optimization
+    from plm_pin.sweep.config import load_config as load_sweep
+
+    ring = [(0.3, 0.0), (-0.15, 0.26), (-0.15, -0.26)]
+    urdf = planar(
+        "RPR", ring, [(0.1 * x / 0.3, 0.1 * y / 0.3) for x, y in ring], folder=tmp_path / "m", name="arm"
+    )
+    poses = {"x": {"linspace": [-0.01, 0.01, 2]}, "y": {"linspace": [-0.01, 0.01, 2]}}
+    optimization = {"mechanism": "m/arm.urdf", "variables": {"pivot2.x": [-0.2, -0.1]}, "poses": poses}
+    sweep = {"mechanism": "m/arm.urdf", "poses": poses, "metrics": ["reachable"]}
+    (tmp_path / "opt.yaml").write_text(yaml.safe_dump(optimization))
+    (tmp_path / "sweep.yaml").write_text(yaml.safe_dump(sweep))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    problem, _ = load_optimization(tmp_path / "opt.yaml")
+    spec, _ = load_sweep(tmp_path / "sweep.yaml")
+    import plm_pin
+
+    assert problem.spec.build(0).nq == spec.build(0).nq == plm_pin.load(urdf).nq
+    assert not Path("m/arm.urdf").exists() and urdf == tmp_path / "m" / "arm.urdf"
