@@ -77,7 +77,7 @@ def unpack(ints: np.ndarray, floats: np.ndarray) -> KernelArrays:
 # 3 x 3 matrices are 9-tuples of floats (row-major) and vectors 3-tuples: no arrays, no views.
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _rot(x: float, y: float, z: float, c: float, s: float) -> tuple:
     """Rotation about the unit axis ``(x, y, z)`` of cosine ``c`` and sine ``s``."""
     t = 1.0 - c
@@ -94,7 +94,7 @@ def _rot(x: float, y: float, z: float, c: float, s: float) -> tuple:
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _quat(x: float, y: float, z: float, w: float) -> tuple:
     """Rotation of the unit quaternion ``(x, y, z, w)`` (Pinocchio's order)."""
     tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
@@ -114,7 +114,7 @@ def _quat(x: float, y: float, z: float, w: float) -> tuple:
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mul(A: tuple, B: tuple) -> tuple:
     """``A B``."""
     return (
@@ -130,7 +130,7 @@ def _mul(A: tuple, B: tuple) -> tuple:
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mul_t(A: tuple, B: tuple) -> tuple:
     """``A B^T``."""
     return (
@@ -146,7 +146,7 @@ def _mul_t(A: tuple, B: tuple) -> tuple:
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _t_mul(A: tuple, B: tuple) -> tuple:
     """``A^T B``."""
     return (
@@ -162,13 +162,13 @@ def _t_mul(A: tuple, B: tuple) -> tuple:
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mv(A: tuple, x: float, y: float, z: float) -> tuple:
     """``A (x, y, z)``."""
     return (A[0] * x + A[1] * y + A[2] * z, A[3] * x + A[4] * y + A[5] * z, A[6] * x + A[7] * y + A[8] * z)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _get(M: np.ndarray, i: int) -> tuple:
     """``M[i]`` (a stack of 3 x 3 matrices) as a 9-tuple."""
     return (
@@ -184,7 +184,7 @@ def _get(M: np.ndarray, i: int) -> tuple:
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _put(M: np.ndarray, i: int, T: tuple) -> None:
     """``M[i] = T``."""
     M[i, 0, 0], M[i, 0, 1], M[i, 0, 2] = T[0], T[1], T[2]
@@ -195,7 +195,7 @@ def _put(M: np.ndarray, i: int, T: tuple) -> None:
 _EYE9 = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _column(
     W: tuple, p: tuple, wx: float, wy: float, wz: float, vx: float, vy: float, vz: float,
     Sw: np.ndarray, Sv: np.ndarray, col: int,
@@ -310,7 +310,7 @@ def frames(k: KernelArrays, oR: np.ndarray, op: np.ndarray, fR: np.ndarray, fp: 
         fp[f, 0], fp[f, 1], fp[f, 2] = t0 + op[j, 0], t1 + op[j, 1], t2 + op[j, 2]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _linear(Sw: np.ndarray, Sv: np.ndarray, c: int, x: float, y: float, z: float) -> tuple:
     r"""Velocity of the point ``(x, y, z)`` under velocity column ``c``: :math:`v_o + \omega \times p`."""
     w0, w1, w2 = Sw[c, 0], Sw[c, 1], Sw[c, 2]
@@ -333,7 +333,7 @@ def frame_jacobian(
                 out[d, c] = 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def log3(R: tuple) -> tuple:
     """Pinocchio's ``log3`` of ``R``: the angle [rad] and the rotation vector ``(theta, r0, r1, r2)``."""
     tr = R[0] + R[4] + R[8]
@@ -361,7 +361,7 @@ def log3(R: tuple) -> tuple:
     return theta, t * (R[7] - R[5]), t * (R[2] - R[6]), t * (R[3] - R[1])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def jlog3(theta: float, r0: float, r1: float, r2: float) -> tuple:
     r"""Pinocchio's ``Jlog3`` at ``r`` (angle ``theta``): :math:`\alpha I + [r]_\times / 2 + \beta r r^T`."""
     if theta < 1e-4:  # Taylor series, error below 1e-17
@@ -386,7 +386,7 @@ def jlog3(theta: float, r0: float, r1: float, r2: float) -> tuple:
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def rpy(R: tuple) -> tuple:
     """Pinocchio's ``rpy.matrixToRpy`` of ``R``: ``(roll, pitch, yaw)``."""
     m = math.sqrt(R[7] * R[7] + R[8] * R[8])
@@ -396,12 +396,12 @@ def rpy(R: tuple) -> tuple:
     return math.atan2(R[7], R[8]), p, math.atan2(R[3], R[0])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _wrap(a: float) -> float:
     return math.pi - (math.pi - a) % (2.0 * math.pi)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _angular_rows(
     k: KernelArrays, fa: int, fb: int, G: tuple, n_rows: int, first: int, Sw: np.ndarray, A: np.ndarray
 ) -> None:
@@ -820,32 +820,12 @@ def newton(
     factorised = fresh = False
     polished = not polish
     err_prev = np.inf
-    for iteration in range(max_iterations + 1):
-        evaluate(k, q, x, R_star, with_task, r, A, False, oR, op, fR, fp, Sw, Sv)
-        err = 0.0
-        for i in range(n):
-            err = max(err, abs(r[i]))
-        if err <= tol:
-            if polished or err < round_off:
-                task_pose(k, q, fR, fp, pose)
-                inside = 1.0
-                for i in range(q.shape[0]):
-                    if not k.lower[i] <= q[i] <= k.upper[i]:
-                        inside = 0.0
-                info[0], info[1] = err, inside
-                return iteration
-            polished = True
-            refresh = not factorised
-        elif iteration == max_iterations:
-            return -1
-        elif polish and err < chord_ratio * err_prev:
-            refresh = not factorised
-        elif err < stall_ratio * err_prev or not fresh:
-            refresh = True
-        else:
-            return -1
-        if refresh:
-            evaluate(k, q, x, R_star, with_task, r, A, True, oR, op, fR, fp, Sw, Sv)
+    iteration = 0
+    jac = False  # one call site of the inlined evaluate: each one costs seconds of compile
+    while True:
+        evaluate(k, q, x, R_star, with_task, r, A, jac, oR, op, fR, fp, Sw, Sv)
+        if jac:  # the same q again, now with its Jacobian
+            jac, refresh, factorised = False, True, True
             for i in range(n):
                 for c in range(nfree):
                     Af[i, c] = A[i, free[c]]
@@ -856,7 +836,32 @@ def newton(
                         s += Af[i, a_] * Af[i, c]
                     N[a_, c] = s
                     N[c, a_] = s
-            factorised = True
+        else:
+            err = 0.0
+            for i in range(n):
+                err = max(err, abs(r[i]))
+            if err <= tol:
+                if polished or err < round_off:
+                    task_pose(k, q, fR, fp, pose)
+                    inside = 1.0
+                    for i in range(q.shape[0]):
+                        if not k.lower[i] <= q[i] <= k.upper[i]:
+                            inside = 0.0
+                    info[0], info[1] = err, inside
+                    return iteration
+                polished = True
+                refresh = not factorised
+            elif iteration == max_iterations:
+                return -1
+            elif polish and err < chord_ratio * err_prev:
+                refresh = not factorised
+            elif err < stall_ratio * err_prev or not fresh:
+                refresh = True
+            else:
+                return -1
+            if refresh:
+                jac = True
+                continue
         for c in range(nfree):
             s = 0.0
             for i in range(n):
@@ -873,7 +878,7 @@ def newton(
         integrate(k, q, step, q_next)
         q[:] = q_next
         err_prev = err
-    return -1
+        iteration += 1
 
 
 @njit(cache=True)

@@ -610,7 +610,10 @@ def test_view_animate_moves_a_users_mechanism_in_the_overview(tmp_path):
         (["nonsense"], "'nonsense' is neither a preset nor an existing path"),
         ([], "give a mechanism (preset, erd:<robot>, .urdf, folder) or --animate"),
         (["--animate", "harada2015"], "--animate 'harada2015': give STUDY:CASE, e.g. harada2015:assembly"),
-        (["--animate", "nostudy:x"], "unknown study 'nostudy'; studies are ['enferadi2017', 'harada2011'"),
+        (
+            ["--animate", "nostudy:x"],
+            "unknown study 'nostudy'; studies are ['delta_optimize', 'enferadi2017'",
+        ),
         (
             ["--animate", "harada2015:flip"],
             "study 'harada2015' has no animation 'flip'; its animations are ['assembly', 'working']",

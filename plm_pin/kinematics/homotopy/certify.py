@@ -29,30 +29,30 @@ BOX_GROWTH = (4.0, 64.0, 1024.0)
 """Half-widths of the boxes tried, in order, as multiples of the Newton enclosure's size."""
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _dn(v: float) -> float:
     return np.nextafter(v, -np.inf)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _up(v: float) -> float:
     return np.nextafter(v, np.inf)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mul2(alo: float, ahi: float, blo: float, bhi: float) -> tuple[float, float]:
     p1, p2, p3, p4 = alo * blo, alo * bhi, ahi * blo, ahi * bhi
     return _dn(min(min(p1, p2), min(p3, p4))), _up(max(max(p1, p2), max(p3, p4)))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _add(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     out = np.empty(2)
     out[0], out[1] = _dn(a[0] + b[0]), _up(a[1] + b[1])
     return out
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     p1, p2, p3, p4 = a[0] * b[0], a[0] * b[1], a[1] * b[0], a[1] * b[1]
     out = np.empty(2)

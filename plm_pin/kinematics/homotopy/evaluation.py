@@ -20,7 +20,7 @@ FAST = {"contract", "reassoc", "nsz", "arcp"}
 kept (a path going to infinity must be seen)."""
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _quaternion(
     w: complex, x: complex, y: complex, z: complex, X: np.ndarray, i: int, dX: np.ndarray, d: int
 ) -> None:
@@ -90,7 +90,7 @@ def _mv_into(A: np.ndarray, a: int, S: np.ndarray, s: int, out: np.ndarray, o: i
         )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _copy_into(A: np.ndarray, a: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a]`` for stacks of 4 x 4 matrices."""
     for i in range(4):
@@ -98,7 +98,7 @@ def _copy_into(A: np.ndarray, a: int, out: np.ndarray, o: int) -> None:
             out[o, i, j] = A[a, i, j]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _skew_entry(axis: np.ndarray, i: int, r: int, k: int) -> float:
     """Entry (r, k) of the cross-product matrix of ``axis[i]``."""
     if r == k:
