@@ -6,6 +6,7 @@ import contextlib
 import csv
 import json
 import shlex
+import signal
 import sys
 import threading
 import warnings
@@ -1273,6 +1274,7 @@ def view(
                 if open_browser:
                     viewer.open()
             return
+        _ctrl_c_stops()
         server = MeshcatServer(port)
     except PlmError as exc:
         raise _fail(exc) from None
@@ -1303,6 +1305,17 @@ def view(
     raise _fail(PlmError(f"the meshcat server stopped unexpectedly (exit code {code})"))
 
 
+def _ctrl_c_stops() -> None:
+    """Make Ctrl-C (SIGINT) raise KeyboardInterrupt here, as the serving commands announce.
+
+    A process started in the background of a script inherits SIGINT ignored, and Python keeps
+    it ignored: restored before anything is served, SIGINT (a terminal's Ctrl-C, ``kill -INT``)
+    stops the command wherever it was started.
+    """
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 @app.command("inspect")
 def inspect_command(
     target: Annotated[str, typer.Argument(help="preset name, erd:<robot>, .urdf, .plm.yaml or folder")],
@@ -1318,6 +1331,7 @@ def inspect_command(
 
     Serves a control page beside the meshcat scene until Ctrl-C.
     """
+    _ctrl_c_stops()
     mech = _load(target, ignore)
     try:
         inspector = Inspector(mech, port=port, source=target)

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import base64
 import importlib.util
+import os
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -428,6 +430,30 @@ def test_server_stops_when_the_process_that_started_it_is_killed():
     while alive(server_pid) and time.monotonic() < deadline:
         time.sleep(0.1)
     assert not alive(server_pid)
+
+
+@pytest.mark.slow
+def test_view_server_started_with_sigint_ignored_still_ends_with_ctrl_c():
+    """`plm-pin view` from a script's background (SIGINT inherited ignored): Ctrl-C still ends it, exit 0."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "plm_pin", "view", "fourbar"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])},
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN),
+    )
+    try:
+        assert process.stdout is not None
+        line = process.stdout.readline()  # bounded by the server's own start-up time-out
+        assert line.startswith("fourbar: http://127.0.0.1:"), line
+        process.stdout.readline()  # the second line: how to draw into it
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=60) == 0
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
 
 
 def test_server_that_does_not_start_in_time_is_stopped(monkeypatch):
