@@ -1288,17 +1288,17 @@ def view(
             _print_status(_draw(viewer, q, motion))
         except PlmError as exc:
             raise _fail(exc) from None
-        console.print(f"{mech.name}: {server.web_url}", markup=False, highlight=False, soft_wrap=True)
-        console.print(
-            f"draw another mechanism into it with: plm-pin view NAME --zmq-url {server.zmq_url}\n"
-            "Ctrl-C stops the server",
-            markup=False,
-            highlight=False,
-            soft_wrap=True,
-        )
-        if open_browser:
-            viewer.open()
-        try:
+        try:  # from the announcement on, Ctrl-C is the way out
+            console.print(f"{mech.name}: {server.web_url}", markup=False, highlight=False, soft_wrap=True)
+            console.print(
+                f"draw another mechanism into it with: plm-pin view NAME --zmq-url {server.zmq_url}\n"
+                "Ctrl-C stops the server",
+                markup=False,
+                highlight=False,
+                soft_wrap=True,
+            )
+            if open_browser:
+                viewer.open()
             code = server.wait()
         except KeyboardInterrupt:
             return
