@@ -223,6 +223,8 @@ def interval_system(
     ncoord = np.zeros(k, dtype=np.int64)
     T = np.zeros((k, 4, 4, 2))
     A = np.zeros((k, 4, 4, 2))
+    MX = np.zeros((k, 4, 4, 2))  # M_i X_i, shared by the frames below joint i
+    AdX = np.zeros((k, 7, 4, 4, 2))  # A_i dX_i, likewise
     for i in range(k):
         kd = kind[i]
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
@@ -235,17 +237,38 @@ def interval_system(
         Mi = _point(placement[i])
         A[i] = _matmul(T[parent[i]], Mi) if parent[i] >= 0 else Mi
         T[i] = _matmul(A[i], Xs[i])
+        MX[i] = _matmul(Mi, Xs[i])
+        for c in range(ncoord[i]):
+            AdX[i, c] = _matmul(A[i], dXs[i, c])
     nf = frame_joint.shape[0]
     Tf = np.zeros((nf, 4, 4, 2))
     dTf = np.zeros((nf, n, 4, 4, 2))
     for f in range(nf):
-        S = _point(frame_placement[f])
+        point = True  # only the frame's origin is read (point and distance closures)
+        for c in range(closure_kind.shape[0]):
+            if (closure_kind[c] == 1 or closure_kind[c] == 2) and (
+                closure_frames[c, 0] == f or closure_frames[c, 1] == f
+            ):
+                point = False
+        # the origin alone is the last column of each product: the same operations on one column
+        S = _point(frame_placement[f]) if not point else _point(frame_placement[f][:, 3:4].copy())
         i = frame_joint[f]
-        Tf[f] = _matmul(T[i], S) if i >= 0 else S
+        if i >= 0:
+            P = _matmul(T[i], S)
+        else:
+            P = S
+        if point:
+            Tf[f, :, 3] = P[:, 0]
+        else:
+            Tf[f] = P
         while i >= 0:
             for c in range(ncoord[i]):
-                dTf[f, offset[i] + c] = _matmul(_matmul(A[i], dXs[i, c]), S)
-            S = _matmul(_matmul(_point(placement[i]), Xs[i]), S)
+                P = _matmul(AdX[i, c], S)
+                if point:
+                    dTf[f, offset[i] + c, :, 3] = P[:, 0]
+                else:
+                    dTf[f, offset[i] + c] = P
+            S = _matmul(MX[i], S)
             i = parent[i]
     m = combination.shape[1]
     e = np.zeros((m, 2))

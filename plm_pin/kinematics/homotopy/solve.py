@@ -183,31 +183,30 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         NotPolynomial: the mechanism has no polynomial form.
     """
     from .certify import certify
-    from .evaluation import closure_entries, evaluate
-    from .tracking import DIVERGED, REACHED, track_all
+    from .evaluation import closure_entries
+    from .tracking import DIVERGED, REACHED, systems_at, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)
     p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
     X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args())
-    roots: list[np.ndarray] = []
     diverged = int(np.sum(codes == DIVERGED))
     failed = int(np.sum((codes != DIVERGED) & (codes != REACHED)))
-    singular = collided = 0
-    for x, code in zip(X, codes, strict=True):
-        if code != REACHED:
-            continue
-        scale = 1.0 + np.abs(x).max()
-        F, Jx, _ = evaluate(form, x, p1)
-        if not np.all(np.isfinite(F)) or np.abs(F).max() > HOMOTOPY_ROOT_RTOL * scale:
-            failed += 1
-            continue
-        if np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND:
-            singular += 1
-            continue
-        x = canonical(form, x)
-        if roots and np.abs(np.array(roots) - x).max(axis=1).min() <= HOMOTOPY_SAME_ROOT_RTOL * scale:
+    X = X[codes == REACHED]
+    F, Jx = systems_at(X, p1, zero, form.kernel_args())  # the ends' residuals and Jacobians, one call
+    scale = 1.0 + np.abs(X).max(axis=1)
+    with np.errstate(invalid="ignore"):
+        solved = np.isfinite(F).all(axis=1) & (np.abs(F).max(axis=1) <= HOMOTOPY_ROOT_RTOL * scale)
+    failed += int(np.sum(~solved))
+    X, scale, Jx = X[solved], scale[solved], Jx[solved]
+    regular = ~(np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND) if len(X) else np.zeros(0, dtype=bool)
+    singular = int(np.sum(~regular))
+    X, scale = canonical(form, X[regular]), scale[regular]
+    roots: list[np.ndarray] = []
+    collided = 0
+    for x, s in zip(X, scale, strict=True):
+        if roots and np.abs(np.array(roots) - x).max(axis=1).min() <= HOMOTOPY_SAME_ROOT_RTOL * s:
             collided += 1
         else:
             roots.append(x)

@@ -254,3 +254,25 @@ def track_all(
     for i in range(N):
         out[i], codes[i], steps[i] = track(X0[i], p0, b0, p1, b1, ws, args)
     return out, codes, steps
+
+
+@njit(cache=True)
+def systems_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, args: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The square system at every row of ``X`` (N, n): F (N, n) and F_x (N, n, n), in one compiled call."""
+    N, n = X.shape
+    parent, kind, offset, placement, frame_joint, combination = (
+        args[0],
+        args[1],
+        args[2],
+        args[4],
+        args[6],
+        args[13],
+    )
+    ws = workspace(n, p.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1])
+    Fs = np.empty((N, n), dtype=np.complex128)
+    Js = np.empty((N, n, n), dtype=np.complex128)
+    for k in range(N):
+        F, J = system(X[k], p, b, ws, *args)
+        Fs[k] = F
+        Js[k] = J[:, :n]
+    return Fs, Js
