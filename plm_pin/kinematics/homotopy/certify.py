@@ -79,10 +79,10 @@ def _matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
         for j in range(n):
             lo, hi = 0.0, 0.0
             for r in range(k):
-                alo, ahi = A[i, r, 0], A[i, r, 1]
-                if alo == 0.0 and ahi == 0.0:
-                    continue
-                plo, phi = _mul2(alo, ahi, B[r, j, 0], B[r, j, 1])
+                alo, ahi, blo, bhi = A[i, r, 0], A[i, r, 1], B[r, j, 0], B[r, j, 1]
+                if (alo == 0.0 and ahi == 0.0) or (blo == 0.0 and bhi == 0.0):
+                    continue  # an exact zero term: the sum is unchanged, exactly
+                plo, phi = _mul2(alo, ahi, blo, bhi)
                 lo, hi = _dn(lo + plo), _up(hi + phi)
             out[i, j, 0], out[i, j, 1] = lo, hi
     return out
@@ -421,13 +421,17 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> tuple[float, np.n
     return out, Fx
 
 
-def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float | None:
+def certify(
+    form: PolynomialForm, x: np.ndarray, actuators: np.ndarray, pi: np.ndarray | None = None
+) -> float | None:
     """Half-width (relative, times 1 + abs(x)) of a box around real ``x`` proven to hold one root, or None.
 
     The boxes tried are :data:`BOX_GROWTH` times the Newton enclosure's size (:func:`newton_size`),
-    at most :data:`~plm_pin.tolerances.HOMOTOPY_MAX_BOX_RTOL`.
+    at most :data:`~plm_pin.tolerances.HOMOTOPY_MAX_BOX_RTOL`. ``pi``: the actuators'
+    :func:`parameter_intervals`, when the caller has them.
     """
-    pi = parameter_intervals(form, actuators)
+    if pi is None:
+        pi = parameter_intervals(form, actuators)
     args = form.kernel_args()
     x = np.asarray(x, dtype=float)
     size, Fx = newton_size(x, pi, args)

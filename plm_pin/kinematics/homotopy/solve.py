@@ -150,19 +150,6 @@ def parameter_actuators(mech: Mechanism) -> tuple[int, ...] | None:
     return tuple(int(a) for a in best)
 
 
-def _real_newton(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> np.ndarray:
-    from .evaluation import evaluate
-
-    x = np.real(x).astype(float)
-    for _ in range(3):
-        F, Jx, _ = evaluate(form, x, p)
-        step = np.linalg.solve(np.real(Jx), -np.real(F))
-        x = x + step
-        if np.abs(step).max() < 1e-15 * (1.0 + np.abs(x).max()):
-            break
-    return x
-
-
 def _off_actuators(form: PolynomialForm, x: np.ndarray, values: np.ndarray) -> bool:
     """Whether real root ``x`` puts an actuator left unknown off its value ``values[a]``."""
     scale = HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(x).max())
@@ -182,9 +169,9 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     Raises:
         NotPolynomial: the mechanism has no polynomial form.
     """
-    from .certify import certify
+    from .certify import certify, parameter_intervals
     from .evaluation import closure_entries
-    from .tracking import DIVERGED, REACHED, systems_at, track_all
+    from .tracking import DIVERGED, REACHED, real_newton, systems_at, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)
@@ -213,11 +200,12 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     real: list[RealRoot] = []
     uncertified: list[np.ndarray] = []
     spurious = elsewhere = 0
-    pr = np.real(p1)
+    pr = np.ascontiguousarray(np.real(p1))
+    args, pi = form.kernel_args(), parameter_intervals(form, pr)
     for x in roots:
         if np.abs(x.imag).max() > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(x).max()):
             continue
-        xr = _real_newton(form, x, pr)
+        xr = real_newton(x, pr, args)
         entries, _ = closure_entries(form, xr, pr)
         if np.abs(entries).max() > HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(xr).max()):
             spurious += 1
@@ -225,7 +213,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         if _off_actuators(form, xr, values):
             elsewhere += 1
             continue
-        radius = certify(form, xr, pr)
+        radius = certify(form, xr, pr, pi)
         if radius is None:
             uncertified.append(xr)
         else:
