@@ -79,10 +79,10 @@ def _matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
         for j in range(n):
             lo, hi = 0.0, 0.0
             for r in range(k):
-                alo, ahi = A[i, r, 0], A[i, r, 1]
-                if alo == 0.0 and ahi == 0.0:
-                    continue
-                plo, phi = _mul2(alo, ahi, B[r, j, 0], B[r, j, 1])
+                alo, ahi, blo, bhi = A[i, r, 0], A[i, r, 1], B[r, j, 0], B[r, j, 1]
+                if (alo == 0.0 and ahi == 0.0) or (blo == 0.0 and bhi == 0.0):
+                    continue  # an exact zero term: the sum is unchanged, exactly
+                plo, phi = _mul2(alo, ahi, blo, bhi)
                 lo, hi = _dn(lo + plo), _up(hi + phi)
             out[i, j, 0], out[i, j, 1] = lo, hi
     return out
@@ -223,6 +223,8 @@ def interval_system(
     ncoord = np.zeros(k, dtype=np.int64)
     T = np.zeros((k, 4, 4, 2))
     A = np.zeros((k, 4, 4, 2))
+    MX = np.zeros((k, 4, 4, 2))  # M_i X_i, shared by the frames below joint i
+    AdX = np.zeros((k, 7, 4, 4, 2))  # A_i dX_i, likewise
     for i in range(k):
         kd = kind[i]
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
@@ -235,17 +237,38 @@ def interval_system(
         Mi = _point(placement[i])
         A[i] = _matmul(T[parent[i]], Mi) if parent[i] >= 0 else Mi
         T[i] = _matmul(A[i], Xs[i])
+        MX[i] = _matmul(Mi, Xs[i])
+        for c in range(ncoord[i]):
+            AdX[i, c] = _matmul(A[i], dXs[i, c])
     nf = frame_joint.shape[0]
     Tf = np.zeros((nf, 4, 4, 2))
     dTf = np.zeros((nf, n, 4, 4, 2))
     for f in range(nf):
-        S = _point(frame_placement[f])
+        point = True  # only the frame's origin is read (point and distance closures)
+        for c in range(closure_kind.shape[0]):
+            if (closure_kind[c] == 1 or closure_kind[c] == 2) and (
+                closure_frames[c, 0] == f or closure_frames[c, 1] == f
+            ):
+                point = False
+        # the origin alone is the last column of each product: the same operations on one column
+        S = _point(frame_placement[f]) if not point else _point(frame_placement[f][:, 3:4].copy())
         i = frame_joint[f]
-        Tf[f] = _matmul(T[i], S) if i >= 0 else S
+        if i >= 0:
+            P = _matmul(T[i], S)
+        else:
+            P = S
+        if point:
+            Tf[f, :, 3] = P[:, 0]
+        else:
+            Tf[f] = P
         while i >= 0:
             for c in range(ncoord[i]):
-                dTf[f, offset[i] + c] = _matmul(_matmul(A[i], dXs[i, c]), S)
-            S = _matmul(_matmul(_point(placement[i]), Xs[i]), S)
+                P = _matmul(AdX[i, c], S)
+                if point:
+                    dTf[f, offset[i] + c, :, 3] = P[:, 0]
+                else:
+                    dTf[f, offset[i] + c] = P
+            S = _matmul(MX[i], S)
             i = parent[i]
     m = combination.shape[1]
     e = np.zeros((m, 2))
@@ -398,13 +421,17 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> tuple[float, np.n
     return out, Fx
 
 
-def certify(form: PolynomialForm, x: np.ndarray, actuators: np.ndarray) -> float | None:
+def certify(
+    form: PolynomialForm, x: np.ndarray, actuators: np.ndarray, pi: np.ndarray | None = None
+) -> float | None:
     """Half-width (relative, times 1 + abs(x)) of a box around real ``x`` proven to hold one root, or None.
 
     The boxes tried are :data:`BOX_GROWTH` times the Newton enclosure's size (:func:`newton_size`),
-    at most :data:`~plm_pin.tolerances.HOMOTOPY_MAX_BOX_RTOL`.
+    at most :data:`~plm_pin.tolerances.HOMOTOPY_MAX_BOX_RTOL`. ``pi``: the actuators'
+    :func:`parameter_intervals`, when the caller has them.
     """
-    pi = parameter_intervals(form, actuators)
+    if pi is None:
+        pi = parameter_intervals(form, actuators)
     args = form.kernel_args()
     x = np.asarray(x, dtype=float)
     size, Fx = newton_size(x, pi, args)

@@ -150,19 +150,6 @@ def parameter_actuators(mech: Mechanism) -> tuple[int, ...] | None:
     return tuple(int(a) for a in best)
 
 
-def _real_newton(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> np.ndarray:
-    from .evaluation import evaluate
-
-    x = np.real(x).astype(float)
-    for _ in range(3):
-        F, Jx, _ = evaluate(form, x, p)
-        step = np.linalg.solve(np.real(Jx), -np.real(F))
-        x = x + step
-        if np.abs(step).max() < 1e-15 * (1.0 + np.abs(x).max()):
-            break
-    return x
-
-
 def _off_actuators(form: PolynomialForm, x: np.ndarray, values: np.ndarray) -> bool:
     """Whether real root ``x`` puts an actuator left unknown off its value ``values[a]``."""
     scale = HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(x).max())
@@ -182,43 +169,43 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     Raises:
         NotPolynomial: the mechanism has no polynomial form.
     """
-    from .certify import certify
-    from .evaluation import closure_entries, evaluate
-    from .tracking import DIVERGED, REACHED, track_all
+    from .certify import certify, parameter_intervals
+    from .evaluation import closure_entries
+    from .tracking import DIVERGED, REACHED, real_newton, systems_at, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)
     p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
     X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args())
-    roots: list[np.ndarray] = []
     diverged = int(np.sum(codes == DIVERGED))
     failed = int(np.sum((codes != DIVERGED) & (codes != REACHED)))
-    singular = collided = 0
-    for x, code in zip(X, codes, strict=True):
-        if code != REACHED:
-            continue
-        scale = 1.0 + np.abs(x).max()
-        F, Jx, _ = evaluate(form, x, p1)
-        if not np.all(np.isfinite(F)) or np.abs(F).max() > HOMOTOPY_ROOT_RTOL * scale:
-            failed += 1
-            continue
-        if np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND:
-            singular += 1
-            continue
-        x = canonical(form, x)
-        if roots and np.abs(np.array(roots) - x).max(axis=1).min() <= HOMOTOPY_SAME_ROOT_RTOL * scale:
+    X = X[codes == REACHED]
+    F, Jx = systems_at(X, p1, zero, form.kernel_args())  # the ends' residuals and Jacobians, one call
+    scale = 1.0 + np.abs(X).max(axis=1)
+    with np.errstate(invalid="ignore"):
+        solved = np.isfinite(F).all(axis=1) & (np.abs(F).max(axis=1) <= HOMOTOPY_ROOT_RTOL * scale)
+    failed += int(np.sum(~solved))
+    X, scale, Jx = X[solved], scale[solved], Jx[solved]
+    regular = ~(np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND) if len(X) else np.zeros(0, dtype=bool)
+    singular = int(np.sum(~regular))
+    X, scale = canonical(form, X[regular]), scale[regular]
+    roots: list[np.ndarray] = []
+    collided = 0
+    for x, s in zip(X, scale, strict=True):
+        if roots and np.abs(np.array(roots) - x).max(axis=1).min() <= HOMOTOPY_SAME_ROOT_RTOL * s:
             collided += 1
         else:
             roots.append(x)
     real: list[RealRoot] = []
     uncertified: list[np.ndarray] = []
     spurious = elsewhere = 0
-    pr = np.real(p1)
+    pr = np.ascontiguousarray(np.real(p1))
+    args, pi = form.kernel_args(), parameter_intervals(form, pr)
     for x in roots:
         if np.abs(x.imag).max() > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(x).max()):
             continue
-        xr = _real_newton(form, x, pr)
+        xr = real_newton(x, pr, args)
         entries, _ = closure_entries(form, xr, pr)
         if np.abs(entries).max() > HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(xr).max()):
             spurious += 1
@@ -226,7 +213,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         if _off_actuators(form, xr, values):
             elsewhere += 1
             continue
-        radius = certify(form, xr, pr)
+        radius = certify(form, xr, pr, pi)
         if radius is None:
             uncertified.append(xr)
         else:

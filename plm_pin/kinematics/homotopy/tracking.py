@@ -254,3 +254,67 @@ def track_all(
     for i in range(N):
         out[i], codes[i], steps[i] = track(X0[i], p0, b0, p1, b1, ws, args)
     return out, codes, steps
+
+
+@njit(cache=True)
+def systems_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, args: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The square system at every row of ``X`` (N, n): F (N, n) and F_x (N, n, n), in one compiled call."""
+    N, n = X.shape
+    parent, kind, offset, placement, frame_joint, combination = (
+        args[0],
+        args[1],
+        args[2],
+        args[4],
+        args[6],
+        args[13],
+    )
+    ws = workspace(n, p.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1])
+    Fs = np.empty((N, n), dtype=np.complex128)
+    Js = np.empty((N, n, n), dtype=np.complex128)
+    for k in range(N):
+        F, J = system(X[k], p, b, ws, *args)
+        Fs[k] = F
+        Js[k] = J[:, :n]
+    return Fs, Js
+
+
+@njit(cache=True)
+def real_newton(x0: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
+    """At most three Newton steps on the real system from the real part of ``x0``, at real parameters ``p``.
+
+    Stops early when a step is below 1e-15 relative.
+    """
+    n = x0.shape[0]
+    parent, kind, offset, placement, frame_joint, combination = (
+        args[0],
+        args[1],
+        args[2],
+        args[4],
+        args[6],
+        args[13],
+    )
+    ws = workspace(n, p.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1])
+    x = x0.real.copy()
+    xc = np.empty(n, dtype=np.complex128)
+    pc = p.astype(np.complex128)
+    b = np.zeros(n, dtype=np.complex128)
+    A = np.empty((n, n))
+    r = np.empty(n)
+    for _ in range(3):
+        for i in range(n):
+            xc[i] = x[i]
+        F, J = system(xc, pc, b, ws, *args)
+        for i in range(n):
+            r[i] = -F[i].real
+            for j in range(n):
+                A[i, j] = J[i, j].real
+        step = np.linalg.solve(A, r)
+        big, size = 0.0, 0.0
+        for i in range(n):
+            x[i] += step[i]
+            big = max(big, abs(step[i]))
+        for i in range(n):
+            size = max(size, abs(x[i]))
+        if big < 1e-15 * (1.0 + size):
+            break
+    return x
