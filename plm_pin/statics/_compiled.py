@@ -53,9 +53,10 @@ def _oriented(G: np.ndarray, tie: float) -> np.ndarray:
                 break
         return G.copy() if G[pivot, 0] > 0.0 else -G
     A = np.ascontiguousarray(G.T)
+    rows = np.ascontiguousarray(G)
     shares = np.zeros(n_act)
     for i in range(n_act):
-        shares[i] = A[:, i] @ A[:, i]
+        shares[i] = rows[i] @ rows[i]
     Q = np.zeros((k, k))
     for j in range(k):
         top = shares.max()
@@ -66,8 +67,9 @@ def _oriented(G: np.ndarray, tie: float) -> np.ndarray:
                 break
         a = np.ascontiguousarray(A[:, pivot])
         w = a - Q @ (Q.T @ a)
-        Q[:, j] = w / np.sqrt(w @ w)
-        shares = shares - (Q[:, j] @ A) ** 2
+        q = w / np.sqrt(w @ w)
+        Q[:, j] = q
+        shares = shares - (q @ A) ** 2
     return G @ Q
 
 
@@ -121,7 +123,8 @@ def factor(
     C0 = np.empty((n_act, k0))
     for i in range(n_act):
         C0[i] = N0[act_v[i]]
-    U, s, Vt = np.linalg.svd(C0)
+    U, s, Vt_any = np.linalg.svd(C0)
+    Vt = np.ascontiguousarray(Vt_any)  # numba types LAPACK's outputs as any layout
     top = s[0] if s.shape[0] else 1.0
     rank = 0
     for v in s:
