@@ -255,8 +255,9 @@ def info(
             escape(f"{c['type']} ({c['rows']} rows): {c['frames'][0]} = {c['frames'][1]}"),
         )
     for a in summary["actuators"]:
-        limits = "unbounded" if a["limits"] is None else f"[{a['limits'][0]:g}, {a['limits'][1]:g}]"
-        table.add_row(escape(f"actuator {a['joint']}"), escape(f"{a['kind']}, limits {limits}"))
+        unit = "N" if a["kind"] == "prismatic" else "N m"
+        limits = "unbounded" if a["limits"] is None else f"[{a['limits'][0]:g}, {a['limits'][1]:g}] {unit}"
+        table.add_row(escape(f"actuator {a['joint']}"), escape(f"{a['kind']}, effort limits {limits}"))
     task = summary["task"]
     table.add_row(
         "task",
