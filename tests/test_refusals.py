@@ -260,3 +260,23 @@ def test_task_space_terms_that_overflow_are_refused(speed):
     ):
         task_space_dynamics(mech, mech.q_ref, xdot=[speed])
     assert np.all(np.isfinite(S * speed))  # the velocity itself is finite
+
+
+@pytest.mark.parametrize("size", [1, 3, 64, 65, 500])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_vectors_with_a_non_finite_entry_are_refused_at_any_length(size, bad):
+    from plm_pin._arguments import as_vector
+
+    x = np.ones(size)
+    x[size // 2] = bad
+    with pytest.raises(InvalidInput, match=rf"x has non-finite entries at indices \[{size // 2}\]"):
+        as_vector(x, size, "x")
+
+
+@pytest.mark.parametrize("size", [2, 64, 65])
+def test_vectors_of_huge_finite_entries_pass_though_their_sum_overflows(size):
+    from plm_pin._arguments import as_vector
+
+    x = np.full(size, np.finfo(float).max)
+    assert sum(x.tolist()) == np.inf  # the quick check's sum overflows: the full check must decide
+    np.testing.assert_array_equal(as_vector(x, size, "x"), x)
