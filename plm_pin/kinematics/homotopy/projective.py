@@ -10,7 +10,7 @@ and a random affine chart :math:`a \cdot z = 1` closing the system, a path to in
 bounded path whose :math:`z_0` tends to zero. Its end is then read off :math:`z_0` at
 :math:`t = 1`: zero (relative to :math:`|z|`, :data:`~plm_pin.tolerances.HOMOTOPY_INFINITY_RTOL`)
 is a root at infinity, anything else the finite root :math:`z / z_0`. A path whose :math:`z_0`
-falls that low before :math:`t = 1`, or whose step fails there (a root at infinity is often
+falls that low after :data:`ENDGAME_T`, or whose step fails there (a root at infinity is often
 singular), is at infinity too.
 
 The homogenised system is evaluated through the affine one at :math:`x = z / z_0`: its terms
@@ -36,6 +36,10 @@ from .tracking import CORRECTOR_STEPS, FAILED, FINAL_NEWTON, MAX_STEP, MIN_STEP,
 
 AT_INFINITY = 3
 """Path end code: the path went to a root at infinity (:math:`z_0 = 0` at :math:`t = 1`)."""
+ENDGAME_T = 0.99
+"""From this :math:`t` on, a path whose :math:`z_0` falls to
+:data:`~plm_pin.tolerances.HOMOTOPY_INFINITY_RTOL` is at infinity, without tracking on to
+:math:`t = 1` (earlier, a path may pass near infinity and come back)."""
 
 
 @njit(cache=True)
@@ -98,8 +102,9 @@ def track_projective(
     """Track the root ``x0`` (n,) of the closures at ``p0`` to ``p1`` in the projective chart ``chart``.
 
     Returns:
-        The end ``z = (z_0, z_1, ..., z_n)`` (n + 1,) and its code: REACHED (a finite root
-        ``z[1:] / z[0]``), AT_INFINITY, or FAILED (the step fell below the smallest).
+        The end ``z = (z_0, z_1, ..., z_n)`` (n + 1,), its code: REACHED (a finite root
+        ``z[1:] / z[0]``), AT_INFINITY, or FAILED (the step fell below the smallest), and the
+        :math:`t` it got to.
     """
     n = x0.shape[0]
     m = n + 1
@@ -184,6 +189,8 @@ def track_projective(
             if streak >= 3:
                 h = min(2.0 * h, MAX_STEP)
                 streak = 0
+            if t >= ENDGAME_T and abs(z[0]) <= HOMOTOPY_INFINITY_RTOL * _norm(z):
+                return z, AT_INFINITY, t
         else:
             h *= 0.5
             streak = 0
@@ -197,7 +204,9 @@ def track_projective(
                 break
             for i in range(m):
                 z[i] += d[i]
-    if abs(z[0]) <= HOMOTOPY_INFINITY_RTOL * _norm(z):  # reached, or stopped by a singular end there
+    if t >= ENDGAME_T and abs(z[0]) <= HOMOTOPY_INFINITY_RTOL * _norm(
+        z
+    ):  # or stopped by a singular end there
         code = AT_INFINITY
     return z, code, t
 
