@@ -278,10 +278,12 @@ def projective_ends(
             failed += 1
             continue
         G, Gz = homogeneous_at(z, p1, a, form.degrees, args)
+        rows = np.linalg.norm(
+            Gz, axis=1
+        )  # scaled to unit norm: the homogenised equations' scales are arbitrary
         if np.abs(G).max() > HOMOTOPY_ROOT_RTOL * (1.0 + np.abs(z).max()):
             failed += 1
-        elif np.linalg.cond(Gz / np.linalg.norm(Gz, axis=1)[:, None]) > HOMOTOPY_SINGULAR_COND:
-            # rows scaled to unit norm: the homogenised equations' scales are arbitrary
+        elif not np.all(rows > 0) or not np.linalg.cond(Gz / rows[:, None]) <= HOMOTOPY_SINGULAR_COND:
             singular += 1
         else:
             roots.append(z[1:] / z[0])
