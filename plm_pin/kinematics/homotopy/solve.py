@@ -104,6 +104,11 @@ class HomotopySolve:
         return f"{self.roots} of {self.generic_count} roots reached: " + ", ".join(parts)
 
 
+HANDOFF_GROWTH = 1e3
+"""Growth of a path's norm (times 1 + its start's) at which the affine tracker stops and the path is
+tracked again in projective coordinates (a path to infinity costs the affine tracker 50 to 90
+steps before it gives up, 20 to 25 with this)."""
+
 _Prepared = tuple[PolynomialForm, GenericSolution]
 _FORMS: weakref.WeakKeyDictionary[Mechanism, _Prepared] = weakref.WeakKeyDictionary()
 
@@ -184,7 +189,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     values = np.asarray(actuators, dtype=float)
     p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
-    X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args())
+    X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH)
     F, Jx = systems_at(X, p1, zero, form.kernel_args())  # the ends' residuals and Jacobians, one call
     scale = 1.0 + np.abs(X).max(axis=1)
     with np.errstate(invalid="ignore"):
