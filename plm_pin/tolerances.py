@@ -51,6 +51,7 @@ __all__ = [
     "HOMOTOPY_CORRECTOR_TOL",
     "HOMOTOPY_DIVERGED_NORM",
     "HOMOTOPY_ENTRY_TOL",
+    "HOMOTOPY_INFINITY_RTOL",
     "HOMOTOPY_MAX_BOX_RTOL",
     "HOMOTOPY_REAL_RTOL",
     "HOMOTOPY_ROOT_RTOL",
@@ -508,6 +509,12 @@ HOMOTOPY_SINGULAR_COND = 1e10
 
 HOMOTOPY_DIVERGED_NORM = 1e8
 """[-] Norm of the unknowns above which a homotopy path goes to infinity."""
+
+HOMOTOPY_INFINITY_RTOL = 1e-6
+"""[-] Homogenising coordinate, relative to the projective point, at or below which a path is at infinity.
+
+An affine norm above 1e6: no real assembly of a mechanism whose lengths are metres or less is
+that far, and a singular root at infinity stops the tracker before a tighter bound is met."""
 
 HOMOTOPY_CORRECTOR_TOL = 1e-9
 """[-] Relative Newton correction at which a homotopy corrector step is accepted."""

@@ -4,9 +4,15 @@ Each of the :math:`N` generic solutions (:mod:`.generic`) is tracked from the ge
 parameters to the actuator values (:mod:`.tracking`). By the parameter continuation theorem
 (Morgan & Sommese 1989; Sommese & Wampler 2005, thm. 7.1.1) every isolated solution at the
 target is the end of one of these paths, and no parameter has more than :math:`N`
-non-singular isolated solutions. So when the :math:`N` paths end at :math:`N` distinct
-non-singular roots, they are all the roots: the result is *complete*. Otherwise (a path went to
-infinity, ended singular, failed, or two paths met) it is not, and says how many and why.
+non-singular isolated solutions. So when every path ends at its own non-singular root or at
+infinity, those roots are all the roots: the result is *complete*. Otherwise (a path ended
+singular, failed, or two paths met) it is not, and says how many and why.
+
+Paths to infinity: at a non-generic target some roots of the generic parameter are at infinity
+(a Delta with its three arms at one angle: base and platform hexagons are then similar, and 12
+of its 40 roots leave), and near it they are finite but large. A path the affine tracker cannot
+follow to a clean end is tracked again in projective coordinates (:mod:`.projective`), where
+both stay bounded: it ends at a root at infinity (dropped; it is no assembly) or at a finite one.
 
 Real roots are refined by Newton on the real system, kept when every closure entry vanishes
 (not only the random combination), and certified by a Krawczyk test (:mod:`.certify`).
@@ -58,7 +64,7 @@ class HomotopySolve:
         spurious: real roots of the square system only (the random combination's).
         elsewhere: real assemblies at other values of the actuators left unknowns (redundant
             actuation, :attr:`PolynomialForm.checked`).
-        diverged: paths that went to infinity.
+        diverged: paths that went to infinity (ended there in projective coordinates).
         singular: paths that ended at a singular root.
         failed: paths the tracker lost.
         collided: paths that ended on a root another path had reached.
@@ -77,8 +83,8 @@ class HomotopySolve:
 
     @property
     def complete(self) -> bool:
-        """Whether every generic path ended at its own non-singular root (all roots found)."""
-        return self.roots == self.generic_count and not self.uncertified
+        """Whether every generic path ended at its own non-singular root or at infinity (all roots found)."""
+        return self.roots + self.diverged == self.generic_count and not self.uncertified
 
     def why_incomplete(self) -> str:
         """What kept the solve from being complete ('' when complete)."""
@@ -97,6 +103,11 @@ class HomotopySolve:
         ]
         return f"{self.roots} of {self.generic_count} roots reached: " + ", ".join(parts)
 
+
+HANDOFF_GROWTH = 1e3
+"""Growth of a path's norm (times 1 + its start's) at which the affine tracker stops and the path is
+tracked again in projective coordinates (a path to infinity costs the affine tracker 50 to 90
+steps before it gives up, 20 to 25 with this)."""
 
 _Prepared = tuple[PolynomialForm, GenericSolution]
 _FORMS: weakref.WeakKeyDictionary[Mechanism, _Prepared] = weakref.WeakKeyDictionary()
@@ -171,25 +182,25 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     """
     from .certify import certify, parameter_intervals
     from .evaluation import closure_entries
-    from .tracking import DIVERGED, REACHED, real_newton, systems_at, track_all
+    from .projective import projective_ends
+    from .tracking import REACHED, real_newton, systems_at, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)
     p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
-    X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args())
-    diverged = int(np.sum(codes == DIVERGED))
-    failed = int(np.sum((codes != DIVERGED) & (codes != REACHED)))
-    X = X[codes == REACHED]
+    X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH)
     F, Jx = systems_at(X, p1, zero, form.kernel_args())  # the ends' residuals and Jacobians, one call
     scale = 1.0 + np.abs(X).max(axis=1)
     with np.errstate(invalid="ignore"):
-        solved = np.isfinite(F).all(axis=1) & (np.abs(F).max(axis=1) <= HOMOTOPY_ROOT_RTOL * scale)
-    failed += int(np.sum(~solved))
-    X, scale, Jx = X[solved], scale[solved], Jx[solved]
-    regular = ~(np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND) if len(X) else np.zeros(0, dtype=bool)
-    singular = int(np.sum(~regular))
-    X, scale = canonical(form, X[regular]), scale[regular]
+        clean = (codes == REACHED) & np.isfinite(F).all(axis=1)
+        clean &= np.abs(F).max(axis=1) <= HOMOTOPY_ROOT_RTOL * scale
+        clean[clean] = ~(np.linalg.cond(Jx[clean]) > HOMOTOPY_SINGULAR_COND)
+    # the other paths (off to infinity, lost, or at a large root the affine test cannot judge), again
+    # in projective coordinates: a path at infinity ends there, a large root is reached
+    far, diverged, singular, failed = projective_ends(form, gen.x[~clean], gen.p, p1)
+    X = canonical(form, np.concatenate([X[clean], far]))
+    scale = 1.0 + np.abs(X).max(axis=1)
     roots: list[np.ndarray] = []
     collided = 0
     for x, s in zip(X, scale, strict=True):

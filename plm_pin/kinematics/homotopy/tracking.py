@@ -142,11 +142,15 @@ def track(
     b1: np.ndarray,
     ws: tuple,
     args: tuple,
+    handoff: float = np.inf,
 ) -> tuple[np.ndarray, int, int]:
     """Track one solution ``x0`` of the system at ``(p0, b0)`` to ``(p1, b1)``.
 
     ``ws`` is the evaluation workspace (:func:`~.evaluation.workspace`); the path's own buffers are
     allocated once here, so no step allocates.
+
+    A path whose norm passes ``handoff`` times ``1 + |x0|`` stops as DIVERGED too (for the
+    projective tracker to take over, :mod:`.projective`).
 
     Returns:
         The end point, its code (REACHED, DIVERGED, FAILED) and the number of steps.
@@ -212,7 +216,7 @@ def track(
             if streak >= 3:
                 h = min(2.0 * h, MAX_STEP)
                 streak = 0
-            if _norm(x) > HOMOTOPY_DIVERGED_NORM:
+            if _norm(x) > HOMOTOPY_DIVERGED_NORM or _norm(x) > handoff * (1.0 + norm0):
                 return x, DIVERGED, steps
         else:
             fresh = True  # k1 (at x) still holds
@@ -233,9 +237,18 @@ def track(
 
 @njit(cache=True)
 def track_all(
-    X0: np.ndarray, p0: np.ndarray, b0: np.ndarray, p1: np.ndarray, b1: np.ndarray, args: tuple
+    X0: np.ndarray,
+    p0: np.ndarray,
+    b0: np.ndarray,
+    p1: np.ndarray,
+    b1: np.ndarray,
+    args: tuple,
+    handoff: float = np.inf,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Track every row of ``X0`` (shape (N, n)): end points (N, n), codes (N,), steps (N,)."""
+    """Track every row of ``X0`` (shape (N, n)): end points (N, n), codes (N,), steps (N,).
+
+    ``handoff`` as in :func:`track`.
+    """
     N = X0.shape[0]
     parent, kind, offset, placement, frame_joint, combination = (
         args[0],
@@ -252,7 +265,7 @@ def track_all(
     codes = np.empty(N, dtype=np.int64)
     steps = np.empty(N, dtype=np.int64)
     for i in range(N):
-        out[i], codes[i], steps[i] = track(X0[i], p0, b0, p1, b1, ws, args)
+        out[i], codes[i], steps[i] = track(X0[i], p0, b0, p1, b1, ws, args, handoff)
     return out, codes, steps
 
 

@@ -360,6 +360,49 @@ def test_presets_modes_contain_every_multistart_mode(name):
         assert any(same_assembly(mech, q, s.q) for s in modes)
 
 
+def _clavel_level_poses(theta: np.ndarray) -> list[np.ndarray]:
+    """The Delta preset's two level platform positions at crank angles ``theta``: three spheres meet.
+
+    Clavel's closed form (plm_pin/legs/delta.py): elbow E_i = a_i + l_a (cos t_i e_i - sin t_i z),
+    and a level platform puts p + b_i at l_b from E_i; the registry's dimensions, written again.
+    """
+    la, lb = 0.30, 0.60
+    centres = []
+    for t, phi in zip(theta, np.radians([0.0, 120.0, 240.0]), strict=True):
+        e = np.array([math.cos(phi), math.sin(phi), 0.0])
+        centres.append(0.20 * e + la * (math.cos(t) * e - math.sin(t) * np.array([0.0, 0.0, 1.0])) - 0.05 * e)
+    c1, c2, c3 = centres
+    ex = (c2 - c1) / np.linalg.norm(c2 - c1)
+    i = float(ex @ (c3 - c1))
+    ey = (c3 - c1 - i * ex) / np.linalg.norm(c3 - c1 - i * ex)
+    ez = np.cross(ex, ey)
+    d, j = float(np.linalg.norm(c2 - c1)), float(ey @ (c3 - c1))
+    x = d / 2  # equal radii
+    y = (i * i + j * j - 2 * i * x) / (2 * j)
+    h = math.sqrt(lb * lb - x * x - y * y)
+    return [c1 + x * ex + y * ey + s * h * ez for s in (1.0, -1.0)]
+
+
+@pytest.mark.parametrize("shift", [(1e-3, 1e-3, 1e-3), (0.02, -0.03, 0.05)])
+def test_delta_complete_with_clavel_level_poses_and_every_multistart_mode(shift):
+    """The Delta: complete (arms at one angle: 12 of 40 roots at infinity), Clavel's two level poses found.
+
+    Every mode of 300-start multi-start Newton is among the homotopy's, and every mode closes.
+    """
+    mech = preset("delta")
+    c = mech.actuator_positions(mech.q_ref) + np.array(shift)
+    modes = forward_kinematics(mech, c)
+    assert modes.method == "homotopy" and modes.complete and modes.generic_count == 40
+    assert modes.certified == len(modes) >= 2
+    for pose in _clavel_level_poses(c):
+        assert sum(np.abs(s.x - pose).max() <= 1e-9 for s in modes) == 1
+    for s in modes:
+        assert s.residual_norm <= 1e-12
+    multi = forward_kinematics(mech, c, method="multi-start", starts=300, seed=5)
+    for s in multi:
+        assert any(same_assembly(mech, s.q, t.q) for t in modes)
+
+
 def test_redundant_actuators_that_disagree_have_no_mode():
     """The 3D4M's fourth actuator moved off the value its three others imply: no assembly (proven)."""
     mech = preset("harada2011_3d4m")
