@@ -4,9 +4,11 @@ Each of the :math:`N` generic solutions (:mod:`.generic`) is tracked from the ge
 parameters to the actuator values (:mod:`.tracking`). By the parameter continuation theorem
 (Morgan & Sommese 1989; Sommese & Wampler 2005, thm. 7.1.1) every isolated solution at the
 target is the end of one of these paths, and no parameter has more than :math:`N`
-non-singular isolated solutions. So when the :math:`N` paths end at :math:`N` distinct
-non-singular roots, they are all the roots: the result is *complete*. Otherwise (a path went to
-infinity, ended singular, failed, or two paths met) it is not, and says how many and why.
+non-singular isolated solutions. So when every one of the :math:`N` paths ends at its own
+non-singular root or goes to infinity (the target has fewer finite roots, e.g. a 3-RPR with
+similar triangles and equal leg lengths), the roots reached are all the isolated roots: the
+result is *complete*. Otherwise (a path ended singular, failed, or two paths met) it is not,
+and says how many and why.
 
 Real roots are refined by Newton on the real system, kept when every closure entry vanishes
 (not only the random combination), and certified by a Krawczyk test (:mod:`.certify`).
@@ -77,8 +79,8 @@ class HomotopySolve:
 
     @property
     def complete(self) -> bool:
-        """Whether every generic path ended at its own non-singular root (all roots found)."""
-        return self.roots == self.generic_count and not self.uncertified
+        """Whether every generic path ended at its own non-singular root or at infinity (all roots found)."""
+        return self.roots + self.diverged == self.generic_count and not self.uncertified
 
     def why_incomplete(self) -> str:
         """What kept the solve from being complete ('' when complete)."""
