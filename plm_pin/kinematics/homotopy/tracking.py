@@ -10,10 +10,10 @@ when a correction, or the next one predicted from the contraction, is small; the
 doubles after three accepted steps in a row and halves on a rejected one.
 
 Endgame: a path whose norm passes :data:`HOMOTOPY_DIVERGED_NORM` goes to infinity (the target has
-fewer finite solutions); a path whose step falls below :data:`MIN_STEP` goes to infinity when its
-norm kept growing like a power of :math:`1/(1 - t)` over the last decades (:func:`_to_infinity`:
-near a root at infinity the affine Jacobian is too ill-conditioned to follow the path much
-further), and fails otherwise (a singular end or a near-collision); a path that reaches
+fewer finite solutions), and so does a path whose step is rejected while its norm grows like a
+power of :math:`1/(1 - t)` over the last decades (:func:`_to_infinity`: near a root at infinity
+the affine Jacobian is too ill-conditioned to follow the path much further); a path whose step
+falls below :data:`MIN_STEP` fails (a singular end or a near-collision); a path that reaches
 :math:`t = 1` gets :data:`FINAL_NEWTON` Newton steps. Because the start point is generic
 complex, the straight segment avoids the discriminant (a complex hypersurface) with probability
 one, except possibly at :math:`t = 1` (the gamma trick in its parameter-space form).
@@ -36,9 +36,9 @@ MIN_STEP = 1e-9  # TOLERANCE -> tolerances.py
 MAX_STEP = 0.2
 FINAL_NEWTON = 4
 ENDGAME_GROWTH = 2.0
-"""Least growth of a path's norm per decade of 1 - t, over two decades, to call it diverging at a collapse."""
+"""Least growth of a path's norm per decade of 1 - t, over two decades, to call it diverging."""
 ENDGAME_EXPONENT = 0.25
-"""Least growth exponent w of a path's norm, like (1 - t)^(-w), at a collapse, to call it diverging."""
+"""Least growth exponent w of a path's norm, like (1 - t)^(-w), at a rejected step, to call it diverging."""
 
 
 @njit(cache=True)
@@ -141,7 +141,7 @@ def _norm(v: np.ndarray) -> float:
 
 @njit(cache=True)
 def _to_infinity(x: np.ndarray, v: np.ndarray, rest: float, gap: float, marks: np.ndarray) -> bool:
-    r"""Whether a path whose step collapsed at :math:`1 - t` = ``rest`` is going to infinity.
+    r"""Whether a path whose step was rejected at :math:`1 - t` = ``rest`` is going to infinity.
 
     Near a root at infinity the affine Jacobian grows ill-conditioned (like a power of
     :math:`|x|`), so the corrector stalls long before :data:`HOMOTOPY_DIVERGED_NORM`. The path
@@ -252,10 +252,12 @@ def track(
                 marks[0], marks[1], marks[2] = marks[1], marks[2], _norm(x)
         else:
             fresh = True  # k1 (at x) still holds
+            if _to_infinity(x, k1, 1.0 - t, gap, marks):  # no use halving the step down to MIN_STEP
+                return x, DIVERGED, steps
             h *= 0.5
             streak = 0
             if h < MIN_STEP:
-                if _norm(x) > 1e3 * (1.0 + norm0) or _to_infinity(x, k1, 1.0 - t, gap, marks):
+                if _norm(x) > 1e3 * (1.0 + norm0):
                     return x, DIVERGED, steps
                 return x, FAILED, steps
     for _ in range(FINAL_NEWTON):
