@@ -48,6 +48,7 @@ __all__ = [
     "GAUGE_MIN_PIVOT",
     "GAUGE_TIE_RTOL",
     "GRAM_RTOL",
+    "HOMOTOPY_COMPLEX_END_RTOL",
     "HOMOTOPY_CORRECTOR_TOL",
     "HOMOTOPY_DIVERGED_NORM",
     "HOMOTOPY_ENTRY_TOL",
@@ -505,6 +506,9 @@ HOMOTOPY_SAME_ROOT_RTOL = 1e-6
 
 HOMOTOPY_SINGULAR_COND = 1e10
 """[-] Condition number of the square system's Jacobian above which a path end counts as singular."""
+
+HOMOTOPY_COMPLEX_END_RTOL = 1e-3
+"""[-] Relative imaginary part above which a singular path end is surely not a real root (it hides none)."""
 
 HOMOTOPY_DIVERGED_NORM = 1e8
 """[-] Norm of the unknowns above which a homotopy path goes to infinity."""

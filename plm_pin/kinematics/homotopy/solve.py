@@ -6,9 +6,12 @@ parameters to the actuator values (:mod:`.tracking`). By the parameter continuat
 target is the end of one of these paths, and no parameter has more than :math:`N`
 non-singular isolated solutions. So when every one of the :math:`N` paths ends at its own
 non-singular root or goes to infinity (the target has fewer finite roots, e.g. a 3-RPR with
-similar triangles and equal leg lengths), the roots reached are all the isolated roots: the
-result is *complete*. Otherwise (a path ended singular, failed, or two paths met) it is not,
-and says how many and why.
+similar triangles and equal leg lengths), the roots reached are all the isolated roots. A path
+that ends singular far from the reals (a huge, ill-conditioned complex root: the same 3-RPR
+with nearly equal legs) hides no real root either, since every isolated real root, singular
+ones included, is the end of a path: with those the result is *complete* (every real assembly
+mode found). Otherwise (a path ended singular near the reals, failed, or two paths met) it is
+not, and says how many and why.
 
 Real roots are refined by Newton on the real system, kept when every closure entry vanishes
 (not only the random combination), and certified by a Krawczyk test (:mod:`.certify`).
@@ -23,6 +26,7 @@ import numpy as np
 
 from ...core.mechanism import Mechanism
 from ...tolerances import (
+    HOMOTOPY_COMPLEX_END_RTOL,
     HOMOTOPY_ENTRY_TOL,
     HOMOTOPY_REAL_RTOL,
     HOMOTOPY_ROOT_RTOL,
@@ -62,6 +66,8 @@ class HomotopySolve:
             actuation, :attr:`PolynomialForm.checked`).
         diverged: paths that went to infinity.
         singular: paths that ended at a singular root.
+        complex_singular: of these, the ones far from real (relative imaginary part above
+            :data:`~plm_pin.tolerances.HOMOTOPY_COMPLEX_END_RTOL`): they hide no real root.
         failed: paths the tracker lost.
         collided: paths that ended on a root another path had reached.
     """
@@ -76,11 +82,16 @@ class HomotopySolve:
     singular: int
     failed: int
     collided: int
+    complex_singular: int = 0
 
     @property
     def complete(self) -> bool:
-        """Whether every generic path ended at its own non-singular root or at infinity (all roots found)."""
-        return self.roots + self.diverged == self.generic_count and not self.uncertified
+        """Whether every real root was found.
+
+        Each generic path ended at its own non-singular root, at infinity, or singular far from real.
+        """
+        accounted = self.roots + self.diverged + self.complex_singular
+        return accounted == self.generic_count and not self.uncertified
 
     def why_incomplete(self) -> str:
         """What kept the solve from being complete ('' when complete)."""
@@ -191,6 +202,10 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     X, scale, Jx = X[solved], scale[solved], Jx[solved]
     regular = ~(np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND) if len(X) else np.zeros(0, dtype=bool)
     singular = int(np.sum(~regular))
+    ends = X[~regular]
+    complex_singular = int(
+        np.sum(np.abs(ends.imag).max(axis=1) > HOMOTOPY_COMPLEX_END_RTOL * (1.0 + np.abs(ends).max(axis=1)))
+    )
     X, scale = canonical(form, X[regular]), scale[regular]
     roots: list[np.ndarray] = []
     collided = 0
@@ -231,4 +246,5 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         singular=singular,
         failed=failed,
         collided=collided,
+        complex_singular=complex_singular,
     )
