@@ -146,9 +146,9 @@ def _to_infinity(x: np.ndarray, v: np.ndarray, rest: float, gap: float, marks: n
     Near a root at infinity the affine Jacobian grows ill-conditioned (like a power of
     :math:`|x|`), so the corrector stalls long before :data:`HOMOTOPY_DIVERGED_NORM`. The path
     goes to infinity when it grows like :math:`(1 - t)^{-w}`: its norm grew at least
-    :data:`ENDGAME_GROWTH` times over each of the last two decades of :math:`1 - t`
-    (``marks``: the norms where :math:`1 - t` passed ``100 gap``, ``10 gap`` and ``gap``), is
-    still above the last mark, and the tangent ``v`` still gives the exponent
+    :data:`ENDGAME_GROWTH` times over each of the last two decades of :math:`1 - t`, or its square
+    over the last one (``marks``: the norms where :math:`1 - t` passed ``100 gap``, ``10 gap`` and
+    ``gap``), is still above the last mark, and the tangent ``v`` still gives the exponent
     :math:`w = (1 - t)\,\mathrm{Re}(x^H v) / |x|^2 \ge` :data:`ENDGAME_EXPONENT`. A path to a
     finite root, regular or singular, has a norm that settles (:math:`w \to 0`, or
     :math:`w < 0` toward the origin).
@@ -156,7 +156,9 @@ def _to_infinity(x: np.ndarray, v: np.ndarray, rest: float, gap: float, marks: n
     if gap > 1e-3 or not (np.isfinite(marks[0]) and np.isfinite(marks[1])):
         return False
     size = _norm(x)
-    if marks[1] < ENDGAME_GROWTH * marks[0] or marks[2] < ENDGAME_GROWTH * marks[1] or size < marks[2]:
+    last = marks[2] / marks[1]  # growth over the last decade
+    steady = marks[1] >= ENDGAME_GROWTH * marks[0] or last >= ENDGAME_GROWTH**2
+    if size < marks[2] or last < ENDGAME_GROWTH or not steady:
         return False
     acc = 0.0
     for i in range(x.shape[0]):
