@@ -258,31 +258,32 @@ def chart(n: int) -> np.ndarray:
 
 def projective_ends(
     form: PolynomialForm, X0: np.ndarray, p0: np.ndarray, p1: np.ndarray
-) -> tuple[np.ndarray, int, int, int]:
+) -> tuple[np.ndarray, int, int, np.ndarray]:
     """Track the generic roots ``X0`` (N, n) from ``p0`` to ``p1`` in projective coordinates.
 
     Returns:
-        The finite non-singular ends (k, n) (their affine coordinates), and the numbers of paths
-        that went to infinity, ended singular, and failed.
+        The finite non-singular ends (k, n) (their affine coordinates), the numbers of paths
+        that went to infinity and that ended singular, and which paths failed (N,).
     """
     a = chart(form.n)
     args = form.kernel_args()
     Z, codes = track_projective_all(np.ascontiguousarray(X0), p0, p1, a, form.degrees, args)
     roots = []
-    infinity = singular = failed = 0
-    for z, code in zip(Z, codes, strict=True):
+    infinity = singular = 0
+    failed = np.zeros(len(Z), dtype=bool)
+    for i, (z, code) in enumerate(zip(Z, codes, strict=True)):
         if code == AT_INFINITY:
             infinity += 1
             continue
         if code != REACHED or not np.all(np.isfinite(z)):
-            failed += 1
+            failed[i] = True
             continue
         G, Gz = homogeneous_at(z, p1, a, form.degrees, args)
         rows = np.linalg.norm(
             Gz, axis=1
         )  # scaled to unit norm: the homogenised equations' scales are arbitrary
         if np.abs(G).max() > HOMOTOPY_ROOT_RTOL * (1.0 + np.abs(z).max()):
-            failed += 1
+            failed[i] = True
         elif not np.all(rows > 0) or not np.linalg.cond(Gz / rows[:, None]) <= HOMOTOPY_SINGULAR_COND:
             singular += 1
         else:

@@ -183,7 +183,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     from .certify import certify, parameter_intervals
     from .evaluation import closure_entries
     from .projective import projective_ends
-    from .tracking import REACHED, real_newton, systems_at, track_all
+    from .tracking import GROWING, REACHED, real_newton, systems_at, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)
@@ -198,7 +198,12 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         clean[clean] = ~(np.linalg.cond(Jx[clean]) > HOMOTOPY_SINGULAR_COND)
     # the other paths (off to infinity, lost, or at a large root the affine test cannot judge), again
     # in projective coordinates: a path at infinity ends there, a large root is reached
-    far, diverged, singular, failed = projective_ends(form, gen.x[~clean], gen.p, p1)
+    far, diverged, singular, lost = projective_ends(form, gen.x[~clean], gen.p, p1)
+    # a path lost in projective coordinates too (a singular end at infinity, as the isotropic points
+    # of revolute (cos, sin) pairs) whose affine norm grew like a power of 1/(1 - t) went to infinity
+    growing = codes[~clean] == GROWING
+    diverged += int(np.sum(lost & growing))
+    failed = int(np.sum(lost & ~growing))
     X = canonical(form, np.concatenate([X[clean], far]))
     scale = 1.0 + np.abs(X).max(axis=1)
     roots: list[np.ndarray] = []

@@ -10,11 +10,13 @@ when a correction, or the next one predicted from the contraction, is small; the
 doubles after three accepted steps in a row and halves on a rejected one.
 
 Endgame: a path whose norm passes :data:`HOMOTOPY_DIVERGED_NORM` goes to infinity (the target has
-fewer finite solutions); a path whose step falls below :data:`MIN_STEP` fails (a singular
-end or a near-collision); a path that reaches :math:`t = 1` gets :data:`FINAL_NEWTON` Newton
-steps. Because the start point is generic complex, the straight segment avoids the
-discriminant (a complex hypersurface) with probability one, except possibly at
-:math:`t = 1` (the gamma trick in its parameter-space form).
+fewer finite solutions), and so does a path whose step is rejected while its norm grows like a
+power of :math:`1/(1 - t)` over the last decades (:func:`_to_infinity`: near a root at infinity
+the affine Jacobian is too ill-conditioned to follow the path much further); a path whose step
+falls below :data:`MIN_STEP` fails (a singular end or a near-collision); a path that reaches
+:math:`t = 1` gets :data:`FINAL_NEWTON` Newton steps. Because the start point is generic
+complex, the straight segment avoids the discriminant (a complex hypersurface) with probability
+one, except possibly at :math:`t = 1` (the gamma trick in its parameter-space form).
 """
 
 from __future__ import annotations
@@ -25,14 +27,19 @@ from numba import njit
 from ...tolerances import HOMOTOPY_CORRECTOR_TOL, HOMOTOPY_DIVERGED_NORM
 from .evaluation import system, workspace
 
-REACHED, DIVERGED, FAILED = 0, 1, 2
-"""Path end codes: reached t = 1, went to infinity, tracker failure."""
+REACHED, DIVERGED, FAILED, GROWING = 0, 1, 2, 3
+"""Path end codes: reached t = 1, went to infinity (or handed over), tracker failure, and went to
+infinity by the endgame's growth test (:func:`_to_infinity`)."""
 
 CORRECTOR_STEPS = 3
 MIN_STEP = 1e-9  # TOLERANCE -> tolerances.py
 """Smallest step in t [-] before a path is declared failed."""
 MAX_STEP = 0.2
 FINAL_NEWTON = 4
+ENDGAME_GROWTH = 2.0
+"""Least growth of a path's norm per decade of 1 - t, over two decades, to call it diverging."""
+ENDGAME_EXPONENT = 0.25
+"""Least growth exponent w of a path's norm, like (1 - t)^(-w), at a rejected step, to call it diverging."""
 
 
 @njit(cache=True)
@@ -134,6 +141,33 @@ def _norm(v: np.ndarray) -> float:
 
 
 @njit(cache=True)
+def _to_infinity(x: np.ndarray, v: np.ndarray, rest: float, gap: float, marks: np.ndarray) -> bool:
+    r"""Whether a path whose step was rejected at :math:`1 - t` = ``rest`` is going to infinity.
+
+    Near a root at infinity the affine Jacobian grows ill-conditioned (like a power of
+    :math:`|x|`), so the corrector stalls long before :data:`HOMOTOPY_DIVERGED_NORM`. The path
+    goes to infinity when it grows like :math:`(1 - t)^{-w}`: its norm grew at least
+    :data:`ENDGAME_GROWTH` times over each of the last two decades of :math:`1 - t`, or its square
+    over the last one (``marks``: the norms where :math:`1 - t` passed ``100 gap``, ``10 gap`` and
+    ``gap``), is still above the last mark, and the tangent ``v`` still gives the exponent
+    :math:`w = (1 - t)\,\mathrm{Re}(x^H v) / |x|^2 \ge` :data:`ENDGAME_EXPONENT`. A path to a
+    finite root, regular or singular, has a norm that settles (:math:`w \to 0`, or
+    :math:`w < 0` toward the origin).
+    """
+    if gap > 1e-3 or not (np.isfinite(marks[0]) and np.isfinite(marks[1])):
+        return False
+    size = _norm(x)
+    last = marks[2] / marks[1]  # growth over the last decade
+    steady = marks[1] >= ENDGAME_GROWTH * marks[0] or last >= ENDGAME_GROWTH**2
+    if size < marks[2] or last < ENDGAME_GROWTH or not steady:
+        return False
+    acc = 0.0
+    for i in range(x.shape[0]):
+        acc += x[i].real * v[i].real + x[i].imag * v[i].imag
+    return rest * acc / (size * size) >= ENDGAME_EXPONENT
+
+
+@njit(cache=True)
 def track(
     x0: np.ndarray,
     p0: np.ndarray,
@@ -153,7 +187,7 @@ def track(
     projective tracker to take over, :mod:`.projective`).
 
     Returns:
-        The end point, its code (REACHED, DIVERGED, FAILED) and the number of steps.
+        The end point, its code (REACHED, DIVERGED, FAILED, GROWING) and the number of steps.
     """
     n = x0.shape[0]
     x = x0.copy()
@@ -168,6 +202,8 @@ def track(
     t, h = 0.0, 0.1
     steps, streak = 0, 0
     norm0 = _norm(x0)
+    # the norm where 1 - t last passed a power of ten, and at the two passes before (endgame)
+    gap, marks = 1.0, np.array([np.nan, np.nan, norm0])
     while t < 1.0:
         if steps > 5000:
             return x, FAILED, steps
@@ -218,8 +254,13 @@ def track(
                 streak = 0
             if _norm(x) > HOMOTOPY_DIVERGED_NORM or _norm(x) > handoff * (1.0 + norm0):
                 return x, DIVERGED, steps
+            if 1.0 - t <= 0.1 * gap:
+                gap = 1.0 - t
+                marks[0], marks[1], marks[2] = marks[1], marks[2], _norm(x)
         else:
             fresh = True  # k1 (at x) still holds
+            if _to_infinity(x, k1, 1.0 - t, gap, marks):  # no use halving the step down to MIN_STEP
+                return x, GROWING, steps
             h *= 0.5
             streak = 0
             if h < MIN_STEP:

@@ -110,3 +110,38 @@ def rpr_poses(
                 p = branches(phi)[k]
                 out.append(np.array([p[0], p[1], phi]))
     return out
+
+
+def rpr_complex_poses(base: np.ndarray, plate: np.ndarray, rho: np.ndarray) -> list[np.ndarray]:
+    """Every finite complex pose (x, y, phi) with |p + R(phi) b_i - A_i| = rho_i, by elimination.
+
+    Subtracting leg 1's equation from legs 2 and 3 leaves two equations linear in the platform
+    origin p, solved by Cramer's rule, p = N / D (N, D quadratic in cos phi, sin phi); leg 1's
+    equation times D^2 is then a quartic in (cos phi, sin phi), a degree-8 polynomial in
+    t = tan(phi / 2) once multiplied by (1 + t^2)^4, interpolated at 9 points. Of its roots,
+    t = +-i are the factor (1 + t^2) and those with D = 0 have p at infinity (the linear system
+    degenerates; for similar triangles these are the two roots at infinity); the others are
+    the finite poses. ``rho`` may be complex.
+    """
+    rho2 = np.asarray(rho, dtype=complex) ** 2
+
+    def parts(t: complex) -> tuple[complex, complex, complex, complex]:
+        c, s = (1 - t * t) / (1 + t * t), 2 * t / (1 + t * t)
+        e = np.array([[c * b[0] - s * b[1], s * b[0] + c * b[1]] for b in plate]) - base
+        q = (e**2).sum(axis=1) - rho2
+        M, rhs = 2 * (e[1:] - e[0]), q[0] - q[1:]
+        D = M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]
+        Nx, Ny = rhs[0] * M[1, 1] - M[0, 1] * rhs[1], M[0, 0] * rhs[1] - rhs[0] * M[1, 0]
+        g = (Nx * Nx + Ny * Ny + 2 * D * (Nx * e[0, 0] + Ny * e[0, 1]) + D * D * q[0]) * (1 + t * t) ** 4
+        return g, Nx, Ny, D * (1 + t * t) ** 2
+
+    nodes = 1.3 * np.exp(2j * np.pi * np.arange(9) / 9)
+    coef = np.linalg.solve(np.vander(nodes, 9), [parts(t)[0] for t in nodes])
+    d_size = max(abs(parts(t)[3]) for t in nodes)
+    out = []
+    for t in np.roots(coef):
+        _, Nx, Ny, D = parts(t)
+        if abs(1 + t * t) < 1e-6 or abs(D) < 1e-6 * d_size:
+            continue
+        out.append(np.array([Nx / D * (1 + t * t) ** 2, Ny / D * (1 + t * t) ** 2, 2 * np.arctan(t)]))
+    return out

@@ -28,7 +28,7 @@ from plm_pin.legs import hexapod
 from plm_pin.warnings import ReferenceWarning
 from tests.conftest import preset
 
-from .rpr import rpr_files, rpr_poses
+from .rpr import rpr_complex_poses, rpr_files, rpr_poses
 
 HERE = Path(__file__).parent
 # A 3-RPR with six real assembly modes (found by the univariate search of rpr.py, the oracle)
@@ -152,6 +152,46 @@ def test_3rpr_out_of_reach_is_unreachable_with_proof(tmp_path):
     mech = _load_rpr(tmp_path)
     with pytest.raises(plm_pin.PoseUnreachable, match=r"none of the 6 complex roots is real"):
         forward_kinematics(mech, [0.01, 0.01, 0.01])
+
+
+def _preset_rpr_triangles() -> tuple[np.ndarray, np.ndarray]:
+    """Base hinges and platform hinges (platform frame) of the preset planar_3rpr, from its registry entry."""
+    from plm_pin.models.registry import PRESETS
+
+    params = PRESETS["planar_3rpr"].parameters
+    return np.array(params["base"], dtype=float), np.array(params["platform"], dtype=float)
+
+
+@pytest.mark.parametrize("offset", [(1e-3, 1e-3, 1e-3), (0.02, -0.01, 0.0)], ids=["equal_legs", "unequal"])
+def test_planar_3rpr_similar_triangles_match_the_elimination(offset):
+    """planar_3rpr (similar triangles): 4 generic roots, complete, the real modes are the elimination's.
+
+    With similar base and platform triangles two of the 3-RPR's six roots lie at infinity for
+    every leg length, and with equal legs two more go there: the paths to them diverge, and
+    the roots reached are the elimination's finite roots.
+    """
+    from plm_pin.kinematics.homotopy import solve_homotopy
+
+    mech = preset("planar_3rpr")
+    base, plate = _preset_rpr_triangles()
+    rng = np.random.default_rng(3)
+    generic = rpr_complex_poses(base, plate, rng.normal(size=3) + 1j * rng.normal(size=3))
+    c = mech.actuator_positions(mech.q_ref) + np.array(offset)
+    finite = rpr_complex_poses(base, plate, c)
+    real = [e.real for e in finite if np.abs(e.imag).max() <= 1e-9]
+    modes = forward_kinematics(mech, c)
+    assert modes.method == "homotopy" and modes.complete and not modes.why_incomplete
+    assert modes.generic_count == len(generic) == 4
+    assert modes.certified == len(modes) == len(real) >= 2
+    res = solve_homotopy(mech, c)
+    assert res.roots == len(finite) and res.roots + res.diverged == 4
+    for e in real:
+        errs = []
+        for s in modes:
+            d = s.x - e
+            d[2] = (d[2] + math.pi) % (2 * math.pi) - math.pi
+            errs.append(np.abs(d).max())
+        assert min(errs) <= 1e-9
 
 
 def _stewart_geometry(mech: plm_pin.Mechanism) -> dict[str, list]:
