@@ -214,6 +214,16 @@ def _lu_solve(M: np.ndarray, B: np.ndarray) -> bool:
 
 
 @njit(cache=True)
+def _finite(X: np.ndarray) -> bool:
+    """Whether every entry of ``X`` (2-D) is finite, without the temporary of ``np.isfinite``."""
+    for i in range(X.shape[0]):
+        for j in range(X.shape[1]):
+            if not math.isfinite(X[i, j]):
+                return False
+    return True
+
+
+@njit(cache=True)
 def _gram_eigenvalues(M: np.ndarray, G: np.ndarray, work: np.ndarray, out: np.ndarray) -> int:
     """Squared singular values of ``M`` (r, c), descending, into ``out``; returns n = min(r, c).
 
@@ -296,7 +306,7 @@ def square_metrics(
                     M[b, a] = s
                 for j in range(k):
                     S[a, j] = Ap[m + j, a]
-        if not _lu_solve(M, S) or not np.isfinite(S).all():
+        if not _lu_solve(M, S) or not _finite(S):
             continue
         for j in range(k):  # Gram-Schmidt, twice
             for c in range(nv):
