@@ -137,6 +137,11 @@ def _tridiagonal_eigenvalues(G: np.ndarray, n: int, d: np.ndarray, e: np.ndarray
     if n >= 2:
         e[n - 2] = G[n - 1, n - 2]
     e[n - 1] = 0.0
+    if abs(d[n - 1]) < abs(d[0]):  # deflate from the smaller end, as dsterf (QR on this order)
+        for i in range(n // 2):
+            d[i], d[n - 1 - i] = d[n - 1 - i], d[i]
+        for i in range((n - 1) // 2):
+            e[i], e[n - 2 - i] = e[n - 2 - i], e[i]
     norm = 0.0
     for i in range(n):
         norm = max(norm, abs(d[i]) + abs(e[i]) + (abs(e[i - 1]) if i > 0 else 0.0))
