@@ -73,3 +73,24 @@ def test_gram_eigenvalues_match_lapack(kind, rng):
             assert _gram_eigenvalues(X, np.empty((n + 2, n + 2)), np.empty(n + 2), got) == n
             assert np.all(np.diff(got[:n]) <= 0.0) and np.all(got[:n] >= 0.0)
             np.testing.assert_allclose(got[:n], np.clip(want, 0.0, None), rtol=0.0, atol=50 * n * eps * scale)
+
+
+def test_tridiagonal_eigenvalues_on_special_matrices(rng):
+    """Zero, scaled identity, repeated and widely scaled matrices: LAPACK's values to round-off of |G|."""
+    from plm_pin.kernels.metrics import _tridiagonal_eigenvalues
+
+    eps = np.finfo(float).eps
+    Q = np.linalg.qr(rng.normal(size=(7, 7)))[0]
+    cases = [
+        np.zeros((7, 7)),
+        3.0 * np.eye(7),
+        Q @ np.diag([2.0, 2.0, 2.0, 1.0, 1.0, 0.0, 0.0]) @ Q.T,  # repeated eigenvalues, hidden
+        1e100 * (Q @ np.diag(np.arange(7.0)) @ Q.T),
+        1e-100 * (Q @ np.diag(np.arange(7.0)) @ Q.T),
+    ]
+    for P in cases:
+        P = (P + P.T) / 2.0
+        want = np.linalg.eigvalsh(P)
+        G, d, e = P.copy(), np.empty(7), np.empty(7)
+        assert _tridiagonal_eigenvalues(G, 7, d, e)
+        np.testing.assert_allclose(np.sort(d), want, rtol=0.0, atol=50 * 7 * eps * np.abs(want).max())
