@@ -96,11 +96,13 @@ def _tridiagonal_eigenvalues(G: np.ndarray, n: int, d: np.ndarray, e: np.ndarray
     ``e``), whose eigenvalues the implicit QL iteration with Wilkinson shifts finds, values
     only, in the root-free form of Pal, Walker and Kahan (on the squares of ``e``, as LAPACK's
     ``dsterf``: no square root per rotation, 7 % cheaper than ``tql1``'s on the 9 x 9 Gram
-    of the 3D4M). Both are backward stable: the values are exact for a symmetric matrix within
-    a few round-offs of ``|G|``. An off-diagonal entry is dropped once below round-off of the
-    tridiagonal's norm (not of its neighbours), which keeps that bound and saves the sweeps a
-    relative test would spend on the zero eigenvalues of a rank-deficient Gram. Without
-    LAPACK's scaling, entries must stay below 1e150, far beyond a Jacobian's Gram.
+    of the 3D4M), deflating from the end of the diagonal with the smaller entry (``dsterf``'s
+    choice, fewer rotations there). Both are backward stable: the values are exact for a
+    symmetric matrix within a few round-offs of ``|G|``. An off-diagonal entry is dropped once
+    below round-off of the tridiagonal's norm (not of its neighbours), which keeps that bound
+    and saves the sweeps a relative test would spend on the zero eigenvalues of a
+    rank-deficient Gram. Without LAPACK's scaling, ``|G|`` must lie between 1e-150 and 1e150
+    (its squares stay normal), far from a Jacobian's Gram.
     """
     eps = EPS
     for k in range(n - 2):  # reflect x = G[k+1:, k] onto alpha e_0 by I - v v^T / h, v = x - alpha e_0
