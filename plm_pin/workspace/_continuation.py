@@ -554,10 +554,13 @@ def _walk_rows(
             break
         row, col = np.concatenate(rows), np.concatenate(cols)
         q, ok, A, R = _batch_solve(ev, kin, np.concatenate(guesses), poses[row, col], tol)
-        modes = batch_modes(A[ok], ev.legs, kin.turns(R[ok], ev.legs))
+        if not ok.all():  # (copies of R, the largest array, only where some point failed)
+            A, R, q, row, col = A[ok], R[ok], q[ok], row[ok], col[ok]
+        modes = batch_modes(A, ev.legs, kin.turns(R, ev.legs))
         fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
-        keep = np.flatnonzero(ok)[fits]
-        state.accept_batch(row[keep] * n1 + col[keep], q[keep], modes[fits], A[keep], metrics)
+        if not fits.all():
+            A, q, modes, row, col = A[fits], q[fits], modes[fits], row[fits], col[fits]
+        state.accept_batch(row * n1 + col, q, modes, A, metrics)
 
 
 def _batch_solve(
