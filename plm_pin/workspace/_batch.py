@@ -440,16 +440,19 @@ class BatchKinematics:
         seen from the leg's root joint (rotations ``R`` of :class:`Evaluation`), points away
         from the leg's generic axis is negated.
         """
-        out = []
-        for leg in legs:
-            if not leg.square:
-                continue
-            sign = np.ones((R.shape[0], len(leg.columns)))
-            for k, jid, root, generic in leg.axes:
-                world = R[:, jid, :, self.axis[jid]]
-                seen = np.einsum("bji,bj->bi", R[:, root], world)
-                sign[seen @ np.asarray(generic) < 0.0, k] = -1.0
-            out.append(sign)
+        square = [leg for leg in legs if leg.square]
+        out = [np.ones((R.shape[0], len(leg.columns))) for leg in square]
+        axes = [
+            (i, k, jid, root, generic) for i, leg in enumerate(square) for k, jid, root, generic in leg.axes
+        ]
+        if not axes:
+            return out
+        which, column, jid, root, generic = (np.array(v) for v in zip(*axes, strict=True))
+        world = R[:, jid, :, self.axis[jid]]  # (n_axes, B, 3): advanced indices apart go first
+        # (R_root^T world) . generic = world . (R_root generic)
+        away = np.einsum("abi,bai->ba", world, np.einsum("baij,aj->bai", R[:, root], generic)) < 0.0
+        for t in range(len(axes)):
+            out[which[t]][away[:, t], column[t]] = -1.0
         return out
 
 
@@ -634,13 +637,36 @@ def batch_modes(
     out = np.zeros((A.shape[0], len(square)), dtype=np.int8)
     for n in sorted({len(leg.columns) for leg in square}):  # the blocks of one size in one call
         which = [i for i, leg in enumerate(square) if len(leg.columns) == n]
-        M = np.stack([A[:, list(square[i].sign_rows)][:, :, list(square[i].columns)] for i in which], axis=1)
-        if turns is not None:
-            M = M * np.stack([turns[i] for i in which], axis=1)[:, :, None, :]
-        det = np.linalg.det(M)
-        bound = np.prod(np.linalg.norm(M, axis=2), axis=-1)
+        rows = np.array([square[i].sign_rows for i in which])  # (n_which, n)
+        cols = np.array([square[i].columns for i in which])
+        M = A[:, rows[:, :, None], cols[:, None, :]]  # (B, n_which, n, n), one gather
+        det = _small_det(M)
+        if turns is not None:  # negating columns negates the determinant, exactly
+            for w, i in enumerate(which):
+                for c in range(n):  # cheaper than np.prod on these narrow arrays
+                    det[:, w] *= turns[i][:, c]
+        bound = np.prod(np.sqrt(np.einsum("bwij,bwij->bwj", M, M)), axis=-1)  # Hadamard's
         out[:, which] = np.where(np.abs(det) <= rtol * bound, 0, np.sign(det))
     return out
+
+
+def _small_det(M: np.ndarray) -> np.ndarray:
+    """Determinants of a stack of square matrices (..., n, n): by cofactors up to 3 x 3, else LAPACK's LU.
+
+    The cofactor sums are exact up to a few round-offs of Hadamard's bound, as the LU's are, and
+    save the LAPACK call per matrix on the small leg blocks.
+    """
+    n = M.shape[-1]
+    if n == 1:
+        return M[..., 0, 0].copy()
+    if n == 2:
+        return M[..., 0, 0] * M[..., 1, 1] - M[..., 0, 1] * M[..., 1, 0]
+    if n == 3:
+        a, b, c = M[..., 0, 0], M[..., 0, 1], M[..., 0, 2]
+        d, e, f = M[..., 1, 0], M[..., 1, 1], M[..., 1, 2]
+        g, h, i = M[..., 2, 0], M[..., 2, 1], M[..., 2, 2]
+        return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    return np.linalg.det(M)
 
 
 def _squared_singular_values(M: np.ndarray) -> np.ndarray:

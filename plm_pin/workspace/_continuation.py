@@ -537,27 +537,30 @@ def _walk_rows(
             if not 0 <= i < n0 or not reached[back[0]].any():
                 del fronts[direction]
                 continue
-            have = reached[back[0]]
-            pred = Q[back[0]].copy()
+            c = np.flatnonzero(reached[back[0]])  # the columns solved on the row before
+            pred = Q0 = Q[back[0], c]
             if len(back) >= 2:
-                two = have & reached[back[1]]
-                pred[two] = 2.0 * Q[back[0]][two] - Q[back[1]][two]
+                two = reached[back[1], c][:, None]
+                Q1 = Q[back[1], c]
+                pred = np.where(two, 2.0 * Q0 - Q1, Q0)
                 if len(back) == 3:
-                    three = two & reached[back[2]]
-                    pred[three] = 3.0 * Q[back[0]][three] - 3.0 * Q[back[1]][three] + Q[back[2]][three]
-            c = np.flatnonzero(have)
+                    three = two & reached[back[2], c][:, None]
+                    pred = np.where(three, 3.0 * Q0 - 3.0 * Q1 + Q[back[2], c], pred)
             rows.append(np.full(c.size, i))
             cols.append(c)
-            guesses.append(pred[c])
+            guesses.append(pred)
             fronts[direction] = i + direction
         if not rows:
             break
         row, col = np.concatenate(rows), np.concatenate(cols)
         q, ok, A, R = _batch_solve(ev, kin, np.concatenate(guesses), poses[row, col], tol)
-        modes = batch_modes(A[ok], ev.legs, kin.turns(R[ok], ev.legs))
+        if not ok.all():  # (copies of R, the largest array, only where some point failed)
+            A, R, q, row, col = A[ok], R[ok], q[ok], row[ok], col[ok]
+        modes = batch_modes(A, ev.legs, kin.turns(R, ev.legs))
         fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
-        keep = np.flatnonzero(ok)[fits]
-        state.accept_batch(row[keep] * n1 + col[keep], q[keep], modes[fits], A[keep], metrics)
+        if not fits.all():
+            A, q, modes, row, col = A[fits], q[fits], modes[fits], row[fits], col[fits]
+        state.accept_batch(row * n1 + col, q, modes, A, metrics)
 
 
 def _batch_solve(

@@ -39,3 +39,58 @@ def test_compiled_metrics_match_the_svd_metrics(name, rng):
     assert good.all()
     for key, value in want.items():
         np.testing.assert_allclose(got[key], value, rtol=1e-9, err_msg=key)
+
+
+def _square_root(rng, n, kind):
+    """A random n x n X whose Gram X^T X is full rank, rank-deficient or graded."""
+    X = rng.normal(size=(n, n))
+    if kind == "deficient":  # rank n // 2, zero eigenvalues hidden by a random rotation
+        X[: n - n // 2] = 0.0
+        X = X @ np.linalg.qr(rng.normal(size=(n, n)))[0]
+    elif kind == "graded":  # columns scaled over eight decades
+        X = X * np.logspace(0.0, -8.0, n)
+    return X
+
+
+@pytest.mark.parametrize("kind", ["full", "deficient", "graded"])
+def test_gram_eigenvalues_match_lapack(kind, rng):
+    """Tridiagonal QL (and Jacobi below it) give LAPACK's eigenvalues to round-off of the matrix norm."""
+    from plm_pin.kernels.metrics import _gram_eigenvalues, _tridiagonal_eigenvalues
+
+    eps = np.finfo(float).eps
+    for n in range(1, 13):
+        for _ in range(20):
+            X = _square_root(rng, n, kind)
+            P = X.T @ X
+            want = np.linalg.eigvalsh(P)[::-1]  # descending
+            scale = max(want[0], np.finfo(float).tiny)
+            G, d, e = np.full((n + 2, n + 2), np.nan), np.full(n + 2, np.nan), np.full(n + 2, np.nan)
+            G[:n, :n] = P
+            assert _tridiagonal_eigenvalues(G, n, d, e)
+            np.testing.assert_allclose(np.sort(d[:n])[::-1], want, rtol=0.0, atol=50 * n * eps * scale)
+            # from X itself (its Gram X X^T has the same eigenvalues; Jacobi for n <= 2), clipped at zero
+            got = np.full(n + 2, np.nan)
+            assert _gram_eigenvalues(X, np.empty((n + 2, n + 2)), np.empty(n + 2), got) == n
+            assert np.all(np.diff(got[:n]) <= 0.0) and np.all(got[:n] >= 0.0)
+            np.testing.assert_allclose(got[:n], np.clip(want, 0.0, None), rtol=0.0, atol=50 * n * eps * scale)
+
+
+def test_tridiagonal_eigenvalues_on_special_matrices(rng):
+    """Zero, scaled identity, repeated and widely scaled matrices: LAPACK's values to round-off of |G|."""
+    from plm_pin.kernels.metrics import _tridiagonal_eigenvalues
+
+    eps = np.finfo(float).eps
+    Q = np.linalg.qr(rng.normal(size=(7, 7)))[0]
+    cases = [
+        np.zeros((7, 7)),
+        3.0 * np.eye(7),
+        Q @ np.diag([2.0, 2.0, 2.0, 1.0, 1.0, 0.0, 0.0]) @ Q.T,  # repeated eigenvalues, hidden
+        1e100 * (Q @ np.diag(np.arange(7.0)) @ Q.T),
+        1e-100 * (Q @ np.diag(np.arange(7.0)) @ Q.T),
+    ]
+    for P in cases:
+        P = (P + P.T) / 2.0
+        want = np.linalg.eigvalsh(P)
+        G, d, e = P.copy(), np.empty(7), np.empty(7)
+        assert _tridiagonal_eigenvalues(G, 7, d, e)
+        np.testing.assert_allclose(np.sort(d), want, rtol=0.0, atol=50 * 7 * eps * np.abs(want).max())

@@ -17,6 +17,7 @@ from plm_pin.tolerances import GRAM_RTOL
 from plm_pin.workspace import _continuation, workspace_map
 from plm_pin.workspace._batch import (
     BatchKinematics,
+    _small_det,
     batch_modes,
     batch_newton,
     log3_and_jacobian,
@@ -132,6 +133,17 @@ def test_batched_newton_modes_and_metrics_match_the_serial_ones():
     svd = batch_metrics(A[:, :m], A[:, m:], mech.actuated_v_indices, mech.mobility)
     for name, values in svd.items():
         assert np.allclose(fast[name], values, rtol=1e-12, atol=0.0), name
+
+
+def test_small_determinants_equal_lapack(rng):
+    """Cofactor determinants (n <= 3, one singular) equal LAPACK's to round-off of Hadamard's bound."""
+    for n in range(1, 5):
+        M = rng.normal(size=(50, 2, n, n))
+        M[0, 0, -1] = M[0, 0, 0]  # singular
+        bound = np.prod(np.linalg.norm(M, axis=-2), axis=-1)
+        got = _small_det(M)
+        assert got.shape == (50, 2)
+        assert np.all(np.abs(got - np.linalg.det(M)) <= 10 * np.finfo(float).eps * bound)
 
 
 def test_block_solve_of_the_8pss_equals_lu_on_pinocchio_jacobians():
