@@ -51,6 +51,8 @@ def positive(value: object, name: str, unit: str = "") -> float:
     Raises:
         InvalidInput: naming ``name`` and the value (a string, a boolean, NaN, 0 or a negative number).
     """
+    if type(value) is float and 0.0 < value < math.inf:  # the common case, without the ABC checks
+        return value
     if (
         isinstance(value, bool)
         or not isinstance(value, numbers.Real)
@@ -68,6 +70,8 @@ def count(value: object, name: str, minimum: int = 0) -> int:
     Raises:
         InvalidInput: naming ``name`` and the value.
     """
+    if type(value) is int and value >= minimum:  # the common case, without the ABC checks
+        return value
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
         raise InvalidInput(f"{name} must be a whole number >= {minimum}, got {short(value)}")
     return int(value)
@@ -208,6 +212,8 @@ def flag(value: object, name: str) -> bool:
     Raises:
         InvalidInput: naming ``name`` and the value (e.g. the string ``"no"``, which would count as true).
     """
+    if value is True or value is False:
+        return value
     if not isinstance(value, (bool, np.bool_)):
         raise InvalidInput(f"{name} must be True or False, got {short(value)}")
     return bool(value)

@@ -232,7 +232,7 @@ def _warn_once(key: str, message: str) -> None:
 
 def kernels_enabled() -> bool:
     """Whether the kernels may be used: ``PLM_PIN_KERNELS`` is not ``0`` and numba imports."""
-    if os.environ.get(SWITCH, "1").strip() == "0":
+    if _switched_off():
         return False
     if not _NUMBA:
         try:
@@ -246,6 +246,23 @@ def kernels_enabled() -> bool:
         _NUMBA.append(True)
     return True
 
+
+def _switched_off() -> bool:
+    """Whether ``PLM_PIN_KERNELS`` reads ``0`` now (read at each call: tests and callers change it).
+
+    On POSIX ``os.environ`` keeps its entries in a dict of encoded bytes, ``_data``, which its
+    setters and deleters update: reading it there skips the key's encoding and the Mapping
+    machinery (a twentieth of ``os.environ.get``'s cost), the value decoded as ``os.environ`` does.
+    """
+    data = getattr(os.environ, "_data", None)
+    if os.name != "posix" or type(data) is not dict:
+        return os.environ.get(SWITCH, "1").strip() == "0"
+    raw = data.get(_SWITCH_KEY)
+    return raw is not None and os.fsdecode(raw).strip() == "0"
+
+
+_SWITCH_KEY = os.fsencode(SWITCH)
+"""The switch's name as ``os.environ`` encodes it (the file-system encoding)."""
 
 _NUMBA: list[bool] = []
 """Holds True once numba imported."""
