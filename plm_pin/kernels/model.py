@@ -61,12 +61,16 @@ class Kernel:
         """The target coordinates and, with all three angles selected, the target rotation."""
         if target is None:
             return _NO_TARGET, _EYE
-        task = target.task
+        return Kernel._pose_arrays(target.task, target.x)
+
+    @staticmethod
+    def _pose_arrays(task: Task, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Task coordinates ``x`` and, with all three angles of a frame task selected, their rotation."""
         if isinstance(task, FrameTask) and len(task.angular) == 3:
             angles = np.empty(3)
-            angles[list(task.angular)] = target.x[len(task.linear) :]
-            return target.x, pin.rpy.rpyToMatrix(angles)
-        return target.x, _EYE
+            angles[list(task.angular)] = x[len(task.linear) :]
+            return x, pin.rpy.rpyToMatrix(angles)
+        return x, _EYE
 
     def placements(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """World rotations and translations of every joint (nj, 3, 3), (nj, 3) and kernel frame (nf, ...)."""
@@ -127,15 +131,42 @@ class Kernel:
             ``(q, residual, pose, residual_norm, within_limits)``, or None when Newton stalls.
         """
         x, R = self._target_arrays(target)
+        return self._solve(q0, free, tol, x, R, target.size if target is not None else None, polish)
+
+    def solve_pose(
+        self, q0: np.ndarray, tol: float, task: Task, x: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
+        """:meth:`solve` on every column with the task rows of ``TaskTarget(task, x)``, without building it.
+
+        Args:
+            q0: starting configuration, shape (nq,).
+            tol: target largest absolute residual [m, rad].
+            task: the task the kernel was built with.
+            x: its target coordinates [m, rad], shape (n_task,).
+        """
+        x, R = self._pose_arrays(task, x)
+        return self._solve(q0, None, tol, x, R, self.n_task, True)
+
+    def _solve(
+        self,
+        q0: np.ndarray,
+        free: np.ndarray | None,
+        tol: float,
+        x: np.ndarray,
+        R: np.ndarray,
+        task_rows: int | None,
+        polish: bool,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
+        """:meth:`solve` with the target as arrays (:meth:`_target_arrays`) and its rows (None: no target)."""
         q, pose, info = np.array(q0, dtype=float), np.empty(self.n_task), np.empty(2)
-        r = np.empty(self.arrays.m + (target.size if target is not None else 0))
+        r = np.empty(self.arrays.m + (task_rows or 0))
         iterations = _compiled().newton(
             self.ints,
             self.floats,
             self._all if free is None else free,
             x,
             R,
-            target is not None,
+            task_rows is not None,
             tol,
             ROUND_OFF,
             NEWTON_MAX_ITERATIONS,

@@ -16,7 +16,7 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..kernels import kernel_of
-from ..results import Result, unit
+from ..results import Result, frozen, unit
 from ..tolerances import FK_SAME_MODE_TOL, SAME_ASSEMBLY_TOL
 from ..warnings import IncompleteSearchWarning
 from .starts import random_starts
@@ -181,8 +181,8 @@ def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray
 
 
 _ONE_COORDINATE = "_actuators_one_coordinate"
-"""Attribute of a mechanism: a 1-tuple of the actuated configuration indices when each actuated
-joint has one configuration coordinate, else of False."""
+"""Attribute of a mechanism: a 1-tuple of the actuated configuration indices (read-only) when each
+actuated joint has one configuration coordinate, else of False."""
 
 
 def frame_distance(mech: Mechanism, q1: np.ndarray, q2: np.ndarray) -> float:
@@ -335,7 +335,7 @@ def forward_kinematics(
             continue
         if found and any(same_assembly(mech, s.q, q) for s in found):
             continue
-        found.append(FKSolution(q, x, residual_norm))
+        found.append(frozen(FKSolution, {"q": q, "x": x, "residual_norm": residual_norm, "certified": False}))
         if not all_modes:
             break
     if not found:
