@@ -17,6 +17,10 @@ _SHORT = 64
 """Longest vector whose finiteness :func:`as_vector` checks by a Python sum (cheaper than numpy up to it)."""
 
 
+_FLOAT = np.dtype(float)
+"""The float64 dtype (NumPy's native one, a singleton)."""
+
+
 def nonfinite_indices(arr: np.ndarray) -> list:
     """Indices of the non-finite entries of ``arr``: ints for a vector, tuples for higher ranks."""
     bad = np.argwhere(~np.isfinite(arr))
@@ -29,10 +33,13 @@ def as_vector(x: object, size: int, name: str) -> np.ndarray:
     Raises:
         InvalidInput: naming ``name`` and what is wrong.
     """
-    try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInput(f"{name} must be {size} numbers: {exc}") from None
+    if type(x) is np.ndarray and x.dtype is _FLOAT:  # already a float array: what asarray would return
+        arr = x
+    else:
+        try:
+            arr = np.asarray(x, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InvalidInput(f"{name} must be {size} numbers: {exc}") from None
     if arr.shape != (size,):
         raise InvalidInput(f"{name} must have shape ({size},), got {arr.shape}")
     # the sum of a short vector's entries is finite when none is NaN or infinite (a tenth of

@@ -15,7 +15,7 @@ import dataclasses
 import math
 import os
 from collections.abc import Mapping
-from typing import Any, ClassVar, TypeVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -91,36 +91,6 @@ def plain(value: object, nonfinite_as_text: bool = False) -> object:
         fields = {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
         return plain(fields, nonfinite_as_text)
     raise TypeError(f"{value!r} ({type(value).__name__}) has no JSON form")
-
-
-R = TypeVar("R")
-
-
-def frozen(cls: type[R], values: dict[str, Any]) -> R:
-    """An instance of the frozen result dataclass ``cls`` holding ``values``, built without its ``__init__``.
-
-    For the hot paths of the kinematics (a frozen dataclass's ``__init__`` sets each field
-    through ``object.__setattr__``, about twice this cost). ``values`` must name every field
-    of ``cls``; ``cls`` must have no ``__post_init__`` (it would not run).
-
-    Raises:
-        TypeError: ``cls`` is not a dataclass without ``__post_init__``, or ``values`` does not
-            name exactly its fields.
-    """
-    names = _FIELD_NAMES.get(cls)
-    if names is None:
-        if not dataclasses.is_dataclass(cls) or hasattr(cls, "__post_init__"):
-            raise TypeError(f"{cls.__name__} is not a dataclass without __post_init__")
-        names = _FIELD_NAMES[cls] = frozenset(f.name for f in dataclasses.fields(cls))
-    if values.keys() != names:
-        raise TypeError(f"{cls.__name__} has the fields {sorted(names)}, got {sorted(values)}")
-    obj = object.__new__(cls)
-    obj.__dict__.update(values)
-    return obj
-
-
-_FIELD_NAMES: dict[type, frozenset[str]] = {}
-"""Field names of the classes :func:`frozen` built, kept once read."""
 
 
 class Result:

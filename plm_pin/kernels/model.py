@@ -158,7 +158,9 @@ class Kernel:
         polish: bool,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
         """:meth:`solve` with the target as arrays (:meth:`_target_arrays`) and its rows (None: no target)."""
-        q, pose, info = np.array(q0, dtype=float), np.empty(self.n_task), np.empty(2)
+        # a float array's copy() is the same array as np.array(q0, dtype=float), for half its cost
+        q = q0.copy() if type(q0) is np.ndarray and q0.dtype is _FLOAT else np.array(q0, dtype=float)
+        pose, info = np.empty(self.n_task), np.empty(2)
         r = np.empty(self.arrays.m + (task_rows or 0))
         iterations = _compiled().newton(
             self.ints,
@@ -180,7 +182,8 @@ class Kernel:
         )
         if iterations < 0:
             return None
-        return q, r, pose, float(info[0]), bool(info[1])
+        residual_norm, inside = info.tolist()
+        return q, r, pose, residual_norm, bool(inside)
 
     def batch_newton(
         self, Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float, max_iterations: int, stall: float
@@ -238,6 +241,7 @@ class Kernel:
         return out, good
 
 
+_FLOAT = np.dtype(float)
 _NO_TARGET = np.zeros(0)
 _EYE = np.eye(3)
 _COMPILED: list[ModuleType] = []
@@ -285,13 +289,14 @@ def _switched_off() -> bool:
     setters and deleters update: reading it there skips the key's encoding and the Mapping
     machinery (a twentieth of ``os.environ.get``'s cost), the value decoded as ``os.environ`` does.
     """
-    data = getattr(os.environ, "_data", None)
-    if os.name != "posix" or type(data) is not dict:
+    data = getattr(os.environ, "_data", None) if _POSIX else None
+    if type(data) is not dict:
         return os.environ.get(SWITCH, "1").strip() == "0"
     raw = data.get(_SWITCH_KEY)
     return raw is not None and os.fsdecode(raw).strip() == "0"
 
 
+_POSIX = os.name == "posix"
 _SWITCH_KEY = os.fsencode(SWITCH)
 """The switch's name as ``os.environ`` encodes it (the file-system encoding)."""
 
@@ -304,7 +309,7 @@ def kernel_of(mech: Mechanism) -> Kernel | None:
 
     Built at first use from the model, the closures and the task, then kept with the mechanism.
     """
-    if not kernels_enabled():
+    if _switched_off() or (not _NUMBA and not kernels_enabled()):
         return None
     closures = mech.closures  # the model is final (idle gauges added) once they are compiled
     hit = vars(mech).get(_CACHE)

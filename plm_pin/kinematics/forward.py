@@ -16,7 +16,7 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
 from ..kernels import kernel_of
-from ..results import Result, frozen, unit
+from ..results import Result, unit
 from ..tolerances import FK_SAME_MODE_TOL, SAME_ASSEMBLY_TOL
 from ..warnings import IncompleteSearchWarning
 from .starts import random_starts
@@ -335,7 +335,7 @@ def forward_kinematics(
             continue
         if found and any(same_assembly(mech, s.q, q) for s in found):
             continue
-        found.append(frozen(FKSolution, {"q": q, "x": x, "residual_norm": residual_norm, "certified": False}))
+        found.append(FKSolution(q, x, residual_norm))
         if not all_modes:
             break
     if not found:

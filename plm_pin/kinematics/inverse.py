@@ -21,7 +21,7 @@ from ..core.mechanism import Mechanism, require_task
 from ..core.task import TaskTarget, check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, JointLimitExceeded, PoseUnreachable
 from ..kernels import kernel_of
-from ..results import Result, frozen, unit
+from ..results import Result, unit
 from ..tolerances import BRANCH_TOL
 from .forward import same_assembly
 from .limits import limit_violations, wrap_into_limits
@@ -253,14 +253,7 @@ def _kernel_solution(
     q, r, _, residual_norm, inside = solved
     if inside:  # nothing to shift, nothing outside
         q.setflags(write=False)
-        values = {
-            "q": q,
-            "x": x.copy(),
-            "residual_norm": residual_norm,
-            "limit_violations": {},
-            "_mech": mech,
-        }
-        return frozen(IKSolution, values)
+        return IKSolution(q, x.copy(), residual_norm, {}, mech)
     return _solution_from_residual(mech, x, q, r)
 
 
