@@ -17,6 +17,10 @@ _SHORT = 64
 """Longest vector whose finiteness :func:`as_vector` checks by a Python sum (cheaper than numpy up to it)."""
 
 
+_FLOAT = np.dtype(float)
+"""The float64 dtype (NumPy's native one, a singleton)."""
+
+
 def nonfinite_indices(arr: np.ndarray) -> list:
     """Indices of the non-finite entries of ``arr``: ints for a vector, tuples for higher ranks."""
     bad = np.argwhere(~np.isfinite(arr))
@@ -29,10 +33,13 @@ def as_vector(x: object, size: int, name: str) -> np.ndarray:
     Raises:
         InvalidInput: naming ``name`` and what is wrong.
     """
-    try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInput(f"{name} must be {size} numbers: {exc}") from None
+    if type(x) is np.ndarray and x.dtype is _FLOAT:  # already a float array: what asarray would return
+        arr = x
+    else:
+        try:
+            arr = np.asarray(x, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InvalidInput(f"{name} must be {size} numbers: {exc}") from None
     if arr.shape != (size,):
         raise InvalidInput(f"{name} must have shape ({size},), got {arr.shape}")
     # the sum of a short vector's entries is finite when none is NaN or infinite (a tenth of
@@ -51,6 +58,8 @@ def positive(value: object, name: str, unit: str = "") -> float:
     Raises:
         InvalidInput: naming ``name`` and the value (a string, a boolean, NaN, 0 or a negative number).
     """
+    if type(value) is float and 0.0 < value < math.inf:  # the common case, without the ABC checks
+        return value
     if (
         isinstance(value, bool)
         or not isinstance(value, numbers.Real)
@@ -68,6 +77,8 @@ def count(value: object, name: str, minimum: int = 0) -> int:
     Raises:
         InvalidInput: naming ``name`` and the value.
     """
+    if type(value) is int and value >= minimum:  # the common case, without the ABC checks
+        return value
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
         raise InvalidInput(f"{name} must be a whole number >= {minimum}, got {short(value)}")
     return int(value)
@@ -208,6 +219,8 @@ def flag(value: object, name: str) -> bool:
     Raises:
         InvalidInput: naming ``name`` and the value (e.g. the string ``"no"``, which would count as true).
     """
+    if value is True or value is False:
+        return value
     if not isinstance(value, (bool, np.bool_)):
         raise InvalidInput(f"{name} must be True or False, got {short(value)}")
     return bool(value)

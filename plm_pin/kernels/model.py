@@ -61,12 +61,16 @@ class Kernel:
         """The target coordinates and, with all three angles selected, the target rotation."""
         if target is None:
             return _NO_TARGET, _EYE
-        task = target.task
+        return Kernel._pose_arrays(target.task, target.x)
+
+    @staticmethod
+    def _pose_arrays(task: Task, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Task coordinates ``x`` and, with all three angles of a frame task selected, their rotation."""
         if isinstance(task, FrameTask) and len(task.angular) == 3:
             angles = np.empty(3)
-            angles[list(task.angular)] = target.x[len(task.linear) :]
-            return target.x, pin.rpy.rpyToMatrix(angles)
-        return target.x, _EYE
+            angles[list(task.angular)] = x[len(task.linear) :]
+            return x, pin.rpy.rpyToMatrix(angles)
+        return x, _EYE
 
     def placements(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """World rotations and translations of every joint (nj, 3, 3), (nj, 3) and kernel frame (nf, ...)."""
@@ -127,15 +131,44 @@ class Kernel:
             ``(q, residual, pose, residual_norm, within_limits)``, or None when Newton stalls.
         """
         x, R = self._target_arrays(target)
-        q, pose, info = np.array(q0, dtype=float), np.empty(self.n_task), np.empty(2)
-        r = np.empty(self.arrays.m + (target.size if target is not None else 0))
+        return self._solve(q0, free, tol, x, R, target.size if target is not None else None, polish)
+
+    def solve_pose(
+        self, q0: np.ndarray, tol: float, task: Task, x: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
+        """:meth:`solve` on every column with the task rows of ``TaskTarget(task, x)``, without building it.
+
+        Args:
+            q0: starting configuration, shape (nq,).
+            tol: target largest absolute residual [m, rad].
+            task: the task the kernel was built with.
+            x: its target coordinates [m, rad], shape (n_task,).
+        """
+        x, R = self._pose_arrays(task, x)
+        return self._solve(q0, None, tol, x, R, self.n_task, True)
+
+    def _solve(
+        self,
+        q0: np.ndarray,
+        free: np.ndarray | None,
+        tol: float,
+        x: np.ndarray,
+        R: np.ndarray,
+        task_rows: int | None,
+        polish: bool,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
+        """:meth:`solve` with the target as arrays (:meth:`_target_arrays`) and its rows (None: no target)."""
+        # a float array's copy() is the same array as np.array(q0, dtype=float), for half its cost
+        q = q0.copy() if type(q0) is np.ndarray and q0.dtype is _FLOAT else np.array(q0, dtype=float)
+        pose, info = np.empty(self.n_task), np.empty(2)
+        r = np.empty(self.arrays.m + (task_rows or 0))
         iterations = _compiled().newton(
             self.ints,
             self.floats,
             self._all if free is None else free,
             x,
             R,
-            target is not None,
+            task_rows is not None,
             tol,
             ROUND_OFF,
             NEWTON_MAX_ITERATIONS,
@@ -149,7 +182,8 @@ class Kernel:
         )
         if iterations < 0:
             return None
-        return q, r, pose, float(info[0]), bool(info[1])
+        residual_norm, inside = info.tolist()
+        return q, r, pose, residual_norm, bool(inside)
 
     def batch_newton(
         self, Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float, max_iterations: int, stall: float
@@ -207,6 +241,7 @@ class Kernel:
         return out, good
 
 
+_FLOAT = np.dtype(float)
 _NO_TARGET = np.zeros(0)
 _EYE = np.eye(3)
 _COMPILED: list[ModuleType] = []
@@ -232,7 +267,7 @@ def _warn_once(key: str, message: str) -> None:
 
 def kernels_enabled() -> bool:
     """Whether the kernels may be used: ``PLM_PIN_KERNELS`` is not ``0`` and numba imports."""
-    if os.environ.get(SWITCH, "1").strip() == "0":
+    if _switched_off():
         return False
     if not _NUMBA:
         try:
@@ -247,6 +282,24 @@ def kernels_enabled() -> bool:
     return True
 
 
+def _switched_off() -> bool:
+    """Whether ``PLM_PIN_KERNELS`` reads ``0`` now (read at each call: tests and callers change it).
+
+    On POSIX ``os.environ`` keeps its entries in a dict of encoded bytes, ``_data``, which its
+    setters and deleters update: reading it there skips the key's encoding and the Mapping
+    machinery (a twentieth of ``os.environ.get``'s cost), the value decoded as ``os.environ`` does.
+    """
+    data = getattr(os.environ, "_data", None) if _POSIX else None
+    if type(data) is not dict:
+        return os.environ.get(SWITCH, "1").strip() == "0"
+    raw = data.get(_SWITCH_KEY)
+    return raw is not None and os.fsdecode(raw).strip() == "0"
+
+
+_POSIX = os.name == "posix"
+_SWITCH_KEY = os.fsencode(SWITCH)
+"""The switch's name as ``os.environ`` encodes it (the file-system encoding)."""
+
 _NUMBA: list[bool] = []
 """Holds True once numba imported."""
 
@@ -256,7 +309,7 @@ def kernel_of(mech: Mechanism) -> Kernel | None:
 
     Built at first use from the model, the closures and the task, then kept with the mechanism.
     """
-    if not kernels_enabled():
+    if _switched_off() or (not _NUMBA and not kernels_enabled()):
         return None
     closures = mech.closures  # the model is final (idle gauges added) once they are compiled
     hit = vars(mech).get(_CACHE)

@@ -163,10 +163,13 @@ def _fit_eliminated(mech: Mechanism, q: np.ndarray, columns: np.ndarray, tol: fl
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
     out = q.copy()
     simple = vars(mech).get(_ONE_COORDINATE)
-    if simple is None:  # whether every actuated joint has one coordinate (read once per mechanism)
-        simple = vars(mech)[_ONE_COORDINATE] = all(mech.model.nqs[a.joint_id] == 1 for a in mech.actuators)
-    if simple:
-        out[mech.actuated_q_indices] = c
+    if simple is None:  # the actuated coordinates when every actuated joint has one (read once per mechanism)
+        indices = mech.actuated_q_indices
+        indices.setflags(write=False)
+        one = all(mech.model.nqs[a.joint_id] == 1 for a in mech.actuators)
+        simple = vars(mech)[_ONE_COORDINATE] = (indices if one else False,)
+    if simple[0] is not False:
+        out[simple[0]] = c
         return out
     nqs = mech.model.nqs
     for a, value in zip(mech.actuators, c, strict=True):
@@ -178,7 +181,8 @@ def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray
 
 
 _ONE_COORDINATE = "_actuators_one_coordinate"
-"""Attribute of a mechanism: whether each actuated joint has one configuration coordinate."""
+"""Attribute of a mechanism: a 1-tuple of the actuated configuration indices (read-only) when each
+actuated joint has one configuration coordinate, else of False."""
 
 
 def frame_distance(mech: Mechanism, q1: np.ndarray, q2: np.ndarray) -> float:
@@ -329,7 +333,7 @@ def forward_kinematics(
         except ClosureNotSatisfied as exc:
             best = min(best, exc.residual_norm)
             continue
-        if any(same_assembly(mech, s.q, q) for s in found):
+        if found and any(same_assembly(mech, s.q, q) for s in found):
             continue
         found.append(FKSolution(q, x, residual_norm))
         if not all_modes:

@@ -120,11 +120,11 @@ def _solution(mech: Mechanism, target: TaskTarget, q: np.ndarray) -> IKSolution:
     r_x, _ = ws.task_rows
     _closures.residual_from_placements(ws.data, mech.closures, r_phi)
     target.residual(ws.data, r_x)
-    return _solution_from_residual(mech, target, q, ws.residual)
+    return _solution_from_residual(mech, target.x, q, ws.residual)
 
 
-def _solution_from_residual(mech: Mechanism, target: TaskTarget, q: np.ndarray, r: np.ndarray) -> IKSolution:
-    """The solution at ``q`` whose stacked residual (closures, task) is ``r``.
+def _solution_from_residual(mech: Mechanism, x: np.ndarray, q: np.ndarray, r: np.ndarray) -> IKSolution:
+    """The solution at ``q`` for the task coordinates ``x``, whose stacked residual (closures, task) is ``r``.
 
     Revolute angles are shifted by 2 pi into their limits where they fit (the same
     placements, the same mode); a configuration inside every limit is kept as it is.
@@ -137,7 +137,7 @@ def _solution_from_residual(mech: Mechanism, target: TaskTarget, q: np.ndarray, 
         violations = limit_violations(mech, q)
     q.setflags(write=False)
     residual_norm = float(abs(r).max()) if r.size else 0.0
-    return IKSolution(q, target.x.copy(), residual_norm, violations, mech)
+    return IKSolution(q, x.copy(), residual_norm, violations, mech)
 
 
 def check_mode(mech: Mechanism, mode: object) -> tuple[int, ...] | None:
@@ -205,25 +205,30 @@ def inverse_kinematics(
             "a pose does not determine the configuration; give a task with as many coordinates as DOF"
         )
     xa = check_task_vector(x, task.size)
-    target = TaskTarget(task, xa)
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
-    if mode is not None:
-        check_mode(mech, mode)
-        first = _from_guess(mech, target, q0, tol)
-        if first is not None and first.mode == tuple(mode):
-            return _within_limits(mech, first, respect_limits)
-        for sol in working_modes(mech, xa, guess=guess, tol=tol):
-            if sol.mode == tuple(mode):
-                return _within_limits(mech, sol, respect_limits)
-        raise PoseUnreachable(
-            f"{mech.name}: no inverse-kinematics solution in working mode {tuple(mode)} at x = {xa.tolist()}"
-        )
-    solution = _from_guess(mech, target, q0, tol)
-    if solution is not None:
-        return _within_limits(mech, solution, respect_limits)
-    if not explain:
-        raise PoseUnreachable(f"{mech.name}: pose {xa.tolist()} could not be solved from this guess")
-    raise _unreachable(mech, target, q0, tol)
+    if mode is None:  # the guess's basin, on the kernels first: no TaskTarget to build when they solve it
+        kernel = kernel_of(mech)
+        if kernel is not None:
+            solved = kernel.solve_pose(q0, tol, task, xa)
+            if solved is not None:
+                return _within_limits(mech, _kernel_solution(mech, xa, solved), respect_limits)
+        target = TaskTarget(task, xa)
+        solution = _from_guess(mech, target, q0, tol, newton_tried=kernel is not None)
+        if solution is not None:
+            return _within_limits(mech, solution, respect_limits)
+        if not explain:
+            raise PoseUnreachable(f"{mech.name}: pose {xa.tolist()} could not be solved from this guess")
+        raise _unreachable(mech, target, q0, tol)
+    check_mode(mech, mode)
+    first = _from_guess(mech, TaskTarget(task, xa), q0, tol)
+    if first is not None and first.mode == tuple(mode):
+        return _within_limits(mech, first, respect_limits)
+    for sol in working_modes(mech, xa, guess=guess, tol=tol):
+        if sol.mode == tuple(mode):
+            return _within_limits(mech, sol, respect_limits)
+    raise PoseUnreachable(
+        f"{mech.name}: no inverse-kinematics solution in working mode {tuple(mode)} at x = {xa.tolist()}"
+    )
 
 
 def _within_limits(mech: Mechanism, sol: IKSolution, respect_limits: bool) -> IKSolution:
@@ -238,29 +243,42 @@ def _within_limits(mech: Mechanism, sol: IKSolution, respect_limits: bool) -> IK
     return sol
 
 
-def _from_guess(mech: Mechanism, target: TaskTarget, q0: np.ndarray, tol: float) -> IKSolution | None:
+def _kernel_solution(
+    mech: Mechanism, x: np.ndarray, solved: tuple[np.ndarray, np.ndarray, np.ndarray, float, bool]
+) -> IKSolution:
+    """The solution from :meth:`~plm_pin.kernels.Kernel.solve`'s answer for the task coordinates ``x``.
+
+    The kernels give the residual norm and whether the solution is within limits.
+    """
+    q, r, _, residual_norm, inside = solved
+    if inside:  # nothing to shift, nothing outside
+        q.setflags(write=False)
+        return IKSolution(q, x.copy(), residual_norm, {}, mech)
+    return _solution_from_residual(mech, x, q, r)
+
+
+def _from_guess(
+    mech: Mechanism, target: TaskTarget, q0: np.ndarray, tol: float, newton_tried: bool = False
+) -> IKSolution | None:
     """The solution in the basin of the (checked) configuration ``q0``, or None.
 
     Newton first (on the compiled kernels where :func:`~plm_pin.kernels.kernel_of` serves the
-    mechanism: they also give the residual norm and whether the solution is within limits);
+    mechanism), unless ``newton_tried`` says the kernels' Newton already stalled from ``q0``;
     its last pass gives the residual of the solution. Levenberg-Marquardt when Newton stalls.
     """
-    kernel = kernel_of(mech)
     ws = mech._thread_workspace()
-    if kernel is not None:
-        solved = kernel.solve(q0, None, tol, target)
-        if solved is not None:
-            q, _, _, residual_norm, inside = solved
-            if inside:  # nothing to shift, nothing outside
-                q.setflags(write=False)
-                return IKSolution(q, target.x.copy(), residual_norm, {}, mech)
-            return _solution_from_residual(mech, target, q, solved[1])
-    else:
-        fast = newton(
-            mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
-        )
-        if fast is not None:
-            return _solution_from_residual(mech, target, fast[0], ws.residual)
+    if not newton_tried:
+        kernel = kernel_of(mech)
+        if kernel is not None:
+            solved = kernel.solve(q0, None, tol, target)
+            if solved is not None:
+                return _kernel_solution(mech, target.x, solved)
+        else:
+            fast = newton(
+                mech.model, ws.data, mech.closures, q0, None, ws.residual, ws.jacobian, tol=tol, extra=target
+            )
+            if fast is not None:
+                return _solution_from_residual(mech, target.x, fast[0], ws.residual)
     try:
         q = assemble(
             mech.model,

@@ -18,7 +18,7 @@ from plm_pin.core import closures as C
 from plm_pin.core.assembly import newton
 from plm_pin.core.task import TaskTarget, compile_task
 from plm_pin.description.sidecar import ClosureSpec
-from plm_pin.kernels import Kernel, kernel_of
+from plm_pin.kernels import Kernel, kernel_of, kernels_enabled
 from plm_pin.kernels.arrays import JOINT_KINDS, unsupported_joints
 from plm_pin.kinematics import forward_kinematics, inverse_kinematics
 from plm_pin.models import preset_names
@@ -205,3 +205,18 @@ def test_switch_turns_the_kernels_off(monkeypatch):
     assert kernel_of(mech) is not None
     monkeypatch.setenv("PLM_PIN_KERNELS", "0")
     assert kernel_of(mech) is None
+
+
+@pytest.mark.parametrize(
+    ("value", "on"), [(None, True), ("0", False), (" 0\n", False), ("1", True), ("", True)]
+)
+def test_switch_is_read_at_each_call(monkeypatch, value, on):
+    mech = preset("harada2011_3d4m")
+    if value is None:
+        monkeypatch.delenv("PLM_PIN_KERNELS", raising=False)
+    else:
+        monkeypatch.setenv("PLM_PIN_KERNELS", value)
+    assert (kernel_of(mech) is not None) is on
+    assert kernels_enabled() is on
+    monkeypatch.setenv("PLM_PIN_KERNELS", "1" if not on else "0")  # flipped: the next call sees it
+    assert (kernel_of(mech) is not None) is not on
