@@ -61,6 +61,7 @@ from .form import (
     REVOLUTE,
     REVOLUTE_PARAM,
     SPHERICAL,
+    LegAim,
     PolynomialForm,
 )
 
@@ -259,6 +260,17 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
         degrees=np.zeros(n, dtype=np.int64),
         eliminated_v=np.array([model.joints[j].idx_v for j in eliminated], dtype=np.int64),
         digest="",
+        legs=tuple(
+            LegAim(
+                frame=int(c.frame_ids[leg.side]),
+                target=int(c.frame_ids[1 - leg.side]),
+                carrier=leg.carrier,
+                centre=_homogeneous(leg.centre),
+                joints=tuple(int(j) for j in reversed(leg.joints)),
+            )
+            for c in closures
+            if (leg := legs.get(c.name)) is not None and not set(leg.joints) & keep
+        ),
     )
     live = _live_entries(form)
     if live.sum() < n_comb:
@@ -458,3 +470,113 @@ def from_configuration(form: PolynomialForm, mech: Mechanism, q: np.ndarray) -> 
                 x[o : o + 3] = X[:3, 3]
             x[o + t : o + t + 4] = quat.w, quat.x, quat.y, quat.z
     return x
+
+
+def _turn(u: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
+    """The angle of the rotation about unit ``u`` that takes ``x``'s component across ``u`` to ``y``'s [rad]."""
+    xp, yp = x - (u @ x) * u, y - (u @ y) * u
+    return float(np.arctan2(u @ np.cross(xp, yp), xp @ yp))
+
+
+def _aim_pair(u1: np.ndarray, u2: np.ndarray, v: np.ndarray, w: np.ndarray) -> list[tuple[float, float]]:
+    r"""The angles :math:`(\theta_1, \theta_2)` with :math:`R(u_1, \theta_1) R(u_2, \theta_2) v = w`.
+
+    Two rotations about axes through one point (Paden-Kahan subproblem 2): the middle vector
+    :math:`c = R(u_2, \theta_2) v = R(u_1, -\theta_1) w` has :math:`u_1 \cdot c = u_1 \cdot w`,
+    :math:`u_2 \cdot c = u_2 \cdot v` and :math:`|c| = |v|`, so
+    :math:`c = \alpha u_1 + \beta u_2 \pm \gamma\, u_1 \times u_2`: the mirror pair of a universal
+    joint. Empty for parallel axes.
+    """
+    k = float(u1 @ u2)
+    den = 1.0 - k * k
+    if den < 1e-12:
+        return []
+    a, b = float(u1 @ w), float(u2 @ v)
+    alpha, beta = (a - k * b) / den, (b - k * a) / den
+    gamma = np.sqrt(max(0.0, (v @ v - alpha * alpha - beta * beta - 2 * alpha * beta * k) / den))
+    n = np.cross(u1, u2)
+    out = []
+    for g in (gamma, -gamma):
+        c = alpha * u1 + beta * u2 + g * n
+        out.append((_turn(u1, c, w), _turn(u2, v, c)))
+    return out
+
+
+def _revolute_angle(q: np.ndarray, jm: pin.JointModel) -> float:
+    iq = jm.idx_q
+    return float(np.arctan2(q[iq + 1], q[iq])) if jm.nq == 2 else float(q[iq])
+
+
+def _set_revolute(q: np.ndarray, jm: pin.JointModel, angle: float) -> None:
+    iq = jm.idx_q
+    if jm.nq == 2:
+        q[iq : iq + 2] = np.cos(angle), np.sin(angle)
+    else:
+        q[iq] = angle
+
+
+def aim_legs(form: PolynomialForm, mech: Mechanism, q: np.ndarray) -> tuple[np.ndarray, bool]:
+    r"""Set the joints of the legs reduced to distances from the rest of ``q``, in closed form.
+
+    Each leg's joints (a universal joint: two revolutes about axes through the leg's centre O,
+    or one spherical joint) turn its closure point, at its strut length, about O onto the
+    direction of the closure's other frame. For a universal joint, of the two angle pairs
+    (:func:`_aim_pair`) the one nearest ``q``'s values; for a spherical joint, the smallest
+    rotation from ``q``'s value. At a root of the polynomial form the leg's point then meets
+    the other frame: the closure holds to rounding.
+
+    Args:
+        form: the polynomial form.
+        mech: its mechanism.
+        q: a configuration with every joint but the legs' set (actuators included), shape (nq,).
+
+    Returns:
+        The configuration with the legs aimed, and whether every eliminated leg could be
+        (False: a leg of another shape, or parallel axes; its joints keep ``q``'s values).
+    """
+    model = mech.model
+    out = np.array(q, dtype=float, copy=True)
+    if not form.legs:
+        return out, form.eliminated_v.size == 0
+    neutral = pin.neutral(model)
+    zero = out.copy()
+    for leg in form.legs:
+        for j in leg.joints:
+            jm = model.joints[j]
+            zero[jm.idx_q : jm.idx_q + jm.nq] = neutral[jm.idx_q : jm.idx_q + jm.nq]
+    data = model.createData()
+    pin.forwardKinematics(model, data, zero)
+    done = True
+    for leg in form.legs:
+        origin = (data.oMi[leg.carrier].homogeneous @ leg.centre)[:3, 3]
+        v = pin.updateFramePlacement(model, data, leg.frame).translation - origin
+        w = pin.updateFramePlacement(model, data, leg.target).translation - origin
+        kinds = [_kind_or_none(model.joints[j]) for j in leg.joints]
+        if kinds == [SPHERICAL]:
+            jm = model.joints[leg.joints[0]]
+            iq, Rj = jm.idx_q, data.oMi[leg.joints[0]].rotation
+            now = pin.Quaternion(out[iq + 3], *out[iq : iq + 3]).normalized().toRotationMatrix()
+            turn = pin.Quaternion.FromTwoVectors(Rj @ now @ Rj.T @ v, w).toRotationMatrix()
+            quat = pin.Quaternion(Rj.T @ turn @ Rj @ now).normalized()
+            out[iq : iq + 4] = quat.x, quat.y, quat.z, quat.w
+            continue
+        if kinds != [REVOLUTE, REVOLUTE]:
+            done = False
+            continue
+        ja, jb = (model.joints[j] for j in leg.joints)
+        u1 = data.oMi[leg.joints[0]].rotation @ _joint_kind(ja)[1]
+        u2 = data.oMi[leg.joints[1]].rotation @ _joint_kind(jb)[1]
+        pairs = _aim_pair(u1, u2, v, w)
+        if not pairs:
+            done = False
+            continue
+        ref = np.array([_revolute_angle(out, ja), _revolute_angle(out, jb)])
+
+        def wrapped(pair: tuple[float, float], ref: np.ndarray = ref) -> np.ndarray:
+            t = np.array(pair)
+            return t + 2 * np.pi * np.round((ref - t) / (2 * np.pi))
+
+        best = min((wrapped(p) for p in pairs), key=lambda t: float(np.abs(t - ref).sum()))
+        _set_revolute(out, ja, float(best[0]))
+        _set_revolute(out, jb, float(best[1]))
+    return out, done
