@@ -25,6 +25,9 @@ class LegAim:
         carrier: the joint carrying the leg's centre O.
         centre: O's placement in the carrier (homogeneous), shape (4, 4).
         joints: the concurrent joints, the carrier's child first: two revolutes or one spherical.
+        axes: each joint's axis in its frame (zero for a spherical joint), shape (len(joints), 3).
+        q_index: each joint's first configuration coordinate.
+        nq: each joint's number of configuration coordinates.
     """
 
     frame: int
@@ -32,6 +35,9 @@ class LegAim:
     carrier: int
     centre: np.ndarray
     joints: tuple[int, ...]
+    axes: np.ndarray
+    q_index: tuple[int, ...]
+    nq: tuple[int, ...]
 
 
 @dataclass(frozen=True)
