@@ -490,14 +490,14 @@ def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _turns(u: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Per row, the angle of the turn about unit ``u`` taking ``x``'s part across ``u`` to ``y``'s [rad], shape (m,)."""
+    """Per row, the turn about unit ``u`` taking ``x``'s part across ``u`` to ``y``'s [rad], shape (m,)."""
     xp = x - _dot(u, x)[:, None] * u
     yp = y - _dot(u, y)[:, None] * u
     return np.arctan2(_dot(u, _cross(xp, yp)), _dot(xp, yp))
 
 
 def aim_pairs(u1: np.ndarray, u2: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
-    r"""Per row, the two angle pairs :math:`(\theta_1, \theta_2)` with :math:`R(u_1, \theta_1) R(u_2, \theta_2) v = w`.
+    r"""Per row, both angle pairs with :math:`R(u_1, \theta_1) R(u_2, \theta_2) v = w`.
 
     Two rotations about axes through one point (Paden-Kahan subproblem 2): the middle vector
     :math:`c = R(u_2, \theta_2) v = R(u_1, -\theta_1) w` has :math:`u_1 \cdot c = u_1 \cdot w`,
@@ -506,8 +506,10 @@ def aim_pairs(u1: np.ndarray, u2: np.ndarray, v: np.ndarray, w: np.ndarray) -> n
     joint (one pair twice where :math:`w` cannot be reached, :math:`\gamma` clipped at 0).
 
     Args:
-        u1, u2: unit axes (not parallel), shape (m, 3).
-        v, w: the vector before and after, shape (m, 3).
+        u1: the first (outer) unit axes, shape (m, 3).
+        u2: the second unit axes, not parallel to ``u1``, shape (m, 3).
+        v: the vector before the turns, shape (m, 3).
+        w: the vector after them, shape (m, 3).
 
     Returns:
         The angles [rad], shape (2, m, 2): solution, row, (theta1, theta2).
