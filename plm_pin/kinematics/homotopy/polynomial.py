@@ -332,7 +332,8 @@ def _distance_legs(
     :math:`|p_B - O|^2 - L^2 = 0` (degree 2 in the other side's unknowns), with
     :math:`L^2 = |c + q e|^2` for the actuated strut (in the form, the slide hangs from the world
     and its closure point is placed at :math:`c`, so that the point's norm is the length). The
-    concurrent joints leave the system (their angles are found again by the polish). O is fixed
+    concurrent joints leave the system (their angles are set again in closed form by
+    :func:`aim_legs`). O is fixed
     in the body above them.
     """
     model = mech.model
