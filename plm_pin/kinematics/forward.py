@@ -115,9 +115,8 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
     qs = np.array(
         [_with_actuators(mech, to_configuration(form, mech, xr, c[form.parameters]), c) for xr, _ in roots]
     )
-    if form.eliminated_v.size and len(
-        qs
-    ):  # the legs reduced to distances: their angles again, in closed form
+    # the legs reduced to distances: their angles again, in closed form
+    if form.eliminated_v.size and len(qs):
         qs, aimed = aim_legs(form, mech, qs, mech._thread_workspace().data)
         if not aimed:  # a leg of another shape: Newton on its joints alone
             qs = np.array([_fit_eliminated(mech, q, form.eliminated_v, tol) for q in qs])
