@@ -93,7 +93,7 @@ _FALLBACK_WARNED: set[str] = set()
 def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | None:
     """Every assembly mode by parameter homotopy, or None when the mechanism has no polynomial form."""
     from .homotopy import NotPolynomial, prepared, solve_homotopy
-    from .homotopy.polynomial import to_configuration
+    from .homotopy.polynomial import aim_legs, to_configuration
 
     try:
         form, _ = prepared(mech)
@@ -112,10 +112,15 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
     out = FKModes()
     roots = [(r.x, True) for r in res.real] + [(x, False) for x in res.uncertified]  # kept: complete=False
     complete = res.complete
-    for xr, certified in roots:
-        q = _with_actuators(mech, to_configuration(form, mech, xr, c[form.parameters]), c)
-        if form.eliminated_v.size:  # the legs reduced to distances: find their angles again
-            q = _fit_eliminated(mech, q, form.eliminated_v, tol)
+    qs = np.array(
+        [_with_actuators(mech, to_configuration(form, mech, xr, c[form.parameters]), c) for xr, _ in roots]
+    )
+    # the legs reduced to distances: their angles again, in closed form
+    if form.eliminated_v.size and len(qs):
+        qs, aimed = aim_legs(form, mech, qs, mech._thread_workspace().data)
+        if not aimed:  # a leg of another shape: Newton on its joints alone
+            qs = np.array([_fit_eliminated(mech, q, form.eliminated_v, tol) for q in qs])
+    for q, (_, certified) in zip(qs, roots, strict=True):
         try:
             q, residual_norm, x = _close(mech, q, free, tol)
         except ClosureNotSatisfied:  # a root the full model does not close: not a mode, and not proven

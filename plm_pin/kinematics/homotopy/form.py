@@ -16,6 +16,31 @@ unknowns, actuated revolute and prismatic parameters."""
 
 
 @dataclass(frozen=True)
+class LegAim:
+    """What aims an eliminated leg (a distance closure) at its other closure frame.
+
+    Attributes:
+        frame: the closure frame at the leg's end.
+        target: the closure's other frame (placed by the form's unknowns).
+        carrier: the joint carrying the leg's centre O.
+        centre: O's placement in the carrier (homogeneous), shape (4, 4).
+        joints: the concurrent joints, the carrier's child first: two revolutes or one spherical.
+        axes: each joint's axis in its frame (zero for a spherical joint), shape (len(joints), 3).
+        q_index: each joint's first configuration coordinate.
+        nq: each joint's number of configuration coordinates.
+    """
+
+    frame: int
+    target: int
+    carrier: int
+    centre: np.ndarray
+    joints: tuple[int, ...]
+    axes: np.ndarray
+    q_index: tuple[int, ...]
+    nq: tuple[int, ...]
+
+
+@dataclass(frozen=True)
 class PolynomialForm:
     """A mechanism's closures as a square polynomial system (see the module docstring).
 
@@ -51,6 +76,8 @@ class PolynomialForm:
         degrees: degree of each equation of the square system, shape (n,).
         eliminated_v: velocity indices of the joints of the eliminated legs (set by the polish).
         digest: hex digest of all of the above (the cache key of the generic solve).
+        legs: per eliminated leg, the frames and joints that aim it again at a platform pose
+            (:func:`plm_pin.kinematics.homotopy.polynomial.aim_legs`; not in the digest).
     """
 
     joints: np.ndarray
@@ -79,6 +106,7 @@ class PolynomialForm:
     degrees: np.ndarray
     eliminated_v: np.ndarray
     digest: str
+    legs: tuple[LegAim, ...] = ()
 
     def kernel_args(self) -> tuple[np.ndarray, ...]:
         """The arrays the compiled kernels take, in their order."""

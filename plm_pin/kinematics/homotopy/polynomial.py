@@ -45,6 +45,7 @@ and the random combination, add spurious solutions that this filter removes).
 from __future__ import annotations
 
 import hashlib
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,6 +62,7 @@ from .form import (
     REVOLUTE,
     REVOLUTE_PARAM,
     SPHERICAL,
+    LegAim,
     PolynomialForm,
 )
 
@@ -259,6 +261,22 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
         degrees=np.zeros(n, dtype=np.int64),
         eliminated_v=np.array([model.joints[j].idx_v for j in eliminated], dtype=np.int64),
         digest="",
+        legs=tuple(
+            LegAim(
+                frame=int(c.frame_ids[leg.side]),
+                target=int(c.frame_ids[1 - leg.side]),
+                carrier=leg.carrier,
+                centre=_homogeneous(leg.centre),
+                joints=tuple(int(j) for j in reversed(leg.joints)),
+                axes=np.array([_joint_kind(model.joints[j])[1] for j in reversed(leg.joints)]),
+                q_index=tuple(int(model.joints[j].idx_q) for j in reversed(leg.joints)),
+                nq=tuple(int(model.joints[j].nq) for j in reversed(leg.joints)),
+            )
+            for c in closures
+            if (leg := legs.get(c.name)) is not None
+            and not set(leg.joints) & keep
+            and [_kind_or_none(model.joints[j]) for j in leg.joints] in ([REVOLUTE, REVOLUTE], [SPHERICAL])
+        ),
     )
     live = _live_entries(form)
     if live.sum() < n_comb:
@@ -314,7 +332,8 @@ def _distance_legs(
     :math:`|p_B - O|^2 - L^2 = 0` (degree 2 in the other side's unknowns), with
     :math:`L^2 = |c + q e|^2` for the actuated strut (in the form, the slide hangs from the world
     and its closure point is placed at :math:`c`, so that the point's norm is the length). The
-    concurrent joints leave the system (their angles are found again by the polish). O is fixed
+    concurrent joints leave the system (their angles are set again in closed form by
+    :func:`aim_legs`). O is fixed
     in the body above them.
     """
     model = mech.model
@@ -458,3 +477,134 @@ def from_configuration(form: PolynomialForm, mech: Mechanism, q: np.ndarray) -> 
                 x[o : o + 3] = X[:3, 3]
             x[o + t : o + t + 4] = quat.w, quat.x, quat.y, quat.z
     return x
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross products of two (m, 3) arrays."""
+    a0, a1, a2 = a.T
+    b0, b1, b2 = b.T
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=1)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,ij->i", a, b)
+
+
+def _turns(u: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Per row, the turn about unit ``u`` taking ``x``'s part across ``u`` to ``y``'s [rad], shape (m,)."""
+    xp = x - _dot(u, x)[:, None] * u
+    yp = y - _dot(u, y)[:, None] * u
+    return np.arctan2(_dot(u, _cross(xp, yp)), _dot(xp, yp))
+
+
+def aim_pairs(u1: np.ndarray, u2: np.ndarray, v: np.ndarray, w: np.ndarray) -> np.ndarray:
+    r"""Per row, both angle pairs with :math:`R(u_1, \theta_1) R(u_2, \theta_2) v = w`.
+
+    Two rotations about axes through one point (Paden-Kahan subproblem 2): the middle vector
+    :math:`c = R(u_2, \theta_2) v = R(u_1, -\theta_1) w` has :math:`u_1 \cdot c = u_1 \cdot w`,
+    :math:`u_2 \cdot c = u_2 \cdot v` and :math:`|c| = |v|`, so
+    :math:`c = \alpha u_1 + \beta u_2 \pm \gamma\, u_1 \times u_2`: the mirror pair of a universal
+    joint (one pair twice where :math:`w` cannot be reached, :math:`\gamma` clipped at 0).
+
+    Args:
+        u1: the first (outer) unit axes, shape (m, 3).
+        u2: the second unit axes, not parallel to ``u1``, shape (m, 3).
+        v: the vector before the turns, shape (m, 3).
+        w: the vector after them, shape (m, 3).
+
+    Returns:
+        The angles [rad], shape (2, m, 2): solution, row, (theta1, theta2).
+    """
+    m = len(u1)
+    k = _dot(u1, u2)
+    den = 1.0 - k * k
+    a, b = _dot(u1, w), _dot(u2, v)
+    alpha, beta = (a - k * b) / den, (b - k * a) / den
+    gamma = np.sqrt(np.maximum(0.0, (_dot(v, v) - alpha * alpha - beta * beta - 2 * alpha * beta * k) / den))
+    base = alpha[:, None] * u1 + beta[:, None] * u2
+    n = gamma[:, None] * _cross(u1, u2)
+    c = np.concatenate([base + n, base - n])  # the middle vector of both solutions
+    first = _turns(np.concatenate([u1, u1]), c, np.concatenate([w, w]))
+    second = _turns(np.concatenate([u2, u2]), np.concatenate([v, v]), c)
+    return np.stack([first, second], axis=1).reshape(2, m, 2)
+
+
+def aim_legs(
+    form: PolynomialForm, mech: Mechanism, qs: np.ndarray, data: pin.Data | None = None
+) -> tuple[np.ndarray, bool]:
+    r"""Set the joints of the legs reduced to distances from the rest of each configuration, in closed form.
+
+    Each leg's joints (a universal joint: two revolutes about axes through the leg's centre O,
+    or one spherical joint) turn its closure point, at its strut length, about O onto the
+    direction of the closure's other frame. For a universal joint, of the two angle pairs
+    (:func:`aim_pairs`) the one nearest the configuration's values; for a spherical joint, the
+    smallest turn from its value. At a root of the polynomial form the leg's point then meets
+    the other frame: the closure holds to rounding.
+
+    Args:
+        form: the polynomial form.
+        mech: its mechanism.
+        qs: configurations with every joint but the legs' set (actuators included), shape (r, nq).
+        data: Pinocchio data of ``mech.model`` to work in (a new one by default).
+
+    Returns:
+        The configurations with the legs aimed, shape (r, nq), and whether every eliminated
+        leg was (False: a leg of another shape, or one not aimed; its joints keep their values).
+    """
+    model = mech.model
+    out = np.array(qs, dtype=float, copy=True).reshape(-1, model.nq)
+    done = form.eliminated_v.size == sum(len(leg.joints) for leg in form.legs)  # one column per joint
+    if not form.legs or not len(out):
+        return out, done
+    zero = out.copy()
+    for leg in form.legs:  # the legs' joints at their neutral value: rotations and axes read at zero
+        for iq, nq in zip(leg.q_index, leg.nq, strict=True):
+            zero[:, iq : iq + nq] = _NEUTRAL[nq]
+    if data is None:
+        data = model.createData()
+    rows: list[tuple[int, LegAim]] = []
+    u1, u2, v, w, ref = [], [], [], [], []
+    for i, z in enumerate(zero):
+        pin.forwardKinematics(model, data, z)
+        for leg in form.legs:
+            origin = (data.oMi[leg.carrier].homogeneous @ leg.centre)[:3, 3]
+            vl = pin.updateFramePlacement(model, data, leg.frame).translation - origin
+            wl = pin.updateFramePlacement(model, data, leg.target).translation - origin
+            if len(leg.joints) == 1:  # a spherical joint: the smallest turn of its current value
+                iq, Rj = leg.q_index[0], data.oMi[leg.joints[0]].rotation
+                now = pin.Quaternion(out[i, iq + 3], *out[i, iq : iq + 3]).normalized().toRotationMatrix()
+                turn = pin.Quaternion.FromTwoVectors(Rj @ now @ Rj.T @ vl, wl).toRotationMatrix()
+                quat = pin.Quaternion(Rj.T @ turn @ Rj @ now).normalized()
+                out[i, iq : iq + 4] = quat.x, quat.y, quat.z, quat.w
+                continue
+            rows.append((i, leg))
+            u1.append(data.oMi[leg.joints[0]].rotation @ leg.axes[0])
+            u2.append(data.oMi[leg.joints[1]].rotation @ leg.axes[1])
+            v.append(vl)
+            w.append(wl)
+            ref.append([_angle(out[i], iq, nq) for iq, nq in zip(leg.q_index, leg.nq, strict=True)])
+    if rows:
+        angles = aim_pairs(np.array(u1), np.array(u2), np.array(v), np.array(w))
+        r = np.array(ref)
+        angles += 2 * np.pi * np.round((r - angles) / (2 * np.pi))  # each angle nearest its current value
+        pick = np.abs(angles - r).sum(axis=2).argmin(axis=0)
+        best = angles[pick, np.arange(len(rows))]
+        done = done and bool(np.isfinite(best).all())
+        for (i, leg), row in zip(rows, best.tolist(), strict=True):
+            if not all(map(math.isfinite, row)):
+                continue
+            for iq, nq, angle in zip(leg.q_index, leg.nq, row, strict=True):
+                if nq == 2:
+                    out[i, iq], out[i, iq + 1] = math.cos(angle), math.sin(angle)
+                else:
+                    out[i, iq] = angle
+    return out, done
+
+
+_NEUTRAL = {1: np.zeros(1), 2: np.array([1.0, 0.0]), 4: np.array([0.0, 0, 0, 1])}
+"""Neutral configuration coordinates of a leg joint, by its nq (revolute, unbounded revolute, spherical)."""
+
+
+def _angle(q: np.ndarray, iq: int, nq: int) -> float:
+    """A revolute joint's angle in ``q`` [rad] (one coordinate, or (cos, sin) when unbounded)."""
+    return math.atan2(q[iq + 1], q[iq]) if nq == 2 else float(q[iq])
