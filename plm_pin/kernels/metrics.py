@@ -26,7 +26,7 @@ METRIC_NAMES = ("manipulability", "condition_number", "constraint_margin", "inve
 """The columns of :func:`square_metrics`' output, in order."""
 
 
-EPS = float(np.finfo(np.float64).eps)
+FLOAT_EPSILON = float(np.finfo(np.float64).eps)
 """Machine epsilon of float64, as a compile-time constant (``np.finfo`` in a loop costs a call)."""
 
 JACOBI_MAX = 2
@@ -58,7 +58,7 @@ def _gram(M: np.ndarray, G: np.ndarray) -> int:
 @njit(cache=True)
 def _jacobi_eigenvalues(G: np.ndarray, n: int, out: np.ndarray) -> None:
     """Eigenvalues of the symmetric ``G[:n, :n]`` (overwritten) into ``out[:n]``: cyclic Jacobi."""
-    eps = EPS
+    eps = FLOAT_EPSILON
     for _ in range(64):
         off = 0.0
         total = 0.0
@@ -104,7 +104,7 @@ def _tridiagonal_eigenvalues(G: np.ndarray, n: int, d: np.ndarray, e: np.ndarray
     rank-deficient Gram. Without LAPACK's scaling, ``|G|`` must lie between 1e-150 and 1e150
     (its squares stay normal), far from a Jacobian's Gram.
     """
-    eps = EPS
+    eps = FLOAT_EPSILON
     for k in range(n - 2):  # reflect x = G[k+1:, k] onto alpha e_0 by I - v v^T / h, v = x - alpha e_0
         xx = 0.0
         for i in range(k + 1, n):

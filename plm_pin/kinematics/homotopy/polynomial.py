@@ -263,19 +263,19 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
         digest="",
         legs=tuple(
             LegAim(
-                frame=int(c.frame_ids[leg.side]),
-                target=int(c.frame_ids[1 - leg.side]),
-                carrier=leg.carrier,
-                centre=_homogeneous(leg.centre),
-                joints=tuple(int(j) for j in reversed(leg.joints)),
-                axes=np.array([_joint_kind(model.joints[j])[1] for j in reversed(leg.joints)]),
-                q_index=tuple(int(model.joints[j].idx_q) for j in reversed(leg.joints)),
-                nq=tuple(int(model.joints[j].nq) for j in reversed(leg.joints)),
+                frame=int(c.frame_ids[found.side]),
+                target=int(c.frame_ids[1 - found.side]),
+                carrier=found.carrier,
+                centre=_homogeneous(found.centre),
+                joints=tuple(int(j) for j in reversed(found.joints)),
+                axes=np.array([_joint_kind(model.joints[j])[1] for j in reversed(found.joints)]),
+                q_index=tuple(int(model.joints[j].idx_q) for j in reversed(found.joints)),
+                nq=tuple(int(model.joints[j].nq) for j in reversed(found.joints)),
             )
             for c in closures
-            if (leg := legs.get(c.name)) is not None
-            and not set(leg.joints) & keep
-            and [_kind_or_none(model.joints[j]) for j in leg.joints] in ([REVOLUTE, REVOLUTE], [SPHERICAL])
+            if (found := legs.get(c.name)) is not None
+            and not set(found.joints) & keep
+            and [_kind_or_none(model.joints[j]) for j in found.joints] in ([REVOLUTE, REVOLUTE], [SPHERICAL])
         ),
     )
     live = _live_entries(form)
