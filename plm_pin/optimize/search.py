@@ -56,8 +56,12 @@ def _here(problem: Problem, xs: list[tuple[float, ...]]) -> list[DesignEvaluatio
 
 
 def _on_dask(client: Client) -> Evaluator:
+    scattered: list[tuple[Problem, Any]] = []  # the problem sent to every worker once, with its future
+
     def run(problem: Problem, xs: list[tuple[float, ...]]) -> list[DesignEvaluation]:
-        shared = client.scatter(problem, broadcast=True, hash=False)
+        if not scattered or scattered[0][0] is not problem:
+            scattered[:] = [(problem, client.scatter(problem, broadcast=True, hash=False))]
+        shared = scattered[0][1]
         futures = client.map(evaluate_design, [shared] * len(xs), xs, pure=False)
         out: list[DesignEvaluation] = client.gather(futures)
         return out
