@@ -227,6 +227,20 @@ def workspace(
     )
 
 
+@njit(cache=True)
+def workspace_for(n: int, npar: int, args: tuple) -> tuple:
+    """:func:`workspace` for ``n`` unknowns and ``npar`` parameters of the form packed in ``args``."""
+    parent, kind, offset, placement, frame_joint, combination = (
+        args[0],
+        args[1],
+        args[2],
+        args[4],
+        args[6],
+        args[13],
+    )
+    return workspace(n, npar, parent, kind, offset, placement, frame_joint, combination.shape[1])
+
+
 @njit(cache=True, fastmath=FAST)
 def _entries(
     x: np.ndarray,

@@ -30,9 +30,18 @@ from ...tolerances import (
     HOMOTOPY_ROOT_RTOL,
     HOMOTOPY_SINGULAR_COND,
 )
-from .evaluation import system, workspace
+from .evaluation import system, workspace_for
 from .form import PolynomialForm
-from .tracking import CORRECTOR_STEPS, FAILED, FINAL_NEWTON, MAX_STEP, MIN_STEP, REACHED, solve_linear
+from .tracking import (
+    CORRECTOR_STEPS,
+    FAILED,
+    FINAL_NEWTON,
+    MAX_STEP,
+    MIN_STEP,
+    REACHED,
+    path_norm,
+    solve_linear,
+)
 
 AT_INFINITY = 3
 """Path end code: the path went to a root at infinity (:math:`z_0 = 0` at :math:`t = 1`)."""
@@ -72,14 +81,6 @@ def _homogeneous(z, p, ws, args, degrees, chart, zero_b, x, G, H):  # type: igno
 
 
 @njit(cache=True)
-def _norm(v: np.ndarray) -> float:
-    acc = 0.0
-    for i in range(v.shape[0]):
-        acc += v[i].real * v[i].real + v[i].imag * v[i].imag
-    return np.sqrt(acc)
-
-
-@njit(cache=True)
 def _step(z, p, dp, ws, args, degrees, chart, zero_b, x, G, H, A, newton, velocity):  # type: ignore[no-untyped-def]
     """``newton`` = the Newton step, ``velocity`` = the tangent dz/dt at ``(z, p)``; one factorisation."""
     _homogeneous(z, p, ws, args, degrees, chart, zero_b, x, G, H)
@@ -108,15 +109,7 @@ def track_projective(
     """
     n = x0.shape[0]
     m = n + 1
-    parent, kind, offset, placement, frame_joint, combination = (
-        args[0],
-        args[1],
-        args[2],
-        args[4],
-        args[6],
-        args[13],
-    )
-    ws = workspace(n, p0.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1])
+    ws = workspace_for(n, p0.shape[0], args)
     zero_b = np.zeros(n, dtype=np.complex128)
     x = np.empty(n, dtype=np.complex128)
     G = np.empty(m, dtype=np.complex128)
@@ -170,17 +163,17 @@ def track_projective(
             converged = False
             for _ in range(CORRECTOR_STEPS):
                 _step(y, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, v)
-                nd = _norm(d)
+                nd = path_norm(d)
                 if not np.isfinite(nd) or nd > 0.5 * last:
                     break
                 for i in range(m):
                     y[i] += d[i]
-                small = HOMOTOPY_CORRECTOR_TOL * _norm(y)
+                small = HOMOTOPY_CORRECTOR_TOL * path_norm(y)
                 if nd <= small or (last < np.inf and nd * (nd / last) <= small):
                     converged = True
                     break
                 last = nd
-            ok = converged or last <= 1e-6 * _norm(y)
+            ok = converged or last <= 1e-6 * path_norm(y)
         if ok:
             z[:] = y
             k1[:] = v
@@ -189,7 +182,7 @@ def track_projective(
             if streak >= 3:
                 h = min(2.0 * h, MAX_STEP)
                 streak = 0
-            if t >= ENDGAME_T and abs(z[0]) <= HOMOTOPY_INFINITY_RTOL * _norm(z):
+            if t >= ENDGAME_T and abs(z[0]) <= HOMOTOPY_INFINITY_RTOL * path_norm(z):
                 return z, AT_INFINITY, t
         else:
             h *= 0.5
@@ -200,11 +193,11 @@ def track_projective(
     if code == REACHED:
         for _ in range(FINAL_NEWTON):
             _step(z, p1, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, v)
-            if not np.isfinite(_norm(d)):
+            if not np.isfinite(path_norm(d)):
                 break
             for i in range(m):
                 z[i] += d[i]
-    if t >= ENDGAME_T and abs(z[0]) <= HOMOTOPY_INFINITY_RTOL * _norm(
+    if t >= ENDGAME_T and abs(z[0]) <= HOMOTOPY_INFINITY_RTOL * path_norm(
         z
     ):  # or stopped by a singular end there
         code = AT_INFINITY
@@ -231,15 +224,7 @@ def homogeneous_at(
     """The homogenised system (n + 1,) and its Jacobian in ``z`` (n + 1, n + 1) at ``z``, ``p``."""
     m = z.shape[0]
     n = m - 1
-    parent, kind, offset, placement, frame_joint, combination = (
-        args[0],
-        args[1],
-        args[2],
-        args[4],
-        args[6],
-        args[13],
-    )
-    ws = workspace(n, p.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1])
+    ws = workspace_for(n, p.shape[0], args)
     G = np.empty(m, dtype=np.complex128)
     H = np.empty((m, m + p.shape[0]), dtype=np.complex128)
     x = np.empty(n, dtype=np.complex128)

@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit
 
 from ...tolerances import HOMOTOPY_CORRECTOR_TOL, HOMOTOPY_DIVERGED_NORM
-from .evaluation import system, workspace
+from .evaluation import system, workspace_for
 
 REACHED, DIVERGED, FAILED, GROWING = 0, 1, 2, 3
 """Path end codes: reached t = 1, went to infinity (or handed over), tracker failure, and went to
@@ -133,7 +133,8 @@ def _at(t: float, a0: np.ndarray, da: np.ndarray, out: np.ndarray) -> np.ndarray
 
 
 @njit(cache=True)
-def _norm(v: np.ndarray) -> float:
+def path_norm(v: np.ndarray) -> float:
+    """Euclidean norm of a complex vector (no temporary, unlike ``np.linalg.norm``)."""
     acc = 0.0
     for i in range(v.shape[0]):
         acc += v[i].real * v[i].real + v[i].imag * v[i].imag
@@ -156,7 +157,7 @@ def _to_infinity(x: np.ndarray, v: np.ndarray, rest: float, gap: float, marks: n
     """
     if gap > 1e-3 or not (np.isfinite(marks[0]) and np.isfinite(marks[1])):
         return False
-    size = _norm(x)
+    size = path_norm(x)
     last = marks[2] / marks[1]  # growth over the last decade
     steady = marks[1] >= ENDGAME_GROWTH * marks[0] or last >= ENDGAME_GROWTH**2
     if size < marks[2] or last < ENDGAME_GROWTH or not steady:
@@ -201,7 +202,7 @@ def track(
     pt, bt = np.empty_like(p0), np.empty_like(b0)
     t, h = 0.0, 0.1
     steps, streak = 0, 0
-    norm0 = _norm(x0)
+    norm0 = path_norm(x0)
     # the norm where 1 - t last passed a power of ten, and at the two passes before (endgame)
     gap, marks = 1.0, np.array([np.nan, np.nan, norm0])
     while t < 1.0:
@@ -231,18 +232,18 @@ def track(
             converged = False
             for _ in range(CORRECTOR_STEPS):
                 _newton_velocity(y, pt, bt, dp, db, ws, args, d, v)
-                nd = _norm(d)
+                nd = path_norm(d)
                 if not np.isfinite(nd) or nd > 0.5 * last:
                     break
                 for i in range(n):
                     y[i] += d[i]
                 # converged: this correction is small, or the next one will be (contraction nd / last)
-                small = HOMOTOPY_CORRECTOR_TOL * (1.0 + _norm(y))
+                small = HOMOTOPY_CORRECTOR_TOL * (1.0 + path_norm(y))
                 if nd <= small or (last < np.inf and nd * (nd / last) <= small):
                     converged = True
                     break
                 last = nd
-            ok = converged or last <= 1e-6 * (1.0 + _norm(y))
+            ok = converged or last <= 1e-6 * (1.0 + path_norm(y))
         if ok:  # the next step's first tangent: the last corrector's, a correction below tolerance away
             x[:] = y
             k1[:] = v
@@ -252,11 +253,11 @@ def track(
             if streak >= 3:
                 h = min(2.0 * h, MAX_STEP)
                 streak = 0
-            if _norm(x) > HOMOTOPY_DIVERGED_NORM or _norm(x) > handoff * (1.0 + norm0):
+            if path_norm(x) > HOMOTOPY_DIVERGED_NORM or path_norm(x) > handoff * (1.0 + norm0):
                 return x, DIVERGED, steps
             if 1.0 - t <= 0.1 * gap:
                 gap = 1.0 - t
-                marks[0], marks[1], marks[2] = marks[1], marks[2], _norm(x)
+                marks[0], marks[1], marks[2] = marks[1], marks[2], path_norm(x)
         else:
             fresh = True  # k1 (at x) still holds
             if _to_infinity(x, k1, 1.0 - t, gap, marks):  # no use halving the step down to MIN_STEP
@@ -264,12 +265,12 @@ def track(
             h *= 0.5
             streak = 0
             if h < MIN_STEP:
-                if _norm(x) > 1e3 * (1.0 + norm0):
+                if path_norm(x) > 1e3 * (1.0 + norm0):
                     return x, DIVERGED, steps
                 return x, FAILED, steps
     for _ in range(FINAL_NEWTON):
         _newton(x, p1, b1, ws, args, d)
-        if not np.isfinite(_norm(d)):
+        if not np.isfinite(path_norm(d)):
             break
         for i in range(n):
             x[i] += d[i]
@@ -291,17 +292,7 @@ def track_all(
     ``handoff`` as in :func:`track`.
     """
     N = X0.shape[0]
-    parent, kind, offset, placement, frame_joint, combination = (
-        args[0],
-        args[1],
-        args[2],
-        args[4],
-        args[6],
-        args[13],
-    )
-    ws = workspace(
-        X0.shape[1], p0.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1]
-    )
+    ws = workspace_for(X0.shape[1], p0.shape[0], args)
     out = np.empty_like(X0)
     codes = np.empty(N, dtype=np.int64)
     steps = np.empty(N, dtype=np.int64)
@@ -314,15 +305,7 @@ def track_all(
 def systems_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, args: tuple) -> tuple[np.ndarray, np.ndarray]:
     """The square system at every row of ``X`` (N, n): F (N, n) and F_x (N, n, n), in one compiled call."""
     N, n = X.shape
-    parent, kind, offset, placement, frame_joint, combination = (
-        args[0],
-        args[1],
-        args[2],
-        args[4],
-        args[6],
-        args[13],
-    )
-    ws = workspace(n, p.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1])
+    ws = workspace_for(n, p.shape[0], args)
     Fs = np.empty((N, n), dtype=np.complex128)
     Js = np.empty((N, n, n), dtype=np.complex128)
     for k in range(N):
@@ -339,15 +322,7 @@ def real_newton(x0: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
     Stops early when a step is below 1e-15 relative.
     """
     n = x0.shape[0]
-    parent, kind, offset, placement, frame_joint, combination = (
-        args[0],
-        args[1],
-        args[2],
-        args[4],
-        args[6],
-        args[13],
-    )
-    ws = workspace(n, p.shape[0], parent, kind, offset, placement, frame_joint, combination.shape[1])
+    ws = workspace_for(n, p.shape[0], args)
     x = x0.real.copy()
     xc = np.empty(n, dtype=np.complex128)
     pc = p.astype(np.complex128)
