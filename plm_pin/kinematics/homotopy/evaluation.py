@@ -20,7 +20,7 @@ FAST = {"contract", "reassoc", "nsz", "arcp"}
 kept (a path going to infinity must be seen)."""
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _quaternion(
     w: complex, x: complex, y: complex, z: complex, X: np.ndarray, i: int, dX: np.ndarray, d: int
 ) -> None:
@@ -75,6 +75,31 @@ def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: i
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
+def _derivative_into(
+    A: np.ndarray, a: int, dX: np.ndarray, d: int, translation: bool, out: np.ndarray
+) -> None:
+    """``out[d] = A[a] @ dX[d]`` for a joint's local derivative ``dX[d]``, by its structure.
+
+    A derivative along a translation coordinate has only its last column (the axis, first three
+    entries); along a rotation coordinate (cos, sin, angle, quaternion) only its upper-left
+    3 x 3 block. So the product is a rotation times a vector (9 products) or two 3 x 3 blocks (27),
+    instead of a matrix product's 43; the zero parts stay zero (last row included).
+    """
+    if translation:
+        for r in range(3):
+            for k in range(3):
+                out[d, r, k] = 0.0
+            out[d, r, 3] = A[a, r, 0] * dX[d, 0, 3] + A[a, r, 1] * dX[d, 1, 3] + A[a, r, 2] * dX[d, 2, 3]
+    else:
+        for r in range(3):
+            for k in range(3):
+                out[d, r, k] = A[a, r, 0] * dX[d, 0, k] + A[a, r, 1] * dX[d, 1, k] + A[a, r, 2] * dX[d, 2, k]
+            out[d, r, 3] = 0.0
+    for k in range(4):
+        out[d, 3, k] = 0.0
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
 def _mv_into(A: np.ndarray, a: int, S: np.ndarray, s: int, out: np.ndarray, o: int) -> None:
     """``out[o, :3, 3] = (A[a] @ S[s])[:3, 3]``: a transform (or its derivative) applied to a point.
 
@@ -90,7 +115,7 @@ def _mv_into(A: np.ndarray, a: int, S: np.ndarray, s: int, out: np.ndarray, o: i
         )
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _copy_into(A: np.ndarray, a: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a]`` for stacks of 4 x 4 matrices."""
     for i in range(4):
@@ -98,7 +123,7 @@ def _copy_into(A: np.ndarray, a: int, out: np.ndarray, o: int) -> None:
             out[o, i, j] = A[a, i, j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _skew_entry(axis: np.ndarray, i: int, r: int, k: int) -> float:
     """Entry (r, k) of the cross-product matrix of ``axis[i]``."""
     if r == k:
@@ -110,7 +135,7 @@ def _skew_entry(axis: np.ndarray, i: int, r: int, k: int) -> float:
     return -axis[i, 1] if k == 0 else axis[i, 0]
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True, inline="always", fastmath=FAST)
 def _local(
     kind: int,
     axis: np.ndarray,
@@ -277,7 +302,14 @@ def _entries(
             _copy_into(M, i, A, i)
             _copy_into(MX, i, T, i)
         for c in range(ncoord[i]):
-            _mm_into(A, i, dX, 7 * i + c, AdX, 7 * i + c)
+            _derivative_into(
+                A,
+                i,
+                dX,
+                7 * i + c,
+                kd == PRISMATIC or kd == PRISMATIC_PARAM or c < 3 * (kd == FREE_FLYER),
+                AdX,
+            )
     nf = frame_joint.shape[0]
     for f in range(nf):
         for r in range(4):
@@ -436,18 +468,17 @@ def system(
             acc += x[o + r] * x[o + r]
             J[u, o + r] = 2.0 * x[o + r]
         F[u] = acc + b[u]
-    for i in range(combination.shape[0]):
+    for i in range(combination.shape[0]):  # rows of C @ e and C @ de, skipping C's zeros (a selection)
         acc = b[nu + i]
-        for r in range(m):
-            acc += combination[i, r] * e[r]
-        F[nu + i] = acc
         for j in range(nc):
-            acc = 0j
-            for r in range(m):
-                w = combination[i, r]
-                if w != 0.0:
-                    acc += w * de[r, j]
-            J[nu + i, j] = acc
+            J[nu + i, j] = 0.0
+        for r in range(m):
+            w = combination[i, r]
+            if w != 0.0:
+                acc += w * e[r]
+                for j in range(nc):
+                    J[nu + i, j] += w * de[r, j]
+        F[nu + i] = acc
     return F, J
 
 

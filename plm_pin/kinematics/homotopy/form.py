@@ -62,7 +62,8 @@ class PolynomialForm:
         closure_length2: squared length of each distance closure on a rigid strut [m^2], shape (nc,).
         entry_offset: first entry of each closure, shape (nc,).
         n_entries: total closure entries.
-        combination: the random matrix :math:`C`, shape (n - n_unit, n_entries).
+        combination: the matrix :math:`C`, a selection of the live entries or random,
+            shape (n - n_unit, n_entries).
         n: number of unknowns.
         n_unit: number of unit equations (first in the system).
         unit_offsets: first unknown of each unit block (revolute 2, quaternion 4), shape (n_unit,).

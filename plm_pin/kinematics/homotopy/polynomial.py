@@ -35,9 +35,10 @@ Closure entries (the residuals of :mod:`plm_pin.core.closures` written polynomia
   universal joint from the count. With an actuated prismatic strut (U-P-S, S-P-S legs),
   :math:`L^2 = |c + q e|^2` is given by the actuator :math:`q` (:func:`_distance_legs`).
 
-Entries that vanish identically (the out-of-plane rows of a planar chain) are dropped;
-the rest are combined by a fixed random matrix :math:`C` (seeded) into as many equations
-as unknowns remain after the unit equations, so the system is square. A solution of the
+Entries that vanish identically (the out-of-plane rows of a planar chain) are dropped.
+When as many remain as unknowns after the unit equations, they are the equations
+(:math:`C` selects them); otherwise a fixed random matrix :math:`C` (seeded) combines them
+into that many, so the system is square. A solution of the
 square system is kept only when the full set of entries vanishes too (redundant actuation,
 and the random combination, add spurious solutions that this filter removes).
 """
@@ -284,9 +285,12 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
             f"{int(live.sum())} independent closure entries for {n_comb} unknowns: the actuators do not fix "
             "the configuration"
         )
-    rng = np.random.default_rng(SEED)
-    combination = rng.normal(size=(n_comb, n_entries)) * live
-    degrees = np.concatenate([np.full(n_unit, 2), np.full(n_comb, int(entry_degree[live].max()))])
+    if live.sum() == n_comb:  # square already: the live entries themselves, each of its own degree
+        combination = np.eye(n_entries)[live]
+        degrees = np.concatenate([np.full(n_unit, 2), entry_degree[live]])
+    else:
+        combination = np.random.default_rng(SEED).normal(size=(n_comb, n_entries)) * live
+        degrees = np.concatenate([np.full(n_unit, 2), np.full(n_comb, int(entry_degree[live].max()))])
     h = hashlib.sha256()
     for arr in (parent, kind, offset, axis, placement, fixed, frame_joint, frame_placement, closure_kind):
         h.update(np.ascontiguousarray(arr).tobytes())

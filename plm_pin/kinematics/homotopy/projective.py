@@ -32,6 +32,7 @@ from ...tolerances import (
 )
 from .evaluation import system, workspace_for
 from .form import PolynomialForm
+from .threads import over_threads
 from .tracking import (
     CORRECTOR_STEPS,
     FAILED,
@@ -204,7 +205,7 @@ def track_projective(
     return z, code, t
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def track_projective_all(
     X0: np.ndarray, p0: np.ndarray, p1: np.ndarray, chart: np.ndarray, degrees: np.ndarray, args: tuple
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -252,7 +253,7 @@ def projective_ends(
     """
     a = chart(form.n)
     args = form.kernel_args()
-    Z, codes = track_projective_all(np.ascontiguousarray(X0), p0, p1, a, form.degrees, args)
+    Z, codes = over_threads(track_projective_all, np.ascontiguousarray(X0), p0, p1, a, form.degrees, args)
     roots = []
     infinity = singular = 0
     failed = np.zeros(len(Z), dtype=bool)

@@ -183,13 +183,14 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     from .certify import certify, parameter_intervals
     from .evaluation import closure_entries
     from .projective import projective_ends
+    from .threads import over_threads
     from .tracking import GROWING, REACHED, real_newton, systems_at, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)
     p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
-    X, codes, _ = track_all(gen.x, gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH)
+    X, codes, _ = over_threads(track_all, gen.x, gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH)
     F, Jx = systems_at(X, p1, zero, form.kernel_args())  # the ends' residuals and Jacobians, one call
     scale = 1.0 + np.abs(X).max(axis=1)
     with np.errstate(invalid="ignore"):

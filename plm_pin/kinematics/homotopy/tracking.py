@@ -277,7 +277,7 @@ def track(
     return x, REACHED, steps
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def track_all(
     X0: np.ndarray,
     p0: np.ndarray,
