@@ -99,9 +99,15 @@ def _step(z, p, dp, ws, args, degrees, chart, zero_b, x, G, H, A, newton, veloci
 
 @njit(cache=True)
 def track_projective(
-    x0: np.ndarray, p0: np.ndarray, p1: np.ndarray, chart: np.ndarray, degrees: np.ndarray, args: tuple
+    x0: np.ndarray,
+    t0: float,
+    p0: np.ndarray,
+    p1: np.ndarray,
+    chart: np.ndarray,
+    degrees: np.ndarray,
+    args: tuple,
 ) -> tuple[np.ndarray, int, float]:
-    """Track the root ``x0`` (n,) of the closures at ``p0`` to ``p1`` in the projective chart ``chart``.
+    """Track the root ``x0`` (n,) of the closures at ``p0 + t0 (p1 - p0)`` to ``p1`` in the chart ``chart``.
 
     Returns:
         The end ``z = (z_0, z_1, ..., z_n)`` (n + 1,), its code: REACHED (a finite root
@@ -132,10 +138,10 @@ def track_projective(
         np.empty_like(z),
     )
     dp = p1 - p0
-    pt = np.empty_like(p0)
-    t, h = 0.0, 0.1
+    pt = p0 + t0 * dp
+    t, h = t0, 0.1
     steps, streak = 0, 0
-    _step(z, p0, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, k1)
+    _step(z, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, k1)
     code = REACHED
     while t < 1.0:
         if steps > 5000:
@@ -207,14 +213,20 @@ def track_projective(
 
 @njit(cache=True, nogil=True)
 def track_projective_all(
-    X0: np.ndarray, p0: np.ndarray, p1: np.ndarray, chart: np.ndarray, degrees: np.ndarray, args: tuple
+    X0: np.ndarray,
+    T0: np.ndarray,
+    p0: np.ndarray,
+    p1: np.ndarray,
+    chart: np.ndarray,
+    degrees: np.ndarray,
+    args: tuple,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`track_projective` on every row of ``X0`` (N, n): ends (N, n + 1), codes (N,)."""
+    """:func:`track_projective` from each row of ``X0`` (N, n) at its ``T0`` (N,): ends (N, n + 1), codes."""
     N, n = X0.shape
     Z = np.empty((N, n + 1), dtype=np.complex128)
     codes = np.empty(N, dtype=np.int64)
     for i in range(N):
-        Z[i], codes[i], _ = track_projective(X0[i], p0, p1, chart, degrees, args)
+        Z[i], codes[i], _ = track_projective(X0[i], T0[i], p0, p1, chart, degrees, args)
     return Z, codes
 
 
@@ -243,9 +255,12 @@ def chart(n: int) -> np.ndarray:
 
 
 def projective_ends(
-    form: PolynomialForm, X0: np.ndarray, p0: np.ndarray, p1: np.ndarray
+    form: PolynomialForm, X0: np.ndarray, T0: np.ndarray, p0: np.ndarray, p1: np.ndarray
 ) -> tuple[np.ndarray, int, int, np.ndarray]:
-    """Track the generic roots ``X0`` (N, n) from ``p0`` to ``p1`` in projective coordinates.
+    """Track paths from ``p0`` to ``p1`` in projective coordinates, from ``X0`` (N, n) at ``T0`` (N,).
+
+    A row is a point of its path at :math:`t` = ``T0``: a generic root (:math:`t = 0`), or where the
+    affine tracker gave the path up.
 
     Returns:
         The finite non-singular ends (k, n) (their affine coordinates), the numbers of paths
@@ -253,7 +268,9 @@ def projective_ends(
     """
     a = chart(form.n)
     args = form.kernel_args()
-    Z, codes = over_threads(track_projective_all, np.ascontiguousarray(X0), p0, p1, a, form.degrees, args)
+    Z, codes = over_threads(
+        track_projective_all, (np.ascontiguousarray(X0), T0), p0, p1, a, form.degrees, args
+    )
     roots = []
     infinity = singular = 0
     failed = np.zeros(len(Z), dtype=bool)

@@ -190,16 +190,23 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     values = np.asarray(actuators, dtype=float)
     p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
-    X, codes, _ = over_threads(track_all, gen.x, gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH)
+    X, codes, _, ends = over_threads(
+        track_all, (gen.x,), gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH
+    )
     F, Jx = systems_at(X, p1, zero, form.kernel_args())  # the ends' residuals and Jacobians, one call
     scale = 1.0 + np.abs(X).max(axis=1)
     with np.errstate(invalid="ignore"):
         clean = (codes == REACHED) & np.isfinite(F).all(axis=1)
         clean &= np.abs(F).max(axis=1) <= HOMOTOPY_ROOT_RTOL * scale
         clean[clean] = ~(np.linalg.cond(Jx[clean]) > HOMOTOPY_SINGULAR_COND)
-    # the other paths (off to infinity, lost, or at a large root the affine test cannot judge), again
-    # in projective coordinates: a path at infinity ends there, a large root is reached
-    far, diverged, singular, lost = projective_ends(form, gen.x[~clean], gen.p, p1)
+    # the other paths (off to infinity, lost, or at a large root the affine test cannot judge) in
+    # projective coordinates: a path at infinity ends there, a large root is reached. A path given up
+    # before t = 1 goes on from where it stopped; one that reached t = 1 is tracked again from its start
+    resume = ends < 1.0
+    starts = np.where(resume[:, None], X, gen.x)[~clean]
+    far, diverged, singular, lost = projective_ends(
+        form, starts, np.where(resume, ends, 0.0)[~clean], gen.p, p1
+    )
     # a path lost in projective coordinates too (a singular end at infinity, as the isotropic points
     # of revolute (cos, sin) pairs) whose affine norm grew like a power of 1/(1 - t) went to infinity
     growing = codes[~clean] == GROWING

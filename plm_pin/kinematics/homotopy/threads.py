@@ -31,23 +31,23 @@ def path_threads(n_paths: int) -> int:
 
 
 def over_threads(
-    track: Callable[..., tuple[np.ndarray, ...]], X0: np.ndarray, *args: object
+    track: Callable[..., tuple[np.ndarray, ...]], rows: tuple[np.ndarray, ...], *args: object
 ) -> tuple[np.ndarray, ...]:
-    """``track(X0, *args)`` with the rows of ``X0`` shared among :func:`path_threads` threads.
+    """``track(*rows, *args)`` with the rows of the arrays ``rows`` (one per path, each) shared among threads.
 
-    ``track`` returns arrays whose first axis runs over the rows of ``X0``; they are put back
-    in row order. An exception on any thread is raised here.
+    :func:`path_threads` threads; ``track`` returns arrays whose first axis runs over the paths,
+    put back in path order. An exception on any thread is raised here.
     """
-    n = X0.shape[0]
+    n = rows[0].shape[0]
     k = path_threads(n)
     if k == 1:
-        return track(X0, *args)
-    rows = [np.arange(i, n, k) for i in range(k)]
+        return track(*rows, *args)
+    share = [np.arange(i, n, k) for i in range(k)]
     parts: list[tuple[np.ndarray, ...] | BaseException | None] = [None] * k
 
     def run(i: int) -> None:
         try:
-            parts[i] = track(np.ascontiguousarray(X0[rows[i]]), *args)
+            parts[i] = track(*(np.ascontiguousarray(r[share[i]]) for r in rows), *args)
         except BaseException as error:  # raised again on the calling thread
             parts[i] = error
 
@@ -66,5 +66,5 @@ def over_threads(
     for i, part in enumerate(parts):
         assert isinstance(part, tuple)
         for o, a in zip(out, part, strict=True):
-            o[rows[i]] = a
+            o[share[i]] = a
     return out

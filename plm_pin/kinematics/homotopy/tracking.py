@@ -178,7 +178,7 @@ def track(
     ws: tuple,
     args: tuple,
     handoff: float = np.inf,
-) -> tuple[np.ndarray, int, int]:
+) -> tuple[np.ndarray, int, int, float]:
     """Track one solution ``x0`` of the system at ``(p0, b0)`` to ``(p1, b1)``.
 
     ``ws`` is the evaluation workspace (:func:`~.evaluation.workspace`); the path's own buffers are
@@ -188,7 +188,9 @@ def track(
     projective tracker to take over, :mod:`.projective`).
 
     Returns:
-        The end point, its code (REACHED, DIVERGED, FAILED, GROWING) and the number of steps.
+        The end point, its code (REACHED, DIVERGED, FAILED, GROWING), the number of steps and
+        the :math:`t` of the end point (1, or where the path was given up: a point on the path
+        there, for the projective tracker to go on from).
     """
     n = x0.shape[0]
     x = x0.copy()
@@ -207,7 +209,7 @@ def track(
     gap, marks = 1.0, np.array([np.nan, np.nan, norm0])
     while t < 1.0:
         if steps > 5000:
-            return x, FAILED, steps
+            return x, FAILED, steps, t
         h = min(h, 1.0 - t)
         steps += 1
         # RK4 predictor
@@ -254,27 +256,27 @@ def track(
                 h = min(2.0 * h, MAX_STEP)
                 streak = 0
             if path_norm(x) > HOMOTOPY_DIVERGED_NORM or path_norm(x) > handoff * (1.0 + norm0):
-                return x, DIVERGED, steps
+                return x, DIVERGED, steps, t
             if 1.0 - t <= 0.1 * gap:
                 gap = 1.0 - t
                 marks[0], marks[1], marks[2] = marks[1], marks[2], path_norm(x)
         else:
             fresh = True  # k1 (at x) still holds
             if _to_infinity(x, k1, 1.0 - t, gap, marks):  # no use halving the step down to MIN_STEP
-                return x, GROWING, steps
+                return x, GROWING, steps, t
             h *= 0.5
             streak = 0
             if h < MIN_STEP:
                 if path_norm(x) > 1e3 * (1.0 + norm0):
-                    return x, DIVERGED, steps
-                return x, FAILED, steps
+                    return x, DIVERGED, steps, t
+                return x, FAILED, steps, t
     for _ in range(FINAL_NEWTON):
         _newton(x, p1, b1, ws, args, d)
         if not np.isfinite(path_norm(d)):
             break
         for i in range(n):
             x[i] += d[i]
-    return x, REACHED, steps
+    return x, REACHED, steps, 1.0
 
 
 @njit(cache=True, nogil=True)
@@ -286,8 +288,8 @@ def track_all(
     b1: np.ndarray,
     args: tuple,
     handoff: float = np.inf,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Track every row of ``X0`` (shape (N, n)): end points (N, n), codes (N,), steps (N,).
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Track every row of ``X0`` (shape (N, n)): end points (N, n), codes, steps and end t (N,) each.
 
     ``handoff`` as in :func:`track`.
     """
@@ -296,9 +298,10 @@ def track_all(
     out = np.empty_like(X0)
     codes = np.empty(N, dtype=np.int64)
     steps = np.empty(N, dtype=np.int64)
+    ends = np.empty(N)
     for i in range(N):
-        out[i], codes[i], steps[i] = track(X0[i], p0, b0, p1, b1, ws, args, handoff)
-    return out, codes, steps
+        out[i], codes[i], steps[i], ends[i] = track(X0[i], p0, b0, p1, b1, ws, args, handoff)
+    return out, codes, steps, ends
 
 
 @njit(cache=True)

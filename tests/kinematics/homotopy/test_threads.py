@@ -27,7 +27,7 @@ def two_threads(monkeypatch):
 def test_rows_come_back_in_order(two_threads):
     """Each output row is the one computed from its own input row."""
     X = np.arange(3 * 40, dtype=float).reshape(40, 3)
-    doubled, sums = over_threads(lambda A, k: (k * A, A.sum(axis=1)), X, 2.0)
+    doubled, sums = over_threads(lambda A, k: (k * A, A.sum(axis=1)), (X,), 2.0)
     assert path_threads(len(X)) == 2
     assert np.array_equal(doubled, 2.0 * X) and np.array_equal(sums, X.sum(axis=1))
 
@@ -43,7 +43,7 @@ def test_an_error_on_a_thread_is_raised_to_the_caller(two_threads):
         return (A,)
 
     with pytest.raises(ValueError, match="lost on thread 2"):
-        over_threads(track, np.arange(40.0).reshape(40, 1))
+        over_threads(track, (np.arange(40.0).reshape(40, 1),))
 
 
 def test_threaded_paths_equal_one_thread(two_threads):
@@ -53,7 +53,7 @@ def test_threaded_paths_equal_one_thread(two_threads):
     p1 = (mech.actuator_positions(mech.q_ref) + 1e-3)[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
     args = (gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH)
-    threaded = over_threads(track_all, gen.x, *args)
+    threaded = over_threads(track_all, (gen.x,), *args)
     alone = track_all(gen.x, *args)
     for a, b in zip(threaded, alone, strict=True):
         assert np.array_equal(a, b)
