@@ -126,7 +126,7 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
         except ClosureNotSatisfied:  # a root the full model does not close: not a mode, and not proven
             complete = False
             continue
-        if not any(_same_mode(mech, s, q, x) for s in out):
+        if not _found_mode(mech, out, q, x):
             out.append(FKSolution(q, x, residual_norm, certified))
     out.method, out.complete = "homotopy", complete
     out.generic_count, out.certified = res.generic_count, len(res.real)
@@ -136,19 +136,22 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
     return out
 
 
-def _same_mode(mech: Mechanism, s: FKSolution, q: np.ndarray, x: np.ndarray) -> bool:
-    """Whether ``(q, x)`` is the mode of ``s``: every frame origin and the task pose (angles modulo 2 pi).
+def _found_mode(mech: Mechanism, found: FKModes, q: np.ndarray, x: np.ndarray) -> bool:
+    """Whether ``(q, x)`` is the mode of a solution in ``found``: every frame origin and the task pose.
 
-    A half-turn of a symmetric platform can leave every frame origin in place and still turn
+    The task poses are compared at once (angles modulo 2 pi), the frame origins only where they
+    agree. A half-turn of a symmetric platform can leave every frame origin in place and still turn
     the end effector: the task pose tells the two apart.
     """
-    d = np.asarray(x - s.x, dtype=float)
+    if not found:
+        return False
+    d = np.array([s.x for s in found], dtype=float) - np.asarray(x, dtype=float)
     task = mech.task
     if task is not None:
-        for i, dof in enumerate(task.dofs):
-            if dof.startswith("r"):
-                d[i] = (d[i] + np.pi) % (2 * np.pi) - np.pi
-    return bool(np.all(np.abs(d) < FK_SAME_MODE_TOL)) and same_assembly(mech, s.q, q)
+        turns = [i for i, dof in enumerate(task.dofs) if dof.startswith("r")]
+        d[:, turns] = (d[:, turns] + np.pi) % (2 * np.pi) - np.pi
+    near = np.flatnonzero(np.all(np.abs(d) < FK_SAME_MODE_TOL, axis=1))
+    return any(same_assembly(mech, found[int(k)].q, q) for k in near)
 
 
 def _fit_eliminated(mech: Mechanism, q: np.ndarray, columns: np.ndarray, tol: float) -> np.ndarray:
