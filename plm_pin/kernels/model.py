@@ -49,6 +49,8 @@ class Kernel:
         self.frame_ids = frame_ids
         self.n_task = n_task
         self._all = np.arange(arrays.nv)
+        # a frame task (kind 1) holding all three angles: its targets come with their rotation
+        self._rotation_target = arrays.t_kind == 1 and int(np.count_nonzero(arrays.t_rows >= 3)) == 3
 
     @classmethod
     def build(cls, model: pin.Model, closures: tuple[Closure, ...], task: Task | None) -> Kernel:
@@ -155,7 +157,7 @@ class Kernel:
             task: the task the kernel was built with.
             x: its target coordinates [m, rad], shape (n_task,).
         """
-        x, R = self._pose_arrays(task, x)
+        x, R = self._pose_arrays(task, x) if self._rotation_target else (x, _EYE)
         return self._solve(_float_copy(q0), None, tol, x, R, self.n_task, True)
 
     def _solve(
