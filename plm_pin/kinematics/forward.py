@@ -344,10 +344,11 @@ def forward_kinematics(
     flag(all_modes, "all_modes")
     if method not in FK_METHODS:
         raise InvalidInput(f"method must be one of {list(FK_METHODS)}, got {method!r}")
-    c = check_task_vector(actuators, mech.n_actuators, "actuators")
-    if mech.mobility > mech.n_actuators:
+    n_actuators = mech.n_actuators
+    c = check_task_vector(actuators, n_actuators, "actuators")
+    if mech.mobility > n_actuators:
         raise InvalidInput(
-            f"{mech.name} has {mech.mobility} DOF but {mech.n_actuators} actuators: fixing them does not "
+            f"{mech.name} has {mech.mobility} DOF but {n_actuators} actuators: fixing them does not "
             "determine the configuration"
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
