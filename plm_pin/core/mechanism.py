@@ -356,7 +356,7 @@ class Mechanism:
         Raises:
             InvalidInput: on a wrong shape or a non-finite entry.
         """
-        return as_vector(q, self.nq, name)
+        return as_vector(q, self.model.nq, name)  # the model's nq is an int: no int() to pay on a hot path
 
     # ---------------------------------------------------------- closures
     def closure_residual(self, q: ArrayLike) -> np.ndarray:

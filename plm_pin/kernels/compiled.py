@@ -817,26 +817,17 @@ def newton(
     oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
     Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
     q_next = np.empty(q.shape[0])
-    factorised = fresh = False
+    factorised = fresh = again = False
     polished = not polish
     err_prev = np.inf
     iteration = 0
-    jac = False  # one call site of the inlined evaluate: each one costs seconds of compile
+    # The first step needs a Jacobian whatever the residual (none is factorised yet): it comes
+    # with the first pass, spent in vain only when the start is already solved. Later passes
+    # take one only when the step asks for it, at the same q again (``again``).
+    jac = True  # one call site of the inlined evaluate: each one costs seconds of compile
     while True:
         evaluate(k, q, x, R_star, with_task, r, A, jac, oR, op, fR, fp, Sw, Sv)
-        if jac:  # the same q again, now with its Jacobian
-            jac, refresh, factorised = False, True, True
-            for i in range(n):
-                for c in range(nfree):
-                    Af[i, c] = A[i, free[c]]
-            for a_ in range(nfree):
-                for c in range(a_ + 1):
-                    s = 0.0
-                    for i in range(n):
-                        s += Af[i, a_] * Af[i, c]
-                    N[a_, c] = s
-                    N[c, a_] = s
-        else:
+        if not again:
             err = 0.0
             for i in range(n):
                 err = max(err, abs(r[i]))
@@ -859,9 +850,21 @@ def newton(
                 refresh = True
             else:
                 return -1
-            if refresh:
-                jac = True
+            if refresh and not jac:
+                jac = again = True
                 continue
+        if jac:  # this q's Jacobian: a fresh normal matrix
+            jac, again, refresh, factorised = False, False, True, True
+            for i in range(n):
+                for c in range(nfree):
+                    Af[i, c] = A[i, free[c]]
+            for a_ in range(nfree):
+                for c in range(a_ + 1):
+                    s = 0.0
+                    for i in range(n):
+                        s += Af[i, a_] * Af[i, c]
+                    N[a_, c] = s
+                    N[c, a_] = s
         for c in range(nfree):
             s = 0.0
             for i in range(n):

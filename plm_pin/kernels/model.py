@@ -49,6 +49,8 @@ class Kernel:
         self.frame_ids = frame_ids
         self.n_task = n_task
         self._all = np.arange(arrays.nv)
+        # a frame task (kind 1) holding all three angles: its targets come with their rotation
+        self._rotation_target = arrays.t_kind == 1 and int(np.count_nonzero(arrays.t_rows >= 3)) == 3
 
     @classmethod
     def build(cls, model: pin.Model, closures: tuple[Closure, ...], task: Task | None) -> Kernel:
@@ -124,14 +126,25 @@ class Kernel:
         tol: float,
         target: TaskTarget | None = None,
         polish: bool = True,
+        in_place: bool = False,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
         """:meth:`newton`, with the largest absolute residual and whether the solution is within limits.
+
+        Args:
+            q0: starting configuration, shape (nq,).
+            free: velocity columns allowed to move (None: all).
+            tol: target largest absolute residual [m, rad].
+            target: task rows solved with the closures.
+            polish: take the polishing step once within ``tol``.
+            in_place: solve in ``q0`` itself, a writable C-contiguous float array the caller gives
+                up (it holds the last iterate when Newton stalls), instead of in a copy.
 
         Returns:
             ``(q, residual, pose, residual_norm, within_limits)``, or None when Newton stalls.
         """
         x, R = self._target_arrays(target)
-        return self._solve(q0, free, tol, x, R, target.size if target is not None else None, polish)
+        q = q0 if in_place else _float_copy(q0)
+        return self._solve(q, free, tol, x, R, target.size if target is not None else None, polish)
 
     def solve_pose(
         self, q0: np.ndarray, tol: float, task: Task, x: np.ndarray
@@ -144,12 +157,12 @@ class Kernel:
             task: the task the kernel was built with.
             x: its target coordinates [m, rad], shape (n_task,).
         """
-        x, R = self._pose_arrays(task, x)
-        return self._solve(q0, None, tol, x, R, self.n_task, True)
+        x, R = self._pose_arrays(task, x) if self._rotation_target else (x, _EYE)
+        return self._solve(_float_copy(q0), None, tol, x, R, self.n_task, True)
 
     def _solve(
         self,
-        q0: np.ndarray,
+        q: np.ndarray,
         free: np.ndarray | None,
         tol: float,
         x: np.ndarray,
@@ -157,9 +170,7 @@ class Kernel:
         task_rows: int | None,
         polish: bool,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
-        """:meth:`solve` with the target as arrays (:meth:`_target_arrays`) and its rows (None: no target)."""
-        # a float array's copy() is the same array as np.array(q0, dtype=float), for half its cost
-        q = q0.copy() if type(q0) is np.ndarray and q0.dtype is _FLOAT else np.array(q0, dtype=float)
+        """:meth:`solve` from ``q``, overwritten, the target as arrays and its rows (None: no target)."""
         pose, info = np.empty(self.n_task), np.empty(2)
         r = np.empty(self.arrays.m + (task_rows or 0))
         iterations = _compiled().newton(
@@ -242,6 +253,14 @@ class Kernel:
 
 
 _FLOAT = np.dtype(float)
+
+
+def _float_copy(q: np.ndarray) -> np.ndarray:
+    """``q`` as a new C-contiguous float array (the compiled Newton's start, solved in place)."""
+    # a float array's copy() is the same array as np.array(q, dtype=float), for half its cost
+    return q.copy() if type(q) is np.ndarray and q.dtype is _FLOAT else np.array(q, dtype=float)
+
+
 _NO_TARGET = np.zeros(0)
 _EYE = np.eye(3)
 _COMPILED: list[ModuleType] = []

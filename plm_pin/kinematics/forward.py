@@ -224,9 +224,11 @@ def task_pose(mech: Mechanism, q: ArrayLike) -> np.ndarray:
 
 
 def _close(
-    mech: Mechanism, start: np.ndarray, free: np.ndarray, tol: float
+    mech: Mechanism, start: np.ndarray, free: np.ndarray, tol: float, newton_tried: bool = False
 ) -> tuple[np.ndarray, float, np.ndarray]:
     """Close the loops moving the ``free`` columns: Newton first (on the kernels where they serve), else LM.
+
+    ``newton_tried`` says the kernels' Newton already stalled from ``start`` (LM only then).
 
     Returns:
         The configuration (read-only), its largest closure residual and its task pose
@@ -236,7 +238,7 @@ def _close(
         ClosureNotSatisfied: when neither reaches ``tol``.
     """
     kernel = kernel_of(mech)
-    if kernel is not None:
+    if kernel is not None and not newton_tried:
         solved = kernel.solve(start, free, tol)
         if solved is not None:
             q, _, x, residual_norm, _ = solved
@@ -258,6 +260,42 @@ def _close(
         q.setflags(write=False)
     task = mech.task_compiled
     return q, residual_norm, task.pose_from_data(ws.data) if task is not None else np.zeros(0)
+
+
+def _guess_mode(mech: Mechanism, c: np.ndarray, q0: np.ndarray, free: np.ndarray, tol: float) -> FKModes:
+    """The assembly mode in the basin of ``q0`` with the actuators at ``c`` (``all_modes=False``).
+
+    On the kernels first, solving in the start itself (built here, no copy to keep), then
+    :func:`_close` from a fresh start when their Newton stalls.
+
+    Raises:
+        PoseUnreachable: when the loops cannot be closed from ``q0``.
+    """
+    kernel = kernel_of(mech)
+    solved = None if kernel is None else kernel.solve(_with_actuators(mech, q0, c), free, tol, in_place=True)
+    if solved is not None:
+        q, _, x, residual_norm, _ = solved
+        q.setflags(write=False)
+    else:
+        try:
+            q, residual_norm, x = _close(mech, _with_actuators(mech, q0, c), free, tol, kernel is not None)
+        except ClosureNotSatisfied as exc:
+            miss: float | None = exc.residual_norm
+        else:
+            miss = None
+        if miss is not None:  # raised here, not in the handler: no chained ClosureNotSatisfied
+            raise _no_assembly(mech, c, miss, 1)
+    found = FKModes()
+    found.append(FKSolution(q, x, residual_norm))
+    return found
+
+
+def _no_assembly(mech: Mechanism, c: np.ndarray, best: float, n_starts: int) -> PoseUnreachable:
+    """The error for actuators at ``c``: no start closed the loops (smallest residual ``best``)."""
+    return PoseUnreachable(
+        f"{mech.name}: no assembly with actuators at {c.tolist()}: the loops cannot be closed "
+        f"(smallest residual {best:.3g} m/rad over {n_starts} starts)"
+    )
 
 
 def forward_kinematics(
@@ -309,15 +347,18 @@ def forward_kinematics(
     flag(all_modes, "all_modes")
     if method not in FK_METHODS:
         raise InvalidInput(f"method must be one of {list(FK_METHODS)}, got {method!r}")
-    c = check_task_vector(actuators, mech.n_actuators, "actuators")
-    if mech.mobility > mech.n_actuators:
+    n_actuators = mech.n_actuators
+    c = check_task_vector(actuators, n_actuators, "actuators")
+    if mech.mobility > n_actuators:
         raise InvalidInput(
-            f"{mech.name} has {mech.mobility} DOF but {mech.n_actuators} actuators: fixing them does not "
+            f"{mech.name} has {mech.mobility} DOF but {n_actuators} actuators: fixing them does not "
             "determine the configuration"
         )
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     free = mech.passive_v_indices  # actuators are one-DOF joints
-    homotopy = _homotopy_modes(mech, c, tol) if all_modes and method == "auto" else None
+    if not all_modes:
+        return _guess_mode(mech, c, q0, free, tol)
+    homotopy = _homotopy_modes(mech, c, tol) if method == "auto" else None
     if homotopy is not None and homotopy.complete:
         found = homotopy
         if not found:
@@ -327,10 +368,9 @@ def forward_kinematics(
             )
         found.sort(key=lambda s: tuple(np.round(s.x, 9)))
         return found
+    rng = np.random.default_rng(seed)
     starts_q = [_with_actuators(mech, q0, c)]
-    if all_modes:
-        rng = np.random.default_rng(seed)
-        starts_q += [_with_actuators(mech, q, c) for q in random_starts(mech, rng, q0, free, starts)]
+    starts_q += [_with_actuators(mech, q, c) for q in random_starts(mech, rng, q0, free, starts)]
     found = FKModes() if homotopy is None else homotopy  # an incomplete homotopy: multi-start adds
     if homotopy is not None:
         homotopy.why_incomplete += "; multi-start Newton added what its starts found"
@@ -344,13 +384,7 @@ def forward_kinematics(
         if found and any(same_assembly(mech, s.q, q) for s in found):
             continue
         found.append(FKSolution(q, x, residual_norm))
-        if not all_modes:
-            break
     if not found:
-        raise PoseUnreachable(
-            f"{mech.name}: no assembly with actuators at {c.tolist()}: the loops cannot be closed "
-            f"(smallest residual {best:.3g} m/rad over {len(starts_q)} starts)"
-        )
-    if all_modes:
-        found.sort(key=lambda s: tuple(np.round(s.x, 9)))
+        raise _no_assembly(mech, c, best, len(starts_q))
+    found.sort(key=lambda s: tuple(np.round(s.x, 9)))
     return found

@@ -199,12 +199,13 @@ def inverse_kinematics(
     tol = mech.closure_tol if tol is None else positive(tol, "tol")
     flag(explain, "explain"), flag(respect_limits, "respect_limits")
     task = require_task(mech)
-    if task.size < mech.mobility:
+    n_task = task.size
+    if n_task < mech.mobility:
         raise InvalidInput(
-            f"{mech.name}: the task has {task.size} coordinates but the mechanism has {mech.mobility} DOF: "
+            f"{mech.name}: the task has {n_task} coordinates but the mechanism has {mech.mobility} DOF: "
             "a pose does not determine the configuration; give a task with as many coordinates as DOF"
         )
-    xa = check_task_vector(x, task.size)
+    xa = check_task_vector(x, n_task)
     q0 = mech.q_ref if guess is None else mech.check_q(guess, "guess")
     if mode is None:  # the guess's basin, on the kernels first: no TaskTarget to build when they solve it
         kernel = kernel_of(mech)
