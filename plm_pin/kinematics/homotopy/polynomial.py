@@ -564,32 +564,29 @@ def aim_legs(
     for leg in form.legs:  # the legs' joints at their neutral value: rotations and axes read at zero
         for iq, nq in zip(leg.q_index, leg.nq, strict=True):
             zero[:, iq : iq + nq] = _NEUTRAL[nq]
-    if data is None:
-        data = model.createData()
+    oR, op, at = _placements(mech, zero, {f for leg in form.legs for f in (leg.frame, leg.target)}, data)
     rows: list[tuple[int, LegAim]] = []
     u1, u2, v, w, ref = [], [], [], [], []
-    for i, z in enumerate(zero):
-        pin.forwardKinematics(model, data, z)
-        for leg in form.legs:
-            origin = (data.oMi[leg.carrier].homogeneous @ leg.centre)[:3, 3]
-            vl = pin.updateFramePlacement(model, data, leg.frame).translation - origin
-            wl = pin.updateFramePlacement(model, data, leg.target).translation - origin
-            if len(leg.joints) == 1:  # a spherical joint: the smallest turn of its current value
-                iq, Rj = leg.q_index[0], data.oMi[leg.joints[0]].rotation
+    for leg in form.legs:
+        origin = oR[:, leg.carrier] @ leg.centre[:3, 3] + op[:, leg.carrier]
+        vl, wl = at[leg.frame] - origin, at[leg.target] - origin
+        if len(leg.joints) == 1:  # a spherical joint: the smallest turn of its current value
+            iq = leg.q_index[0]
+            for i, Rj in enumerate(oR[:, leg.joints[0]]):
                 now = pin.Quaternion(out[i, iq + 3], *out[i, iq : iq + 3]).normalized().toRotationMatrix()
-                turn = pin.Quaternion.FromTwoVectors(Rj @ now @ Rj.T @ vl, wl).toRotationMatrix()
+                turn = pin.Quaternion.FromTwoVectors(Rj @ now @ Rj.T @ vl[i], wl[i]).toRotationMatrix()
                 quat = pin.Quaternion(Rj.T @ turn @ Rj @ now).normalized()
                 out[i, iq : iq + 4] = quat.x, quat.y, quat.z, quat.w
-                continue
-            rows.append((i, leg))
-            u1.append(data.oMi[leg.joints[0]].rotation @ leg.axes[0])
-            u2.append(data.oMi[leg.joints[1]].rotation @ leg.axes[1])
-            v.append(vl)
-            w.append(wl)
-            ref.append([_angle(out[i], iq, nq) for iq, nq in zip(leg.q_index, leg.nq, strict=True)])
+            continue
+        rows.extend((i, leg) for i in range(len(out)))
+        u1.append(oR[:, leg.joints[0]] @ leg.axes[0])
+        u2.append(oR[:, leg.joints[1]] @ leg.axes[1])
+        v.append(vl)
+        w.append(wl)
+        ref.append([[_angle(qi, iq, nq) for iq, nq in zip(leg.q_index, leg.nq, strict=True)] for qi in out])
     if rows:
-        angles = aim_pairs(np.array(u1), np.array(u2), np.array(v), np.array(w))
-        r = np.array(ref)
+        angles = aim_pairs(*(np.concatenate(a) for a in (u1, u2, v, w)))
+        r = np.concatenate(ref)
         angles += 2 * np.pi * np.round((r - angles) / (2 * np.pi))  # each angle nearest its current value
         pick = np.abs(angles - r).sum(axis=2).argmin(axis=0)
         best = angles[pick, np.arange(len(rows))]
@@ -603,6 +600,35 @@ def aim_legs(
                 else:
                     out[i, iq] = angle
     return out, done
+
+
+def _placements(
+    mech: Mechanism, qs: np.ndarray, frames: set[int], data: pin.Data | None
+) -> tuple[np.ndarray, np.ndarray, dict[int, np.ndarray]]:
+    """Joint rotations (r, njoints, 3, 3) and origins (r, njoints, 3) at each row of ``qs``; frame origins.
+
+    ``frames`` are Pinocchio frame ids; their origins come as (r, 3) arrays. On the compiled
+    kernels when they hold those frames, else by Pinocchio.
+    """
+    from ...kernels import kernel_of
+
+    kernel = kernel_of(mech)
+    if kernel is not None and frames <= set(kernel.frame_ids):
+        placed = [kernel.placements(q) for q in qs]
+        fp = np.array([p[3] for p in placed])
+        at = {f: fp[:, kernel.frame_ids.index(f)] for f in frames}
+        return np.array([p[0] for p in placed]), np.array([p[1] for p in placed]), at
+    model = mech.model
+    data = data if data is not None else model.createData()
+    oR, op = np.empty((len(qs), model.njoints, 3, 3)), np.empty((len(qs), model.njoints, 3))
+    at = {f: np.empty((len(qs), 3)) for f in frames}
+    for i, q in enumerate(qs):
+        pin.forwardKinematics(model, data, q)
+        for j, M in enumerate(data.oMi):
+            oR[i, j], op[i, j] = M.rotation, M.translation
+        for f, where in at.items():
+            where[i] = pin.updateFramePlacement(model, data, f).translation
+    return oR, op, at
 
 
 _NEUTRAL = {1: np.zeros(1), 2: np.array([1.0, 0.0]), 4: np.array([0.0, 0, 0, 1])}

@@ -21,6 +21,8 @@ path at infinity approaches but never reaches at :math:`t < 1`.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import njit
 
@@ -247,6 +249,11 @@ def homogeneous_at(
 
 def chart(n: int) -> np.ndarray:
     """The fixed random affine chart :math:`a` (n + 1,) of the projective tracking (seeded, unit norm)."""
+    return _chart(n).copy()
+
+
+@functools.cache
+def _chart(n: int) -> np.ndarray:
     from .polynomial import SEED
 
     rng = np.random.default_rng(SEED + 3)
