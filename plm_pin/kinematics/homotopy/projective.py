@@ -273,6 +273,8 @@ def projective_ends(
         The finite non-singular ends (k, n) (their affine coordinates), the numbers of paths
         that went to infinity and that ended singular, and which paths failed (N,).
     """
+    if not len(X0):
+        return np.zeros((0, form.n), dtype=np.complex128), 0, 0, np.zeros(0, dtype=bool)
     a = chart(form.n)
     args = form.kernel_args()
     Z, codes = over_threads(

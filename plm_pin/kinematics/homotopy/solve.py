@@ -184,7 +184,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     from .evaluation import closure_entries
     from .projective import projective_ends
     from .threads import over_threads
-    from .tracking import GROWING, REACHED, real_newton, systems_at, track_all
+    from .tracking import GROWING, REACHED, ends_at, real_newton, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)
@@ -193,12 +193,11 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     X, codes, _, ends = over_threads(
         track_all, (gen.x,), gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH
     )
-    F, Jx = systems_at(X, p1, zero, form.kernel_args())  # the ends' residuals and Jacobians, one call
+    F, cond = ends_at(X, p1, zero, form.kernel_args())  # the ends' residuals and conditioning, one call
     scale = 1.0 + np.abs(X).max(axis=1)
     with np.errstate(invalid="ignore"):
         clean = (codes == REACHED) & np.isfinite(F).all(axis=1)
-        clean &= np.abs(F).max(axis=1) <= HOMOTOPY_ROOT_RTOL * scale
-        clean[clean] = ~(np.linalg.cond(Jx[clean]) > HOMOTOPY_SINGULAR_COND)
+        clean &= (np.abs(F).max(axis=1) <= HOMOTOPY_ROOT_RTOL * scale) & (cond <= HOMOTOPY_SINGULAR_COND)
     # the other paths (off to infinity, lost, or at a large root the affine test cannot judge) in
     # projective coordinates: a path at infinity ends there, a large root is reached. A path given up
     # before t = 1 goes on from where it stopped; one that reached t = 1 is tracked again from its start

@@ -2,11 +2,12 @@
 
 Paths are independent and the compiled trackers release the GIL (``nogil``), so the rows of
 a batch of start points are shared among threads: interleaved (row ``k`` on thread
-``k mod T``), because path costs vary several-fold. Plain threads, started per call (about
-0.1 ms, against milliseconds of tracking), so nothing outlives the call: a forked process
-(a sweep's or Dask's worker) starts clean. The number of threads is numba's
-(``NUMBA_NUM_THREADS``, by default the cores), at most the cores this process may run on;
-batches of fewer than :data:`THREADS_MIN_PATHS` paths stay on the calling thread.
+``k mod T``), because path costs vary several-fold. The calling thread tracks its own share
+while a pool's threads track the others; the pool is made on first use in each process (a
+forked child, such as a sweep's or Dask's worker, makes its own: a parent's pool threads do
+not exist there). The number of threads is numba's (``NUMBA_NUM_THREADS``, by default the
+cores), at most the cores this process may run on and half the paths; batches of fewer than
+:data:`THREADS_MIN_PATHS` paths stay on the calling thread.
 """
 
 from __future__ import annotations
@@ -14,12 +15,27 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 THREADS_MIN_PATHS = 4
-"""Fewest paths in a batch worth a second thread, two per thread (a thread's start and join cost
-about 0.05 ms, a path's tracking 0.1 to 0.5 ms)."""
+"""Fewest paths in a batch worth a second thread, two per thread (handing a share to a pool thread
+costs about 0.05 ms, a path's tracking 0.1 to 0.5 ms)."""
+
+_POOL: tuple[int, int, ThreadPoolExecutor] | None = None  # (process id, threads, pool)
+_POOL_LOCK = threading.Lock()
+
+
+def _pool(threads: int) -> ThreadPoolExecutor:
+    """The process's pool of at least ``threads`` threads (made again in a forked child)."""
+    global _POOL
+    with _POOL_LOCK:
+        if _POOL is None or _POOL[0] != os.getpid() or _POOL[1] < threads:
+            if _POOL is not None and _POOL[0] == os.getpid():  # too small: its threads end when idle
+                _POOL[2].shutdown(wait=False)
+            _POOL = (os.getpid(), threads, ThreadPoolExecutor(threads, thread_name_prefix="plm-pin-paths"))
+        return _POOL[2]
 
 
 def path_threads(n_paths: int) -> int:
@@ -52,12 +68,11 @@ def over_threads(
         except BaseException as error:  # raised again on the calling thread
             parts[i] = error
 
-    others = [threading.Thread(target=run, args=(i,), daemon=True) for i in range(1, k)]
-    for t in others:
-        t.start()
+    pool = _pool(k - 1)
+    others = [pool.submit(run, i) for i in range(1, k)]
     run(0)
-    for t in others:
-        t.join()
+    for future in others:
+        future.result()
     for part in parts:
         if isinstance(part, BaseException):
             raise part

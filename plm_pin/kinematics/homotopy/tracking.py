@@ -305,17 +305,21 @@ def track_all(
 
 
 @njit(cache=True)
-def systems_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, args: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """The square system at every row of ``X`` (N, n): F (N, n) and F_x (N, n, n), in one compiled call."""
+def ends_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, args: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The square system at every row of ``X`` (N, n): F (N, n) and the condition number of F_x (N,).
+
+    In one compiled call; the condition number (2-norm, by an SVD) is infinite where F_x is not finite.
+    """
     N, n = X.shape
     ws = workspace_for(n, p.shape[0], args)
     Fs = np.empty((N, n), dtype=np.complex128)
-    Js = np.empty((N, n, n), dtype=np.complex128)
+    conds = np.empty(N)
     for k in range(N):
         F, J = system(X[k], p, b, ws, *args)
         Fs[k] = F
-        Js[k] = J[:, :n]
-    return Fs, Js
+        Jx = np.ascontiguousarray(J[:, :n])
+        conds[k] = np.linalg.cond(Jx) if np.all(np.isfinite(Jx)) else np.inf
+    return Fs, conds
 
 
 @njit(cache=True)

@@ -6,6 +6,8 @@ calling thread alone (paths are independent: the split must not change a bit).
 
 from __future__ import annotations
 
+import multiprocessing
+
 import numpy as np
 import pytest
 from numba import config
@@ -57,3 +59,17 @@ def test_threaded_paths_equal_one_thread(two_threads):
     alone = track_all(gen.x, *args)
     for a, b in zip(threaded, alone, strict=True):
         assert np.array_equal(a, b)
+
+
+def _shares(_: int) -> list[float]:
+    """A child's over_threads result (module level, so a process pool can run it)."""
+    X = np.arange(40.0).reshape(40, 1)
+    return over_threads(lambda A: (2.0 * A,), (X,))[0].ravel().tolist()
+
+
+def test_a_forked_child_tracks_after_its_parent_did(two_threads):
+    """The parent's pool threads do not exist in a forked child: the child makes its own pool (no hang)."""
+    over_threads(lambda A: (A,), (np.zeros((40, 1)),))  # the parent's pool exists now
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        got = pool.apply_async(_shares, (0,)).get(timeout=60)
+    assert got == (2.0 * np.arange(40.0)).tolist()
