@@ -107,6 +107,15 @@ def _fma2(lo: float, hi: float, alo: float, ahi: float, blo: float, bhi: float) 
 
 
 @njit(cache=True)
+def _pfma2(lo: float, hi: float, y: float, blo: float, bhi: float) -> tuple[float, float]:
+    """:func:`_fma2` by the point ``y``: of the four products two pairs are equal, so two are taken."""
+    if y == 0.0 or (blo == 0.0 and bhi == 0.0):
+        return lo, hi
+    p, q = y * blo, y * bhi
+    return _dn(lo + _dn(min(p, q))), _up(hi + _up(max(p, q)))
+
+
+@njit(cache=True)
 def _matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """Interval matrix product, A (m, k, 2), B (k, n, 2) (a new array; the kernels below use buffers)."""
     m, k, n = A.shape[0], A.shape[1], B.shape[1]
@@ -142,6 +151,40 @@ def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: i
 
 
 @njit(cache=True)
+def _mm_point_left(P: np.ndarray, p: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
+    """``out[o] = P[p] B[b]`` for a stack ``P`` of exact (float) 4 x 4 matrices, as :func:`_mm_into`."""
+    for i in range(4):
+        l0, h0, l1, h1, l2, h2, l3, h3 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        for r in range(4):
+            y = P[p, i, r]
+            if y == 0.0:
+                continue
+            l0, h0 = _pfma2(l0, h0, y, B[b, r, 0, 0], B[b, r, 0, 1])
+            l1, h1 = _pfma2(l1, h1, y, B[b, r, 1, 0], B[b, r, 1, 1])
+            l2, h2 = _pfma2(l2, h2, y, B[b, r, 2, 0], B[b, r, 2, 1])
+            l3, h3 = _pfma2(l3, h3, y, B[b, r, 3, 0], B[b, r, 3, 1])
+        out[o, i, 0, 0], out[o, i, 0, 1], out[o, i, 1, 0], out[o, i, 1, 1] = l0, h0, l1, h1
+        out[o, i, 2, 0], out[o, i, 2, 1], out[o, i, 3, 0], out[o, i, 3, 1] = l2, h2, l3, h3
+
+
+@njit(cache=True)
+def _mm_point_right(A: np.ndarray, a: int, P: np.ndarray, p: int, out: np.ndarray, o: int) -> None:
+    """``out[o] = A[a] P[p]`` for a stack ``P`` of exact (float) 4 x 4 matrices, as :func:`_mm_into`."""
+    for i in range(4):
+        l0, h0, l1, h1, l2, h2, l3, h3 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        for r in range(4):
+            alo, ahi = A[a, i, r, 0], A[a, i, r, 1]
+            if alo == 0.0 and ahi == 0.0:
+                continue
+            l0, h0 = _pfma2(l0, h0, P[p, r, 0], alo, ahi)
+            l1, h1 = _pfma2(l1, h1, P[p, r, 1], alo, ahi)
+            l2, h2 = _pfma2(l2, h2, P[p, r, 2], alo, ahi)
+            l3, h3 = _pfma2(l3, h3, P[p, r, 3], alo, ahi)
+        out[o, i, 0, 0], out[o, i, 0, 1], out[o, i, 1, 0], out[o, i, 1, 1] = l0, h0, l1, h1
+        out[o, i, 2, 0], out[o, i, 2, 1], out[o, i, 3, 0], out[o, i, 3, 1] = l2, h2, l3, h3
+
+
+@njit(cache=True)
 def _mv_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
     """``out[o, :, 3] = A[a] B[b, :, 3]``: the last column alone (a point carried by a transform)."""
     l0, h0, l1, h1, l2, h2, l3, h3 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -171,23 +214,21 @@ def _local(
 ) -> None:
     """Interval local transform of joint ``i`` from the intervals ``v[o:]`` into ``X[i]``.
 
-    Its derivatives go into ``dX[7 i:]``; ``K2`` (3, 3, 2) is scratch for a revolute joint's
-    :math:`K^2`.
+    Its derivatives go into ``dX[o:]`` (the joint's unknowns); ``K2[i]`` is a revolute joint's
+    :math:`K^2` (:func:`workspace`).
     """
-    d = 7 * i
+    d = o  # the joint's first unknown: its derivatives' slot (unused by parameters)
     for r in range(4):
         for k in range(4):
             X[i, r, k, 0] = X[i, r, k, 1] = 0.0
     X[i, 3, 3, 0] = X[i, 3, 3, 1] = 1.0
     if kind == REVOLUTE or kind == REVOLUTE_PARAM:
-        # K = [axis]_x (exact), K^2 as an interval product
         for r in range(3):
             for k in range(3):
                 lo, hi = 0.0, 0.0
                 for t in range(3):
-                    a = _skew_entry(axis, i, r, t)
                     b = _skew_entry(axis, i, t, k)
-                    lo, hi = _fma2(lo, hi, a, a, b, b)
+                    lo, hi = _pfma2(lo, hi, _skew_entry(axis, i, r, t), b, b)
                 K2[r, k, 0], K2[r, k, 1] = lo, hi
         clo, chi, slo, shi = v[o, 0], v[o, 1], v[o + 1, 0], v[o + 1, 1]
         omlo, omhi = _dn(1.0 - chi), _up(1.0 - clo)
@@ -330,6 +371,11 @@ def _skew_entry(axis: np.ndarray, i: int, r: int, k: int) -> float:
     return -axis[i, 1] if k == 0 else axis[i, 0]
 
 
+# the buffers of a workspace, by position
+_NCOORD, _X, _DX, _T, _A, _MX, _ADX, _TF, _DTF, _POINT, _S, _E, _K2 = range(13)
+_DE3, _ENT, _DENT, _F, _J, _XI, _FX, _JMID, _LU, _PIV, _Y, _ROW, _D = range(13, 26)
+
+
 @njit(cache=True)
 def workspace(n: int, args: tuple) -> tuple:
     """The buffers of :func:`interval_system` and the Krawczyk test, allocated once per certificate.
@@ -337,7 +383,7 @@ def workspace(n: int, args: tuple) -> tuple:
     Also the static structure: the number of coordinates of each joint and which closure frames
     are read only at their origin (point and distance closures).
     """
-    kind, placement, frame_joint = args[1], args[4], args[6]
+    kind, frame_joint = args[1], args[6]
     closure_kind, closure_frames, combination = args[8], args[9], args[13]
     k, nf, m = kind.shape[0], frame_joint.shape[0], combination.shape[1]
     ncoord = np.zeros(k, dtype=np.int64)
@@ -356,37 +402,79 @@ def workspace(n: int, args: tuple) -> tuple:
         if closure_kind[c] == 1 or closure_kind[c] == 2:
             point[closure_frames[c, 0]] = False
             point[closure_frames[c, 1]] = False
-    M = np.empty((k, 4, 4, 2))
-    for i in range(k):
-        for r in range(4):
-            for q in range(4):
-                M[i, r, q, 0] = M[i, r, q, 1] = placement[i, r, q]
+    # one allocation, carved into the buffers (all written before read but dTf)
+    q = 4 * 4 * 2  # one interval 4 x 4 matrix
+    size = (4 * k + 2 * n + nf + nf * n + 2) * q + 3 * 18 + 2 * m + 2 * m * n + 10 * n + 2 * n * n + 3 * n * n
+    buf = np.empty(size)
+    o = 0
+    # (a reshape costs more than an index: the buffers of one shape are carved as one stack)
+    stack = buf[o : o + 4 * k * q].reshape((4, k, 4, 4, 2))
+    X = stack[0]  # local transforms
+    T = stack[1]  # world transform after the joint
+    A = stack[2]  # world transform of the joint frame before X_j
+    MX = stack[3]  # M_j X_j, shared by the frames below joint j
+    o += 4 * k * q
+    stack = buf[o : o + 2 * n * q].reshape((2, n, 4, 4, 2))
+    dX = stack[0]  # derivatives of X_j, at the joint's unknowns
+    AdX = stack[1]  # A_j dX_j, shared likewise
+    o += 2 * n * q
+    Tf = buf[o : o + nf * q].reshape((nf, 4, 4, 2))  # closure frames
+    o += nf * q
+    dTf = buf[o : o + nf * n * q].reshape((nf * n, 4, 4, 2))  # their derivatives, n per frame
+    dTf[:] = 0.0  # zero off the frame's path
+    o += nf * n * q
+    S = buf[o : o + 2 * q].reshape((2, 4, 4, 2))  # suffix products (two slots)
+    o += 2 * q
+    small = buf[o : o + 54].reshape((3, 3, 3, 2))
+    E = small[0]  # R_A^T R_B
+    dE = small[1]  # a derivative of E
+    K2 = small[2]  # K^2 of a revolute joint
+    o += 54
+    e = buf[o : o + 2 * m].reshape((m, 2))  # closure entries
+    o += 2 * m
+    de = buf[o : o + 2 * m * n].reshape((m, n, 2))  # their derivatives
+    o += 2 * m * n
+    vectors = buf[o : o + 10 * n].reshape((5, n, 2))
+    F = vectors[0]
+    xi = vectors[1]  # the box (or the point) evaluated
+    Fx = vectors[2]  # F at the point, kept for the Krawczyk test
+    row = vectors[3]  # a row of Y F_x(X)
+    D = vectors[4]  # X - x
+    o += 10 * n
+    J = buf[o : o + 2 * n * n].reshape((n, n, 2))  # F_x
+    o += 2 * n * n
+    squares = buf[o : o + 3 * n * n].reshape((3, n, n))
+    Jmid = squares[0]  # the midpoint Jacobian
+    LU = squares[1]  # its LU factors
+    Y = squares[2]  # its inverse
+    piv = np.empty(n, dtype=np.int64)  # the row pivots
     return (
         ncoord,
-        M,  # joint placements, as degenerate intervals
-        np.zeros((k, 4, 4, 2)),  # X: local transforms
-        np.zeros((7 * k, 4, 4, 2)),  # dX: their derivatives, 7 per joint
-        np.zeros((k, 4, 4, 2)),  # T: world transform after the joint
-        np.zeros((k, 4, 4, 2)),  # A: world transform of the joint frame before X_j
-        np.zeros((k, 4, 4, 2)),  # MX: M_j X_j, shared by the frames below joint j
-        np.zeros((7 * k, 4, 4, 2)),  # AdX: A_j dX_j, likewise
-        np.zeros((nf, 4, 4, 2)),  # Tf: closure frames
-        np.zeros((nf * n, 4, 4, 2)),  # dTf: their derivatives, n per frame (zero off the path)
+        X,
+        dX,
+        T,
+        A,
+        MX,
+        AdX,
+        Tf,
+        dTf,
         point,
-        np.zeros((2, 4, 4, 2)),  # S: suffix products (two slots)
-        np.zeros((3, 3, 2)),  # E = R_A^T R_B
-        np.zeros((3, 3, 2)),  # K^2 of a revolute joint
-        np.zeros((3, 3, 2)),  # dE
-        np.zeros((m, 2)),  # e
-        np.zeros((m, n, 2)),  # de
-        np.zeros((n, 2)),  # F
-        np.zeros((n, n, 2)),  # F_x
-        np.zeros((n, 2)),  # the box (or the point) evaluated
-        np.zeros((n, 2)),  # F at the point, kept for the Krawczyk test
-        np.zeros((n, n)),  # the midpoint Jacobian
-        np.zeros((n, n)),  # its LU factors
-        np.zeros(n, dtype=np.int64),  # their row pivots
-        np.zeros((n, n)),  # Y, the inverse
+        S,
+        E,
+        K2,
+        dE,
+        e,
+        de,
+        F,
+        J,
+        xi,
+        Fx,
+        Jmid,
+        LU,
+        piv,
+        Y,
+        row,
+        D,
     )
 
 
@@ -395,6 +483,7 @@ def _system_into(
     xi: np.ndarray,
     pi: np.ndarray,
     ws: tuple,
+    values: bool,
     parent: np.ndarray,
     kind: np.ndarray,
     offset: np.ndarray,
@@ -412,12 +501,15 @@ def _system_into(
     unit_offsets: np.ndarray,
     unit_sizes: np.ndarray,
 ) -> None:
-    """:func:`interval_system` into the buffers ``F`` and ``F_x`` of ``ws`` (:func:`workspace`)."""
+    """:func:`interval_system` into the buffers ``F`` and ``F_x`` of ``ws`` (:func:`workspace`).
+
+    Without ``values``, ``F_x`` alone (``F`` is left unset).
+    """
     n = xi.shape[0]
-    _joints(xi, pi.reshape(-1, 2), ws, parent, kind, offset, axis, fixed)
+    _joints(xi, pi.reshape(-1, 2), ws, parent, kind, offset, axis, placement, fixed)
     _frames(n, ws, parent, offset, frame_joint, frame_placement)
-    _closures(n, ws, closure_kind, closure_frames, closure_axis, closure_length2, entry_offset)
-    _combine(xi, ws, combination, unit_offsets, unit_sizes)
+    _closures(n, ws, closure_kind, closure_frames, closure_axis, closure_length2, entry_offset, values)
+    _combine(xi, ws, combination, unit_offsets, unit_sizes, values)
 
 
 @njit(cache=True)
@@ -429,28 +521,40 @@ def _joints(
     kind: np.ndarray,
     offset: np.ndarray,
     axis: np.ndarray,
+    placement: np.ndarray,
     fixed: np.ndarray,
 ) -> None:
     """Each joint's local transform and derivatives, its world transform and the products below it.
 
     ``pflat``: the parameters' intervals, parameter o's at rows 2 o and 2 o + 1.
     """
-    ncoord, M, X, dX, T, A, MX, AdX, K2 = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5], ws[6], ws[7], ws[13]
+    ncoord, X, dX, T, A, MX, AdX, K2 = (
+        ws[_NCOORD],
+        ws[_X],
+        ws[_DX],
+        ws[_T],
+        ws[_A],
+        ws[_MX],
+        ws[_ADX],
+        ws[_K2],
+    )
     for i in range(kind.shape[0]):
         kd = kind[i]
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
             _local(kd, axis, fixed, i, pflat, 2 * offset[i], X, dX, K2)
         else:
             _local(kd, axis, fixed, i, xi, offset[i], X, dX, K2)
-        _mm_into(M, i, X, i, MX, i)
+        _mm_point_left(placement, i, X, i, MX, i)
         if parent[i] >= 0:
-            _mm_into(T, parent[i], M, i, A, i)
+            _mm_point_right(T, parent[i], placement, i, A, i)
             _mm_into(A, i, X, i, T, i)
         else:  # on the world: A = M, T = M X
-            _copy_into(M, i, A, i)
+            for r in range(4):
+                for q in range(4):
+                    A[i, r, q, 0] = A[i, r, q, 1] = placement[i, r, q]
             _copy_into(MX, i, T, i)
         for c in range(ncoord[i]):
-            _mm_into(A, i, dX, 7 * i + c, AdX, 7 * i + c)
+            _mm_into(A, i, dX, offset[i] + c, AdX, offset[i] + c)
 
 
 @njit(cache=True)
@@ -463,7 +567,16 @@ def _frames(
     frame_placement: np.ndarray,
 ) -> None:
     """Each closure frame's transform ``Tf`` and its derivatives ``dTf`` along the unknowns."""
-    ncoord, T, MX, AdX, Tf, dTf, point, S = ws[0], ws[4], ws[6], ws[7], ws[8], ws[9], ws[10], ws[11]
+    ncoord, T, MX, AdX, Tf, dTf, point, S = (
+        ws[_NCOORD],
+        ws[_T],
+        ws[_MX],
+        ws[_ADX],
+        ws[_TF],
+        ws[_DTF],
+        ws[_POINT],
+        ws[_S],
+    )
     for f in range(frame_joint.shape[0]):
         for r in range(4):
             for q in range(4):
@@ -477,7 +590,9 @@ def _frames(
                     Tf[f, r, 3, 0], Tf[f, r, 3, 1] = S[0, r, 3, 0], S[0, r, 3, 1]
             while i >= 0:
                 for c in range(ncoord[i]):
-                    _mv_into(AdX, 7 * i + c, S, 0, dTf, f * n + offset[i] + c)
+                    _mv_into(AdX, offset[i] + c, S, 0, dTf, f * n + offset[i] + c)
+                if parent[i] < 0:
+                    break  # (no joint above to carry the suffix to)
                 _mv_into(MX, i, S, 0, S, 1)
                 for r in range(4):
                     S[0, r, 3, 0], S[0, r, 3, 1] = S[1, r, 3, 0], S[1, r, 3, 1]
@@ -489,7 +604,9 @@ def _frames(
             _copy_into(S, 0, Tf, f)
         while i >= 0:
             for c in range(ncoord[i]):
-                _mm_into(AdX, 7 * i + c, S, 0, dTf, f * n + offset[i] + c)
+                _mm_into(AdX, offset[i] + c, S, 0, dTf, f * n + offset[i] + c)
+            if parent[i] < 0:
+                break
             _mm_into(MX, i, S, 0, S, 1)
             _copy_into(S, 1, S, 0)
             i = parent[i]
@@ -504,9 +621,10 @@ def _closures(
     closure_axis: np.ndarray,
     closure_length2: np.ndarray,
     entry_offset: np.ndarray,
+    values: bool,
 ) -> None:
-    """The closure entries ``e`` and their derivatives ``de`` from the frames."""
-    Tf, dTf, E, dE, e, de = ws[8], ws[9], ws[12], ws[14], ws[15], ws[16]
+    """The closure entries ``e`` (unless not ``values``) and their derivatives ``de`` from the frames."""
+    Tf, dTf, E, dE, e, de = ws[_TF], ws[_DTF], ws[_E], ws[_DE3], ws[_ENT], ws[_DENT]
     for c in range(closure_kind.shape[0]):
         a, b, o = closure_frames[c, 0], closure_frames[c, 1], entry_offset[c]
         if closure_kind[c] == 3:  # |p_B - p_A|^2 - L^2, L^2 = |p_L|^2 for an actuated strut L
@@ -544,7 +662,9 @@ def _closures(
                 for t in range(3):
                     lo, hi = _fma2(lo, hi, Tf[a, t, r, 0], Tf[a, t, r, 1], Tf[b, t, s, 0], Tf[b, t, s, 1])
                 E[r, s, 0], E[r, s, 1] = lo, hi
-        if closure_kind[c] == 1:
+        if not values:
+            pass
+        elif closure_kind[c] == 1:
             for r in range(3):
                 for s in range(3):
                     lo, hi = E[r, s, 0], E[r, s, 1]
@@ -582,10 +702,15 @@ def _closures(
 
 @njit(cache=True)
 def _combine(
-    xi: np.ndarray, ws: tuple, combination: np.ndarray, unit_offsets: np.ndarray, unit_sizes: np.ndarray
+    xi: np.ndarray,
+    ws: tuple,
+    combination: np.ndarray,
+    unit_offsets: np.ndarray,
+    unit_sizes: np.ndarray,
+    values: bool,
 ) -> None:
-    """The unit equations and the random combination of the entries: ``F`` and ``F_x``."""
-    e, de, F, J = ws[15], ws[16], ws[17], ws[18]
+    """The unit equations and the random combination of the entries: ``F`` (if ``values``) and ``F_x``."""
+    e, de, F, J = ws[_ENT], ws[_DENT], ws[_F], ws[_J]
     n = xi.shape[0]
     nu, m = unit_offsets.shape[0], e.shape[0]
     for q in range(nu):
@@ -595,25 +720,31 @@ def _combine(
         lo, hi = -1.0, -1.0
         for r in range(unit_sizes[q]):
             xl, xh = xi[o + r, 0], xi[o + r, 1]
+            J[q, o + r, 0], J[q, o + r, 1] = 2.0 * xl, 2.0 * xh
+            if not values:
+                continue
             l2, h2 = xl * xl, xh * xh  # the square of an interval (tighter than a product)
             if xl <= 0.0 <= xh:
                 lo, hi = _add2(lo, hi, 0.0, _up(max(l2, h2)))
             else:
                 lo, hi = _add2(lo, hi, _dn(min(l2, h2)), _up(max(l2, h2)))
-            J[q, o + r, 0], J[q, o + r, 1] = 2.0 * xl, 2.0 * xh
         F[q, 0], F[q, 1] = lo, hi
     for i in range(n - nu):
-        lo, hi = 0.0, 0.0
-        for r in range(m):
-            w = combination[i, r]
-            lo, hi = _fma2(lo, hi, w, w, e[r, 0], e[r, 1])
-        F[nu + i, 0], F[nu + i, 1] = lo, hi
-        for j in range(n):
+        if values:
             lo, hi = 0.0, 0.0
             for r in range(m):
-                w = combination[i, r]
-                lo, hi = _fma2(lo, hi, w, w, de[r, j, 0], de[r, j, 1])
-            J[nu + i, j, 0], J[nu + i, j, 1] = lo, hi
+                lo, hi = _pfma2(lo, hi, combination[i, r], e[r, 0], e[r, 1])
+            F[nu + i, 0], F[nu + i, 1] = lo, hi
+        for j in range(n):
+            J[nu + i, j, 0] = J[nu + i, j, 1] = 0.0
+        for r in range(m):  # the row's n sums side by side
+            w = combination[i, r]
+            if w == 0.0:
+                continue
+            for j in range(n):
+                J[nu + i, j, 0], J[nu + i, j, 1] = _pfma2(
+                    J[nu + i, j, 0], J[nu + i, j, 1], w, de[r, j, 0], de[r, j, 1]
+                )
 
 
 @njit(cache=True)
@@ -621,8 +752,7 @@ def _axis_product(E: np.ndarray, r: int, closure_axis: np.ndarray, c: int) -> tu
     """Row ``r`` of the interval matrix ``E`` (3, 3, 2) times the exact axis ``closure_axis[c]``."""
     lo, hi = 0.0, 0.0
     for s in range(3):
-        u = closure_axis[c, s]
-        lo, hi = _fma2(lo, hi, E[r, s, 0], E[r, s, 1], u, u)
+        lo, hi = _pfma2(lo, hi, closure_axis[c, s], E[r, s, 0], E[r, s, 1])
     return lo, hi
 
 
@@ -680,8 +810,8 @@ def interval_system(
         unit_sizes,
     )
     ws = workspace(xi.shape[0], args)
-    _system_into(xi, pi, ws, *args)
-    return ws[17], ws[18]
+    _system_into(xi, pi, ws, True, *args)
+    return ws[_F], ws[_J]
 
 
 @njit(cache=True)
@@ -712,23 +842,30 @@ def _inverse(A: np.ndarray, LU: np.ndarray, piv: np.ndarray, Y: np.ndarray) -> b
             if f != 0.0:
                 for j in range(kk + 1, n):
                     LU[i, j] -= f * LU[kk, j]
-    for c in range(n):  # column c of the inverse: L U y = P e_c
-        for i in range(n):
-            Y[i, c] = 1.0 if i == c else 0.0
-        for kk in range(n):
-            p = piv[kk]
-            if p != kk:
-                Y[kk, c], Y[p, c] = Y[p, c], Y[kk, c]
-        for i in range(n):
-            acc = Y[i, c]
-            for j in range(i):
-                acc -= LU[i, j] * Y[j, c]
-            Y[i, c] = acc
-        for i in range(n - 1, -1, -1):
-            acc = Y[i, c]
-            for j in range(i + 1, n):
-                acc -= LU[i, j] * Y[j, c]
-            Y[i, c] = acc / LU[i, i]
+    # Y = U^-1 L^-1 P, by row operations on the rows of P
+    for i in range(n):
+        for j in range(n):
+            Y[i, j] = 1.0 if i == j else 0.0
+    for kk in range(n):
+        p = piv[kk]
+        if p != kk:
+            for j in range(n):
+                Y[kk, j], Y[p, j] = Y[p, j], Y[kk, j]
+    for i in range(1, n):
+        for t in range(i):
+            f = LU[i, t]
+            if f != 0.0:
+                for j in range(n):
+                    Y[i, j] -= f * Y[t, j]
+    for i in range(n - 1, -1, -1):
+        for t in range(i + 1, n):
+            f = LU[i, t]
+            if f != 0.0:
+                for j in range(n):
+                    Y[i, j] -= f * Y[t, j]
+        d = LU[i, i]
+        for j in range(n):
+            Y[i, j] /= d
     return True
 
 
@@ -748,16 +885,16 @@ def _midpoint_inverse(
 def _newton_size(x: np.ndarray, pi: np.ndarray, args: tuple, ws: tuple) -> float:
     """:func:`newton_size` in the buffers of ``ws``; F at ``x`` is left in its ``Fx``."""
     n = x.shape[0]
-    xi, Fx = ws[19], ws[20]
+    xi, Fx = ws[_XI], ws[_FX]
     for i in range(n):
         xi[i, 0] = xi[i, 1] = x[i]
-    _system_into(xi, pi, ws, *args)
-    F = ws[17]
+    _system_into(xi, pi, ws, True, *args)
+    F = ws[_F]
     for i in range(n):
         Fx[i, 0], Fx[i, 1] = F[i, 0], F[i, 1]
-    if not _midpoint_inverse(ws[18], ws[21], ws[22], ws[23], ws[24]):
+    if not _midpoint_inverse(ws[_J], ws[_JMID], ws[_LU], ws[_PIV], ws[_Y]):
         return np.inf
-    Jmid, Y = ws[21], ws[24]
+    Jmid, Y = ws[_JMID], ws[_Y]
     # numerically singular as numpy's matrix_rank has it (sigma_min <= n eps sigma_max), with the
     # 1-norm condition number (exact here, from the inverse) standing for the 2-norm one
     na, ny = 0.0, 0.0
@@ -792,37 +929,49 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> tuple[float, np.n
     """
     ws = workspace(x.shape[0], args)
     size = _newton_size(x, pi, args, ws)
-    return size, ws[20]
+    return size, ws[_FX]
 
 
 @njit(cache=True)
-def _krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.ndarray, ws: tuple) -> bool:
-    """:func:`krawczyk` in the buffers of ``ws`` (``Fx`` may be one of them: it is only read)."""
+def _krawczyk(
+    x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.ndarray, ws: tuple, midpoint: bool
+) -> bool:
+    r""":func:`krawczyk` in the buffers of ``ws`` (``Fx`` may be one of them: it is only read).
+
+    Y: the inverse of the midpoint of :math:`F_x(X)` if ``midpoint``, else the one in ``ws``
+    (:func:`_newton_size`'s, of :math:`F_x(\tilde x)`).
+    """
     n = x.shape[0]
-    box = ws[19]
+    box = ws[_XI]
     for i in range(n):
         r = radius * (1.0 + abs(x[i]))
         box[i, 0], box[i, 1] = _dn(x[i] - r), _up(x[i] + r)
-    _system_into(box, pi, ws, *args)
-    JX = ws[18]
-    if not _midpoint_inverse(JX, ws[21], ws[22], ws[23], ws[24]):
+    _system_into(box, pi, ws, False, *args)
+    JX = ws[_J]
+    if midpoint and not _midpoint_inverse(JX, ws[_JMID], ws[_LU], ws[_PIV], ws[_Y]):
         return False
-    Y = ws[24]
+    Y, row, d = ws[_Y], ws[_ROW], ws[_D]
+    for j in range(n):
+        d[j, 0], d[j, 1] = _dn(box[j, 0] - x[j]), _up(box[j, 1] - x[j])  # X - x
     for i in range(n):
         # row i of K(X) = x - Y F(x) + (I - Y F_x(X)) (X - x)
         yl, yh = 0.0, 0.0
         for t in range(n):
-            yl, yh = _fma2(yl, yh, Y[i, t], Y[i, t], Fx[t, 0], Fx[t, 1])
+            yl, yh = _pfma2(yl, yh, Y[i, t], Fx[t, 0], Fx[t, 1])
+        for j in range(n):
+            row[j, 0] = row[j, 1] = 0.0
+        for t in range(n):  # row i of Y F_x(X), its n sums side by side
+            y = Y[i, t]
+            if y == 0.0:
+                continue
+            for j in range(n):
+                row[j, 0], row[j, 1] = _pfma2(row[j, 0], row[j, 1], y, JX[t, j, 0], JX[t, j, 1])
         ml, mh = 0.0, 0.0
         for j in range(n):
-            lo, hi = 0.0, 0.0
-            for t in range(n):
-                lo, hi = _fma2(lo, hi, Y[i, t], Y[i, t], JX[t, j, 0], JX[t, j, 1])
-            lo, hi = -hi, -lo
+            lo, hi = -row[j, 1], -row[j, 0]
             if i == j:
                 lo, hi = _add2(lo, hi, 1.0, 1.0)
-            dl, dh = _dn(box[j, 0] - x[j]), _up(box[j, 1] - x[j])
-            ml, mh = _fma2(ml, mh, lo, hi, dl, dh)
+            ml, mh = _fma2(ml, mh, lo, hi, d[j, 0], d[j, 1])
         lo = _dn(_dn(x[i] - yh) + ml)
         hi = _up(_up(x[i] - yl) + mh)
         if not (box[i, 0] < lo and hi < box[i, 1]):
@@ -838,19 +987,60 @@ def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.n
     Y is the inverse of the midpoint of the interval Jacobian (any matrix keeps the test
     rigorous); the test fails when that midpoint is singular.
     """
-    return _krawczyk(x, radius, pi, args, Fx, workspace(x.shape[0], args))
+    return _krawczyk(x, radius, pi, args, Fx, workspace(x.shape[0], args), True)
 
 
 @njit(cache=True)
-def _certify(x: np.ndarray, pi: np.ndarray, args: tuple, growth: tuple, largest: float) -> float:
-    """:func:`certify`'s radius in one compiled call with one workspace, or -1 when not certified."""
+def _certify(
+    x: np.ndarray,
+    pi: np.ndarray,
+    parent: np.ndarray,
+    kind: np.ndarray,
+    offset: np.ndarray,
+    axis: np.ndarray,
+    placement: np.ndarray,
+    fixed: np.ndarray,
+    frame_joint: np.ndarray,
+    frame_placement: np.ndarray,
+    closure_kind: np.ndarray,
+    closure_frames: np.ndarray,
+    closure_axis: np.ndarray,
+    closure_length2: np.ndarray,
+    entry_offset: np.ndarray,
+    combination: np.ndarray,
+    unit_offsets: np.ndarray,
+    unit_sizes: np.ndarray,
+) -> float:
+    r""":func:`certify`'s radius in one compiled call with one workspace, or -1 when not certified.
+
+    Y is the Newton step's inverse of :math:`F_x(\tilde x)`, for every box. The form's arrays come
+    one by one (a call with a tuple of arrays costs more to dispatch).
+    """
+    args = (
+        parent,
+        kind,
+        offset,
+        axis,
+        placement,
+        fixed,
+        frame_joint,
+        frame_placement,
+        closure_kind,
+        closure_frames,
+        closure_axis,
+        closure_length2,
+        entry_offset,
+        combination,
+        unit_offsets,
+        unit_sizes,
+    )
     ws = workspace(x.shape[0], args)
     size = max(_newton_size(x, pi, args, ws), _EPS)
-    for g in growth:
+    for g in BOX_GROWTH:
         radius = g * size
-        if not radius <= largest:
+        if not radius <= HOMOTOPY_MAX_BOX_RTOL:
             break
-        if _krawczyk(x, radius, pi, args, ws[20], ws):
+        if _krawczyk(x, radius, pi, args, ws[_FX], ws, False):
             return radius
     return -1.0
 
@@ -884,7 +1074,5 @@ def certify(
     if pi is None:
         pi = parameter_intervals(form, actuators)
     x = np.ascontiguousarray(x, dtype=float)
-    radius = _certify(
-        x, np.ascontiguousarray(pi, dtype=float), form.kernel_args(), BOX_GROWTH, HOMOTOPY_MAX_BOX_RTOL
-    )
+    radius = _certify(x, np.ascontiguousarray(pi, dtype=float), *form.kernel_args())
     return None if radius < 0.0 else radius
