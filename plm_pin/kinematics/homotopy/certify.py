@@ -19,13 +19,25 @@ an actuated angle are widened by two ulps on each side (libm's error is below on
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from llvmlite import ir
 from numba import njit, types
+from numba.core.typing.templates import Signature
 from numba.extending import intrinsic
 
 from ...tolerances import HOMOTOPY_MAX_BOX_RTOL
-from .form import FREE_FLYER, PRISMATIC, PRISMATIC_PARAM, REVOLUTE, REVOLUTE_PARAM, SPHERICAL, PolynomialForm
+from .form import (
+    FIXED,
+    FREE_FLYER,
+    PRISMATIC,
+    PRISMATIC_PARAM,
+    REVOLUTE,
+    REVOLUTE_PARAM,
+    SPHERICAL,
+    PolynomialForm,
+)
 
 BOX_GROWTH = (4.0, 64.0, 1024.0)
 """Half-widths of the boxes tried, in order, as multiples of the Newton enclosure's size."""
@@ -39,20 +51,24 @@ _NEG_INF = int(np.array(-np.inf).view(np.int64))
 
 
 @intrinsic
-def _bits(typingctx, v):
+def _bits(typingctx: object, v: types.Type) -> tuple[Signature, Callable[..., ir.Value]]:
     """The IEEE 754 bits of a double as an int64 (a bit cast, no conversion)."""
 
-    def codegen(context, builder, signature, args):
+    def codegen(
+        context: object, builder: ir.IRBuilder, signature: Signature, args: list[ir.Value]
+    ) -> ir.Value:
         return builder.bitcast(args[0], ir.IntType(64))
 
     return types.int64(types.float64), codegen
 
 
 @intrinsic
-def _double(typingctx, b):
+def _double(typingctx: object, b: types.Type) -> tuple[Signature, Callable[..., ir.Value]]:
     """The double whose IEEE 754 bits are the int64 ``b``."""
 
-    def codegen(context, builder, signature, args):
+    def codegen(
+        context: object, builder: ir.IRBuilder, signature: Signature, args: list[ir.Value]
+    ) -> ir.Value:
         return builder.bitcast(args[0], ir.DoubleType())
 
     return types.float64(types.int64), codegen
@@ -66,7 +82,7 @@ def _up(v: float) -> float:
     successor is the least subnormal), the previous one for a negative double; -0 goes to the
     least subnormal and infinity stays (a NaN stays a NaN).
     """
-    b = _bits(v)
+    b: int = _bits(v)  # type: ignore[call-arg]
     if b == _NEG_ZERO:
         return _TINY
     if b == _POS_INF:
@@ -77,7 +93,7 @@ def _up(v: float) -> float:
 @njit(cache=True)
 def _dn(v: float) -> float:
     """``nextafter(v, -inf)``, bit for bit: the mirror image of :func:`_up`."""
-    b = _bits(v)
+    b: int = _bits(v)  # type: ignore[call-arg]
     if b == 0:
         return -_TINY
     if b == _NEG_INF:
@@ -129,7 +145,7 @@ def _matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a] B[b]`` for stacks of interval 4 x 4 matrices, shape (., 4, 4, 2).
 
@@ -150,7 +166,7 @@ def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: i
         out[o, i, 2, 0], out[o, i, 2, 1], out[o, i, 3, 0], out[o, i, 3, 1] = l2, h2, l3, h3
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mm_point_left(P: np.ndarray, p: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
     """``out[o] = P[p] B[b]`` for a stack ``P`` of exact (float) 4 x 4 matrices, as :func:`_mm_into`."""
     for i in range(4):
@@ -167,7 +183,7 @@ def _mm_point_left(P: np.ndarray, p: int, B: np.ndarray, b: int, out: np.ndarray
         out[o, i, 2, 0], out[o, i, 2, 1], out[o, i, 3, 0], out[o, i, 3, 1] = l2, h2, l3, h3
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mm_point_right(A: np.ndarray, a: int, P: np.ndarray, p: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a] P[p]`` for a stack ``P`` of exact (float) 4 x 4 matrices, as :func:`_mm_into`."""
     for i in range(4):
@@ -184,7 +200,7 @@ def _mm_point_right(A: np.ndarray, a: int, P: np.ndarray, p: int, out: np.ndarra
         out[o, i, 2, 0], out[o, i, 2, 1], out[o, i, 3, 0], out[o, i, 3, 1] = l2, h2, l3, h3
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mv_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
     """``out[o, :, 3] = A[a] B[b, :, 3]``: the last column alone (a point carried by a transform)."""
     l0, h0, l1, h1, l2, h2, l3, h3 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -200,7 +216,7 @@ def _mv_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: i
     out[o, 2, 3, 0], out[o, 2, 3, 1], out[o, 3, 3, 0], out[o, 3, 3, 1] = l2, h2, l3, h3
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _local(
     kind: int,
     axis: np.ndarray,
@@ -372,8 +388,8 @@ def _skew_entry(axis: np.ndarray, i: int, r: int, k: int) -> float:
 
 
 # the buffers of a workspace, by position
-_NCOORD, _X, _DX, _T, _A, _MX, _ADX, _TF, _DTF, _POINT, _S, _E, _K2 = range(13)
-_DE3, _ENT, _DENT, _F, _J, _XI, _FX, _JMID, _LU, _PIV, _Y, _ROW, _D = range(13, 26)
+_NCOORD, _STATIC, _X, _DX, _T, _A, _MX, _ADX, _TF, _DTF, _POINT, _S, _E, _K2 = range(14)
+_DE3, _ENT, _DENT, _F, _J, _XI, _FX, _JMID, _LU, _PIV, _Y, _ROW, _D = range(14, 27)
 
 
 @njit(cache=True)
@@ -383,7 +399,7 @@ def workspace(n: int, args: tuple) -> tuple:
     Also the static structure: the number of coordinates of each joint and which closure frames
     are read only at their origin (point and distance closures).
     """
-    kind, frame_joint = args[1], args[6]
+    parent, kind, frame_joint = args[0], args[1], args[6]
     closure_kind, closure_frames, combination = args[8], args[9], args[13]
     k, nf, m = kind.shape[0], frame_joint.shape[0], combination.shape[1]
     ncoord = np.zeros(k, dtype=np.int64)
@@ -397,7 +413,14 @@ def workspace(n: int, args: tuple) -> tuple:
             ncoord[i] = 4
         elif kd == FREE_FLYER:
             ncoord[i] = 7
-    point = np.ones(nf, dtype=np.bool_)
+    flags = np.ones(nf + k, dtype=np.bool_)
+    point = flags[:nf]
+    static = flags[nf:]  # X_j, M_j X_j, A_j, T_j depend on neither x nor (but for M_j X_j) the path
+    for i in range(k):
+        kd = kind[i]
+        static[i] = (kd == FIXED or kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM) and (
+            parent[i] < 0 or static[parent[i]]
+        )
     for c in range(closure_kind.shape[0]):
         if closure_kind[c] == 1 or closure_kind[c] == 2:
             point[closure_frames[c, 0]] = False
@@ -450,6 +473,7 @@ def workspace(n: int, args: tuple) -> tuple:
     piv = np.empty(n, dtype=np.int64)  # the row pivots
     return (
         ncoord,
+        static,
         X,
         dX,
         T,
@@ -478,41 +502,40 @@ def workspace(n: int, args: tuple) -> tuple:
     )
 
 
-@njit(cache=True)
-def _system_into(
-    xi: np.ndarray,
-    pi: np.ndarray,
-    ws: tuple,
-    values: bool,
-    parent: np.ndarray,
-    kind: np.ndarray,
-    offset: np.ndarray,
-    axis: np.ndarray,
-    placement: np.ndarray,
-    fixed: np.ndarray,
-    frame_joint: np.ndarray,
-    frame_placement: np.ndarray,
-    closure_kind: np.ndarray,
-    closure_frames: np.ndarray,
-    closure_axis: np.ndarray,
-    closure_length2: np.ndarray,
-    entry_offset: np.ndarray,
-    combination: np.ndarray,
-    unit_offsets: np.ndarray,
-    unit_sizes: np.ndarray,
-) -> None:
+@njit(cache=True, inline="always")
+def _system_into(xi: np.ndarray, pi: np.ndarray, ws: tuple, values: bool, again: bool, args: tuple) -> None:
     """:func:`interval_system` into the buffers ``F`` and ``F_x`` of ``ws`` (:func:`workspace`).
 
-    Without ``values``, ``F_x`` alone (``F`` is left unset).
+    ``args``: the form's arrays (:meth:`~.form.PolynomialForm.kernel_args`). Without ``values``,
+    ``F_x`` alone (``F`` is left unset); ``again``: ``ws`` holds a pass with the same parameters
+    (:func:`_joints`). Inlined in its callers: a call passes every buffer of ``ws``.
     """
+    (
+        parent,
+        kind,
+        offset,
+        axis,
+        placement,
+        fixed,
+        frame_joint,
+        frame_placement,
+        closure_kind,
+        closure_frames,
+        closure_axis,
+        closure_length2,
+        entry_offset,
+        combination,
+        unit_offsets,
+        unit_sizes,
+    ) = args
     n = xi.shape[0]
-    _joints(xi, pi.reshape(-1, 2), ws, parent, kind, offset, axis, placement, fixed)
+    _joints(xi, pi.reshape(-1, 2), ws, parent, kind, offset, axis, placement, fixed, again)
     _frames(n, ws, parent, offset, frame_joint, frame_placement)
     _closures(n, ws, closure_kind, closure_frames, closure_axis, closure_length2, entry_offset, values)
     _combine(xi, ws, combination, unit_offsets, unit_sizes, values)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _joints(
     xi: np.ndarray,
     pflat: np.ndarray,
@@ -523,13 +546,16 @@ def _joints(
     axis: np.ndarray,
     placement: np.ndarray,
     fixed: np.ndarray,
+    again: bool,
 ) -> None:
     """Each joint's local transform and derivatives, its world transform and the products below it.
 
-    ``pflat``: the parameters' intervals, parameter o's at rows 2 o and 2 o + 1.
+    ``pflat``: the parameters' intervals, parameter o's at rows 2 o and 2 o + 1. ``again``: ``ws``
+    holds a pass with the same parameters, whose transforms that do not depend on x are kept.
     """
-    ncoord, X, dX, T, A, MX, AdX, K2 = (
+    ncoord, static, X, dX, T, A, MX, AdX, K2 = (
         ws[_NCOORD],
+        ws[_STATIC],
         ws[_X],
         ws[_DX],
         ws[_T],
@@ -540,11 +566,15 @@ def _joints(
     )
     for i in range(kind.shape[0]):
         kd = kind[i]
+        if again and static[i]:
+            continue
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
-            _local(kd, axis, fixed, i, pflat, 2 * offset[i], X, dX, K2)
-        else:
+            if not again:
+                _local(kd, axis, fixed, i, pflat, 2 * offset[i], X, dX, K2)
+                _mm_point_left(placement, i, X, i, MX, i)
+        elif kd != FIXED or not again:
             _local(kd, axis, fixed, i, xi, offset[i], X, dX, K2)
-        _mm_point_left(placement, i, X, i, MX, i)
+            _mm_point_left(placement, i, X, i, MX, i)
         if parent[i] >= 0:
             _mm_point_right(T, parent[i], placement, i, A, i)
             _mm_into(A, i, X, i, T, i)
@@ -557,7 +587,7 @@ def _joints(
             _mm_into(A, i, dX, offset[i] + c, AdX, offset[i] + c)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _frames(
     n: int,
     ws: tuple,
@@ -612,7 +642,7 @@ def _frames(
             i = parent[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _closures(
     n: int,
     ws: tuple,
@@ -700,7 +730,7 @@ def _closures(
                     de[o + 3 + r, j, 0], de[o + 3 + r, j, 1] = _axis_product(dE, r, closure_axis, c)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _combine(
     xi: np.ndarray,
     ws: tuple,
@@ -756,7 +786,7 @@ def _axis_product(E: np.ndarray, r: int, closure_axis: np.ndarray, c: int) -> tu
     return lo, hi
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _copy_into(A: np.ndarray, a: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a]`` for stacks of interval 4 x 4 matrices."""
     for i in range(4):
@@ -810,7 +840,7 @@ def interval_system(
         unit_sizes,
     )
     ws = workspace(xi.shape[0], args)
-    _system_into(xi, pi, ws, True, *args)
+    _system_into(xi, pi, ws, True, False, args)
     return ws[_F], ws[_J]
 
 
@@ -888,7 +918,7 @@ def _newton_size(x: np.ndarray, pi: np.ndarray, args: tuple, ws: tuple) -> float
     xi, Fx = ws[_XI], ws[_FX]
     for i in range(n):
         xi[i, 0] = xi[i, 1] = x[i]
-    _system_into(xi, pi, ws, True, *args)
+    _system_into(xi, pi, ws, True, False, args)
     F = ws[_F]
     for i in range(n):
         Fx[i, 0], Fx[i, 1] = F[i, 0], F[i, 1]
@@ -934,21 +964,22 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> tuple[float, np.n
 
 @njit(cache=True)
 def _krawczyk(
-    x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.ndarray, ws: tuple, midpoint: bool
+    x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.ndarray, ws: tuple, reuse: bool
 ) -> bool:
     r""":func:`krawczyk` in the buffers of ``ws`` (``Fx`` may be one of them: it is only read).
 
-    Y: the inverse of the midpoint of :math:`F_x(X)` if ``midpoint``, else the one in ``ws``
-    (:func:`_newton_size`'s, of :math:`F_x(\tilde x)`).
+    ``reuse``: ``ws`` holds :func:`_newton_size`'s pass at ``x`` with the same ``pi``; Y is its
+    inverse of :math:`F_x(\tilde x)`, and the transforms that do not depend on x are kept.
+    Otherwise Y is the inverse of the midpoint of :math:`F_x(X)`.
     """
     n = x.shape[0]
     box = ws[_XI]
     for i in range(n):
         r = radius * (1.0 + abs(x[i]))
         box[i, 0], box[i, 1] = _dn(x[i] - r), _up(x[i] + r)
-    _system_into(box, pi, ws, False, *args)
+    _system_into(box, pi, ws, False, reuse, args)
     JX = ws[_J]
-    if midpoint and not _midpoint_inverse(JX, ws[_JMID], ws[_LU], ws[_PIV], ws[_Y]):
+    if not reuse and not _midpoint_inverse(JX, ws[_JMID], ws[_LU], ws[_PIV], ws[_Y]):
         return False
     Y, row, d = ws[_Y], ws[_ROW], ws[_D]
     for j in range(n):
@@ -987,7 +1018,7 @@ def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.n
     Y is the inverse of the midpoint of the interval Jacobian (any matrix keeps the test
     rigorous); the test fails when that midpoint is singular.
     """
-    return _krawczyk(x, radius, pi, args, Fx, workspace(x.shape[0], args), True)
+    return _krawczyk(x, radius, pi, args, Fx, workspace(x.shape[0], args), False)
 
 
 @njit(cache=True)
@@ -1040,7 +1071,7 @@ def _certify(
         radius = g * size
         if not radius <= HOMOTOPY_MAX_BOX_RTOL:
             break
-        if _krawczyk(x, radius, pi, args, ws[_FX], ws, False):
+        if _krawczyk(x, radius, pi, args, ws[_FX], ws, True):
             return radius
     return -1.0
 
