@@ -1,8 +1,8 @@
 """Polynomial form, compiled evaluation and interval certificates (plm_pin/kinematics/homotopy).
 
 Oracles: finite differences for the Jacobians, the closure residual of plm_pin.core for the
-entries, exact rational arithmetic for the interval enclosures, a shifted point for a
-Krawczyk test that must fail.
+entries, exact rational arithmetic for the interval enclosures, the complex evaluator for the
+interval system, a shifted point for a Krawczyk test that must fail.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from plm_pin.kinematics.homotopy import generic_solution, polynomial_form, prepared
-from plm_pin.kinematics.homotopy.certify import _matmul, certify
+from plm_pin.kinematics.homotopy.certify import _matmul, certify, interval_system, parameter_intervals
 from plm_pin.kinematics.homotopy.evaluation import evaluate
 from plm_pin.kinematics.homotopy.generic import solve_generic
 from plm_pin.kinematics.homotopy.polynomial import from_configuration, to_configuration
@@ -87,6 +87,34 @@ def test_krawczyk_certifies_a_root_and_refuses_a_shifted_point():
     c = mech.actuator_positions(mech.q_ref)
     assert certify(form, x, c) is not None
     assert certify(form, x + 1e-3, c) is None
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_interval_system_encloses_the_complex_evaluation(name):
+    """F and F_x over a box (or a point) hold the complex evaluator's values at its midpoint and inside it.
+
+    The interval system (plm_pin/kinematics/homotopy/certify.py) and the evaluator (evaluation.py) are
+    separate codes; boxes of half-widths 0 (a point), 1e-9 and 1e-4 about random real points and
+    parameters, the evaluator at the midpoint and at random points strictly inside.
+    """
+    form = polynomial_form(preset(name))
+    rng = np.random.default_rng(2)
+    args = form.kernel_args()
+    for _ in range(4):
+        x = rng.normal(size=form.n)
+        p = rng.normal(size=form.n_params)
+        pi = parameter_intervals(form, p)
+        for width in (0.0, 1e-9, 1e-4):
+            half = width * rng.uniform(0.5, 1.0, size=form.n)
+            box = np.stack([x - half, x + half], axis=-1)
+            F, J = interval_system(box, pi, *args)
+            assert np.all(F[:, 0] <= F[:, 1]) and np.all(J[..., 0] <= J[..., 1])
+            inside = [0.5 * (box[:, 0] + box[:, 1])]  # the float midpoint
+            inside += [x + half * rng.uniform(-0.5, 0.5, size=form.n) for _ in range(3)]
+            for y in inside:
+                Fy, Jy, _ = evaluate(form, y, p)
+                assert np.all(F[:, 0] <= Fy.real) and np.all(Fy.real <= F[:, 1])
+                assert np.all(J[..., 0] <= Jy.real) and np.all(Jy.real <= J[..., 1])
 
 
 def test_interval_products_enclose_the_exact_product():
