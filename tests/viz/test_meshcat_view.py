@@ -723,3 +723,26 @@ def test_a_spatial_mechanism_has_no_plane_normal():
     mech = plm_pin.load("zhao2011_8pss")
     assert plane_normal(mech) is None
     np.testing.assert_array_equal(_camera_direction(mech), CAMERA_DIRECTION)
+
+
+def test_static_scene_packer_writes_the_bytes_of_meshcats_own_umsgpack():
+    """The compiled packer of static scenes gives umsgpack's bytes for meshes, transforms and animations."""
+    umsgpack = pytest.importorskip("umsgpack")
+    from plm_pin.viz import meshcat_server
+
+    commands = []
+    send = meshcat_server.StaticWindow.send
+
+    def record(window, command):
+        commands.append(command.lower())
+        send(window, command)
+
+    mech = preset("harada2011_3d4m")
+    qs = np.array([mech.q_ref, mech.q_ref])
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(meshcat_server.StaticWindow, "send", record)
+        scene_html(mech, qs=qs, times=[0.0, 0.5])
+    assert any(c["type"] == "set_object" for c in commands)
+    assert any(c["type"] == "set_animation" for c in commands)
+    packb = meshcat_server.packer()
+    assert [packb(c) for c in commands] == [umsgpack.packb(c) for c in commands]
