@@ -355,15 +355,18 @@ def working_mode_from_data(
     A = structure_jacobian_from_data(model, data, closures, task, ik_rows)
     J_omega = data.J[3:]  # the world angular rows of the joint Jacobians, read once
     oMi = data.oMi
-    joints = model.joints
+    turned: dict[int, np.ndarray] = {}  # R^T of each root, read once (a leg's axes share their root)
     out = []
     for leg in legs:
         if not leg.square:
             continue
         M = A[leg.block]
-        for k, jid, root, axis in leg.axes:
-            world = J_omega[:, joints[jid].idx_v]
-            if float(np.dot(np.asarray(oMi[root].rotation.T @ world), axis)) < 0.0:
+        for k, _, root, axis in leg.axes:
+            R_T = turned.get(root)
+            if R_T is None:
+                R_T = turned[root] = oMi[root].rotation.T
+            world = J_omega[:, leg.columns[k]]  # the revolute's one velocity column (_axis_in's)
+            if float(np.dot(np.asarray(R_T @ world), axis)) < 0.0:
                 M[:, k] = -M[:, k]
         out.append(_determinant_sign(M, rtol))
     return tuple(out)
