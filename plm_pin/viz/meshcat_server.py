@@ -345,7 +345,7 @@ def packer() -> Callable[[Any], bytes]:
     try:
         msgpack = importlib.import_module("msgpack")
     except ImportError:
-        return umsgpack.packb  # type: ignore[no-any-return]
+        return umsgpack.packb
 
     def default(obj: Any) -> Any:
         if isinstance(obj, umsgpack.Ext):
