@@ -126,17 +126,25 @@ def platform_rows(task: Task) -> list[int]:
 
 
 def structure_jacobian_from_data(
-    model: pin.Model, data: pin.Data, closures: Sequence[_closures.Closure], task: Task
+    model: pin.Model,
+    data: pin.Data,
+    closures: Sequence[_closures.Closure],
+    task: Task,
+    ik_rows: np.ndarray | None = None,
 ) -> np.ndarray:
     """``[J_phi; J_x; J_rest]``: :func:`ik_jacobian_from_data` and the platform's other twist rows.
 
     Shape (m + 6, nv); ``J_rest`` holds the task frame's twist rows the task leaves out, so
     that the whole platform is pinned. A joint task has no platform: shape (m + n_task, nv).
+    ``ik_rows``: ``[J_phi; J_x]`` already computed from this ``data``, copied instead of recomputed.
     """
     m = _closures.closure_rows(closures)
     rest = platform_rows(task)
     A = np.empty((m + task.size + len(rest), model.nv))
-    ik_jacobian_from_data(model, data, closures, task, A[: m + task.size])
+    if ik_rows is None:
+        ik_jacobian_from_data(model, data, closures, task, A[: m + task.size])
+    else:
+        A[: m + task.size] = ik_rows
     if isinstance(task, FrameTask):
         A[m + task.size :] = pin.getFrameJacobian(model, data, task.frame_id, _LWA)[rest]
     return A
@@ -335,21 +343,30 @@ def working_mode_from_data(
     task: Task,
     legs: Sequence[Leg],
     rtol: float = LEG_SINGULAR_RTOL,
+    ik_rows: np.ndarray | None = None,
 ) -> tuple[int, ...]:
     """Working mode from joint Jacobians and placements already in ``data``.
 
     The structure Jacobian, with each passive revolute column turned to keep its axis on
     the side of its generic axis (seen from the body its chain hangs from), then the signs
-    of :func:`working_mode_from_jacobian`.
+    of :func:`working_mode_from_jacobian`. ``ik_rows``: ``[J_phi; J_x]`` already computed
+    from this ``data`` (see :func:`structure_jacobian_from_data`).
     """
-    A = structure_jacobian_from_data(model, data, closures, task)
+    A = structure_jacobian_from_data(model, data, closures, task, ik_rows)
+    J_omega = data.J[3:]  # the world angular rows of the joint Jacobians, read once
+    oMi = data.oMi
+    turned: dict[int, np.ndarray] = {}  # R^T of each root, read once (a leg's axes share their root)
     out = []
     for leg in legs:
         if not leg.square:
             continue
         M = A[leg.block]
-        for k, jid, root, axis in leg.axes:
-            if float(np.dot(_axis_in(model, data, jid, root), axis)) < 0.0:
+        for k, _, root, axis in leg.axes:
+            R_T = turned.get(root)
+            if R_T is None:
+                R_T = turned[root] = oMi[root].rotation.T
+            world = J_omega[:, leg.columns[k]]  # the revolute's one velocity column (_axis_in's)
+            if float(np.dot(np.asarray(R_T @ world), axis)) < 0.0:
                 M[:, k] = -M[:, k]
         out.append(_determinant_sign(M, rtol))
     return tuple(out)

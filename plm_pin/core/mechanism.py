@@ -579,6 +579,16 @@ class Mechanism:
         return self.n_actuators - self.mobility
 
     def _generic_configurations(self) -> list[np.ndarray]:
+        """The reference and two assembled perturbations of it (seeded), kept for the same tolerance."""
+        key = (self.closure_tol, self.q_ref)
+        kept = self.__dict__.get("_generic")
+        if kept is not None and kept[0][0] == key[0] and kept[0][1] is key[1]:
+            return list(kept[1])
+        configs = self._assemble_generic()
+        self.__dict__["_generic"] = (key, tuple(configs))
+        return configs
+
+    def _assemble_generic(self) -> list[np.ndarray]:
         configs = [self.q_ref]
         rng = np.random.default_rng(20111009)
         for _ in range(2):

@@ -75,6 +75,7 @@ from .._lazy import lazy_module
 from .._linalg import LU, det_sign
 from .._text import short
 from ..core import closures as _closures
+from ..core.legs import Leg, working_mode_from_data
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import FrameTask, Task
 from ..exceptions import (
@@ -89,7 +90,7 @@ from ..kinematics.inverse import inverse_kinematics
 from ..kinematics.jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians
 from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
-from ..tolerances import RANK_RTOL, RATE_CONSISTENCY_TOL, SINGULARITY_TOL
+from ..tolerances import LEG_SINGULAR_RTOL, RANK_RTOL, RATE_CONSISTENCY_TOL, SINGULARITY_TOL
 
 interpolate = lazy_module("scipy.interpolate")  # BPoly, make_interp_spline
 
@@ -402,6 +403,19 @@ def _check_regular(mech: Mechanism, jac: ClosedChainJacobians, tol: float, kind:
         raise SingularConfiguration(f"{' and '.join(bad)} singular, at or below the tolerance {tol:.3g}")
 
 
+def _sample_mode(
+    mech: Mechanism, task: Task, legs: tuple[Leg, ...], jac: ClosedChainJacobians
+) -> tuple[int, ...]:
+    """Working mode at the configuration of :func:`closed_chain_jacobians` (its pass still in ``mech.data``).
+
+    :func:`plm_pin.kinematics.working_mode` without its own kinematics pass and Jacobians.
+    """
+    ik_rows = np.concatenate((jac.J_phi, jac.J_x))
+    return working_mode_from_data(
+        mech.model, mech.data, mech.closures, task, legs, LEG_SINGULAR_RTOL, ik_rows
+    )
+
+
 def particular_acceleration(mech: Mechanism, q: np.ndarray, v: np.ndarray, J_phi: np.ndarray) -> np.ndarray:
     r"""Kinematics of ``(q, v, 0)`` into ``mech.data``, and the least-norm :math:`a_p` of the closure rows.
 
@@ -522,19 +536,23 @@ def task_trajectory(
     rec.x[:] = x_all
     rows = _RateRows(task, mech.model)
     first_mode: tuple[int, ...] = ()
+    legs: tuple[Leg, ...] = ()
     for k in range(ts.shape[0]):
         x = x_all[k]
         try:
             if k == 0:
                 sol = inverse_kinematics(mech, x, guess, mode=mode, tol=tol)
                 first_mode = sol.mode
+                legs = mech.legs  # built by the line above: no pass of its own between the two below
             else:
                 sol = inverse_kinematics(mech, x, rec.predict(k), tol=tol)
             jac = closed_chain_jacobians(mech, sol.q)
             _check_regular(mech, jac, singularity_tol, "inverse")
-            if sol.mode != first_mode:
+            # the working mode from the Jacobians just computed at sol.q (what sol.mode recomputes)
+            sample_mode = first_mode if k == 0 else _sample_mode(mech, task, legs, jac)
+            if sample_mode != first_mode:
                 raise SingularConfiguration(
-                    f"working mode {sol.mode} differs from the first sample's {first_mode}: the path "
+                    f"working mode {sample_mode} differs from the first sample's {first_mode}: the path "
                     f"crossed an inverse (type 1) singularity after t = {ts[k - 1]:.9g} s, or the samples "
                     "are too sparse"
                 )

@@ -310,14 +310,14 @@ class StaticWindow:
             ViewerError: when meshcat is missing.
         """
         require_meshcat()
-        self._msgpack = importlib.import_module("umsgpack")
+        self._packb = packer()
         self._bridge = _recorder_class()()
 
     def send(self, command: Any) -> None:
         """Apply one meshcat command to the scene."""
         data = command.lower()
         self._bridge.handle_zmq(
-            [data["type"].encode("utf-8"), data["path"].encode("utf-8"), self._msgpack.packb(data)]
+            [data["type"].encode("utf-8"), data["path"].encode("utf-8"), self._packb(data)]
         )
 
     def get_scene(self) -> str:
@@ -331,6 +331,28 @@ class StaticWindow:
 
     def close(self) -> None:
         """Nothing to close."""
+
+
+@functools.cache
+def packer() -> Callable[[Any], bytes]:
+    """The packer of meshcat's commands: the compiled ``msgpack`` if installed, else ``umsgpack``.
+
+    Both write the same bytes (the MessagePack format leaves no choice for these values:
+    strings, floats as float64, lists, maps and meshcat's typed-array extensions); the
+    compiled one is some ten times faster on an animation's thousands of transforms.
+    """
+    umsgpack = importlib.import_module("umsgpack")
+    try:
+        msgpack = importlib.import_module("msgpack")
+    except ImportError:
+        return umsgpack.packb
+
+    def default(obj: Any) -> Any:
+        if isinstance(obj, umsgpack.Ext):
+            return msgpack.ExtType(obj.type, obj.data)
+        raise TypeError(f"cannot pack {type(obj).__name__} for meshcat")
+
+    return functools.partial(msgpack.packb, default=default, use_bin_type=True)
 
 
 @functools.cache

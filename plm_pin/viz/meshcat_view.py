@@ -418,6 +418,68 @@ def task_origins(mech: Mechanism, qs: ArrayLike) -> np.ndarray:
     return out
 
 
+@functools.cache
+def _batched_frame_class() -> type:
+    """The animation frame of meshcat, its rotations turned to quaternions afterwards, all at once.
+
+    :meth:`set_transform` records the position as meshcat does, and for the quaternion a list
+    that :func:`_fill_quaternions` fills in place: the animation is the one meshcat builds,
+    its tracks and keys in the same order, without one 4 x 4 eigenproblem call per node and frame.
+    """
+    base = require_meshcat().animation.AnimationFrameVisualizer
+
+    class BatchedFrame(base):  # type: ignore[misc, valid-type]
+        __slots__ = ("pending",)
+
+        def __init__(self, animation: Any, path: Any, current_frame: float, pending: list[Any]) -> None:
+            super().__init__(animation, path, current_frame)
+            self.pending = pending
+
+        def __getitem__(self, path: str) -> BatchedFrame:
+            return BatchedFrame(self.animation, self.path.append(path), self.current_frame, self.pending)
+
+        def set_transform(self, matrix: np.ndarray) -> None:
+            clip = self.get_clip()
+            clip.set_property(self.current_frame, "position", "vector3", list(matrix[:3, 3]))
+            quaternion: list[Any] = []
+            clip.set_property(self.current_frame, "quaternion", "quaternion", quaternion)
+            self.pending.append((quaternion, np.array(matrix, dtype=np.float64)[:4, :4]))
+
+    return BatchedFrame
+
+
+def _fill_quaternions(pending: list[tuple[list[Any], np.ndarray]]) -> None:
+    """Fill each recorded quaternion list with meshcat's ``js_quaternion`` of its matrix.
+
+    The arithmetic of ``meshcat.transformations.quaternion_from_matrix`` (its general branch),
+    on all the matrices at once: the same symmetric matrix K, the same LAPACK eigensolver
+    (a stack is solved matrix by matrix), so the same numbers.
+    """
+    if not pending:
+        return
+    M = np.stack([m for _, m in pending])  # (n, 4, 4)
+    m00, m01, m02 = M[:, 0, 0], M[:, 0, 1], M[:, 0, 2]
+    m10, m11, m12 = M[:, 1, 0], M[:, 1, 1], M[:, 1, 2]
+    m20, m21, m22 = M[:, 2, 0], M[:, 2, 1], M[:, 2, 2]
+    zero = np.zeros(len(pending))
+    K = np.stack(
+        [
+            np.stack([m00 - m11 - m22, zero, zero, zero], axis=-1),
+            np.stack([m01 + m10, m11 - m00 - m22, zero, zero], axis=-1),
+            np.stack([m02 + m20, m12 + m21, m22 - m00 - m11, zero], axis=-1),
+            np.stack([m21 - m12, m02 - m20, m10 - m01, m00 + m11 + m22], axis=-1),
+        ],
+        axis=1,
+    )  # (n, 4, 4)
+    K /= 3.0
+    w, V = np.linalg.eigh(K)
+    for (quaternion, _), wk, Vk in zip(pending, w, V, strict=True):
+        q = Vk[[3, 0, 1, 2], np.argmax(wk)]
+        if q[0] < 0.0:
+            np.negative(q, q)
+        quaternion[:] = [q[1], q[2], q[3], q[0]]
+
+
 def _check_motion(mech: Mechanism, qs: ArrayLike, times: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     q_arr = np.asarray(qs, dtype=float)
     t_arr = np.asarray(times, dtype=float)
@@ -769,13 +831,16 @@ class MeshcatViewer:
         q_arr, t_arr = _check_motion(self.mech, qs, times)
         status = self.display(q_arr[0])
         animation = require_meshcat().animation.Animation(default_framerate=ANIMATION_FPS)
+        frame_class = _batched_frame_class()
+        pending: list[tuple[list[Any], np.ndarray]] = []
         try:
             for q, t in zip(q_arr, t_arr, strict=True):
-                with animation.at_frame(self._vis, (t - t_arr[0]) * ANIMATION_FPS) as frame:
-                    self._viz.viewer = frame  # Pinocchio places the nodes through its viewer
-                    self._viz.display(q)
+                frame = frame_class(animation, self._vis.path, (t - t_arr[0]) * ANIMATION_FPS, pending)
+                self._viz.viewer = frame  # Pinocchio places the nodes through its viewer
+                self._viz.display(q)
         finally:
             self._viz.viewer = self._vis
+        _fill_quaternions(pending)
         self._vis.set_animation(animation, play=play, repetitions=repetitions)
         self._animated = True
         return status

@@ -160,8 +160,8 @@ class IKEvaluator:
         return ik_jacobian_from_data(self.model, self.data, self.closures, self.task, out)
 
     def mode(self, A: np.ndarray) -> tuple[int, ...]:
-        """Working mode at the configuration of :meth:`solve` (``A`` of :meth:`jacobian` is not needed)."""
-        return working_mode_from_data(self.model, self.data, self.closures, self.task, self.legs)
+        """Working mode at the configuration of :meth:`solve`, ``A`` its :meth:`jacobian` (not recomputed)."""
+        return working_mode_from_data(self.model, self.data, self.closures, self.task, self.legs, ik_rows=A)
 
     def extrapolate(self, previous: list[np.ndarray]) -> np.ndarray:
         """Next configuration on a line of equally spaced solutions ``previous`` (nearest first)."""

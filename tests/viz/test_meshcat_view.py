@@ -723,3 +723,64 @@ def test_a_spatial_mechanism_has_no_plane_normal():
     mech = plm_pin.load("zhao2011_8pss")
     assert plane_normal(mech) is None
     np.testing.assert_array_equal(_camera_direction(mech), CAMERA_DIRECTION)
+
+
+def test_static_scene_packer_writes_the_bytes_of_meshcats_own_umsgpack():
+    """The compiled packer of static scenes gives umsgpack's bytes for meshes, transforms and animations."""
+    umsgpack = pytest.importorskip("umsgpack")
+    from plm_pin.viz import meshcat_server
+
+    commands = []
+    send = meshcat_server.StaticWindow.send
+
+    def record(window, command):
+        commands.append(command.lower())
+        send(window, command)
+
+    mech = preset("harada2011_3d4m")
+    qs = np.array([mech.q_ref, mech.q_ref])
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(meshcat_server.StaticWindow, "send", record)
+        scene_html(mech, qs=qs, times=[0.0, 0.5])
+    assert any(c["type"] == "set_object" for c in commands)
+    assert any(c["type"] == "set_animation" for c in commands)
+    packb = meshcat_server.packer()
+    assert [packb(c) for c in commands] == [umsgpack.packb(c) for c in commands]
+
+
+def test_animation_keys_are_those_of_meshcats_own_frames_and_quaternions():
+    """The batched quaternions give the animation meshcat's at_frame and js_quaternion give, key for key."""
+    meshcat = pytest.importorskip("meshcat")
+    mech = preset("harada2011_3d4m")
+    rng = np.random.default_rng(3)
+    qs = [mech.q_ref]
+    for _ in range(12):
+        qs.append(mech.assemble(qs[-1] + 0.02 * rng.normal(size=mech.nq)).q)
+    times = np.linspace(0.0, 1.2, len(qs))
+    viewer = MeshcatViewer(mech, static=True)
+    viewer.animate(qs, times)
+    animation = meshcat.animation.Animation(default_framerate=30)
+    from plm_pin.viz.meshcat_view import ANIMATION_FPS
+
+    animation.default_framerate = ANIMATION_FPS
+    try:
+        for q, t in zip(qs, times, strict=True):
+            with animation.at_frame(viewer._vis, (t - times[0]) * ANIMATION_FPS) as frame:
+                viewer._viz.viewer = frame
+                viewer._viz.display(q)
+    finally:
+        viewer._viz.viewer = viewer._vis
+    expected = animation.lower()
+    sent = []
+    send = type(viewer._vis.window).send
+
+    def record(window, command):
+        sent.append(command.lower())
+        send(window, command)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(type(viewer._vis.window), "send", record)
+        viewer.animate(qs, times)
+    lowered = [c for c in sent if c["type"] == "set_animation"][-1]["animations"]
+    assert any(track["name"] == ".quaternion" for a in expected for track in a["clip"]["tracks"])
+    assert lowered == expected
