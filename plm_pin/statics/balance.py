@@ -311,13 +311,10 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
     pin.updateFramePlacements(model, data)
     if not closures:
         return np.empty((0, model.nv))
-    points = point_closures(mech) if kernels_enabled() else None
-    if points is not None:  # one compiled call, the same numbers
-        J_phi = np.empty((points.plus.shape[0], model.nv))
-        t = np.concatenate(placement_views(data, points.frames)[0]).reshape(-1, 3)
-        closed = _compiled().point_closure_rows(
-            data.J, t, points.support, points.plus, points.minus, points.axis, mech.assembled_tol, J_phi
-        )
+    rows = point_closure_rows(mech, data)
+    if rows is not None:  # one compiled call, the same numbers
+        J_phi = np.empty((rows.m, model.nv))
+        closed = rows(J_phi)
     else:
         bound = _closures.BoundClosures(data, closures)
         J_phi = bound.jacobian(model, np.empty((bound.rows, model.nv)))
@@ -325,6 +322,55 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
     if not closed:
         check_assembled(mech, q)  # raises, with the residual and the worst closure
     return J_phi
+
+
+class _PointRows:
+    """What :func:`point_closure_rows` returns: the compiled point-closure rows on one Pinocchio data."""
+
+    __slots__ = ("_args", "_kernel", "_t", "m")
+
+    def __init__(self, mech: Mechanism, data: pin.Data, points: PointClosures) -> None:
+        self._kernel = _compiled().point_closure_rows
+        self._t = placement_views(data, points.frames)[0]  # live views of the frame positions
+        self._args = (data.J, points.support, points.plus, points.minus, points.axis, mech.assembled_tol)
+        self.m = int(points.plus.shape[0])
+
+    def __call__(self, out: np.ndarray) -> bool:
+        r"""Write :math:`J_\phi` into ``out`` (m, nv); whether the configuration closes to assembled_tol."""
+        Jw, support, plus, minus, axis, tol = self._args
+        t = np.concatenate(self._t).reshape(-1, 3)  # (n_frames, 3)
+        return bool(self._kernel(Jw, t, support, plus, minus, axis, tol, out))
+
+
+def point_closure_rows(mech: Mechanism, data: pin.Data) -> _PointRows | None:
+    r"""The compiled closure rows of ``mech`` on ``data``, or None where the Pinocchio path runs.
+
+    ``rows(out)`` writes :math:`J_\phi` (m, nv) from the joint Jacobians and frame placements
+    in ``data`` (``pin.computeJointJacobians`` and ``pin.updateFramePlacements`` of the
+    configuration) and returns whether the closure residual is within ``mech.assembled_tol``:
+    the numbers and the decision of :class:`~plm_pin.core.closures.BoundClosures`, bit for
+    bit (:func:`~plm_pin.statics._compiled.point_closure_rows`). None when the kernels are off
+    or a closure has rotation rows (or there is none).
+    """
+    if not mech.closures or not kernels_enabled():
+        return None
+    points = point_closures(mech)
+    return None if points is None else _PointRows(mech, data, points)
+
+
+def compiled_factors(
+    mech: Mechanism, J_phi: np.ndarray, act_v: np.ndarray, tau: np.ndarray, singular_rtol: float
+) -> BalanceFactors | None:
+    """:func:`balance_factors` in one compiled call, for loops whose configuration changes at each call.
+
+    Nothing is kept or reused, and the arrays stay writable. Call it when
+    :func:`~plm_pin.kernels.kernels_enabled`; None when the compiled call declines (then
+    :func:`balance_factors` decides, and words the error).
+    """
+    status, *arrays = _compiled().factor(
+        J_phi, act_v, tau, singular_rtol, mech.closure_tol, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL
+    )
+    return BalanceFactors(*arrays) if status == 0 else None  # 0: _compiled.OK
 
 
 class PointClosures(NamedTuple):
