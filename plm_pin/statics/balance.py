@@ -327,19 +327,21 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
 class _PointRows:
     """What :func:`point_closure_rows` returns: the compiled point-closure rows on one Pinocchio data."""
 
-    __slots__ = ("_args", "_kernel", "_t", "m")
+    __slots__ = ("_args", "_kernel", "_mech", "_t", "closures", "data", "m")
 
     def __init__(self, mech: Mechanism, data: pin.Data, points: PointClosures) -> None:
         self._kernel = _compiled().point_closure_rows
+        self._mech = mech
+        self.closures, self.data = mech.closures, data
         self._t = placement_views(data, points.frames)[0]  # live views of the frame positions
-        self._args = (data.J, points.support, points.plus, points.minus, points.axis, mech.assembled_tol)
+        self._args = (data.J, points.support, points.plus, points.minus, points.axis)
         self.m = int(points.plus.shape[0])
 
     def __call__(self, out: np.ndarray) -> bool:
         r"""Write :math:`J_\phi` into ``out`` (m, nv); whether the configuration closes to assembled_tol."""
-        Jw, support, plus, minus, axis, tol = self._args
+        Jw, support, plus, minus, axis = self._args
         t = np.concatenate(self._t).reshape(-1, 3)  # (n_frames, 3)
-        return bool(self._kernel(Jw, t, support, plus, minus, axis, tol, out))
+        return bool(self._kernel(Jw, t, support, plus, minus, axis, self._mech.assembled_tol, out))
 
 
 def point_closure_rows(mech: Mechanism, data: pin.Data) -> _PointRows | None:
@@ -350,12 +352,20 @@ def point_closure_rows(mech: Mechanism, data: pin.Data) -> _PointRows | None:
     configuration) and returns whether the closure residual is within ``mech.assembled_tol``:
     the numbers and the decision of :class:`~plm_pin.core.closures.BoundClosures`, bit for
     bit (:func:`~plm_pin.statics._compiled.point_closure_rows`). None when the kernels are off
-    or a closure has rotation rows (or there is none).
+    or a closure has rotation rows (or there is none). The last one made in the calling
+    thread is kept with the mechanism, for its data.
     """
-    if not mech.closures or not kernels_enabled():
+    closures = mech.closures
+    if not closures or not kernels_enabled():
         return None
+    rows = getattr(mech._local, "statics_rows", None)
+    if rows is not None and rows.data is data and rows.closures is closures:
+        return rows
     points = point_closures(mech)
-    return None if points is None else _PointRows(mech, data, points)
+    if points is None:
+        return None
+    rows = mech._local.statics_rows = _PointRows(mech, data, points)
+    return rows
 
 
 def compiled_factors(
