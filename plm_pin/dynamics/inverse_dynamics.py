@@ -394,13 +394,13 @@ class _Kinematics:
         worst = np.zeros(n)  # largest closure residual of each sample
         rows = point_closure_rows(mech, data)  # compiled, the same numbers and decision; None: Pinocchio's
         bound = _closures.BoundClosures(data, closures) if closures and rows is None else None  # live views
-        closed = True
+        closed, tol = True, mech.assembled_tol
         phi = np.empty(m)
         for i, q in enumerate(trajectory.q):
             pin.computeJointJacobians(model, data, q)
             pin.updateFramePlacements(model, data)
             if rows is not None:
-                closed = rows(J_phi[i]) and closed
+                closed = rows(J_phi[i], tol) and closed
             elif bound is not None:
                 worst[i] = abs(bound.residual(phi)).max()
                 bound.jacobian(model, J_phi[i])
@@ -408,7 +408,7 @@ class _Kinematics:
                 J_load[i] = pin.getFrameJacobian(model, data, frame_id, _LWA)
             if J_task is not None and task is not None:
                 task.jacobian_from_data(model, data, J_task[i])
-        if not closed or not np.all(worst <= mech.assembled_tol):  # NaN refused too
+        if not closed or not np.all(worst <= tol):  # NaN refused too
             check_samples_assembled(mech, trajectory.q, trajectory.t)  # raises, naming the first open sample
         return cls(J_phi, J_load, J_task)
 

@@ -314,7 +314,7 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
     rows = point_closure_rows(mech, data)
     if rows is not None:  # one compiled call, the same numbers
         J_phi = np.empty((rows.m, model.nv))
-        closed = rows(J_phi)
+        closed = rows(J_phi, mech.assembled_tol)
     else:
         bound = _closures.BoundClosures(data, closures)
         J_phi = bound.jacobian(model, np.empty((bound.rows, model.nv)))
@@ -327,29 +327,28 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
 class _PointRows:
     """What :func:`point_closure_rows` returns: the compiled point-closure rows on one Pinocchio data."""
 
-    __slots__ = ("_args", "_kernel", "_mech", "_t", "closures", "data", "m")
+    __slots__ = ("_args", "_kernel", "_t", "closures", "data", "m")
 
     def __init__(self, mech: Mechanism, data: pin.Data, points: PointClosures) -> None:
         self._kernel = _compiled().point_closure_rows
-        self._mech = mech
         self.closures, self.data = mech.closures, data
         self._t = placement_views(data, points.frames)[0]  # live views of the frame positions
         self._args = (data.J, points.support, points.plus, points.minus, points.axis)
         self.m = int(points.plus.shape[0])
 
-    def __call__(self, out: np.ndarray) -> bool:
-        r"""Write :math:`J_\phi` into ``out`` (m, nv); whether the configuration closes to assembled_tol."""
+    def __call__(self, out: np.ndarray, tol: float) -> bool:
+        r"""Write :math:`J_\phi` into ``out`` (m, nv); whether the configuration closes to ``tol`` [m]."""
         Jw, support, plus, minus, axis = self._args
         t = np.concatenate(self._t).reshape(-1, 3)  # (n_frames, 3)
-        return bool(self._kernel(Jw, t, support, plus, minus, axis, self._mech.assembled_tol, out))
+        return bool(self._kernel(Jw, t, support, plus, minus, axis, tol, out))
 
 
 def point_closure_rows(mech: Mechanism, data: pin.Data) -> _PointRows | None:
     r"""The compiled closure rows of ``mech`` on ``data``, or None where the Pinocchio path runs.
 
-    ``rows(out)`` writes :math:`J_\phi` (m, nv) from the joint Jacobians and frame placements
-    in ``data`` (``pin.computeJointJacobians`` and ``pin.updateFramePlacements`` of the
-    configuration) and returns whether the closure residual is within ``mech.assembled_tol``:
+    ``rows(out, tol)`` writes :math:`J_\phi` (m, nv) from the joint Jacobians and frame
+    placements in ``data`` (``pin.computeJointJacobians`` and ``pin.updateFramePlacements`` of
+    the configuration) and returns whether the closure residual is within ``tol``:
     the numbers and the decision of :class:`~plm_pin.core.closures.BoundClosures`, bit for
     bit (:func:`~plm_pin.statics._compiled.point_closure_rows`). None when the kernels are off
     or a closure has rotation rows (or there is none). The last one made in the calling
