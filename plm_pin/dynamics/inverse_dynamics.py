@@ -45,9 +45,20 @@ from ..exceptions import (
     InverseDynamicsFailed,
     SingularConfiguration,
 )
+from ..kernels import kernels_enabled
 from ..results import Result, unit
 from ..statics import AllocationRule, solve_balance
-from ..statics.balance import AnyLoad, Load, balance_factors, build_balance, load_on_frame
+from ..statics.balance import (
+    AnyLoad,
+    Load,
+    actuated_v,
+    balance_factors,
+    build_balance,
+    compiled_factors,
+    load_on_frame,
+    point_closure_rows,
+)
+from ..statics.forces import default_rule
 from ..tolerances import STATICS_SINGULAR_RTOL
 from .trajectory import JointTrajectory, checked_trajectory
 
@@ -156,7 +167,15 @@ def _body_names(members: object, group: object) -> list[str]:
 
 
 def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) -> _BodyGroups:
-    """The groups of bodies (bodies named by their joint's first body frame), checked."""
+    """The groups of bodies (bodies named by their joint's first body frame), checked.
+
+    The default groups (one per body) are made once per model and actuator tuple, and kept
+    with the mechanism.
+    """
+    if groups is None:
+        hit = vars(mech).get(_DEFAULT_GROUPS)
+        if hit is not None and hit[0] is mech.model and hit[1] is mech.actuators:
+            return hit[2]
     model = mech.model
     bodies = {name: j for j, name in enumerate(mech.body_names, start=1)}
     if groups is None:
@@ -183,7 +202,16 @@ def _body_groups(mech: Mechanism, groups: Mapping[str, Sequence[str]] | None) ->
         factor = (2.0 * np.pi / spec.lead) ** 2 if spec.lead else 1.0
         rotor[act.idx_v] = spec.rotor_inertia * factor
         screw[act.idx_v] = spec.screw_inertia * factor
-    return _BodyGroups(tuple(chosen), joints, rotor, screw)
+    rotor.setflags(write=False)
+    screw.setflags(write=False)
+    body = _BodyGroups(tuple(chosen), joints, rotor, screw)
+    if groups is None:
+        vars(mech)[_DEFAULT_GROUPS] = (model, mech.actuators, body)
+    return body
+
+
+_DEFAULT_GROUPS = "_dynamics_body_groups"
+"""Attribute of a mechanism holding its model, actuator tuple and default body groups."""
 
 
 def _body_forces(model: pin.Model, data: pin.Data, gravity: bool, support: np.ndarray) -> np.ndarray:
@@ -302,15 +330,27 @@ def inverse_dynamics(
     load_arguments(None if callable(wrench) else wrench, frame, limits, mech.n_actuators)
     check_tolerance(singular_rtol, "singular_rtol", relative=True)
     flag(gravity, "gravity")
-    rule = AllocationRule.checked(
-        mech,
-        objective=objective,
-        weights=weights,
-        limits=limits,
-        internal=internal,
-        min_compression=min_compression,
-        link_limits=link_limits,
-    )
+    if (
+        isinstance(objective, str)
+        and objective == "norm"
+        and weights is None
+        and isinstance(limits, str)
+        and limits == "description"
+        and internal is None
+        and min_compression is None
+        and link_limits is None
+    ):
+        rule = default_rule(mech)  # AllocationRule.checked(mech), made once
+    else:
+        rule = AllocationRule.checked(
+            mech,
+            objective=objective,
+            weights=weights,
+            limits=limits,
+            internal=internal,
+            min_compression=min_compression,
+            link_limits=link_limits,
+        )
     if trajectory.q.shape[1:] != (mech.nq,) or trajectory.v.shape[1:] != (mech.nv,):
         raise InvalidInput(
             f"the trajectory has q of width {trajectory.q.shape[1]} and v of width {trajectory.v.shape[1]}; "
@@ -339,7 +379,7 @@ class _Kinematics:
             ClosureNotSatisfied: as :func:`plm_pin.core.checks.check_samples_assembled` (its message).
         """
         model, closures = mech.model, mech.closures
-        data = model.createData()
+        data = mech.data  # this pass calls no user code: the calling thread's scratch data
         task = mech.task_compiled
         n, m = trajectory.t.shape[0], mech.n_closure_rows
         frame_id = None
@@ -352,19 +392,23 @@ class _Kinematics:
         J_load = np.empty((n, 6, model.nv)) if frame_id is not None else None
         J_task = np.empty((n, task.size, model.nv)) if square and task is not None else None
         worst = np.zeros(n)  # largest closure residual of each sample
-        bound = _closures.BoundClosures(data, closures) if closures else None  # live views: bound once
+        rows = point_closure_rows(mech, data)  # compiled, the same numbers and decision; None: Pinocchio's
+        bound = _closures.BoundClosures(data, closures) if closures and rows is None else None  # live views
+        closed, tol = True, mech.assembled_tol
         phi = np.empty(m)
         for i, q in enumerate(trajectory.q):
             pin.computeJointJacobians(model, data, q)
             pin.updateFramePlacements(model, data)
-            if bound is not None:
+            if rows is not None:
+                closed = rows(J_phi[i], tol) and closed
+            elif bound is not None:
                 worst[i] = abs(bound.residual(phi)).max()
                 bound.jacobian(model, J_phi[i])
             if J_load is not None:
                 J_load[i] = pin.getFrameJacobian(model, data, frame_id, _LWA)
             if J_task is not None and task is not None:
                 task.jacobian_from_data(model, data, J_task[i])
-        if not np.all(worst <= mech.assembled_tol):  # NaN refused too
+        if not closed or not np.all(worst <= tol):  # NaN refused too
             check_samples_assembled(mech, trajectory.q, trajectory.t)  # raises, naming the first open sample
         return cls(J_phi, J_load, J_task)
 
@@ -381,9 +425,10 @@ def _run(
     unloaded: bool,
 ) -> InverseDynamics:
     """The trajectory loop: RNEA and one factorisation of the balance per sample, on a data of its own."""
-    model, act_v = mech.model, mech.actuated_v_indices
+    model, act_v = mech.model, actuated_v(mech)
     data = model.createData()
     n, n_act, nv = trajectory.t.shape[0], mech.n_actuators, mech.nv
+    compiled = kernels_enabled()  # the factorisation in one compiled call (balance_factors when it declines)
     missing = {"rotor": not body.rotor.any(), "screw": not body.screw.any(), "external": unloaded}
     absent = tuple(name for name, gone in missing.items() if gone)
     out = _Buffers(n, n_act, nv, mech.n_closure_rows, absent)
@@ -407,7 +452,9 @@ def _run(
         tau = parts.sum(axis=1)
         try:
             if linear:  # weighted minimum norm: the forces are F tau, one factorisation
-                factors = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
+                factors = compiled_factors(mech, J_phi, act_v, tau, singular_rtol) if compiled else None
+                if factors is None:  # kernels off, or the compiled call declined: the LAPACK path decides
+                    factors = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
                 F = rule.weighted_map(factors.P, factors.G)
                 f_c = F @ tau
                 applied = tau.copy()
@@ -445,14 +492,11 @@ def _run(
                 float(trajectory.t[i]),
                 exc,
             ) from exc
-        shares = F @ parts  # (n_act, 4), in the order of TERMS
-        for k, name in enumerate(TERMS):
-            out.terms[name][i] = shares[:, k]
+        out.shares[i] = F @ parts  # (n_act, 4), in the order of TERMS
         if "rotor" not in absent:
             out.fixed["rotor"][i] = F @ (body.rotor * a)
         if "screw" not in absent:
             out.fixed["screw"][i] = F @ (body.screw * a)
-        out.fixed["external"][i] = shares[:, 3]
         out.F[i] = F
         out.f_c[i], out.lam[i] = f_c, lam
     return out.result(mech, trajectory, body, gravity, n, linear)
@@ -495,8 +539,8 @@ class _Buffers:
         self.lam = np.zeros((n, m))
         self.residual = np.zeros(n)
         self.internal: list[np.ndarray] = []
-        self.terms = {name: np.zeros((n, n_act)) for name in TERMS}
-        self.fixed = {name: np.zeros((n, n_act)) for name in ("rotor", "screw", "external")}
+        self.shares = np.zeros((n, n_act, len(TERMS)))  # the share of each term, in the order of TERMS
+        self.fixed = {name: np.zeros((n, n_act)) for name in ("rotor", "screw")}
         self.F = np.zeros((n, n_act, nv))  # weighted minimum-norm map of each sample
 
     def result(
@@ -510,10 +554,12 @@ class _Buffers:
     ) -> InverseDynamics:
         """The first ``count`` samples as an :class:`InverseDynamics` (body split on first access)."""
         f_c = self.f_c[:count]
-        terms = {k: v[:count] for k, v in self.terms.items()}
+        terms = {name: np.ascontiguousarray(self.shares[:count, :, k]) for k, name in enumerate(TERMS)}
         if not linear:
             terms["allocation"] = f_c - sum(terms.values(), np.zeros_like(f_c))
         fixed = {k: v[:count] for k, v in self.fixed.items() if k not in self.absent}
+        if "external" not in self.absent:  # the load's share: that of its term (an array of its own)
+            fixed["external"] = np.ascontiguousarray(self.shares[:count, :, TERMS.index("external")])
         F = self.F[:count]
 
         def bodies() -> dict[str, np.ndarray]:

@@ -142,3 +142,48 @@ def factor(
     for i in range(n_act):
         C[i] = N[act_v[i]]
     return OK, N, lambda_map, C, P, G
+
+
+@njit(cache=True)
+def point_closure_rows(
+    Jw: np.ndarray,
+    t: np.ndarray,
+    support: np.ndarray,
+    plus: np.ndarray,
+    minus: np.ndarray,
+    axis: np.ndarray,
+    tol: float,
+    J: np.ndarray,
+) -> bool:
+    r"""Jacobian of point closures into ``J`` from Pinocchio's joint Jacobians; whether they close to ``tol``.
+
+    Pinocchio's arithmetic, step for step: the world-aligned Jacobian of frame ``f`` at column
+    ``c`` of its joint's support is :math:`(v - p_f \times \omega, \omega)` (``getFrameJacobian``
+    with ``LOCAL_WORLD_ALIGNED``), zero elsewhere; a closure row is the difference of its two
+    frames' rows, and its residual the difference of their positions (the products of
+    :class:`~plm_pin.core.closures.BoundClosures` with its +1 / -1 maps: one rounding each).
+
+    Args:
+        Jw: ``data.J``, the joint Jacobians in the world frame, shape (6, nv).
+        t: positions of the closure frames, shape (n_frames, 3) [m].
+        support: whether column ``c`` moves frame ``f``, shape (n_frames, nv).
+        plus: frame B of each row (index in the frames), shape (m,).
+        minus: frame A of each row, shape (m,).
+        axis: the coordinate (0, 1, 2) of each row, shape (m,).
+        tol: largest residual of a closed configuration [m].
+        J: output, shape (m, nv).
+    """
+    m, nv = J.shape
+    closed = True
+    for r in range(m):
+        b, a, i = plus[r], minus[r], axis[r]
+        phi = t[b, i] - t[a, i]
+        if not abs(phi) <= tol:  # NaN: not closed
+            closed = False
+        i1, i2 = (i + 1) % 3, (i + 2) % 3  # (p x w)_i = p_i1 w_i2 - p_i2 w_i1
+        for c in range(nv):
+            vb = Jw[i, c] - (t[b, i1] * Jw[3 + i2, c] - t[b, i2] * Jw[3 + i1, c]) if support[b, c] else 0.0
+            va = Jw[i, c] - (t[a, i1] * Jw[3 + i2, c] - t[a, i2] * Jw[3 + i1, c]) if support[a, c] else 0.0
+            d = vb - va
+            J[r, c] = d if d != 0.0 else 0.0  # a zero is +0, as the sum of the +1 / -1 product
+    return closed

@@ -33,6 +33,7 @@ the internal-force space (see :func:`oriented_internal_basis`); with one interna
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import dataclass, field
 from types import ModuleType
@@ -48,6 +49,7 @@ from .._arguments import as_vector, check_tolerance, flag
 from ..core import closures as _closures
 from ..core.checks import check_assembled, check_finite_model, check_finite_result
 from ..core.mechanism import Mechanism
+from ..core.scratch import placement_views
 from ..core.task import FrameTask, JointTask
 from ..exceptions import FrameNotFound, InvalidInput, SingularConfiguration
 from ..kernels import kernels_enabled
@@ -263,12 +265,35 @@ def static_balance(
     J_phi = assembled_closure_jacobian(mech, data, qa)
     check_finite_model(mech)
     load = None if wrench is None else load_on_frame(mech, wrench, frame)
-    rtol = check_tolerance(singular_rtol, "singular_rtol", relative=True)
+    # the default tolerance is a valid float: its check costs more than the rest of this setup
+    rtol = (
+        singular_rtol
+        if singular_rtol is STATICS_SINGULAR_RTOL
+        else check_tolerance(singular_rtol, "singular_rtol", relative=True)
+    )
     flag(gravity, "gravity")
-    tau = _loaded(model, data, load, None)
-    if gravity:
-        tau += pin.computeGeneralizedGravity(model, data, qa)
-    return build_balance(mech, qa, tau, load, gravity, J_phi, mech.actuated_v_indices, rtol)
+    if load is None:  # 0 + g, as the loaded sum below, without the zeros
+        tau = pin.computeGeneralizedGravity(model, data, qa) + 0.0 if gravity else np.zeros(model.nv)
+    else:
+        tau = _loaded(model, data, load, None)
+        if gravity:
+            tau += pin.computeGeneralizedGravity(model, data, qa)
+    return build_balance(mech, qa, tau, load, gravity, J_phi, actuated_v(mech), rtol)
+
+
+def actuated_v(mech: Mechanism) -> np.ndarray:
+    """:attr:`Mechanism.actuated_v_indices`, once per actuator tuple, read-only, kept with the mechanism."""
+    hit = vars(mech).get(_ACTUATED)
+    if hit is not None and hit[0] is mech.actuators:
+        return hit[1]
+    act_v = mech.actuated_v_indices
+    act_v.setflags(write=False)
+    vars(mech)[_ACTUATED] = (mech.actuators, act_v)
+    return act_v
+
+
+_ACTUATED = "_statics_actuated_v"
+"""Attribute of a mechanism holding its actuator tuple and their velocity indices."""
 
 
 def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -> np.ndarray:
@@ -286,11 +311,122 @@ def assembled_closure_jacobian(mech: Mechanism, data: pin.Data, q: np.ndarray) -
     pin.updateFramePlacements(model, data)
     if not closures:
         return np.empty((0, model.nv))
-    bound = _closures.BoundClosures(data, closures)
-    J_phi = bound.jacobian(model, np.empty((bound.rows, model.nv)))
-    if not np.max(np.abs(bound.residual(np.empty(bound.rows)))) <= mech.assembled_tol:
+    rows = point_closure_rows(mech, data)
+    if rows is not None:  # one compiled call, the same numbers
+        J_phi = np.empty((rows.m, model.nv))
+        closed = rows(J_phi, mech.assembled_tol)
+    else:
+        bound = _closures.BoundClosures(data, closures)
+        J_phi = bound.jacobian(model, np.empty((bound.rows, model.nv)))
+        closed = np.max(np.abs(bound.residual(np.empty(bound.rows)))) <= mech.assembled_tol
+    if not closed:
         check_assembled(mech, q)  # raises, with the residual and the worst closure
     return J_phi
+
+
+class _PointRows:
+    """What :func:`point_closure_rows` returns: the compiled point-closure rows on one Pinocchio data."""
+
+    __slots__ = ("_args", "_kernel", "_t", "closures", "data", "m")
+
+    def __init__(self, mech: Mechanism, data: pin.Data, points: PointClosures) -> None:
+        self._kernel = _compiled().point_closure_rows
+        self.closures, self.data = mech.closures, data
+        self._t = placement_views(data, points.frames)[0]  # live views of the frame positions
+        self._args = (data.J, points.support, points.plus, points.minus, points.axis)
+        self.m = int(points.plus.shape[0])
+
+    def __call__(self, out: np.ndarray, tol: float) -> bool:
+        r"""Write :math:`J_\phi` into ``out`` (m, nv); whether the configuration closes to ``tol`` [m]."""
+        Jw, support, plus, minus, axis = self._args
+        t = np.concatenate(self._t).reshape(-1, 3)  # (n_frames, 3)
+        return bool(self._kernel(Jw, t, support, plus, minus, axis, tol, out))
+
+
+def point_closure_rows(mech: Mechanism, data: pin.Data) -> _PointRows | None:
+    r"""The compiled closure rows of ``mech`` on ``data``, or None where the Pinocchio path runs.
+
+    ``rows(out, tol)`` writes :math:`J_\phi` (m, nv) from the joint Jacobians and frame
+    placements in ``data`` (``pin.computeJointJacobians`` and ``pin.updateFramePlacements`` of
+    the configuration) and returns whether the closure residual is within ``tol``:
+    the numbers and the decision of :class:`~plm_pin.core.closures.BoundClosures`, bit for
+    bit (:func:`~plm_pin.statics._compiled.point_closure_rows`). None when the kernels are off
+    or a closure has rotation rows (or there is none). The last one made in the calling
+    thread is kept with the mechanism, for its data.
+    """
+    closures = mech.closures
+    if not closures or not kernels_enabled():
+        return None
+    rows = getattr(mech._local, "statics_rows", None)
+    if rows is not None and rows.data is data and rows.closures is closures:
+        return rows
+    points = point_closures(mech)
+    if points is None:
+        return None
+    rows = mech._local.statics_rows = _PointRows(mech, data, points)
+    return rows
+
+
+def compiled_factors(
+    mech: Mechanism, J_phi: np.ndarray, act_v: np.ndarray, tau: np.ndarray, singular_rtol: float
+) -> BalanceFactors | None:
+    """:func:`balance_factors` in one compiled call, for loops whose configuration changes at each call.
+
+    Nothing is kept or reused, and the arrays stay writable. Call it when
+    :func:`~plm_pin.kernels.kernels_enabled`; None when the compiled call declines (then
+    :func:`balance_factors` decides, and words the error).
+    """
+    status, *arrays = _compiled().factor(
+        J_phi, act_v, tau, singular_rtol, mech.closure_tol, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL
+    )
+    return BalanceFactors(*arrays) if status == 0 else None  # 0: _compiled.OK
+
+
+class PointClosures(NamedTuple):
+    """The closures of a mechanism whose closures are all point closures, as index arrays.
+
+    Attributes:
+        frames: the closure frames, in first-use order (as :class:`~plm_pin.core.closures.BoundClosures`).
+        support: whether each velocity moves each frame (its joint's support), shape (n_frames, nv).
+        plus: frame B of each closure row (index in ``frames``), shape (m,).
+        minus: frame A of each closure row, shape (m,).
+        axis: the coordinate (0, 1, 2) of each closure row, shape (m,).
+    """
+
+    frames: tuple[int, ...]
+    support: np.ndarray
+    plus: np.ndarray
+    minus: np.ndarray
+    axis: np.ndarray
+
+
+def point_closures(mech: Mechanism) -> PointClosures | None:
+    """The :class:`PointClosures` of ``mech``, once per closure tuple; None if a closure has rotations."""
+    closures = mech.closures
+    hit = vars(mech).get(_POINTS)
+    if hit is not None and hit[0] is closures:
+        return hit[1]
+    points = None
+    if all(c.spec.type == "point" for c in closures):
+        model = mech.model
+        frames = tuple(dict.fromkeys(f for c in closures for f in c.frame_ids))
+        support = np.zeros((len(frames), model.nv), dtype=bool)
+        for k, f in enumerate(frames):
+            for j in model.supports[model.frames[f].parentJoint][1:]:  # the universe moves nothing
+                support[k, model.idx_vs[j] : model.idx_vs[j] + model.nvs[j]] = True
+        m = _closures.closure_rows(closures)
+        plus, minus, axis = (np.zeros(m, dtype=np.int64) for _ in range(3))
+        for c in closures:
+            rows = slice(c.rows.start, c.rows.start + 3)
+            plus[rows], minus[rows] = frames.index(c.frame_ids[1]), frames.index(c.frame_ids[0])
+            axis[rows] = (0, 1, 2)
+        points = PointClosures(frames, support, plus, minus, axis)
+    vars(mech)[_POINTS] = (closures, points)
+    return points
+
+
+_POINTS = "_statics_point_closures"
+"""Attribute of a mechanism holding its closure tuple and their :class:`PointClosures` (or None)."""
 
 
 def generalized_balance(
@@ -441,6 +577,16 @@ class BalanceFactors(NamedTuple):
 _COMPILED: list[ModuleType] = []
 """Holds :mod:`plm_pin.statics._compiled` once imported (it imports numba)."""
 
+
+def _compiled() -> ModuleType:
+    """:mod:`plm_pin.statics._compiled`, imported on first use (it imports numba)."""
+    if not _COMPILED:
+        from . import _compiled as compiled
+
+        _COMPILED.append(compiled)
+    return _COMPILED[0]
+
+
 _LAST: weakref.WeakKeyDictionary[Mechanism, tuple[tuple[bytes, bytes, float, float], BalanceFactors]] = (
     weakref.WeakKeyDictionary()
 )
@@ -474,11 +620,7 @@ def balance_factors(
                 abs(tau).max(initial=0.0), 1e-300
             ):
                 return factors
-        if not _COMPILED:
-            from . import _compiled
-
-            _COMPILED.append(_compiled)
-        status, *arrays = _COMPILED[0].factor(
+        status, *arrays = _compiled().factor(
             J_phi, act_v, tau, singular_rtol, mech.closure_tol, EQUILIBRIUM_RTOL, INTERNAL_TIE_RTOL
         )
         if status == 0:  # _compiled.OK
@@ -507,7 +649,10 @@ def balance_factors(
     N = N @ Vt.T  # along C's right singular vectors: C = B^T N has orthogonal columns, largest first
     P = (U[:, :r] / s[:r]) @ N[:, :r].T  # (n_act, nv)
     G = oriented_internal_basis(U[:, r:]) if r < U.shape[1] else U[:, r:]
-    return BalanceFactors(N, lambda_map, N[act_v], P, G)
+    factors = BalanceFactors(N, lambda_map, N[act_v], P, G)
+    for arr in factors:
+        arr.setflags(write=False)  # as the compiled factors: they go into the balance as they are
+    return factors
 
 
 def build_balance(
@@ -543,9 +688,19 @@ def build_balance(
         InvalidInput: ``tau`` is not finite (DescriptionError when a body's inertia overflows).
         SingularConfiguration: as :func:`static_balance`.
     """
-    check_finite_result(mech, "the generalized forces to balance", tau=tau)
+    if not finite(tau):
+        check_finite_result(mech, "the generalized forces to balance", tau=tau)
     N, lambda_map, C, P, G = balance_factors(mech, J_phi, act_v, tau, singular_rtol)
     f_p = P @ tau
-    for arr in (f_p, G, q, tau, J_phi, N, C, lambda_map, P):
+    for arr in (f_p, q, tau, J_phi):  # the factors are read-only already
         arr.setflags(write=False)
     return StaticBalance(q, tau, load, gravity, J_phi, N, C, f_p, G, act_v, lambda_map, P, v, a)
+
+
+def finite(x: np.ndarray) -> bool:
+    """Whether every entry of the vector ``x`` is finite (a sum of a few Python floats, else numpy).
+
+    A finite sum means no NaN nor infinity; a sum that overflows on finite entries is decided
+    by ``isfinite``.
+    """
+    return math.isfinite(sum(x.tolist())) or bool(np.isfinite(x).all())

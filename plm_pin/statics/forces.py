@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .._arguments import effort_limits, finite_number, load_arguments, mapping, real_numbers
+from .._arguments import effort_limits, finite_number, load_arguments, mapping, optional_name, real_numbers
 from .._linalg import lu_solve
 from .._text import short
 from ..core.checks import check_finite_result
@@ -25,7 +25,7 @@ from ..results import Result, unit
 from ..tolerances import LINK_FORCE_RTOL, STATICS_SINGULAR_RTOL
 from . import reactions as _reactions
 from .allocation import OBJECTIVES, Allocation, Inequalities, allocate, check_weights, min_norm
-from .balance import StaticBalance, static_balance
+from .balance import StaticBalance, finite, static_balance
 
 
 @dataclass(frozen=True)
@@ -223,11 +223,11 @@ class AllocationRule:
         return cls(objective, W, bounds, internal, min_compression, link_limits)
 
     @functools.cached_property
-    def _unweighted(self) -> bool:
+    def unweighted(self) -> bool:
         """Whether the weights are the identity (the plain minimum norm)."""
         return bool(np.array_equal(self.weights, np.eye(self.weights.shape[0])))
 
-    @property
+    @functools.cached_property
     def is_linear(self) -> bool:
         """Whether the chosen forces are linear in the load: weighted minimum norm, nothing else."""
         return (
@@ -247,7 +247,7 @@ class AllocationRule:
 
     def weighted_map(self, P: np.ndarray, G: np.ndarray) -> np.ndarray:
         """:meth:`linear_map` from the minimum-norm map ``P`` (n_act, nv) and the internal basis ``G``."""
-        if G.shape[1] == 0 or self._unweighted:
+        if G.shape[1] == 0 or self.unweighted:
             return P  # W = I: P is that minimum norm (G^T P = 0)
         WG = self.weights @ G
         if G.shape[1] == 1:  # one internal force (3D4M): a scalar
@@ -263,21 +263,40 @@ def solve_balance(mech: Mechanism, balance: StaticBalance, rule: AllocationRule)
         InvalidInput: malformed preload names or values.
     """
     f_p, G = balance.f_particular, balance.internal_basis
-    result = min_norm(f_p, G, rule.weights) if rule.is_linear else _allocated(mech, balance, rule)
-    lam = balance.closure_forces(result.f_c)
-    check_finite_result(mech, "static forces", f_c=result.f_c, lam=lam)
-    for a in (result.f_c, lam, result.y):
+    if not rule.is_linear:
+        result = _allocated(mech, balance, rule)
+        f_c, y, active = result.f_c, result.y, result.active
+    elif rule.unweighted:  # the minimum norm (min_norm with W = I)
+        f_c, y, active = _plain_min_norm(f_p, G)
+    else:
+        result = min_norm(f_p, G, rule.weights)
+        f_c, y, active = result.f_c, result.y, result.active
+    tau = balance.tau
+    Bf = np.zeros(tau.shape[0])  # balance.generalized(f_c)
+    Bf[balance.actuated_v] = f_c
+    lam = balance.lambda_map @ (tau - Bf)  # balance.closure_forces(f_c)
+    if not (finite(f_c) and finite(lam)):
+        check_finite_result(mech, "static forces", f_c=f_c, lam=lam)
+    for a in (f_c, lam, y):
         a.setflags(write=False)
-    return StaticForces(
-        mech,
-        balance,
-        result.f_c,
-        lam,
-        result.y,
-        balance.residual(result.f_c, lam),
-        result.active,
-        rule.objective,
-    )
+    residual = float(abs(Bf + balance.J_phi.T @ lam - tau).max(initial=0.0))  # balance.residual(f_c, lam)
+    return StaticForces(mech, balance, f_c, lam, y, residual, active, rule.objective)
+
+
+def _plain_min_norm(f_p: np.ndarray, G: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """:func:`~plm_pin.statics.allocation.min_norm` with unit weights: ``(f_c, y, active)``.
+
+    ``W G`` is ``G`` itself, so the products are those of ``min_norm`` without the product by ``I``.
+    """
+    k = G.shape[1]
+    if k == 0:
+        y = np.zeros(0)
+    elif k == 1:  # one internal force (3D4M): a scalar
+        g = G[:, 0]
+        y = np.array([-(g @ f_p) / (g @ g)])
+    else:
+        y = lu_solve(G.T @ G, -(G.T @ f_p))
+    return f_p + G @ y, y, ()
 
 
 def _allocated(mech: Mechanism, balance: StaticBalance, rule: AllocationRule) -> Allocation:
@@ -355,18 +374,51 @@ def static_forces(
         AllocationInfeasible: the limits and conditions cannot all be met; the error carries
             the least-violating allocation and the saturated actuators.
     """
-    load_arguments(wrench, frame, limits, mech.n_actuators)
-    rule = AllocationRule.checked(
-        mech,
-        objective=objective,
-        weights=weights,
-        limits=limits,
-        internal=internal,
-        min_compression=min_compression,
-        link_limits=link_limits,
-    )
+    if (
+        isinstance(objective, str)
+        and objective == "norm"
+        and weights is None
+        and isinstance(limits, str)
+        and limits == "description"
+        and internal is None
+        and min_compression is None
+        and link_limits is None
+    ):
+        real_numbers(wrench, "wrench")  # load_arguments with the default limits
+        optional_name(frame, "frame")
+        rule = default_rule(mech)
+    else:
+        load_arguments(wrench, frame, limits, mech.n_actuators)
+        rule = AllocationRule.checked(
+            mech,
+            objective=objective,
+            weights=weights,
+            limits=limits,
+            internal=internal,
+            min_compression=min_compression,
+            link_limits=link_limits,
+        )
     balance = static_balance(mech, q, wrench, frame, gravity=gravity, singular_rtol=singular_rtol)
     return solve_balance(mech, balance, rule)
+
+
+def default_rule(mech: Mechanism) -> AllocationRule:
+    """``AllocationRule.checked(mech)`` (minimum norm, the description's limits), once per actuator tuple.
+
+    Kept with the mechanism, its arrays read-only: the rule of every call with the default options.
+    """
+    hit = vars(mech).get(_DEFAULT_RULE)
+    if hit is not None and hit[0] is mech.actuators:
+        return hit[1]
+    rule = AllocationRule.checked(mech)
+    for arr in (rule.weights, rule.limits):
+        arr.setflags(write=False)
+    vars(mech)[_DEFAULT_RULE] = (mech.actuators, rule)
+    return rule
+
+
+_DEFAULT_RULE = "_statics_default_rule"
+"""Attribute of a mechanism holding its actuator tuple and the default allocation rule."""
 
 
 def _link_name(name: object, argument: str) -> str:

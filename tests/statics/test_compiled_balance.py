@@ -56,3 +56,36 @@ def test_dependent_closure_rows_take_the_lapack_path(monkeypatch):
     single = _factors(mech, J, tau, monkeypatch, False)
     np.testing.assert_allclose(ours.P, single.P, atol=1e-9)  # the same feasible motions and forces
     np.testing.assert_allclose(J2.T @ ours.lambda_map @ tau, J.T @ single.lambda_map @ tau, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", preset_names())
+def test_compiled_closure_rows_equal_pinocchio_frame_jacobians(name):
+    """Point closures: the compiled rows and closure decision equal Pinocchio's, bit for bit."""
+    from plm_pin.core.closures import BoundClosures
+    from plm_pin.core.scratch import placement_views
+    from plm_pin.statics import _compiled
+    from plm_pin.statics.balance import point_closures
+
+    mech = preset(name)
+    points = point_closures(mech) if mech.closures else None
+    if points is None:
+        pytest.skip("no closure, or closures with rotation rows (the Pinocchio path)")
+    model = mech.model
+    data = model.createData()
+    rng = np.random.default_rng(7)
+    for k in range(20):  # the reference pose, then poses off the closure manifold (J is defined there too)
+        q = mech.q_ref if k == 0 else pin.integrate(model, mech.q_ref, 0.3 * rng.normal(size=model.nv))
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        bound = BoundClosures(data, mech.closures)
+        expected = bound.jacobian(model, np.empty((bound.rows, model.nv)))
+        phi = bound.residual(np.empty(bound.rows))
+        ours = np.empty_like(expected)
+        t = np.concatenate(placement_views(data, points.frames)[0]).reshape(-1, 3)
+        tol = mech.assembled_tol
+        closed = _compiled.point_closure_rows(
+            data.J, t, points.support, points.plus, points.minus, points.axis, tol, ours
+        )
+        assert ours.tobytes() == expected.tobytes()
+        assert closed == (np.abs(phi).max() <= tol)
+        assert closed == (k == 0)
