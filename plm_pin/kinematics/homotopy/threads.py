@@ -44,7 +44,8 @@ def path_threads(n_paths: int) -> int:
         return 1
     from numba import config
 
-    return max(1, min(int(config.NUMBA_NUM_THREADS), len(os.sched_getaffinity(0)), n_paths // 2))
+    numba_threads = int(config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
+    return max(1, min(numba_threads, len(os.sched_getaffinity(0)), n_paths // 2))
 
 
 def over_threads(
