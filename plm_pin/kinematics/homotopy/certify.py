@@ -48,7 +48,7 @@ BOX_GROWTH = (4.0, 64.0, 1024.0)
 """Half-widths of the boxes tried, in order, as multiples of the Newton enclosure's size."""
 
 
-_EPS = float(np.finfo(np.float64).eps)
+_FLOAT_EPSILON = float(np.finfo(np.float64).eps)  # machine epsilon (IEEE doubles), not a tolerance
 _TINY = float(np.nextafter(0.0, 1.0))  # the smallest positive (subnormal) double
 _NEG_ZERO = int(np.array(-0.0).view(np.int64))  # the bits of -0.0, +inf and -inf
 _POS_INF = int(np.array(np.inf).view(np.int64))
@@ -939,7 +939,7 @@ def _newton_size(x: np.ndarray, pi: np.ndarray, args: tuple, ws: tuple) -> float
             sa += abs(Jmid[i, j])
             sy += abs(Y[i, j])
         na, ny = max(na, sa), max(ny, sy)
-    if not (na * ny * n * _EPS < 1.0):
+    if not (na * ny * n * _FLOAT_EPSILON < 1.0):
         return np.inf
     out = 0.0
     for i in range(n):
@@ -1071,7 +1071,7 @@ def _certify(
         unit_sizes,
     )
     ws = workspace(x.shape[0], args)
-    size = max(_newton_size(x, pi, args, ws), _EPS)
+    size = max(_newton_size(x, pi, args, ws), _FLOAT_EPSILON)
     for g in BOX_GROWTH:
         radius = g * size
         if not radius <= HOMOTOPY_MAX_BOX_RTOL:
