@@ -58,7 +58,7 @@ from ..statics.balance import (
     load_on_frame,
     point_closure_rows,
 )
-from ..statics.forces import default_rule
+from ..statics.forces import allocation_rule
 from ..tolerances import STATICS_SINGULAR_RTOL
 from .trajectory import JointTrajectory, checked_trajectory
 
@@ -330,27 +330,15 @@ def inverse_dynamics(
     load_arguments(None if callable(wrench) else wrench, frame, limits, mech.n_actuators)
     check_tolerance(singular_rtol, "singular_rtol", relative=True)
     flag(gravity, "gravity")
-    if (
-        isinstance(objective, str)
-        and objective == "norm"
-        and weights is None
-        and isinstance(limits, str)
-        and limits == "description"
-        and internal is None
-        and min_compression is None
-        and link_limits is None
-    ):
-        rule = default_rule(mech)  # AllocationRule.checked(mech), made once
-    else:
-        rule = AllocationRule.checked(
-            mech,
-            objective=objective,
-            weights=weights,
-            limits=limits,
-            internal=internal,
-            min_compression=min_compression,
-            link_limits=link_limits,
-        )
+    rule = allocation_rule(
+        mech,
+        objective=objective,
+        weights=weights,
+        limits=limits,
+        internal=internal,
+        min_compression=min_compression,
+        link_limits=link_limits,
+    )
     if trajectory.q.shape[1:] != (mech.nq,) or trajectory.v.shape[1:] != (mech.nv,):
         raise InvalidInput(
             f"the trajectory has q of width {trajectory.q.shape[1]} and v of width {trajectory.v.shape[1]}; "

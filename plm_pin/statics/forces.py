@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -374,7 +375,34 @@ def static_forces(
         AllocationInfeasible: the limits and conditions cannot all be met; the error carries
             the least-violating allocation and the saturated actuators.
     """
-    if (
+    options = dict(
+        objective=objective,
+        weights=weights,
+        limits=limits,
+        internal=internal,
+        min_compression=min_compression,
+        link_limits=link_limits,
+    )
+    if default_options(**options):
+        real_numbers(wrench, "wrench")  # load_arguments with the default limits
+        optional_name(frame, "frame")
+    else:
+        load_arguments(wrench, frame, limits, mech.n_actuators)
+    rule = allocation_rule(mech, **options)
+    balance = static_balance(mech, q, wrench, frame, gravity=gravity, singular_rtol=singular_rtol)
+    return solve_balance(mech, balance, rule)
+
+
+def default_options(
+    objective: object,
+    weights: object,
+    limits: object,
+    internal: object,
+    min_compression: object,
+    link_limits: object,
+) -> bool:
+    """Whether the allocation options are the defaults (minimum norm, the description's limits)."""
+    return (
         isinstance(objective, str)
         and objective == "norm"
         and weights is None
@@ -383,23 +411,12 @@ def static_forces(
         and internal is None
         and min_compression is None
         and link_limits is None
-    ):
-        real_numbers(wrench, "wrench")  # load_arguments with the default limits
-        optional_name(frame, "frame")
-        rule = default_rule(mech)
-    else:
-        load_arguments(wrench, frame, limits, mech.n_actuators)
-        rule = AllocationRule.checked(
-            mech,
-            objective=objective,
-            weights=weights,
-            limits=limits,
-            internal=internal,
-            min_compression=min_compression,
-            link_limits=link_limits,
-        )
-    balance = static_balance(mech, q, wrench, frame, gravity=gravity, singular_rtol=singular_rtol)
-    return solve_balance(mech, balance, rule)
+    )
+
+
+def allocation_rule(mech: Mechanism, **options: Any) -> AllocationRule:
+    """The checked rule of ``options`` (:meth:`AllocationRule.checked`); :func:`default_rule` for defaults."""
+    return default_rule(mech) if default_options(**options) else AllocationRule.checked(mech, **options)
 
 
 def default_rule(mech: Mechanism) -> AllocationRule:
