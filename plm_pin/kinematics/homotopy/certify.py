@@ -136,20 +136,6 @@ def _pfma2(lo: float, hi: float, y: float, blo: float, bhi: float) -> tuple[floa
     return _dn(lo + _dn(min(p, q))), _up(hi + _up(max(p, q)))
 
 
-@njit(cache=True)
-def _matmul(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Interval matrix product, A (m, k, 2), B (k, n, 2) (a new array; the kernels below use buffers)."""
-    m, k, n = A.shape[0], A.shape[1], B.shape[1]
-    out = np.zeros((m, n, 2))
-    for i in range(m):
-        for j in range(n):
-            lo, hi = 0.0, 0.0
-            for r in range(k):
-                lo, hi = _fma2(lo, hi, A[i, r, 0], A[i, r, 1], B[r, j, 0], B[r, j, 1])
-            out[i, j, 0], out[i, j, 1] = lo, hi
-    return out
-
-
 @njit(cache=True, inline="always")
 def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a] B[b]`` for stacks of interval 4 x 4 matrices, shape (., 4, 4, 2).

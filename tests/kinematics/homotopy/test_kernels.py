@@ -15,7 +15,13 @@ import numpy as np
 import pytest
 
 from plm_pin.kinematics.homotopy import generic_solution, polynomial_form, prepared
-from plm_pin.kinematics.homotopy.certify import _matmul, certify, interval_system, parameter_intervals
+from plm_pin.kinematics.homotopy.certify import (
+    _fma2,
+    _mm_into,
+    certify,
+    interval_system,
+    parameter_intervals,
+)
 from plm_pin.kinematics.homotopy.evaluation import evaluate
 from plm_pin.kinematics.homotopy.generic import solve_generic
 from plm_pin.kinematics.homotopy.polynomial import from_configuration, to_configuration
@@ -117,21 +123,49 @@ def test_interval_system_encloses_the_complex_evaluation(name):
                 assert np.all(J[..., 0] <= Jy.real) and np.all(Jy.real <= J[..., 1])
 
 
+def _exact_range(alo, ahi, blo, bhi):
+    """Exact range of ``a b`` over [alo, ahi] x [blo, bhi]: a bilinear product's extremes are at vertices."""
+    vertices = [Fraction(a) * Fraction(b) for a in (alo, ahi) for b in (blo, bhi)]
+    return min(vertices), max(vertices)
+
+
+def _interval_entries(rng, shape):
+    """Random intervals (lo, hi on the last axis): point, narrow and wide ones, some exactly zero."""
+    lo = rng.normal(size=shape)
+    width = rng.choice([0.0, 1e-3, 1.0], size=shape) * rng.uniform(0, 1, size=shape)
+    box = np.stack([lo, lo + width], axis=-1)
+    box[rng.random(size=shape) < 0.2] = 0.0
+    return box
+
+
 def test_interval_products_enclose_the_exact_product():
-    """Interval matrix products contain the exact rational product of any point in the boxes."""
+    """_fma2 and _mm_into contain the exact rational result for every point of the boxes.
+
+    Each entry of the product is a sum of terms with independent factors, so its exact range over
+    the boxes is the sum of each term's exact range; the computed bounds must lie outside it
+    (outward rounding) and within round-off of it.
+    """
     rng = np.random.default_rng(1)
+    for _ in range(200):
+        s, a, b = _interval_entries(rng, (3,))
+        lo, hi = _fma2(s[0], s[1], a[0], a[1], b[0], b[1])
+        plo, phi = _exact_range(*a, *b)
+        exact = (Fraction(s[0]) + plo, Fraction(s[1]) + phi)
+        assert Fraction(lo) <= exact[0] and exact[1] <= Fraction(hi)
+        assert exact[0] - Fraction(lo) <= 1e-12 and Fraction(hi) - exact[1] <= 1e-12
     for _ in range(20):
-        lo = rng.normal(size=(3, 4))
-        A = np.stack([lo, lo + rng.uniform(0, 1e-3, size=lo.shape)], axis=-1)
-        lo = rng.normal(size=(4, 2))
-        B = np.stack([lo, lo + rng.uniform(0, 1e-3, size=lo.shape)], axis=-1)
-        C = _matmul(A, B)
-        a = A[..., 0] if rng.random() < 0.5 else A[..., 1]  # a vertex of the box
-        b = B[..., 1]
-        for i in range(3):
-            for j in range(2):
-                exact = sum(Fraction(a[i, r]) * Fraction(b[r, j]) for r in range(4))
-                assert Fraction(C[i, j, 0]) <= exact <= Fraction(C[i, j, 1])
+        A = _interval_entries(rng, (3, 4, 4))
+        B = _interval_entries(rng, (2, 4, 4))
+        C = np.full((3, 4, 4, 2), np.nan)
+        _mm_into(A, 2, B, 1, C, 1)
+        assert np.isnan(C[[0, 2]]).all()  # the other matrices of the stack are untouched
+        for i in range(4):
+            for j in range(4):
+                ranges = [_exact_range(*A[2, i, r], *B[1, r, j]) for r in range(4)]
+                exact = (sum(r[0] for r in ranges), sum(r[1] for r in ranges))
+                lo, hi = Fraction(C[1, i, j, 0]), Fraction(C[1, i, j, 1])
+                assert lo <= exact[0] and exact[1] <= hi
+                assert exact[0] - lo <= 1e-12 and hi - exact[1] <= 1e-12
 
 
 def test_import_plm_pin_does_not_import_numba():
