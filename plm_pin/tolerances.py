@@ -53,6 +53,7 @@ __all__ = [
     "HOMOTOPY_ENTRY_TOL",
     "HOMOTOPY_INFINITY_RTOL",
     "HOMOTOPY_MAX_BOX_RTOL",
+    "HOMOTOPY_MIN_STEP",
     "HOMOTOPY_REAL_RTOL",
     "HOMOTOPY_ROOT_RTOL",
     "HOMOTOPY_SAME_ROOT_RTOL",
@@ -518,6 +519,9 @@ that far, and a singular root at infinity stops the tracker before a tighter bou
 
 HOMOTOPY_CORRECTOR_TOL = 1e-9
 """[-] Relative Newton correction at which a homotopy corrector step is accepted."""
+
+HOMOTOPY_MIN_STEP = 1e-9
+"""[-] Smallest step in the path parameter t before a homotopy path is declared failed."""
 
 HOMOTOPY_MAX_BOX_RTOL = 1e-6
 """[-] Largest relative half-width of a Krawczyk box (a root certified farther out is not certified)."""

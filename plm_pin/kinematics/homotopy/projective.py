@@ -29,6 +29,7 @@ from numba import njit
 from ...tolerances import (
     HOMOTOPY_CORRECTOR_TOL,
     HOMOTOPY_INFINITY_RTOL,
+    HOMOTOPY_MIN_STEP,
     HOMOTOPY_ROOT_RTOL,
     HOMOTOPY_SINGULAR_COND,
 )
@@ -40,7 +41,6 @@ from .tracking import (
     FAILED,
     FINAL_NEWTON,
     MAX_STEP,
-    MIN_STEP,
     REACHED,
     path_norm,
     solve_linear,
@@ -196,7 +196,7 @@ def track_projective(
         else:
             h *= 0.5
             streak = 0
-            if h < MIN_STEP:
+            if h < HOMOTOPY_MIN_STEP:
                 code = FAILED
                 break
     if code == REACHED:

@@ -13,7 +13,7 @@ Endgame: a path whose norm passes :data:`HOMOTOPY_DIVERGED_NORM` goes to infinit
 fewer finite solutions), and so does a path whose step is rejected while its norm grows like a
 power of :math:`1/(1 - t)` over the last decades (:func:`_to_infinity`: near a root at infinity
 the affine Jacobian is too ill-conditioned to follow the path much further); a path whose step
-falls below :data:`MIN_STEP` fails (a singular end or a near-collision); a path that reaches
+falls below :data:`HOMOTOPY_MIN_STEP` fails (a singular end or a near-collision); a path that reaches
 :math:`t = 1` gets :data:`FINAL_NEWTON` Newton steps. Because the start point is generic
 complex, the straight segment avoids the discriminant (a complex hypersurface) with probability
 one, except possibly at :math:`t = 1` (the gamma trick in its parameter-space form).
@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...tolerances import HOMOTOPY_CORRECTOR_TOL, HOMOTOPY_DIVERGED_NORM
+from ...tolerances import HOMOTOPY_CORRECTOR_TOL, HOMOTOPY_DIVERGED_NORM, HOMOTOPY_MIN_STEP
 from .evaluation import system, workspace_for
 
 REACHED, DIVERGED, FAILED, GROWING = 0, 1, 2, 3
@@ -32,8 +32,6 @@ REACHED, DIVERGED, FAILED, GROWING = 0, 1, 2, 3
 infinity by the endgame's growth test (:func:`_to_infinity`)."""
 
 CORRECTOR_STEPS = 3
-MIN_STEP = 1e-9  # TOLERANCE -> tolerances.py
-"""Smallest step in t [-] before a path is declared failed."""
 MAX_STEP = 0.2
 FINAL_NEWTON = 4
 ENDGAME_GROWTH = 2.0
@@ -262,11 +260,11 @@ def track(
                 marks[0], marks[1], marks[2] = marks[1], marks[2], path_norm(x)
         else:
             fresh = True  # k1 (at x) still holds
-            if _to_infinity(x, k1, 1.0 - t, gap, marks):  # no use halving the step down to MIN_STEP
+            if _to_infinity(x, k1, 1.0 - t, gap, marks):  # no use halving the step down to HOMOTOPY_MIN_STEP
                 return x, GROWING, steps, t
             h *= 0.5
             streak = 0
-            if h < MIN_STEP:
+            if h < HOMOTOPY_MIN_STEP:
                 if path_norm(x) > 1e3 * (1.0 + norm0):
                     return x, DIVERGED, steps, t
                 return x, FAILED, steps, t
