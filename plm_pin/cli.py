@@ -5,6 +5,9 @@ from __future__ import annotations
 import contextlib
 import csv
 import json
+import math
+import multiprocessing
+import os
 import shlex
 import signal
 import sys
@@ -12,6 +15,7 @@ import threading
 import warnings
 import webbrowser
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -1032,12 +1036,17 @@ def report(
             "joint task (--over elbow=-1:1:21), repeatable",
         ),
     ] = None,
+    jobs: Annotated[
+        int | None,
+        typer.Option("--jobs", min=1, help="all: studies run at once, each in a process (default: all CPUs)"),
+    ] = None,
 ) -> None:
     """Write study reports: per study a self-contained HTML page and results.json, then index.html.
 
     Each report is written to a temporary folder inside OUT, then swapped in
     whole: a failed or interrupted run leaves the previous report as it was.
-    Nothing is written outside OUT.
+    Nothing is written outside OUT. Several studies run in parallel processes
+    (--jobs, default all CPUs), each writing its own report.
     """
     require_renderer()  # a missing report extra fails now, not after the studies ran
     try:
@@ -1072,34 +1081,119 @@ def report(
         *columns, TimeElapsedColumn(), console=errors, transient=True, disable=not errors.is_terminal
     )
     written, failed = 0, 0
+    workers = min(jobs or _cpus(), len(runs))
     with progress:
         task = progress.add_task("reports", total=len(runs))
-        for study, chosen in runs:
-            progress.update(task, description=study.name)
-            try:
-                result = run_study(
-                    study,
+        if workers > 1:
+            progress.update(task, description=f"{len(runs)} studies in {workers} processes")
+            lines = _reports_in_processes(runs, root, out, case_words, case, workers)
+        else:
+            lines = (
+                _study_report(
+                    study.name,
                     chosen,
-                    command=_regenerate(study, chosen, out, case_words),
+                    root,
+                    _regenerate(study, chosen, out, case_words),
+                    case if study.takes_case else None,
                     observer=_show_step(progress, task, study.name),
-                    case=case if study.takes_case else None,
                     loaded=loaded.get(chosen) if chosen is not None else None,
                 )
-                path = write_report(result, root)
-            except PlmError as exc:
-                errors.print(f"[bold red]error:[/] {escape(str(exc))}", highlight=False, soft_wrap=True)
-                failed += 1
-            else:
+                for study, chosen in runs
+            )
+        for message, ok in lines:
+            if ok:
                 written += 1
-                console.print(
-                    f"wrote {path} ({result.elapsed:.1f} s)", markup=False, highlight=False, soft_wrap=True
-                )
+                console.print(message, markup=False, highlight=False, soft_wrap=True)
+            else:
+                failed += 1
+                errors.print(f"[bold red]error:[/] {escape(message)}", highlight=False, soft_wrap=True)
             progress.advance(task)
     if written:
         index = write_index(root)
         console.print(f"wrote {index}", markup=False, highlight=False, soft_wrap=True)
     if failed:
         raise typer.Exit(code=1)
+
+
+def _cpus() -> int:
+    """The CPUs this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def _study_report(
+    name: str,
+    chosen: str | None,
+    root: Path,
+    command: str,
+    case: StudyCase | None,
+    observer: Callable[[str], None] | None = None,
+    loaded: Mechanism | None = None,
+) -> tuple[str, bool]:
+    """Run study ``name`` and write its report into ``root`` (here, or as a worker process's share).
+
+    ``chosen``, ``command``, ``case``, ``observer`` and ``loaded``: as :func:`run_study` takes them.
+
+    Returns:
+        The line to print (where the report went and its time, or the error) and whether it was written.
+    """
+    try:
+        result = run_study(
+            find_study(name), chosen, command=command, observer=observer, case=case, loaded=loaded
+        )
+        path = write_report(result, root)
+    except PlmError as exc:
+        return str(exc), False
+    return f"wrote {path} ({result.elapsed:.1f} s)", True
+
+
+def _reports_in_processes(
+    runs: list[tuple[Study, str | None]],
+    root: Path,
+    out: Path,
+    case_words: list[str],
+    case: StudyCase,
+    workers: int,
+) -> Iterator[tuple[str, bool]]:
+    """Run the studies in ``workers`` processes, yielding each one's line as it ends.
+
+    Fresh (spawned) processes: the parent's threads (the progress display) are not copied into
+    them. Each writes its own report folder; the writer is safe for concurrent writers.
+    """
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(workers, mp_context=context, initializer=_one_thread) as pool:
+        jobs = [
+            pool.submit(
+                _study_report,
+                study.name,
+                chosen,
+                root,
+                _regenerate(study, chosen, out, case_words),
+                case if study.takes_case else None,
+            )
+            for study, chosen in _longest_first(runs, root)
+        ]
+        for job in as_completed(jobs):
+            yield job.result()
+
+
+def _one_thread() -> None:
+    """A report process's set-up: one thread for numba's work (the processes share the cores)."""
+    os.environ["NUMBA_NUM_THREADS"] = "1"  # read when numba is first imported, by the studies
+
+
+def _longest_first(runs: list[tuple[Study, str | None]], root: Path) -> list[tuple[Study, str | None]]:
+    """``runs`` by the run time of each study's last report in ``root``, longest first (unknown ones first).
+
+    Started first, the long studies do not end alone on one process while the others idle.
+    """
+    last: dict[str, float] = {}
+    for path in root.glob("*/results.json"):
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+            last[str(data["study"])] = float(data["elapsed_s"])
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+    return sorted(runs, key=lambda run: -last.get(run[0].name, math.inf))
 
 
 def _numbers(text: str, what: str) -> list[float]:

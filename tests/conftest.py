@@ -197,7 +197,8 @@ def report_all(tmp_path_factory) -> ReportAll:
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(cli, "run_study", recorded)
-        invoked = CliRunner().invoke(cli.app, ["report", "all", "--out", str(out)])
+        # one process: the recording sees the studies run here (--jobs 2 is checked in test_cli)
+        invoked = CliRunner().invoke(cli.app, ["report", "all", "--out", str(out), "--jobs", "1"])
     return ReportAll(out, invoked.exit_code, invoked.output, results)
 
 

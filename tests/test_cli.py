@@ -307,6 +307,42 @@ def test_report_all_runs_every_study_and_indexes_them(report_all):
         assert shown > 20 and missing == [], folder
 
 
+@pytest.mark.slow
+def test_report_studies_in_two_processes_write_what_one_process_writes(tmp_path):
+    """--jobs 2: each study's report is written by a worker process, the same tables as in one process.
+
+    A study that fails in a worker comes back as its one-line error; the others are written.
+    """
+    root = tmp_path / "reports"
+    root.mkdir()
+    runs = [(cli.find_study("enferadi2017"), None), (cli.find_study("harada2011"), None)]
+    runs.append((cli.find_study("overview"), str(tmp_path / "missing.urdf")))
+    lines = list(cli._reports_in_processes(runs, root, root, [], cli.StudyCase(), 2))
+    written = sorted(line for line, ok in lines if ok)
+    assert [ok for _, ok in lines].count(False) == 1, lines
+    assert "missing.urdf" in next(line for line, ok in lines if not ok)
+    assert [line.split()[1] for line in written] == [
+        str(root / "enferadi2017" / "report.html"),
+        str(root / "harada2011" / "report.html"),
+    ]
+    here = cli.run_study(cli.find_study("enferadi2017"), command="plm-pin report enferadi2017 --out x")
+    there = json.loads((root / "enferadi2017" / "results.json").read_text())
+    assert there["agreement"] == json.loads(json.dumps(here.to_dict()))["agreement"]
+    assert there["sections"] == json.loads(json.dumps(here.to_dict()))["sections"]
+
+
+def test_report_processes_start_the_longest_studies_first(tmp_path):
+    """Runs are ordered by the last report's run time in the output folder, unknown studies first."""
+    for name, seconds in (("harada2011", 3.0), ("zhao2011", 14.0), ("enferadi2017", 2.0)):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "results.json").write_text(json.dumps({"study": name, "elapsed_s": seconds}))
+    (tmp_path / "broken").mkdir()
+    (tmp_path / "broken" / "results.json").write_text("{")
+    runs = [(cli.find_study(n), None) for n in ("enferadi2017", "harada2011", "harada2015", "zhao2011")]
+    ordered = [study.name for study, _ in cli._longest_first(runs, tmp_path)]
+    assert ordered == ["harada2015", "zhao2011", "harada2011", "enferadi2017"]
+
+
 def test_no_arguments_shows_help():
     """Running with no command prints the usage and lists the commands."""
     result = runner.invoke(app, [])
