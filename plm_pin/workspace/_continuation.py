@@ -120,7 +120,7 @@ class IKEvaluator:
         """Tree velocity size."""
         return int(self.model.nv)
 
-    def solve(self, x: np.ndarray, q0: np.ndarray, tol: float) -> np.ndarray | None:
+    def solve(self, x: np.ndarray, q0: np.ndarray, tol: float, data: bool = True) -> np.ndarray | None:
         """Configuration at task coordinates ``x`` by Newton from ``q0``, or None.
 
         :func:`plm_pin.core.assembly.newton` without its polishing step: the attempt
@@ -128,13 +128,14 @@ class IKEvaluator:
         :data:`~plm_pin.core.assembly.STALL_RATIO`, or after
         :data:`~plm_pin.core.assembly.NEWTON_MAX_ITERATIONS`; on the compiled kernels where
         they serve the mechanism. On success the data holds the joint Jacobians and frame
-        placements at the returned configuration (read them with :meth:`jacobian`).
+        placements at the returned configuration (read them with :meth:`jacobian`); on the
+        kernels, only if ``data``.
         """
         target = TaskTarget(self.task, x)
         if self.kernel is not None:
             solved = self.kernel.newton(q0, None, tol, target, polish=False)
-            if solved is None:
-                return None
+            if solved is None or not data:
+                return None if solved is None else solved[0]
             pin.computeJointJacobians(self.model, self.data, solved[0])
             pin.updateFramePlacements(self.model, self.data)
             return solved[0]
@@ -484,7 +485,10 @@ def sweep_rows(
     i0 = seed // n1
     row = np.zeros(state.reached.size, dtype=bool)
     row[i0 * n1 : (i0 + 1) * n1] = True
-    flood(ev, state, metrics, target_mode, [seed], tol, row)
+    if ev.kernel is not None:
+        _walk_seed_row(ev, kin, state, metrics, seed, target_mode, tol)
+    else:
+        flood(ev, state, metrics, target_mode, [seed], tol, row)
     _walk_rows(ev, kin, state, metrics, i0, target_mode, tol)
     grid = state.reached.reshape(n0, n1)
     edge = np.zeros_like(grid)
@@ -494,6 +498,47 @@ def sweep_rows(
     edge[:, :-1] |= ~grid[:, 1:]
     border = np.flatnonzero((grid & edge).reshape(-1))
     flood(ev, state, metrics, target_mode, border.tolist(), tol)
+
+
+def _walk_seed_row(
+    ev: IKEvaluator,
+    kin: BatchKinematics,
+    state: GridState,
+    metrics: Metrics,
+    seed: int,
+    target_mode: tuple[int, ...],
+    tol: float,
+) -> None:
+    """The seed's row, outward from the seed on each side: :func:`flood` kept to the row, on the kernels.
+
+    Each point is solved by the compiled Newton from its side's line extrapolated (as
+    :func:`flood` does); a side ends at its first point that does not converge. The side's
+    Jacobians, working modes and metrics then come in one batch, and it is cut at its first
+    point out of ``target_mode``, where :func:`flood` would have stopped.
+    """
+    n1 = state.shape[1]
+    i0, j0 = divmod(seed, n1)
+    wanted = np.array(target_mode)
+    for d, step in ((2, 1), (3, -1)):  # the directions +1 and -1 along the row (see _neighbours)
+        line, cols = [state.q[seed]], []
+        j = j0 + step
+        while 0 <= j < n1 and not state.reached[i0 * n1 + j]:
+            q = ev.solve(state.poses[i0 * n1 + j], ev.extrapolate(line[:-4:-1]), tol, data=False)
+            if q is None:
+                break
+            line.append(q)
+            cols.append(j)
+            j += step
+        index = i0 * n1 + np.array(cols, dtype=np.int64)
+        if index.size:
+            q, ok, A, R = _batch_solve(ev, kin, np.array(line[1:]), state.poses[index], tol)
+            modes = batch_modes(A, ev.legs, kin.turns(R, ev.legs))
+            good = ok & np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
+            k = index.size if good.all() else int(np.argmin(good))
+            state.accept_batch(index[:k], q[:k], modes[:k], A[:k], metrics)
+            j = j0 + step * (k + 1)  # the point where the side stopped
+        if 0 <= j < n1:
+            state.tried[i0 * n1 + j] |= 1 << d
 
 
 LAG = 2

@@ -15,12 +15,13 @@ The metrics are those of :func:`plm_pin.workspace.manipulability` and
 Cost (``make bench``): on trees of one-axis joints and free-flyers with point closures
 and a task of translations plus a planar yaw or all three angles (the 2-PRRRP tables, the
 n-PSS), 2-D grids are solved a row at a time by one batched Newton over the row, both
-sides of the seed's row together (:mod:`plm_pin.workspace._batch`, numpy forward kinematics
-from the model's joint placements), about 2 Pinocchio-equivalent passes per pose, in one
-process; the points the rows miss are filled point by point. Other mechanisms go point by
-point (one Newton step per pose, exact Jacobians, metrics in batches); their grids of
-20,000 poses or more are split in bands of rows solved in parallel processes (``workers``,
-default all CPUs), then joined across the band borders.
+sides of the seed's row together (on the compiled kernels, else
+:mod:`plm_pin.workspace._batch`'s numpy forward kinematics from the model's joint placements),
+in one process, after the seed's row (walked point by point by the compiled Newton, its
+modes and metrics in one batch); the points the rows miss are filled point by point.
+Other mechanisms go point by point (one Newton step per pose, exact Jacobians, metrics in
+batches); their grids of 20,000 poses or more are split in bands of rows solved in parallel
+processes (``workers``, default all CPUs), then joined across the band borders.
 """
 
 from __future__ import annotations
