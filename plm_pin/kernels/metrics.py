@@ -10,7 +10,10 @@ a Householder reduction to a tridiagonal matrix and the implicit QL iteration wi
 shifts (values only, no allocation). Both are backward stable: each eigenvalue is exact for a
 symmetric matrix within a small multiple of round-off of the Gram's norm, so it is accurate to
 about :math:`\epsilon \lambda_{max}`, which :data:`plm_pin.tolerances.GRAM_RTOL` accounts for.
-The same values and the same acceptance tests as the numpy path; a pose that fails them (or
+Closure rows that are exactly zero (the out-of-plane rows of a planar loop closed by 3-D point
+closures) are dropped first: they change none of the values, and without them such a
+system is often square, solved without the normal equations. The same values and the same
+acceptance tests as the numpy path; a pose that fails them (or
 whose QL iteration does not converge) is flagged for that path's SVD. numba is imported only
 here; the functions compile on first use (cached on disk).
 """
@@ -280,7 +283,6 @@ def square_metrics(
     """
     B, n, nv = A.shape
     k, na = mobility, actuated_v.shape[0]
-    square = n == nv
     M = np.empty((nv, nv))
     S = np.empty((nv, k))
     N = np.empty((nv, k))
@@ -294,9 +296,24 @@ def square_metrics(
     work = np.empty(big)
     s_ce, s_c, s_phi, s_t, s_x = np.empty(big), np.empty(big), np.empty(big), np.empty(big), np.empty(big)
     rank = nv - k
+    live = np.empty((n, nv))
+    m_all = m
     for p in range(B):
         good[p] = False
-        Ap = A[p]
+        m = 0  # A without its zero closure rows (a planar loop's out-of-plane ones): the same metrics
+        for i in range(m_all):
+            zero = True
+            for c in range(nv):
+                if A[p, i, c] != 0.0:
+                    zero = False
+                    break
+            if not zero:
+                live[m] = A[p, i]
+                m += 1
+        for j in range(k):
+            live[m + j] = A[p, m_all + j]
+        Ap = live[: m + k]
+        square = m + k == nv
         if square:  # A S = [0; I]
             M[:, :] = Ap
             S[:, :] = 0.0
@@ -306,7 +323,7 @@ def square_metrics(
             for a in range(nv):
                 for b in range(a + 1):
                     s = 0.0
-                    for i in range(n):
+                    for i in range(m + k):
                         s += Ap[i, a] * Ap[i, b]
                     M[a, b] = s
                     M[b, a] = s
@@ -353,7 +370,9 @@ def square_metrics(
                 CT[a, b] = s
         n_ce = _gram_eigenvalues(CT, G, work, s_ce)
         n_c = _gram_eigenvalues(C, G, work, s_c)
-        _gram_eigenvalues(Ap[:m], G, work, s_phi)
+        s_phi[:] = 0.0  # (fewer live rows than the rank: the rank-th value is zero)
+        if m > 0:
+            _gram_eigenvalues(Ap[:m], G, work, s_phi)
         _gram_eigenvalues(T_inv, G, work, s_t)
         _gram_eigenvalues(Ap[m:], G, work, s_x)
         inverse = 1.0 / (math.sqrt(s_t[0]) * math.sqrt(s_x[0]))
