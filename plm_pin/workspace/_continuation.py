@@ -475,7 +475,8 @@ def sweep_rows(
 ) -> None:
     """Solve a 2-D grid row by row with the batched evaluator, then fill what it missed point by point.
 
-    The seed's row is walked by :func:`flood`; the rows on either side of it are then solved
+    The seed's row is walked by :func:`_walk_seed_row` on the kernels (else by :func:`flood`
+    kept to the row); the rows on either side of it are then solved
     by :func:`_walk_rows`, both sides in the same batches, in this process (two processes,
     one per side, were slower on two cores: the fork and the merge cost more than the second
     side saves). Whatever stays
@@ -483,11 +484,11 @@ def sweep_rows(
     """
     n0, n1 = state.shape
     i0 = seed // n1
-    row = np.zeros(state.reached.size, dtype=bool)
-    row[i0 * n1 : (i0 + 1) * n1] = True
     if ev.kernel is not None:
         _walk_seed_row(ev, kin, state, metrics, seed, target_mode, tol)
     else:
+        row = np.zeros(state.reached.size, dtype=bool)
+        row[i0 * n1 : (i0 + 1) * n1] = True
         flood(ev, state, metrics, target_mode, [seed], tol, row)
     _walk_rows(ev, kin, state, metrics, i0, target_mode, tol)
     grid = state.reached.reshape(n0, n1)
