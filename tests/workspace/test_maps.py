@@ -143,6 +143,37 @@ def test_parallel_workers_give_the_same_map():
     np.testing.assert_allclose(one.actuators, two.actuators, atol=1e-11, equal_nan=True)
 
 
+@pytest.mark.parametrize(
+    ("name", "half_width"), [("harada2011_3d4m", (0.09, 0.08)), ("zhao2011_8pss", (0.03, 0.03))]
+)
+def test_map_on_the_kernels_equals_the_pinocchio_path(name, half_width, monkeypatch):
+    """The compiled path (seed row, batched rows, metrics) and the Pinocchio/numpy path give one map.
+
+    On the 3D4M the grid runs past the reach of the rods, so the edges are filled point by point.
+    """
+    mech = preset(name)
+    x0 = task_pose(mech, mech.q_ref)
+    dofs = mech.task.dofs
+    values = tuple(
+        x0[dofs.index(a)] + np.linspace(-h, h, 15) for a, h in zip(("x", "y"), half_width, strict=True)
+    )
+    compiled = workspace_map(mech, ("x", "y"), values, workers=1)
+    monkeypatch.setenv("PLM_PIN_KERNELS", "0")
+    plain = workspace_map(mech, ("x", "y"), values, workers=1)
+    assert compiled.reachable.any() and (name != "harada2011_3d4m" or not compiled.reachable.all())
+    np.testing.assert_array_equal(compiled.reachable, plain.reachable)
+    np.testing.assert_array_equal(compiled.mode, plain.mode)
+    for metric in (
+        "manipulability",
+        "condition_number",
+        "constraint_margin",
+        "inverse_margin",
+        "direct_margin",
+    ):
+        np.testing.assert_allclose(compiled.metric(metric), plain.metric(metric), rtol=1e-8, equal_nan=True)
+    np.testing.assert_allclose(compiled.actuators, plain.actuators, atol=1e-11, equal_nan=True)
+
+
 def test_three_axis_grid_follows_the_papers_inverse_kinematics_and_the_2d_map():
     """An x-y-theta grid: actuators follow eq. (2) with the (M.5) signs; its theta slice is the x-y map."""
     mech = preset("harada2011_3d4m")
