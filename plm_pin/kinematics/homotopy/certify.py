@@ -493,7 +493,7 @@ def workspace(n: int, args: tuple) -> tuple:
     )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _system_into(xi: np.ndarray, pi: np.ndarray, ws: tuple, values: bool, again: bool, args: tuple) -> None:
     """:func:`interval_system` into the buffers ``F`` and ``F_x`` of ``ws`` (:func:`workspace`).
 
@@ -526,7 +526,7 @@ def _system_into(xi: np.ndarray, pi: np.ndarray, ws: tuple, values: bool, again:
     _combine(xi, ws, combination, unit_offsets, unit_sizes, values)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _joints(
     xi: np.ndarray,
     pflat: np.ndarray,
@@ -578,7 +578,7 @@ def _joints(
             _mm_into(A, i, dX, offset[i] + c, AdX, offset[i] + c)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _frames(
     n: int,
     ws: tuple,
@@ -633,7 +633,7 @@ def _frames(
             i = parent[i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _closures(
     n: int,
     ws: tuple,
@@ -721,7 +721,7 @@ def _closures(
                     de[o + 3 + r, j, 0], de[o + 3 + r, j, 1] = _axis_product(dE, r, closure_axis, c)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _combine(
     xi: np.ndarray,
     ws: tuple,
