@@ -134,10 +134,11 @@ class IKEvaluator:
         target = TaskTarget(self.task, x)
         if self.kernel is not None:
             solved = self.kernel.newton(q0, None, tol, target, polish=False)
-            if solved is None or not data:
-                return None if solved is None else solved[0]
-            pin.computeJointJacobians(self.model, self.data, solved[0])
-            pin.updateFramePlacements(self.model, self.data)
+            if solved is None:
+                return None
+            if data:
+                pin.computeJointJacobians(self.model, self.data, solved[0])
+                pin.updateFramePlacements(self.model, self.data)
             return solved[0]
         found = newton(
             self.model,
@@ -183,6 +184,11 @@ class IKEvaluator:
 def compatible(mode: Sequence[int], target: Sequence[int]) -> bool:
     """Whether ``mode`` is the working mode ``target`` (a zero sign, a singular leg, matches either)."""
     return all(m == t or m == 0 or t == 0 for m, t in zip(mode, target, strict=True))
+
+
+def compatible_rows(modes: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """:func:`compatible` for each row of ``modes`` (B, n_legs), as a boolean array (B,)."""
+    return np.all((modes == target) | (modes == 0) | (target == 0), axis=1)
 
 
 BATCH = 1024
@@ -534,7 +540,7 @@ def _walk_seed_row(
         if index.size:
             q, ok, A, R = _batch_solve(ev, kin, np.array(line[1:]), state.poses[index], tol)
             modes = batch_modes(A, ev.legs, kin.turns(R, ev.legs))
-            good = ok & np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
+            good = ok & compatible_rows(modes, wanted)
             k = index.size if good.all() else int(np.argmin(good))
             state.accept_batch(index[:k], q[:k], modes[:k], A[:k], metrics)
             j = j0 + step * (k + 1)  # the point where the side stopped
@@ -603,7 +609,7 @@ def _walk_rows(
         if not ok.all():  # (copies of R, the largest array, only where some point failed)
             A, R, q, row, col = A[ok], R[ok], q[ok], row[ok], col[ok]
         modes = batch_modes(A, ev.legs, kin.turns(R, ev.legs))
-        fits = np.all((modes == wanted) | (modes == 0) | (wanted == 0), axis=1)
+        fits = compatible_rows(modes, wanted)
         if not fits.all():
             A, q, modes, row, col = A[fits], q[fits], modes[fits], row[fits], col[fits]
         state.accept_batch(row * n1 + col, q, modes, A, metrics)
