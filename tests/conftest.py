@@ -209,14 +209,19 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     The tests reading the session's ``report_all`` share one unit, so ``report all`` runs once;
     every other test shares one with its module, so a module fixture (the docs build, the wheel's
     venv, an overview run) is built once. That unit comes first, then the modules holding slow
-    tests, so the short ones fill the end of both workers. A run without xdist ignores the groups.
+    tests, so the short ones fill the end of both workers. The tests of the installed wheel come
+    last: its venv takes the kernels the other tests compiled (``tests/test_package.py``).
+    A run without xdist ignores the groups.
     """
     groups = {
         item: "report_all" if "report_all" in item.fixturenames else item.nodeid.split("::")[0]
         for item in items
     }
     slow = {groups[item] for item in items if item.get_closest_marker("slow")}
-    items.sort(key=lambda item: (groups[item] != "report_all", groups[item] not in slow))
+    wheel = {groups[item] for item in items if "wheel_venv" in item.fixturenames}
+    items.sort(
+        key=lambda item: (groups[item] in wheel, groups[item] != "report_all", groups[item] not in slow)
+    )
     for item in items:
         item.add_marker(pytest.mark.xdist_group(groups[item]))
 

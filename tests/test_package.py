@@ -6,6 +6,7 @@ import importlib
 import json
 import os
 import pkgutil
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -137,7 +138,33 @@ def wheel_venv(tmp_path_factory) -> Path:
         check=True,
         capture_output=True,
     )
+    where = "import os, plm_pin; print(os.path.dirname(plm_pin.__file__))"
+    installed = subprocess.run(
+        [str(python), "-c", where], cwd=tmp_path, capture_output=True, text=True, check=True, env=OUTSIDE
+    )
+    _share_compiled_cache(Path(installed.stdout.strip()))
     return venv / "bin"
+
+
+def _share_compiled_cache(installed: Path) -> None:
+    """Give the package installed at ``installed`` the checkout's compiled kernels (numba's cache files).
+
+    numba keys a cached function on its source file's modification time and size: each installed
+    file identical to the checkout's gets the checkout's time and its cache files, so the installed
+    package loads what the checkout's tests compiled instead of compiling every kernel again (minutes
+    on a 2-core machine). A kernel the checkout has not compiled is compiled where it is installed.
+    The tests using the venv run last (``tests/conftest.py``), when the checkout's cache is filled.
+    """
+    for source in (REPO / "plm_pin").rglob("*.py"):
+        cached = sorted(source.parent.glob(f"__pycache__/{source.stem}.*.nb[ic]"))
+        target = installed / source.relative_to(REPO / "plm_pin")
+        if not cached or not target.is_file() or target.read_bytes() != source.read_bytes():
+            continue
+        stat = source.stat()
+        os.utime(target, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+        (target.parent / "__pycache__").mkdir(exist_ok=True)
+        for file in cached:
+            shutil.copy2(file, target.parent / "__pycache__" / file.name)
 
 
 @pytest.mark.slow
