@@ -499,7 +499,9 @@ def _system_into(xi: np.ndarray, pi: np.ndarray, ws: tuple, values: bool, again:
 
     ``args``: the form's arrays (:meth:`~.form.PolynomialForm.kernel_args`). Without ``values``,
     ``F_x`` alone (``F`` is left unset); ``again``: ``ws`` holds a pass with the same parameters
-    (:func:`_joints`). Inlined in its callers: a call passes every buffer of ``ws``.
+    (:func:`_joints`). Its callers pass the flags as ``np.bool_(True)`` or ``np.bool_(False)``:
+    numba compiles a function once per literal argument, and a bare ``True`` would compile the
+    system (and everything it calls) once per combination of flags, about half a minute each.
     """
     (
         parent,
@@ -831,7 +833,7 @@ def interval_system(
         unit_sizes,
     )
     ws = workspace(xi.shape[0], args)
-    _system_into(xi, pi, ws, True, False, args)
+    _system_into(xi, pi, ws, np.bool_(True), np.bool_(False), args)
     return ws[_F], ws[_J]
 
 
@@ -909,7 +911,7 @@ def _newton_size(x: np.ndarray, pi: np.ndarray, args: tuple, ws: tuple) -> float
     xi, Fx = ws[_XI], ws[_FX]
     for i in range(n):
         xi[i, 0] = xi[i, 1] = x[i]
-    _system_into(xi, pi, ws, True, False, args)
+    _system_into(xi, pi, ws, np.bool_(True), np.bool_(False), args)
     F = ws[_F]
     for i in range(n):
         Fx[i, 0], Fx[i, 1] = F[i, 0], F[i, 1]
@@ -968,7 +970,7 @@ def _krawczyk(
     for i in range(n):
         r = radius * (1.0 + abs(x[i]))
         box[i, 0], box[i, 1] = _dn(x[i] - r), _up(x[i] + r)
-    _system_into(box, pi, ws, False, reuse, args)
+    _system_into(box, pi, ws, np.bool_(False), reuse, args)
     JX = ws[_J]
     if not reuse and not _midpoint_inverse(JX, ws[_JMID], ws[_LU], ws[_PIV], ws[_Y]):
         return False
@@ -1009,7 +1011,7 @@ def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.n
     Y is the inverse of the midpoint of the interval Jacobian (any matrix keeps the test
     rigorous); the test fails when that midpoint is singular.
     """
-    return _krawczyk(x, radius, pi, args, Fx, workspace(x.shape[0], args), False)
+    return _krawczyk(x, radius, pi, args, Fx, workspace(x.shape[0], args), np.bool_(False))
 
 
 @njit(cache=True)
@@ -1062,7 +1064,7 @@ def _certify(
         radius = g * size
         if not radius <= HOMOTOPY_MAX_BOX_RTOL:
             break
-        if _krawczyk(x, radius, pi, args, ws[_FX], ws, True):
+        if _krawczyk(x, radius, pi, args, ws[_FX], ws, np.bool_(True)):
             return radius
     return -1.0
 
