@@ -14,8 +14,8 @@ The metrics are those of :func:`plm_pin.workspace.manipulability` and
 keyword ``metrics`` names the ones to compute (default all of
 :data:`~plm_pin.workspace.manipulability.POSE_METRICS`); the others are not computed, their
 arrays hold NaN and :meth:`WorkspaceSlice.metric` refuses them. A manipulability map without
-the margins skips the eigenvalues of the closure Jacobian and of :math:`C`, most of the
-metrics' cost.
+the margins skips the eigenvalues of the closure Jacobian, of :math:`C` and of :math:`T^{-1}`,
+about half of the metrics' cost.
 
 Cost (``make bench``): on trees of one-axis joints and free-flyers with point closures
 and a task of translations plus a planar yaw or all three angles (the 2-PRRRP tables, the
@@ -272,7 +272,7 @@ def workspace_map(
         metrics: the metrics to compute, among
             :data:`~plm_pin.workspace.manipulability.POSE_METRICS` (default all; a string names
             one). The others are not computed and hold NaN: ``metrics=("manipulability",)``
-            skips the singularity margins' eigenvalues, most of the metrics' cost.
+            skips the singularity margins' eigenvalues, about half of the metrics' cost.
 
     Returns:
         The map, arrays of shape ``(len(values[0]), len(values[1]))``.
