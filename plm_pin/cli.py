@@ -830,7 +830,10 @@ def map_command(
         ),
     ] = None,
     metric: Annotated[
-        str, typer.Option("--metric", help=f"comma-separated, among {', '.join(POSE_METRICS)}, or all")
+        str,
+        typer.Option(
+            "--metric", help=f"the metrics computed: comma-separated, among {', '.join(POSE_METRICS)}, or all"
+        ),
     ] = "manipulability",
     over: Annotated[
         list[str] | None,
@@ -861,7 +864,7 @@ def map_command(
         for d, v in values.items():
             pose[dofs.index(d)] = v
         (a, va), (b, vb) = ranges.items()
-        grid = workspace_map(mech, (a, b), (va, vb), pose, mode=_mode_signs(mode, mech))
+        grid = workspace_map(mech, (a, b), (va, vb), pose, mode=_mode_signs(mode, mech), metrics=metrics)
     _write_map_csv(path, mech, grid, metrics)
     units = _task_units(mech)
     table = Table(title=escape(f"{mech.name}: workspace map over {a} and {b}"), show_header=False)

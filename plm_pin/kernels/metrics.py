@@ -5,10 +5,11 @@ For each stacked Jacobian :math:`A = [J_\phi; J_x]` of a batch, the velocity map
 partial pivoting, its orthonormal basis :math:`N` by Gram-Schmidt (twice), :math:`T = J_x N`
 and its inverse, :math:`C = N_a`, and the squared singular values of :math:`C T^{-1}`,
 :math:`C`, :math:`J_\phi`, :math:`T^{-1}` and :math:`J_x` as the eigenvalues of their smaller
-Gram matrices. Those eigenvalues come from Jacobi rotations on a 1 x 1 or 2 x 2 Gram, else from
-a Householder reduction to a tridiagonal matrix and the implicit QL iteration with Wilkinson
-shifts (values only, no allocation). Both are backward stable: each eigenvalue is exact for a
-symmetric matrix within a small multiple of round-off of the Gram's norm, so it is accurate to
+Gram matrices, each stage only where a metric asked for needs it. Those eigenvalues come from
+Jacobi rotations on a 1 x 1 or 2 x 2 Gram, else from a Householder reduction to a tridiagonal
+matrix and the implicit QL iteration with Wilkinson shifts (values only, no allocation). Both
+are backward stable: each eigenvalue is exact for a symmetric matrix within a small multiple of
+round-off of the Gram's norm, so it is accurate to
 about :math:`\epsilon \lambda_{max}`, which :data:`plm_pin.tolerances.GRAM_RTOL` accounts for.
 Closure rows that are exactly zero (the out-of-plane rows of a planar loop closed by 3-D point
 closures) are dropped first: they change none of the values, and without them such a
@@ -257,32 +258,57 @@ def _gram_eigenvalues(M: np.ndarray, G: np.ndarray, work: np.ndarray, out: np.nd
 
 
 @njit(cache=True)
+def _frobenius(M: np.ndarray) -> float:
+    """Frobenius norm of ``M`` (2-D): a bound of its largest singular value from above."""
+    s = 0.0
+    for i in range(M.shape[0]):
+        for j in range(M.shape[1]):
+            s += M[i, j] * M[i, j]
+    return math.sqrt(s)
+
+
+@njit(cache=True)
 def square_metrics(
     A: np.ndarray,
     m: int,
     actuated_v: np.ndarray,
     mobility: int,
+    wanted: np.ndarray,
     factor_rcond: float,
     gram_rtol: float,
     inverse_rtol: float,
     out: np.ndarray,
     good: np.ndarray,
 ) -> None:
-    """The map metrics of each stacked Jacobian ``A[p] = [J_phi; J_x]`` (B, m + k, nv), k = ``mobility``.
+    r"""The map metrics of each stacked Jacobian ``A[p] = [J_phi; J_x]`` (B, m + k, nv), k = ``mobility``.
+
+    Only the stages the ``wanted`` metrics need run: the velocity map and its basis for all but
+    the constraint margin, :math:`T^{-1}` for :math:`J_{ce}` and the inverse margin, the Gram
+    eigenvalues of :math:`C T^{-1}` for the manipulability and condition number, of
+    :math:`C` for the direct margin, of :math:`J_\phi` for the constraint margin, of
+    :math:`T^{-1}` and :math:`J_x` for the inverse margin. Without the inverse margin, the test
+    that :math:`T` is regular takes the Frobenius norms (each a bound of the largest singular
+    value from above, so the margin tested is at most the true one: a pose passing it passes
+    the exact test). Each pose is tested only on what it computes.
 
     Args:
         A: stacked Jacobians, shape (B, m + k, nv).
         m: closure rows.
         actuated_v: velocity indices of the actuators, shape (n_act,).
         mobility: DOF (= k).
+        wanted: which metrics to compute, one flag per :data:`METRIC_NAMES` entry, shape (5,).
         factor_rcond: smallest accepted ratio of the velocity map's QR diagonal.
         gram_rtol: smallest accepted ratio of squared singular values (the Gram's accuracy).
         inverse_rtol: smallest accepted inverse margin.
-        out: the metrics (:data:`METRIC_NAMES`), shape (B, 5).
+        out: the metrics (:data:`METRIC_NAMES`), shape (B, 5); the columns not wanted are left as they are.
         good: out, whether the pose passed every test (else its row of ``out`` is meaningless).
     """
     B, n, nv = A.shape
     k, na = mobility, actuated_v.shape[0]
+    w_ce = wanted[0] or wanted[1]  # the singular values of J_ce = C T^-1
+    w_phi, w_inverse, w_direct = wanted[2], wanted[3], wanted[4]
+    w_t = w_ce or w_inverse  # T^-1
+    w_basis = w_t or w_direct  # the velocity map and its basis N
     M = np.empty((nv, nv))
     S = np.empty((nv, k))
     N = np.empty((nv, k))
@@ -313,82 +339,99 @@ def square_metrics(
         for j in range(k):
             live[m + j] = A[p, m_all + j]
         Ap = live[: m + k]
-        square = m + k == nv
-        if square:  # A S = [0; I]
-            M[:, :] = Ap
-            S[:, :] = 0.0
-            for j in range(k):
-                S[m + j, j] = 1.0
-        else:  # A^T A S = J_x^T
-            for a in range(nv):
-                for b in range(a + 1):
-                    s = 0.0
-                    for i in range(m + k):
-                        s += Ap[i, a] * Ap[i, b]
-                    M[a, b] = s
-                    M[b, a] = s
+        if w_basis:
+            square = m + k == nv
+            if square:  # A S = [0; I]
+                M[:, :] = Ap
+                S[:, :] = 0.0
                 for j in range(k):
-                    S[a, j] = Ap[m + j, a]
-        if not _lu_solve(M, S) or not _finite(S):
-            continue
-        for j in range(k):  # Gram-Schmidt, twice
-            for c in range(nv):
-                N[c, j] = S[c, j]
-            for _ in range(2):
-                for i in range(j):
+                    S[m + j, j] = 1.0
+            else:  # A^T A S = J_x^T
+                for a in range(nv):
+                    for b in range(a + 1):
+                        s = 0.0
+                        for i in range(m + k):
+                            s += Ap[i, a] * Ap[i, b]
+                        M[a, b] = s
+                        M[b, a] = s
+                    for j in range(k):
+                        S[a, j] = Ap[m + j, a]
+            if not _lu_solve(M, S) or not _finite(S):
+                continue
+            for j in range(k):  # Gram-Schmidt, twice
+                for c in range(nv):
+                    N[c, j] = S[c, j]
+                for _ in range(2):
+                    for i in range(j):
+                        s = 0.0
+                        for c in range(nv):
+                            s += N[c, i] * N[c, j]
+                        for c in range(nv):
+                            N[c, j] -= s * N[c, i]
+                s = 0.0
+                for c in range(nv):
+                    s += N[c, j] * N[c, j]
+                d[j] = math.sqrt(s)
+                if d[j] > 0.0:
+                    for c in range(nv):
+                        N[c, j] /= d[j]
+            if not d.min() > factor_rcond * d.max():
+                continue
+        inverse = 0.0
+        if w_t:
+            for a in range(k):
+                for b in range(k):
                     s = 0.0
                     for c in range(nv):
-                        s += N[c, i] * N[c, j]
-                    for c in range(nv):
-                        N[c, j] -= s * N[c, i]
-            s = 0.0
-            for c in range(nv):
-                s += N[c, j] * N[c, j]
-            d[j] = math.sqrt(s)
-            if d[j] > 0.0:
-                for c in range(nv):
-                    N[c, j] /= d[j]
-        if not d.min() > factor_rcond * d.max():
-            continue
-        for a in range(k):
-            for b in range(k):
-                s = 0.0
-                for c in range(nv):
-                    s += Ap[m + a, c] * N[c, b]
-                T[a, b] = s
-                T_inv[a, b] = 1.0 if a == b else 0.0
-        if not _lu_solve(T, T_inv):
-            continue
-        for a in range(na):
-            for b in range(k):
-                C[a, b] = N[actuated_v[a], b]
-        for a in range(na):
-            for b in range(k):
-                s = 0.0
-                for c in range(k):
-                    s += C[a, c] * T_inv[c, b]
-                CT[a, b] = s
-        n_ce = _gram_eigenvalues(CT, G, work, s_ce)
-        n_c = _gram_eigenvalues(C, G, work, s_c)
-        s_phi[:] = 0.0  # (fewer live rows than the rank: the rank-th value is zero)
-        if m > 0:
-            _gram_eigenvalues(Ap[:m], G, work, s_phi)
-        _gram_eigenvalues(T_inv, G, work, s_t)
-        _gram_eigenvalues(Ap[m:], G, work, s_x)
-        inverse = 1.0 / (math.sqrt(s_t[0]) * math.sqrt(s_x[0]))
-        if not (
-            inverse > inverse_rtol
-            and s_ce[n_ce - 1] > gram_rtol * s_ce[0]
-            and s_c[n_c - 1] > gram_rtol * s_c[0]
-            and s_phi[rank - 1] > gram_rtol * s_phi[0]
-        ):
-            continue
-        w = 1.0
-        for i in range(n_ce):
-            w *= math.sqrt(s_ce[i])
-        out[p, 0] = w
-        out[p, 1] = math.sqrt(s_ce[0]) / math.sqrt(s_ce[n_ce - 1])
-        out[p, 2] = math.sqrt(s_phi[rank - 1] / s_phi[0])
-        out[p, 3] = inverse
-        out[p, 4] = math.sqrt(s_c[n_c - 1])
+                        s += Ap[m + a, c] * N[c, b]
+                    T[a, b] = s
+                    T_inv[a, b] = 1.0 if a == b else 0.0
+            if not _lu_solve(T, T_inv):
+                continue
+            if w_inverse:
+                _gram_eigenvalues(T_inv, G, work, s_t)
+                _gram_eigenvalues(Ap[m:], G, work, s_x)
+                inverse = 1.0 / (math.sqrt(s_t[0]) * math.sqrt(s_x[0]))
+                tested = inverse
+            else:
+                tested = 1.0 / (_frobenius(T_inv) * _frobenius(Ap[m:]))
+            if not tested > inverse_rtol:
+                continue
+        if w_ce or w_direct:
+            for a in range(na):
+                for b in range(k):
+                    C[a, b] = N[actuated_v[a], b]
+        n_ce = n_c = 0
+        if w_ce:
+            for a in range(na):
+                for b in range(k):
+                    s = 0.0
+                    for c in range(k):
+                        s += C[a, c] * T_inv[c, b]
+                    CT[a, b] = s
+            n_ce = _gram_eigenvalues(CT, G, work, s_ce)
+            if not s_ce[n_ce - 1] > gram_rtol * s_ce[0]:
+                continue
+        if w_direct:
+            n_c = _gram_eigenvalues(C, G, work, s_c)
+            if not s_c[n_c - 1] > gram_rtol * s_c[0]:
+                continue
+        if w_phi:
+            s_phi[:] = 0.0  # (fewer live rows than the rank: the rank-th value is zero)
+            if m > 0:
+                _gram_eigenvalues(Ap[:m], G, work, s_phi)
+            if not s_phi[rank - 1] > gram_rtol * s_phi[0]:
+                continue
+        if w_ce:
+            w = 1.0
+            for i in range(n_ce):
+                w *= math.sqrt(s_ce[i])
+            out[p, 0] = w
+            out[p, 1] = math.sqrt(s_ce[0]) / math.sqrt(s_ce[n_ce - 1])
+        if w_phi:
+            out[p, 2] = math.sqrt(s_phi[rank - 1] / s_phi[0])
+        if w_inverse:
+            out[p, 3] = inverse
+        if w_direct:
+            out[p, 4] = math.sqrt(s_c[n_c - 1])
         good[p] = True

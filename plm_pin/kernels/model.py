@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Sequence
 from types import ModuleType
 from typing import TYPE_CHECKING
 
@@ -226,13 +227,16 @@ class Kernel:
         return q, ok, A, R
 
     def map_metrics(
-        self, A: np.ndarray, actuated_v: np.ndarray, mobility: int
+        self, A: np.ndarray, actuated_v: np.ndarray, mobility: int, names: Sequence[str]
     ) -> tuple[np.ndarray, np.ndarray]:
         """Map metrics of stacked Jacobians ``A = [J_phi; J_x]`` (B, m + k, nv), compiled (:mod:`.metrics`).
 
+        Only the metrics in ``names`` (among :data:`.metrics.METRIC_NAMES`) are computed.
+
         Returns:
-            The metrics (B, 5) in the order of :data:`.metrics.METRIC_NAMES`, and whether each
-            pose passed the acceptance tests (B,) (the others' rows are meaningless).
+            The metrics (B, 5) in the order of :data:`.metrics.METRIC_NAMES` (NaN in the columns
+            not asked for), and whether each pose passed the acceptance tests of those it
+            computes (B,) (the others' rows are meaningless).
         """
         from . import metrics
 
@@ -243,6 +247,7 @@ class Kernel:
             self.arrays.m,
             np.asarray(actuated_v, dtype=np.int64),
             mobility,
+            np.array([name in names for name in metrics.METRIC_NAMES]),
             FACTOR_RCOND,
             GRAM_RTOL,
             INVERSE_RTOL,

@@ -55,7 +55,7 @@ from ..stiffness import StiffnessMap, stiffness_map
 from ..stiffness.maps import VARIABLES as STIFFNESS_VARIABLES
 from ..tolerances import SINGULARITY_TOL
 from ..workspace import WorkspaceSlice, accuracy_over, workspace_grid
-from ..workspace.manipulability import Manipulability
+from ..workspace.manipulability import MARGIN_METRICS, POSE_METRICS, Manipulability
 from ..workspace.orientation import ENDS, RANGE_XTOL, OrientationRange, orientation_range
 
 SINGULARITY_CODES: tuple[str, ...] = ("regular", *KINDS)
@@ -287,6 +287,9 @@ class Metric:
         required: the options among ``options`` that have no default and must be given.
         split: whether its per-pose work divides into shares (:attr:`PointEvaluation.share`):
             independent analyses of each reached pose or line, not the continuation over the grid.
+        grid_metrics: the per-pose metrics of :attr:`PointEvaluation.grid` it reads (among
+            :data:`~plm_pin.workspace.POSE_METRICS`); the grid computes those the sweep's
+            metrics read and no other.
     """
 
     name: str
@@ -296,6 +299,7 @@ class Metric:
     compute: Callable[[PointEvaluation], dict[str, np.ndarray]]
     required: tuple[str, ...] = ()
     split: bool = False
+    grid_metrics: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -309,6 +313,7 @@ class PoseGrid:
             reference pose).
         reduced_over: pose axes the reduced metrics run over.
         options: every option of the metrics, defaults filled in.
+        grid_metrics: the per-pose metrics the grid computes (:func:`grid_metrics` of the sweep's).
     """
 
     axes: tuple[str, ...]
@@ -316,6 +321,7 @@ class PoseGrid:
     pose: tuple[float, ...] | None
     reduced_over: tuple[str, ...]
     options: Mapping[str, Any]
+    grid_metrics: tuple[str, ...]
 
 
 class PointEvaluation:
@@ -362,10 +368,16 @@ class PointEvaluation:
 
     @functools.cached_property
     def grid(self) -> WorkspaceSlice:
-        """The metrics of :func:`~plm_pin.workspace.workspace_grid` over the whole pose grid."""
+        """:func:`~plm_pin.workspace.workspace_grid` over the pose grid, computing ``spec.grid_metrics``."""
         spec = self.spec
         return workspace_grid(
-            self.mech, spec.axes, spec.values, self.base, mode=self.mode, tol=self.option("ik_tol")
+            self.mech,
+            spec.axes,
+            spec.values,
+            self.base,
+            mode=self.mode,
+            tol=self.option("ik_tol"),
+            metrics=spec.grid_metrics,
         )
 
     @functools.cached_property
@@ -401,7 +413,7 @@ def _grid_values(name: str) -> Callable[[PointEvaluation], dict[str, np.ndarray]
 
 def _singularity(ev: PointEvaluation) -> dict[str, np.ndarray]:
     grid = ev.grid
-    margins = np.stack([grid.constraint_margin, grid.inverse_margin, grid.direct_margin])  # KINDS order
+    margins = np.stack([grid.metric(name) for name in MARGIN_METRICS])  # KINDS order
     smallest = np.min(margins, axis=0)
     code = np.where(smallest <= ev.option("singularity_tol"), 1 + np.argmin(margins, axis=0), 0)
     code = np.where(grid.reachable, code, -1).astype(np.int8)
@@ -527,6 +539,7 @@ METRICS: dict[str, Metric] = {
             (Variable("manipulability", W_UNIT, _W),),
             (),
             _grid_values("manipulability"),
+            grid_metrics=("manipulability",),
         ),
         Metric(
             "condition_number",
@@ -534,6 +547,7 @@ METRICS: dict[str, Metric] = {
             (Variable("condition_number", SLICE_UNITS["condition_number"], "condition number of J_ce"),),
             (),
             _grid_values("condition_number"),
+            grid_metrics=("condition_number",),
         ),
         Metric(
             "singularity",
@@ -553,6 +567,7 @@ METRICS: dict[str, Metric] = {
             ),
             ("singularity_tol",),
             _singularity,
+            grid_metrics=MARGIN_METRICS,
         ),
         Metric(
             "min_manipulability",
@@ -560,6 +575,7 @@ METRICS: dict[str, Metric] = {
             (Variable("min_manipulability", W_UNIT, "smallest manipulability w", axes="reduced"),),
             ("over",),
             _min_manipulability,
+            grid_metrics=("manipulability",),
         ),
         Metric(
             "reachable_fraction",
@@ -700,6 +716,11 @@ METRICS: dict[str, Metric] = {
     )
 }
 """Every metric, by name."""
+
+
+def grid_metrics(metrics: Sequence[str]) -> tuple[str, ...]:
+    """The per-pose metrics of the workspace grid that ``metrics`` read, in :data:`POSE_METRICS` order."""
+    return tuple(name for name in POSE_METRICS if any(name in METRICS[m].grid_metrics for m in metrics))
 
 
 def metric_options(metrics: Sequence[str]) -> tuple[str, ...]:

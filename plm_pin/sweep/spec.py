@@ -32,7 +32,7 @@ from ..description.sidecar import TASK_DOFS
 from ..exceptions import InvalidInput, PlmError
 from ..loading import build_mechanism, resolve_builder
 from ..models.registry import Builder, builder_parameters
-from .metrics import METRICS, PoseGrid, Variable, check_options
+from .metrics import METRICS, PoseGrid, Variable, check_options, grid_metrics
 
 Scalar = float | int | str
 Value = Scalar | tuple[Scalar, ...]
@@ -287,7 +287,9 @@ class SweepSpec:
 
     def pose_grid(self) -> PoseGrid:
         """The pose grid and options every parameter point's metrics share."""
-        return PoseGrid(self.axes, self.values, self.pose, self.reduced_over, self.options)
+        return PoseGrid(
+            self.axes, self.values, self.pose, self.reduced_over, self.options, grid_metrics(self.metrics)
+        )
 
     def variables(self) -> tuple[Variable, ...]:
         """The result variables of the metrics, in order."""

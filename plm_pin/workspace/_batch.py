@@ -22,6 +22,7 @@ microseconds per pose.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -33,7 +34,7 @@ from ..core.legs import Leg
 from ..core.task import FrameTask, Task, wrap_angle
 from ..kernels import Kernel
 from ..tolerances import BATCH_LOG3_SERIES_ANGLE, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL
-from .manipulability import batch_metrics
+from .manipulability import POSE_METRICS, batch_metrics
 
 _AXES = {"X": 0, "Y": 1, "Z": 2}
 _REVOLUTE, _PRISMATIC, _FREE_FLYER = 1, 2, 3
@@ -677,7 +678,12 @@ def _squared_singular_values(M: np.ndarray) -> np.ndarray:
 
 
 def compiled_square_task_metrics(
-    kernel: Kernel, A: np.ndarray, m: int, actuated_v: np.ndarray, mobility: int
+    kernel: Kernel,
+    A: np.ndarray,
+    m: int,
+    actuated_v: np.ndarray,
+    mobility: int,
+    names: Sequence[str] = POSE_METRICS,
 ) -> dict[str, np.ndarray]:
     """:func:`square_task_metrics` pose by pose on the compiled kernel (:meth:`Kernel.map_metrics`).
 
@@ -686,17 +692,22 @@ def compiled_square_task_metrics(
     """
     from ..kernels.metrics import METRIC_NAMES
 
-    values, good = kernel.map_metrics(A, actuated_v, mobility)
-    out = {name: values[:, i].copy() for i, name in enumerate(METRIC_NAMES)}
+    values, good = kernel.map_metrics(A, actuated_v, mobility, names)
+    out = {name: values[:, METRIC_NAMES.index(name)].copy() for name in names}
     if not good.all():
         bad = ~good
-        for name, v in batch_metrics(A[bad, :m], A[bad, m:], actuated_v, mobility).items():
+        for name, v in batch_metrics(A[bad, :m], A[bad, m:], actuated_v, mobility, names=names).items():
             out[name][bad] = v
     return out
 
 
 def square_task_metrics(
-    A: np.ndarray, m: int, actuated_v: np.ndarray, mobility: int, arrow: BlockArrow | None = None
+    A: np.ndarray,
+    m: int,
+    actuated_v: np.ndarray,
+    mobility: int,
+    arrow: BlockArrow | None = None,
+    names: Sequence[str] = POSE_METRICS,
 ) -> dict[str, np.ndarray]:
     r"""The map metrics of stacked Jacobians ``A = [J_phi; J_x]`` (B, m + k, nv) from the Newton system.
 
@@ -718,6 +729,9 @@ def square_task_metrics(
     cheaper than an SVD of each matrix) where that is accurate (:data:`GRAM_RTOL`); poses
     where it is not, where :math:`S` is ill-conditioned (:data:`FACTOR_RCOND`) or where
     :math:`T` is singular get :func:`~plm_pin.workspace.manipulability.batch_metrics` (SVD).
+    Only what ``names`` needs is computed (the constraint margin alone needs no :math:`S`);
+    without the inverse margin, :math:`T` is tested with the Frobenius norms, bounds of
+    :math:`\sigma_{max}` from above (a pose passing that test passes the exact one).
 
     Args:
         A: stacked Jacobians, shape (B, m + k, nv).
@@ -725,50 +739,63 @@ def square_task_metrics(
         actuated_v: velocity indices of the actuators.
         mobility: DOF (= k).
         arrow: the block structure of ``A`` (:attr:`BatchKinematics.arrow`), solved by blocks.
+        names: the metrics to compute, among
+            :data:`~plm_pin.workspace.manipulability.POSE_METRICS` (default: all).
 
     Returns:
-        ``{name: (B,) array}`` as :func:`~plm_pin.workspace.manipulability.batch_metrics` returns.
+        ``{name: (B,) array}`` for every name of ``names``, as
+        :func:`~plm_pin.workspace.manipulability.batch_metrics` returns.
     """
     J_phi, J_x = A[:, :m], A[:, m:]
-    try:
-        if A.shape[1] == A.shape[2]:  # as many rows as velocities: A S = [0; I], no normal matrix
-            E = np.broadcast_to(np.eye(A.shape[1])[:, m:], (*A.shape[:2], mobility))
-            S = np.linalg.solve(A, E) if arrow is None else arrow.solve(A, E)
-        else:
-            S = np.linalg.solve(np.swapaxes(A, 1, 2) @ A, np.swapaxes(J_x, 1, 2))  # (B, nv, k)
-    except np.linalg.LinAlgError:
-        return batch_metrics(J_phi, J_x, actuated_v, mobility)
-    finite = np.isfinite(S).all(axis=(1, 2))
-    S[~finite] = 0.0
-    N, Rs = np.linalg.qr(S)
-    d = np.abs(np.diagonal(Rs, axis1=1, axis2=2))
-    good = finite & (d.min(axis=1) > FACTOR_RCOND * d.max(axis=1))
-    T_inv = np.linalg.inv(np.where(good[:, None, None], J_x @ N, np.eye(mobility)))
-    C = N[:, actuated_v]
-    rank = J_phi.shape[-1] - mobility
-    s2_ce = _squared_singular_values(C @ T_inv)
-    s2_c = _squared_singular_values(C)
-    s2_phi = _squared_singular_values(J_phi)[:, [0, rank - 1]]
-    s_T_inv = np.sqrt(_squared_singular_values(T_inv)[:, 0])
-    s_x = np.sqrt(_squared_singular_values(J_x)[:, 0])
+    want_ce = "manipulability" in names or "condition_number" in names  # J_ce = C T^-1
+    want_t = want_ce or "inverse_margin" in names
+    good = np.ones(A.shape[0], dtype=bool)
+    out: dict[str, np.ndarray] = {}
     with np.errstate(divide="ignore", invalid="ignore"):
-        inverse = 1.0 / (s_T_inv * s_x)
-        good &= (
-            (inverse > INVERSE_RTOL)
-            & (s2_ce[:, -1] > GRAM_RTOL * s2_ce[:, 0])
-            & (s2_c[:, -1] > GRAM_RTOL * s2_c[:, 0])
-            & (s2_phi[:, 1] > GRAM_RTOL * s2_phi[:, 0])
-        )
-        s_ce = np.sqrt(s2_ce)
-        out = {
-            "manipulability": np.prod(s_ce, axis=1),
-            "condition_number": s_ce[:, 0] / s_ce[:, -1],
-            "constraint_margin": np.sqrt(s2_phi[:, 1] / s2_phi[:, 0]),
-            "inverse_margin": inverse,
-            "direct_margin": np.sqrt(s2_c[:, -1]),
-        }
+        if want_t or "direct_margin" in names:
+            try:
+                if A.shape[1] == A.shape[2]:  # as many rows as velocities: A S = [0; I], no normal matrix
+                    E = np.broadcast_to(np.eye(A.shape[1])[:, m:], (*A.shape[:2], mobility))
+                    S = np.linalg.solve(A, E) if arrow is None else arrow.solve(A, E)
+                else:
+                    S = np.linalg.solve(np.swapaxes(A, 1, 2) @ A, np.swapaxes(J_x, 1, 2))  # (B, nv, k)
+            except np.linalg.LinAlgError:
+                return batch_metrics(J_phi, J_x, actuated_v, mobility, names=names)
+            finite = np.isfinite(S).all(axis=(1, 2))
+            S[~finite] = 0.0
+            N, Rs = np.linalg.qr(S)
+            d = np.abs(np.diagonal(Rs, axis1=1, axis2=2))
+            good = finite & (d.min(axis=1) > FACTOR_RCOND * d.max(axis=1))
+            C = N[:, actuated_v]
+        if want_t:
+            T_inv = np.linalg.inv(np.where(good[:, None, None], J_x @ N, np.eye(mobility)))
+            if "inverse_margin" in names:
+                s_T_inv = np.sqrt(_squared_singular_values(T_inv)[:, 0])
+                s_x = np.sqrt(_squared_singular_values(J_x)[:, 0])
+                out["inverse_margin"] = 1.0 / (s_T_inv * s_x)
+                good &= out["inverse_margin"] > INVERSE_RTOL
+            else:
+                good &= (
+                    1.0 / (np.linalg.norm(T_inv, axis=(1, 2)) * np.linalg.norm(J_x, axis=(1, 2)))
+                    > INVERSE_RTOL
+                )
+        if want_ce:
+            s2_ce = _squared_singular_values(C @ T_inv)
+            good &= s2_ce[:, -1] > GRAM_RTOL * s2_ce[:, 0]
+            s_ce = np.sqrt(s2_ce)
+            out["manipulability"] = np.prod(s_ce, axis=1)
+            out["condition_number"] = s_ce[:, 0] / s_ce[:, -1]
+        if "direct_margin" in names:
+            s2_c = _squared_singular_values(C)
+            good &= s2_c[:, -1] > GRAM_RTOL * s2_c[:, 0]
+            out["direct_margin"] = np.sqrt(s2_c[:, -1])
+        if "constraint_margin" in names:
+            s2_phi = _squared_singular_values(J_phi)[:, [0, J_phi.shape[-1] - mobility - 1]]
+            good &= s2_phi[:, 1] > GRAM_RTOL * s2_phi[:, 0]
+            out["constraint_margin"] = np.sqrt(s2_phi[:, 1] / s2_phi[:, 0])
+    out = {name: out[name] for name in names}
     if not good.all():
         bad = ~good
-        for name, v in batch_metrics(J_phi[bad], J_x[bad], actuated_v, mobility).items():
+        for name, v in batch_metrics(J_phi[bad], J_x[bad], actuated_v, mobility, names=names).items():
             out[name][bad] = v
     return out

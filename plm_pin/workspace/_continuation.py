@@ -55,7 +55,7 @@ from ._batch import (
     rpy_matrix,
     square_task_metrics,
 )
-from .manipulability import batch_metrics
+from .manipulability import POSE_METRICS, batch_metrics
 
 ndimage = lazy_module("scipy.ndimage")  # label: the unreached regions of a grid
 
@@ -394,20 +394,28 @@ _WORKER: dict[str, Any] = {}
 
 
 def _init_worker(
-    ev: IKEvaluator, poses: np.ndarray, shape: tuple[int, ...], target: tuple[int, ...], tol: float
+    ev: IKEvaluator,
+    poses: np.ndarray,
+    shape: tuple[int, ...],
+    target: tuple[int, ...],
+    tol: float,
+    names: tuple[str, ...],
 ) -> None:
-    _WORKER.update(ev=ev, poses=poses, shape=shape, target=target, tol=tol)
+    _WORKER.update(ev=ev, poses=poses, shape=shape, target=target, tol=tol, names=names)
 
 
-def _metrics_for(ev: IKEvaluator, kin: BatchKinematics | None = None) -> Metrics:
+def _metrics_for(ev: IKEvaluator, names: tuple[str, ...], kin: BatchKinematics | None = None) -> Metrics:
+    """The batch metrics ``names`` (among :data:`POSE_METRICS`) of ``ev``'s mechanism, the cheapest way."""
     arrow = None if kin is None else kin.arrow  # the IK Jacobian's structure, as ``ev``'s has it
 
     def metrics(A: np.ndarray) -> dict[str, np.ndarray]:
+        if not names:
+            return {}
         if ev.task.size == ev.mobility and ev.m:
             if ev.kernel is not None and arrow is None:  # with the arrow, numpy's block solve is cheaper
-                return compiled_square_task_metrics(ev.kernel, A, ev.m, ev.actuated_v, ev.mobility)
-            return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility, arrow)
-        return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility)
+                return compiled_square_task_metrics(ev.kernel, A, ev.m, ev.actuated_v, ev.mobility, names)
+            return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility, arrow, names)
+        return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility, names=names)
 
     return metrics
 
@@ -417,7 +425,7 @@ def _band(rows: tuple[int, int], spine: list[tuple[int, np.ndarray]]) -> tuple[s
     ev: IKEvaluator = _WORKER["ev"]
     shape: tuple[int, ...] = _WORKER["shape"]
     state = GridState.empty(ev, shape, _WORKER["poses"])
-    metrics = _metrics_for(ev)
+    metrics = _metrics_for(ev, _WORKER["names"])
     start = []
     for index, q in spine:
         sol = ev.solve(state.poses[index], np.asarray(q), _WORKER["tol"])
@@ -432,9 +440,15 @@ def _band(rows: tuple[int, int], spine: list[tuple[int, np.ndarray]]) -> tuple[s
 
 
 def _solve_grid(
-    ev: IKEvaluator, state: GridState, seed: int, target: tuple[int, ...], tol: float, workers: int
+    ev: IKEvaluator,
+    state: GridState,
+    seed: int,
+    target: tuple[int, ...],
+    tol: float,
+    workers: int,
+    names: tuple[str, ...],
 ) -> None:
-    metrics = _metrics_for(ev)
+    metrics = _metrics_for(ev, names)
     if workers <= 1:
         flood(ev, state, metrics, target, [seed], tol)
         return
@@ -451,7 +465,7 @@ def _solve_grid(
         workers,
         mp_context=context,
         initializer=_init_worker,
-        initargs=(ev, state.poses, state.shape, target, tol),
+        initargs=(ev, state.poses, state.shape, target, tol, names),
     ) as pool:
         jobs = []
         for a, b in bands:
@@ -743,6 +757,7 @@ def solve_poses(
     mode: tuple[int, ...] | None,
     tol: float,
     workers: int | None,
+    names: tuple[str, ...] = POSE_METRICS,
 ) -> tuple[GridState, tuple[int, ...] | None]:
     """Solve a grid of task poses by continuation from the point nearest to the guess's pose.
 
@@ -753,6 +768,8 @@ def solve_poses(
         mode: working mode to keep (default: the seed's, from ``guess``).
         tol: residual tolerance [m, rad].
         workers: processes (None: all CPUs for large 2-D grids).
+        names: the metrics to compute, among :data:`POSE_METRICS` (the others are absent from
+            the state's ``metrics``).
 
     Returns:
         The solved grid, and the working mode kept (None when no point could be seeded).
@@ -780,10 +797,10 @@ def solve_poses(
     in_ik = all(max(leg.sign_rows) < ik_rows for leg in ev.legs if leg.square)
     kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 and in_ik else None
     if kin is not None:
-        sweep_rows(ev, kin, state, _metrics_for(ev, kin), index, target, tol)
+        sweep_rows(ev, kin, state, _metrics_for(ev, names, kin), index, target, tol)
     else:
-        _solve_grid(ev, state, index, target, tol, n_workers)
-    reseed(mech, ev, state, _metrics_for(ev, kin), target, guess, tol)
+        _solve_grid(ev, state, index, target, tol, n_workers, names)
+    reseed(mech, ev, state, _metrics_for(ev, names, kin), target, guess, tol)
     return state, target
 
 

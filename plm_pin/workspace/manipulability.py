@@ -20,6 +20,7 @@ unit of length whenever the task mixes translations and rotations.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -51,6 +52,9 @@ POSE_METRICS: tuple[str, ...] = (
     "direct_margin",
 )
 """Names of the per-pose metrics of workspace maps, in this order."""
+
+MARGIN_METRICS: tuple[str, ...] = ("constraint_margin", "inverse_margin", "direct_margin")
+"""The singularity margins of :data:`POSE_METRICS`, as :data:`plm_pin.kinematics.singularity.KINDS`."""
 
 
 def manipulability_unit(mech: Mechanism) -> str:
@@ -220,8 +224,13 @@ def manipulability_at(
 
 
 def batch_metrics(
-    J_phi: np.ndarray, J_x: np.ndarray, actuated_v: np.ndarray, mobility: int, basis: np.ndarray | None = None
-) -> dict:
+    J_phi: np.ndarray,
+    J_x: np.ndarray,
+    actuated_v: np.ndarray,
+    mobility: int,
+    basis: np.ndarray | None = None,
+    names: Sequence[str] = POSE_METRICS,
+) -> dict[str, np.ndarray]:
     """Manipulability, condition number and singularity margins of a batch of configurations.
 
     The batched counterpart of :func:`manipulability` and
@@ -234,20 +243,23 @@ def batch_metrics(
         mobility: DOF of the mechanism (= n_task).
         basis: an orthonormal basis of the feasible motions already at hand, shape (b, nv,
             mobility) (default: from the SVD of ``J_phi``); the values do not depend on it.
+        names: the metrics to compute, among :data:`POSE_METRICS` (default: all).
 
     Returns:
-        ``{name: (b,) array}`` for every name of :data:`POSE_METRICS`.
+        ``{name: (b,) array}`` for every name of ``names``.
     """
     if basis is None:
         _, s_phi, T, C = feasible_motions(J_phi, J_x, actuated_v, mobility)
     else:
         s_phi = np.linalg.svd(J_phi, compute_uv=False)
         T, C = J_x @ basis, basis[..., actuated_v, :]
-    _, _, w, cond, _ = _manipulability_values(T, C, J_x)
-    return {
-        "manipulability": w,
-        "condition_number": cond,
-        "constraint_margin": constraint_margins(s_phi, J_phi.shape[-1] - mobility),
-        "inverse_margin": inverse_margins(T, J_x),
-        "direct_margin": direct_margins(C),
-    }
+    values = {}
+    if "manipulability" in names or "condition_number" in names:
+        _, _, values["manipulability"], values["condition_number"], _ = _manipulability_values(T, C, J_x)
+    if "constraint_margin" in names:
+        values["constraint_margin"] = constraint_margins(s_phi, J_phi.shape[-1] - mobility)
+    if "inverse_margin" in names:
+        values["inverse_margin"] = inverse_margins(T, J_x)
+    if "direct_margin" in names:
+        values["direct_margin"] = direct_margins(C)
+    return {name: values[name] for name in names}

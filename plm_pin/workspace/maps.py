@@ -10,7 +10,12 @@ instead of raising. "Reachable" therefore means reachable in the seed's working 
 through the grid, which is what a mechanism moving continuously can do.
 
 The metrics are those of :func:`plm_pin.workspace.manipulability` and
-:func:`plm_pin.kinematics.classify` (the singularity margins), computed in batches.
+:func:`plm_pin.kinematics.classify` (the singularity margins), computed in batches. The
+keyword ``metrics`` names the ones to compute (default all of
+:data:`~plm_pin.workspace.manipulability.POSE_METRICS`); the others are not computed, their
+arrays hold NaN and :meth:`WorkspaceSlice.metric` refuses them. A manipulability map without
+the margins skips the eigenvalues of the closure Jacobian, of :math:`C` and of :math:`T^{-1}`,
+about half of the metrics' cost.
 
 Cost (``make bench``): on trees of one-axis joints and free-flyers with point closures
 and a task of translations plus a planar yaw or all three angles (the 2-PRRRP tables, the
@@ -32,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .._text import short
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput
 from ..kinematics.collisions import collision_free
@@ -48,7 +54,7 @@ class WorkspaceSlice(Result):
 
     ``a[i, j]`` belongs to the pose whose coordinate ``axes[0]`` is ``values[0][i]`` and
     ``axes[1]`` is ``values[1][j]``, the others being those of ``pose``. Unreachable
-    points hold NaN (and 0 in ``mode``).
+    points hold NaN (and 0 in ``mode``), and so do the metrics not in ``metrics`` everywhere.
 
     Attributes:
         axes: the varied task coordinates, among the task's (``x y z rx ry rz``).
@@ -67,6 +73,8 @@ class WorkspaceSlice(Result):
         q: configurations, shape ``shape + (nq,)``.
         mode: working mode of each point (one sign per square leg), shape ``shape + (n_legs,)``.
         working_mode: the seed's working mode, kept over the slice (None when nothing was reached).
+        metrics: the metrics computed, in the order of
+            :data:`~plm_pin.workspace.manipulability.POSE_METRICS` (the others are NaN).
     """
 
     axes: tuple[str, ...]
@@ -83,6 +91,7 @@ class WorkspaceSlice(Result):
     q: np.ndarray = field(metadata=unit("m, rad"))
     mode: np.ndarray
     working_mode: tuple[int, ...] | None
+    metrics: tuple[str, ...] = POSE_METRICS
     _SKIPPED = ("q",)
     _NONFINITE_AS_TEXT = (*POSE_METRICS, "actuators")
 
@@ -126,9 +135,18 @@ class WorkspaceSlice(Result):
         return _grid_poses(self.pose, self.dofs, self.axes, self.values)
 
     def metric(self, name: str) -> np.ndarray:
-        """One of :data:`plm_pin.workspace.manipulability.POSE_METRICS` by name, shape ``shape``."""
+        """One of :data:`plm_pin.workspace.manipulability.POSE_METRICS` by name, shape ``shape``.
+
+        Raises:
+            InvalidInput: an unknown name, or a metric the slice was computed without.
+        """
         if name not in POSE_METRICS:
             raise InvalidInput(f"unknown metric {name!r}; metrics are {list(POSE_METRICS)}")
+        if name not in self.metrics:
+            raise InvalidInput(
+                f"metric {name!r} was not computed (metrics={list(self.metrics)}); include it in the "
+                "map's metrics"
+            )
         return np.asarray(getattr(self, name))
 
 
@@ -165,6 +183,25 @@ def _check_axes(
     return dofs, tuple(arrays)
 
 
+def _check_metrics(metrics: Sequence[str] | None) -> tuple[str, ...]:
+    """The names of ``metrics`` in the order of :data:`POSE_METRICS` (None: all; a string: that one).
+
+    Raises:
+        InvalidInput: not a sequence of strings, or an unknown name.
+    """
+    if metrics is None:
+        return POSE_METRICS
+    names = (metrics,) if isinstance(metrics, str) else metrics
+    if not isinstance(names, Sequence):
+        raise InvalidInput(
+            f"metrics must be a list of names among {list(POSE_METRICS)}, got {short(metrics)}"
+        )
+    for name in names:
+        if name not in POSE_METRICS:
+            raise InvalidInput(f"metrics: unknown metric {short(name)}; choose among {list(POSE_METRICS)}")
+    return tuple(name for name in POSE_METRICS if name in names)
+
+
 def _slice(
     mech: Mechanism,
     axes: tuple[str, ...],
@@ -174,15 +211,17 @@ def _slice(
     mode: tuple[int, ...] | None,
     tol: float | None,
     workers: int | None,
+    metrics: Sequence[str] | None,
 ) -> WorkspaceSlice:
+    names = _check_metrics(metrics)
     dofs, arrays = _check_axes(mech, axes, values)
     base = base_pose(mech, pose, guess)
     shape = tuple(len(a) for a in arrays)
     poses = _grid_poses(base, dofs, axes, arrays)
     tol = mech.closure_tol if tol is None else tol
-    state, target = solve_poses(mech, poses, guess, mode=mode, tol=tol, workers=workers)
+    state, target = solve_poses(mech, poses, guess, mode=mode, tol=tol, workers=workers, names=names)
     reached = state.reached.reshape(shape)
-    metrics = {
+    columns = {
         name: state.metrics.get(name, np.full(state.reached.size, np.nan)).reshape(shape)
         for name in POSE_METRICS
     }
@@ -193,15 +232,16 @@ def _slice(
         pose=base,
         dofs=dofs,
         reachable=reached,
-        manipulability=metrics["manipulability"],
-        condition_number=metrics["condition_number"],
-        constraint_margin=metrics["constraint_margin"],
-        inverse_margin=metrics["inverse_margin"],
-        direct_margin=metrics["direct_margin"],
+        manipulability=columns["manipulability"],
+        condition_number=columns["condition_number"],
+        constraint_margin=columns["constraint_margin"],
+        inverse_margin=columns["inverse_margin"],
+        direct_margin=columns["direct_margin"],
         actuators=mech.actuator_positions(q),
         q=q,
         mode=np.where(reached[..., None], state.mode.reshape(*shape, -1), 0).astype(np.int8),
         working_mode=target,
+        metrics=names,
     )
 
 
@@ -215,6 +255,7 @@ def workspace_map(
     mode: tuple[int, ...] | None = None,
     tol: float | None = None,
     workers: int | None = None,
+    metrics: Sequence[str] | None = None,
 ) -> WorkspaceSlice:
     """Manipulability, condition number, singularity margins and reachability over a 2-D grid.
 
@@ -228,17 +269,21 @@ def workspace_map(
         tol: inverse-kinematics residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
         workers: processes to use (default: all CPUs for grids of 20,000 poses or more, else 1);
             unused where the rows are solved in batches (one process is faster there).
+        metrics: the metrics to compute, among
+            :data:`~plm_pin.workspace.manipulability.POSE_METRICS` (default all; a string names
+            one). The others are not computed and hold NaN: ``metrics=("manipulability",)``
+            skips the singularity margins' eigenvalues, about half of the metrics' cost.
 
     Returns:
         The map, arrays of shape ``(len(values[0]), len(values[1]))``.
 
     Raises:
-        InvalidInput: unknown or repeated axes, malformed values or pose, or a task whose
-            size differs from the mechanism's DOF.
+        InvalidInput: unknown or repeated axes, malformed values or pose, a task whose size
+            differs from the mechanism's DOF, or an unknown metric.
     """
     if len(axes) != 2 or len(values) != 2:
         raise InvalidInput(f"a map varies two task coordinates; got axes {list(axes)}")
-    return _slice(mech, tuple(axes), values, pose, guess, mode, tol, workers)
+    return _slice(mech, tuple(axes), values, pose, guess, mode, tol, workers, metrics)
 
 
 def workspace_grid(
@@ -250,6 +295,7 @@ def workspace_grid(
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     tol: float | None = None,
+    metrics: Sequence[str] | None = None,
 ) -> WorkspaceSlice:
     """The metrics of :func:`workspace_map` over a grid of any number of task coordinates.
 
@@ -265,6 +311,7 @@ def workspace_grid(
         guess: configuration the seed is solved from (default: the reference configuration).
         mode: working mode to keep (default: the seed's).
         tol: inverse-kinematics residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
+        metrics: the metrics to compute (default all; see :func:`workspace_map`).
 
     Returns:
         The grid, arrays of shape ``tuple(len(v) for v in values)``.
@@ -274,7 +321,7 @@ def workspace_grid(
     """
     if len(axes) < 1 or len(axes) != len(values):
         raise InvalidInput(f"give one array of values per varied coordinate; got axes {list(axes)}")
-    return _slice(mech, tuple(axes), values, pose, guess, mode, tol, 1)
+    return _slice(mech, tuple(axes), values, pose, guess, mode, tol, 1, metrics)
 
 
 def workspace_sweep(
@@ -286,6 +333,7 @@ def workspace_sweep(
     guess: ArrayLike | None = None,
     mode: tuple[int, ...] | None = None,
     tol: float | None = None,
+    metrics: Sequence[str] | None = None,
 ) -> WorkspaceSlice:
     """The metrics of :func:`workspace_map` along one task coordinate, the others fixed.
 
@@ -297,8 +345,12 @@ def workspace_sweep(
         guess: configuration the seed is solved from (default: the reference configuration).
         mode: working mode to keep (default: the seed's).
         tol: inverse-kinematics residual tolerance [m, rad] (default: the mechanism's ``closure_tol``).
+        metrics: the metrics to compute (default all; see :func:`workspace_map`).
 
     Returns:
         The sweep, arrays of shape ``(len(values),)``.
+
+    Raises:
+        InvalidInput: see :func:`workspace_map`.
     """
-    return _slice(mech, (axis,), (values,), pose, guess, mode, tol, 1)
+    return _slice(mech, (axis,), (values,), pose, guess, mode, tol, 1, metrics)

@@ -33,6 +33,7 @@ from ..exceptions import InvalidInput
 from ..kinematics.working_mode import guess_mode, start_configuration
 from ..results import Result, unit
 from ..tolerances import LOCUS_REFINE_MARGIN, RANGE_XTOL, SINGULARITY_TOL
+from .manipulability import MARGIN_METRICS
 from .maps import workspace_sweep
 from .singular_loci import SingularPoint, line_path, locate_on_solved
 
@@ -132,7 +133,7 @@ def orientation_range(
         )
     q0 = start_configuration(mech, guess)
     mode = guess_mode(mech, q0)
-    line = workspace_sweep(mech, axis, ts, pose, guess=q0, mode=mode, tol=ik_tol)
+    line = workspace_sweep(mech, axis, ts, pose, guess=q0, mode=mode, tol=ik_tol, metrics=MARGIN_METRICS)
     base = line.pose
     nan = math.nan
     unreachable = OrientationRange(axis, float(reference), nan, nan, "unreachable", "unreachable", base, ())

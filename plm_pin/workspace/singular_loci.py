@@ -45,6 +45,7 @@ from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
 from ..tolerances import LOCUS_REFINE_MARGIN, LOCUS_XTOL, SINGULARITY_TOL
 from ._continuation import IKEvaluator, base_pose, compatible, solve_poses
+from .manipulability import MARGIN_METRICS
 
 optimize = lazy_module("scipy.optimize")  # brentq, minimize_scalar: 0.1 s to import
 
@@ -228,7 +229,7 @@ def singular_points(
 
     poses = np.stack([pose(float(s)) for s in ts])
     ik_tol = mech.closure_tol if ik_tol is None else positive(ik_tol, "ik_tol", "m, rad")
-    state, target = solve_poses(mech, poses, guess, mode=mode, tol=ik_tol, workers=1)
+    state, target = solve_poses(mech, poses, guess, mode=mode, tol=ik_tol, workers=1, names=MARGIN_METRICS)
     if target is None:
         return []
     return locate_on_solved(

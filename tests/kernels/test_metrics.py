@@ -8,6 +8,7 @@ import pytest
 
 from plm_pin.core.task import TaskTarget
 from plm_pin.kernels import kernel_of
+from plm_pin.kernels.metrics import METRIC_NAMES
 from plm_pin.kinematics import inverse_kinematics, task_pose
 from plm_pin.workspace._batch import compiled_square_task_metrics
 from plm_pin.workspace.manipulability import batch_metrics
@@ -35,10 +36,14 @@ def test_compiled_metrics_match_the_svd_metrics(name, rng):
     m = mech.n_closure_rows
     got = compiled_square_task_metrics(kernel, A, m, mech.actuated_v_indices, mech.mobility)
     want = batch_metrics(A[:, :m], A[:, m:], mech.actuated_v_indices, mech.mobility)  # SVDs
-    _, good = kernel.map_metrics(A, mech.actuated_v_indices, mech.mobility)
+    _, good = kernel.map_metrics(A, mech.actuated_v_indices, mech.mobility, METRIC_NAMES)
     assert good.all()
     for key, value in want.items():
         np.testing.assert_allclose(got[key], value, rtol=1e-9, err_msg=key)
+    for key in METRIC_NAMES:  # each alone: only its stages run, the same values
+        alone = compiled_square_task_metrics(kernel, A, m, mech.actuated_v_indices, mech.mobility, (key,))
+        assert list(alone) == [key]
+        np.testing.assert_array_equal(alone[key], got[key], err_msg=key)
 
 
 def _square_root(rng, n, kind):

@@ -13,7 +13,7 @@ from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import classify, error_bound, error_model, inverse_kinematics
 from plm_pin.statics import static_forces
 from plm_pin.sweep import METRICS, sweep
-from plm_pin.workspace import manipulability, orientation_range
+from plm_pin.workspace import POSE_METRICS, manipulability, orientation_range
 from tests.sweep.conftest import FIG6_L, FIG6_RT, FIG6_Y, THETAS, small
 
 LEGS = {"(1, 2, 4)": (1, 2, 4), "(1, 2, 3, 4)": (1, 2, 3, 4)}
@@ -174,6 +174,20 @@ def test_every_metric_documents_its_variables_and_options():
         for v in metric.variables:
             assert v.unit and v.description and v.dtype in ("float64", "int8", "bool")
         assert set(metric.options) <= set(OPTIONS)
+
+
+def test_the_grid_computes_the_pose_metrics_the_sweep_reads_and_no_other():
+    """The union of the pose metrics the asked metrics read, in POSE_METRICS order; none for reach alone."""
+    from plm_pin.sweep.metrics import grid_metrics
+
+    assert grid_metrics(["reachable_fraction", "within_limits", "orientation_range"]) == ()
+    assert grid_metrics(["condition_number", "min_manipulability", "manipulability"]) == (
+        "manipulability",
+        "condition_number",
+    )
+    assert grid_metrics(["singularity"]) == ("constraint_margin", "inverse_margin", "direct_margin")
+    for metric in METRICS.values():
+        assert set(metric.grid_metrics) <= set(POSE_METRICS), metric.name
 
 
 def test_stiffness_without_gravity_is_k_j_ce_t_j_ce_of_the_paper():

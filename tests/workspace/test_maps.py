@@ -14,7 +14,7 @@ from analyses import _harada2011_paper as paper
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import classify, inverse_kinematics, task_pose
 from plm_pin.kinematics.working_mode import working_mode
-from plm_pin.workspace import manipulability, workspace_grid, workspace_map, workspace_sweep
+from plm_pin.workspace import POSE_METRICS, manipulability, workspace_grid, workspace_map, workspace_sweep
 from plm_pin.workspace._batch import BatchKinematics
 from plm_pin.workspace._continuation import IKEvaluator
 from tests.conftest import preset
@@ -174,6 +174,68 @@ def test_map_on_the_kernels_equals_the_pinocchio_path(name, half_width, monkeypa
     np.testing.assert_allclose(compiled.actuators, plain.actuators, atol=1e-11, equal_nan=True)
 
 
+SUBSETS = (
+    ("manipulability",),
+    ("condition_number", "direct_margin"),
+    ("constraint_margin",),
+    ("inverse_margin",),
+    ("manipulability", "inverse_margin"),
+    (),
+)
+
+
+@pytest.mark.parametrize(
+    ("name", "half_width"), [("harada2011_3d4m", (0.09, 0.08)), ("zhao2011_8pss", (0.03, 0.03))]
+)
+@pytest.mark.parametrize("kernels", [True, False])
+def test_a_map_of_some_metrics_equals_the_full_map_on_them(name, half_width, kernels, monkeypatch):
+    """Each subset of the metrics gives the all-five map's values on its columns and NaN elsewhere.
+
+    On either path (compiled, numpy); a pose may pass the acceptance tests of a subset and not
+    those of all five, so a value may come from the Gram eigenvalues in one map and the SVD in
+    the other: equal to round-off.
+    """
+    if not kernels:
+        monkeypatch.setenv("PLM_PIN_KERNELS", "0")
+    mech = preset(name)
+    x0 = task_pose(mech, mech.q_ref)
+    dofs = mech.task.dofs
+    values = tuple(
+        x0[dofs.index(a)] + np.linspace(-h, h, 15) for a, h in zip(("x", "y"), half_width, strict=True)
+    )
+    full = workspace_map(mech, ("x", "y"), values, workers=1)
+    assert full.metrics == POSE_METRICS and full.reachable.any()
+    for subset in SUBSETS:
+        part = workspace_map(mech, ("x", "y"), values, workers=1, metrics=list(reversed(subset)))
+        assert part.metrics == subset  # in the order of POSE_METRICS
+        np.testing.assert_array_equal(part.reachable, full.reachable)
+        np.testing.assert_array_equal(part.q, full.q)
+        for metric in POSE_METRICS:
+            if metric in subset:
+                np.testing.assert_allclose(
+                    part.metric(metric), full.metric(metric), rtol=1e-11, equal_nan=True, err_msg=metric
+                )
+            else:
+                assert np.isnan(getattr(part, metric)).all()
+                with pytest.raises(InvalidInput, match=rf"metric '{metric}' was not computed"):
+                    part.metric(metric)
+
+
+def test_unknown_metrics_are_refused_and_one_name_is_a_subset():
+    """A bad name is refused with the valid choices; a string names one metric."""
+    mech = preset("harada2011_3d4m")
+    xs, ys = np.linspace(-0.02, 0.02, 3), np.linspace(0.06, 0.08, 3)
+    with pytest.raises(InvalidInput, match=r"metrics: unknown metric 'w'; choose among \['manipulability', "):
+        workspace_map(mech, ("x", "y"), (xs, ys), metrics=("manipulability", "w"))
+    with pytest.raises(InvalidInput, match=r"metrics: unknown metric 3; choose among"):
+        workspace_sweep(mech, "x", xs, metrics=[3])
+    with pytest.raises(InvalidInput, match=r"metrics must be a list of names among"):
+        workspace_grid(mech, ("x",), (xs,), metrics=7)
+    one = workspace_sweep(mech, "x", xs, metrics="direct_margin")
+    assert one.metrics == ("direct_margin",) and np.isfinite(one.direct_margin).all()
+    assert np.isnan(one.manipulability).all()
+
+
 def test_three_axis_grid_follows_the_papers_inverse_kinematics_and_the_2d_map():
     """An x-y-theta grid: actuators follow eq. (2) with the (M.5) signs; its theta slice is the x-y map."""
     mech = preset("harada2011_3d4m")
@@ -211,7 +273,9 @@ def test_sweep_shapes_and_json():
     assert list(data) == [
         *("axes", "values", "pose", "dofs", "reachable", "manipulability", "condition_number"),
         *("constraint_margin", "inverse_margin", "direct_margin", "actuators", "mode", "working_mode"),
+        "metrics",
     ]  # q left out
+    assert data["metrics"] == list(POSE_METRICS)
     with pytest.raises(ValueError):
         result.manipulability[0] = 1.0  # read-only
 
