@@ -494,7 +494,9 @@ def workspace(n: int, args: tuple) -> tuple:
 
 
 @njit(cache=True)
-def _system_into(xi: np.ndarray, pi: np.ndarray, ws: tuple, values: bool, again: bool, args: tuple) -> None:
+def _system_into(
+    xi: np.ndarray, pi: np.ndarray, ws: tuple, values: bool | np.bool_, again: bool | np.bool_, args: tuple
+) -> None:
     """:func:`interval_system` into the buffers ``F`` and ``F_x`` of ``ws`` (:func:`workspace`).
 
     ``args``: the form's arrays (:meth:`~.form.PolynomialForm.kernel_args`). Without ``values``,
@@ -539,7 +541,7 @@ def _joints(
     axis: np.ndarray,
     placement: np.ndarray,
     fixed: np.ndarray,
-    again: bool,
+    again: bool | np.bool_,
 ) -> None:
     """Each joint's local transform and derivatives, its world transform and the products below it.
 
@@ -644,7 +646,7 @@ def _closures(
     closure_axis: np.ndarray,
     closure_length2: np.ndarray,
     entry_offset: np.ndarray,
-    values: bool,
+    values: bool | np.bool_,
 ) -> None:
     """The closure entries ``e`` (unless not ``values``) and their derivatives ``de`` from the frames."""
     Tf, dTf, E, dE, e, de = ws[_TF], ws[_DTF], ws[_E], ws[_DE3], ws[_ENT], ws[_DENT]
@@ -730,7 +732,7 @@ def _combine(
     combination: np.ndarray,
     unit_offsets: np.ndarray,
     unit_sizes: np.ndarray,
-    values: bool,
+    values: bool | np.bool_,
 ) -> None:
     """The unit equations and the random combination of the entries: ``F`` (if ``values``) and ``F_x``."""
     e, de, F, J = ws[_ENT], ws[_DENT], ws[_F], ws[_J]
@@ -957,7 +959,13 @@ def newton_size(x: np.ndarray, pi: np.ndarray, args: tuple) -> tuple[float, np.n
 
 @njit(cache=True)
 def _krawczyk(
-    x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.ndarray, ws: tuple, reuse: bool
+    x: np.ndarray,
+    radius: float,
+    pi: np.ndarray,
+    args: tuple,
+    Fx: np.ndarray,
+    ws: tuple,
+    reuse: bool | np.bool_,
 ) -> bool:
     r""":func:`krawczyk` in the buffers of ``ws`` (``Fx`` may be one of them: it is only read).
 
