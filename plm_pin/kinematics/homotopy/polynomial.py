@@ -428,34 +428,38 @@ def _live_entries(form: PolynomialForm) -> np.ndarray:
 def to_configuration(
     form: PolynomialForm, mech: Mechanism, x: np.ndarray, actuators: np.ndarray
 ) -> np.ndarray:
-    """The tree configuration of a real solution ``x`` with the actuators at ``actuators``, shape (nq,).
+    """The tree configuration of each real solution ``x`` with the actuators at ``actuators``.
 
-    Joints off the loops keep their reference value; quaternions and (cos, sin) pairs are
-    normalised.
+    ``x`` is one solution, shape (n,), or a stack of them, (N, n); the configurations come in the
+    same shape with nq on the last axis. Joints off the loops keep their reference value;
+    quaternions and (cos, sin) pairs are normalised.
     """
     model = mech.model
-    q = mech.q_ref.copy()
-    x = np.real(x)
+    X = np.real(x)
+    rows = X.reshape(-1, form.n)
+    q = np.tile(mech.q_ref, (len(rows), 1))
     for i, j in enumerate(form.joints.tolist()):
         jm, kd, o = model.joints[j], int(form.kind[i]), int(form.offset[i])
         iq = jm.idx_q
         if kd in (REVOLUTE, REVOLUTE_PARAM):
-            angle = float(actuators[o]) if kd == REVOLUTE_PARAM else float(np.arctan2(x[o + 1], x[o]))
+            angle = float(actuators[o]) if kd == REVOLUTE_PARAM else np.arctan2(rows[:, o + 1], rows[:, o])
             if jm.nq == 2:
-                q[iq : iq + 2] = np.cos(angle), np.sin(angle)
+                q[:, iq], q[:, iq + 1] = np.cos(angle), np.sin(angle)
             else:
-                q[iq] = angle
+                q[:, iq] = angle
         elif kd == PRISMATIC:
-            q[iq] = x[o]
+            q[:, iq] = rows[:, o]
         elif kd == PRISMATIC_PARAM:
-            q[iq] = actuators[o]
+            q[:, iq] = actuators[o]
         elif kd in (SPHERICAL, FREE_FLYER):
             t = 3 if kd == FREE_FLYER else 0
-            w, qx, qy, qz = x[o + t : o + t + 4] / np.linalg.norm(x[o + t : o + t + 4])
+            quat = rows[:, o + t : o + t + 4]
+            quat = quat / np.linalg.norm(quat, axis=1, keepdims=True)
             if t:
-                q[iq : iq + 3] = x[o : o + 3]
-            q[iq + t : iq + t + 4] = qx, qy, qz, w  # Pinocchio stores (x, y, z, w)
-    return q
+                q[:, iq : iq + 3] = rows[:, o : o + 3]
+            q[:, iq + t : iq + t + 3] = quat[:, 1:]  # Pinocchio stores (x, y, z, w)
+            q[:, iq + t + 3] = quat[:, 0]
+    return q.reshape(*X.shape[:-1], model.nq)
 
 
 def from_configuration(form: PolynomialForm, mech: Mechanism, q: np.ndarray) -> np.ndarray:

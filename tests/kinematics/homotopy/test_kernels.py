@@ -61,6 +61,7 @@ def test_reference_pose_solves_the_system_and_round_trips(name):
     assert np.abs(evaluate(form, x, c)[0]).max() <= 1e-14
     q = to_configuration(form, mech, x, c)
     assert np.abs(from_configuration(form, mech, q) - x).max() <= 1e-14
+    assert np.array_equal(to_configuration(form, mech, np.stack([x, x]), c), np.stack([q, q]))
 
 
 @pytest.mark.parametrize("name", ["harada2011_3d4m", "harada2015_asymmetric"])
