@@ -150,7 +150,8 @@ def _distinct_modes(mech: Mechanism, solutions: list[FKSolution]) -> list[FKSolu
     if task is not None:
         turns = [i for i, dof in enumerate(task.dofs) if dof.startswith("r")]
         d[..., turns] = (d[..., turns] + np.pi) % (2 * np.pi) - np.pi
-    near = np.tril(np.all(np.abs(d) < FK_SAME_MODE_TOL, axis=2), -1)  # solution k against those before it
+    order = np.arange(len(solutions))
+    near = np.all(np.abs(d) < FK_SAME_MODE_TOL, axis=2) & (order[:, None] > order)  # k against earlier ones
     kept = np.ones(len(solutions), dtype=bool)
     for k in np.flatnonzero(near.any(axis=1)).tolist():  # in order: the solutions before k are settled
         earlier = np.flatnonzero(near[k, :k] & kept[:k]).tolist()

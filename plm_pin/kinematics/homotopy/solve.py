@@ -20,6 +20,7 @@ Real roots are refined by Newton on the real system, kept when every closure ent
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import dataclass
 
@@ -182,7 +183,8 @@ def _distinct(X: np.ndarray) -> np.ndarray:
     """
     scale = 1.0 + np.abs(X).max(axis=1)
     near = np.abs(X[:, None] - X[None]).max(axis=2) <= HOMOTOPY_SAME_ROOT_RTOL * scale[:, None]
-    near = np.tril(near, -1)  # row k against the rows before it
+    order = np.arange(len(X))
+    near &= order[:, None] > order  # row k against the rows before it
     kept = np.ones(len(X), dtype=bool)
     for k in np.flatnonzero(near.any(axis=1)).tolist():  # in order: the rows before k are settled
         kept[k] = not (near[k, :k] & kept[:k]).any()
@@ -224,8 +226,8 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     # a path lost in projective coordinates too (a singular end at infinity, as the isotropic points
     # of revolute (cos, sin) pairs) whose affine norm grew like a power of 1/(1 - t) went to infinity
     growing = codes[~clean] == GROWING
-    diverged += int(np.sum(lost & growing))
-    failed = int(np.sum(lost & ~growing))
+    diverged += int(np.count_nonzero(lost & growing))
+    failed = int(np.count_nonzero(lost & ~growing))
     X = canonical(form, np.concatenate([X[clean], far]))
     roots = X[_distinct(X)]
     # the real roots: refined on the real system, kept when every closure entry vanishes and the
@@ -242,10 +244,10 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     return HomotopySolve(
         generic_count=gen.count,
         roots=len(roots),
-        real=tuple(RealRoot(x, float(r)) for x, r in zip(kept, radii, strict=True) if not np.isnan(r)),
+        real=tuple(RealRoot(x, r) for x, r in zip(kept, radii.tolist(), strict=True) if not math.isnan(r)),
         uncertified=tuple(kept[np.isnan(radii)]),
-        spurious=int(np.sum(~closes)),
-        elsewhere=int(np.sum(closes & ~here)),
+        spurious=int(np.count_nonzero(~closes)),
+        elsewhere=int(np.count_nonzero(closes & ~here)),
         diverged=diverged,
         singular=singular,
         failed=failed,
