@@ -232,10 +232,10 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     roots = X[_distinct(X)]
     # the real roots: refined on the real system, kept when every closure entry vanishes and the
     # actuators left unknown are at their values, then certified
-    real = ~(np.abs(roots.imag).max(axis=1) > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(roots).max(axis=1)))
+    is_real = ~(np.abs(roots.imag).max(axis=1) > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(roots).max(axis=1)))
     pr = np.ascontiguousarray(np.real(p1))
     args = form.kernel_args()
-    Xr = real_newton(roots[real], pr, args)
+    Xr = real_newton(roots[is_real], pr, args)
     entries = entries_at(Xr.astype(np.complex128), p1, args)
     closes = ~(np.abs(entries).max(axis=1) > HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(Xr).max(axis=1)))
     here = ~_off_actuators(form, Xr, values)
