@@ -109,25 +109,24 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
         return None
     res = solve_homotopy(mech, c)
     free = mech.passive_v_indices
-    out = FKModes()
-    roots = [(r.x, True) for r in res.real] + [(x, False) for x in res.uncertified]  # kept: complete=False
+    X = np.array([r.x for r in res.real] + list(res.uncertified)).reshape(-1, form.n)
+    certified = [True] * len(res.real) + [False] * len(res.uncertified)  # kept: complete=False
     complete = res.complete
-    qs = np.array(
-        [_with_actuators(mech, to_configuration(form, mech, xr, c[form.parameters]), c) for xr, _ in roots]
-    )
+    qs = _with_actuators(mech, to_configuration(form, mech, X, c[form.parameters]), c)
     # the legs reduced to distances: their angles again, in closed form
     if form.eliminated_v.size and len(qs):
         qs, aimed = aim_legs(form, mech, qs, mech._thread_workspace().data)
         if not aimed:  # a leg of another shape: Newton on its joints alone
             qs = np.array([_fit_eliminated(mech, q, form.eliminated_v, tol) for q in qs])
-    for q, (_, certified) in zip(qs, roots, strict=True):
+    closed: list[FKSolution] = []
+    for q, proven in zip(qs, certified, strict=True):
         try:
             q, residual_norm, x = _close(mech, q, free, tol)
         except ClosureNotSatisfied:  # a root the full model does not close: not a mode, and not proven
             complete = False
             continue
-        if not _found_mode(mech, out, q, x):
-            out.append(FKSolution(q, x, residual_norm, certified))
+        closed.append(FKSolution(q, x, residual_norm, proven))
+    out = FKModes(_distinct_modes(mech, closed))
     out.method, out.complete = "homotopy", complete
     out.generic_count, out.certified = res.generic_count, len(res.real)
     out.why_incomplete = res.why_incomplete() or (
@@ -136,22 +135,28 @@ def _homotopy_modes(mech: Mechanism, c: np.ndarray, tol: float) -> FKModes | Non
     return out
 
 
-def _found_mode(mech: Mechanism, found: FKModes, q: np.ndarray, x: np.ndarray) -> bool:
-    """Whether ``(q, x)`` is the mode of a solution in ``found``: every frame origin and the task pose.
+def _distinct_modes(mech: Mechanism, solutions: list[FKSolution]) -> list[FKSolution]:
+    """The solutions that are no earlier kept solution's mode, in order: every frame origin and the task pose.
 
     The task poses are compared at once (angles modulo 2 pi), the frame origins only where they
     agree. A half-turn of a symmetric platform can leave every frame origin in place and still turn
     the end effector: the task pose tells the two apart.
     """
-    if not found:
-        return False
-    d = np.array([s.x for s in found], dtype=float) - np.asarray(x, dtype=float)
+    if len(solutions) < 2:
+        return solutions
+    x = np.array([s.x for s in solutions], dtype=float)
+    d = x[None] - x[:, None]  # d[k, j]: solution j's pose less solution k's
     task = mech.task
     if task is not None:
         turns = [i for i, dof in enumerate(task.dofs) if dof.startswith("r")]
-        d[:, turns] = (d[:, turns] + np.pi) % (2 * np.pi) - np.pi
-    near = np.flatnonzero(np.all(np.abs(d) < FK_SAME_MODE_TOL, axis=1))
-    return any(same_assembly(mech, found[int(k)].q, q) for k in near)
+        d[..., turns] = (d[..., turns] + np.pi) % (2 * np.pi) - np.pi
+    order = np.arange(len(solutions))
+    near = np.all(np.abs(d) < FK_SAME_MODE_TOL, axis=2) & (order[:, None] > order)  # k against earlier ones
+    kept = np.ones(len(solutions), dtype=bool)
+    for k in np.flatnonzero(near.any(axis=1)).tolist():  # in order: the solutions before k are settled
+        earlier = np.flatnonzero(near[k, :k] & kept[:k]).tolist()
+        kept[k] = not any(same_assembly(mech, solutions[j].q, solutions[k].q) for j in earlier)
+    return [s for s, keep in zip(solutions, kept.tolist(), strict=True) if keep]
 
 
 def _fit_eliminated(mech: Mechanism, q: np.ndarray, columns: np.ndarray, tol: float) -> np.ndarray:
@@ -169,6 +174,7 @@ def _fit_eliminated(mech: Mechanism, q: np.ndarray, columns: np.ndarray, tol: fl
 
 
 def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """A copy of ``q`` (nq,), or of each row of ``q`` (N, nq), with the actuated joints at ``c``."""
     out = q.copy()
     simple = vars(mech).get(_ONE_COORDINATE)
     if simple is None:  # the actuated coordinates when every actuated joint has one (read once per mechanism)
@@ -177,14 +183,15 @@ def _with_actuators(mech: Mechanism, q: np.ndarray, c: np.ndarray) -> np.ndarray
         one = all(mech.model.nqs[a.joint_id] == 1 for a in mech.actuators)
         simple = vars(mech)[_ONE_COORDINATE] = (indices if one else False,)
     if simple[0] is not False:
-        out[simple[0]] = c
+        out[..., simple[0]] = c
         return out
     nqs = mech.model.nqs
-    for a, value in zip(mech.actuators, c, strict=True):
-        if nqs[a.joint_id] == 1:
-            out[a.idx_q] = value
-        else:  # an unbounded revolute: (cos, sin)
-            mech.set_joint(out, a.joint, value)
+    for row in out.reshape(-1, out.shape[-1]):
+        for a, value in zip(mech.actuators, c, strict=True):
+            if nqs[a.joint_id] == 1:
+                row[a.idx_q] = value
+            else:  # an unbounded revolute: (cos, sin)
+                mech.set_joint(row, a.joint, value)
     return out
 
 

@@ -1024,7 +1024,7 @@ def krawczyk(x: np.ndarray, radius: float, pi: np.ndarray, args: tuple, Fx: np.n
 
 @njit(cache=True)
 def _certify(
-    x: np.ndarray,
+    X: np.ndarray,
     pi: np.ndarray,
     parent: np.ndarray,
     kind: np.ndarray,
@@ -1042,11 +1042,13 @@ def _certify(
     combination: np.ndarray,
     unit_offsets: np.ndarray,
     unit_sizes: np.ndarray,
-) -> float:
-    r""":func:`certify`'s radius in one compiled call with one workspace, or -1 when not certified.
+) -> np.ndarray:
+    r""":func:`certify`'s radii for every row of ``X``, in one compiled call with one workspace.
 
-    Y is the Newton step's inverse of :math:`F_x(\tilde x)`, for every box. The form's arrays come
-    one by one (a call with a tuple of arrays costs more to dispatch).
+    NaN where not certified. Y is the Newton step's inverse of :math:`F_x(\tilde x)`, for every box.
+    Each row's test starts with its own Newton pass, which writes every buffer the test reads (the
+    workspace carries nothing from one row to the next). The form's arrays come one by one (a call
+    with a tuple of arrays costs more to dispatch).
     """
     args = (
         parent,
@@ -1066,15 +1068,19 @@ def _certify(
         unit_offsets,
         unit_sizes,
     )
-    ws = workspace(x.shape[0], args)
-    size = max(_newton_size(x, pi, args, ws), _FLOAT_EPSILON)
-    for g in BOX_GROWTH:
-        radius = g * size
-        if not radius <= HOMOTOPY_MAX_BOX_RTOL:
-            break
-        if _krawczyk(x, radius, pi, args, ws[_FX], ws, np.bool_(True)):
-            return radius
-    return -1.0
+    radii = np.full(X.shape[0], np.nan)
+    ws = workspace(X.shape[1], args)
+    for k in range(X.shape[0]):
+        x = X[k]
+        size = max(_newton_size(x, pi, args, ws), _FLOAT_EPSILON)
+        for g in BOX_GROWTH:
+            radius = g * size
+            if not radius <= HOMOTOPY_MAX_BOX_RTOL:
+                break
+            if _krawczyk(x, radius, pi, args, ws[_FX], ws, np.bool_(True)):
+                radii[k] = radius
+                break
+    return radii
 
 
 def parameter_intervals(form: PolynomialForm, actuators: np.ndarray) -> np.ndarray:
@@ -1095,16 +1101,16 @@ def parameter_intervals(form: PolynomialForm, actuators: np.ndarray) -> np.ndarr
 
 
 def certify(
-    form: PolynomialForm, x: np.ndarray, actuators: np.ndarray, pi: np.ndarray | None = None
-) -> float | None:
-    """Half-width (relative, times 1 + abs(x)) of a box around real ``x`` proven to hold one root, or None.
+    form: PolynomialForm, X: np.ndarray, actuators: np.ndarray, pi: np.ndarray | None = None
+) -> np.ndarray:
+    """Per row of real ``X`` (N, n): the half-width of a box proven to hold exactly one root, or NaN.
 
-    The boxes tried are :data:`BOX_GROWTH` times the Newton enclosure's size (:func:`newton_size`),
-    at most :data:`~plm_pin.tolerances.HOMOTOPY_MAX_BOX_RTOL`. ``pi``: the actuators'
-    :func:`parameter_intervals`, when the caller has them.
+    The half-width is relative (times 1 + abs(x)). The boxes tried are :data:`BOX_GROWTH` times the
+    Newton enclosure's size (:func:`newton_size`), at most
+    :data:`~plm_pin.tolerances.HOMOTOPY_MAX_BOX_RTOL`; every row in one compiled call. ``pi``: the
+    actuators' :func:`parameter_intervals`, when the caller has them.
     """
     if pi is None:
         pi = parameter_intervals(form, actuators)
-    x = np.ascontiguousarray(x, dtype=float)
-    radius = _certify(x, np.ascontiguousarray(pi, dtype=float), *form.kernel_args())
-    return None if radius < 0.0 else radius
+    X = np.ascontiguousarray(X, dtype=float).reshape(-1, form.n)
+    return _certify(X, np.ascontiguousarray(pi, dtype=float), *form.kernel_args())

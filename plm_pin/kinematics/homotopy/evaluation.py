@@ -482,6 +482,38 @@ def system(
     return F, J
 
 
+@njit(cache=True)
+def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
+    """Closure entries at every row of complex ``X`` (N, n) and parameters ``p``: shape (N, n_entries).
+
+    In one compiled call; ``args`` is the form's :meth:`~.form.PolynomialForm.kernel_args`.
+    """
+    N, n = X.shape
+    ws = workspace_for(n, p.shape[0], args)
+    e = ws[12]
+    out = np.empty((N, e.shape[0]), dtype=np.complex128)
+    for k in range(N):
+        _entries(
+            X[k],
+            p,
+            ws,
+            args[0],
+            args[1],
+            args[2],
+            args[3],
+            args[5],
+            args[6],
+            args[7],
+            args[8],
+            args[9],
+            args[10],
+            args[11],
+            args[12],
+        )
+        out[k] = e
+    return out
+
+
 _WORKSPACES: dict[tuple[str, int], tuple] = {}
 
 

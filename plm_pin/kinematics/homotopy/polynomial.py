@@ -46,7 +46,6 @@ and the random combination, add spurious solutions that this filter removes).
 from __future__ import annotations
 
 import hashlib
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -428,34 +427,38 @@ def _live_entries(form: PolynomialForm) -> np.ndarray:
 def to_configuration(
     form: PolynomialForm, mech: Mechanism, x: np.ndarray, actuators: np.ndarray
 ) -> np.ndarray:
-    """The tree configuration of a real solution ``x`` with the actuators at ``actuators``, shape (nq,).
+    """The tree configuration of each real solution ``x`` with the actuators at ``actuators``.
 
-    Joints off the loops keep their reference value; quaternions and (cos, sin) pairs are
-    normalised.
+    ``x`` is one solution, shape (n,), or a stack of them, (N, n); the configurations come in the
+    same shape with nq on the last axis. Joints off the loops keep their reference value;
+    quaternions and (cos, sin) pairs are normalised.
     """
     model = mech.model
-    q = mech.q_ref.copy()
-    x = np.real(x)
+    X = np.real(x)
+    rows = X.reshape(-1, form.n)
+    q = np.tile(mech.q_ref, (len(rows), 1))
     for i, j in enumerate(form.joints.tolist()):
         jm, kd, o = model.joints[j], int(form.kind[i]), int(form.offset[i])
         iq = jm.idx_q
         if kd in (REVOLUTE, REVOLUTE_PARAM):
-            angle = float(actuators[o]) if kd == REVOLUTE_PARAM else float(np.arctan2(x[o + 1], x[o]))
+            angle = float(actuators[o]) if kd == REVOLUTE_PARAM else np.arctan2(rows[:, o + 1], rows[:, o])
             if jm.nq == 2:
-                q[iq : iq + 2] = np.cos(angle), np.sin(angle)
+                q[:, iq], q[:, iq + 1] = np.cos(angle), np.sin(angle)
             else:
-                q[iq] = angle
+                q[:, iq] = angle
         elif kd == PRISMATIC:
-            q[iq] = x[o]
+            q[:, iq] = rows[:, o]
         elif kd == PRISMATIC_PARAM:
-            q[iq] = actuators[o]
+            q[:, iq] = actuators[o]
         elif kd in (SPHERICAL, FREE_FLYER):
             t = 3 if kd == FREE_FLYER else 0
-            w, qx, qy, qz = x[o + t : o + t + 4] / np.linalg.norm(x[o + t : o + t + 4])
+            quat = rows[:, o + t : o + t + 4]
+            quat = quat / np.linalg.norm(quat, axis=1, keepdims=True)
             if t:
-                q[iq : iq + 3] = x[o : o + 3]
-            q[iq + t : iq + t + 4] = qx, qy, qz, w  # Pinocchio stores (x, y, z, w)
-    return q
+                q[:, iq : iq + 3] = rows[:, o : o + 3]
+            q[:, iq + t : iq + t + 3] = quat[:, 1:]  # Pinocchio stores (x, y, z, w)
+            q[:, iq + t + 3] = quat[:, 0]
+    return q.reshape(*X.shape[:-1], model.nq)
 
 
 def from_configuration(form: PolynomialForm, mech: Mechanism, q: np.ndarray) -> np.ndarray:
@@ -565,7 +568,7 @@ def aim_legs(
         for iq, nq in zip(leg.q_index, leg.nq, strict=True):
             zero[:, iq : iq + nq] = _NEUTRAL[nq]
     oR, op, at = _placements(mech, zero, {f for leg in form.legs for f in (leg.frame, leg.target)}, data)
-    rows: list[tuple[int, LegAim]] = []
+    aimed: list[LegAim] = []  # the universal joints' legs, each over every configuration
     u1, u2, v, w, ref = [], [], [], [], []
     for leg in form.legs:
         origin = oR[:, leg.carrier] @ leg.centre[:3, 3] + op[:, leg.carrier]
@@ -578,27 +581,28 @@ def aim_legs(
                 quat = pin.Quaternion(Rj.T @ turn @ Rj @ now).normalized()
                 out[i, iq : iq + 4] = quat.x, quat.y, quat.z, quat.w
             continue
-        rows.extend((i, leg) for i in range(len(out)))
+        aimed.append(leg)
         u1.append(oR[:, leg.joints[0]] @ leg.axes[0])
         u2.append(oR[:, leg.joints[1]] @ leg.axes[1])
         v.append(vl)
         w.append(wl)
-        ref.append([[_angle(qi, iq, nq) for iq, nq in zip(leg.q_index, leg.nq, strict=True)] for qi in out])
-    if rows:
+        ref.append(
+            np.stack([_angles(out, iq, nq) for iq, nq in zip(leg.q_index, leg.nq, strict=True)], axis=1)
+        )
+    if aimed:
         angles = aim_pairs(*(np.concatenate(a) for a in (u1, u2, v, w)))
         r = np.concatenate(ref)
         angles += 2 * np.pi * np.round((r - angles) / (2 * np.pi))  # each angle nearest its current value
         pick = np.abs(angles - r).sum(axis=2).argmin(axis=0)
-        best = angles[pick, np.arange(len(rows))]
+        best = angles[pick, np.arange(len(r))].reshape(len(aimed), len(out), 2)
         done = done and bool(np.isfinite(best).all())
-        for (i, leg), row in zip(rows, best.tolist(), strict=True):
-            if not all(map(math.isfinite, row)):
-                continue
-            for iq, nq, angle in zip(leg.q_index, leg.nq, row, strict=True):
+        for leg, pairs in zip(aimed, best, strict=True):
+            ok = np.isfinite(pairs).all(axis=1)  # the configurations whose leg is aimed
+            for iq, nq, angle in zip(leg.q_index, leg.nq, pairs[ok].T, strict=True):
                 if nq == 2:
-                    out[i, iq], out[i, iq + 1] = math.cos(angle), math.sin(angle)
+                    out[ok, iq], out[ok, iq + 1] = np.cos(angle), np.sin(angle)
                 else:
-                    out[i, iq] = angle
+                    out[ok, iq] = angle
     return out, done
 
 
@@ -635,6 +639,6 @@ _NEUTRAL = {1: np.zeros(1), 2: np.array([1.0, 0.0]), 4: np.array([0.0, 0, 0, 1])
 """Neutral configuration coordinates of a leg joint, by its nq (revolute, unbounded revolute, spherical)."""
 
 
-def _angle(q: np.ndarray, iq: int, nq: int) -> float:
-    """A revolute joint's angle in ``q`` [rad] (one coordinate, or (cos, sin) when unbounded)."""
-    return math.atan2(q[iq + 1], q[iq]) if nq == 2 else float(q[iq])
+def _angles(qs: np.ndarray, iq: int, nq: int) -> np.ndarray:
+    """A revolute joint's angle in each row of ``qs`` [rad] (one coordinate, or (cos, sin) when unbounded)."""
+    return np.arctan2(qs[:, iq + 1], qs[:, iq]) if nq == 2 else qs[:, iq]

@@ -20,6 +20,7 @@ Real roots are refined by Newton on the real system, kept when every closure ent
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import dataclass
 
@@ -161,17 +162,33 @@ def parameter_actuators(mech: Mechanism) -> tuple[int, ...] | None:
     return tuple(int(a) for a in best)
 
 
-def _off_actuators(form: PolynomialForm, x: np.ndarray, values: np.ndarray) -> bool:
-    """Whether real root ``x`` puts an actuator left unknown off its value ``values[a]``."""
-    scale = HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(x).max())
+def _off_actuators(form: PolynomialForm, X: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Per real root (row of ``X``), whether it puts an actuator left unknown off its value ``values[a]``."""
+    scale = HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(X).max(axis=1))
+    off = np.zeros(len(X), dtype=bool)
     for a, o, revolute in form.checked:
         if revolute:
-            off = max(abs(x[o] - np.cos(values[a])), abs(x[o + 1] - np.sin(values[a])))
+            cos, sin = np.abs(X[:, o] - np.cos(values[a])), np.abs(X[:, o + 1] - np.sin(values[a]))
+            off |= np.where(sin > cos, sin, cos) > scale
         else:
-            off = abs(x[o] - values[a])
-        if off > scale:
-            return True
-    return False
+            off |= np.abs(X[:, o] - values[a]) > scale
+    return off
+
+
+def _distinct(X: np.ndarray) -> np.ndarray:
+    """Mask of the rows of ``X`` (N, n) kept as distinct roots, in order: the first of each root.
+
+    A row is kept unless a row kept before it lies within :data:`~plm_pin.tolerances.HOMOTOPY_SAME_ROOT_RTOL`
+    times 1 + its own largest entry (in every coordinate).
+    """
+    scale = 1.0 + np.abs(X).max(axis=1)
+    near = np.abs(X[:, None] - X[None]).max(axis=2) <= HOMOTOPY_SAME_ROOT_RTOL * scale[:, None]
+    order = np.arange(len(X))
+    near &= order[:, None] > order  # row k against the rows before it
+    kept = np.ones(len(X), dtype=bool)
+    for k in np.flatnonzero(near.any(axis=1)).tolist():  # in order: the rows before k are settled
+        kept[k] = not (near[k, :k] & kept[:k]).any()
+    return kept
 
 
 def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
@@ -181,7 +198,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
         NotPolynomial: the mechanism has no polynomial form.
     """
     from .certify import certify, parameter_intervals
-    from .evaluation import closure_entries
+    from .evaluation import entries_at
     from .projective import projective_ends
     from .threads import over_threads
     from .tracking import GROWING, REACHED, ends_at, real_newton, track_all
@@ -209,47 +226,30 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     # a path lost in projective coordinates too (a singular end at infinity, as the isotropic points
     # of revolute (cos, sin) pairs) whose affine norm grew like a power of 1/(1 - t) went to infinity
     growing = codes[~clean] == GROWING
-    diverged += int(np.sum(lost & growing))
-    failed = int(np.sum(lost & ~growing))
+    diverged += int(np.count_nonzero(lost & growing))
+    failed = int(np.count_nonzero(lost & ~growing))
     X = canonical(form, np.concatenate([X[clean], far]))
-    scale = 1.0 + np.abs(X).max(axis=1)
-    roots: list[np.ndarray] = []
-    collided = 0
-    for x, s in zip(X, scale, strict=True):
-        if roots and np.abs(np.array(roots) - x).max(axis=1).min() <= HOMOTOPY_SAME_ROOT_RTOL * s:
-            collided += 1
-        else:
-            roots.append(x)
-    real: list[RealRoot] = []
-    uncertified: list[np.ndarray] = []
-    spurious = elsewhere = 0
+    roots = X[_distinct(X)]
+    # the real roots: refined on the real system, kept when every closure entry vanishes and the
+    # actuators left unknown are at their values, then certified
+    is_real = ~(np.abs(roots.imag).max(axis=1) > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(roots).max(axis=1)))
     pr = np.ascontiguousarray(np.real(p1))
-    args, pi = form.kernel_args(), parameter_intervals(form, pr)
-    for x in roots:
-        if np.abs(x.imag).max() > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(x).max()):
-            continue
-        xr = real_newton(x, pr, args)
-        entries, _ = closure_entries(form, xr, pr)
-        if np.abs(entries).max() > HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(xr).max()):
-            spurious += 1
-            continue
-        if _off_actuators(form, xr, values):
-            elsewhere += 1
-            continue
-        radius = certify(form, xr, pr, pi)
-        if radius is None:
-            uncertified.append(xr)
-        else:
-            real.append(RealRoot(xr, radius))
+    args = form.kernel_args()
+    Xr = real_newton(roots[is_real], pr, args)
+    entries = entries_at(Xr.astype(np.complex128), p1, args)
+    closes = ~(np.abs(entries).max(axis=1) > HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(Xr).max(axis=1)))
+    here = ~_off_actuators(form, Xr, values)
+    kept = Xr[closes & here]
+    radii = certify(form, kept, pr, parameter_intervals(form, pr))
     return HomotopySolve(
         generic_count=gen.count,
         roots=len(roots),
-        real=tuple(real),
-        uncertified=tuple(uncertified),
-        spurious=spurious,
-        elsewhere=elsewhere,
+        real=tuple(RealRoot(x, r) for x, r in zip(kept, radii.tolist(), strict=True) if not math.isnan(r)),
+        uncertified=tuple(kept[np.isnan(radii)]),
+        spurious=int(np.count_nonzero(~closes)),
+        elsewhere=int(np.count_nonzero(closes & ~here)),
         diverged=diverged,
         singular=singular,
         failed=failed,
-        collided=collided,
+        collided=len(X) - len(roots),
     )

@@ -25,7 +25,8 @@ from plm_pin.kinematics.homotopy.certify import (
 from plm_pin.kinematics.homotopy.evaluation import evaluate
 from plm_pin.kinematics.homotopy.generic import solve_generic
 from plm_pin.kinematics.homotopy.polynomial import from_configuration, to_configuration
-from plm_pin.kinematics.homotopy.solve import parameter_actuators
+from plm_pin.kinematics.homotopy.solve import _distinct, parameter_actuators
+from plm_pin.tolerances import HOMOTOPY_SAME_ROOT_RTOL
 from tests.conftest import preset
 
 NAMES = ["fourbar", "harada2011_3d4m", "enferadi2017_star_triangle", "zhao2011_6pss", "stewart_6ups"]
@@ -60,6 +61,7 @@ def test_reference_pose_solves_the_system_and_round_trips(name):
     assert np.abs(evaluate(form, x, c)[0]).max() <= 1e-14
     q = to_configuration(form, mech, x, c)
     assert np.abs(from_configuration(form, mech, q) - x).max() <= 1e-14
+    assert np.array_equal(to_configuration(form, mech, np.stack([x, x]), c), np.stack([q, q]))
 
 
 @pytest.mark.parametrize("name", ["harada2011_3d4m", "harada2015_asymmetric"])
@@ -86,13 +88,33 @@ def test_redundant_actuation_takes_as_many_parameters_as_the_mobility(name):
 
 
 def test_krawczyk_certifies_a_root_and_refuses_a_shifted_point():
-    """A box about the reference root is certified; about a point 1e-3 away it is not."""
+    """A box about the reference root is certified; about a point 1e-3 away it is not.
+
+    In one batch, the root again after the shifted point: each radius equals its row's certified
+    alone (the workspace the rows share carries nothing from one row to the next).
+    """
     mech = preset("harada2011_3d3m")
     form, _ = prepared(mech)
     x = from_configuration(form, mech, mech.q_ref)
     c = mech.actuator_positions(mech.q_ref)
-    assert certify(form, x, c) is not None
-    assert certify(form, x + 1e-3, c) is None
+    rows = np.stack([x, x + 1e-3, x])
+    radii = certify(form, rows, c)
+    assert np.isfinite(radii[0]) and np.isnan(radii[1])
+    alone = np.concatenate([certify(form, row, c) for row in rows])
+    assert np.array_equal(radii, alone, equal_nan=True)
+
+
+def test_distinct_roots_compare_each_row_with_the_rows_kept_before_it():
+    """A row near a kept earlier row is dropped; a row near only a dropped one is kept.
+
+    Rows of largest entry 2, so the same root within 3 HOMOTOPY_SAME_ROOT_RTOL: the second row is
+    2 of those from the first (dropped), the third 2 from the second but 4 from the first (kept),
+    the fourth the first again (dropped), the fifth far from all (kept).
+    """
+    a = np.array([1.0 + 1.0j, 2.0, -0.5j])
+    tol = HOMOTOPY_SAME_ROOT_RTOL
+    X = np.stack([a, a + 2 * tol, a + 4 * tol, a, a + 1.0])
+    assert _distinct(X).tolist() == [True, False, True, False, True]
 
 
 @pytest.mark.parametrize("name", NAMES)
