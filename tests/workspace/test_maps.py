@@ -143,20 +143,27 @@ def test_parallel_workers_give_the_same_map():
     np.testing.assert_allclose(one.actuators, two.actuators, atol=1e-11, equal_nan=True)
 
 
-@pytest.mark.parametrize(
-    ("name", "half_width"), [("harada2011_3d4m", (0.09, 0.08)), ("zhao2011_8pss", (0.03, 0.03))]
-)
+MAP_CASES = [("harada2011_3d4m", (0.09, 0.08)), ("zhao2011_8pss", (0.03, 0.03))]
+"""Presets and the half-widths in x and y [m] of a 15 x 15 grid about their reference pose."""
+
+
+def _grid_about_reference(mech, half_width: tuple[float, float]) -> tuple[np.ndarray, ...]:
+    """15 values of x and of y centred on the reference pose's, ``half_width`` either side."""
+    x0 = task_pose(mech, mech.q_ref)
+    dofs = mech.task.dofs
+    return tuple(
+        x0[dofs.index(a)] + np.linspace(-h, h, 15) for a, h in zip(("x", "y"), half_width, strict=True)
+    )
+
+
+@pytest.mark.parametrize(("name", "half_width"), MAP_CASES)
 def test_map_on_the_kernels_equals_the_pinocchio_path(name, half_width, monkeypatch):
     """The compiled path (seed row, batched rows, metrics) and the Pinocchio/numpy path give one map.
 
     On the 3D4M the grid runs past the reach of the rods, so the edges are filled point by point.
     """
     mech = preset(name)
-    x0 = task_pose(mech, mech.q_ref)
-    dofs = mech.task.dofs
-    values = tuple(
-        x0[dofs.index(a)] + np.linspace(-h, h, 15) for a, h in zip(("x", "y"), half_width, strict=True)
-    )
+    values = _grid_about_reference(mech, half_width)
     compiled = workspace_map(mech, ("x", "y"), values, workers=1)
     monkeypatch.setenv("PLM_PIN_KERNELS", "0")
     plain = workspace_map(mech, ("x", "y"), values, workers=1)
@@ -184,9 +191,7 @@ SUBSETS = (
 )
 
 
-@pytest.mark.parametrize(
-    ("name", "half_width"), [("harada2011_3d4m", (0.09, 0.08)), ("zhao2011_8pss", (0.03, 0.03))]
-)
+@pytest.mark.parametrize(("name", "half_width"), MAP_CASES)
 @pytest.mark.parametrize("kernels", [True, False])
 def test_a_map_of_some_metrics_equals_the_full_map_on_them(name, half_width, kernels, monkeypatch):
     """Each subset of the metrics gives the all-five map's values on its columns and NaN elsewhere.
@@ -198,11 +203,7 @@ def test_a_map_of_some_metrics_equals_the_full_map_on_them(name, half_width, ker
     if not kernels:
         monkeypatch.setenv("PLM_PIN_KERNELS", "0")
     mech = preset(name)
-    x0 = task_pose(mech, mech.q_ref)
-    dofs = mech.task.dofs
-    values = tuple(
-        x0[dofs.index(a)] + np.linspace(-h, h, 15) for a, h in zip(("x", "y"), half_width, strict=True)
-    )
+    values = _grid_about_reference(mech, half_width)
     full = workspace_map(mech, ("x", "y"), values, workers=1)
     assert full.metrics == POSE_METRICS and full.reachable.any()
     for subset in SUBSETS:
