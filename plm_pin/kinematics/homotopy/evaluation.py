@@ -488,6 +488,24 @@ def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
 
     In one compiled call; ``args`` is the form's :meth:`~.form.PolynomialForm.kernel_args`.
     """
+    (
+        parent,
+        kind,
+        offset,
+        axis,
+        _placement,
+        fixed,
+        frame_joint,
+        frame_placement,
+        closure_kind,
+        closure_frames,
+        closure_axis,
+        closure_length2,
+        entry_offset,
+        _combination,
+        _unit_offsets,
+        _unit_sizes,
+    ) = args  # the placements and the square system's combination and units are not read
     N, n = X.shape
     ws = workspace_for(n, p.shape[0], args)
     e = ws[12]
@@ -497,18 +515,18 @@ def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
             X[k],
             p,
             ws,
-            args[0],
-            args[1],
-            args[2],
-            args[3],
-            args[5],
-            args[6],
-            args[7],
-            args[8],
-            args[9],
-            args[10],
-            args[11],
-            args[12],
+            parent,
+            kind,
+            offset,
+            axis,
+            fixed,
+            frame_joint,
+            frame_placement,
+            closure_kind,
+            closure_frames,
+            closure_axis,
+            closure_length2,
+            entry_offset,
         )
         out[k] = e
     return out
