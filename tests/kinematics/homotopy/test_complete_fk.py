@@ -235,38 +235,13 @@ def test_stewart_platform_has_40_roots_and_every_real_mode_closes():
 
 @pytest.mark.slow
 def test_stewart_real_modes_equal_phcpack():
-    """PHCpack's real solutions of the independently written leg equations are exactly our modes.
-
-    PHCpack runs in Debian's python3-phcpy (``make test`` installs it): skipped where it is
-    missing, except on CI, where the oracle must run.
-    """
-    probe = None
-    if shutil.which("/usr/bin/python3") is not None:
-        probe = subprocess.run(["/usr/bin/python3", "-c", "import phcpy"], capture_output=True, check=False)
-    if probe is None or probe.returncode:
-        why = "phcpy is not installed for the system python (make test, or apt-get install python3-phcpy)"
-        if os.environ.get("CI"):
-            pytest.fail(why)
-        pytest.skip(why)
+    """PHCpack's real solutions of the independently written leg equations are exactly our modes."""
     mech = preset("zhao2011_6pss")
-    run = subprocess.run(
-        ["/usr/bin/python3", str(HERE / "phc_stewart.py")],
-        input=json.dumps(_stewart_geometry(mech)),
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=1800,
-    )
-    phc = json.loads(run.stdout.strip().splitlines()[-1])
+    geometry = _stewart_geometry(mech)
+    (phc,) = _phcpack(geometry["A"], geometry["B"], [geometry["L"]])
     assert phc["total"] == 80  # 40 poses, each with its quaternion and its opposite
-    expected = []
-    for x, y, z, w, qx, qy, qz in phc["real"]:
-        R = pin.Quaternion(w, qx, qy, qz).normalized().toRotationMatrix()
-        pose = np.concatenate([[x, y, z], R.ravel()])
-        if not any(np.abs(pose - e).max() < 1e-6 for e in expected):
-            expected.append(pose)
     modes = forward_kinematics(mech, mech.actuator_positions(mech.q_ref))
-    _match(_platform_poses(mech, modes), expected, 1e-8)
+    _match(_platform_poses(mech, modes), _phc_poses(phc), 1e-8)
 
 
 # A general (non-symmetric, non-planar) 6-6 Gough-Stewart platform: irregular points
@@ -315,19 +290,23 @@ def test_general_stewart_ups_legs_reduce_to_distances_40_roots(tmp_path):
         assert not any(same_assembly(mech, s.q, t.q) for t in modes[:i])
 
 
-def _phcpack(geometry: dict[str, list]) -> dict[str, list]:
-    """PHCpack's solutions of the 6-6 leg equations (skipped where phcpy is missing, except on CI)."""
+def _phcpack(base: list, platform: list, lengths: list[list[float]]) -> list[dict[str, list]]:
+    """PHCpack's solutions of the 6-6 leg equations at each set of ``lengths`` (phc_stewart.py).
+
+    PHCpack runs in Debian's python3-phcpy (``make test`` installs it): skipped where it is
+    missing, except on CI, where the oracle must run.
+    """
     probe = None
     if shutil.which("/usr/bin/python3") is not None:
         probe = subprocess.run(["/usr/bin/python3", "-c", "import phcpy"], capture_output=True, check=False)
     if probe is None or probe.returncode:
-        why = "phcpy is not installed for the system python (make phcpack, or apt-get install python3-phcpy)"
+        why = "phcpy is not installed for the system python (make test, or apt-get install python3-phcpy)"
         if os.environ.get("CI"):
             pytest.fail(why)
         pytest.skip(why)
     run = subprocess.run(
         ["/usr/bin/python3", str(HERE / "phc_stewart.py")],
-        input=json.dumps(geometry),
+        input=json.dumps({"A": base, "B": platform, "L": lengths}),
         capture_output=True,
         text=True,
         check=True,
@@ -347,21 +326,29 @@ def _phc_poses(phc: dict[str, list]) -> list[np.ndarray]:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("shift", [0.0, 0.01, 0.03])
-def test_general_stewart_ups_real_modes_equal_phcpack(tmp_path, shift):
-    """PHCpack: 80 signed-quaternion solutions (40 poses), its real ones exactly our modes."""
+def test_general_stewart_ups_real_modes_equal_phcpack(tmp_path):
+    """PHCpack at three sets of leg lengths: 80 signed-quaternion solutions each, its real ones our modes.
+
+    PHCpack solves the first set by its black-box solver and the other two by its own tracker
+    from the first set's 80 solutions (phc_stewart.py); each set's count is checked to be 80.
+    """
     mech = _general_stewart(tmp_path)
-    c = mech.actuator_positions(mech.q_ref) + shift * np.array([1.0, -1.0, 0.5, 0.0, -0.5, 1.0])
-    phc = _phcpack({"A": SG_BASE.tolist(), "B": SG_PLATFORM.tolist(), "L": c.tolist()})
-    assert phc["total"] == 80
-    expected = _phc_poses(phc)
-    if not expected:  # no real assembly: proven by the homotopy too
-        with pytest.raises(plm_pin.PoseUnreachable, match="none of the 40 complex roots is real"):
-            forward_kinematics(mech, c)
-        return
-    modes = forward_kinematics(mech, c)
-    assert modes.complete and modes.generic_count == 40
-    _match(_platform_poses(mech, modes), expected, 1e-8)
+    shifts = [0.0, 0.01, 0.03]
+    lengths = [
+        mech.actuator_positions(mech.q_ref) + shift * np.array([1.0, -1.0, 0.5, 0.0, -0.5, 1.0])
+        for shift in shifts
+    ]
+    results = _phcpack(SG_BASE.tolist(), SG_PLATFORM.tolist(), [c.tolist() for c in lengths])
+    assert [phc["total"] for phc in results] == [80] * len(shifts)
+    for c, phc in zip(lengths, results, strict=True):
+        expected = _phc_poses(phc)
+        if not expected:  # no real assembly: proven by the homotopy too
+            with pytest.raises(plm_pin.PoseUnreachable, match="none of the 40 complex roots is real"):
+                forward_kinematics(mech, c)
+            continue
+        modes = forward_kinematics(mech, c)
+        assert modes.complete and modes.generic_count == 40
+        _match(_platform_poses(mech, modes), expected, 1e-8)
 
 
 @pytest.mark.parametrize(
