@@ -352,24 +352,21 @@ def working_mode_from_data(
     of :func:`working_mode_from_jacobian`. ``ik_rows``: ``[J_phi; J_x]`` already computed
     from this ``data`` (see :func:`structure_jacobian_from_data`).
     """
-    A = structure_jacobian_from_data(model, data, closures, task, ik_rows)
-    J_omega = data.J[3:]  # the world angular rows of the joint Jacobians, read once
-    oMi = data.oMi
-    turned: dict[int, np.ndarray] = {}  # R^T of each root, read once (a leg's axes share their root)
-    out = []
-    for leg in legs:
-        if not leg.square:
-            continue
-        M = A[leg.block]
-        for k, _, root, axis in leg.axes:
-            R_T = turned.get(root)
-            if R_T is None:
-                R_T = turned[root] = oMi[root].rotation.T
-            world = J_omega[:, leg.columns[k]]  # the revolute's one velocity column (_axis_in's)
-            if float(np.dot(np.asarray(R_T @ world), axis)) < 0.0:
-                M[:, k] = -M[:, k]
-        out.append(_determinant_sign(M, rtol))
-    return tuple(out)
+    layout = _sign_layout(tuple(legs))
+    if ik_rows is not None and layout.n_rows <= ik_rows.shape[0]:  # no sign row among the platform's others
+        A = ik_rows
+    else:
+        A = structure_jacobian_from_data(model, data, closures, task, ik_rows)
+    signs = _block_signs(A, layout, rtol)
+    if layout.roots:
+        # negating a column negates the determinant exactly: count the turned columns of each leg
+        R = np.array([data.oMi[root].rotation for root in layout.roots])  # (n_roots, 3, 3)
+        world = data.J[3:, layout.axis_columns]  # (3, n_axes): the revolutes' world axes (_axis_in's)
+        # (R_root^T world) . generic = world . (R_root generic)
+        away = np.einsum("aji,ja,ai->a", R[layout.axis_roots], world, layout.axis_generic) < 0.0
+        turned = np.bincount(layout.axis_legs[away], minlength=layout.n_square).tolist()
+        signs = [-s if t % 2 else s for s, t in zip(signs, turned, strict=True)]
+    return tuple(signs)
 
 
 def working_mode_from_jacobian(
@@ -381,7 +378,68 @@ def working_mode_from_jacobian(
     product of the block's column norms (Hadamard's bound), so the test is scale-free. The
     passive axes are not turned here (see :func:`working_mode_from_data`).
     """
-    return tuple(_determinant_sign(A[leg.block], rtol) for leg in legs if leg.square)
+    return tuple(_block_signs(A, _sign_layout(tuple(legs)), rtol))
+
+
+@dataclass(frozen=True)
+class _SignLayout:
+    """Where the square legs' sign blocks and passive revolutes sit, to read them in a few array operations.
+
+    Attributes:
+        blocks: per block size, the legs' positions among the square legs and their sign
+            rows and columns (W, n).
+        n_square: number of square legs.
+        n_rows: rows of the stacked Jacobian the sign blocks reach (their largest row + 1).
+        roots: the distinct root joints of the passive revolutes.
+        axis_roots: per passive revolute, the position of its root in ``roots`` (n_axes,).
+        axis_columns: its velocity column (n_axes,).
+        axis_legs: the position of its leg among the square legs (n_axes,).
+        axis_generic: its generic axis in the root's frame (n_axes, 3).
+    """
+
+    blocks: tuple[tuple[tuple[int, ...], np.ndarray, np.ndarray], ...]
+    n_square: int
+    n_rows: int
+    roots: tuple[int, ...]
+    axis_roots: np.ndarray
+    axis_columns: np.ndarray
+    axis_legs: np.ndarray
+    axis_generic: np.ndarray
+
+
+@functools.lru_cache(maxsize=64)
+def _sign_layout(legs: tuple[Leg, ...]) -> _SignLayout:
+    """The layout of ``legs``, built once per tuple of legs."""
+    square = [leg for leg in legs if leg.square]
+    blocks = []
+    for n in sorted({len(leg.columns) for leg in square}):  # the blocks of one size in one gather
+        which = [i for i, leg in enumerate(square) if len(leg.columns) == n]
+        rows = np.array([square[i].sign_rows for i in which], dtype=np.intp).reshape(-1, n)
+        cols = np.array([square[i].columns for i in which], dtype=np.intp).reshape(-1, n)
+        blocks.append((tuple(which), rows, cols))
+    axes = [
+        (i, leg.columns[k], root, generic) for i, leg in enumerate(square) for k, _, root, generic in leg.axes
+    ]
+    roots = tuple(sorted({root for _, _, root, _ in axes}))
+    return _SignLayout(
+        tuple(blocks),
+        len(square),
+        max((max(leg.sign_rows) + 1 for leg in square), default=0),
+        roots,
+        np.array([roots.index(root) for _, _, root, _ in axes], dtype=np.intp),
+        np.array([c for _, c, _, _ in axes], dtype=np.intp),
+        np.array([i for i, _, _, _ in axes], dtype=np.intp),
+        np.array([generic for _, _, _, generic in axes], dtype=float).reshape(-1, 3),
+    )
+
+
+def _block_signs(A: np.ndarray, layout: _SignLayout, rtol: float) -> list[int]:
+    """Determinant signs of the square legs' blocks of ``A``, unturned: one gather per block size."""
+    out = [0] * layout.n_square
+    for which, rows, cols in layout.blocks:
+        for i, M in zip(which, A[rows[:, :, None], cols[:, None, :]], strict=True):
+            out[i] = _determinant_sign(M, rtol)
+    return out
 
 
 def _determinant_sign(M: np.ndarray, rtol: float) -> int:

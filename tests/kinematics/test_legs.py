@@ -11,9 +11,16 @@ import itertools
 import math
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
-from plm_pin.core.legs import Leg, structure_jacobian_from_data, working_mode_from_jacobian
+from plm_pin.core.legs import (
+    Leg,
+    ik_jacobian_from_data,
+    structure_jacobian_from_data,
+    working_mode_from_data,
+    working_mode_from_jacobian,
+)
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, working_modes
 from plm_pin.kinematics.jacobians import ik_jacobian
 from plm_pin.kinematics.working_mode import working_mode
@@ -176,6 +183,40 @@ def test_working_mode_from_jacobian_signs_are_lapack_determinant_signs(rng):
         B[list(leg.rows), leg.columns[0]] = B[list(leg.rows), leg.columns[1]]
         signs = working_mode_from_jacobian(B, legs)
         assert signs[legs.index(leg)] == 0
+
+
+def _turned_block_signs(mech, A) -> tuple[int, ...]:
+    """One leg at a time: LAPACK's determinant sign of each square block, its passive columns turned."""
+    out = []
+    for leg in mech.legs:
+        if not leg.square:
+            continue
+        M = A[np.ix_(leg.sign_rows, leg.columns)]
+        for k, jid, root, generic in leg.axes:
+            world = pin.getJointJacobian(mech.model, mech.data, jid, pin.LOCAL_WORLD_ALIGNED)[
+                3:, leg.columns[k]
+            ]
+            if mech.data.oMi[root].rotation.T @ world @ np.array(generic) < 0.0:
+                M[:, k] *= -1.0
+        out.append(int(np.sign(np.linalg.det(M))))
+    return tuple(out)
+
+
+@pytest.mark.parametrize("name", ["zhao2011_8pss", "delta", "harada2011_3d4m"])
+def test_working_mode_from_data_is_the_sign_of_each_turned_block(name, rng):
+    """Working modes, from the structure Jacobian or the IK rows, are per-leg LAPACK determinant signs."""
+    mech = preset(name)
+    task = mech.task_compiled
+    for _ in range(10):
+        q = pin.integrate(mech.model, mech.q_ref, 0.3 * rng.normal(size=mech.nv))
+        pin.computeJointJacobians(mech.model, mech.data, q)
+        pin.updateFramePlacements(mech.model, mech.data)
+        A = structure_jacobian_from_data(mech.model, mech.data, mech.closures, task)
+        expected = _turned_block_signs(mech, A)
+        assert working_mode_from_data(mech.model, mech.data, mech.closures, task, mech.legs) == expected
+        ik_rows = ik_jacobian_from_data(mech.model, mech.data, mech.closures, task)
+        got = working_mode_from_data(mech.model, mech.data, mech.closures, task, mech.legs, ik_rows=ik_rows)
+        assert got == expected
 
 
 DELTA_SIGNS = list(itertools.product((1, -1), repeat=3))
