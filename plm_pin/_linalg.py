@@ -1,4 +1,4 @@
-"""Square solves by LU (LAPACK ``getrf`` / ``getrs`` / ``gesv``), the sign of a determinant, a thin SVD.
+"""Square solves by LU (LAPACK ``getrf`` / ``getrs`` / ``gesv``), the sign of a determinant, an SVD.
 
 ``numpy.linalg.solve`` costs about 9 us on a 9 x 9 system (its generalized-ufunc machinery), the
 LAPACK driver 2.5 us. Solves here raise ``numpy.linalg.LinAlgError`` on an exactly singular matrix,
@@ -87,9 +87,18 @@ def thin_svd(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     For the small matrices of a per-sample loop, where numpy's wrapper costs more than the
     factorisation; numpy's (its own driver) where ``gesdd`` does not converge.
     """
+    return _svd(A, full_matrices=False)
+
+
+def full_svd(A: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``U, s, Vt`` of ``numpy.linalg.svd(A)`` (square ``U`` and ``Vt``), as :func:`thin_svd`."""
+    return _svd(A, full_matrices=True)
+
+
+def _svd(A: np.ndarray, full_matrices: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if A.size:
-        U, s, Vt, info = lapack.dgesdd(A, full_matrices=0)
+        U, s, Vt, info = lapack.dgesdd(A, full_matrices=int(full_matrices))
         if info == 0:
             return U, s, Vt
-    U, s, Vt = np.linalg.svd(A, full_matrices=False)
+    U, s, Vt = np.linalg.svd(A, full_matrices=full_matrices)
     return U, s, Vt

@@ -232,7 +232,7 @@ def task_space_dynamics(
                 f"(tolerance {FEASIBLE_VELOCITY_RTOL:.0e} x max(1, |v|)); pass xdot, or v = S @ xdot"
             )
     model, data = mech.model, mech.data
-    a_p = particular_acceleration(mech, qa, va, jac.J_phi)  # leaves the kinematics of (q, v, 0) in data
+    a_p = particular_acceleration(mech, qa, va, jac)  # leaves the kinematics of (q, v, 0) in data
     a0 = a_p - S @ (task.drift_from_data(model, data) + jac.J_x @ a_p)
     M = np.array(pin.crba(model, data, qa))  # whole symmetric matrix, armature included (Pinocchio 4.1)
     g = np.array(pin.computeGeneralizedGravity(model, data, qa))

@@ -87,7 +87,12 @@ from ..exceptions import (
     TrajectoryError,
 )
 from ..kinematics.inverse import inverse_kinematics
-from ..kinematics.jacobians import ClosedChainJacobians, check_square_task, closed_chain_jacobians
+from ..kinematics.jacobians import (
+    ClosedChainJacobians,
+    check_square_task,
+    closed_chain_jacobians,
+    inverse_if_regular,
+)
 from ..kinematics.singularity import constraint_margins, direct_margins, inverse_margins
 from ..results import Result, unit
 from ..tolerances import LEG_SINGULAR_RTOL, RANK_RTOL, RATE_CONSISTENCY_TOL, SINGULARITY_TOL
@@ -391,11 +396,17 @@ def _check_regular(mech: Mechanism, jac: ClosedChainJacobians, tol: float, kind:
     ``kind`` is ``inverse`` (margin of :math:`T`) or ``direct`` (margin of :math:`C`), as
     :func:`plm_pin.kinematics.classify` defines them.
 
+    An inverse margin above ``tol`` by a bound (:func:`plm_pin.kinematics.jacobians.inverse_if_regular`)
+    needs no SVD; near the tolerance the margin decides.
+
     Raises:
         SingularConfiguration: naming the kinds and margins.
     """
+    constraint = float(constraint_margins(jac.closure_singular_values, mech.nv - mech.mobility))
+    if constraint > tol and kind == "inverse" and inverse_if_regular(jac.T, jac.J_x, tol) is not None:
+        return
     margins = {
-        "constraint": float(constraint_margins(jac.closure_singular_values, mech.nv - mech.mobility)),
+        "constraint": constraint,
         kind: float(inverse_margins(jac.T, jac.J_x) if kind == "inverse" else direct_margins(jac.C)),
     }
     bad = [f"{name} (margin {m:.3g})" for name, m in margins.items() if m <= tol]
@@ -416,11 +427,14 @@ def _sample_mode(
     )
 
 
-def particular_acceleration(mech: Mechanism, q: np.ndarray, v: np.ndarray, J_phi: np.ndarray) -> np.ndarray:
+def particular_acceleration(
+    mech: Mechanism, q: np.ndarray, v: np.ndarray, jac: ClosedChainJacobians
+) -> np.ndarray:
     r"""Kinematics of ``(q, v, 0)`` into ``mech.data``, and the least-norm :math:`a_p` of the closure rows.
 
     :math:`J_\phi a_p = -\dot J_\phi v`; the rows are consistent on the closure manifold, so
-    :math:`a_p` solves them exactly.
+    :math:`a_p` solves them exactly. ``jac``: the Jacobians at ``q``, whose pseudo-inverse of
+    :math:`J_\phi` gives :math:`a_p`.
     """
     model, data = mech.model, mech.data
     pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
@@ -428,7 +442,7 @@ def particular_acceleration(mech: Mechanism, q: np.ndarray, v: np.ndarray, J_phi
     if not mech.closures:
         return np.zeros(model.nv)
     gamma = _closures.drift_from_data(model, data, mech.closures)
-    return np.linalg.lstsq(J_phi, -gamma, rcond=RANK_RTOL)[0]
+    return jac.closure_pinv @ -gamma
 
 
 class _RateRows:
@@ -562,7 +576,7 @@ def task_trajectory(
         T_r = J_r @ jac.N  # (n_task, mobility)
         lu = LU(T_r)
         v = jac.N @ lu.solve(xd_all[k])
-        a_p = particular_acceleration(mech, sol.q, v, jac.J_phi)
+        a_p = particular_acceleration(mech, sol.q, v, jac)
         a = a_p + jac.N @ lu.solve(xdd_all[k] - rows.drift(mech.data) - J_r @ a_p)
         rec.record(k, sol.q, v, a, jac.J_x, sol.actuators)
     return rec.result()
@@ -654,7 +668,7 @@ def actuator_trajectory(
                 path_sign, N_prev = sign, N
             C = N[act]  # (n_act, mobility)
             v = N @ _fit(C, cd_all[k], consistency_tol, "rates", names)
-            a_p = particular_acceleration(mech, q, v, jac.J_phi)
+            a_p = particular_acceleration(mech, q, v, jac)
             a = a_p + N @ _fit(C, cdd_all[k] - a_p[act], consistency_tol, "accelerations", names)
         except (ClosureNotSatisfied, SingularConfiguration, InvalidInput) as exc:
             raise rec.stop("actuator", k, exc) from exc

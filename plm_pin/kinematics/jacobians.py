@@ -14,19 +14,20 @@ The singular values of :math:`T` and :math:`C` do not depend on the choice of :m
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .._linalg import full_svd
 from ..core import closures as _closures
 from ..core.checks import check_closed
 from ..core.legs import ik_jacobian_from_data
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, SingularConfiguration
 from ..results import Result
-from ..tolerances import INVERSE_RTOL
+from ..tolerances import INVERSE_RTOL, RANK_RTOL
 
 
 @dataclass(frozen=True)
@@ -40,6 +41,10 @@ class ClosedChainJacobians(Result):
         closure_singular_values: singular values of ``J_phi``, descending.
         T: task rates per feasible motion ``J_x N``, shape (n_task, mobility).
         C: actuator rates per feasible motion ``S_a N``, shape (n_act, mobility).
+        closure_pinv: least-norm solver of the closure rows: the pseudo-inverse of ``J_phi``,
+            its singular values at most ``RANK_RTOL`` times the largest taken as zero (the rank
+            rule of ``numpy.linalg.lstsq`` with ``rcond=RANK_RTOL``), shape (nv, m). Given as
+            ``pinv`` by :func:`closed_chain_jacobians` from its SVD; computed when not given.
     """
 
     J_phi: np.ndarray
@@ -48,6 +53,14 @@ class ClosedChainJacobians(Result):
     closure_singular_values: np.ndarray
     T: np.ndarray
     C: np.ndarray
+    closure_pinv: np.ndarray = field(init=False, repr=False)
+    pinv: InitVar[np.ndarray | None] = None
+    _SKIPPED = ("closure_pinv",)
+
+    def __post_init__(self, pinv: np.ndarray | None) -> None:
+        if pinv is None:
+            pinv = pseudo_inverse(*_closure_svd(self.J_phi))
+        object.__setattr__(self, "closure_pinv", pinv)
 
     @property
     def S(self) -> np.ndarray:
@@ -93,15 +106,44 @@ def feasible_motions(
         ``N`` (..., nv, mobility), the singular values of ``J_phi`` descending (..., min(m, nv)),
         ``T`` (..., n_task, mobility) and ``C`` (..., n_act, mobility).
     """
-    nv = J_phi.shape[-1]
-    batch = J_phi.shape[:-2]
+    return _motions(_closure_svd(J_phi), J_x, actuated_v, mobility)
+
+
+def _closure_svd(J_phi: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Full SVD ``U, s, Vt`` of ``J_phi`` (..., m, nv); without closure rows ``Vt`` is the identity."""
     if J_phi.shape[-2]:
-        _, s, Vt = np.linalg.svd(J_phi)
-        N = Vt[..., nv - mobility :, :].swapaxes(-1, -2)
-    else:
-        s = np.zeros((*batch, 0))
-        N = np.broadcast_to(np.eye(nv), (*batch, nv, nv))
+        U, s, Vt = full_svd(J_phi) if J_phi.ndim == 2 else np.linalg.svd(J_phi)
+        return U, s, Vt
+    batch, nv = J_phi.shape[:-2], J_phi.shape[-1]
+    return np.zeros((*batch, 0, 0)), np.zeros((*batch, 0)), np.broadcast_to(np.eye(nv), (*batch, nv, nv))
+
+
+def _motions(
+    svd: tuple[np.ndarray, np.ndarray, np.ndarray], J_x: np.ndarray, actuated_v: np.ndarray, mobility: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`feasible_motions` from the SVD of ``J_phi``."""
+    U, s, Vt = svd
+    N = Vt[..., Vt.shape[-1] - mobility :, :].swapaxes(-1, -2) if U.shape[-2] else Vt
     return N, s, J_x @ N, N[..., actuated_v, :]
+
+
+def pseudo_inverse(U: np.ndarray, s: np.ndarray, Vt: np.ndarray, rtol: float = RANK_RTOL) -> np.ndarray:
+    r"""Pseudo-inverse :math:`V_r S_r^{-1} U_r^T` of a matrix from its SVD ``U, s, Vt`` (thin or full).
+
+    The singular values at most ``rtol`` times the largest count as zero, the rule of
+    ``numpy.linalg.lstsq(..., rcond=rtol)``, so ``pinv @ b`` is its least-norm solution.
+
+    Args:
+        U: left singular vectors, shape (m, k) or (m, m).
+        s: singular values, descending, shape (min(m, n),).
+        Vt: right singular vectors (transposed), shape (k, n) or (n, n).
+        rtol: relative rank tolerance [-].
+
+    Returns:
+        The pseudo-inverse, shape (n, m).
+    """
+    r = int(np.count_nonzero(s > rtol * s[0])) if s.size else 0
+    return (Vt[:r].T / s[:r]) @ U[:, :r].T
 
 
 def times_T_inverse(
@@ -112,10 +154,8 @@ def times_T_inverse(
     :math:`T` counts as singular (an inverse-kinematics, type 1, singularity) when
     :math:`\sigma_{min}(T) \le` ``rtol`` :math:`\sigma_{max}(J_x)` (default :data:`INVERSE_RTOL`); the
     product is NaN there.
-    The test costs no SVD away from singularities: :math:`\sigma_{min}(T) \ge 1 / |T^{-1}|_F`
-    and :math:`\sigma_{max}(J_x) \le |J_x|_F`, so :math:`T` is regular wherever
-    :math:`|J_x|_F |T^{-1}|_F` is below half of 1 / ``rtol`` (the half covers the
-    round-off of the computed inverse); the singular values decide only elsewhere.
+    The test costs no SVD away from singularities (:func:`inverse_if_regular`); the singular
+    values decide only elsewhere.
 
     Args:
         M: shape (..., r, k).
@@ -126,14 +166,9 @@ def times_T_inverse(
     Returns:
         :math:`M T^{-1}` (..., r, k), and the singular mask (...).
     """
-    try:
-        T_inv = np.linalg.inv(T)
-    except np.linalg.LinAlgError:  # an exactly singular T: the singular values decide
-        T_inv = None
+    T_inv = inverse_if_regular(T, J_x, rtol)
     if T_inv is not None:
-        bound = (J_x * J_x).sum(axis=(-2, -1)) * (T_inv * T_inv).sum(axis=(-2, -1))  # squared
-        if bound.max() * rtol**2 < 0.25:  # |J_x|_F |T^-1|_F < 0.5 / rtol; False on NaN
-            return M @ T_inv, np.zeros(bound.shape, dtype=bool)
+        return M @ T_inv, np.zeros(T.shape[:-2], dtype=bool)
     sT = np.linalg.svd(T, compute_uv=False)
     singular = sT[..., -1] <= rtol * np.linalg.norm(J_x, ord=2, axis=(-2, -1))
     any_singular = bool(singular.any())
@@ -143,6 +178,29 @@ def times_T_inverse(
     if any_singular:
         out[singular] = np.nan
     return out, singular
+
+
+def inverse_if_regular(T: np.ndarray, J_x: np.ndarray, rtol: float = INVERSE_RTOL) -> np.ndarray | None:
+    r""":math:`T^{-1}` (batched) where a bound shows every :math:`T` regular without an SVD, else None.
+
+    Regular means :math:`\sigma_{min}(T) >` ``rtol`` :math:`\sigma_{max}(J_x)`, the inverse margin
+    above ``rtol``. :math:`\sigma_{min}(T) \ge 1 / |T^{-1}|_F` and
+    :math:`\sigma_{max}(J_x) \le |J_x|_F`, so :math:`T` is regular wherever
+    :math:`|J_x|_F |T^{-1}|_F` is below half of 1 / ``rtol`` (the half covers the round-off of
+    the computed inverse). None near or at a singularity (or for NaN), where the singular
+    values must decide.
+
+    Args:
+        T: shape (..., k, k).
+        J_x: the task Jacobians :math:`T` restricts, shape (..., k, nv).
+        rtol: the inverse margin at or below which :math:`T` counts as singular [-].
+    """
+    try:
+        T_inv = np.linalg.inv(T)
+    except np.linalg.LinAlgError:  # an exactly singular T
+        return None
+    bound = (J_x * J_x).sum(axis=(-2, -1)) * (T_inv * T_inv).sum(axis=(-2, -1))  # squared
+    return T_inv if bound.max(initial=0.0) * rtol**2 < 0.25 else None  # False on NaN
 
 
 def closed_chain_jacobians(mech: Mechanism, q: ArrayLike) -> ClosedChainJacobians:
@@ -165,8 +223,9 @@ def closed_chain_jacobians(mech: Mechanism, q: ArrayLike) -> ClosedChainJacobian
     task = require_task(mech)
     J_phi = _closures.jacobian_from_data(model, data, mech.closures)
     J_x = task.jacobian_from_data(model, data)
-    N, s, T, C = feasible_motions(J_phi, J_x, mech.actuated_v_indices, mech.mobility)
-    return ClosedChainJacobians(J_phi, J_x, N, s, T, C)
+    svd = _closure_svd(J_phi)
+    N, s, T, C = _motions(svd, J_x, mech.actuated_v_indices, mech.mobility)
+    return ClosedChainJacobians(J_phi, J_x, N, s, T, C, pinv=pseudo_inverse(*svd))
 
 
 def check_square_task(n_task: int, dof: int, needed_by: str, name: str = "") -> None:

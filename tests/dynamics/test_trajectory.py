@@ -42,7 +42,8 @@ from plm_pin.exceptions import (
 )
 from plm_pin.families.pss import pss_inverse_kinematics
 from plm_pin.families.star_triangle import star_triangle_inverse_kinematics
-from plm_pin.kinematics import inverse_kinematics, task_pose, working_modes
+from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, task_pose, working_modes
+from plm_pin.kinematics.singularity import constraint_margins, inverse_margins
 from plm_pin.kinematics.working_mode import working_mode
 from plm_pin.models import PRESETS
 from tests.conftest import preset, spatial_6r
@@ -360,6 +361,25 @@ def test_leaving_the_workspace_stops_at_the_first_unreachable_sample_with_the_sa
     np.testing.assert_allclose(
         part.c, [paper.slider_positions(x, L, RT, (1, 2, 4)) for x in part.x], atol=1e-10
     )
+
+
+@pytest.mark.parametrize("name", ["fivebar", "harada2011_3d4m"])
+def test_a_sample_stops_exactly_where_its_inverse_margin_reaches_the_tolerance(name):
+    """At rest, a sample is kept for a tolerance just below its SVD inverse margin and stops just above."""
+    mech = preset(name)
+    x = task_pose(mech, mech.q_ref)
+
+    def profile(t):
+        return x, np.zeros_like(x), np.zeros_like(x)
+
+    jac = closed_chain_jacobians(mech, mech.q_ref)
+    margin = float(inverse_margins(jac.T, jac.J_x))
+    assert margin < float(constraint_margins(jac.closure_singular_values, mech.nv - mech.mobility))
+    kept = task_trajectory(mech, profile, [0.0], guess=mech.q_ref, singularity_tol=margin * (1.0 - 1e-9))
+    assert kept.n_samples == 1
+    with pytest.raises(TrajectoryError, match="inverse \\(margin") as err:
+        task_trajectory(mech, profile, [0.0], guess=mech.q_ref, singularity_tol=margin * (1.0 + 1e-9))
+    assert isinstance(err.value.cause, SingularConfiguration)
 
 
 # ---------------------------------------------------------------- profiles

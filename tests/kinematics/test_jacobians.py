@@ -15,10 +15,16 @@ import pytest
 from scipy.linalg import null_space
 
 from plm_pin import InvalidInput, SingularConfiguration
-from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics, task_pose, working_modes
-from plm_pin.kinematics.jacobians import feasible_motions, times_T_inverse
+from plm_pin.kinematics import (
+    ClosedChainJacobians,
+    closed_chain_jacobians,
+    inverse_kinematics,
+    task_pose,
+    working_modes,
+)
+from plm_pin.kinematics.jacobians import feasible_motions, inverse_if_regular, pseudo_inverse, times_T_inverse
 from plm_pin.models import PRESETS, preset_names
-from plm_pin.tolerances import INVERSE_RTOL
+from plm_pin.tolerances import INVERSE_RTOL, RANK_RTOL
 from tests.conftest import (
     STAR_E,
     ball_joint_body,
@@ -336,3 +342,53 @@ def _sampled_assemblies(mech, rng, n):
     """``n`` assembled configurations near the reference (the inverse kinematics of perturbed poses)."""
     x = task_pose(mech, mech.q_ref)
     return [inverse_kinematics(mech, x + rng.normal(scale=0.01, size=x.size), mech.q_ref).q for _ in range(n)]
+
+
+def test_pseudo_inverse_gives_the_least_norm_solution_of_lstsq(rng):
+    """The SVD pseudo-inverse solves as lstsq(rcond=RANK_RTOL) on rank-deficient and edge matrices."""
+    cases = []
+    for m, n, r in ((24, 30, 24), (24, 30, 20), (30, 24, 18), (6, 6, 5), (9, 4, 1)):
+        cases.append(rng.normal(size=(m, r)) @ rng.normal(size=(r, n)))
+    U, s, Vt = np.linalg.svd(rng.normal(size=(12, 15)), full_matrices=False)
+    s[-3:] = s[0] * RANK_RTOL * np.array([10.0, 0.5, 0.0])  # one kept above the rule, two dropped
+    cases += [U @ np.diag(s) @ Vt, np.zeros((4, 6))]
+    for A in cases:
+        b = rng.normal(size=A.shape[0])
+        expected = np.linalg.lstsq(A, b, rcond=RANK_RTOL)[0]
+        for svd in (np.linalg.svd(A), np.linalg.svd(A, full_matrices=False)):
+            got = pseudo_inverse(*svd) @ b
+            np.testing.assert_allclose(got, expected, rtol=0.0, atol=1e-12 * max(1.0, np.abs(expected).max()))
+
+
+def test_closure_pseudo_inverse_is_given_or_computed_the_same():
+    """closed_chain_jacobians' pseudo-inverse of J_phi (from its SVD) is the one computed from J_phi alone."""
+    for name in ("zhao2011_8pss", "harada2011_3d4m", "fivebar"):
+        mech = preset(name)
+        jac = closed_chain_jacobians(mech, mech.q_ref)
+        rebuilt = ClosedChainJacobians(jac.J_phi, jac.J_x, jac.N, jac.closure_singular_values, jac.T, jac.C)
+        np.testing.assert_allclose(jac.closure_pinv, rebuilt.closure_pinv, atol=1e-12)
+        np.testing.assert_allclose(jac.closure_pinv, np.linalg.pinv(jac.J_phi, rcond=RANK_RTOL), atol=1e-12)
+
+
+def test_inverse_by_bound_is_given_only_where_the_svd_criterion_says_regular(rng):
+    """inverse_if_regular returns inv(T) only where sigma_min(T) > rtol |J_x| and does so away from it."""
+    J_x = rng.normal(size=(6, 30))
+    N = np.linalg.qr(rng.normal(size=(30, 6)))[0]
+    U, s, Vt = np.linalg.svd(J_x @ N)
+    scale = np.linalg.norm(J_x, 2)
+    for rtol in (INVERSE_RTOL, 1e-6):
+        for f in (0.0, 0.5, 0.99, 1.01, 2.0, 10.0, 1e2, 1e4, 1e6):
+            s_f = s.copy()
+            s_f[-1] = min(f * rtol * scale, s[-2])
+            T = U @ np.diag(s_f) @ Vt
+            T_inv = inverse_if_regular(T, J_x, rtol)
+            regular = np.linalg.svd(T, compute_uv=False)[-1] > rtol * scale
+            if T_inv is not None:
+                assert regular
+                np.testing.assert_allclose(T_inv @ T, np.eye(6), atol=1e-13 * np.linalg.cond(T))
+            if s_f[-1] > 2.0 * rtol * np.linalg.norm(J_x) * math.sqrt(6):  # the bound's slack: sure to pass
+                assert T_inv is not None
+        T_batch = np.stack([U @ np.diag(s) @ Vt, U @ np.diag(np.r_[s[:-1], 0.0]) @ Vt])
+        assert (
+            inverse_if_regular(T_batch, np.stack([J_x, J_x]), rtol) is None
+        )  # one singular: the SVD decides
