@@ -621,13 +621,18 @@ class Mechanism:
                 raise InvalidInput(f"q must stack configurations of size {self.nq}, got shape {arr.shape}")
         else:
             arr = self.check_q(q)
-        out = np.empty((*arr.shape[:-1], self.n_actuators))
-        for k, a in enumerate(self.actuators):
-            if self.model.joints[a.joint_id].nq == 2:  # unbounded revolute stored as (cos, sin)
-                out[..., k] = np.arctan2(arr[..., a.idx_q + 1], arr[..., a.idx_q])
-            else:
-                out[..., k] = arr[..., a.idx_q]
+        out = arr[..., self._actuator_q[0]]
+        for k, iq in self._actuator_q[1]:
+            out[..., k] = np.arctan2(arr[..., iq + 1], arr[..., iq])
         return out
+
+    @functools.cached_property
+    def _actuator_q(self) -> tuple[list[int], list[tuple[int, int]]]:
+        """Each actuator's index in ``q``; ``(k, index)`` of those stored as ``(cos, sin)`` (unbounded)."""
+        unbounded = [
+            (k, a.idx_q) for k, a in enumerate(self.actuators) if self.model.joints[a.joint_id].nq == 2
+        ]
+        return [a.idx_q for a in self.actuators], unbounded
 
     @functools.cached_property
     def visual_model(self) -> pin.GeometryModel:
