@@ -40,6 +40,7 @@ from .._lazy import lazy_module
 from ..tolerances import CLOSURE_TOL, LEG_SINGULAR_RTOL, PATTERN_ATOL, PATTERN_RTOL
 from . import closures as _closures
 from .rank import rank_of_singular_values
+from .scratch import placement_views
 from .task import FrameTask, Task
 
 scipy_linalg = lazy_module("scipy.linalg")
@@ -352,7 +353,7 @@ def working_mode_from_data(
     of :func:`working_mode_from_jacobian`. ``ik_rows``: ``[J_phi; J_x]`` already computed
     from this ``data`` (see :func:`structure_jacobian_from_data`).
     """
-    layout = _sign_layout(tuple(legs))
+    layout = _sign_layout(legs)
     if ik_rows is not None and layout.n_rows <= ik_rows.shape[0]:  # no sign row among the platform's others
         A = ik_rows
     else:
@@ -360,7 +361,7 @@ def working_mode_from_data(
     signs = _block_signs(A, layout, rtol)
     if layout.roots:
         # negating a column negates the determinant exactly: count the turned columns of each leg
-        R = np.array([data.oMi[root].rotation for root in layout.roots])  # (n_roots, 3, 3)
+        R = np.array(placement_views(data, layout.roots, joints=True)[1])  # (n_roots, 3, 3)
         world = data.J[3:, layout.axis_columns]  # (3, n_axes): the revolutes' world axes (_axis_in's)
         # (R_root^T world) . generic = world . (R_root generic)
         away = np.einsum("aji,ja,ai->a", R[layout.axis_roots], world, layout.axis_generic) < 0.0
@@ -378,7 +379,7 @@ def working_mode_from_jacobian(
     product of the block's column norms (Hadamard's bound), so the test is scale-free. The
     passive axes are not turned here (see :func:`working_mode_from_data`).
     """
-    return tuple(_block_signs(A, _sign_layout(tuple(legs)), rtol))
+    return tuple(_block_signs(A, _sign_layout(legs), rtol))
 
 
 @dataclass(frozen=True)
@@ -407,9 +408,23 @@ class _SignLayout:
     axis_generic: np.ndarray
 
 
-@functools.lru_cache(maxsize=64)
-def _sign_layout(legs: tuple[Leg, ...]) -> _SignLayout:
-    """The layout of ``legs``, built once per tuple of legs."""
+_LAYOUTS: dict[int, tuple[tuple[Leg, ...], _SignLayout]] = {}
+
+
+def _sign_layout(legs: Sequence[Leg]) -> _SignLayout:
+    """The layout of ``legs``, built once per tuple object (a mechanism's ``legs``), kept alive with it."""
+    hit = _LAYOUTS.get(id(legs))
+    if hit is not None and hit[0] is legs:
+        return hit[1]
+    layout = _build_sign_layout(legs)
+    if isinstance(legs, tuple):  # immutable: safe to keep by identity
+        if len(_LAYOUTS) >= 256:
+            _LAYOUTS.clear()
+        _LAYOUTS[id(legs)] = (legs, layout)
+    return layout
+
+
+def _build_sign_layout(legs: Sequence[Leg]) -> _SignLayout:
     square = [leg for leg in legs if leg.square]
     blocks = []
     for n in sorted({len(leg.columns) for leg in square}):  # the blocks of one size in one gather

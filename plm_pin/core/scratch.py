@@ -28,21 +28,24 @@ PlacementViews = tuple[tuple[np.ndarray, ...], tuple[np.ndarray, ...]]
 VIEWS_KEPT = 64
 """Number of Pinocchio datas whose placement views are kept (the one seen first is dropped first)."""
 
-_VIEWS: dict[int, tuple[pin.Data, dict[tuple[int, ...], PlacementViews]]] = {}
-"""Per Pinocchio data (by id, with the data: the views keep it alive anyway), the views of each frame tuple.
+_VIEWS: dict[int, tuple[pin.Data, dict[tuple[bool, tuple[int, ...]], PlacementViews]]] = {}
+"""Per Pinocchio data (by id, with the data: the views keep it alive anyway), the views of each frame
+(or joint) tuple.
 
 Not a ``WeakKeyDictionary``: ``pin.Data.__eq__`` compares whole contents, which a lookup would call.
 """
 
 
-def placement_views(data: pin.Data, frames: tuple[int, ...]) -> PlacementViews:
+def placement_views(data: pin.Data, frames: tuple[int, ...], *, joints: bool = False) -> PlacementViews:
     """Views of ``data.oMf[f].translation`` and ``.rotation`` for each frame ``f`` of ``frames``.
 
+    With ``joints``, of the joint placements ``data.oMi[j]`` for each joint ``j`` of ``frames``.
     Pinocchio 4.1 returns these arrays as views into the placements it stores (a vector
     sized once, when the data is created), and each view keeps the data alive: each pass of
-    ``framesForwardKinematics`` or ``updateFramePlacements`` shows in them, with no Python
-    call per frame. The views are made once per data and frame tuple and kept for the last
-    :data:`VIEWS_KEPT` datas seen (older ones are dropped, with the data they hold).
+    ``framesForwardKinematics`` or ``updateFramePlacements`` (of ``forwardKinematics`` or
+    ``computeJointJacobians`` for joints) shows in them, with no Python call per frame. The
+    views are made once per data and frame tuple and kept for the last :data:`VIEWS_KEPT`
+    datas seen (older ones are dropped, with the data they hold).
     """
     key = id(data)
     hit = _VIEWS.get(key)
@@ -51,12 +54,12 @@ def placement_views(data: pin.Data, frames: tuple[int, ...]) -> PlacementViews:
             _VIEWS.pop(next(iter(_VIEWS)), None)
         hit = _VIEWS[key] = (data, {})
     per_data = hit[1]
-    views = per_data.get(frames)
+    views = per_data.get((joints, frames))
     if views is None:
-        oMf = data.oMf
-        views = per_data[frames] = (
-            tuple(oMf[f].translation for f in frames),
-            tuple(oMf[f].rotation for f in frames),
+        placements = data.oMi if joints else data.oMf
+        views = per_data[joints, frames] = (
+            tuple(placements[f].translation for f in frames),
+            tuple(placements[f].rotation for f in frames),
         )
     return views
 

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from .._linalg import full_svd
+from .._linalg import full_svd, lu_solve
 from ..core import closures as _closures
 from ..core.checks import check_closed
 from ..core.legs import ik_jacobian_from_data
@@ -195,8 +195,8 @@ def inverse_if_regular(T: np.ndarray, J_x: np.ndarray, rtol: float = INVERSE_RTO
         J_x: the task Jacobians :math:`T` restricts, shape (..., k, nv).
         rtol: the inverse margin at or below which :math:`T` counts as singular [-].
     """
-    try:
-        T_inv = np.linalg.inv(T)
+    try:  # one LAPACK gesv for a single T: numpy's inv costs more than the solve at this size
+        T_inv = lu_solve(T, np.eye(T.shape[-1])) if T.ndim == 2 else np.linalg.inv(T)
     except np.linalg.LinAlgError:  # an exactly singular T
         return None
     bound = (J_x * J_x).sum(axis=(-2, -1)) * (T_inv * T_inv).sum(axis=(-2, -1))  # squared
