@@ -27,6 +27,22 @@ def test_placement_views_follow_every_update_of_the_data(rng):
     assert scratch.placement_views(data, frames)[0] is translations  # made once per data and frames
 
 
+def test_joint_placement_views_follow_every_pass_and_are_not_the_frames(rng):
+    """Views of joint placements (joints=True) show each computeJointJacobians pass, apart from frames."""
+    mech = preset("zhao2011_8pss")
+    data = mech.model.createData()
+    joints = tuple(range(1, mech.model.njoints))
+    translations, rotations = scratch.placement_views(data, joints, joints=True)
+    for _ in range(3):
+        q = pin.integrate(mech.model, mech.q_ref, rng.normal(scale=0.3, size=mech.nv))
+        pin.computeJointJacobians(mech.model, data, q)
+        for j, t, R in zip(joints, translations, rotations, strict=True):
+            np.testing.assert_array_equal(t, data.oMi[j].translation)
+            np.testing.assert_array_equal(R, data.oMi[j].rotation)
+    assert scratch.placement_views(data, joints, joints=True)[1] is rotations
+    assert scratch.placement_views(data, joints)[1] is not rotations  # the frames with those indices
+
+
 def test_placement_views_are_kept_for_a_bounded_number_of_datas():
     """Views (which keep their data alive) are kept for the last VIEWS_KEPT datas; older datas are freed."""
     mech = preset("harada2011_3d4m")
