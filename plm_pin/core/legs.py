@@ -351,7 +351,8 @@ def working_mode_from_data(
     The structure Jacobian, with each passive revolute column turned to keep its axis on
     the side of its generic axis (seen from the body its chain hangs from), then the signs
     of :func:`working_mode_from_jacobian`. ``ik_rows``: ``[J_phi; J_x]`` already computed
-    from this ``data`` (see :func:`structure_jacobian_from_data`).
+    from this ``data`` (see :func:`structure_jacobian_from_data`); when every sign row is among
+    them, the structure Jacobian is not built.
     """
     layout = _sign_layout(legs)
     if ik_rows is not None and layout.n_rows <= ik_rows.shape[0]:  # no sign row among the platform's others
@@ -425,6 +426,7 @@ def _sign_layout(legs: Sequence[Leg]) -> _SignLayout:
 
 
 def _build_sign_layout(legs: Sequence[Leg]) -> _SignLayout:
+    """The :class:`_SignLayout` of ``legs``."""
     square = [leg for leg in legs if leg.square]
     blocks = []
     for n in sorted({len(leg.columns) for leg in square}):  # the blocks of one size in one gather

@@ -25,7 +25,8 @@ the task frame on the profile,
 solved as :math:`v = N T_r^{-1} \dot x` (:math:`S \dot x`) and :math:`a = a_p + N T_r^{-1}
 (\ddot x - \dot J_r v - J_r a_p)`, with :math:`N` the feasible motions
 (:mod:`plm_pin.kinematics.jacobians`), :math:`T_r = J_r N` and :math:`a_p` the minimum-norm
-solution of the closure rows; :math:`\dot J_\phi v` and :math:`\dot J_x v` are
+solution of the closure rows (by the pseudo-inverse of :math:`J_\phi` from the SVD that gives
+:math:`N`); :math:`\dot J_\phi v` and :math:`\dot J_x v` are
 :func:`plm_pin.core.closures.drift_from_data` and :meth:`plm_pin.core.task.Task.drift_from_data`.
 
 Rotation rates. A profile gives time derivatives of the task coordinates, so for angles
