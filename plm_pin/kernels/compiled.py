@@ -885,6 +885,73 @@ def newton(
 
 
 @njit(cache=True)
+def _solve_pose(
+    k: KernelArrays,
+    q: np.ndarray,
+    x: np.ndarray,
+    R_star: np.ndarray,
+    tol: float,
+    max_iterations: int,
+    stall: float,
+    A_ik: np.ndarray,
+    A: np.ndarray,
+    r: np.ndarray,
+    N: np.ndarray,
+    b: np.ndarray,
+    J: np.ndarray,
+    oR: np.ndarray,
+    op: np.ndarray,
+    fR: np.ndarray,
+    fp: np.ndarray,
+    Sw: np.ndarray,
+    Sv: np.ndarray,
+    q_next: np.ndarray,
+) -> bool:
+    """One pose of :func:`batch_newton` from ``q`` (solved in place): whether it converged.
+
+    On success ``A_ik`` (m + n_task, nv) holds the inverse-kinematics Jacobian and ``oR`` the
+    world rotation of every joint; the other arrays are scratch buffers.
+    """
+    m = k.m
+    n = r.shape[0]
+    nv = k.nv
+    err_prev = np.inf
+    for iteration in range(max_iterations + 1):
+        evaluate(k, q, x, R_star, True, r, A, True, oR, op, fR, fp, Sw, Sv)
+        err = 0.0
+        for i in range(n):
+            err = max(err, abs(r[i]))
+        if err <= tol:
+            A_ik[:m] = A[:m]
+            frame_jacobian(k, k.t_frame, fp, Sw, Sv, J)
+            for i in range(n - m):
+                for c in range(nv):
+                    A_ik[m + i, c] = J[k.t_rows[i], c]
+            return True
+        if math.isnan(err) or not err < stall * err_prev or iteration == max_iterations:
+            return False
+        for a_ in range(nv):
+            s = 0.0
+            for i in range(n):
+                s += A[i, a_] * r[i]
+            b[a_] = s
+            for c in range(a_ + 1):
+                s = 0.0
+                for i in range(n):
+                    s += A[i, a_] * A[i, c]
+                N[a_, c] = s
+                N[c, a_] = s
+        if not _cholesky_solve(N, b):
+            return False
+        for c in range(nv):
+            b[c] = -b[c]
+        integrate(k, q, b, q_next)
+        q[:] = q_next
+        err_prev = err
+    return False
+
+
+@njit(cache=True)
 def batch_newton(
     ints: np.ndarray,
     floats: np.ndarray,
@@ -920,54 +987,228 @@ def batch_newton(
         R_out: out, shape (B, nj, 3, 3).
     """
     k = unpack(ints, floats)
-    nj, nv, nf, m = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1), k.m
-    n = m + X.shape[1]
-    A = np.empty((n, nv))
-    r = np.empty(n)
-    N = np.empty((nv, nv))
-    b = np.empty(nv)
-    J = np.empty((6, nv))
+    nj, nv, nf = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1)
+    n = k.m + X.shape[1]
+    A, r, N, b, J = np.empty((n, nv)), np.empty(n), np.empty((nv, nv)), np.empty(nv), np.empty((6, nv))
     oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
     Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
     q_next = np.empty(Q.shape[1])
     for p in range(Q.shape[0]):
-        q = Q[p]
-        ok[p] = False
-        err_prev = np.inf
-        for iteration in range(max_iterations + 1):
-            evaluate(k, q, X[p], R_stars[p], True, r, A, True, oR, op, fR, fp, Sw, Sv)
-            err = 0.0
-            for i in range(n):
-                err = max(err, abs(r[i]))
-            if err <= tol:
-                ok[p] = True
-                A_out[p, :m] = A[:m]
-                frame_jacobian(k, k.t_frame, fp, Sw, Sv, J)
-                for i in range(n - m):
-                    for c in range(nv):
-                        A_out[p, m + i, c] = J[k.t_rows[i], c]
-                R_out[p] = oR
-                break
-            if math.isnan(err) or not err < stall * err_prev or iteration == max_iterations:
-                break
-            for a_ in range(nv):
-                s = 0.0
-                for i in range(n):
-                    s += A[i, a_] * r[i]
-                b[a_] = s
-                for c in range(a_ + 1):
+        ok[p] = _solve_pose(
+            k, Q[p], X[p], R_stars[p], tol, max_iterations, stall, A_out[p], A, r, N, b, J, oR, op, fR, fp,
+            Sw, Sv, q_next,
+        )  # fmt: skip
+        if ok[p]:
+            R_out[p] = oR
+
+
+@njit(cache=True)
+def _leg_determinant(M: np.ndarray, n: int) -> float:
+    """Determinant of ``M[:n, :n]``: by cofactors up to 3 x 3 (as the numpy path), else by LU in ``M``."""
+    if n == 1:
+        return M[0, 0]
+    if n == 2:
+        return M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]
+    if n == 3:
+        a, b, c = M[0, 0], M[0, 1], M[0, 2]
+        d, e, f = M[1, 0], M[1, 1], M[1, 2]
+        g, h, i = M[2, 0], M[2, 1], M[2, 2]
+        return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+    det = 1.0
+    for j in range(n):  # Gaussian elimination with partial pivoting
+        pivot = j
+        for i in range(j + 1, n):
+            if abs(M[i, j]) > abs(M[pivot, j]):
+                pivot = i
+        if M[pivot, j] == 0.0:
+            return 0.0
+        if pivot != j:
+            for c in range(n):
+                M[j, c], M[pivot, c] = M[pivot, c], M[j, c]
+            det = -det
+        det *= M[j, j]
+        for i in range(j + 1, n):
+            f = M[i, j] / M[j, j]
+            for c in range(j + 1, n):
+                M[i, c] -= f * M[j, c]
+    return det
+
+
+@njit(cache=True)
+def _leg_modes(
+    k: KernelArrays,
+    A_ik: np.ndarray,
+    oR: np.ndarray,
+    legs: np.ndarray,
+    turns: np.ndarray,
+    generic: np.ndarray,
+    rtol: float,
+    M: np.ndarray,
+    mode: np.ndarray,
+) -> None:
+    """Working mode into ``mode`` (n_legs,) from the IK Jacobian ``A_ik`` and joint rotations ``oR``.
+
+    As :func:`plm_pin.workspace._batch.batch_modes` with :meth:`BatchKinematics.turns
+    <plm_pin.workspace._batch.BatchKinematics.turns>`: per square leg, the sign of its block's
+    determinant, each passive revolute column negated where its world axis points away from the
+    leg's generic axis seen from the leg's root joint; 0 at or below ``rtol`` times Hadamard's
+    bound. ``legs``, ``turns`` and ``generic`` as :func:`walk_rows_step` takes them; ``M`` is scratch.
+    """
+    size = (legs.shape[1] - 1) // 2
+    for leg in range(legs.shape[0]):
+        n = legs[leg, 0]
+        bound = 1.0
+        for b in range(n):
+            s = 0.0
+            for a in range(n):
+                M[a, b] = A_ik[legs[leg, 1 + a], legs[leg, 1 + size + b]]
+                s += M[a, b] * M[a, b]
+            bound *= math.sqrt(s)
+        det = _leg_determinant(M, n)
+        for t in range(turns.shape[0]):
+            if turns[t, 0] != leg:
+                continue
+            j, root = turns[t, 2], turns[t, 3]
+            w = _mv(_get(oR, j), k.axis[j, 0], k.axis[j, 1], k.axis[j, 2])  # the revolute's world axis
+            g = _mv(_get(oR, root), generic[t, 0], generic[t, 1], generic[t, 2])
+            if w[0] * g[0] + w[1] * g[1] + w[2] * g[2] < 0.0:
+                det = -det
+        mode[leg] = 0 if abs(det) <= rtol * bound else (1 if det > 0.0 else -1)
+
+
+@njit(cache=True)
+def walk_rows_step(
+    ints: np.ndarray,
+    floats: np.ndarray,
+    legs: np.ndarray,
+    turns: np.ndarray,
+    generic: np.ndarray,
+    wanted: np.ndarray,
+    rtol: float,
+    poses: np.ndarray,
+    R_stars: np.ndarray,
+    Q: np.ndarray,
+    reached: np.ndarray,
+    modes: np.ndarray,
+    n1: int,
+    fronts: np.ndarray,
+    lagging: bool,
+    tol: float,
+    max_iterations: int,
+    stall: float,
+    index: np.ndarray,
+    A_out: np.ndarray,
+) -> int:
+    """One step of the row walk on a row-major grid of ``n1`` columns: the next row of each side.
+
+    Each side's next row (``fronts``, the upward side first, the downward one unless
+    ``lagging``) is predicted per column solved on the row before it, by polynomial
+    extrapolation from up to three rows before it on its side, solved by :func:`_solve_pose`
+    and kept where it converges in a working mode (:func:`_leg_modes`) compatible with
+    ``wanted`` (equal signs, or a zero on either side): its configuration, mode and ``reached``
+    written into the grid, its flat index and IK Jacobian into ``index`` and ``A_out``. A side
+    ends (its front set to -1) past the grid's edge or after a row with no solved point.
+
+    Args:
+        ints: the packed integer arrays of the kernel (a frame task).
+        floats: its packed float arrays.
+        legs: per square leg, its block size ``n`` then its ``n`` sign rows and ``n`` velocity
+            columns, each padded to the largest block, shape (n_legs, 1 + 2 * size).
+        turns: per passive revolute to orient: its leg, its column in the leg's block, its joint
+            and the leg's root joint, shape (n_axes, 4).
+        generic: the generic axis of each, in the root joint's frame, shape (n_axes, 3).
+        wanted: the working mode to keep, shape (n_legs,).
+        rtol: a leg block is singular at or below this times Hadamard's bound.
+        poses: task targets of the grid, shape (n_points, n_task).
+        R_stars: their rotations where the task holds all three angles, shape (n_points, 3, 3),
+            else one ignored rotation, shape (1, 3, 3).
+        Q: configurations of the grid (in and out), shape (n_points, nq).
+        reached: solved points (in and out), shape (n_points,).
+        modes: their working modes (out where reached), shape (n_points, n_legs).
+        n1: columns of the grid.
+        fronts: the next row of the upward and the downward side (-1 once ended), updated, (2,).
+        lagging: the downward side waits this step.
+        tol: residual tolerance [m, rad].
+        max_iterations: Newton iteration cap.
+        stall: the residual ratio below which an iteration must go.
+        index: out, flat indices of the points kept, shape (>= 2 * n1,).
+        A_out: out, their IK Jacobians, shape (>= 2 * n1, m + n_task, nv).
+
+    Returns:
+        The number of points kept, or -1 when neither side had a row to walk.
+    """
+    k = unpack(ints, floats)
+    nj, nv, nf, nq = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1), Q.shape[1]
+    n0 = reached.shape[0] // n1
+    n = k.m + poses.shape[1]
+    A, r, N, b, J = np.empty((n, nv)), np.empty(n), np.empty((nv, nv)), np.empty(nv), np.empty((6, nv))
+    oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
+    Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
+    q, q_next = np.empty(nq), np.empty(nq)
+    M = np.empty(((legs.shape[1] - 1) // 2, (legs.shape[1] - 1) // 2))
+    mode = np.empty(legs.shape[0], dtype=np.int8)
+    count = 0
+    walked = False
+    for side in range(2):
+        direction = 1 - 2 * side
+        i = fronts[side]
+        if side == 1 and lagging:
+            continue
+        ended = not 0 <= i < n0
+        if not ended:
+            ended = True
+            for c in range(n1):
+                if reached[(i - direction) * n1 + c]:
+                    ended = False
+                    break
+        if ended:
+            fronts[side] = -1
+            continue
+        walked = True
+        fronts[side] = i + direction
+        b0, b1, b2 = i - direction, i - 2 * direction, i - 3 * direction
+        for c in range(n1):
+            p0 = b0 * n1 + c
+            if not reached[p0]:
+                continue
+            two = 0 <= b1 < n0 and reached[b1 * n1 + c]
+            three = two and 0 <= b2 < n0 and reached[b2 * n1 + c]
+            for t in range(nq):
+                if three:
+                    q[t] = 3.0 * Q[p0, t] - 3.0 * Q[b1 * n1 + c, t] + Q[b2 * n1 + c, t]
+                elif two:
+                    q[t] = 2.0 * Q[p0, t] - Q[b1 * n1 + c, t]
+                else:
+                    q[t] = Q[p0, t]
+            for j in range(1, nj):  # extrapolated quaternions back to unit norm
+                if k.kinds[j] == FREE_FLYER:
+                    iq = k.idx_q[j] + 3
                     s = 0.0
-                    for i in range(n):
-                        s += A[i, a_] * A[i, c]
-                    N[a_, c] = s
-                    N[c, a_] = s
-            if not _cholesky_solve(N, b):
-                break
-            for c in range(nv):
-                b[c] = -b[c]
-            integrate(k, q, b, q_next)
-            q[:] = q_next
-            err_prev = err
+                    for t in range(4):
+                        s += q[iq + t] * q[iq + t]
+                    s = math.sqrt(s)
+                    for t in range(4):
+                        q[iq + t] /= s
+            p = i * n1 + c
+            R_star = R_stars[p] if R_stars.shape[0] > 1 else R_stars[0]
+            if not _solve_pose(
+                k, q, poses[p], R_star, tol, max_iterations, stall, A_out[count], A, r, N, b, J, oR, op,
+                fR, fp, Sw, Sv, q_next,
+            ):  # fmt: skip
+                continue
+            _leg_modes(k, A_out[count], oR, legs, turns, generic, rtol, M, mode)
+            fits = True
+            for leg in range(mode.shape[0]):
+                if not (mode[leg] == wanted[leg] or mode[leg] == 0 or wanted[leg] == 0):
+                    fits = False
+            if not fits:
+                continue
+            Q[p] = q
+            modes[p] = mode
+            reached[p] = True
+            index[count] = p
+            count += 1
+    return count if walked else -1
 
 
 @njit(cache=True)

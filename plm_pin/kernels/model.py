@@ -9,9 +9,10 @@ Pinocchio path, which gives the same results.
 
 from __future__ import annotations
 
+import itertools
 import os
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from types import ModuleType
 from typing import TYPE_CHECKING
 
@@ -20,8 +21,9 @@ import pinocchio as pin
 
 from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
 from ..core.closures import Closure
+from ..core.legs import Leg
 from ..core.task import FrameTask, Task, TaskTarget
-from ..tolerances import FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, ROUND_OFF
+from ..tolerances import FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL, ROUND_OFF
 from ..warnings import KernelFallbackWarning
 from .arrays import KernelArrays, build_arrays, kernel_frames, pack, unsupported_joints
 
@@ -225,6 +227,72 @@ class Kernel:
         R = np.full((B, a.parents.size, 3, 3), np.nan)
         _compiled().batch_newton(self.ints, self.floats, q, X, R_stars, tol, max_iterations, stall, ok, A, R)
         return q, ok, A, R
+
+    def walk_rows(
+        self,
+        legs: Sequence[Leg],
+        wanted: Sequence[int],
+        poses: np.ndarray,
+        R_stars: np.ndarray,
+        Q: np.ndarray,
+        reached: np.ndarray,
+        modes: np.ndarray,
+        n1: int,
+        i0: int,
+        lag: int,
+        tol: float,
+    ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """Solve the rows on both sides of row ``i0`` of a grid, both sides' next rows a step (a frame task).
+
+        Each step (:func:`.compiled.walk_rows_step`) predicts the next row of each side per column
+        from the rows before it on its side, solves it by Gauss-Newton (as :meth:`batch_newton`)
+        and writes the points that converge in a working mode compatible with ``wanted`` into
+        ``Q``, ``reached`` and ``modes``; the downward side waits ``lag`` steps. A side ends at
+        the grid's edge or after a row with no solved point.
+
+        Args:
+            legs: the mechanism's legs (the square ones carry the working mode).
+            wanted: the working mode to keep, one sign per square leg (0 matches either).
+            poses: task targets of the row-major grid, shape (n_points, n_task).
+            R_stars: their rotations where the task holds all three angles (n_points, 3, 3), else
+                any one rotation (1, 3, 3).
+            Q: configurations (in and out), shape (n_points, nq).
+            reached: solved points (in and out), shape (n_points,).
+            modes: working modes (out where reached), shape (n_points, n_legs).
+            n1: columns of the grid.
+            i0: the row already solved (the seed's).
+            lag: steps the downward side waits.
+            tol: residual tolerance [m, rad].
+
+        Yields:
+            Per step with points kept, their flat indices (b,) and IK Jacobians ``[J_phi; J_x]``
+            (task twist rows) (b, m + n_task, nv): views valid until the next step.
+        """
+        square = [leg for leg in legs if leg.square]
+        size = max((len(leg.columns) for leg in square), default=0)
+        blocks = np.zeros((len(square), 1 + 2 * size), dtype=np.int64)
+        for n, leg in enumerate(square):
+            blocks[n, 0] = len(leg.columns)
+            blocks[n, 1 : 1 + len(leg.columns)] = leg.sign_rows
+            blocks[n, 1 + size : 1 + size + len(leg.columns)] = leg.columns
+        axes = [(n, *axis) for n, leg in enumerate(square) for axis in leg.axes]
+        turns = np.array([a[:4] for a in axes], dtype=np.int64).reshape(-1, 4)
+        generic = np.array([a[4] for a in axes], dtype=float).reshape(-1, 3)
+        target = np.asarray(wanted, dtype=np.int8)
+        fronts = np.array([i0 + 1, i0 - 1], dtype=np.int64)
+        index = np.empty(2 * n1, dtype=np.int64)
+        A = np.empty((2 * n1, self.arrays.m + poses.shape[1], self.arrays.nv))
+        step = _compiled().walk_rows_step
+        for k in itertools.count():
+            count = step(
+                self.ints, self.floats, blocks, turns, generic, target, LEG_SINGULAR_RTOL, poses, R_stars,
+                Q, reached, modes, n1, fronts, np.bool_(k < lag), tol, NEWTON_MAX_ITERATIONS, STALL_RATIO,
+                index, A,
+            )  # fmt: skip
+            if count < 0:
+                return
+            if count:
+                yield index[:count], A[:count]
 
     def map_metrics(
         self, A: np.ndarray, actuated_v: np.ndarray, mobility: int, names: Sequence[str]

@@ -264,6 +264,10 @@ class GridState:
         self.q[index] = q
         self.mode[index] = mode
         self.reached[index] = True
+        self.record_metrics(index, A, metrics)
+
+    def record_metrics(self, index: np.ndarray, A: np.ndarray, metrics: Metrics) -> None:
+        """Record the metrics of the points at flat ``index`` from their stacked Jacobians ``A``."""
         n = self.reached.size
         for name, v in metrics(A).items():
             if name not in self.metrics:
@@ -584,9 +588,27 @@ def _walk_rows(
     point is kept only when it converges to ``tol`` in ``target_mode``. The second side
     starts :data:`LAG` batches late, so that every row gets the prediction it had when the
     sides were walked in turn. A side's walk stops at the grid edge or at a row with no
-    solved point before it.
+    solved point before it. On the kernels, each pair of rows is walked by one compiled call
+    (:meth:`~plm_pin.kernels.Kernel.walk_rows`: prediction, Newton and working modes), the
+    metrics of its points computed on return.
     """
     n0, n1 = state.shape
+    if ev.kernel is not None:
+        for index, A in ev.kernel.walk_rows(
+            ev.legs,
+            target_mode,
+            state.poses,
+            _target_rotations(ev.task, state.poses),
+            state.q,
+            state.reached,
+            state.mode,
+            n1,
+            i0,
+            LAG,
+            tol,
+        ):
+            state.record_metrics(index, A, metrics)
+        return
     Q = state.q.reshape(n0, n1, -1)
     reached = state.reached.reshape(n0, n1)
     poses = state.poses.reshape(n0, n1, -1)
@@ -635,14 +657,19 @@ def _batch_solve(
     """``batch_newton`` at ``X`` from ``guesses`` (:mod:`._batch`), on the kernels if they serve."""
     if ev.kernel is None or not isinstance(ev.task, FrameTask):
         return batch_newton(kin, guesses, X, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
-    R_stars = np.broadcast_to(np.eye(3), (X.shape[0], 3, 3))
-    if len(ev.task.angular) == 3:
-        rpy = np.empty((X.shape[0], 3))
-        rpy[:, list(ev.task.angular)] = X[:, len(ev.task.linear) :]
-        R_stars = rpy_matrix(rpy)
+    R_stars = np.broadcast_to(_target_rotations(ev.task, X), (X.shape[0], 3, 3))
     return ev.kernel.batch_newton(
         kin.normalized(guesses), X, R_stars, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO
     )
+
+
+def _target_rotations(task: Task, X: np.ndarray) -> np.ndarray:
+    """Rotations (B, 3, 3) of targets ``X`` (B, k) of a frame task with all three angles, else I (1, 3, 3)."""
+    if not isinstance(task, FrameTask) or len(task.angular) != 3:
+        return np.eye(3)[None]
+    rpy = np.empty((X.shape[0], 3))
+    rpy[:, list(task.angular)] = X[:, len(task.linear) :]
+    return rpy_matrix(rpy)
 
 
 def _seed(

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 import math
 
 import numpy as np
@@ -226,6 +228,47 @@ def test_row_batched_map_equals_the_point_by_point_map(monkeypatch):
     ok = serial.reachable
     assert np.abs(batched.q[ok] - serial.q[ok]).max() < 1e-11
     assert np.allclose(batched.manipulability[ok], serial.manipulability[ok], rtol=1e-10, atol=0.0)
+
+
+WALK_CASES = [
+    ("harada2011_3d4m", ("x", "y"), (np.linspace(-0.16, 0.16, 23), np.linspace(0.0, 0.14, 19))),
+    ("zhao2011_8pss", ("z", "ry"), (np.linspace(-0.8, 0.8, 11), np.linspace(-0.8, 0.8, 9))),
+]
+"""Grids reaching past the workspace edge (the 8-PSS's about its reference pose), so that rows fail."""
+
+
+@pytest.mark.parametrize(("name", "axes", "values"), WALK_CASES)
+def test_compiled_row_walk_equals_the_numpy_walk(monkeypatch, name, axes, values):
+    """The compiled row walk leaves the grid the numpy walk leaves: reached set, modes, q and metrics.
+
+    Both walks start from the same state (the seed's row solved) and are compared before the
+    point-by-point fill, which would otherwise reach what either walk missed.
+    """
+    mech = preset(name)
+    pose = task_pose(mech, mech.q_ref)
+    if name == "zhao2011_8pss":
+        values = tuple(pose[mech.task_compiled.dofs.index(a)] + v for a, v in zip(axes, values, strict=True))
+    walks = []
+    walk = _continuation._walk_rows
+
+    def both(ev, kin, state, metrics, i0, target, tol):
+        plain = copy.deepcopy(state)
+        walk(dataclasses.replace(ev, kernel=None), kin, plain, metrics, i0, target, tol)
+        walk(ev, kin, state, metrics, i0, target, tol)
+        walks.append((plain, copy.deepcopy(state)))
+
+    monkeypatch.setattr(_continuation, "_walk_rows", both)
+    workspace_map(mech, axes, values, pose, workers=1)
+    ((plain, compiled),) = walks
+    n1 = len(values[1])
+    assert n1 < compiled.reached.sum() < compiled.reached.size  # rows walked, some points failed
+    np.testing.assert_array_equal(compiled.reached, plain.reached)
+    np.testing.assert_array_equal(compiled.mode, plain.mode)
+    ok = plain.reached
+    np.testing.assert_allclose(compiled.q[ok], plain.q[ok], rtol=0.0, atol=1e-11)
+    assert compiled.metrics.keys() == plain.metrics.keys() == set(POSE_METRICS)
+    for metric, v in plain.metrics.items():
+        np.testing.assert_allclose(compiled.metrics[metric], v, rtol=1e-10, equal_nan=True, err_msg=metric)
 
 
 def test_gram_metrics_equal_the_svd_metrics_near_singularities():
