@@ -885,70 +885,64 @@ def newton(
 
 
 @njit(cache=True)
-def _solve_pose(
+def _newton_batch(
     k: KernelArrays,
-    q: np.ndarray,
-    x: np.ndarray,
-    R_star: np.ndarray,
+    Q: np.ndarray,
+    X: np.ndarray,
+    R_stars: np.ndarray,
     tol: float,
     max_iterations: int,
     stall: float,
-    A_ik: np.ndarray,
-    A: np.ndarray,
-    r: np.ndarray,
-    N: np.ndarray,
-    b: np.ndarray,
-    J: np.ndarray,
-    oR: np.ndarray,
-    op: np.ndarray,
-    fR: np.ndarray,
-    fp: np.ndarray,
-    Sw: np.ndarray,
-    Sv: np.ndarray,
-    q_next: np.ndarray,
-) -> bool:
-    """One pose of :func:`batch_newton` from ``q`` (solved in place): whether it converged.
-
-    On success ``A_ik`` (m + n_task, nv) holds the inverse-kinematics Jacobian and ``oR`` the
-    world rotation of every joint; the other arrays are scratch buffers.
-    """
-    m = k.m
-    n = r.shape[0]
-    nv = k.nv
-    err_prev = np.inf
-    for iteration in range(max_iterations + 1):
-        evaluate(k, q, x, R_star, True, r, A, True, oR, op, fR, fp, Sw, Sv)
-        err = 0.0
-        for i in range(n):
-            err = max(err, abs(r[i]))
-        if err <= tol:
-            A_ik[:m] = A[:m]
-            frame_jacobian(k, k.t_frame, fp, Sw, Sv, J)
-            for i in range(n - m):
-                for c in range(nv):
-                    A_ik[m + i, c] = J[k.t_rows[i], c]
-            return True
-        if math.isnan(err) or not err < stall * err_prev or iteration == max_iterations:
-            return False
-        for a_ in range(nv):
-            s = 0.0
+    ok: np.ndarray,
+    A_out: np.ndarray,
+    R_out: np.ndarray,
+) -> None:
+    """:func:`batch_newton` on the unpacked arrays ``k``."""
+    nj, nv, nf, m = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1), k.m
+    n = m + X.shape[1]
+    A, r, N, b, J = np.empty((n, nv)), np.empty(n), np.empty((nv, nv)), np.empty(nv), np.empty((6, nv))
+    oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
+    Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
+    q_next = np.empty(Q.shape[1])
+    for p in range(Q.shape[0]):
+        q = Q[p]
+        R_star = R_stars[p] if R_stars.shape[0] > 1 else R_stars[0]
+        ok[p] = False
+        err_prev = np.inf
+        for iteration in range(max_iterations + 1):
+            evaluate(k, q, X[p], R_star, True, r, A, True, oR, op, fR, fp, Sw, Sv)
+            err = 0.0
             for i in range(n):
-                s += A[i, a_] * r[i]
-            b[a_] = s
-            for c in range(a_ + 1):
+                err = max(err, abs(r[i]))
+            if err <= tol:
+                ok[p] = True
+                A_out[p, :m] = A[:m]
+                frame_jacobian(k, k.t_frame, fp, Sw, Sv, J)
+                for i in range(n - m):
+                    for c in range(nv):
+                        A_out[p, m + i, c] = J[k.t_rows[i], c]
+                R_out[p] = oR
+                break
+            if math.isnan(err) or not err < stall * err_prev or iteration == max_iterations:
+                break
+            for a_ in range(nv):
                 s = 0.0
                 for i in range(n):
-                    s += A[i, a_] * A[i, c]
-                N[a_, c] = s
-                N[c, a_] = s
-        if not _cholesky_solve(N, b):
-            return False
-        for c in range(nv):
-            b[c] = -b[c]
-        integrate(k, q, b, q_next)
-        q[:] = q_next
-        err_prev = err
-    return False
+                    s += A[i, a_] * r[i]
+                b[a_] = s
+                for c in range(a_ + 1):
+                    s = 0.0
+                    for i in range(n):
+                        s += A[i, a_] * A[i, c]
+                    N[a_, c] = s
+                    N[c, a_] = s
+            if not _cholesky_solve(N, b):
+                break
+            for c in range(nv):
+                b[c] = -b[c]
+            integrate(k, q, b, q_next)
+            q[:] = q_next
+            err_prev = err
 
 
 @njit(cache=True)
@@ -978,7 +972,8 @@ def batch_newton(
         floats: its packed float arrays.
         Q: starting configurations, solved in place, shape (B, nq).
         X: task targets, shape (B, n_task).
-        R_stars: target rotations of tasks with all three angles (else any), shape (B, 3, 3).
+        R_stars: target rotations of tasks with all three angles (else any), shape (B, 3, 3),
+            or one for every pose, shape (1, 3, 3).
         tol: residual tolerance [m, rad].
         max_iterations: iteration cap.
         stall: the residual ratio below which an iteration must go.
@@ -986,20 +981,7 @@ def batch_newton(
         A_out: out, shape (B, m + n_task, nv).
         R_out: out, shape (B, nj, 3, 3).
     """
-    k = unpack(ints, floats)
-    nj, nv, nf = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1)
-    n = k.m + X.shape[1]
-    A, r, N, b, J = np.empty((n, nv)), np.empty(n), np.empty((nv, nv)), np.empty(nv), np.empty((6, nv))
-    oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
-    Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
-    q_next = np.empty(Q.shape[1])
-    for p in range(Q.shape[0]):
-        ok[p] = _solve_pose(
-            k, Q[p], X[p], R_stars[p], tol, max_iterations, stall, A_out[p], A, r, N, b, J, oR, op, fR, fp,
-            Sw, Sv, q_next,
-        )  # fmt: skip
-        if ok[p]:
-            R_out[p] = oR
+    _newton_batch(unpack(ints, floats), Q, X, R_stars, tol, max_iterations, stall, ok, A_out, R_out)
 
 
 @njit(cache=True)
@@ -1103,11 +1085,12 @@ def walk_rows_step(
 
     Each side's next row (``fronts``, the upward side first, the downward one unless
     ``lagging``) is predicted per column solved on the row before it, by polynomial
-    extrapolation from up to three rows before it on its side, solved by :func:`_solve_pose`
-    and kept where it converges in a working mode (:func:`_leg_modes`) compatible with
-    ``wanted`` (equal signs, or a zero on either side): its configuration, mode and ``reached``
-    written into the grid, its flat index and IK Jacobian into ``index`` and ``A_out``. A side
-    ends (its front set to -1) past the grid's edge or after a row with no solved point.
+    extrapolation from up to three rows before it on its side, solved in one batch by
+    :func:`batch_newton`'s Newton and kept where it converges in a working mode
+    (:func:`_leg_modes`) compatible with ``wanted`` (equal signs, or a zero on either side):
+    its configuration, mode and ``reached`` written into the grid, its flat index and IK
+    Jacobian into ``index`` and ``A_out``. A side ends (its front set to -1) past the grid's
+    edge or after a row with no solved point.
 
     Args:
         ints: the packed integer arrays of the kernel (a frame task).
@@ -1138,13 +1121,18 @@ def walk_rows_step(
         The number of points kept, or -1 when neither side had a row to walk.
     """
     k = unpack(ints, floats)
-    nj, nv, nf, nq = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1), Q.shape[1]
+    nj, nq, n_task = k.parents.shape[0], Q.shape[1], poses.shape[1]
     n0 = reached.shape[0] // n1
-    n = k.m + poses.shape[1]
-    A, r, N, b, J = np.empty((n, nv)), np.empty(n), np.empty((nv, nv)), np.empty(nv), np.empty((6, nv))
-    oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
-    Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
-    q, q_next = np.empty(nq), np.empty(nq)
+    three_angles = R_stars.shape[0] > 1
+    # one side's row: the columns tried, their starts, targets and solutions
+    cols = np.empty(n1, dtype=np.int64)
+    Qb, Xb = np.empty((n1, nq)), np.empty((n1, n_task))
+    Rb = np.empty((n1 if three_angles else 1, 3, 3))
+    ok = np.empty(n1, dtype=np.bool_)
+    Ab = np.empty((n1, A_out.shape[1], A_out.shape[2]))
+    Rj = np.empty((n1, nj, 3, 3))
+    if not three_angles:
+        Rb[0] = R_stars[0]
     M = np.empty(((legs.shape[1] - 1) // 2, (legs.shape[1] - 1) // 2))
     mode = np.empty(legs.shape[0], dtype=np.int8)
     count = 0
@@ -1167,6 +1155,7 @@ def walk_rows_step(
         walked = True
         fronts[side] = i + direction
         b0, b1, b2 = i - direction, i - 2 * direction, i - 3 * direction
+        nb = 0
         for c in range(n1):
             p0 = b0 * n1 + c
             if not reached[p0]:
@@ -1175,38 +1164,45 @@ def walk_rows_step(
             three = two and 0 <= b2 < n0 and reached[b2 * n1 + c]
             for t in range(nq):
                 if three:
-                    q[t] = 3.0 * Q[p0, t] - 3.0 * Q[b1 * n1 + c, t] + Q[b2 * n1 + c, t]
+                    Qb[nb, t] = 3.0 * Q[p0, t] - 3.0 * Q[b1 * n1 + c, t] + Q[b2 * n1 + c, t]
                 elif two:
-                    q[t] = 2.0 * Q[p0, t] - Q[b1 * n1 + c, t]
+                    Qb[nb, t] = 2.0 * Q[p0, t] - Q[b1 * n1 + c, t]
                 else:
-                    q[t] = Q[p0, t]
+                    Qb[nb, t] = Q[p0, t]
             for j in range(1, nj):  # extrapolated quaternions back to unit norm
                 if k.kinds[j] == FREE_FLYER:
                     iq = k.idx_q[j] + 3
                     s = 0.0
                     for t in range(4):
-                        s += q[iq + t] * q[iq + t]
+                        s += Qb[nb, iq + t] * Qb[nb, iq + t]
                     s = math.sqrt(s)
                     for t in range(4):
-                        q[iq + t] /= s
+                        Qb[nb, iq + t] /= s
             p = i * n1 + c
-            R_star = R_stars[p] if R_stars.shape[0] > 1 else R_stars[0]
-            if not _solve_pose(
-                k, q, poses[p], R_star, tol, max_iterations, stall, A_out[count], A, r, N, b, J, oR, op,
-                fR, fp, Sw, Sv, q_next,
-            ):  # fmt: skip
+            Xb[nb] = poses[p]
+            if three_angles:
+                Rb[nb] = R_stars[p]
+            cols[nb] = c
+            nb += 1
+        _newton_batch(
+            k, Qb[:nb], Xb[:nb], Rb[:nb] if three_angles else Rb, tol, max_iterations, stall, ok, Ab, Rj
+        )
+        for e in range(nb):
+            if not ok[e]:
                 continue
-            _leg_modes(k, A_out[count], oR, legs, turns, generic, rtol, M, mode)
+            _leg_modes(k, Ab[e], Rj[e], legs, turns, generic, rtol, M, mode)
             fits = True
             for leg in range(mode.shape[0]):
                 if not (mode[leg] == wanted[leg] or mode[leg] == 0 or wanted[leg] == 0):
                     fits = False
             if not fits:
                 continue
-            Q[p] = q
+            p = i * n1 + cols[e]
+            Q[p] = Qb[e]
             modes[p] = mode
             reached[p] = True
             index[count] = p
+            A_out[count] = Ab[e]
             count += 1
     return count if walked else -1
 

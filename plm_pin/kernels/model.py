@@ -207,7 +207,8 @@ class Kernel:
         Args:
             Q: starting configurations, shape (B, nq).
             X: task targets, shape (B, n_task).
-            R_stars: their rotations where the task holds all three angles (else ignored), (B, 3, 3).
+            R_stars: their rotations where the task holds all three angles (else ignored), (B, 3, 3),
+                or one for every pose (1, 3, 3).
             tol: residual tolerance [m, rad].
             max_iterations: iteration cap.
             stall: a pose whose residual does not fall below ``stall`` times the previous one fails.

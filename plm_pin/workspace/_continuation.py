@@ -657,9 +657,8 @@ def _batch_solve(
     """``batch_newton`` at ``X`` from ``guesses`` (:mod:`._batch`), on the kernels if they serve."""
     if ev.kernel is None or not isinstance(ev.task, FrameTask):
         return batch_newton(kin, guesses, X, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
-    R_stars = np.broadcast_to(_target_rotations(ev.task, X), (X.shape[0], 3, 3))
     return ev.kernel.batch_newton(
-        kin.normalized(guesses), X, R_stars, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO
+        kin.normalized(guesses), X, _target_rotations(ev.task, X), tol, NEWTON_MAX_ITERATIONS, STALL_RATIO
     )
 
 
