@@ -13,7 +13,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .form import FREE_FLYER, PRISMATIC, PRISMATIC_PARAM, REVOLUTE, REVOLUTE_PARAM, SPHERICAL, PolynomialForm
+from .form import (
+    FIXED,
+    FREE_FLYER,
+    PRISMATIC,
+    PRISMATIC_PARAM,
+    REVOLUTE,
+    REVOLUTE_PARAM,
+    SPHERICAL,
+    PolynomialForm,
+)
 
 FAST = {"contract", "reassoc", "nsz", "arcp"}
 """LLVM fast-math flags of the kernels: reassociation and fused multiply-adds, but NaN and infinity
@@ -56,22 +65,46 @@ def _quaternion(
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
-def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
+def _mm_into(
+    A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int, rotates: bool, moves: bool
+) -> None:
     """``out[o] = A[a] @ B[b]`` for stacks of complex 4 x 4 matrices, by plain loops.
 
     Every matrix here is a homogeneous transform (last row 0 0 0 1) or a derivative of one (last
     row 0), so the last rows' first three entries are zero and are not multiplied (43 products
-    instead of 64). Indices rather than views: a view costs a reference count in the compiled
-    code, and the kernels take hundreds of products per evaluation.
+    instead of 64). ``B[b]``'s upper-left 3 x 3 block is the identity unless ``rotates``, and its
+    translation (first three entries of the last column) zero unless ``moves``: the products by
+    those ones and zeros are skipped (the entries of ``A[a]`` they give are copied, the same
+    numbers). Indices rather than views: a view costs a reference count in the compiled code, and
+    the kernels take hundreds of products per evaluation.
     """
     for i in range(3):
         for j in range(3):
-            out[o, i, j] = A[a, i, 0] * B[b, 0, j] + A[a, i, 1] * B[b, 1, j] + A[a, i, 2] * B[b, 2, j]
-        t = A[a, i, 0] * B[b, 0, 3] + A[a, i, 1] * B[b, 1, 3] + A[a, i, 2] * B[b, 2, 3]
-        out[o, i, 3] = t + A[a, i, 3] * B[b, 3, 3]
+            if rotates:
+                out[o, i, j] = A[a, i, 0] * B[b, 0, j] + A[a, i, 1] * B[b, 1, j] + A[a, i, 2] * B[b, 2, j]
+            else:
+                out[o, i, j] = A[a, i, j]
+        if moves:
+            t = A[a, i, 0] * B[b, 0, 3] + A[a, i, 1] * B[b, 1, 3] + A[a, i, 2] * B[b, 2, 3]
+            out[o, i, 3] = t + A[a, i, 3] * B[b, 3, 3]
+        else:
+            out[o, i, 3] = A[a, i, 3] * B[b, 3, 3]
     for j in range(3):
         out[o, 3, j] = 0.0
     out[o, 3, 3] = A[a, 3, 3] * B[b, 3, 3]
+
+
+@njit(cache=True, inline="always")
+def _translated_into(M: np.ndarray, X: np.ndarray, i: int, out: np.ndarray) -> None:
+    """``out[i] = M[i] @ X[i]`` for a pure translation ``M[i]``: ``X[i]`` with ``M[i]``'s translation added.
+
+    The same numbers as :func:`_mm_into` (its other products are by ones and zeros).
+    """
+    for r in range(4):
+        for k in range(4):
+            out[i, r, k] = X[i, r, k]
+    for r in range(3):
+        out[i, r, 3] += M[i, r, 3]
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
@@ -113,6 +146,23 @@ def _mv_into(A: np.ndarray, a: int, S: np.ndarray, s: int, out: np.ndarray, o: i
             + A[a, r, 2] * S[s, 2, 3]
             + A[a, r, 3] * S[s, 3, 3]
         )
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
+def _point_derivative_into(
+    AdX: np.ndarray, d: int, translation: bool, S: np.ndarray, out: np.ndarray, o: int
+) -> None:
+    """``out[o, :3, 3] = (AdX[d] @ S[0])[:3, 3]`` for a derivative ``AdX[d]`` of :func:`_derivative_into`.
+
+    As :func:`_mv_into`, by the derivative's structure: along a translation coordinate it is its
+    last column (the point's fourth entry is 1), along a rotation one its 3 x 3 block times the
+    point (9 products instead of 12; the terms left out are zero).
+    """
+    for r in range(3):
+        if translation:
+            out[o, r, 3] = AdX[d, r, 3]
+        else:
+            out[o, r, 3] = AdX[d, r, 0] * S[0, 0, 3] + AdX[d, r, 1] * S[0, 1, 3] + AdX[d, r, 2] * S[0, 2, 3]
 
 
 @njit(cache=True, inline="always")
@@ -199,14 +249,19 @@ def workspace(
     kind: np.ndarray,
     offset: np.ndarray,
     placement: np.ndarray,
+    fixed: np.ndarray,
     frame_joint: np.ndarray,
     n_entries: int,
 ) -> tuple:
     """The buffers :func:`system` writes into, allocated once per batch of evaluations.
 
     Also the static structure: the derivative column of each joint, the number of its coordinates,
-    and which columns a closure frame depends on (a column off a frame's path stays zero, as do
-    the entries of a derivative matrix a joint kind never writes).
+    which columns a closure frame depends on (a column off a frame's path stays zero, as do
+    the entries of a derivative matrix a joint kind never writes), and per joint whether
+    :math:`M_j` and :math:`X_j` rotate and move (their rotation block is not the identity, their
+    translation not zero: the ``rotates`` and ``moves`` of :func:`_mm_into`; most placements are
+    pure translations, a revolute or spherical joint does not move, a prismatic one does not rotate),
+    and per joint coordinate whether its derivative is along a translation (else a rotation).
     """
     k, nf, nc = kind.shape[0], frame_joint.shape[0], n + npar
     ncoord = np.zeros(k, dtype=np.int64)
@@ -222,6 +277,23 @@ def workspace(
             ncoord[i] = 7
         elif kd == PRISMATIC or kd == PRISMATIC_PARAM or kd == REVOLUTE_PARAM:
             ncoord[i] = 1
+    # (M_j rotates, M_j moves, X_j rotates, X_j moves) per joint; per joint coordinate, whether its
+    # derivative is along a translation (else a rotation)
+    rigid = np.zeros((k, 4), dtype=np.bool_)
+    translation = np.zeros(7 * k, dtype=np.bool_)
+    for i in range(k):
+        kd = kind[i]
+        slides = kd == PRISMATIC or kd == PRISMATIC_PARAM
+        rigid[i, 0] = np.any(placement[i, :3, :3] != np.eye(3))
+        rigid[i, 1] = np.any(placement[i, :3, 3] != 0.0)
+        if kd == FIXED:
+            rigid[i, 2] = np.any(fixed[i, :3, :3] != np.eye(3))
+            rigid[i, 3] = np.any(fixed[i, :3, 3] != 0.0)
+        else:
+            rigid[i, 2] = not slides
+            rigid[i, 3] = slides or kd == FREE_FLYER
+        for c in range(ncoord[i]):
+            translation[7 * i + c] = slides or (kd == FREE_FLYER and c < 3)
     on_path = np.zeros((nf, nc), dtype=np.bool_)
     for f in range(nf):
         i = frame_joint[f]
@@ -249,21 +321,24 @@ def workspace(
         np.zeros((n, nc), dtype=c16),  # J = [F_x F_p]
         np.zeros((2, 4, 4), dtype=c16),  # S: suffix products (two slots)
         np.zeros((3, 3), dtype=c16),  # E
+        rigid,
+        translation,
     )
 
 
 @njit(cache=True)
 def workspace_for(n: int, npar: int, args: tuple) -> tuple:
     """:func:`workspace` for ``n`` unknowns and ``npar`` parameters of the form packed in ``args``."""
-    parent, kind, offset, placement, frame_joint, combination = (
+    parent, kind, offset, placement, fixed, frame_joint, combination = (
         args[0],
         args[1],
         args[2],
         args[4],
+        args[5],
         args[6],
         args[13],
     )
-    return workspace(n, npar, parent, kind, offset, placement, frame_joint, combination.shape[1])
+    return workspace(n, npar, parent, kind, offset, placement, fixed, frame_joint, combination.shape[1])
 
 
 @njit(cache=True, fastmath=FAST)
@@ -285,7 +360,7 @@ def _entries(
     entry_offset: np.ndarray,
 ) -> None:
     """Closure entries ``e`` (m,) and their derivatives ``de`` along (x, p) (m, n + n_params), into ``ws``."""
-    ncoord, col, on_path, M, X, dX, T, A, MX, AdX, Tf, dTf, e, de, _, _, S, E = ws
+    ncoord, col, on_path, M, X, dX, T, A, MX, AdX, Tf, dTf, e, de, _, _, S, E, rigid, translation = ws
     k = kind.shape[0]
     nc = de.shape[1]
     for i in range(k):
@@ -294,22 +369,18 @@ def _entries(
             _local(kd, axis, fixed, i, p, offset[i], X, dX)
         else:
             _local(kd, axis, fixed, i, x, offset[i], X, dX)
-        _mm_into(M, i, X, i, MX, i)
+        if rigid[i, 0]:
+            _mm_into(M, i, X, i, MX, i, rigid[i, 2], rigid[i, 3])
+        else:
+            _translated_into(M, X, i, MX)
         if parent[i] >= 0:
-            _mm_into(T, parent[i], M, i, A, i)
-            _mm_into(A, i, X, i, T, i)
+            _mm_into(T, parent[i], M, i, A, i, rigid[i, 0], rigid[i, 1])
+            _mm_into(A, i, X, i, T, i, rigid[i, 2], rigid[i, 3])
         else:  # on the world: T = M X
             _copy_into(M, i, A, i)
             _copy_into(MX, i, T, i)
         for c in range(ncoord[i]):
-            _derivative_into(
-                A,
-                i,
-                dX,
-                7 * i + c,
-                kd == PRISMATIC or kd == PRISMATIC_PARAM or c < 3 * (kd == FREE_FLYER),
-                AdX,
-            )
+            _derivative_into(A, i, dX, 7 * i + c, translation[7 * i + c], AdX)
     nf = frame_joint.shape[0]
     for f in range(nf):
         for r in range(4):
@@ -329,20 +400,21 @@ def _entries(
                 _copy_into(S, 0, Tf, f)
             while i >= 0:
                 for c in range(ncoord[i]):
-                    _mv_into(AdX, 7 * i + c, S, 0, dTf, f * nc + col[i] + c)
+                    dc = 7 * i + c
+                    _point_derivative_into(AdX, dc, translation[dc], S, dTf, f * nc + col[i] + c)
                 _mv_into(MX, i, S, 0, S, 1)
                 for r in range(3):
                     S[0, r, 3] = S[1, r, 3]
                 i = parent[i]
             continue
         if i >= 0:
-            _mm_into(T, i, S, 0, Tf, f)
+            _mm_into(T, i, S, 0, Tf, f, True, True)
         else:
             _copy_into(S, 0, Tf, f)
         while i >= 0:
             for c in range(ncoord[i]):
-                _mm_into(AdX, 7 * i + c, S, 0, dTf, f * nc + col[i] + c)
-            _mm_into(MX, i, S, 0, S, 1)
+                _mm_into(AdX, 7 * i + c, S, 0, dTf, f * nc + col[i] + c, True, True)
+            _mm_into(MX, i, S, 0, S, 1, True, True)
             _copy_into(S, 1, S, 0)
             i = parent[i]
     for c in range(closure_kind.shape[0]):
@@ -556,6 +628,7 @@ def _new_workspace(form: PolynomialForm) -> tuple:
         form.kind,
         form.offset,
         form.placement,
+        form.fixed,
         form.frame_joint,
         form.n_entries,
     )
