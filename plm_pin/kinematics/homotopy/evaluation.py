@@ -185,11 +185,47 @@ def _skew_entry(axis: np.ndarray, i: int, r: int, k: int) -> float:
     return -axis[i, 1] if k == 0 else axis[i, 0]
 
 
+@njit(cache=True, inline="always")
+def _constant_local(
+    kind: int, axis: np.ndarray, fixed: np.ndarray, i: int, X: np.ndarray, dX: np.ndarray, G: np.ndarray
+) -> None:
+    r"""The entries of joint ``i``'s ``X[i]`` and ``dX[7 i:]`` that do not depend on its coordinates.
+
+    Written once into zeroed buffers (:func:`_local` writes the others at each evaluation): the
+    ones, a fixed joint's transform, the derivatives of a revolute joint in (cos, sin)
+    (:math:`-K^2` and :math:`K`), of a prismatic joint (its axis) and of a free-flyer's
+    translation; and a revolute joint's :math:`K = [a]_\times` and :math:`K^2 = a a^T - (a^T a) I`
+    into ``G[i, 0]`` and ``G[i, 1]``.
+    """
+    d = 7 * i
+    X[i, 3, 3] = 1.0
+    if kind == FIXED:
+        for r in range(3):
+            for k in range(4):
+                X[i, r, k] = fixed[i, r, k]
+    if kind == REVOLUTE or kind == REVOLUTE_PARAM:
+        aa = axis[i, 0] * axis[i, 0] + axis[i, 1] * axis[i, 1] + axis[i, 2] * axis[i, 2]
+        for r in range(3):
+            for k in range(3):
+                G[i, 0, r, k] = _skew_entry(axis, i, r, k)
+                G[i, 1, r, k] = axis[i, r] * axis[i, k] - (aa if r == k else 0.0)
+                if kind == REVOLUTE:
+                    dX[d, r, k] = -G[i, 1, r, k]
+                    dX[d + 1, r, k] = G[i, 0, r, k]
+    elif kind == PRISMATIC or kind == PRISMATIC_PARAM:
+        for r in range(3):
+            X[i, r, r] = 1.0
+            dX[d, r, 3] = axis[i, r]
+    elif kind == FREE_FLYER:
+        for r in range(3):
+            dX[d + r, r, 3] = 1.0
+
+
 @njit(cache=True, inline="always", fastmath=FAST)
 def _local(
     kind: int,
     axis: np.ndarray,
-    fixed: np.ndarray,
+    G: np.ndarray,
     i: int,
     v: np.ndarray,
     o: int,
@@ -198,47 +234,28 @@ def _local(
 ) -> None:
     r"""Local transform of joint ``i`` from ``v[o:]`` into ``X[i]``, its derivatives into ``dX[7 i:]``.
 
-    A revolute joint about the unit axis :math:`a`: :math:`R = I + s K + (1 - c) K^2`,
-    :math:`K = [a]_\times`, :math:`K^2 = a a^T - (a^T a) I`.
+    The entries that depend on the coordinates; :func:`_constant_local` wrote the others. A
+    revolute joint about the unit axis :math:`a`: :math:`R = I + s K + (1 - c) K^2` (``G[i]``).
     """
     d = 7 * i
-    for r in range(4):
-        for k in range(4):
-            X[i, r, k] = 0.0
-    X[i, 3, 3] = 1.0
     if kind == REVOLUTE or kind == REVOLUTE_PARAM:
         if kind == REVOLUTE:
             c, s = v[o], v[o + 1]
         else:
             c, s = np.cos(v[o]), np.sin(v[o])
-        aa = axis[i, 0] * axis[i, 0] + axis[i, 1] * axis[i, 1] + axis[i, 2] * axis[i, 2]
         for r in range(3):
             for k in range(3):
-                K = _skew_entry(axis, i, r, k)
-                K2 = axis[i, r] * axis[i, k] - (aa if r == k else 0.0)
-                X[i, r, k] = (1.0 if r == k else 0.0) + s * K + (1.0 - c) * K2
-                if kind == REVOLUTE:
-                    dX[d, r, k] = -K2
-                    dX[d + 1, r, k] = K
-                else:
-                    dX[d, r, k] = c * K + s * K2
-        return
-    if kind == PRISMATIC or kind == PRISMATIC_PARAM:
+                X[i, r, k] = (1.0 if r == k else 0.0) + s * G[i, 0, r, k] + (1.0 - c) * G[i, 1, r, k]
+                if kind == REVOLUTE_PARAM:
+                    dX[d, r, k] = c * G[i, 0, r, k] + s * G[i, 1, r, k]
+    elif kind == PRISMATIC or kind == PRISMATIC_PARAM:
         for r in range(3):
-            X[i, r, r] = 1.0
             X[i, r, 3] = v[o] * axis[i, r]
-            dX[d, r, 3] = axis[i, r]
-        return
-    if kind == SPHERICAL or kind == FREE_FLYER:
+    elif kind == SPHERICAL or kind == FREE_FLYER:
         t = 3 if kind == FREE_FLYER else 0
         _quaternion(v[o + t], v[o + t + 1], v[o + t + 2], v[o + t + 3], X, i, dX, d + t)
         for r in range(t):
             X[i, r, 3] = v[o + r]
-            dX[d + r, r, 3] = 1.0
-        return
-    for r in range(4):
-        for k in range(4):
-            X[i, r, k] = fixed[i, r, k]
 
 
 @njit(cache=True)
@@ -248,20 +265,26 @@ def workspace(
     parent: np.ndarray,
     kind: np.ndarray,
     offset: np.ndarray,
+    axis: np.ndarray,
     placement: np.ndarray,
     fixed: np.ndarray,
     frame_joint: np.ndarray,
+    closure_kind: np.ndarray,
+    closure_frames: np.ndarray,
     n_entries: int,
 ) -> tuple:
     """The buffers :func:`system` writes into, allocated once per batch of evaluations.
 
-    Also the static structure: the derivative column of each joint, the number of its coordinates,
-    which columns a closure frame depends on (a column off a frame's path stays zero, as do
-    the entries of a derivative matrix a joint kind never writes), and per joint whether
-    :math:`M_j` and :math:`X_j` rotate and move (their rotation block is not the identity, their
-    translation not zero: the ``rotates`` and ``moves`` of :func:`_mm_into`; most placements are
-    pure translations, a revolute or spherical joint does not move, a prismatic one does not rotate),
-    and per joint coordinate whether its derivative is along a translation (else a rotation).
+    Also what does not change from one evaluation to the next: the local transforms' entries that
+    do not depend on the coordinates (:func:`_constant_local`), and the structure: the derivative
+    column of each joint, the number of its coordinates, which columns a closure frame depends on
+    (a column off a frame's path stays zero, as do the entries of a derivative matrix a joint
+    kind never writes), per joint whether :math:`M_j` and :math:`X_j` rotate and move (their
+    rotation block is not the identity, their translation not zero: the ``rotates`` and
+    ``moves`` of :func:`_mm_into`; most placements are pure translations, a revolute or spherical
+    joint does not move, a prismatic one does not rotate), per joint coordinate whether its
+    derivative is along a translation (else a rotation), and which closure frames are read as
+    points (their origin alone: point and distance closures).
     """
     k, nf, nc = kind.shape[0], frame_joint.shape[0], n + npar
     ncoord = np.zeros(k, dtype=np.int64)
@@ -294,6 +317,10 @@ def workspace(
             rigid[i, 3] = slides or kd == FREE_FLYER
         for c in range(ncoord[i]):
             translation[7 * i + c] = slides or (kd == FREE_FLYER and c < 3)
+    point = np.ones(nf, dtype=np.bool_)  # only the frame's origin is read (point and distance closures)
+    for c in range(closure_kind.shape[0]):
+        if closure_kind[c] == 1 or closure_kind[c] == 2:
+            point[closure_frames[c, 0]] = point[closure_frames[c, 1]] = False
     on_path = np.zeros((nf, nc), dtype=np.bool_)
     for f in range(nf):
         i = frame_joint[f]
@@ -302,13 +329,18 @@ def workspace(
                 on_path[f, col[i] + c] = True
             i = parent[i]
     c16 = np.complex128
+    X = np.zeros((k, 4, 4), dtype=c16)
+    dX = np.zeros((7 * k, 4, 4), dtype=c16)
+    G = np.zeros((k, 2, 3, 3))
+    for i in range(k):
+        _constant_local(kind[i], axis, fixed, i, X, dX, G)
     return (
         ncoord,
         col,
         on_path,
         placement.astype(c16),  # M: joint placements
-        np.zeros((k, 4, 4), dtype=c16),  # X: local transforms
-        np.zeros((7 * k, 4, 4), dtype=c16),  # dX: their derivatives, 7 per joint
+        X,  # local transforms
+        dX,  # their derivatives, 7 per joint
         np.zeros((k, 4, 4), dtype=c16),  # T: world transform after the joint
         np.zeros((k, 4, 4), dtype=c16),  # A: world transform of the joint frame before X_j
         np.zeros((k, 4, 4), dtype=c16),  # MX: M_j X_j
@@ -323,22 +355,30 @@ def workspace(
         np.zeros((3, 3), dtype=c16),  # E
         rigid,
         translation,
+        G,  # a revolute joint's K and K^2
+        point,
     )
 
 
 @njit(cache=True)
 def workspace_for(n: int, npar: int, args: tuple) -> tuple:
     """:func:`workspace` for ``n`` unknowns and ``npar`` parameters of the form packed in ``args``."""
-    parent, kind, offset, placement, fixed, frame_joint, combination = (
-        args[0],
-        args[1],
-        args[2],
-        args[4],
-        args[5],
-        args[6],
-        args[13],
+    parent, kind, offset, axis, placement, fixed, frame_joint = args[:7]
+    closure_kind, closure_frames, combination = args[8], args[9], args[13]
+    return workspace(
+        n,
+        npar,
+        parent,
+        kind,
+        offset,
+        axis,
+        placement,
+        fixed,
+        frame_joint,
+        closure_kind,
+        closure_frames,
+        combination.shape[1],
     )
-    return workspace(n, npar, parent, kind, offset, placement, fixed, frame_joint, combination.shape[1])
 
 
 @njit(cache=True, fastmath=FAST)
@@ -350,7 +390,6 @@ def _entries(
     kind: np.ndarray,
     offset: np.ndarray,
     axis: np.ndarray,
-    fixed: np.ndarray,
     frame_joint: np.ndarray,
     frame_placement: np.ndarray,
     closure_kind: np.ndarray,
@@ -360,15 +399,38 @@ def _entries(
     entry_offset: np.ndarray,
 ) -> None:
     """Closure entries ``e`` (m,) and their derivatives ``de`` along (x, p) (m, n + n_params), into ``ws``."""
-    ncoord, col, on_path, M, X, dX, T, A, MX, AdX, Tf, dTf, e, de, _, _, S, E, rigid, translation = ws
+    (
+        ncoord,
+        col,
+        on_path,
+        M,
+        X,
+        dX,
+        T,
+        A,
+        MX,
+        AdX,
+        Tf,
+        dTf,
+        e,
+        de,
+        _,
+        _,
+        S,
+        E,
+        rigid,
+        translation,
+        G,
+        point,
+    ) = ws
     k = kind.shape[0]
     nc = de.shape[1]
     for i in range(k):
         kd = kind[i]
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
-            _local(kd, axis, fixed, i, p, offset[i], X, dX)
+            _local(kd, axis, G, i, p, offset[i], X, dX)
         else:
-            _local(kd, axis, fixed, i, x, offset[i], X, dX)
+            _local(kd, axis, G, i, x, offset[i], X, dX)
         if rigid[i, 0]:
             _mm_into(M, i, X, i, MX, i, rigid[i, 2], rigid[i, 3])
         else:
@@ -387,17 +449,7 @@ def _entries(
             for q in range(4):
                 S[0, r, q] = frame_placement[f, r, q]
         i = frame_joint[f]
-        point = True  # only the frame's origin is read (point and distance closures)
-        for c in range(closure_kind.shape[0]):
-            if (closure_kind[c] == 1 or closure_kind[c] == 2) and (
-                closure_frames[c, 0] == f or closure_frames[c, 1] == f
-            ):
-                point = False
-        if point:  # the origin alone, carried up the path by matrix-vector products
-            if i >= 0:
-                _mv_into(T, i, S, 0, Tf, f)
-            else:
-                _copy_into(S, 0, Tf, f)
+        if point[f]:  # the origin alone, carried up the path by matrix-vector products (to the world: Tf's)
             while i >= 0:
                 for c in range(ncoord[i]):
                     dc = 7 * i + c
@@ -406,6 +458,8 @@ def _entries(
                 for r in range(3):
                     S[0, r, 3] = S[1, r, 3]
                 i = parent[i]
+            for r in range(3):
+                Tf[f, r, 3] = S[0, r, 3]
             continue
         if i >= 0:
             _mm_into(T, i, S, 0, Tf, f, True, True)
@@ -520,7 +574,6 @@ def system(
         kind,
         offset,
         axis,
-        fixed,
         frame_joint,
         frame_placement,
         closure_kind,
@@ -566,7 +619,7 @@ def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
         offset,
         axis,
         _placement,
-        fixed,
+        _fixed,
         frame_joint,
         frame_placement,
         closure_kind,
@@ -577,7 +630,7 @@ def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
         _combination,
         _unit_offsets,
         _unit_sizes,
-    ) = args  # the placements and the square system's combination and units are not read
+    ) = args  # not read: the placements and fixed transforms (in the workspace), the square system's arrays
     N, n = X.shape
     ws = workspace_for(n, p.shape[0], args)
     e = ws[12]
@@ -591,7 +644,6 @@ def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
             kind,
             offset,
             axis,
-            fixed,
             frame_joint,
             frame_placement,
             closure_kind,
@@ -627,9 +679,12 @@ def _new_workspace(form: PolynomialForm) -> tuple:
         form.parent,
         form.kind,
         form.offset,
+        form.axis,
         form.placement,
         form.fixed,
         form.frame_joint,
+        form.closure_kind,
+        form.closure_frames,
         form.n_entries,
     )
 
@@ -645,7 +700,6 @@ def closure_entries(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> tuple
         form.kind,
         form.offset,
         form.axis,
-        form.fixed,
         form.frame_joint,
         form.frame_placement,
         form.closure_kind,
