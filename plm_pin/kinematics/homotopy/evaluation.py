@@ -109,27 +109,31 @@ def _translated_into(M: np.ndarray, X: np.ndarray, i: int, out: np.ndarray) -> N
 
 @njit(cache=True, inline="always", fastmath=FAST)
 def _derivative_into(
-    A: np.ndarray, a: int, dX: np.ndarray, d: int, translation: bool, out: np.ndarray
+    A: np.ndarray, a: int, rotates: bool, dX: np.ndarray, d: int, translation: bool, out: np.ndarray
 ) -> None:
     """``out[d] = A[a] @ dX[d]`` for a joint's local derivative ``dX[d]``, by its structure.
 
     A derivative along a translation coordinate has only its last column (the axis, first three
     entries); along a rotation coordinate (cos, sin, angle, quaternion) only its upper-left
     3 x 3 block. So the product is a rotation times a vector (9 products) or two 3 x 3 blocks (27),
-    instead of a matrix product's 43; the zero parts stay zero (last row included).
+    instead of a matrix product's 43; the zero parts are never written (the buffer starts at zero,
+    and each slot keeps its structure). Unless ``rotates``, ``A[a]``'s rotation block is the
+    identity (a joint on the world placed by a translation): the product is ``dX[d]``'s entries.
     """
-    if translation:
-        for r in range(3):
+    for r in range(3):
+        if translation:
+            if rotates:
+                out[d, r, 3] = A[a, r, 0] * dX[d, 0, 3] + A[a, r, 1] * dX[d, 1, 3] + A[a, r, 2] * dX[d, 2, 3]
+            else:
+                out[d, r, 3] = dX[d, r, 3]
+        else:
             for k in range(3):
-                out[d, r, k] = 0.0
-            out[d, r, 3] = A[a, r, 0] * dX[d, 0, 3] + A[a, r, 1] * dX[d, 1, 3] + A[a, r, 2] * dX[d, 2, 3]
-    else:
-        for r in range(3):
-            for k in range(3):
-                out[d, r, k] = A[a, r, 0] * dX[d, 0, k] + A[a, r, 1] * dX[d, 1, k] + A[a, r, 2] * dX[d, 2, k]
-            out[d, r, 3] = 0.0
-    for k in range(4):
-        out[d, 3, k] = 0.0
+                if rotates:
+                    out[d, r, k] = (
+                        A[a, r, 0] * dX[d, 0, k] + A[a, r, 1] * dX[d, 1, k] + A[a, r, 2] * dX[d, 2, k]
+                    )
+                else:
+                    out[d, r, k] = dX[d, r, k]
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
@@ -441,8 +445,9 @@ def _entries(
         else:  # on the world: T = M X
             _copy_into(M, i, A, i)
             _copy_into(MX, i, T, i)
+        turned = parent[i] >= 0 or rigid[i, 0]  # A_j's rotation block is not the identity
         for c in range(ncoord[i]):
-            _derivative_into(A, i, dX, 7 * i + c, translation[7 * i + c], AdX)
+            _derivative_into(A, i, turned, dX, 7 * i + c, translation[7 * i + c], AdX)
     nf = frame_joint.shape[0]
     for f in range(nf):
         for r in range(4):
