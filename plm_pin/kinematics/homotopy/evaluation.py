@@ -454,17 +454,21 @@ def _entries(
             for q in range(4):
                 S[0, r, q] = frame_placement[f, r, q]
         i = frame_joint[f]
-        if point[f]:  # the origin alone, carried up the path by matrix-vector products (to the world: Tf's)
+        if point[f]:  # the origin alone, carried up the path by matrix-vector products
+            if i >= 0:
+                _mv_into(T, i, S, 0, Tf, f)
+            else:
+                _copy_into(S, 0, Tf, f)
             while i >= 0:
                 for c in range(ncoord[i]):
                     dc = 7 * i + c
                     _point_derivative_into(AdX, dc, translation[dc], S, dTf, f * nc + col[i] + c)
+                if parent[i] < 0:  # (the suffix on the world is not read)
+                    break
                 _mv_into(MX, i, S, 0, S, 1)
                 for r in range(3):
                     S[0, r, 3] = S[1, r, 3]
                 i = parent[i]
-            for r in range(3):
-                Tf[f, r, 3] = S[0, r, 3]
             continue
         if i >= 0:
             _mm_into(T, i, S, 0, Tf, f, True, True)
@@ -473,6 +477,8 @@ def _entries(
         while i >= 0:
             for c in range(ncoord[i]):
                 _mm_into(AdX, 7 * i + c, S, 0, dTf, f * nc + col[i] + c, True, True)
+            if parent[i] < 0:
+                break
             _mm_into(MX, i, S, 0, S, 1, True, True)
             _copy_into(S, 1, S, 0)
             i = parent[i]
