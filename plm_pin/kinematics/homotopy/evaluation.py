@@ -357,10 +357,10 @@ def workspace(
         np.zeros((n, nc), dtype=c16),  # J = [F_x F_p]
         np.zeros((2, 4, 4), dtype=c16),  # S: suffix products (two slots)
         np.zeros((3, 3), dtype=c16),  # E
-        rigid,
-        translation,
+        rigid,  # (M_j rotates, M_j moves, X_j rotates, X_j moves) per joint
+        translation,  # per joint coordinate: its derivative is along a translation
         G,  # a revolute joint's K and K^2
-        point,
+        point,  # per closure frame: only its origin is read
     )
 
 
