@@ -13,7 +13,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .form import FREE_FLYER, PRISMATIC, PRISMATIC_PARAM, REVOLUTE, REVOLUTE_PARAM, SPHERICAL, PolynomialForm
+from .form import (
+    FIXED,
+    FREE_FLYER,
+    PRISMATIC,
+    PRISMATIC_PARAM,
+    REVOLUTE,
+    REVOLUTE_PARAM,
+    SPHERICAL,
+    PolynomialForm,
+)
 
 FAST = {"contract", "reassoc", "nsz", "arcp"}
 """LLVM fast-math flags of the kernels: reassociation and fused multiply-adds, but NaN and infinity
@@ -56,47 +65,75 @@ def _quaternion(
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
-def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
+def _mm_into(
+    A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int, rotates: bool, moves: bool
+) -> None:
     """``out[o] = A[a] @ B[b]`` for stacks of complex 4 x 4 matrices, by plain loops.
 
     Every matrix here is a homogeneous transform (last row 0 0 0 1) or a derivative of one (last
     row 0), so the last rows' first three entries are zero and are not multiplied (43 products
-    instead of 64). Indices rather than views: a view costs a reference count in the compiled
-    code, and the kernels take hundreds of products per evaluation.
+    instead of 64). ``B[b]``'s upper-left 3 x 3 block is the identity unless ``rotates``, and its
+    translation (first three entries of the last column) zero unless ``moves``: the products by
+    those ones and zeros are skipped (the entries of ``A[a]`` they give are copied, the same
+    numbers). Indices rather than views: a view costs a reference count in the compiled code, and
+    the kernels take hundreds of products per evaluation.
     """
     for i in range(3):
         for j in range(3):
-            out[o, i, j] = A[a, i, 0] * B[b, 0, j] + A[a, i, 1] * B[b, 1, j] + A[a, i, 2] * B[b, 2, j]
-        t = A[a, i, 0] * B[b, 0, 3] + A[a, i, 1] * B[b, 1, 3] + A[a, i, 2] * B[b, 2, 3]
-        out[o, i, 3] = t + A[a, i, 3] * B[b, 3, 3]
+            if rotates:
+                out[o, i, j] = A[a, i, 0] * B[b, 0, j] + A[a, i, 1] * B[b, 1, j] + A[a, i, 2] * B[b, 2, j]
+            else:
+                out[o, i, j] = A[a, i, j]
+        if moves:
+            t = A[a, i, 0] * B[b, 0, 3] + A[a, i, 1] * B[b, 1, 3] + A[a, i, 2] * B[b, 2, 3]
+            out[o, i, 3] = t + A[a, i, 3] * B[b, 3, 3]
+        else:
+            out[o, i, 3] = A[a, i, 3] * B[b, 3, 3]
     for j in range(3):
         out[o, 3, j] = 0.0
     out[o, 3, 3] = A[a, 3, 3] * B[b, 3, 3]
 
 
+@njit(cache=True, inline="always")
+def _translated_into(M: np.ndarray, X: np.ndarray, i: int, out: np.ndarray) -> None:
+    """``out[i] = M[i] @ X[i]`` for a pure translation ``M[i]``: ``X[i]`` with ``M[i]``'s translation added.
+
+    The same numbers as :func:`_mm_into` (its other products are by ones and zeros).
+    """
+    for r in range(4):
+        for k in range(4):
+            out[i, r, k] = X[i, r, k]
+    for r in range(3):
+        out[i, r, 3] += M[i, r, 3]
+
+
 @njit(cache=True, inline="always", fastmath=FAST)
 def _derivative_into(
-    A: np.ndarray, a: int, dX: np.ndarray, d: int, translation: bool, out: np.ndarray
+    A: np.ndarray, a: int, rotates: bool, dX: np.ndarray, d: int, translation: bool, out: np.ndarray
 ) -> None:
     """``out[d] = A[a] @ dX[d]`` for a joint's local derivative ``dX[d]``, by its structure.
 
     A derivative along a translation coordinate has only its last column (the axis, first three
     entries); along a rotation coordinate (cos, sin, angle, quaternion) only its upper-left
     3 x 3 block. So the product is a rotation times a vector (9 products) or two 3 x 3 blocks (27),
-    instead of a matrix product's 43; the zero parts stay zero (last row included).
+    instead of a matrix product's 43; the zero parts are never written (the buffer starts at zero,
+    and each slot keeps its structure). Unless ``rotates``, ``A[a]``'s rotation block is the
+    identity (a joint on the world placed by a translation): the product is ``dX[d]``'s entries.
     """
-    if translation:
-        for r in range(3):
+    for r in range(3):
+        if translation:
+            if rotates:
+                out[d, r, 3] = A[a, r, 0] * dX[d, 0, 3] + A[a, r, 1] * dX[d, 1, 3] + A[a, r, 2] * dX[d, 2, 3]
+            else:
+                out[d, r, 3] = dX[d, r, 3]
+        else:
             for k in range(3):
-                out[d, r, k] = 0.0
-            out[d, r, 3] = A[a, r, 0] * dX[d, 0, 3] + A[a, r, 1] * dX[d, 1, 3] + A[a, r, 2] * dX[d, 2, 3]
-    else:
-        for r in range(3):
-            for k in range(3):
-                out[d, r, k] = A[a, r, 0] * dX[d, 0, k] + A[a, r, 1] * dX[d, 1, k] + A[a, r, 2] * dX[d, 2, k]
-            out[d, r, 3] = 0.0
-    for k in range(4):
-        out[d, 3, k] = 0.0
+                if rotates:
+                    out[d, r, k] = (
+                        A[a, r, 0] * dX[d, 0, k] + A[a, r, 1] * dX[d, 1, k] + A[a, r, 2] * dX[d, 2, k]
+                    )
+                else:
+                    out[d, r, k] = dX[d, r, k]
 
 
 @njit(cache=True, inline="always", fastmath=FAST)
@@ -113,6 +150,23 @@ def _mv_into(A: np.ndarray, a: int, S: np.ndarray, s: int, out: np.ndarray, o: i
             + A[a, r, 2] * S[s, 2, 3]
             + A[a, r, 3] * S[s, 3, 3]
         )
+
+
+@njit(cache=True, inline="always", fastmath=FAST)
+def _point_derivative_into(
+    AdX: np.ndarray, d: int, translation: bool, S: np.ndarray, out: np.ndarray, o: int
+) -> None:
+    """``out[o, :3, 3] = (AdX[d] @ S[0])[:3, 3]`` for a derivative ``AdX[d]`` of :func:`_derivative_into`.
+
+    As :func:`_mv_into`, by the derivative's structure: along a translation coordinate it is its
+    last column (the point's fourth entry is 1), along a rotation one its 3 x 3 block times the
+    point (9 products instead of 12; the terms left out are zero).
+    """
+    for r in range(3):
+        if translation:
+            out[o, r, 3] = AdX[d, r, 3]
+        else:
+            out[o, r, 3] = AdX[d, r, 0] * S[0, 0, 3] + AdX[d, r, 1] * S[0, 1, 3] + AdX[d, r, 2] * S[0, 2, 3]
 
 
 @njit(cache=True, inline="always")
@@ -135,11 +189,47 @@ def _skew_entry(axis: np.ndarray, i: int, r: int, k: int) -> float:
     return -axis[i, 1] if k == 0 else axis[i, 0]
 
 
+@njit(cache=True, inline="always")
+def _constant_local(
+    kind: int, axis: np.ndarray, fixed: np.ndarray, i: int, X: np.ndarray, dX: np.ndarray, G: np.ndarray
+) -> None:
+    r"""The entries of joint ``i``'s ``X[i]`` and ``dX[7 i:]`` that do not depend on its coordinates.
+
+    Written once into zeroed buffers (:func:`_local` writes the others at each evaluation): the
+    ones, a fixed joint's transform, the derivatives of a revolute joint in (cos, sin)
+    (:math:`-K^2` and :math:`K`), of a prismatic joint (its axis) and of a free-flyer's
+    translation; and a revolute joint's :math:`K = [a]_\times` and :math:`K^2 = a a^T - (a^T a) I`
+    into ``G[i, 0]`` and ``G[i, 1]``.
+    """
+    d = 7 * i
+    X[i, 3, 3] = 1.0
+    if kind == FIXED:
+        for r in range(3):
+            for k in range(4):
+                X[i, r, k] = fixed[i, r, k]
+    if kind == REVOLUTE or kind == REVOLUTE_PARAM:
+        aa = axis[i, 0] * axis[i, 0] + axis[i, 1] * axis[i, 1] + axis[i, 2] * axis[i, 2]
+        for r in range(3):
+            for k in range(3):
+                G[i, 0, r, k] = _skew_entry(axis, i, r, k)
+                G[i, 1, r, k] = axis[i, r] * axis[i, k] - (aa if r == k else 0.0)
+                if kind == REVOLUTE:
+                    dX[d, r, k] = -G[i, 1, r, k]
+                    dX[d + 1, r, k] = G[i, 0, r, k]
+    elif kind == PRISMATIC or kind == PRISMATIC_PARAM:
+        for r in range(3):
+            X[i, r, r] = 1.0
+            dX[d, r, 3] = axis[i, r]
+    elif kind == FREE_FLYER:
+        for r in range(3):
+            dX[d + r, r, 3] = 1.0
+
+
 @njit(cache=True, inline="always", fastmath=FAST)
 def _local(
     kind: int,
     axis: np.ndarray,
-    fixed: np.ndarray,
+    G: np.ndarray,
     i: int,
     v: np.ndarray,
     o: int,
@@ -148,47 +238,28 @@ def _local(
 ) -> None:
     r"""Local transform of joint ``i`` from ``v[o:]`` into ``X[i]``, its derivatives into ``dX[7 i:]``.
 
-    A revolute joint about the unit axis :math:`a`: :math:`R = I + s K + (1 - c) K^2`,
-    :math:`K = [a]_\times`, :math:`K^2 = a a^T - (a^T a) I`.
+    The entries that depend on the coordinates; :func:`_constant_local` wrote the others. A
+    revolute joint about the unit axis :math:`a`: :math:`R = I + s K + (1 - c) K^2` (``G[i]``).
     """
     d = 7 * i
-    for r in range(4):
-        for k in range(4):
-            X[i, r, k] = 0.0
-    X[i, 3, 3] = 1.0
     if kind == REVOLUTE or kind == REVOLUTE_PARAM:
         if kind == REVOLUTE:
             c, s = v[o], v[o + 1]
         else:
             c, s = np.cos(v[o]), np.sin(v[o])
-        aa = axis[i, 0] * axis[i, 0] + axis[i, 1] * axis[i, 1] + axis[i, 2] * axis[i, 2]
         for r in range(3):
             for k in range(3):
-                K = _skew_entry(axis, i, r, k)
-                K2 = axis[i, r] * axis[i, k] - (aa if r == k else 0.0)
-                X[i, r, k] = (1.0 if r == k else 0.0) + s * K + (1.0 - c) * K2
-                if kind == REVOLUTE:
-                    dX[d, r, k] = -K2
-                    dX[d + 1, r, k] = K
-                else:
-                    dX[d, r, k] = c * K + s * K2
-        return
-    if kind == PRISMATIC or kind == PRISMATIC_PARAM:
+                X[i, r, k] = (1.0 if r == k else 0.0) + s * G[i, 0, r, k] + (1.0 - c) * G[i, 1, r, k]
+                if kind == REVOLUTE_PARAM:
+                    dX[d, r, k] = c * G[i, 0, r, k] + s * G[i, 1, r, k]
+    elif kind == PRISMATIC or kind == PRISMATIC_PARAM:
         for r in range(3):
-            X[i, r, r] = 1.0
             X[i, r, 3] = v[o] * axis[i, r]
-            dX[d, r, 3] = axis[i, r]
-        return
-    if kind == SPHERICAL or kind == FREE_FLYER:
+    elif kind == SPHERICAL or kind == FREE_FLYER:
         t = 3 if kind == FREE_FLYER else 0
         _quaternion(v[o + t], v[o + t + 1], v[o + t + 2], v[o + t + 3], X, i, dX, d + t)
         for r in range(t):
             X[i, r, 3] = v[o + r]
-            dX[d + r, r, 3] = 1.0
-        return
-    for r in range(4):
-        for k in range(4):
-            X[i, r, k] = fixed[i, r, k]
 
 
 @njit(cache=True)
@@ -198,15 +269,26 @@ def workspace(
     parent: np.ndarray,
     kind: np.ndarray,
     offset: np.ndarray,
+    axis: np.ndarray,
     placement: np.ndarray,
+    fixed: np.ndarray,
     frame_joint: np.ndarray,
+    closure_kind: np.ndarray,
+    closure_frames: np.ndarray,
     n_entries: int,
 ) -> tuple:
     """The buffers :func:`system` writes into, allocated once per batch of evaluations.
 
-    Also the static structure: the derivative column of each joint, the number of its coordinates,
-    and which columns a closure frame depends on (a column off a frame's path stays zero, as do
-    the entries of a derivative matrix a joint kind never writes).
+    Also what does not change from one evaluation to the next: the local transforms' entries that
+    do not depend on the coordinates (:func:`_constant_local`), and the structure: the derivative
+    column of each joint, the number of its coordinates, which columns a closure frame depends on
+    (a column off a frame's path stays zero, as do the entries of a derivative matrix a joint
+    kind never writes), per joint whether :math:`M_j` and :math:`X_j` rotate and move (their
+    rotation block is not the identity, their translation not zero: the ``rotates`` and
+    ``moves`` of :func:`_mm_into`; most placements are pure translations, a revolute or spherical
+    joint does not move, a prismatic one does not rotate), per joint coordinate whether its
+    derivative is along a translation (else a rotation), and which closure frames are read as
+    points (their origin alone: point and distance closures).
     """
     k, nf, nc = kind.shape[0], frame_joint.shape[0], n + npar
     ncoord = np.zeros(k, dtype=np.int64)
@@ -222,6 +304,27 @@ def workspace(
             ncoord[i] = 7
         elif kd == PRISMATIC or kd == PRISMATIC_PARAM or kd == REVOLUTE_PARAM:
             ncoord[i] = 1
+    # (M_j rotates, M_j moves, X_j rotates, X_j moves) per joint; per joint coordinate, whether its
+    # derivative is along a translation (else a rotation)
+    rigid = np.zeros((k, 4), dtype=np.bool_)
+    translation = np.zeros(7 * k, dtype=np.bool_)
+    for i in range(k):
+        kd = kind[i]
+        slides = kd == PRISMATIC or kd == PRISMATIC_PARAM
+        rigid[i, 0] = np.any(placement[i, :3, :3] != np.eye(3))
+        rigid[i, 1] = np.any(placement[i, :3, 3] != 0.0)
+        if kd == FIXED:
+            rigid[i, 2] = np.any(fixed[i, :3, :3] != np.eye(3))
+            rigid[i, 3] = np.any(fixed[i, :3, 3] != 0.0)
+        else:
+            rigid[i, 2] = not slides
+            rigid[i, 3] = slides or kd == FREE_FLYER
+        for c in range(ncoord[i]):
+            translation[7 * i + c] = slides or (kd == FREE_FLYER and c < 3)
+    point = np.ones(nf, dtype=np.bool_)  # only the frame's origin is read (point and distance closures)
+    for c in range(closure_kind.shape[0]):
+        if closure_kind[c] == 1 or closure_kind[c] == 2:
+            point[closure_frames[c, 0]] = point[closure_frames[c, 1]] = False
     on_path = np.zeros((nf, nc), dtype=np.bool_)
     for f in range(nf):
         i = frame_joint[f]
@@ -230,13 +333,18 @@ def workspace(
                 on_path[f, col[i] + c] = True
             i = parent[i]
     c16 = np.complex128
+    X = np.zeros((k, 4, 4), dtype=c16)
+    dX = np.zeros((7 * k, 4, 4), dtype=c16)
+    G = np.zeros((k, 2, 3, 3))
+    for i in range(k):
+        _constant_local(kind[i], axis, fixed, i, X, dX, G)
     return (
         ncoord,
         col,
         on_path,
         placement.astype(c16),  # M: joint placements
-        np.zeros((k, 4, 4), dtype=c16),  # X: local transforms
-        np.zeros((7 * k, 4, 4), dtype=c16),  # dX: their derivatives, 7 per joint
+        X,  # local transforms
+        dX,  # their derivatives, 7 per joint
         np.zeros((k, 4, 4), dtype=c16),  # T: world transform after the joint
         np.zeros((k, 4, 4), dtype=c16),  # A: world transform of the joint frame before X_j
         np.zeros((k, 4, 4), dtype=c16),  # MX: M_j X_j
@@ -249,21 +357,32 @@ def workspace(
         np.zeros((n, nc), dtype=c16),  # J = [F_x F_p]
         np.zeros((2, 4, 4), dtype=c16),  # S: suffix products (two slots)
         np.zeros((3, 3), dtype=c16),  # E
+        rigid,  # (M_j rotates, M_j moves, X_j rotates, X_j moves) per joint
+        translation,  # per joint coordinate: its derivative is along a translation
+        G,  # a revolute joint's K and K^2
+        point,  # per closure frame: only its origin is read
     )
 
 
 @njit(cache=True)
 def workspace_for(n: int, npar: int, args: tuple) -> tuple:
     """:func:`workspace` for ``n`` unknowns and ``npar`` parameters of the form packed in ``args``."""
-    parent, kind, offset, placement, frame_joint, combination = (
-        args[0],
-        args[1],
-        args[2],
-        args[4],
-        args[6],
-        args[13],
+    parent, kind, offset, axis, placement, fixed, frame_joint = args[:7]
+    closure_kind, closure_frames, combination = args[8], args[9], args[13]
+    return workspace(
+        n,
+        npar,
+        parent,
+        kind,
+        offset,
+        axis,
+        placement,
+        fixed,
+        frame_joint,
+        closure_kind,
+        closure_frames,
+        combination.shape[1],
     )
-    return workspace(n, npar, parent, kind, offset, placement, frame_joint, combination.shape[1])
 
 
 @njit(cache=True, fastmath=FAST)
@@ -275,7 +394,6 @@ def _entries(
     kind: np.ndarray,
     offset: np.ndarray,
     axis: np.ndarray,
-    fixed: np.ndarray,
     frame_joint: np.ndarray,
     frame_placement: np.ndarray,
     closure_kind: np.ndarray,
@@ -285,64 +403,83 @@ def _entries(
     entry_offset: np.ndarray,
 ) -> None:
     """Closure entries ``e`` (m,) and their derivatives ``de`` along (x, p) (m, n + n_params), into ``ws``."""
-    ncoord, col, on_path, M, X, dX, T, A, MX, AdX, Tf, dTf, e, de, _, _, S, E = ws
+    (
+        ncoord,
+        col,
+        on_path,
+        M,
+        X,
+        dX,
+        T,
+        A,
+        MX,
+        AdX,
+        Tf,
+        dTf,
+        e,
+        de,
+        _,
+        _,
+        S,
+        E,
+        rigid,
+        translation,
+        G,
+        point,
+    ) = ws
     k = kind.shape[0]
     nc = de.shape[1]
     for i in range(k):
         kd = kind[i]
         if kd == REVOLUTE_PARAM or kd == PRISMATIC_PARAM:
-            _local(kd, axis, fixed, i, p, offset[i], X, dX)
+            _local(kd, axis, G, i, p, offset[i], X, dX)
         else:
-            _local(kd, axis, fixed, i, x, offset[i], X, dX)
-        _mm_into(M, i, X, i, MX, i)
+            _local(kd, axis, G, i, x, offset[i], X, dX)
+        if rigid[i, 0]:
+            _mm_into(M, i, X, i, MX, i, rigid[i, 2], rigid[i, 3])
+        else:
+            _translated_into(M, X, i, MX)
         if parent[i] >= 0:
-            _mm_into(T, parent[i], M, i, A, i)
-            _mm_into(A, i, X, i, T, i)
+            _mm_into(T, parent[i], M, i, A, i, rigid[i, 0], rigid[i, 1])
+            _mm_into(A, i, X, i, T, i, rigid[i, 2], rigid[i, 3])
         else:  # on the world: T = M X
             _copy_into(M, i, A, i)
             _copy_into(MX, i, T, i)
+        turned = parent[i] >= 0 or rigid[i, 0]  # A_j's rotation block is not the identity
         for c in range(ncoord[i]):
-            _derivative_into(
-                A,
-                i,
-                dX,
-                7 * i + c,
-                kd == PRISMATIC or kd == PRISMATIC_PARAM or c < 3 * (kd == FREE_FLYER),
-                AdX,
-            )
+            _derivative_into(A, i, turned, dX, 7 * i + c, translation[7 * i + c], AdX)
     nf = frame_joint.shape[0]
     for f in range(nf):
         for r in range(4):
             for q in range(4):
                 S[0, r, q] = frame_placement[f, r, q]
         i = frame_joint[f]
-        point = True  # only the frame's origin is read (point and distance closures)
-        for c in range(closure_kind.shape[0]):
-            if (closure_kind[c] == 1 or closure_kind[c] == 2) and (
-                closure_frames[c, 0] == f or closure_frames[c, 1] == f
-            ):
-                point = False
-        if point:  # the origin alone, carried up the path by matrix-vector products
+        if point[f]:  # the origin alone, carried up the path by matrix-vector products
             if i >= 0:
                 _mv_into(T, i, S, 0, Tf, f)
             else:
                 _copy_into(S, 0, Tf, f)
             while i >= 0:
                 for c in range(ncoord[i]):
-                    _mv_into(AdX, 7 * i + c, S, 0, dTf, f * nc + col[i] + c)
+                    dc = 7 * i + c
+                    _point_derivative_into(AdX, dc, translation[dc], S, dTf, f * nc + col[i] + c)
+                if parent[i] < 0:  # (the suffix on the world is not read)
+                    break
                 _mv_into(MX, i, S, 0, S, 1)
                 for r in range(3):
                     S[0, r, 3] = S[1, r, 3]
                 i = parent[i]
             continue
         if i >= 0:
-            _mm_into(T, i, S, 0, Tf, f)
+            _mm_into(T, i, S, 0, Tf, f, True, True)
         else:
             _copy_into(S, 0, Tf, f)
         while i >= 0:
             for c in range(ncoord[i]):
-                _mm_into(AdX, 7 * i + c, S, 0, dTf, f * nc + col[i] + c)
-            _mm_into(MX, i, S, 0, S, 1)
+                _mm_into(AdX, 7 * i + c, S, 0, dTf, f * nc + col[i] + c, True, True)
+            if parent[i] < 0:
+                break
+            _mm_into(MX, i, S, 0, S, 1, True, True)
             _copy_into(S, 1, S, 0)
             i = parent[i]
     for c in range(closure_kind.shape[0]):
@@ -448,7 +585,6 @@ def system(
         kind,
         offset,
         axis,
-        fixed,
         frame_joint,
         frame_placement,
         closure_kind,
@@ -494,7 +630,7 @@ def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
         offset,
         axis,
         _placement,
-        fixed,
+        _fixed,
         frame_joint,
         frame_placement,
         closure_kind,
@@ -505,7 +641,7 @@ def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
         _combination,
         _unit_offsets,
         _unit_sizes,
-    ) = args  # the placements and the square system's combination and units are not read
+    ) = args  # not read: the placements and fixed transforms (in the workspace), the square system's arrays
     N, n = X.shape
     ws = workspace_for(n, p.shape[0], args)
     e = ws[12]
@@ -519,7 +655,6 @@ def entries_at(X: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
             kind,
             offset,
             axis,
-            fixed,
             frame_joint,
             frame_placement,
             closure_kind,
@@ -555,8 +690,12 @@ def _new_workspace(form: PolynomialForm) -> tuple:
         form.parent,
         form.kind,
         form.offset,
+        form.axis,
         form.placement,
+        form.fixed,
         form.frame_joint,
+        form.closure_kind,
+        form.closure_frames,
         form.n_entries,
     )
 
@@ -572,7 +711,6 @@ def closure_entries(form: PolynomialForm, x: np.ndarray, p: np.ndarray) -> tuple
         form.kind,
         form.offset,
         form.axis,
-        form.fixed,
         form.frame_joint,
         form.frame_placement,
         form.closure_kind,

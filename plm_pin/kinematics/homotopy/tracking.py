@@ -45,15 +45,17 @@ def solve_linear(A: np.ndarray, y: np.ndarray, z: np.ndarray | None = None) -> b
     """Solve ``A u = y`` (complex, square) in place by LU with partial pivoting: ``y`` becomes ``u``.
 
     ``A`` is overwritten. A second right-hand side ``z`` is solved with the same factors. Returns
-    False (and ``y``, ``z`` NaN) when a pivot is exactly zero.
+    False (and ``y``, ``z`` NaN) when a pivot is exactly zero. The pivot is the entry of largest
+    squared modulus (no square root per candidate, as ``abs`` takes).
     """
     n = A.shape[0]
     for k in range(n):
-        piv, best = k, abs(A[k, k])
+        piv, best = k, A[k, k].real * A[k, k].real + A[k, k].imag * A[k, k].imag
         for r in range(k + 1, n):
-            if abs(A[r, k]) > best:
-                piv, best = r, abs(A[r, k])
-        if best == 0.0:
+            size = A[r, k].real * A[r, k].real + A[r, k].imag * A[r, k].imag
+            if size > best:
+                piv, best = r, size
+        if A[piv, k] == 0:
             y[:] = np.nan
             if z is not None:
                 z[:] = np.nan
