@@ -79,3 +79,4 @@ clear-notebooks: $(STAMP)
 
 clean:
 	rm -rf $(VENV) $(REPORTS) .pytest_cache .mypy_cache .ruff_cache build dist docs/_build
+	find plm_pin -name '*.nbi' -delete -o -name '*.nbc' -delete  # numba's compiled kernels
