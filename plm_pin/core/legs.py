@@ -354,7 +354,7 @@ def working_mode_from_data(
     from this ``data`` (see :func:`structure_jacobian_from_data`); when every sign row is among
     them, the structure Jacobian is not built.
     """
-    layout = _sign_layout(legs)
+    layout = sign_layout(legs)
     if ik_rows is not None and layout.n_rows <= ik_rows.shape[0]:  # no sign row among the platform's others
         A = ik_rows
     else:
@@ -380,11 +380,11 @@ def working_mode_from_jacobian(
     product of the block's column norms (Hadamard's bound), so the test is scale-free. The
     passive axes are not turned here (see :func:`working_mode_from_data`).
     """
-    return tuple(_block_signs(A, _sign_layout(legs), rtol))
+    return tuple(_block_signs(A, sign_layout(legs), rtol))
 
 
 @dataclass(frozen=True)
-class _SignLayout:
+class SignLayout:
     """Where the square legs' sign blocks and passive revolutes sit, to read them in a few array operations.
 
     Attributes:
@@ -409,10 +409,10 @@ class _SignLayout:
     axis_generic: np.ndarray
 
 
-_LAYOUTS: dict[int, tuple[tuple[Leg, ...], _SignLayout]] = {}
+_LAYOUTS: dict[int, tuple[tuple[Leg, ...], SignLayout]] = {}
 
 
-def _sign_layout(legs: Sequence[Leg]) -> _SignLayout:
+def sign_layout(legs: Sequence[Leg]) -> SignLayout:
     """The layout of ``legs``, built once per tuple object (a mechanism's ``legs``), kept alive with it."""
     hit = _LAYOUTS.get(id(legs))
     if hit is not None and hit[0] is legs:
@@ -425,8 +425,8 @@ def _sign_layout(legs: Sequence[Leg]) -> _SignLayout:
     return layout
 
 
-def _build_sign_layout(legs: Sequence[Leg]) -> _SignLayout:
-    """The :class:`_SignLayout` of ``legs``."""
+def _build_sign_layout(legs: Sequence[Leg]) -> SignLayout:
+    """The :class:`SignLayout` of ``legs``."""
     square = [leg for leg in legs if leg.square]
     blocks = []
     for n in sorted({len(leg.columns) for leg in square}):  # the blocks of one size in one gather
@@ -438,7 +438,7 @@ def _build_sign_layout(legs: Sequence[Leg]) -> _SignLayout:
         (i, leg.columns[k], root, generic) for i, leg in enumerate(square) for k, _, root, generic in leg.axes
     ]
     roots = tuple(sorted({root for _, _, root, _ in axes}))
-    return _SignLayout(
+    return SignLayout(
         tuple(blocks),
         len(square),
         max((max(leg.sign_rows) + 1 for leg in square), default=0),
@@ -450,7 +450,7 @@ def _build_sign_layout(legs: Sequence[Leg]) -> _SignLayout:
     )
 
 
-def _block_signs(A: np.ndarray, layout: _SignLayout, rtol: float) -> list[int]:
+def _block_signs(A: np.ndarray, layout: SignLayout, rtol: float) -> list[int]:
     """Determinant signs of the square legs' blocks of ``A``, unturned: one gather per block size."""
     out = [0] * layout.n_square
     for which, rows, cols in layout.blocks:

@@ -30,7 +30,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..core.closures import Closure
-from ..core.legs import Leg
+from ..core.legs import Leg, sign_layout
 from ..core.task import FrameTask, Task, wrap_angle
 from ..kernels import Kernel
 from ..tolerances import BATCH_LOG3_SERIES_ANGLE, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL
@@ -634,12 +634,10 @@ def batch_modes(
     (:meth:`BatchKinematics.turns`) orients the passive revolute columns as
     :func:`~plm_pin.core.legs.working_mode_from_data` does (default: none turned).
     """
-    square = [leg for leg in legs if leg.square]
-    out = np.zeros((A.shape[0], len(square)), dtype=np.int8)
-    for n in sorted({len(leg.columns) for leg in square}):  # the blocks of one size in one call
-        which = [i for i, leg in enumerate(square) if len(leg.columns) == n]
-        rows = np.array([square[i].sign_rows for i in which])  # (n_which, n)
-        cols = np.array([square[i].columns for i in which])
+    layout = sign_layout(legs)
+    out = np.zeros((A.shape[0], layout.n_square), dtype=np.int8)
+    for which, rows, cols in layout.blocks:  # the blocks of one size in one call
+        n = rows.shape[1]
         M = A[:, rows[:, :, None], cols[:, None, :]]  # (B, n_which, n, n), one gather
         det = _small_det(M)
         if turns is not None:  # negating columns negates the determinant, exactly
@@ -647,7 +645,7 @@ def batch_modes(
                 for c in range(n):  # cheaper than np.prod on these narrow arrays
                     det[:, w] *= turns[i][:, c]
         bound = np.prod(np.sqrt(np.einsum("bwij,bwij->bwj", M, M)), axis=-1)  # Hadamard's
-        out[:, which] = np.where(np.abs(det) <= rtol * bound, 0, np.sign(det))
+        out[:, list(which)] = np.where(np.abs(det) <= rtol * bound, 0, np.sign(det))
     return out
 
 
