@@ -744,6 +744,33 @@ def integrate(k: KernelArrays, q: np.ndarray, v: np.ndarray, out: np.ndarray) ->
                 out[iq + 2] = q[iq + 2] + t2
 
 
+@njit(cache=True, inline="always")
+def normalize(k: KernelArrays, q: np.ndarray) -> None:
+    """Scale ``q``'s quaternions and (cos, sin) pairs back to unit norm, in place (extrapolated starts).
+
+    :func:`forward` reads an unbounded revolute's or a planar joint's pair as it is, so a pair
+    off the unit circle would place the joint with a scaled rotation.
+    """
+    for j in range(1, k.kinds.shape[0]):
+        kind = k.kinds[j]
+        if kind == FREE_FLYER:
+            iq, n = k.idx_q[j] + 3, 4
+        elif kind == SPHERICAL:
+            iq, n = k.idx_q[j], 4
+        elif kind == PLANAR:
+            iq, n = k.idx_q[j] + 2, 2
+        elif kind == REVOLUTE_UNBOUNDED:
+            iq, n = k.idx_q[j], 2
+        else:
+            continue
+        s = 0.0
+        for t in range(n):
+            s += q[iq + t] * q[iq + t]
+        s = math.sqrt(s)
+        for t in range(n):
+            q[iq + t] /= s
+
+
 @njit(cache=True)
 def _cholesky_solve(N: np.ndarray, b: np.ndarray) -> bool:
     """Cholesky-factor ``N`` in place (lower), solve ``N x = b`` in ``b``; False if not positive definite."""
@@ -906,6 +933,7 @@ def _newton_batch(
     q_next = np.empty(Q.shape[1])
     for p in range(Q.shape[0]):
         q = Q[p]
+        normalize(k, q)
         R_star = R_stars[p] if R_stars.shape[0] > 1 else R_stars[0]
         ok[p] = False
         err_prev = np.inf
@@ -960,6 +988,8 @@ def batch_newton(
     R_out: np.ndarray,
 ) -> None:
     """Gauss-Newton on closures and task at each pose of a batch, from its row of ``Q`` (solved in place).
+
+    Each start's quaternions and (cos, sin) pairs are first put back to unit norm (:func:`normalize`).
 
     Every iteration takes a fresh Jacobian; a pose fails when its residual does not fall
     below ``stall`` times the previous one, when the normal matrix is not positive definite,
@@ -1056,6 +1086,31 @@ def _leg_modes(
             if w[0] * g[0] + w[1] * g[1] + w[2] * g[2] < 0.0:
                 det = -det
         mode[leg] = 0 if abs(det) <= rtol * bound else (1 if det > 0.0 else -1)
+
+
+@njit(cache=True)
+def batch_leg_modes(
+    ints: np.ndarray,
+    floats: np.ndarray,
+    legs: np.ndarray,
+    turns: np.ndarray,
+    generic: np.ndarray,
+    rtol: float,
+    A: np.ndarray,
+    R: np.ndarray,
+    modes: np.ndarray,
+) -> None:
+    """Working modes (:func:`_leg_modes`) of a batch as :func:`batch_newton` leaves it, into ``modes``.
+
+    ``A`` holds the IK Jacobians (B, m + n_task, nv), ``R`` the joint rotations (B, nj, 3, 3),
+    ``modes`` is out (B, n_legs); ``legs``, ``turns``, ``generic`` and ``rtol`` as
+    :func:`walk_rows_step` takes them.
+    """
+    k = unpack(ints, floats)
+    size = (legs.shape[1] - 1) // 2
+    M = np.empty((size, size))
+    for p in range(A.shape[0]):
+        _leg_modes(k, A[p], R[p], legs, turns, generic, rtol, M, modes[p])
 
 
 @njit(cache=True)
@@ -1169,15 +1224,6 @@ def walk_rows_step(
                     Qb[nb, t] = 2.0 * Q[p0, t] - Q[b1 * n1 + c, t]
                 else:
                     Qb[nb, t] = Q[p0, t]
-            for j in range(1, nj):  # extrapolated quaternions back to unit norm
-                if k.kinds[j] == FREE_FLYER:
-                    iq = k.idx_q[j] + 3
-                    s = 0.0
-                    for t in range(4):
-                        s += Qb[nb, iq + t] * Qb[nb, iq + t]
-                    s = math.sqrt(s)
-                    for t in range(4):
-                        Qb[nb, iq + t] /= s
             p = i * n1 + c
             Xb[nb] = poses[p]
             if three_angles:

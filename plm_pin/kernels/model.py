@@ -269,16 +269,7 @@ class Kernel:
             Per step with points kept, their flat indices (b,) and IK Jacobians ``[J_phi; J_x]``
             (task twist rows) (b, m + n_task, nv): views valid until the next step.
         """
-        square = [leg for leg in legs if leg.square]
-        size = max((len(leg.columns) for leg in square), default=0)
-        blocks = np.zeros((len(square), 1 + 2 * size), dtype=np.int64)
-        for n, leg in enumerate(square):
-            blocks[n, 0] = len(leg.columns)
-            blocks[n, 1 : 1 + len(leg.columns)] = leg.sign_rows
-            blocks[n, 1 + size : 1 + size + len(leg.columns)] = leg.columns
-        axes = [(n, *axis) for n, leg in enumerate(square) for axis in leg.axes]
-        turns = np.array([a[:4] for a in axes], dtype=np.int64).reshape(-1, 4)
-        generic = np.array([a[4] for a in axes], dtype=float).reshape(-1, 3)
+        blocks, turns, generic = _leg_arrays(legs)
         target = np.asarray(wanted, dtype=np.int8)
         fronts = np.array([i0 + 1, i0 - 1], dtype=np.int64)
         index = np.empty(2 * n1, dtype=np.int64)
@@ -294,6 +285,25 @@ class Kernel:
                 return
             if count:
                 yield index[:count], A[:count]
+
+    def modes(self, legs: Sequence[Leg], A: np.ndarray, R: np.ndarray) -> np.ndarray:
+        """Working modes of a batch as :meth:`batch_newton` leaves it (:func:`.compiled.batch_leg_modes`).
+
+        Args:
+            legs: the mechanism's legs (the square ones carry the working mode).
+            A: inverse-kinematics Jacobians ``[J_phi; J_x]`` (task twist rows), (B, m + n_task, nv).
+            R: world rotation of every joint at each, (B, njoints, 3, 3).
+
+        Returns:
+            One sign per square leg (0 where its block is singular), shape (B, n_legs), int8.
+        """
+        blocks, turns, generic = _leg_arrays(legs)
+        out = np.zeros((A.shape[0], blocks.shape[0]), dtype=np.int8)
+        _compiled().batch_leg_modes(
+            self.ints, self.floats, blocks, turns, generic, LEG_SINGULAR_RTOL,
+            np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(R, dtype=float), out,
+        )  # fmt: skip
+        return out
 
     def map_metrics(
         self, A: np.ndarray, actuated_v: np.ndarray, mobility: int, names: Sequence[str]
@@ -324,6 +334,28 @@ class Kernel:
             good,
         )
         return out, good
+
+
+def _leg_arrays(legs: Sequence[Leg]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The square legs' sign blocks and passive revolutes packed as the compiled working modes read them.
+
+    Returns:
+        Per square leg its block size ``n``, its ``n`` sign rows and ``n`` velocity columns, each
+        padded to the largest block (n_legs, 1 + 2 * size); per passive revolute to orient its
+        leg, column in the block, joint and the leg's root joint (n_axes, 4); and its generic
+        axis in the root joint's frame (n_axes, 3).
+    """
+    square = [leg for leg in legs if leg.square]
+    size = max((len(leg.columns) for leg in square), default=0)
+    blocks = np.zeros((len(square), 1 + 2 * size), dtype=np.int64)
+    for n, leg in enumerate(square):
+        blocks[n, 0] = len(leg.columns)
+        blocks[n, 1 : 1 + len(leg.columns)] = leg.sign_rows
+        blocks[n, 1 + size : 1 + size + len(leg.columns)] = leg.columns
+    axes = [(n, *axis) for n, leg in enumerate(square) for axis in leg.axes]
+    turns = np.array([a[:4] for a in axes], dtype=np.int64).reshape(-1, 4)
+    generic = np.array([a[4] for a in axes], dtype=float).reshape(-1, 3)
+    return blocks, turns, generic
 
 
 _FLOAT = np.dtype(float)

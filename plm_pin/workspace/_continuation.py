@@ -490,7 +490,7 @@ def _solve_grid(
 
 def sweep_rows(
     ev: IKEvaluator,
-    kin: BatchKinematics,
+    kin: BatchKinematics | None,
     state: GridState,
     metrics: Metrics,
     seed: int,
@@ -499,8 +499,9 @@ def sweep_rows(
 ) -> None:
     """Solve a 2-D grid row by row with the batched evaluator, then fill what it missed point by point.
 
-    The seed's row is walked by :func:`_walk_seed_row` on the kernels (else by :func:`flood`
-    kept to the row); the rows on either side of it are then solved
+    The batched evaluator is the compiled kernel where it serves ``ev`` (``kin`` may then be
+    None), else the numpy ``kin``. The seed's row is walked by :func:`_walk_seed_row` on the
+    kernels (else by :func:`flood` kept to the row); the rows on either side of it are then solved
     by :func:`_walk_rows`, both sides in the same batches, in this process (two processes,
     one per side, were slower on two cores: the fork and the merge cost more than the second
     side saves). Whatever stays
@@ -508,8 +509,8 @@ def sweep_rows(
     """
     n0, n1 = state.shape
     i0 = seed // n1
-    if ev.kernel is not None:
-        _walk_seed_row(ev, kin, state, metrics, seed, target_mode, tol)
+    if _batch_kernel(ev) is not None:
+        _walk_seed_row(ev, state, metrics, seed, target_mode, tol)
     else:
         row = np.zeros(state.reached.size, dtype=bool)
         row[i0 * n1 : (i0 + 1) * n1] = True
@@ -527,7 +528,6 @@ def sweep_rows(
 
 def _walk_seed_row(
     ev: IKEvaluator,
-    kin: BatchKinematics,
     state: GridState,
     metrics: Metrics,
     seed: int,
@@ -541,6 +541,8 @@ def _walk_seed_row(
     Jacobians, working modes and metrics then come in one batch, and it is cut at its first
     point out of ``target_mode``, where :func:`flood` would have stopped.
     """
+    kernel = _batch_kernel(ev)
+    assert kernel is not None  # (sweep_rows walks the seed's row so only on the kernels)
     n1 = state.shape[1]
     i0, j0 = divmod(seed, n1)
     wanted = np.array(target_mode)
@@ -556,8 +558,11 @@ def _walk_seed_row(
             j += step
         index = i0 * n1 + np.array(cols, dtype=np.int64)
         if index.size:
-            q, ok, A, R = _batch_solve(ev, kin, np.array(line[1:]), state.poses[index], tol)
-            modes = batch_modes(A, ev.legs, kin.turns(R, ev.legs))
+            q, ok, A, R = kernel.batch_newton(
+                np.array(line[1:]), state.poses[index], _target_rotations(ev.task, state.poses[index]),
+                tol, NEWTON_MAX_ITERATIONS, STALL_RATIO,
+            )  # fmt: skip
+            modes = kernel.modes(ev.legs, A, R)
             good = ok & compatible_rows(modes, wanted)
             k = index.size if good.all() else int(np.argmin(good))
             state.accept_batch(index[:k], q[:k], modes[:k], A[:k], metrics)
@@ -573,7 +578,7 @@ the two rows past the seed's row on the first side (as when the sides were walke
 
 def _walk_rows(
     ev: IKEvaluator,
-    kin: BatchKinematics,
+    kin: BatchKinematics | None,
     state: GridState,
     metrics: Metrics,
     i0: int,
@@ -593,8 +598,9 @@ def _walk_rows(
     metrics of its points computed on return.
     """
     n0, n1 = state.shape
-    if ev.kernel is not None:
-        for index, A in ev.kernel.walk_rows(
+    kernel = _batch_kernel(ev)
+    if kernel is not None:
+        for index, A in kernel.walk_rows(
             ev.legs,
             target_mode,
             state.poses,
@@ -609,6 +615,7 @@ def _walk_rows(
         ):
             state.record_metrics(index, A, metrics)
         return
+    assert kin is not None  # (solve_poses walks on the kernels or on ``kin``)
     Q = state.q.reshape(n0, n1, -1)
     reached = state.reached.reshape(n0, n1)
     poses = state.poses.reshape(n0, n1, -1)
@@ -641,7 +648,9 @@ def _walk_rows(
         if not rows:
             break
         row, col = np.concatenate(rows), np.concatenate(cols)
-        q, ok, A, R = _batch_solve(ev, kin, np.concatenate(guesses), poses[row, col], tol)
+        q, ok, A, R = batch_newton(
+            kin, np.concatenate(guesses), poses[row, col], tol, NEWTON_MAX_ITERATIONS, STALL_RATIO
+        )
         if not ok.all():  # (copies of R, the largest array, only where some point failed)
             A, R, q, row, col = A[ok], R[ok], q[ok], row[ok], col[ok]
         modes = batch_modes(A, ev.legs, kin.turns(R, ev.legs))
@@ -651,15 +660,9 @@ def _walk_rows(
         state.accept_batch(row * n1 + col, q, modes, A, metrics)
 
 
-def _batch_solve(
-    ev: IKEvaluator, kin: BatchKinematics, guesses: np.ndarray, X: np.ndarray, tol: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``batch_newton`` at ``X`` from ``guesses`` (:mod:`._batch`), on the kernels if they serve."""
-    if ev.kernel is None or not isinstance(ev.task, FrameTask):
-        return batch_newton(kin, guesses, X, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
-    return ev.kernel.batch_newton(
-        kin.normalized(guesses), X, _target_rotations(ev.task, X), tol, NEWTON_MAX_ITERATIONS, STALL_RATIO
-    )
+def _batch_kernel(ev: IKEvaluator) -> Kernel | None:
+    """The compiled kernel that solves ``ev``'s batches, or None (it takes frame tasks only)."""
+    return ev.kernel if isinstance(ev.task, FrameTask) else None
 
 
 def _target_rotations(task: Task, X: np.ndarray) -> np.ndarray:
@@ -822,7 +825,7 @@ def solve_poses(
     ik_rows = ev.m + ev.task.size  # the batched modes read leg blocks of the IK Jacobian only
     in_ik = all(max(leg.sign_rows) < ik_rows for leg in ev.legs if leg.square)
     kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 and in_ik else None
-    if kin is not None:
+    if len(shape) == 2 and in_ik and (kin is not None or _batch_kernel(ev) is not None):
         sweep_rows(ev, kin, state, _metrics_for(ev, names, kin), index, target, tol)
     else:
         _solve_grid(ev, state, index, target, tol, n_workers, names)

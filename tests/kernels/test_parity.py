@@ -184,6 +184,34 @@ def test_every_joint_and_closure_type(dofs, rng):
             np.testing.assert_allclose(a.homogeneous, b.homogeneous, atol=TOL)
 
 
+def test_batch_newton_puts_quaternions_and_pairs_back_to_unit_norm(rng):
+    """A start whose quaternions and (cos, sin) pairs are off unit norm (an extrapolated one) is normalised.
+
+    The start is a configuration with every quaternion and pair scaled by 1.3, the target its own
+    task pose: once normalised it is a solution, so it passes with no Newton iteration and comes
+    back as the configuration. Read as it is, each scaled pair would place its joint by a scaled
+    rotation, far from the target.
+    """
+    model = _every_joint_model()
+    task = compile_task(model, "f8", ("x", "y", "z", "rx", "ry", "rz"))  # every joint type up to PY
+    kernel = Kernel.build(model, (), task)
+    data = model.createData()
+    unit = {"JointModelFreeFlyer": (3, 7), "JointModelSpherical": (0, 4), "JointModelPlanar": (2, 4)}
+    unit["JointModelRUBY"] = (0, 2)
+    for _ in range(5):
+        q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
+        pin.framesForwardKinematics(model, data, q)
+        x = task.pose_from_data(data)
+        start = q.copy()
+        for joint in model.joints[1:]:
+            a, b = unit.get(joint.shortname(), (0, 0))
+            start[joint.idx_q + a : joint.idx_q + b] *= 1.3
+        R_star = data.oMf[task.frame_id].rotation[None]
+        got, ok, _, _ = kernel.batch_newton(start[None], x[None], R_star, 1e-12, 0, 0.5)
+        assert ok[0]
+        np.testing.assert_allclose(got[0], q, rtol=0.0, atol=1e-15)
+
+
 def test_unsupported_joint_falls_back_with_one_warning(monkeypatch):
     """Without a joint type the kernels take the Pinocchio path, say so once, and answer the same."""
     mech = preset("fivebar")

@@ -180,6 +180,12 @@ def test_unsupported_models_fall_back_to_the_generic_path():
     assert BatchKinematics.from_parts(mech.model, mech.closures, mech.task_compiled) is None
 
 
+def _point_by_point(monkeypatch) -> None:
+    """Maps solved point by point (:func:`~plm_pin.workspace._continuation.flood`) from here on."""
+    monkeypatch.setattr(_continuation.BatchKinematics, "from_parts", classmethod(lambda cls, *a: None))
+    monkeypatch.setattr(_continuation, "_batch_kernel", lambda ev: None)
+
+
 @pytest.mark.parametrize(
     ("axes", "span", "shape"),
     [(("x", "y"), (0.05, 0.05), (9, 8)), (("z", "ry"), (0.8, 0.8), (11, 9))],  # the second crosses the edge
@@ -197,11 +203,11 @@ def test_row_batched_8pss_map_equals_the_point_by_point_map(monkeypatch, axes, s
         x0[dofs.index(a)] + np.linspace(-h, h, n) for a, h, n in zip(axes, span, shape, strict=True)
     )
     calls = []
-    solve = _continuation._batch_solve
-    monkeypatch.setattr(_continuation, "_batch_solve", lambda *a: calls.append(1) or solve(*a))
+    walk = _continuation._walk_rows
+    monkeypatch.setattr(_continuation, "_walk_rows", lambda *a: calls.append(1) or walk(*a))
     batched = workspace_map(mech, axes, values, workers=1)
     assert calls  # the rows went through the batch
-    monkeypatch.setattr(_continuation.BatchKinematics, "from_parts", classmethod(lambda cls, *a: None))
+    _point_by_point(monkeypatch)
     serial = workspace_map(mech, axes, values, workers=1)
     inside = serial.reachable.all()
     assert inside == (axes == ("x", "y")) and serial.reachable.any()
@@ -220,7 +226,7 @@ def test_row_batched_map_equals_the_point_by_point_map(monkeypatch):
     values = (np.linspace(-0.16, 0.16, 23), np.linspace(0.0, 0.14, 19))  # reaches past the workspace edge
     pose = (0.0, 0.08, math.radians(-20.0))
     batched = workspace_map(mech, ("x", "y"), values, pose, workers=1)
-    monkeypatch.setattr(_continuation.BatchKinematics, "from_parts", classmethod(lambda cls, *a: None))
+    _point_by_point(monkeypatch)
     serial = workspace_map(mech, ("x", "y"), values, pose, workers=1)
     assert 0.3 < serial.reachable_fraction < 1.0
     assert np.array_equal(batched.reachable, serial.reachable)

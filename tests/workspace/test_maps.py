@@ -10,14 +10,24 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+import plm_pin
 from analyses import _harada2011_paper as paper
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import classify, inverse_kinematics, task_pose
 from plm_pin.kinematics.working_mode import working_mode
-from plm_pin.workspace import POSE_METRICS, manipulability, workspace_grid, workspace_map, workspace_sweep
+from plm_pin.warnings import ReferenceWarning
+from plm_pin.workspace import (
+    POSE_METRICS,
+    _continuation,
+    manipulability,
+    workspace_grid,
+    workspace_map,
+    workspace_sweep,
+)
 from plm_pin.workspace._batch import BatchKinematics
 from plm_pin.workspace._continuation import IKEvaluator
 from tests.conftest import preset
+from tests.kinematics.homotopy.rpr import rpr_files
 
 L, RT = 0.140, 0.05  # Harada 2011 Table 1
 THETA = math.radians(-20.0)
@@ -181,6 +191,39 @@ def test_map_on_the_kernels_equals_the_pinocchio_path(name, half_width, monkeypa
     np.testing.assert_allclose(compiled.actuators, plain.actuators, atol=1e-11, equal_nan=True)
 
 
+def test_map_of_a_user_mechanism_with_kernel_only_joints_walks_rows_on_the_kernels(tmp_path, monkeypatch):
+    """A 3-RPR of one's own with continuous pivots walks its rows on the kernels; the Pinocchio path agrees.
+
+    Continuous joints ((cos, sin) pairs) are outside the numpy batch evaluator, so the kernels
+    walk the rows alone; the map equals the point-by-point Pinocchio one. The grid runs near a
+    direct singularity, where solutions converged to the same residual tolerance from other
+    starts differ by the tolerance times the condition number: the metrics are compared at
+    condition numbers below 1e3.
+    """
+    base = np.array([[0.0, 0.0], [1.0, 0.0], [0.3, 0.9]])
+    plate = np.array([[0.0, 0.0], [0.45, 0.05], [0.15, 0.35]])
+    with pytest.warns(ReferenceWarning, match="moved it away"):  # no reference given: the loader picks one
+        mech = plm_pin.load(rpr_files(tmp_path, base, plate))
+    ev = IKEvaluator.from_mechanism(mech)
+    assert ev.kernel is not None and BatchKinematics.from_parts(ev.model, ev.closures, ev.task) is None
+    walked = []
+    walk = _continuation._walk_rows
+    monkeypatch.setattr(_continuation, "_walk_rows", lambda *a: walked.append(walk(*a)))
+    x0 = task_pose(mech, mech.q_ref)
+    values = (x0[0] + np.linspace(-1.0, 1.0, 25), x0[1] + np.linspace(-1.0, 1.0, 21))
+    compiled = workspace_map(mech, ("x", "y"), values, workers=1)
+    assert walked
+    monkeypatch.setenv("PLM_PIN_KERNELS", "0")
+    plain = workspace_map(mech, ("x", "y"), values, workers=1)
+    assert compiled.reachable.all() and plain.reachable.all()
+    np.testing.assert_array_equal(compiled.mode, plain.mode)
+    np.testing.assert_allclose(compiled.q, plain.q, rtol=0.0, atol=1e-9)
+    assert plain.condition_number.max() > 1e3  # near the singularity
+    well = plain.condition_number < 1e3
+    for metric in POSE_METRICS:
+        np.testing.assert_allclose(compiled.metric(metric)[well], plain.metric(metric)[well], rtol=1e-9)
+
+
 SUBSETS = (
     ("manipulability",),
     ("condition_number", "direct_margin"),
@@ -335,8 +378,13 @@ def test_continuation_evaluator_pickles_for_worker_processes():
     assert copy.mode(copy.jacobian()) == working_mode(mech, b)
 
 
-def test_parallel_bands_of_a_map_the_batched_rows_do_not_take_give_the_same_map():
-    """A star-triangle map (a closure the row batches do not take: solved point by point) in two processes."""
+def test_parallel_bands_of_a_map_the_batched_rows_do_not_take_give_the_same_map(monkeypatch):
+    """A star-triangle map solved point by point in one process and in two give the same map.
+
+    Off the kernels, its closures are outside the numpy row batches, so the grid is split into
+    bands of rows solved in parallel.
+    """
+    monkeypatch.setenv("PLM_PIN_KERNELS", "0")
     mech = preset("enferadi2017_star_triangle")
     assert BatchKinematics.from_parts(mech.model, mech.closures, mech.task_compiled) is None
     x0 = task_pose(mech, mech.q_ref)
