@@ -1089,28 +1089,37 @@ def _leg_modes(
 
 
 @njit(cache=True)
-def batch_leg_modes(
+def batch_newton_modes(
     ints: np.ndarray,
     floats: np.ndarray,
     legs: np.ndarray,
     turns: np.ndarray,
     generic: np.ndarray,
     rtol: float,
-    A: np.ndarray,
-    R: np.ndarray,
+    Q: np.ndarray,
+    X: np.ndarray,
+    R_stars: np.ndarray,
+    tol: float,
+    max_iterations: int,
+    stall: float,
+    ok: np.ndarray,
+    A_out: np.ndarray,
     modes: np.ndarray,
 ) -> None:
-    """Working modes (:func:`_leg_modes`) of a batch as :func:`batch_newton` leaves it, into ``modes``.
+    """:func:`batch_newton`, and the working mode (:func:`_leg_modes`) of each pose that converges.
 
-    ``A`` holds the IK Jacobians (B, m + n_task, nv), ``R`` the joint rotations (B, nj, 3, 3),
-    ``modes`` is out (B, n_legs); ``legs``, ``turns``, ``generic`` and ``rtol`` as
-    :func:`walk_rows_step` takes them.
+    Arguments as :func:`batch_newton`'s (without the joint rotations) and, for the modes,
+    ``legs``, ``turns``, ``generic`` and ``rtol`` as :func:`walk_rows_step` takes them;
+    ``modes`` is out, shape (B, n_legs).
     """
     k = unpack(ints, floats)
+    R = np.empty((Q.shape[0], k.parents.shape[0], 3, 3))
+    _newton_batch(k, Q, X, R_stars, tol, max_iterations, stall, ok, A_out, R)
     size = (legs.shape[1] - 1) // 2
     M = np.empty((size, size))
-    for p in range(A.shape[0]):
-        _leg_modes(k, A[p], R[p], legs, turns, generic, rtol, M, modes[p])
+    for p in range(Q.shape[0]):
+        if ok[p]:
+            _leg_modes(k, A_out[p], R[p], legs, turns, generic, rtol, M, modes[p])
 
 
 @njit(cache=True)

@@ -54,6 +54,7 @@ class Kernel:
         self._all = np.arange(arrays.nv)
         # a frame task (kind 1) holding all three angles: its targets come with their rotation
         self._rotation_target = arrays.t_kind == 1 and int(np.count_nonzero(arrays.t_rows >= 3)) == 3
+        self._legs: tuple[Sequence[Leg], tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
 
     @classmethod
     def build(cls, model: pin.Model, closures: tuple[Closure, ...], task: Task | None) -> Kernel:
@@ -269,7 +270,7 @@ class Kernel:
             Per step with points kept, their flat indices (b,) and IK Jacobians ``[J_phi; J_x]``
             (task twist rows) (b, m + n_task, nv): views valid until the next step.
         """
-        blocks, turns, generic = _leg_arrays(legs)
+        blocks, turns, generic = self._leg_arrays(legs)
         target = np.asarray(wanted, dtype=np.int8)
         fronts = np.array([i0 + 1, i0 - 1], dtype=np.int64)
         index = np.empty(2 * n1, dtype=np.int64)
@@ -286,24 +287,46 @@ class Kernel:
             if count:
                 yield index[:count], A[:count]
 
-    def modes(self, legs: Sequence[Leg], A: np.ndarray, R: np.ndarray) -> np.ndarray:
-        """Working modes of a batch as :meth:`batch_newton` leaves it (:func:`.compiled.batch_leg_modes`).
+    def newton_modes(
+        self, legs: Sequence[Leg], Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float,
+        max_iterations: int = NEWTON_MAX_ITERATIONS,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+        """:meth:`batch_newton` with the working mode of each pose that converges (one compiled call).
 
         Args:
             legs: the mechanism's legs (the square ones carry the working mode).
-            A: inverse-kinematics Jacobians ``[J_phi; J_x]`` (task twist rows), (B, m + n_task, nv).
-            R: world rotation of every joint at each, (B, njoints, 3, 3).
+            Q: starting configurations, shape (B, nq) (a solution with ``max_iterations`` 0: only
+                its Jacobian and mode are computed).
+            X: task targets, shape (B, n_task).
+            R_stars: as :meth:`batch_newton`'s.
+            tol: residual tolerance [m, rad].
+            max_iterations: iteration cap.
 
         Returns:
-            One sign per square leg (0 where its block is singular), shape (B, n_legs), int8.
+            Configurations (B, nq), which converged (B,), the inverse-kinematics Jacobians
+            ``[J_phi; J_x]`` (task twist rows) (B, m + n_task, nv) and the working modes (B, n_legs),
+            one sign per square leg (0 where its block is singular); the last two meaningful
+            where converged.
         """
-        blocks, turns, generic = _leg_arrays(legs)
-        out = np.zeros((A.shape[0], blocks.shape[0]), dtype=np.int8)
-        _compiled().batch_leg_modes(
-            self.ints, self.floats, blocks, turns, generic, LEG_SINGULAR_RTOL,
-            np.ascontiguousarray(A, dtype=float), np.ascontiguousarray(R, dtype=float), out,
+        a = self.arrays
+        B = Q.shape[0]
+        q = np.array(Q, dtype=float)
+        blocks, turns, generic = self._leg_arrays(legs)
+        ok = np.zeros(B, dtype=np.bool_)
+        A = np.empty((B, a.m + X.shape[1], a.nv))
+        modes = np.zeros((B, blocks.shape[0]), dtype=np.int8)
+        _compiled().batch_newton_modes(
+            self.ints, self.floats, blocks, turns, generic, LEG_SINGULAR_RTOL, q,
+            np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(R_stars, dtype=float), tol,
+            max_iterations, STALL_RATIO, ok, A, modes,
         )  # fmt: skip
-        return out
+        return q, ok, A, modes
+
+    def _leg_arrays(self, legs: Sequence[Leg]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:func:`_leg_arrays` of ``legs``, kept for the last legs asked (a mechanism's, asked per point)."""
+        if self._legs is None or self._legs[0] is not legs:
+            self._legs = (legs, _leg_arrays(legs))
+        return self._legs[1]
 
     def map_metrics(
         self, A: np.ndarray, actuated_v: np.ndarray, mobility: int, names: Sequence[str]

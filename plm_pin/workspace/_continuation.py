@@ -154,6 +154,29 @@ class IKEvaluator:
         )
         return None if found is None else found[0]
 
+    def solve_point(
+        self, x: np.ndarray, q0: np.ndarray, tol: float
+    ) -> tuple[np.ndarray, np.ndarray, Sequence[int]] | None:
+        """:meth:`solve`, with the solution's stacked ``[J_phi; J_x]`` and working mode, or None.
+
+        On the compiled kernels (a frame task), the Jacobian and mode come from one more compiled
+        call at the solution, with no Pinocchio data; else from the data (:meth:`jacobian`,
+        :meth:`mode`).
+        """
+        kernel = _batch_kernel(self)
+        if kernel is None:
+            q = self.solve(x, q0, tol)
+            if q is None:
+                return None
+            A = self.jacobian()
+            return q, A, self.mode(A)
+        q = self.solve(x, q0, tol, data=False)
+        if q is None:
+            return None
+        X = x[None]
+        _, ok, A, modes = kernel.newton_modes(self.legs, q[None], X, _target_rotations(self.task, X), tol, 0)
+        return (q, A[0], modes[0]) if ok[0] else None
+
     def jacobian(self, out: np.ndarray | None = None) -> np.ndarray:
         """Stacked ``[J_phi; J_x]`` (:func:`plm_pin.kinematics.jacobians.ik_jacobian`) left by :meth:`solve`.
 
@@ -236,14 +259,23 @@ class GridState:
             np.zeros(n, dtype=np.uint8),
         )
 
-    def accept(self, ev: IKEvaluator, index: int, q: np.ndarray, target_mode: tuple[int, ...] | None) -> bool:
-        """Record the solution at ``index`` (the data of ``ev`` is at ``q``) if its mode fits."""
-        if self._A is None:
-            self._A = np.empty((BATCH, ev.m + ev.task.size, ev.nv))
-        A = ev.jacobian(self._A[len(self._pending)])  # buffered for the metrics
-        mode = ev.mode(A)
+    def accept(
+        self,
+        index: int,
+        q: np.ndarray,
+        A: np.ndarray,
+        mode: Sequence[int],
+        target_mode: tuple[int, ...] | None,
+    ) -> bool:
+        """Record the solution at ``index``, its ``[J_phi; J_x]`` and working mode, if the mode fits.
+
+        ``A`` is buffered for the metrics (:meth:`flush`); ``target_mode`` None accepts any mode.
+        """
         if target_mode is not None and not compatible(mode, target_mode):
             return False
+        if self._A is None:
+            self._A = np.empty((BATCH, *A.shape))
+        self._A[len(self._pending)] = A
         self.q[index] = q
         self.mode[index] = mode
         self.reached[index] = True
@@ -362,8 +394,8 @@ def flood(
                 if b < 0 or b >= shape[axis] or not reached[p - off * back]:
                     break
                 previous.append(q_all[p - off * back])
-            q = ev.solve(state.poses[n], ev.extrapolate(previous), tol)
-            if q is None or not state.accept(ev, n, q, target_mode):
+            found = ev.solve_point(state.poses[n], ev.extrapolate(previous), tol)
+            if found is None or not state.accept(n, *found, target_mode):
                 continue
             queue.append(n)
             if state.full():
@@ -432,8 +464,8 @@ def _band(rows: tuple[int, int], spine: list[tuple[int, np.ndarray]]) -> tuple[s
     metrics = _metrics_for(ev, _WORKER["names"])
     start = []
     for index, q in spine:
-        sol = ev.solve(state.poses[index], np.asarray(q), _WORKER["tol"])
-        if sol is not None and state.accept(ev, index, sol, None):
+        found = ev.solve_point(state.poses[index], np.asarray(q), _WORKER["tol"])
+        if found is not None and state.accept(index, *found, None):
             start.append(index)
     state.flush(metrics)
     active = np.zeros(state.reached.size, dtype=bool)
@@ -558,11 +590,10 @@ def _walk_seed_row(
             j += step
         index = i0 * n1 + np.array(cols, dtype=np.int64)
         if index.size:
-            q, ok, A, R = kernel.batch_newton(
-                np.array(line[1:]), state.poses[index], _target_rotations(ev.task, state.poses[index]),
-                tol, NEWTON_MAX_ITERATIONS, STALL_RATIO,
-            )  # fmt: skip
-            modes = kernel.modes(ev.legs, A, R)
+            X = state.poses[index]
+            q, ok, A, modes = kernel.newton_modes(
+                ev.legs, np.array(line[1:]), X, _target_rotations(ev.task, X), tol
+            )
             good = ok & compatible_rows(modes, wanted)
             k = index.size if good.all() else int(np.argmin(good))
             state.accept_batch(index[:k], q[:k], modes[:k], A[:k], metrics)
@@ -817,8 +848,8 @@ def solve_poses(
     if seeded is None:
         return state, None
     index, q = seeded
-    sol = ev.solve(flat[index], q, tol)
-    if sol is None or not state.accept(ev, index, sol, None):
+    found = ev.solve_point(flat[index], q, tol)
+    if found is None or not state.accept(index, *found, None):
         return state, None
     target = tuple(int(s) for s in state.mode[index])
     n_workers = _auto_workers(flat.shape[0], shape, workers)  # checks ``workers`` on either path
@@ -880,8 +911,8 @@ def reseed(
                 q = _reseed_solution(mech, ev, state.poses[index], guess, mode, tol)
                 if q is None:
                     continue
-                sol = ev.solve(state.poses[index], q, tol)
-                if sol is None or not state.accept(ev, index, sol, target_mode):
+                found = ev.solve_point(state.poses[index], q, tol)
+                if found is None or not state.accept(index, *found, target_mode):
                     continue
                 flood(ev, state, metrics, target_mode, [index], tol)
                 grown = True

@@ -138,20 +138,16 @@ class _PathSolver:
         else:
             s = (t - t_a) / (t_b - t_a)
             start = pin.integrate(model, q_a, s * pin.difference(model, q_a, q_b))
-        q = self.ev.solve(x, start, self.tol)
-        if q is None and not fallback:
-            return None
-        if q is None:
+        found = self.ev.solve_point(x, start, self.tol)
+        if found is None and fallback:
             try:
                 general = inverse_kinematics(self.mech, x, start, tol=self.tol).q
             except PoseUnreachable:
                 return None
-            q = self.ev.solve(x, np.asarray(general), self.tol)  # leaves the Jacobians in the data
-            if q is None:
-                return None
-        if not compatible(self.ev.mode(self.ev.jacobian()), self.target):
+            found = self.ev.solve_point(x, np.asarray(general), self.tol)
+        if found is None or not compatible(found[2], self.target):
             return None
-        return np.asarray(q)
+        return np.asarray(found[0])
 
 
 def _point(
