@@ -310,7 +310,12 @@ def _refine_root(
     xtol: float,
     tol: float,
 ) -> SingularPoint | None:
-    """Root of det T det C between two solved samples of opposite signs, by Brent's method."""
+    """Root of det T det C between two solved samples of opposite signs, by Brent's method.
+
+    The ends are solved again first. When a sample lies on the singularity, its function is
+    round-off, whose sign the new solve may turn: the ends then share a sign, and the end
+    nearer to zero is the root.
+    """
     cache: dict[float, np.ndarray] = {}
 
     def g(s: float) -> float:
@@ -321,6 +326,10 @@ def _refine_root(
         return signed_singularity_function(mech, q)
 
     try:
+        g_a, g_b = g(t_a), g(t_b)
+        if g_a * g_b >= 0.0:
+            end = t_a if abs(g_a) <= abs(g_b) else t_b
+            return _point(mech, pose, end, cache[end], "sign_change", (end, end), tol)
         root, result = optimize.brentq(g, t_a, t_b, xtol=xtol, full_output=True, disp=False)
     except _Unreached:
         return None

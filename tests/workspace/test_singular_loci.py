@@ -12,6 +12,7 @@ from analyses import _harada2011_paper as paper
 from plm_pin.exceptions import InvalidInput
 from plm_pin.kinematics import closed_chain_jacobians, inverse_kinematics
 from plm_pin.kinematics.working_mode import working_mode
+from plm_pin.loading import build_mechanism
 from plm_pin.workspace import (
     singular_loci,
     singular_points,
@@ -86,6 +87,22 @@ def test_3d3m_loci_in_the_papers_working_mode(y):
     mode = working_mode(mech, mech.q_ref)
     points = singular_points_along(mech, "rz", THETAS, (0.0, y, 0.0), mode=mode)
     _check_against(points, expected_3d3m(y, L, RT, +1))
+
+
+def test_singular_point_on_a_sample_is_found_whatever_the_sign_of_its_round_off():
+    """A sample exactly on eq. (11.1) (rt = 0.06 m, y = 0.03 m: theta = 30 deg) is the root it is.
+
+    There the singularity function is round-off (about 1e-20), whose sign the root finder's own
+    solve of the sample turns on this grid; the bracket's ends then share a sign. The points
+    are eq. (11.1) at 30 deg and eq. (11.4) at -asin(y / (l + rt)), to 1e-8 rad.
+    """
+    rt, y = 0.06, 0.03
+    mech = build_mechanism("harada2011_3d3m", {"half_plate": rt})
+    thetas = np.radians(np.linspace(-80.0, 80.0, 33))  # 30 deg is a sample
+    points = singular_points_along(mech, "rz", thetas, (0.0, y, 0.0), mode=working_mode(mech, mech.q_ref))
+    roots = [p.parameter for p in points if p.method == "sign_change"]
+    expected = [-math.asin(y / (L + rt)), math.asin(y / rt)]  # eqs. (11.4), (11.1)
+    assert len(roots) == 2 and max(abs(a - b) for a, b in zip(roots, expected, strict=True)) < TOL
 
 
 @pytest.mark.parametrize("y", [0.02, 0.05, 0.08, -0.04])
