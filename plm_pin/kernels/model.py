@@ -106,6 +106,7 @@ class Kernel:
         tol: float,
         target: TaskTarget | None = None,
         polish: bool = True,
+        max_iterations: int = NEWTON_MAX_ITERATIONS,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """:func:`plm_pin.core.assembly.newton` on the kernels, or None when it stalls.
 
@@ -115,12 +116,13 @@ class Kernel:
             tol: target largest absolute residual [m, rad].
             target: task rows solved with the closures.
             polish: take the polishing step once within ``tol``.
+            max_iterations: iterations before it gives up.
 
         Returns:
             The configuration, its residual ``[phi; task target]`` and its task coordinates
             (:meth:`plm_pin.core.task.Task.pose_from_data`, empty without a task).
         """
-        solved = self.solve(q0, free, tol, target, polish)
+        solved = self.solve(q0, free, tol, target, polish, max_iterations=max_iterations)
         return None if solved is None else solved[:3]
 
     def solve(
@@ -131,6 +133,7 @@ class Kernel:
         target: TaskTarget | None = None,
         polish: bool = True,
         in_place: bool = False,
+        max_iterations: int = NEWTON_MAX_ITERATIONS,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
         """:meth:`newton`, with the largest absolute residual and whether the solution is within limits.
 
@@ -142,13 +145,15 @@ class Kernel:
             polish: take the polishing step once within ``tol``.
             in_place: solve in ``q0`` itself, a writable C-contiguous float array the caller gives
                 up (it holds the last iterate when Newton stalls), instead of in a copy.
+            max_iterations: iterations before it gives up.
 
         Returns:
             ``(q, residual, pose, residual_norm, within_limits)``, or None when Newton stalls.
         """
         x, R = self._target_arrays(target)
         q = q0 if in_place else _float_copy(q0)
-        return self._solve(q, free, tol, x, R, target.size if target is not None else None, polish)
+        task_rows = target.size if target is not None else None
+        return self._solve(q, free, tol, x, R, task_rows, polish, max_iterations)
 
     def solve_pose(
         self, q0: np.ndarray, tol: float, task: Task, x: np.ndarray
@@ -173,6 +178,7 @@ class Kernel:
         R: np.ndarray,
         task_rows: int | None,
         polish: bool,
+        max_iterations: int = NEWTON_MAX_ITERATIONS,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, bool] | None:
         """:meth:`solve` from ``q``, overwritten, the target as arrays and its rows (None: no target)."""
         pose, info = np.empty(self.n_task), np.empty(2)
@@ -186,7 +192,7 @@ class Kernel:
             task_rows is not None,
             tol,
             ROUND_OFF,
-            NEWTON_MAX_ITERATIONS,
+            max_iterations,
             STALL_RATIO,
             CHORD_RATIO,
             polish,

@@ -772,8 +772,25 @@ def _reseed_solution(
 
     Undamped Newton only (no Levenberg-Marquardt): a candidate it cannot reach costs well under
     a millisecond, so that stretches with no reachable point stay cheap. The working modes are
-    enumerated only when Newton converges in another mode than ``mode``.
+    enumerated only when Newton converges in another mode than ``mode``. On the kernels where they
+    serve ``ev`` (the same Newton, compiled).
     """
+    kernel = _batch_kernel(ev)
+    if kernel is not None:
+        solved = kernel.newton(
+            guess, None, tol, TaskTarget(ev.task, x), max_iterations=RESEED_NEWTON_ITERATIONS
+        )
+        if solved is None:
+            return None
+        if mode is None:
+            return solved[0]
+        X = x[None]
+        _, ok, _, modes = kernel.newton_modes(
+            ev.legs, solved[0][None], X, _target_rotations(ev.task, X), tol, 0
+        )
+        if ok[0] and tuple(modes[0]) == tuple(mode):
+            return solved[0]
+        return _in_mode(mech, x, guess, mode)
     found = newton(
         ev.model,
         ev.data,
@@ -790,6 +807,11 @@ def _reseed_solution(
         return None
     if mode is None or ev.mode(ev.jacobian()) == tuple(mode):
         return found[0]
+    return _in_mode(mech, x, guess, mode)
+
+
+def _in_mode(mech: Mechanism, x: np.ndarray, guess: np.ndarray, mode: tuple[int, ...]) -> np.ndarray | None:
+    """Inverse kinematics at ``x`` in working mode ``mode`` from ``guess`` (its modes enumerated), or None."""
     try:
         return inverse_kinematics(mech, x, guess, mode=mode).q
     except PoseUnreachable:
