@@ -1123,6 +1123,87 @@ def batch_newton_modes(
 
 
 @njit(cache=True)
+def walk_line(
+    ints: np.ndarray,
+    floats: np.ndarray,
+    legs: np.ndarray,
+    turns: np.ndarray,
+    generic: np.ndarray,
+    wanted: np.ndarray,
+    rtol: float,
+    poses: np.ndarray,
+    R_stars: np.ndarray,
+    Q: np.ndarray,
+    reached: np.ndarray,
+    modes: np.ndarray,
+    start: int,
+    step: int,
+    tol: float,
+    max_iterations: int,
+    stall: float,
+    index: np.ndarray,
+    A_out: np.ndarray,
+) -> int:
+    """Walk one side of a line of poses from a solved point: each next point predicted, solved, kept.
+
+    The walk starts at point ``start`` (reached) and goes by ``step`` (+1 or -1). Each point is
+    predicted by polynomial extrapolation from up to three points before it on this walk (the
+    start included), its quaternions and (cos, sin) pairs put back to unit norm, solved by
+    :func:`batch_newton`'s Newton and kept (written into ``Q``, ``modes``, ``reached``; its
+    flat index and IK Jacobian into ``index`` and ``A_out``) if its working mode
+    (:func:`_leg_modes`) is compatible with ``wanted``. The walk ends at the line's end, at a
+    reached point, or at the first point that fails either test.
+
+    Arguments as :func:`walk_rows_step` takes them, for the line's points alone.
+
+    Returns:
+        The number of points kept (the walk stopped at point ``start + step * (count + 1)``).
+    """
+    k = unpack(ints, floats)
+    nj, nq = k.parents.shape[0], Q.shape[1]
+    three_angles = R_stars.shape[0] > 1
+    q, X = np.empty((1, nq)), np.empty((1, poses.shape[1]))
+    ok = np.empty(1, dtype=np.bool_)
+    A = np.empty((1, A_out.shape[1], A_out.shape[2]))
+    R = np.empty((1, nj, 3, 3))
+    size = (legs.shape[1] - 1) // 2
+    M = np.empty((size, size))
+    mode = np.empty(legs.shape[0], dtype=np.int8)
+    count = 0
+    p = start + step
+    while 0 <= p < reached.shape[0] and not reached[p]:
+        p0 = p - step
+        for t in range(nq):
+            if count >= 2:  # the start and two points of this walk behind
+                q[0, t] = 3.0 * Q[p0, t] - 3.0 * Q[p0 - step, t] + Q[p0 - 2 * step, t]
+            elif count == 1:
+                q[0, t] = 2.0 * Q[p0, t] - Q[p0 - step, t]
+            else:
+                q[0, t] = Q[p0, t]
+        X[0] = poses[p]
+        _newton_batch(
+            k, q, X, R_stars[p : p + 1] if three_angles else R_stars, tol, max_iterations, stall, ok, A, R
+        )
+        if not ok[0]:
+            break
+        _leg_modes(k, A[0], R[0], legs, turns, generic, rtol, M, mode)
+        fits = True
+        for leg in range(mode.shape[0]):
+            if not (mode[leg] == wanted[leg] or mode[leg] == 0 or wanted[leg] == 0):
+                fits = False
+        if not fits:
+            break
+        Q[p] = q[0]
+        modes[p] = mode
+        reached[p] = True
+        index[count] = p
+        A_out[count] = A[0]
+        count += 1
+        p += step
+    return count
+
+
+@njit(cache=True)
 def walk_rows_step(
     ints: np.ndarray,
     floats: np.ndarray,

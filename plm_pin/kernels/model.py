@@ -293,6 +293,49 @@ class Kernel:
             if count:
                 yield index[:count], A[:count]
 
+    def walk_line(
+        self,
+        legs: Sequence[Leg],
+        wanted: Sequence[int],
+        poses: np.ndarray,
+        R_stars: np.ndarray,
+        Q: np.ndarray,
+        reached: np.ndarray,
+        modes: np.ndarray,
+        start: int,
+        step: int,
+        tol: float,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Walk one side of a line of poses from its solved point ``start`` (:func:`.compiled.walk_line`).
+
+        Args:
+            legs: the mechanism's legs (the square ones carry the working mode).
+            wanted: the working mode to keep, one sign per square leg (0 matches either).
+            poses: task targets of the line's points, in order, shape (n, n_task).
+            R_stars: as :meth:`walk_rows` takes them, for these points.
+            Q: their configurations (in and out; a view writes through), shape (n, nq).
+            reached: solved points (in and out), shape (n,).
+            modes: working modes (out where reached), shape (n, n_legs).
+            start: the point walked from.
+            step: +1 or -1.
+            tol: residual tolerance [m, rad].
+
+        Returns:
+            The indices of the points kept, in walking order (b,), and their IK Jacobians
+            ``[J_phi; J_x]`` (task twist rows) (b, m + n_task, nv); the walk stopped at point
+            ``start + step * (b + 1)``.
+        """
+        blocks, turns, generic = self._leg_arrays(legs)
+        n = reached.shape[0]
+        index = np.empty(n, dtype=np.int64)
+        A = np.empty((n, self.arrays.m + poses.shape[1], self.arrays.nv))
+        count = _compiled().walk_line(
+            self.ints, self.floats, blocks, turns, generic, np.asarray(wanted, dtype=np.int8),
+            LEG_SINGULAR_RTOL, poses, R_stars, Q, reached, modes, start, step, tol,
+            NEWTON_MAX_ITERATIONS, STALL_RATIO, index, A,
+        )  # fmt: skip
+        return index[:count], A[:count]
+
     def newton_modes(
         self, legs: Sequence[Leg], Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float,
         max_iterations: int = NEWTON_MAX_ITERATIONS,
@@ -329,9 +372,17 @@ class Kernel:
         return q, ok, A, modes
 
     def _leg_arrays(self, legs: Sequence[Leg]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:func:`_leg_arrays` of ``legs``, kept for the last legs asked (a mechanism's, asked per point)."""
+        """:func:`_leg_arrays` of ``legs``, kept for the last legs asked (a mechanism's, asked per point).
+
+        Raises:
+            ValueError: a leg's sign rows reach past the IK Jacobian (the compiled modes read only it).
+        """
         if self._legs is None or self._legs[0] is not legs:
-            self._legs = (legs, _leg_arrays(legs))
+            packed = _leg_arrays(legs)
+            rows = packed[0][:, 1 : 1 + (packed[0].shape[1] - 1) // 2]
+            if rows.size and rows.max() >= self.arrays.m + self.n_task:
+                raise ValueError("working modes with sign rows past the IK Jacobian are not compiled")
+            self._legs = (legs, packed)
         return self._legs[1]
 
     def map_metrics(

@@ -96,6 +96,10 @@ class IKEvaluator:
     def __post_init__(self) -> None:
         self.m = _closures.closure_rows(self.closures)
         self.n_legs = sum(leg.square for leg in self.legs)
+        # the working modes read leg blocks of the IK Jacobian only (no other platform row)
+        self.modes_in_ik = all(
+            max(leg.sign_rows) < self.m + self.task.size for leg in self.legs if leg.square
+        )
         self._r = np.empty(self.m + self.task.size)  # residual [closures; task]
         self._A = np.empty((self.m + self.task.size, self.nv))  # its Jacobian
 
@@ -177,6 +181,21 @@ class IKEvaluator:
         _, ok, A, modes = kernel.newton_modes(self.legs, q[None], X, _target_rotations(self.task, X), tol, 0)
         return (q, A[0], modes[0]) if ok[0] else None
 
+    def ik_jacobians(self, Q: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """Stacked ``[J_phi; J_x]`` (B, m + n_task, nv) at configurations ``Q`` (B, nq) of task poses ``X``.
+
+        One compiled call on the kernels (a frame task), else Pinocchio's data per configuration.
+        """
+        kernel = _batch_kernel(self)
+        if kernel is not None:  # no Newton step (none allowed) and any residual accepted
+            return kernel.newton_modes(self.legs, Q, X, _target_rotations(self.task, X), np.inf, 0)[2]
+        out = np.empty((Q.shape[0], self.m + self.task.size, self.nv))
+        for b, q in enumerate(Q):
+            pin.computeJointJacobians(self.model, self.data, q)
+            pin.updateFramePlacements(self.model, self.data)
+            self.jacobian(out[b])
+        return out
+
     def jacobian(self, out: np.ndarray | None = None) -> np.ndarray:
         """Stacked ``[J_phi; J_x]`` (:func:`plm_pin.kinematics.jacobians.ik_jacobian`) left by :meth:`solve`.
 
@@ -226,7 +245,7 @@ class GridState:
     """Solutions and metrics over a flattened grid of shape ``shape`` (row-major).
 
     Attributes:
-        shape: grid shape (one or two axes).
+        shape: grid shape (any number of axes; a line walked by rows is a grid of one row).
         poses: task coordinates of every point [m, rad], shape (n_points, k).
         q: configurations (NaN where not reached), shape (n_points, nq).
         reached: solved in the working mode, shape (n_points,).
@@ -566,38 +585,36 @@ def _walk_seed_row(
     target_mode: tuple[int, ...],
     tol: float,
 ) -> None:
-    """The seed's row, outward from the seed on each side: :func:`flood` kept to the row, on the kernels.
+    """The seed's row, outward from the seed on each side: :func:`flood` kept to the row, compiled.
 
-    Each point is solved by the compiled Newton from its side's line extrapolated (as
-    :func:`flood` does); a side ends at its first point that does not converge. The side's
-    Jacobians, working modes and metrics then come in one batch, and it is cut at its first
-    point out of ``target_mode``, where :func:`flood` would have stopped.
+    Each side is one compiled walk (:meth:`~plm_pin.kernels.Kernel.walk_line`): each point
+    solved by Newton from its side's line extrapolated (as :func:`flood` does), the side ending
+    at its first point that does not converge or falls out of ``target_mode``, where
+    :func:`flood` would have stopped; the side's metrics then come in one batch.
     """
     kernel = _batch_kernel(ev)
     assert kernel is not None  # (sweep_rows walks the seed's row so only on the kernels)
     n1 = state.shape[1]
     i0, j0 = divmod(seed, n1)
-    wanted = np.array(target_mode)
+    row = slice(i0 * n1, (i0 + 1) * n1)  # views: the walk writes into the grid
+    poses = state.poses[row]
+    R_stars = _target_rotations(ev.task, poses)
     for d, step in ((2, 1), (3, -1)):  # the directions +1 and -1 along the row (see _neighbours)
-        line, cols = [state.q[seed]], []
-        j = j0 + step
-        while 0 <= j < n1 and not state.reached[i0 * n1 + j]:
-            q = ev.solve(state.poses[i0 * n1 + j], ev.extrapolate(line[:-4:-1]), tol, data=False)
-            if q is None:
-                break
-            line.append(q)
-            cols.append(j)
-            j += step
-        index = i0 * n1 + np.array(cols, dtype=np.int64)
+        index, A = kernel.walk_line(
+            ev.legs,
+            target_mode,
+            poses,
+            R_stars,
+            state.q[row],
+            state.reached[row],
+            state.mode[row],
+            j0,
+            step,
+            tol,
+        )
         if index.size:
-            X = state.poses[index]
-            q, ok, A, modes = kernel.newton_modes(
-                ev.legs, np.array(line[1:]), X, _target_rotations(ev.task, X), tol
-            )
-            good = ok & compatible_rows(modes, wanted)
-            k = index.size if good.all() else int(np.argmin(good))
-            state.accept_batch(index[:k], q[:k], modes[:k], A[:k], metrics)
-            j = j0 + step * (k + 1)  # the point where the side stopped
+            state.record_metrics(i0 * n1 + index, A, metrics)
+        j = j0 + step * (index.size + 1)  # the point where the side stopped
         if 0 <= j < n1:
             state.tried[i0 * n1 + j] |= 1 << d
 
@@ -692,8 +709,11 @@ def _walk_rows(
 
 
 def _batch_kernel(ev: IKEvaluator) -> Kernel | None:
-    """The compiled kernel that solves ``ev``'s batches, or None (it takes frame tasks only)."""
-    return ev.kernel if isinstance(ev.task, FrameTask) else None
+    """The compiled kernel that solves ``ev``'s batches and reads their working modes, or None.
+
+    It takes frame tasks whose working modes the IK Jacobian holds (:attr:`IKEvaluator.modes_in_ik`).
+    """
+    return ev.kernel if isinstance(ev.task, FrameTask) and ev.modes_in_ik else None
 
 
 def _target_rotations(task: Task, X: np.ndarray) -> np.ndarray:
@@ -862,7 +882,11 @@ def solve_poses(
     k = poses.shape[-1]
     ev = IKEvaluator.from_mechanism(mech)
     flat = np.ascontiguousarray(poses.reshape(-1, k))
-    state = GridState.empty(ev, shape, flat)
+    in_ik = ev.modes_in_ik  # the batched modes read leg blocks of the IK Jacobian only
+    kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 and in_ik else None
+    # walked by rows: two-axis grids, and on the kernels lines too (as grids of one row)
+    rows = kin is not None or (_batch_kernel(ev) is not None and len(shape) <= 2)
+    state = GridState.empty(ev, (1, *shape) if rows and len(shape) == 1 else shape, flat)
     scale = np.ptp(flat, axis=0)
     guess = start_configuration(mech, guess)
     x_guess = task_pose(mech, guess)
@@ -875,10 +899,7 @@ def solve_poses(
         return state, None
     target = tuple(int(s) for s in state.mode[index])
     n_workers = _auto_workers(flat.shape[0], shape, workers)  # checks ``workers`` on either path
-    ik_rows = ev.m + ev.task.size  # the batched modes read leg blocks of the IK Jacobian only
-    in_ik = all(max(leg.sign_rows) < ik_rows for leg in ev.legs if leg.square)
-    kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 and in_ik else None
-    if len(shape) == 2 and in_ik and (kin is not None or _batch_kernel(ev) is not None):
+    if rows:
         sweep_rows(ev, kin, state, _metrics_for(ev, names, kin), index, target, tol)
     else:
         _solve_grid(ev, state, index, target, tol, n_workers, names)

@@ -40,7 +40,7 @@ from .._lazy import lazy_module
 from ..core.mechanism import Mechanism, require_task
 from ..exceptions import InvalidInput, PoseUnreachable
 from ..kinematics.inverse import check_mode, inverse_kinematics
-from ..kinematics.jacobians import check_square_task, closed_chain_jacobians
+from ..kinematics.jacobians import check_square_task, closed_chain_jacobians, feasible_motions
 from ..kinematics.singularity import SingularityReport, classify
 from ..results import Result, unit
 from ..tolerances import LOCUS_REFINE_MARGIN, LOCUS_XTOL, SINGULARITY_TOL
@@ -94,12 +94,24 @@ def signed_singularity_function(mech: Mechanism, q: ArrayLike) -> float:
         InvalidInput: for a redundant mechanism or a task of another size.
     """
     jac = closed_chain_jacobians(mech, q)
-    if jac.T.shape[0] != jac.T.shape[1] or jac.C.shape[0] != jac.C.shape[1]:
+    return float(_det_T_det_C(mech, jac.T, jac.C))
+
+
+def _signed_functions(mech: Mechanism, A: np.ndarray) -> np.ndarray:
+    """:func:`signed_singularity_function` from stacked ``[J_phi; J_x]`` (B, m + k, nv) at solutions."""
+    m = mech.n_closure_rows
+    _, _, T, C = feasible_motions(A[:, :m], A[:, m:], mech.actuated_v_indices, mech.mobility)
+    return _det_T_det_C(mech, T, C)
+
+
+def _det_T_det_C(mech: Mechanism, T: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """``det(T) det(C)`` (batched over leading axes), refused unless both are square."""
+    if T.shape[-2] != T.shape[-1] or C.shape[-2] != C.shape[-1]:
         raise InvalidInput(
             f"{mech.name}: det(T) det(C) needs as many task coordinates and actuators as DOF "
-            f"({mech.mobility}); T is {jac.T.shape}, C is {jac.C.shape}"
+            f"({mech.mobility}); T is {T.shape[-2:]}, C is {C.shape[-2:]}"
         )
-    return float(np.linalg.det(jac.T) * np.linalg.det(jac.C))
+    return np.asarray(np.linalg.det(T) * np.linalg.det(C))
 
 
 class _PathSolver:
@@ -257,8 +269,10 @@ def locate_on_solved(
     redundant = mech.n_actuators != mech.mobility
     if not redundant:
         g = np.full(ts.size, np.nan)
-        for j in np.flatnonzero(reached).tolist():
-            g[j] = signed_singularity_function(mech, Q[j])
+        solved = np.flatnonzero(reached)
+        if solved.size:  # from the samples' Jacobians at once
+            X = np.stack([pose(float(t)) for t in ts[solved]])
+            g[solved] = _signed_functions(mech, solver.ev.ik_jacobians(Q[solved], X))
         for i in range(ts.size - 1):
             if not (reached[i] and reached[i + 1]):
                 continue

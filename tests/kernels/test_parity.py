@@ -248,3 +248,19 @@ def test_switch_is_read_at_each_call(monkeypatch, value, on):
     assert kernels_enabled() is on
     monkeypatch.setenv("PLM_PIN_KERNELS", "1" if not on else "0")  # flipped: the next call sees it
     assert (kernel_of(mech) is not None) is not on
+
+
+def test_working_modes_with_sign_rows_past_the_ik_jacobian_stay_off_the_kernels():
+    """A corpus five-bar whose working mode reads platform rows past ``[J_phi; J_x]``.
+
+    The compiled modes read only the IK Jacobian: the kernel refuses these legs (a ValueError,
+    not a read past its rows), and the maps' batches leave them to the Pinocchio path.
+    """
+    from plm_pin.workspace._continuation import IKEvaluator, _batch_kernel
+
+    mech = _mechanism("5bar_linkage_iso3d")
+    ev = IKEvaluator.from_mechanism(mech)
+    assert ev.kernel is not None and not ev.modes_in_ik and _batch_kernel(ev) is None
+    x = np.zeros((1, ev.task.size))
+    with pytest.raises(ValueError, match="sign rows past the IK Jacobian"):
+        ev.kernel.newton_modes(ev.legs, mech.q_ref[None], x, np.eye(3)[None], 1e-10)

@@ -191,6 +191,40 @@ def test_map_on_the_kernels_equals_the_pinocchio_path(name, half_width, monkeypa
     np.testing.assert_allclose(compiled.actuators, plain.actuators, atol=1e-11, equal_nan=True)
 
 
+LINES = [
+    ("harada2011_3d3m", "rz", np.radians(np.linspace(-85.0, 85.0, 69)), 0.1),
+    ("zhao2011_8pss", "z", np.linspace(-0.8, 0.8, 69), None),
+]
+"""Sweeps past the reach: preset, axis, values about the reference pose's (the 3D3M: absolute), y [m]."""
+
+
+@pytest.mark.parametrize(("name", "axis", "line", "y"), LINES)
+def test_line_walked_on_the_kernels_equals_the_pinocchio_path(name, axis, line, y, monkeypatch):
+    """A sweep past the reach, walked from its seed by one compiled call per side.
+
+    It equals the point-by-point Pinocchio path: reachable set, modes, configurations and metrics
+    (the 8-PSS: a free-flyer, its extrapolated quaternions put back to unit norm).
+    """
+    mech = preset(name)
+    x0 = task_pose(mech, mech.q_ref)
+    values = line if y is not None else x0[mech.task.dofs.index(axis)] + line
+    if y is not None:
+        x0[mech.task.dofs.index("y")] = y
+    walked = []
+    walk = _continuation._walk_seed_row
+    monkeypatch.setattr(_continuation, "_walk_seed_row", lambda *a: walked.append(walk(*a)))
+    compiled = workspace_sweep(mech, axis, values, x0)
+    assert walked
+    monkeypatch.setenv("PLM_PIN_KERNELS", "0")
+    plain = workspace_sweep(mech, axis, values, x0)
+    assert 0.2 < compiled.reachable_fraction < 1.0  # the walk stops at the edge
+    np.testing.assert_array_equal(compiled.reachable, plain.reachable)
+    np.testing.assert_array_equal(compiled.mode, plain.mode)
+    np.testing.assert_allclose(compiled.q, plain.q, rtol=0.0, atol=1e-10)
+    for metric in POSE_METRICS:
+        np.testing.assert_allclose(compiled.metric(metric), plain.metric(metric), rtol=1e-8, equal_nan=True)
+
+
 def test_3d_grid_solved_point_by_point_on_the_kernels_equals_the_pinocchio_path(monkeypatch):
     """A Delta's x-y-z grid, past its reach, solved point by point: the kernels' Jacobians and modes agree.
 
