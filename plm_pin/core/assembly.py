@@ -24,6 +24,9 @@ NEWTON_MAX_ITERATIONS = 12
 STALL_RATIO = 0.9
 """A Newton iteration that does not divide the residual by at least 1 / STALL_RATIO ends the attempt."""
 
+LM_MAX_ITERATIONS = 60
+"""Levenberg-Marquardt iterations the inverse and forward kinematics allow once Newton stalls."""
+
 CHORD_RATIO = 1e-2
 """A step that divides the residual by at least 1 / CHORD_RATIO lets :func:`newton` keep its factorisation."""
 
@@ -264,16 +267,18 @@ def assemble(
     if phi.size and np.max(np.abs(phi)) > tol:
         if on_failure is not None:
             raise on_failure(q, phi)
-        raise ClosureNotSatisfied(
-            f"loops not closed: residual {np.max(np.abs(phi)):.3g} > tolerance {tol:.3g}",
-            float(np.max(np.abs(phi))),
-            tol,
-            q,
-            "",
-        )
+        raise not_closed(q, phi, tol)
     q.setflags(write=False)
     phi.setflags(write=False)
     return Assembly(q, phi, iterations, tol)
+
+
+def not_closed(q: np.ndarray, phi: np.ndarray, tol: float) -> ClosureNotSatisfied:
+    """The error of an assembly that stopped at ``q``, residual ``phi``, above ``tol`` [m, rad]."""
+    worst = float(np.max(np.abs(phi)))
+    return ClosureNotSatisfied(
+        f"loops not closed: residual {worst:.3g} > tolerance {tol:.3g}", worst, tol, q, ""
+    )
 
 
 @dataclass(frozen=True)

@@ -912,6 +912,114 @@ def newton(
 
 
 @njit(cache=True)
+def assemble(
+    ints: np.ndarray,
+    floats: np.ndarray,
+    free: np.ndarray,
+    x: np.ndarray,
+    R_star: np.ndarray,
+    with_task: bool,
+    tol: float,
+    rcond: float,
+    round_off: float,
+    max_iterations: int,
+    q: np.ndarray,
+    r: np.ndarray,
+) -> int:
+    """:func:`plm_pin.core.assembly.assemble` (Levenberg-Marquardt) moving the ``free`` columns.
+
+    Step for step the Python one: the minimum-norm damped step from the SVD of the free
+    columns' Jacobian, singular values at most ``max(rcond s_1, tol max(s_1, 1))`` left out,
+    damping ``mu0 |r|^2`` raised tenfold on a rejected step (up to 30 times) and lowered tenfold
+    on an accepted one, one polishing step once within ``tol``.
+
+    ``q`` holds the start and ends at the last iterate, ``r`` its residual ``[phi; task]``.
+
+    Returns:
+        The iterations taken, or -1 when the largest absolute residual is above ``tol``.
+    """
+    k = unpack(ints, floats)
+    nj, nv, nf = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1)
+    n, nfree = r.shape[0], free.shape[0]
+    A = np.empty((n, nv))
+    Jf = np.empty((n, nfree))
+    r_new, q_new = np.empty(n), np.empty(q.shape[0])
+    step, c = np.zeros(nv), np.empty(min(n, nfree))
+    oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
+    Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
+    U, s, Vt = np.empty((n, 0)), np.empty(0), np.empty((0, nfree))
+    cost = mu0 = floor = 1.0
+    iterations, polish, tries = 0, 1, 0
+    phase = 0  # 0: residual at q, 1: Jacobian at q, 2: residual at the trial q_new
+    while n:
+        trial = phase == 2
+        # one call site of the inlined evaluate (each costs seconds of compile)
+        evaluate(k, q_new if trial else q, x, R_star, with_task, r_new if trial else r, A, phase == 1,
+                 oR, op, fR, fp, Sw, Sv)  # fmt: skip
+        check = True  # else take a step with the current damping
+        if phase == 1:  # the SVD of the free columns, and the residual's components on it
+            for i in range(n):
+                for j in range(nfree):
+                    Jf[i, j] = A[i, free[j]]
+            U, s, Vt = np.linalg.svd(Jf, full_matrices=False)
+            floor = max(rcond * s[0], tol * max(s[0], 1.0)) if s.size else 0.0
+            if s.size == 0 or not s[0] > floor:
+                break
+            for i in range(s.shape[0]):
+                u = 0.0
+                for a in range(n):
+                    u += U[a, i] * r[a]
+                c[i] = u
+            tries = 0
+            check = False
+        elif phase == 2:
+            cost_new = 0.0
+            for i in range(n):
+                cost_new += r_new[i] * r_new[i]
+            if cost_new < cost:
+                q[:] = q_new
+                r[:] = r_new
+                cost = cost_new
+                mu0 = max(mu0 / 10.0, 1e-12)
+            else:
+                mu0 *= 10.0
+                tries += 1
+                if tries == 30:
+                    break
+                check = False
+        else:
+            cost = 0.0
+            for i in range(n):
+                cost += r[i] * r[i]
+        if check:
+            err = 0.0
+            for i in range(n):
+                err = max(err, abs(r[i]))
+            if iterations >= max_iterations:
+                break
+            if err <= tol:
+                if polish == 0 or err < round_off:
+                    break
+                polish -= 1
+            iterations += 1
+            phase = 1
+            continue
+        mu = mu0 * cost
+        step[:] = 0.0
+        for i in range(s.shape[0]):
+            if s[i] > floor:
+                g = s[i] / (s[i] * s[i] + mu) * c[i]
+                for j in range(nfree):
+                    step[free[j]] -= g * Vt[i, j]
+        integrate(k, q, step, q_new)
+        phase = 2
+    err = 0.0
+    for i in range(n):
+        err = max(err, abs(r[i]))
+    return iterations if err <= tol else -1
+
+
+@njit(cache=True)
 def _newton_batch(
     k: KernelArrays,
     Q: np.ndarray,

@@ -23,7 +23,7 @@ from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
 from ..core.closures import Closure
 from ..core.legs import Leg
 from ..core.task import FrameTask, Task, TaskTarget
-from ..tolerances import FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL, ROUND_OFF
+from ..tolerances import ASSEMBLY_RCOND, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL, ROUND_OFF
 from ..warnings import KernelFallbackWarning
 from .arrays import KernelArrays, build_arrays, kernel_frames, pack, unsupported_joints
 
@@ -154,6 +154,35 @@ class Kernel:
         q = q0 if in_place else _float_copy(q0)
         task_rows = target.size if target is not None else None
         return self._solve(q, free, tol, x, R, task_rows, polish, max_iterations)
+
+    def assemble(
+        self,
+        q0: np.ndarray,
+        free: np.ndarray | None,
+        tol: float,
+        target: TaskTarget | None = None,
+        max_iterations: int = 100,
+    ) -> tuple[np.ndarray, np.ndarray, bool]:
+        """:func:`plm_pin.core.assembly.assemble` (Levenberg-Marquardt) on the kernels.
+
+        Args:
+            q0: starting configuration, shape (nq,).
+            free: velocity columns allowed to move (None: all).
+            tol: target largest absolute residual [m, rad].
+            target: task rows solved with the closures.
+            max_iterations: iteration cap.
+
+        Returns:
+            The last iterate, its residual ``[phi; task target]`` and whether ``tol`` was reached.
+        """
+        x, R = self._target_arrays(target)
+        q = _float_copy(q0)
+        r = np.empty(self.arrays.m + (target.size if target is not None else 0))
+        iterations = _compiled().assemble(
+            self.ints, self.floats, self._all if free is None else free, x, R, target is not None, tol,
+            ASSEMBLY_RCOND, ROUND_OFF, max_iterations, q, r,
+        )  # fmt: skip
+        return q, r, iterations >= 0
 
     def solve_pose(
         self, q0: np.ndarray, tol: float, task: Task, x: np.ndarray

@@ -11,7 +11,7 @@ import pinocchio as pin
 from numpy.typing import ArrayLike
 
 from .._arguments import count, flag, positive
-from ..core.assembly import assemble, newton
+from ..core.assembly import LM_MAX_ITERATIONS, assemble, newton, not_closed
 from ..core.mechanism import Mechanism, require_task
 from ..core.task import check_task_vector
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PoseUnreachable
@@ -258,8 +258,17 @@ def _close(
         if kernel is not None
         else newton(mech.model, ws.data, mech.closures, start, free, r_phi, A_phi, tol=tol)
     )
-    if fast is None:
-        asm = assemble(mech.model, ws.data, mech.closures, start, free, tol=tol, max_iterations=60)
+    if fast is None and kernel is not None:  # Levenberg-Marquardt, compiled
+        q, r, closed = kernel.assemble(start, free, tol, max_iterations=LM_MAX_ITERATIONS)
+        if not closed:
+            raise not_closed(q, r, tol)
+        residual_norm = float(np.abs(r).max()) if r.size else 0.0
+        q.setflags(write=False)
+        pin.framesForwardKinematics(mech.model, ws.data, q)
+    elif fast is None:
+        asm = assemble(
+            mech.model, ws.data, mech.closures, start, free, tol=tol, max_iterations=LM_MAX_ITERATIONS
+        )
         q, residual_norm = asm.q, asm.residual_norm
         pin.framesForwardKinematics(mech.model, ws.data, q)
     else:

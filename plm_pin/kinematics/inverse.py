@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike
 
 from .._arguments import count, flag, positive, signs
 from ..core import closures as _closures
-from ..core.assembly import assemble, newton
+from ..core.assembly import LM_MAX_ITERATIONS, assemble, newton
 from ..core.closures import Closure, compile_closures
 from ..core.closures import closure_rows as _closure_rows
 from ..core.mechanism import Mechanism, require_task
@@ -265,11 +265,12 @@ def _from_guess(
 
     Newton first (on the compiled kernels where :func:`~plm_pin.kernels.kernel_of` serves the
     mechanism), unless ``newton_tried`` says the kernels' Newton already stalled from ``q0``;
-    its last pass gives the residual of the solution. Levenberg-Marquardt when Newton stalls.
+    its last pass gives the residual of the solution. Levenberg-Marquardt when Newton stalls
+    (on the kernels too).
     """
     ws = mech._thread_workspace()
+    kernel = kernel_of(mech)
     if not newton_tried:
-        kernel = kernel_of(mech)
         if kernel is not None:
             solved = kernel.solve(q0, None, tol, target)
             if solved is not None:
@@ -280,6 +281,9 @@ def _from_guess(
             )
             if fast is not None:
                 return _solution_from_residual(mech, target.x, fast[0], ws.residual)
+    if kernel is not None:
+        q, r, closed = kernel.assemble(q0, None, tol, target, max_iterations=LM_MAX_ITERATIONS)
+        return _solution_from_residual(mech, target.x, q, r) if closed else None
     try:
         q = assemble(
             mech.model,
@@ -288,7 +292,7 @@ def _from_guess(
             q0,
             np.arange(mech.nv),
             tol=tol,
-            max_iterations=60,
+            max_iterations=LM_MAX_ITERATIONS,
             extra=target,
         ).q
     except ClosureNotSatisfied:
