@@ -1231,6 +1231,31 @@ def batch_newton_modes(
 
 
 @njit(cache=True)
+def _predict(Q: np.ndarray, p0: int, p1: int, p2: int, out: np.ndarray) -> None:
+    """The next point of a line of equally spaced solutions, by polynomial extrapolation, into ``out``.
+
+    The solutions are ``Q[p0]``, ``Q[p1]``, ``Q[p2]``, nearest first; -1 where absent (from the
+    last one given on).
+    """
+    for t in range(out.shape[0]):
+        if p2 >= 0:
+            out[t] = 3.0 * Q[p0, t] - 3.0 * Q[p1, t] + Q[p2, t]
+        elif p1 >= 0:
+            out[t] = 2.0 * Q[p0, t] - Q[p1, t]
+        else:
+            out[t] = Q[p0, t]
+
+
+@njit(cache=True)
+def _compatible(mode: np.ndarray, wanted: np.ndarray) -> bool:
+    """Whether working mode ``mode`` is ``wanted`` (a zero sign on either side matches either)."""
+    for leg in range(mode.shape[0]):
+        if not (mode[leg] == wanted[leg] or mode[leg] == 0 or wanted[leg] == 0):
+            return False
+    return True
+
+
+@njit(cache=True)
 def walk_line(
     ints: np.ndarray,
     floats: np.ndarray,
@@ -1281,13 +1306,7 @@ def walk_line(
     p = start + step
     while 0 <= p < reached.shape[0] and not reached[p]:
         p0 = p - step
-        for t in range(nq):
-            if count >= 2:  # the start and two points of this walk behind
-                q[0, t] = 3.0 * Q[p0, t] - 3.0 * Q[p0 - step, t] + Q[p0 - 2 * step, t]
-            elif count == 1:
-                q[0, t] = 2.0 * Q[p0, t] - Q[p0 - step, t]
-            else:
-                q[0, t] = Q[p0, t]
+        _predict(Q, p0, p0 - step if count >= 1 else -1, p0 - 2 * step if count >= 2 else -1, q[0])
         X[0] = poses[p]
         _newton_batch(
             k, q, X, R_stars[p : p + 1] if three_angles else R_stars, tol, max_iterations, stall, ok, A, R
@@ -1295,11 +1314,7 @@ def walk_line(
         if not ok[0]:
             break
         _leg_modes(k, A[0], R[0], legs, turns, generic, rtol, M, mode)
-        fits = True
-        for leg in range(mode.shape[0]):
-            if not (mode[leg] == wanted[leg] or mode[leg] == 0 or wanted[leg] == 0):
-                fits = False
-        if not fits:
+        if not _compatible(mode, wanted):
             break
         Q[p] = q[0]
         modes[p] = mode
@@ -1415,13 +1430,7 @@ def walk_rows_step(
                 continue
             two = 0 <= b1 < n0 and reached[b1 * n1 + c]
             three = two and 0 <= b2 < n0 and reached[b2 * n1 + c]
-            for t in range(nq):
-                if three:
-                    Qb[nb, t] = 3.0 * Q[p0, t] - 3.0 * Q[b1 * n1 + c, t] + Q[b2 * n1 + c, t]
-                elif two:
-                    Qb[nb, t] = 2.0 * Q[p0, t] - Q[b1 * n1 + c, t]
-                else:
-                    Qb[nb, t] = Q[p0, t]
+            _predict(Q, p0, b1 * n1 + c if two else -1, b2 * n1 + c if three else -1, Qb[nb])
             p = i * n1 + c
             Xb[nb] = poses[p]
             if three_angles:
@@ -1435,11 +1444,7 @@ def walk_rows_step(
             if not ok[e]:
                 continue
             _leg_modes(k, Ab[e], Rj[e], legs, turns, generic, rtol, M, mode)
-            fits = True
-            for leg in range(mode.shape[0]):
-                if not (mode[leg] == wanted[leg] or mode[leg] == 0 or wanted[leg] == 0):
-                    fits = False
-            if not fits:
+            if not _compatible(mode, wanted):
                 continue
             p = i * n1 + cols[e]
             Q[p] = Qb[e]
