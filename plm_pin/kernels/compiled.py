@@ -1032,7 +1032,29 @@ def _newton_batch(
     A_out: np.ndarray,
     R_out: np.ndarray,
 ) -> None:
-    """:func:`batch_newton` on the unpacked arrays ``k``."""
+    """Gauss-Newton on closures and task at each pose of a batch, from its row of ``Q`` (solved in place).
+
+    Each start's quaternions and (cos, sin) pairs are first put back to unit norm (:func:`normalize`).
+
+    Every iteration takes a fresh Jacobian; a pose fails when its residual does not fall
+    below ``stall`` times the previous one, when the normal matrix is not positive definite,
+    or after ``max_iterations``; no polishing step. Where a pose converges, ``ok`` is True,
+    ``A_out`` holds the inverse-kinematics Jacobian (closure rows, then the task frame's
+    world-aligned twist rows) and ``R_out`` the world rotation of every joint.
+
+    Args:
+        k: the kernel's arrays (a frame task).
+        Q: starting configurations, solved in place, shape (B, nq).
+        X: task targets, shape (B, n_task).
+        R_stars: target rotations of tasks with all three angles (else any), shape (B, 3, 3),
+            or one for every pose, shape (1, 3, 3).
+        tol: residual tolerance [m, rad].
+        max_iterations: iteration cap.
+        stall: the residual ratio below which an iteration must go.
+        ok: out, shape (B,).
+        A_out: out, shape (B, m + n_task, nv).
+        R_out: out, shape (B, nj, 3, 3).
+    """
     nj, nv, nf, m = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1), k.m
     n = m + X.shape[1]
     A, r, N, b, J = np.empty((n, nv)), np.empty(n), np.empty((nv, nv)), np.empty(nv), np.empty((6, nv))
@@ -1079,47 +1101,6 @@ def _newton_batch(
             integrate(k, q, b, q_next)
             q[:] = q_next
             err_prev = err
-
-
-@njit(cache=True)
-def batch_newton(
-    ints: np.ndarray,
-    floats: np.ndarray,
-    Q: np.ndarray,
-    X: np.ndarray,
-    R_stars: np.ndarray,
-    tol: float,
-    max_iterations: int,
-    stall: float,
-    ok: np.ndarray,
-    A_out: np.ndarray,
-    R_out: np.ndarray,
-) -> None:
-    """Gauss-Newton on closures and task at each pose of a batch, from its row of ``Q`` (solved in place).
-
-    Each start's quaternions and (cos, sin) pairs are first put back to unit norm (:func:`normalize`).
-
-    Every iteration takes a fresh Jacobian; a pose fails when its residual does not fall
-    below ``stall`` times the previous one, when the normal matrix is not positive definite,
-    or after ``max_iterations``; no polishing step. Where a pose converges, ``ok`` is True,
-    ``A_out`` holds the inverse-kinematics Jacobian (closure rows, then the task frame's
-    world-aligned twist rows) and ``R_out`` the world rotation of every joint.
-
-    Args:
-        ints: the packed integer arrays of the kernel (a frame task).
-        floats: its packed float arrays.
-        Q: starting configurations, solved in place, shape (B, nq).
-        X: task targets, shape (B, n_task).
-        R_stars: target rotations of tasks with all three angles (else any), shape (B, 3, 3),
-            or one for every pose, shape (1, 3, 3).
-        tol: residual tolerance [m, rad].
-        max_iterations: iteration cap.
-        stall: the residual ratio below which an iteration must go.
-        ok: out, shape (B,).
-        A_out: out, shape (B, m + n_task, nv).
-        R_out: out, shape (B, nj, 3, 3).
-    """
-    _newton_batch(unpack(ints, floats), Q, X, R_stars, tol, max_iterations, stall, ok, A_out, R_out)
 
 
 @njit(cache=True)
@@ -1214,9 +1195,9 @@ def batch_newton_modes(
     A_out: np.ndarray,
     modes: np.ndarray,
 ) -> None:
-    """:func:`batch_newton`, and the working mode (:func:`_leg_modes`) of each pose that converges.
+    """:func:`_newton_batch`, and the working mode (:func:`_leg_modes`) of each pose that converges.
 
-    Arguments as :func:`batch_newton`'s (without the joint rotations) and, for the modes,
+    Arguments as :func:`_newton_batch`'s (the packed arrays, without the joint rotations) and, for the modes,
     ``legs``, ``turns``, ``generic`` and ``rtol`` as :func:`walk_rows_step` takes them;
     ``modes`` is out, shape (B, n_legs).
     """
@@ -1282,7 +1263,7 @@ def walk_line(
     The walk starts at point ``start`` (reached) and goes by ``step`` (+1 or -1). Each point is
     predicted by polynomial extrapolation from up to three points before it on this walk (the
     start included), its quaternions and (cos, sin) pairs put back to unit norm, solved by
-    :func:`batch_newton`'s Newton and kept (written into ``Q``, ``modes``, ``reached``; its
+    :func:`_newton_batch`'s Newton and kept (written into ``Q``, ``modes``, ``reached``; its
     flat index and IK Jacobian into ``index`` and ``A_out``) if its working mode
     (:func:`_leg_modes`) is compatible with ``wanted``. The walk ends at the line's end, at a
     reached point, or at the first point that fails either test.
@@ -1354,7 +1335,7 @@ def walk_rows_step(
     Each side's next row (``fronts``, the upward side first, the downward one unless
     ``lagging``) is predicted per column solved on the row before it, by polynomial
     extrapolation from up to three rows before it on its side, solved in one batch by
-    :func:`batch_newton`'s Newton and kept where it converges in a working mode
+    :func:`_newton_batch`'s Newton and kept where it converges in a working mode
     (:func:`_leg_modes`) compatible with ``wanted`` (equal signs, or a zero on either side):
     its configuration, mode and ``reached`` written into the grid, its flat index and IK
     Jacobian into ``index`` and ``A_out``. A side ends (its front set to -1) past the grid's

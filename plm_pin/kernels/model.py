@@ -235,36 +235,6 @@ class Kernel:
         residual_norm, inside = info.tolist()
         return q, r, pose, residual_norm, bool(inside)
 
-    def batch_newton(
-        self, Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float, max_iterations: int, stall: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Gauss-Newton at each pose of a batch (:func:`.compiled.batch_newton`; a frame task).
-
-        Args:
-            Q: starting configurations, shape (B, nq).
-            X: task targets, shape (B, n_task).
-            R_stars: their rotations where the task holds all three angles (else ignored), (B, 3, 3),
-                or one for every pose (1, 3, 3).
-            tol: residual tolerance [m, rad].
-            max_iterations: iteration cap.
-            stall: a pose whose residual does not fall below ``stall`` times the previous one fails.
-
-        Returns:
-            Configurations (B, nq), which converged (B,), the inverse-kinematics Jacobian
-            ``[J_phi; J_x]`` (task twist rows) at each (B, m + n_task, nv) and the joint
-            rotations there (B, njoints, 3, 3); the last two meaningful where converged.
-        """
-        a = self.arrays
-        B = Q.shape[0]
-        q = np.array(Q, dtype=float)
-        X = np.ascontiguousarray(X, dtype=float)
-        R_stars = np.ascontiguousarray(R_stars, dtype=float)
-        ok = np.zeros(B, dtype=np.bool_)
-        A = np.full((B, a.m + X.shape[1], a.nv), np.nan)
-        R = np.full((B, a.parents.size, 3, 3), np.nan)
-        _compiled().batch_newton(self.ints, self.floats, q, X, R_stars, tol, max_iterations, stall, ok, A, R)
-        return q, ok, A, R
-
     def walk_rows(
         self,
         legs: Sequence[Leg],
@@ -282,7 +252,7 @@ class Kernel:
         """Solve the rows on both sides of row ``i0`` of a grid, both sides' next rows a step (a frame task).
 
         Each step (:func:`.compiled.walk_rows_step`) predicts the next row of each side per column
-        from the rows before it on its side, solves it by Gauss-Newton (as :meth:`batch_newton`)
+        from the rows before it on its side, solves it by Gauss-Newton (as :meth:`newton_modes`)
         and writes the points that converge in a working mode compatible with ``wanted`` into
         ``Q``, ``reached`` and ``modes``; the downward side waits ``lag`` steps. A side ends at
         the grid's edge or after a row with no solved point.
@@ -369,14 +339,20 @@ class Kernel:
         self, legs: Sequence[Leg], Q: np.ndarray, X: np.ndarray, R_stars: np.ndarray, tol: float,
         max_iterations: int = NEWTON_MAX_ITERATIONS,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
-        """:meth:`batch_newton` with the working mode of each pose that converges (one compiled call).
+        """Gauss-Newton at each pose of a batch, with the working mode of each that converges (a frame task).
+
+        One compiled call (:func:`.compiled.batch_newton_modes`): each start's quaternions and
+        (cos, sin) pairs are put back to unit norm, every iteration takes a fresh Jacobian, and a
+        pose fails when its residual does not fall below :data:`STALL_RATIO` times the previous
+        one, when the normal matrix is not positive definite, or after ``max_iterations``.
 
         Args:
             legs: the mechanism's legs (the square ones carry the working mode).
             Q: starting configurations, shape (B, nq) (a solution with ``max_iterations`` 0: only
                 its Jacobian and mode are computed).
             X: task targets, shape (B, n_task).
-            R_stars: as :meth:`batch_newton`'s.
+            R_stars: their rotations where the task holds all three angles (else ignored),
+                (B, 3, 3), or one for every pose (1, 3, 3).
             tol: residual tolerance [m, rad].
             max_iterations: iteration cap.
 

@@ -1,4 +1,4 @@
-"""The kernels' batched Newton against the numpy batch engine of the workspace maps."""
+"""The kernels' batched Newton and working modes against the numpy batch engine of the workspace maps."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 
 from plm_pin.core.assembly import NEWTON_MAX_ITERATIONS, STALL_RATIO
 from plm_pin.kernels import kernel_of
-from plm_pin.workspace._batch import BatchKinematics, batch_newton, rpy_matrix
+from plm_pin.workspace._batch import BatchKinematics, batch_modes, batch_newton, rpy_matrix
 from tests.conftest import preset
 
 
@@ -31,10 +31,11 @@ def test_batch_newton_matches_the_numpy_engine(name, rng):
         R_stars = rpy_matrix(X[:, len(task.linear) :])
     tol = mech.closure_tol
     want = batch_newton(kin, Q, X, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
-    got = kernel.batch_newton(kin.normalized(Q), X, R_stars, tol, NEWTON_MAX_ITERATIONS, STALL_RATIO)
+    got = kernel.newton_modes(mech.legs, Q, X, R_stars, tol, NEWTON_MAX_ITERATIONS)
     np.testing.assert_array_equal(got[1], want[1])
     assert got[1].sum() >= len(X) // 2 and not got[1][-1]
     ok = got[1]
     np.testing.assert_allclose(got[0][ok], want[0][ok], atol=1e-9)
     np.testing.assert_allclose(got[2][ok], want[2][ok], atol=1e-9)
-    np.testing.assert_allclose(got[3][ok], want[3][ok], atol=1e-9)
+    modes = batch_modes(want[2][ok], mech.legs, kin.turns(want[3][ok], mech.legs))
+    np.testing.assert_array_equal(got[3][ok], modes)
