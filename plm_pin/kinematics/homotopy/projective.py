@@ -42,6 +42,7 @@ from .tracking import (
     FINAL_NEWTON,
     MAX_STEP,
     REACHED,
+    corrected,
     path_norm,
     solve_linear,
 )
@@ -52,6 +53,10 @@ ENDGAME_T = 0.99
 """From this :math:`t` on, a path whose :math:`z_0` falls to
 :data:`~plm_pin.tolerances.HOMOTOPY_INFINITY_RTOL` is at infinity, without tracking on to
 :math:`t = 1` (earlier, a path may pass near infinity and come back)."""
+ENDGAME_STALL = 1e-2
+"""From :data:`ENDGAME_T` on, a path whose step falls below this fraction of :math:`1 - t` is given up
+(FAILED): near a singular end, such as a root at infinity, the corrector stalls at any step, and halving
+on to :data:`~plm_pin.tolerances.HOMOTOPY_MIN_STEP` only costs evaluations."""
 
 
 @njit(cache=True)
@@ -143,6 +148,7 @@ def track_projective(
     pt = p0 + t0 * dp
     t, h = t0, 0.1
     steps, streak = 0, 0
+    omega = np.inf  # Newton's contraction constant, from the last step (:func:`~.tracking.corrected`)
     _step(z, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, k1)
     code = REACHED
     while t < 1.0:
@@ -177,8 +183,9 @@ def track_projective(
                     break
                 for i in range(m):
                     y[i] += d[i]
-                small = HOMOTOPY_CORRECTOR_TOL * path_norm(y)
-                if nd <= small or (last < np.inf and nd * (nd / last) <= small):
+                if last < np.inf:
+                    omega = nd / (last * last)
+                if corrected(nd, last, omega, HOMOTOPY_CORRECTOR_TOL * path_norm(y)):
                     converged = True
                     break
                 last = nd
@@ -196,7 +203,7 @@ def track_projective(
         else:
             h *= 0.5
             streak = 0
-            if h < HOMOTOPY_MIN_STEP:
+            if h < HOMOTOPY_MIN_STEP or (t >= ENDGAME_T and h < ENDGAME_STALL * (1.0 - t)):
                 code = FAILED
                 break
     if code == REACHED:

@@ -6,8 +6,9 @@ actuator values and the offsets added to the equations (:mod:`.generic` uses the
 a forward-kinematics call keeps them at zero). A path follows
 :math:`\dot x = -F_x^{-1} (F_p \dot p + \dot b)`: a fourth-order Runge-Kutta predictor, then
 at most :data:`CORRECTOR_STEPS` Newton corrections, accepted when they contract and stopped
-when a correction, or the next one predicted from the contraction, is small; the step
-doubles after three accepted steps in a row and halves on a rejected one.
+when a correction, or the next one predicted from the contraction, is small (:func:`corrected`);
+the next step aims the predictor's error at :data:`STEP_ERROR` (:func:`next_step`), and a rejected
+step halves.
 
 Endgame: a path whose norm passes :data:`HOMOTOPY_DIVERGED_NORM` goes to infinity (the target has
 fewer finite solutions), and so does a path whose step is rejected while its norm grows like a
@@ -34,6 +35,10 @@ infinity by the endgame's growth test (:func:`_to_infinity`)."""
 CORRECTOR_STEPS = 3
 MAX_STEP = 0.2
 FINAL_NEWTON = 4
+STEP_ERROR = 1e-3
+"""The predictor's error (its first correction, relative to 1 + the path's norm) the next step aims at."""
+OMEGA_MARGIN = 4.0
+"""Safety factor on the last step's Newton contraction constant when predicting a correction from one."""
 ENDGAME_GROWTH = 2.0
 """Least growth of a path's norm per decade of 1 - t, over two decades, to call it diverging."""
 ENDGAME_EXPONENT = 0.25
@@ -141,6 +146,32 @@ def path_norm(v: np.ndarray) -> float:
     return np.sqrt(acc)
 
 
+@njit(cache=True, inline="always")
+def corrected(nd: float, last: float, omega: float, small: float) -> bool:
+    """Whether the corrector has converged after a correction of norm ``nd`` (``last``: the one before).
+
+    It has when ``nd`` is below ``small``, or the next correction will be: by this step's
+    contraction (``nd / last``) or, after the first correction (``last`` inf), by Newton's quadratic
+    contraction with the constant ``omega`` measured at the last step (times :data:`OMEGA_MARGIN`;
+    inf while unmeasured, so a path's first step always takes two corrections).
+    """
+    next_one = nd * (nd / last) if last < np.inf else OMEGA_MARGIN * omega * nd * nd
+    return nd <= small or next_one <= small
+
+
+@njit(cache=True, inline="always")
+def next_step(h: float, first: float, size: float) -> float:
+    """The step after an accepted step ``h`` whose first correction (the predictor's error) was ``first``.
+
+    The predictor's error is of fifth order in the step: the next one aims it at :data:`STEP_ERROR`
+    times ``size`` (the path's scale), growing at most twofold and shrinking at most by half, and
+    at most :data:`MAX_STEP`.
+    """
+    goal = STEP_ERROR * size
+    grow = 2.0 if first <= goal / 32.0 else max(0.5, 0.8 * (goal / first) ** 0.2)
+    return min(grow * h, MAX_STEP)
+
+
 @njit(cache=True)
 def _to_infinity(x: np.ndarray, v: np.ndarray, rest: float, gap: float, marks: np.ndarray) -> bool:
     r"""Whether a path whose step was rejected at :math:`1 - t` = ``rest`` is going to infinity.
@@ -203,7 +234,8 @@ def track(
     dp, db = p1 - p0, b1 - b0
     pt, bt = np.empty_like(p0), np.empty_like(b0)
     t, h = 0.0, 0.1
-    steps, streak = 0, 0
+    steps = 0
+    omega = np.inf  # Newton's contraction constant at the last step: |next correction| ~ omega |correction|^2
     norm0 = path_norm(x0)
     # the norm where 1 - t last passed a power of ten, and at the two passes before (endgame)
     gap, marks = 1.0, np.array([np.nan, np.nan, norm0])
@@ -230,6 +262,7 @@ def track(
             y[i] = x[i] + (h / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
             ok = ok and np.isfinite(y[i].real) and np.isfinite(y[i].imag)
         last: float = np.inf
+        first = np.inf  # the first correction: the predictor's error
         if ok:
             converged = False
             for _ in range(CORRECTOR_STEPS):
@@ -239,9 +272,11 @@ def track(
                     break
                 for i in range(n):
                     y[i] += d[i]
-                # converged: this correction is small, or the next one will be (contraction nd / last)
-                small = HOMOTOPY_CORRECTOR_TOL * (1.0 + path_norm(y))
-                if nd <= small or (last < np.inf and nd * (nd / last) <= small):
+                if last < np.inf:
+                    omega = nd / (last * last)
+                else:
+                    first = nd
+                if corrected(nd, last, omega, HOMOTOPY_CORRECTOR_TOL * (1.0 + path_norm(y))):
                     converged = True
                     break
                 last = nd
@@ -251,10 +286,7 @@ def track(
             k1[:] = v
             fresh = True
             t += h
-            streak += 1
-            if streak >= 3:
-                h = min(2.0 * h, MAX_STEP)
-                streak = 0
+            h = next_step(h, first, 1.0 + path_norm(x))
             if path_norm(x) > HOMOTOPY_DIVERGED_NORM or path_norm(x) > handoff * (1.0 + norm0):
                 return x, DIVERGED, steps, t
             if 1.0 - t <= 0.1 * gap:
@@ -265,7 +297,6 @@ def track(
             if _to_infinity(x, k1, 1.0 - t, gap, marks):  # no use halving the step down to HOMOTOPY_MIN_STEP
                 return x, GROWING, steps, t
             h *= 0.5
-            streak = 0
             if h < HOMOTOPY_MIN_STEP:
                 if path_norm(x) > 1e3 * (1.0 + norm0):
                     return x, DIVERGED, steps, t
