@@ -506,7 +506,7 @@ HOMOTOPY_SAME_ROOT_RTOL = 1e-6
 """[-] Relative distance under which two generic solutions are the same root."""
 
 HOMOTOPY_SINGULAR_COND = 1e10
-"""[-] Condition number of the square system's Jacobian above which a path end counts as singular."""
+"""[-] 1-norm condition number of the square system's Jacobian above which a path end counts as singular."""
 
 HOMOTOPY_DIVERGED_NORM = 1e8
 """[-] Norm of the unknowns above which a homotopy path goes to infinity."""

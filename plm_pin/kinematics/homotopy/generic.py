@@ -92,7 +92,7 @@ def _regular(
 ) -> np.ndarray:
     """Rows of ``X`` that ended at t = 1 on a finite, non-singular root."""
     from .evaluation import evaluate
-    from .tracking import REACHED
+    from .tracking import REACHED, condition_number
 
     keep = []
     for x, code in zip(X, codes, strict=True):
@@ -100,7 +100,9 @@ def _regular(
             continue
         F, Jx, _ = evaluate(form, x, p, b)
         scale = 1.0 + np.abs(x).max()
-        if np.abs(F).max() > HOMOTOPY_ROOT_RTOL * scale or np.linalg.cond(Jx) > HOMOTOPY_SINGULAR_COND:
+        if np.abs(F).max() > HOMOTOPY_ROOT_RTOL * scale:
+            continue
+        if condition_number(np.ascontiguousarray(Jx)) > HOMOTOPY_SINGULAR_COND:
             continue
         keep.append(x)
     return np.array(keep).reshape(-1, form.n)

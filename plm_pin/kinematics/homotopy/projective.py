@@ -42,6 +42,7 @@ from .tracking import (
     FINAL_NEWTON,
     MAX_STEP,
     REACHED,
+    condition_number,
     corrected,
     path_norm,
     solve_linear,
@@ -303,7 +304,7 @@ def projective_ends(
         )  # scaled to unit norm: the homogenised equations' scales are arbitrary
         if np.abs(G).max() > HOMOTOPY_ROOT_RTOL * (1.0 + np.abs(z).max()):
             failed[i] = True
-        elif not np.all(rows > 0) or not np.linalg.cond(Gz / rows[:, None]) <= HOMOTOPY_SINGULAR_COND:
+        elif not np.all(rows > 0) or not condition_number(Gz / rows[:, None]) <= HOMOTOPY_SINGULAR_COND:
             singular += 1
         else:
             roots.append(z[1:] / z[0])

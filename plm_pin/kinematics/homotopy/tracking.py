@@ -336,10 +336,27 @@ def track_all(
 
 
 @njit(cache=True)
+def condition_number(A: np.ndarray) -> float:
+    r"""The 1-norm condition number :math:`\|A\|_1 \|A^{-1}\|_1` of a square complex matrix.
+
+    By an LU inverse: 2 to 6 us on the 4 to 12 unknowns here, where the 2-norm's SVD takes 6 to 30
+    (the two are within a factor n of each other). Infinite where ``A`` is not finite or is singular.
+    """
+    if not np.all(np.isfinite(A)):
+        return np.inf
+    try:
+        B = np.linalg.inv(A)
+    except Exception:  # exactly singular
+        return np.inf
+    size = np.abs(A).sum(axis=0).max() * np.abs(B).sum(axis=0).max()
+    return size if np.isfinite(size) else np.inf
+
+
+@njit(cache=True)
 def ends_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, args: tuple) -> tuple[np.ndarray, np.ndarray]:
     """The square system at every row of ``X`` (N, n): F (N, n) and the condition number of F_x (N,).
 
-    In one compiled call; the condition number (2-norm, by an SVD) is infinite where F_x is not finite.
+    In one compiled call; the condition number is :func:`condition_number`'s.
     """
     N, n = X.shape
     ws = workspace_for(n, p.shape[0], args)
@@ -348,8 +365,7 @@ def ends_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, args: tuple) -> tuple[n
     for k in range(N):
         F, J = system(X[k], p, b, ws, *args)
         Fs[k] = F
-        Jx = np.ascontiguousarray(J[:, :n])
-        conds[k] = np.linalg.cond(Jx) if np.all(np.isfinite(Jx)) else np.inf
+        conds[k] = condition_number(np.ascontiguousarray(J[:, :n]))
     return Fs, conds
 
 

@@ -117,6 +117,20 @@ def test_distinct_roots_compare_each_row_with_the_rows_kept_before_it():
     assert _distinct(X).tolist() == [True, False, True, False, True]
 
 
+def test_condition_number_is_numpys_1_norm_condition_and_infinite_where_singular():
+    """Equal to numpy's cond(A, 1) on random and ill-conditioned matrices; infinite on singular ones."""
+    from plm_pin.kinematics.homotopy.tracking import condition_number
+
+    rng = np.random.default_rng(5)
+    for n in (2, 7, 11):
+        A = rng.normal(size=(n, n)) + 1j * rng.normal(size=(n, n))
+        A[:, 0] *= 1e-6  # ill-conditioned
+        assert condition_number(A) == pytest.approx(np.linalg.cond(A, 1), rel=1e-9)
+    singular = np.ones((3, 3), dtype=np.complex128)
+    assert condition_number(singular) == np.inf
+    assert condition_number(np.full((2, 2), np.nan + 0j)) == np.inf
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_interval_system_encloses_the_complex_evaluation(name):
     """F and F_x over a box (or a point) hold the complex evaluator's values at its midpoint and inside it.
