@@ -147,7 +147,7 @@ def track_projective(
     )
     dp = p1 - p0
     pt = p0 + t0 * dp
-    t, h = t0, 0.1
+    t, h = t0, 0.1 * (1.0 - t0)  # a path resumed near its end starts at the scale of what is left
     steps, streak = 0, 0
     omega = np.inf  # Newton's contraction constant, from the last step (:func:`~.tracking.corrected`)
     _step(z, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, k1)
