@@ -50,10 +50,12 @@ __all__ = [
     "GRAM_RTOL",
     "HOMOTOPY_CORRECTOR_TOL",
     "HOMOTOPY_DIVERGED_NORM",
+    "HOMOTOPY_ENDGAME_MIN_STEP",
     "HOMOTOPY_ENTRY_TOL",
     "HOMOTOPY_INFINITY_RTOL",
     "HOMOTOPY_MAX_BOX_RTOL",
     "HOMOTOPY_MIN_STEP",
+    "HOMOTOPY_PREDICTOR_RTOL",
     "HOMOTOPY_REAL_RTOL",
     "HOMOTOPY_ROOT_RTOL",
     "HOMOTOPY_SAME_ROOT_RTOL",
@@ -522,6 +524,12 @@ HOMOTOPY_CORRECTOR_TOL = 1e-9
 
 HOMOTOPY_MIN_STEP = 1e-9
 """[-] Smallest step in the path parameter t before a homotopy path is declared failed."""
+
+HOMOTOPY_PREDICTOR_RTOL = 1e-3
+"""[-] Predictor error (first correction, relative to 1 + the path's norm) a homotopy step is sized for."""
+
+HOMOTOPY_ENDGAME_MIN_STEP = 1e-2
+"""[-] Smallest step past t = 0.99, as a fraction of 1 - t, before a projective homotopy path is given up."""
 
 HOMOTOPY_MAX_BOX_RTOL = 1e-6
 """[-] Largest relative half-width of a Krawczyk box (a root certified farther out is not certified)."""

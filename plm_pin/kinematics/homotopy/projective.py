@@ -28,6 +28,7 @@ from numba import njit
 
 from ...tolerances import (
     HOMOTOPY_CORRECTOR_TOL,
+    HOMOTOPY_ENDGAME_MIN_STEP,
     HOMOTOPY_INFINITY_RTOL,
     HOMOTOPY_MIN_STEP,
     HOMOTOPY_ROOT_RTOL,
@@ -54,10 +55,6 @@ ENDGAME_T = 0.99
 """From this :math:`t` on, a path whose :math:`z_0` falls to
 :data:`~plm_pin.tolerances.HOMOTOPY_INFINITY_RTOL` is at infinity, without tracking on to
 :math:`t = 1` (earlier, a path may pass near infinity and come back)."""
-ENDGAME_STALL = 1e-2
-"""From :data:`ENDGAME_T` on, a path whose step falls below this fraction of :math:`1 - t` is given up
-(FAILED): near a singular end, such as a root at infinity, the corrector stalls at any step, and halving
-on to :data:`~plm_pin.tolerances.HOMOTOPY_MIN_STEP` only costs evaluations."""
 
 
 @njit(cache=True)
@@ -204,7 +201,9 @@ def track_projective(
         else:
             h *= 0.5
             streak = 0
-            if h < HOMOTOPY_MIN_STEP or (t >= ENDGAME_T and h < ENDGAME_STALL * (1.0 - t)):
+            # past ENDGAME_T a step that small is given up too: near a singular end, such as a root at
+            # infinity, the corrector stalls at any step, and halving on only costs evaluations
+            if h < HOMOTOPY_MIN_STEP or (t >= ENDGAME_T and h < HOMOTOPY_ENDGAME_MIN_STEP * (1.0 - t)):
                 code = FAILED
                 break
     if code == REACHED:

@@ -7,8 +7,9 @@ a forward-kinematics call keeps them at zero). A path follows
 :math:`\dot x = -F_x^{-1} (F_p \dot p + \dot b)`: a fourth-order Runge-Kutta predictor, then
 at most :data:`CORRECTOR_STEPS` Newton corrections, accepted when they contract and stopped
 when a correction, or the next one predicted from the contraction, is small (:func:`corrected`);
-the next step aims the predictor's error at :data:`STEP_ERROR` (:func:`next_step`), and a rejected
-step halves.
+the next step aims the predictor's error at
+:data:`~plm_pin.tolerances.HOMOTOPY_PREDICTOR_RTOL` (:func:`next_step`), and a rejected step
+halves.
 
 Endgame: a path whose norm passes :data:`HOMOTOPY_DIVERGED_NORM` goes to infinity (the target has
 fewer finite solutions), and so does a path whose step is rejected while its norm grows like a
@@ -25,7 +26,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...tolerances import HOMOTOPY_CORRECTOR_TOL, HOMOTOPY_DIVERGED_NORM, HOMOTOPY_MIN_STEP
+from ...tolerances import (
+    HOMOTOPY_CORRECTOR_TOL,
+    HOMOTOPY_DIVERGED_NORM,
+    HOMOTOPY_MIN_STEP,
+    HOMOTOPY_PREDICTOR_RTOL,
+)
 from .evaluation import system, workspace_for
 
 REACHED, DIVERGED, FAILED, GROWING = 0, 1, 2, 3
@@ -35,9 +41,7 @@ infinity by the endgame's growth test (:func:`_to_infinity`)."""
 CORRECTOR_STEPS = 3
 MAX_STEP = 0.2
 FINAL_NEWTON = 4
-STEP_ERROR = 1e-3
-"""The predictor's error (its first correction, relative to 1 + the path's norm) the next step aims at."""
-OMEGA_MARGIN = 4.0
+CONTRACTION_SAFETY = 4.0
 """Safety factor on the last step's Newton contraction constant when predicting a correction from one."""
 ENDGAME_GROWTH = 2.0
 """Least growth of a path's norm per decade of 1 - t, over two decades, to call it diverging."""
@@ -152,10 +156,10 @@ def corrected(nd: float, last: float, omega: float, small: float) -> bool:
 
     It has when ``nd`` is below ``small``, or the next correction will be: by this step's
     contraction (``nd / last``) or, after the first correction (``last`` inf), by Newton's quadratic
-    contraction with the constant ``omega`` measured at the last step (times :data:`OMEGA_MARGIN`;
+    contraction with the constant ``omega`` measured at the last step (times :data:`CONTRACTION_SAFETY`;
     inf while unmeasured, so a path's first step always takes two corrections).
     """
-    next_one = nd * (nd / last) if last < np.inf else OMEGA_MARGIN * omega * nd * nd
+    next_one = nd * (nd / last) if last < np.inf else CONTRACTION_SAFETY * omega * nd * nd
     return nd <= small or next_one <= small
 
 
@@ -163,11 +167,11 @@ def corrected(nd: float, last: float, omega: float, small: float) -> bool:
 def next_step(h: float, first: float, size: float) -> float:
     """The step after an accepted step ``h`` whose first correction (the predictor's error) was ``first``.
 
-    The predictor's error is of fifth order in the step: the next one aims it at :data:`STEP_ERROR`
-    times ``size`` (the path's scale), growing at most twofold and shrinking at most by half, and
-    at most :data:`MAX_STEP`.
+    The predictor's error is of fifth order in the step: the next one aims it at
+    :data:`~plm_pin.tolerances.HOMOTOPY_PREDICTOR_RTOL` times ``size`` (the path's scale), growing at
+    most twofold and shrinking at most by half, and at most :data:`MAX_STEP`.
     """
-    goal = STEP_ERROR * size
+    goal = HOMOTOPY_PREDICTOR_RTOL * size
     grow = 2.0 if first <= goal / 32.0 else max(0.5, 0.8 * (goal / first) ** 0.2)
     return min(grow * h, MAX_STEP)
 
