@@ -277,7 +277,7 @@ def workspace(
     closure_frames: np.ndarray,
     n_entries: int,
 ) -> tuple:
-    """The buffers :func:`system` writes into, allocated once per batch of evaluations.
+    """The buffers :func:`generic_system` writes into, allocated once per batch of evaluations.
 
     Also what does not change from one evaluation to the next: the local transforms' entries that
     do not depend on the coordinates (:func:`_constant_local`), and the structure: the derivative
@@ -550,7 +550,7 @@ def _entries(
 
 
 @njit(cache=True, fastmath=FAST)
-def system(
+def generic_system(
     x: np.ndarray,
     p: np.ndarray,
     b: np.ndarray,
@@ -574,8 +574,9 @@ def system(
 ) -> tuple[np.ndarray, np.ndarray]:
     r"""Square system :math:`F(x; p) + b` (n,) and its Jacobian :math:`[F_x\ F_p]` (n, n + n_params).
 
-    Both are buffers of ``ws`` (:func:`workspace`), overwritten by the next call (and ``J`` may be
-    factored in place by the caller).
+    From the form's joints, frames and closures at each call: the definition of the system, which
+    :mod:`.straight_line` traces once into the program the trackers run. Both results are buffers
+    of ``ws`` (:func:`workspace`), overwritten by the next call.
     """
     _entries(
         x,
@@ -727,7 +728,7 @@ def evaluate(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Square system at complex ``x``, ``p`` (plus offsets ``b``): F (n,), F_x (n, n), F_p (n, n_params)."""
     bb = np.zeros(form.n, dtype=np.complex128) if b is None else np.asarray(b, dtype=np.complex128)
-    F, J = system(
+    F, J = generic_system(
         np.asarray(x, dtype=np.complex128),
         np.asarray(p, dtype=np.complex128),
         bb,

@@ -10,6 +10,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+Program = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+r"""A straight-line program of the square system (:mod:`.straight_line`): constants, complex (c,);
+instructions, int32 (k, 3): registers a, b, c; coefficients (k, 2): P and S of
+:math:`r_t = P\, r_a r_b + S\, r_c`; outputs, int32 (n, 1 + n + n_params): the registers of F and of
+each row of :math:`[F_x\ F_p]`."""
+
+EMPTY_PROGRAM: Program = (
+    np.zeros(0, dtype=np.complex128),
+    np.zeros((0, 3), dtype=np.int32),
+    np.zeros((0, 2)),
+    np.zeros((0, 0), dtype=np.int32),
+)
+"""No program (a form being built): the system is then evaluated generically."""
+
 FIXED, REVOLUTE, PRISMATIC, SPHERICAL, FREE_FLYER, REVOLUTE_PARAM, PRISMATIC_PARAM = range(7)
 """Joint kinds: held fixed, revolute (cos, sin), prismatic, spherical and free-flyer (quaternion)
 unknowns, actuated revolute and prismatic parameters."""
@@ -79,6 +93,8 @@ class PolynomialForm:
         digest: hex digest of all of the above (the cache key of the generic solve).
         legs: per eliminated leg, the frames and joints that aim it again at a platform pose
             (:func:`plm_pin.kinematics.homotopy.polynomial.aim_legs`; not in the digest).
+        program: the square system as a straight-line program, traced from the arrays above
+            (:mod:`.straight_line`; not in the digest).
     """
 
     joints: np.ndarray
@@ -108,9 +124,10 @@ class PolynomialForm:
     eliminated_v: np.ndarray
     digest: str
     legs: tuple[LegAim, ...] = ()
+    program: Program = EMPTY_PROGRAM
 
     def kernel_args(self) -> tuple[np.ndarray, ...]:
-        """The arrays the compiled kernels take, in their order."""
+        """The arrays the generic evaluation's kernels take, in their order."""
         return (
             self.parent,
             self.kind,

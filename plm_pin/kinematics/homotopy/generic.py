@@ -132,7 +132,7 @@ def _loop(  # type: ignore[no-untyped-def]
     from .threads import over_threads
     from .tracking import track_all
 
-    args = form.kernel_args()
+    program = form.program
 
     def rand(k: int) -> np.ndarray:
         return rng.normal(size=k) + 1j * rng.normal(size=k)
@@ -140,7 +140,7 @@ def _loop(  # type: ignore[no-untyped-def]
     p1, p2 = p0 + rand(form.n_params), p0 + rand(form.n_params)
     b1, b2 = (b0 + b_scale * rand(form.n), b0 + b_scale * rand(form.n)) if vary_b else (b0, b0)
     for (pa, ba), (pb, bb) in (((p0, b0), (p1, b1)), ((p1, b1), (p2, b2)), ((p2, b2), (p0, b0))):
-        X, codes, *_ = over_threads(track_all, (X,), pa, ba, pb, bb, args)
+        X, codes, *_ = over_threads(track_all, (X,), pa, ba, pb, bb, program)
         X = _regular(form, X, codes, pb, bb)
         if not len(X):
             break
@@ -155,7 +155,7 @@ def _seeded(form: PolynomialForm, seed: tuple[np.ndarray, np.ndarray] | None, p0
         return np.zeros((0, form.n), dtype=np.complex128)
     x, p = (np.asarray(a, dtype=np.complex128) for a in seed)
     zero = np.zeros(form.n, dtype=np.complex128)
-    X, codes, *_ = track_all(x.reshape(1, -1), p, zero, p0, zero, form.kernel_args())
+    X, codes, *_ = track_all(x.reshape(1, -1), p, zero, p0, zero, form.program)
     return canonical(form, _regular(form, X, codes, p0, zero))
 
 
@@ -188,7 +188,7 @@ def solve_generic(form: PolynomialForm, seed: tuple[np.ndarray, np.ndarray] | No
         if len(known) * 2 ** int(np.sum(form.unit_sizes == 4)) > MAX_SOLUTIONS:
             raise NotPolynomial(f"more than {MAX_SOLUTIONS} generic solutions")
     zero = np.zeros(form.n, dtype=np.complex128)
-    X, codes, *_ = over_threads(track_all, (known,), p0, b0, p0, zero, form.kernel_args())
+    X, codes, *_ = over_threads(track_all, (known,), p0, b0, p0, zero, form.program)
     roots = _merge(
         np.zeros((0, form.n), dtype=np.complex128), canonical(form, _regular(form, X, codes, p0, zero))
     )

@@ -300,6 +300,9 @@ def polynomial_form(mech: Mechanism, parameters: tuple[int, ...] | None = None) 
     object.__setattr__(form, "combination", combination)
     object.__setattr__(form, "degrees", degrees)
     object.__setattr__(form, "digest", h.hexdigest())
+    from .straight_line import straight_line
+
+    object.__setattr__(form, "program", straight_line(form))
     return form
 
 

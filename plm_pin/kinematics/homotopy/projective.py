@@ -34,8 +34,8 @@ from ...tolerances import (
     HOMOTOPY_ROOT_RTOL,
     HOMOTOPY_SINGULAR_COND,
 )
-from .evaluation import system, workspace_for
 from .form import PolynomialForm
+from .straight_line import Program, system, workspace
 from .threads import over_threads
 from .tracking import (
     CORRECTOR_STEPS,
@@ -58,13 +58,13 @@ ENDGAME_T = 0.99
 
 
 @njit(cache=True)
-def _homogeneous(z, p, ws, args, degrees, chart, zero_b, x, G, H):  # type: ignore[no-untyped-def]
+def _homogeneous(z, p, ws, program, degrees, chart, zero_b, x, G, H):  # type: ignore[no-untyped-def]
     """``G`` = the homogenised system at ``z`` (n + 1,), ``H`` = its Jacobian ``[G_z G_p]``."""
     n = x.shape[0]
     z0 = z[0]
     for j in range(n):
         x[j] = z[j + 1] / z0
-    F, J = system(x, p, zero_b, ws, *args)
+    F, J = system(x, p, zero_b, ws, program)
     npar = p.shape[0]
     for i in range(n):
         d = degrees[i]
@@ -87,9 +87,9 @@ def _homogeneous(z, p, ws, args, degrees, chart, zero_b, x, G, H):  # type: igno
 
 
 @njit(cache=True)
-def _step(z, p, dp, ws, args, degrees, chart, zero_b, x, G, H, A, newton, velocity):  # type: ignore[no-untyped-def]
+def _step(z, p, dp, ws, program, degrees, chart, zero_b, x, G, H, A, newton, velocity):  # type: ignore[no-untyped-def]
     """``newton`` = the Newton step, ``velocity`` = the tangent dz/dt at ``(z, p)``; one factorisation."""
-    _homogeneous(z, p, ws, args, degrees, chart, zero_b, x, G, H)
+    _homogeneous(z, p, ws, program, degrees, chart, zero_b, x, G, H)
     m = z.shape[0]
     for i in range(m):
         newton[i] = -G[i]
@@ -110,7 +110,7 @@ def track_projective(
     p1: np.ndarray,
     chart: np.ndarray,
     degrees: np.ndarray,
-    args: tuple,
+    program: Program,
 ) -> tuple[np.ndarray, int, float]:
     """Track the root ``x0`` (n,) of the closures at ``p0 + t0 (p1 - p0)`` to ``p1`` in the chart ``chart``.
 
@@ -121,7 +121,7 @@ def track_projective(
     """
     n = x0.shape[0]
     m = n + 1
-    ws = workspace_for(n, p0.shape[0], args)
+    ws = workspace(n, p0.shape[0], program)
     zero_b = np.zeros(n, dtype=np.complex128)
     x = np.empty(n, dtype=np.complex128)
     G = np.empty(m, dtype=np.complex128)
@@ -147,7 +147,7 @@ def track_projective(
     t, h = t0, 0.1 * (1.0 - t0)  # a path resumed near its end starts at the scale of what is left
     steps, streak = 0, 0
     omega = np.inf  # Newton's contraction constant, from the last step (:func:`~.tracking.corrected`)
-    _step(z, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, k1)
+    _step(z, pt, dp, ws, program, degrees, chart, zero_b, x, G, H, A, d, k1)
     code = REACHED
     while t < 1.0:
         if steps > 5000:
@@ -159,14 +159,14 @@ def track_projective(
         for i in range(m):
             zs[i] = z[i] + 0.5 * h * k1[i]
         pt[:] = p0 + th * dp
-        _step(zs, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, k2)
+        _step(zs, pt, dp, ws, program, degrees, chart, zero_b, x, G, H, A, d, k2)
         for i in range(m):
             zs[i] = z[i] + 0.5 * h * k2[i]
-        _step(zs, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, k3)
+        _step(zs, pt, dp, ws, program, degrees, chart, zero_b, x, G, H, A, d, k3)
         for i in range(m):
             zs[i] = z[i] + h * k3[i]
         pt[:] = p0 + (t + h) * dp
-        _step(zs, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, k4)
+        _step(zs, pt, dp, ws, program, degrees, chart, zero_b, x, G, H, A, d, k4)
         ok = True
         for i in range(m):
             y[i] = z[i] + (h / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
@@ -175,7 +175,7 @@ def track_projective(
         if ok:
             converged = False
             for _ in range(CORRECTOR_STEPS):
-                _step(y, pt, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, v)
+                _step(y, pt, dp, ws, program, degrees, chart, zero_b, x, G, H, A, d, v)
                 nd = path_norm(d)
                 if not np.isfinite(nd) or nd > 0.5 * last:
                     break
@@ -208,7 +208,7 @@ def track_projective(
                 break
     if code == REACHED:
         for _ in range(FINAL_NEWTON):
-            _step(z, p1, dp, ws, args, degrees, chart, zero_b, x, G, H, A, d, v)
+            _step(z, p1, dp, ws, program, degrees, chart, zero_b, x, G, H, A, d, v)
             if not np.isfinite(path_norm(d)):
                 break
             for i in range(m):
@@ -228,29 +228,29 @@ def track_projective_all(
     p1: np.ndarray,
     chart: np.ndarray,
     degrees: np.ndarray,
-    args: tuple,
+    program: Program,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`track_projective` from each row of ``X0`` (N, n) at its ``T0`` (N,): ends (N, n + 1), codes."""
     N, n = X0.shape
     Z = np.empty((N, n + 1), dtype=np.complex128)
     codes = np.empty(N, dtype=np.int64)
     for i in range(N):
-        Z[i], codes[i], _ = track_projective(X0[i], T0[i], p0, p1, chart, degrees, args)
+        Z[i], codes[i], _ = track_projective(X0[i], T0[i], p0, p1, chart, degrees, program)
     return Z, codes
 
 
 @njit(cache=True)
 def homogeneous_at(
-    z: np.ndarray, p: np.ndarray, chart: np.ndarray, degrees: np.ndarray, args: tuple
+    z: np.ndarray, p: np.ndarray, chart: np.ndarray, degrees: np.ndarray, program: Program
 ) -> tuple[np.ndarray, np.ndarray]:
     """The homogenised system (n + 1,) and its Jacobian in ``z`` (n + 1, n + 1) at ``z``, ``p``."""
     m = z.shape[0]
     n = m - 1
-    ws = workspace_for(n, p.shape[0], args)
+    ws = workspace(n, p.shape[0], program)
     G = np.empty(m, dtype=np.complex128)
     H = np.empty((m, m + p.shape[0]), dtype=np.complex128)
     x = np.empty(n, dtype=np.complex128)
-    _homogeneous(z, p, ws, args, degrees, chart, np.zeros(n, dtype=np.complex128), x, G, H)
+    _homogeneous(z, p, ws, program, degrees, chart, np.zeros(n, dtype=np.complex128), x, G, H)
     return G, H[:, :m].copy()
 
 
@@ -283,9 +283,9 @@ def projective_ends(
     if not len(X0):
         return np.zeros((0, form.n), dtype=np.complex128), 0, 0, np.zeros(0, dtype=bool)
     a = chart(form.n)
-    args = form.kernel_args()
+    program = form.program
     Z, codes = over_threads(
-        track_projective_all, (np.ascontiguousarray(X0), T0), p0, p1, a, form.degrees, args
+        track_projective_all, (np.ascontiguousarray(X0), T0), p0, p1, a, form.degrees, program
     )
     roots = []
     infinity = singular = 0
@@ -297,7 +297,7 @@ def projective_ends(
         if code != REACHED or not np.all(np.isfinite(z)):
             failed[i] = True
             continue
-        G, Gz = homogeneous_at(z, p1, a, form.degrees, args)
+        G, Gz = homogeneous_at(z, p1, a, form.degrees, program)
         rows = np.linalg.norm(
             Gz, axis=1
         )  # scaled to unit norm: the homogenised equations' scales are arbitrary

@@ -207,10 +207,8 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     values = np.asarray(actuators, dtype=float)
     p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
-    X, codes, _, ends = over_threads(
-        track_all, (gen.x,), gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH
-    )
-    F, cond = ends_at(X, p1, zero, form.kernel_args())  # the ends' residuals and conditioning, one call
+    X, codes, _, ends = over_threads(track_all, (gen.x,), gen.p, zero, p1, zero, form.program, HANDOFF_GROWTH)
+    F, cond = ends_at(X, p1, zero, form.program)  # the ends' residuals and conditioning, one call
     scale = 1.0 + np.abs(X).max(axis=1)
     with np.errstate(invalid="ignore"):
         clean = (codes == REACHED) & np.isfinite(F).all(axis=1)
@@ -234,9 +232,8 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     # actuators left unknown are at their values, then certified
     is_real = ~(np.abs(roots.imag).max(axis=1) > HOMOTOPY_REAL_RTOL * (1.0 + np.abs(roots).max(axis=1)))
     pr = np.ascontiguousarray(np.real(p1))
-    args = form.kernel_args()
-    Xr = real_newton(roots[is_real], pr, args)
-    entries = entries_at(Xr.astype(np.complex128), p1, args)
+    Xr = real_newton(roots[is_real], pr, form.program)
+    entries = entries_at(Xr.astype(np.complex128), p1, form.kernel_args())
     closes = ~(np.abs(entries).max(axis=1) > HOMOTOPY_ENTRY_TOL * (1.0 + np.abs(Xr).max(axis=1)))
     here = ~_off_actuators(form, Xr, values)
     kept = Xr[closes & here]

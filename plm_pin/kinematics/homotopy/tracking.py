@@ -32,7 +32,7 @@ from ...tolerances import (
     HOMOTOPY_MIN_STEP,
     HOMOTOPY_PREDICTOR_RTOL,
 )
-from .evaluation import system, workspace_for
+from .straight_line import Program, system, workspace
 
 REACHED, DIVERGED, FAILED, GROWING = 0, 1, 2, 3
 """Path end codes: reached t = 1, went to infinity (or handed over), tracker failure, and went to
@@ -98,9 +98,9 @@ def solve_linear(A: np.ndarray, y: np.ndarray, z: np.ndarray | None = None) -> b
 
 
 @njit(cache=True)
-def _velocity(x, p, b, dp, db, ws, args, out):  # type: ignore[no-untyped-def]
+def _velocity(x, p, b, dp, db, ws, program, out):  # type: ignore[no-untyped-def]
     """``out`` = the path's tangent dx/dt at (x, p, b)."""
-    _, J = system(x, p, b, ws, *args)
+    _, J = system(x, p, b, ws, program)
     n = x.shape[0]
     for i in range(n):
         acc = -db[i]
@@ -111,18 +111,18 @@ def _velocity(x, p, b, dp, db, ws, args, out):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def _newton(x, p, b, ws, args, out):  # type: ignore[no-untyped-def]
+def _newton(x, p, b, ws, program, out):  # type: ignore[no-untyped-def]
     """``out`` = the Newton step at (x, p, b)."""
-    F, J = system(x, p, b, ws, *args)
+    F, J = system(x, p, b, ws, program)
     for i in range(x.shape[0]):
         out[i] = -F[i]
     solve_linear(J[:, : x.shape[0]], out)
 
 
 @njit(cache=True)
-def _newton_velocity(x, p, b, dp, db, ws, args, out, velocity):  # type: ignore[no-untyped-def]
+def _newton_velocity(x, p, b, dp, db, ws, program, out, velocity):  # type: ignore[no-untyped-def]
     """``out`` = the Newton step and ``velocity`` = the path's tangent at (x, p, b), one factorisation."""
-    F, J = system(x, p, b, ws, *args)
+    F, J = system(x, p, b, ws, program)
     n = x.shape[0]
     for i in range(n):
         out[i] = -F[i]
@@ -211,12 +211,12 @@ def track(
     p1: np.ndarray,
     b1: np.ndarray,
     ws: tuple,
-    args: tuple,
+    program: Program,
     handoff: float = np.inf,
 ) -> tuple[np.ndarray, int, int, float]:
     """Track one solution ``x0`` of the system at ``(p0, b0)`` to ``(p1, b1)``.
 
-    ``ws`` is the evaluation workspace (:func:`~.evaluation.workspace`); the path's own buffers are
+    ``ws`` is the program's workspace (:func:`~.straight_line.workspace`); the path's own buffers are
     allocated once here, so no step allocates.
 
     A path whose norm passes ``handoff`` times ``1 + |x0|`` stops as DIVERGED too (for the
@@ -250,17 +250,17 @@ def track(
         steps += 1
         # RK4 predictor
         if not fresh:
-            _velocity(x, _at(t, p0, dp, pt), _at(t, b0, db, bt), dp, db, ws, args, k1)
+            _velocity(x, _at(t, p0, dp, pt), _at(t, b0, db, bt), dp, db, ws, program, k1)
         th = t + 0.5 * h
         for i in range(n):
             xs[i] = x[i] + 0.5 * h * k1[i]
-        _velocity(xs, _at(th, p0, dp, pt), _at(th, b0, db, bt), dp, db, ws, args, k2)
+        _velocity(xs, _at(th, p0, dp, pt), _at(th, b0, db, bt), dp, db, ws, program, k2)
         for i in range(n):
             xs[i] = x[i] + 0.5 * h * k2[i]
-        _velocity(xs, pt, bt, dp, db, ws, args, k3)
+        _velocity(xs, pt, bt, dp, db, ws, program, k3)
         for i in range(n):
             xs[i] = x[i] + h * k3[i]
-        _velocity(xs, _at(t + h, p0, dp, pt), _at(t + h, b0, db, bt), dp, db, ws, args, k4)
+        _velocity(xs, _at(t + h, p0, dp, pt), _at(t + h, b0, db, bt), dp, db, ws, program, k4)
         ok = True
         for i in range(n):
             y[i] = x[i] + (h / 6.0) * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
@@ -270,7 +270,7 @@ def track(
         if ok:
             converged = False
             for _ in range(CORRECTOR_STEPS):
-                _newton_velocity(y, pt, bt, dp, db, ws, args, d, v)
+                _newton_velocity(y, pt, bt, dp, db, ws, program, d, v)
                 nd = path_norm(d)
                 if not np.isfinite(nd) or nd > 0.5 * last:
                     break
@@ -306,7 +306,7 @@ def track(
                     return x, DIVERGED, steps, t
                 return x, FAILED, steps, t
     for _ in range(FINAL_NEWTON):
-        _newton(x, p1, b1, ws, args, d)
+        _newton(x, p1, b1, ws, program, d)
         if not np.isfinite(path_norm(d)):
             break
         for i in range(n):
@@ -321,7 +321,7 @@ def track_all(
     b0: np.ndarray,
     p1: np.ndarray,
     b1: np.ndarray,
-    args: tuple,
+    program: Program,
     handoff: float = np.inf,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Track every row of ``X0`` (shape (N, n)): end points (N, n), codes, steps and end t (N,) each.
@@ -329,13 +329,13 @@ def track_all(
     ``handoff`` as in :func:`track`.
     """
     N = X0.shape[0]
-    ws = workspace_for(X0.shape[1], p0.shape[0], args)
+    ws = workspace(X0.shape[1], p0.shape[0], program)
     out = np.empty_like(X0)
     codes = np.empty(N, dtype=np.int64)
     steps = np.empty(N, dtype=np.int64)
     ends = np.empty(N)
     for i in range(N):
-        out[i], codes[i], steps[i], ends[i] = track(X0[i], p0, b0, p1, b1, ws, args, handoff)
+        out[i], codes[i], steps[i], ends[i] = track(X0[i], p0, b0, p1, b1, ws, program, handoff)
     return out, codes, steps, ends
 
 
@@ -357,31 +357,31 @@ def condition_number(A: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def ends_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, args: tuple) -> tuple[np.ndarray, np.ndarray]:
+def ends_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, program: Program) -> tuple[np.ndarray, np.ndarray]:
     """The square system at every row of ``X`` (N, n): F (N, n) and the condition number of F_x (N,).
 
     In one compiled call; the condition number is :func:`condition_number`'s.
     """
     N, n = X.shape
-    ws = workspace_for(n, p.shape[0], args)
+    ws = workspace(n, p.shape[0], program)
     Fs = np.empty((N, n), dtype=np.complex128)
     conds = np.empty(N)
     for k in range(N):
-        F, J = system(X[k], p, b, ws, *args)
+        F, J = system(X[k], p, b, ws, program)
         Fs[k] = F
         conds[k] = condition_number(np.ascontiguousarray(J[:, :n]))
     return Fs, conds
 
 
 @njit(cache=True)
-def real_newton(X0: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
+def real_newton(X0: np.ndarray, p: np.ndarray, program: Program) -> np.ndarray:
     """Each row of ``X0`` (N, n) refined by at most three Newton steps on the real system, from its real part.
 
     At real parameters ``p``, in one compiled call; a row stops early when a step is below 1e-15
     relative. Returns the refined rows, shape (N, n).
     """
     N, n = X0.shape
-    ws = workspace_for(n, p.shape[0], args)
+    ws = workspace(n, p.shape[0], program)
     out = np.empty((N, n))
     xc = np.empty(n, dtype=np.complex128)
     pc = p.astype(np.complex128)
@@ -395,7 +395,7 @@ def real_newton(X0: np.ndarray, p: np.ndarray, args: tuple) -> np.ndarray:
         for _ in range(3):
             for i in range(n):
                 xc[i] = x[i]
-            F, J = system(xc, pc, b, ws, *args)
+            F, J = system(xc, pc, b, ws, program)
             for i in range(n):
                 r[i] = -F[i].real
                 for j in range(n):

@@ -54,7 +54,7 @@ def test_threaded_paths_equal_one_thread(two_threads):
     form, gen = prepared(mech)
     p1 = (mech.actuator_positions(mech.q_ref) + 1e-3)[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
-    args = (gen.p, zero, p1, zero, form.kernel_args(), HANDOFF_GROWTH)
+    args = (gen.p, zero, p1, zero, form.program, HANDOFF_GROWTH)
     threaded = over_threads(track_all, (gen.x,), *args)
     alone = track_all(gen.x, *args)
     for a, b in zip(threaded, alone, strict=True):
