@@ -109,12 +109,22 @@ def _regular(
 
 
 def canonical(form: PolynomialForm, X: np.ndarray) -> np.ndarray:
-    """Each row of ``X`` (n,) or (N, n) with every quaternion signed to a positive real part of w."""
+    """Each row of ``X`` (n,) or (N, n) with every quaternion q signed by its leading component.
+
+    q and -q are one rotation: of the pair, the one whose first component of modulus at least half
+    the largest (the lead) has a positive real part, or a positive imaginary part when that is the
+    larger. The lead is never near zero, so rounding cannot sign two copies of a root apart (as w
+    would at a half turn, where it is zero).
+    """
     X = np.array(X, dtype=np.complex128)
     for o, size in zip(form.unit_offsets, form.unit_sizes, strict=True):
         if size == 4:
-            flip = np.real(X[..., o]) < 0
-            X[..., o : o + 4] = np.where(flip[..., None], -X[..., o : o + 4], X[..., o : o + 4])
+            q = X[..., o : o + 4]
+            size_of = np.abs(q)
+            lead = np.argmax(size_of >= 0.5 * size_of.max(axis=-1, keepdims=True, initial=0.0), axis=-1)
+            z = np.take_along_axis(q, lead[..., None], axis=-1)[..., 0]
+            flip = np.where(np.abs(z.real) >= np.abs(z.imag), z.real, z.imag) < 0
+            X[..., o : o + 4] = np.where(flip[..., None], -q, q)
     return X
 
 

@@ -23,7 +23,7 @@ from plm_pin.kinematics.homotopy.certify import (
     parameter_intervals,
 )
 from plm_pin.kinematics.homotopy.evaluation import evaluate
-from plm_pin.kinematics.homotopy.generic import solve_generic
+from plm_pin.kinematics.homotopy.generic import canonical, solve_generic
 from plm_pin.kinematics.homotopy.polynomial import from_configuration, to_configuration
 from plm_pin.kinematics.homotopy.solve import _distinct, parameter_actuators
 from plm_pin.tolerances import HOMOTOPY_SAME_ROOT_RTOL
@@ -102,6 +102,30 @@ def test_krawczyk_certifies_a_root_and_refuses_a_shifted_point():
     assert np.isfinite(radii[0]) and np.isnan(radii[1])
     alone = np.concatenate([certify(form, row, c) for row in rows])
     assert np.array_equal(radii, alone, equal_nan=True)
+
+
+def test_a_quaternion_and_its_negative_get_one_sign_even_at_a_half_turn():
+    """canonical() maps q and -q to one row, with w zero up to rounding (a half turn) and complex q.
+
+    At a half turn about z, w is 0 or -0 or 1e-17 of either sign from one path to the next; a sign
+    read from w would keep both copies of the root.
+    """
+    form = polynomial_form(preset("delta"))  # a free flyer: translation, then a quaternion
+    o = int(form.unit_offsets[form.unit_sizes == 4][0])
+    rng = np.random.default_rng(4)
+    rows = []
+    for w in (0.0, -0.0, 1e-17, -1e-17):
+        q = np.array([w, 1e-17, -1e-17, 1.0])
+        rows += [q, -q]
+    c = rng.normal(size=4) + 1j * rng.normal(size=4)
+    rows += [c, -c, 1j * np.array([0.0, 0.6, 0.0, -0.8]), -1j * np.array([1e-17, 0.6, 0.0, -0.8])]
+    X = np.zeros((len(rows), form.n), dtype=np.complex128)
+    X[:, o : o + 4] = rows
+    Q = canonical(form, X)[:, o : o + 4]
+    assert np.abs(Q[:8] - Q[0]).max() <= 1e-16 and Q[0, 3] == 1.0
+    assert np.array_equal(Q[8], Q[9]) and np.abs(Q[10] - Q[11]).max() <= 1e-16
+    assert np.array_equal(canonical(form, X), canonical(form, canonical(form, X)))
+    assert canonical(form, X[:0]).shape == (0, form.n)  # no root reached
 
 
 def test_distinct_roots_compare_each_row_with_the_rows_kept_before_it():
