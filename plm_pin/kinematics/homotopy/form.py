@@ -10,17 +10,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-Program = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+Program = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 r"""A straight-line program of the square system (:mod:`.straight_line`): constants, complex (c,);
 instructions, int32 (k, 3): registers a, b, c; coefficients (k, 2): P and S of
 :math:`r_t = P\, r_a r_b + S\, r_c`; outputs, int32 (n, 1 + n + n_params): the registers of F and of
-each row of :math:`[F_x\ F_p]`."""
+each row of :math:`[F_x\ F_p]`; angles, int32: the parameters whose cosine and sine it reads."""
 
 EMPTY_PROGRAM: Program = (
     np.zeros(0, dtype=np.complex128),
     np.zeros((0, 3), dtype=np.int32),
     np.zeros((0, 2)),
     np.zeros((0, 0), dtype=np.int32),
+    np.zeros(0, dtype=np.int32),
 )
 """No program (a form being built): the system is then evaluated generically."""
 

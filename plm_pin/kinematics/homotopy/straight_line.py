@@ -18,11 +18,12 @@ The program computes the same numbers as the generic evaluation, in the same ord
 sum, up to rounding (the compiled kernels contract products and sums into fused multiply-adds
 where they choose). One compiled loop (:func:`system`) runs every form's program, so nothing
 is compiled per mechanism. The test 3-RPR's program has 94 instructions, the general 6-6
-platform's 409, the Delta's 488; an evaluation takes a quarter to three fifths of the generic
-one's time (0.55 against 2.1 us on the 3-RPR, 1.6 against 2.8 us on the 6-6 platform).
+platform's 409, the Delta's 488; an evaluation takes a fifth to a half of the generic one's
+time (0.36 against 1.9 us on the 3-RPR, 1.3 against 2.7 us on the 6-6 platform).
 
 Register file: ``[constants | x (n) | p (n_params) | cos p | sin p | b (n) | results]``; the
-revolute parameters' cosines and sines are computed once per call, before the instructions.
+revolute parameters' cosines and sines (the program's ``angles``) are computed once per call,
+before the instructions.
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ class _Tape:
         self.ids: dict[tuple, int] = {}
         self.constants: list[complex] = []
         self.n, self.n_params = n, n_params
+        self.angles: set[int] = set()  # the parameters whose cosine and sine are read
         self.constant(0j)  # register _ZERO
         self.constant(1 + 0j)  # register _ONE
 
@@ -147,6 +149,7 @@ class _Value:
         n, m = self.tape.n, self.tape.n_params
         if key[0] != "input" or not n <= key[1] < n + m:
             raise TracedBranch("cos and sin are taken of parameters only")
+        self.tape.angles.add(key[1] - n)
         return self.tape.input(key[1] + which * m)
 
     def cos(self) -> _Value:  # np.cos on an object array element
@@ -212,10 +215,13 @@ def straight_line(form: PolynomialForm) -> Program:
     x, p, b = inputs(0, n), inputs(n, m), inputs(n + 3 * m, n)
     F, J = plain["generic_system"](x, p, b, ws, *form.kernel_args())
     outputs = np.concatenate([F[:, None], J], axis=1)
-    return _assemble(tape, [[tape.operand(v) for v in row] for row in outputs], n + 3 * m + n)
+    program = _assemble(tape, [[tape.operand(v) for v in row] for row in outputs], n + 3 * m + n)
+    return (*program, np.array(sorted(tape.angles), dtype=np.int32))
 
 
-def _assemble(tape: _Tape, outputs: list[list[int]], n_inputs: int) -> Program:
+def _assemble(
+    tape: _Tape, outputs: list[list[int]], n_inputs: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Registers for the values the outputs read, each product read once fused into the sum reading it."""
     values = tape.values
     is_instruction = [isinstance(key[0], int) for key in values]
@@ -290,7 +296,7 @@ def system(
     By ``program``. Both are buffers of ``ws`` (:func:`workspace`), overwritten by the next call
     (and ``J`` may be factored in place by the caller).
     """
-    constants, instructions, coefficients, outputs = program
+    constants, instructions, coefficients, outputs, angles = program
     registers, F, J = ws
     c, n, m = constants.shape[0], x.shape[0], p.shape[0]
     for i in range(n):
@@ -298,6 +304,7 @@ def system(
         registers[c + n + 3 * m + i] = b[i]
     for i in range(m):
         registers[c + n + i] = p[i]
+    for i in angles:
         registers[c + n + m + i] = np.cos(p[i])
         registers[c + n + 2 * m + i] = np.sin(p[i])
     first = c + 2 * n + 3 * m

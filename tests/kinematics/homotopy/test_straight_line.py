@@ -76,7 +76,7 @@ def test_no_instruction_multiplies_by_a_constant_zero_or_one(name):
     factor; a product (S = 0) never reads 1 as one either. A sum reads 1 as ``b`` (its ``a`` times
     one), and an instruction reads 0 as ``c`` only with S = 0.
     """
-    constants, instructions, coefficients, _ = polynomial_form(preset(name)).program
+    constants, instructions, coefficients, _, _ = polynomial_form(preset(name)).program
     assert constants[0] == 0 and constants[1] == 1
     a, b, c = instructions.T
     P, S = coefficients.T
@@ -85,6 +85,16 @@ def test_no_instruction_multiplies_by_a_constant_zero_or_one(name):
     assert not np.any(product & ((a == 1) | (b == 1)))
     assert np.all(S[c == 0] == 0)
     assert set(np.unique(P)) <= {-1.0, 1.0} and set(np.unique(S)) <= {-1.0, 0.0, 1.0}
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_the_angles_are_the_revolute_parameters(name):
+    """The program takes the cosine and sine of the actuated revolute joints' parameters, no other."""
+    from plm_pin.kinematics.homotopy.form import REVOLUTE_PARAM
+
+    form = polynomial_form(preset(name))
+    revolute = sorted(int(o) for k, o in zip(form.kind, form.offset, strict=True) if k == REVOLUTE_PARAM)
+    assert form.program[4].tolist() == revolute
 
 
 def test_a_branch_on_a_traced_value_is_refused():
