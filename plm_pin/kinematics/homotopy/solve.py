@@ -30,9 +30,7 @@ from ...core.mechanism import Mechanism
 from ...tolerances import (
     HOMOTOPY_ENTRY_TOL,
     HOMOTOPY_REAL_RTOL,
-    HOMOTOPY_ROOT_RTOL,
     HOMOTOPY_SAME_ROOT_RTOL,
-    HOMOTOPY_SINGULAR_COND,
 )
 from .form import PolynomialForm
 from .generic import GenericSolution, canonical, generic_solution
@@ -191,6 +189,36 @@ def _distinct(X: np.ndarray) -> np.ndarray:
     return kept
 
 
+def _projective(
+    form: PolynomialForm,
+    gen: GenericSolution,
+    X: np.ndarray,
+    codes: np.ndarray,
+    ends: np.ndarray,
+    unclean: np.ndarray,
+    p1: np.ndarray,
+) -> tuple[np.ndarray, int, int, int]:
+    """The paths the affine tracker did not end cleanly (``unclean``), in projective coordinates.
+
+    A path off to infinity, lost, or at a large root the affine test cannot judge: a path at
+    infinity ends there, a large root is reached. A path given up before t = 1 goes on from where
+    it stopped; one that reached t = 1 is tracked again from its start. Returns the finite roots
+    reached, and the paths that went to infinity, ended singular, and failed.
+    """
+    from .projective import projective_ends
+    from .tracking import GROWING
+
+    resume = ends < 1.0
+    starts = np.where(resume[:, None], X, gen.x)[unclean]
+    t0 = np.where(resume, ends, 0.0)[unclean]
+    far, diverged, singular, lost = projective_ends(form, starts, t0, gen.p, p1)
+    # a path lost in projective coordinates too (a singular end at infinity, as the isotropic points
+    # of revolute (cos, sin) pairs) whose affine norm grew like a power of 1/(1 - t) went to infinity
+    growing = codes[unclean] == GROWING
+    diverged += int(np.count_nonzero(lost & growing))
+    return far, diverged, singular, int(np.count_nonzero(lost & ~growing))
+
+
 def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     """Track every generic solution of ``mech`` to ``actuators`` and certify the real ends.
 
@@ -199,33 +227,18 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     """
     from .certify import certify, parameter_intervals
     from .evaluation import entries_at
-    from .projective import projective_ends
     from .threads import over_threads
-    from .tracking import GROWING, REACHED, ends_at, real_newton, track_all
+    from .tracking import clean_ends, real_newton, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)
     p1 = values[form.parameters].astype(np.complex128)
     zero = np.zeros(form.n, dtype=np.complex128)
     X, codes, _, ends = over_threads(track_all, (gen.x,), gen.p, zero, p1, zero, form.program, HANDOFF_GROWTH)
-    F, cond = ends_at(X, p1, zero, form.program)  # the ends' residuals and conditioning, one call
-    scale = 1.0 + np.abs(X).max(axis=1)
-    with np.errstate(invalid="ignore"):
-        clean = (codes == REACHED) & np.isfinite(F).all(axis=1)
-        clean &= (np.abs(F).max(axis=1) <= HOMOTOPY_ROOT_RTOL * scale) & (cond <= HOMOTOPY_SINGULAR_COND)
-    # the other paths (off to infinity, lost, or at a large root the affine test cannot judge) in
-    # projective coordinates: a path at infinity ends there, a large root is reached. A path given up
-    # before t = 1 goes on from where it stopped; one that reached t = 1 is tracked again from its start
-    resume = ends < 1.0
-    starts = np.where(resume[:, None], X, gen.x)[~clean]
-    far, diverged, singular, lost = projective_ends(
-        form, starts, np.where(resume, ends, 0.0)[~clean], gen.p, p1
+    clean = clean_ends(X, codes, p1, zero, form.program)
+    far, diverged, singular, failed = (
+        (X[:0], 0, 0, 0) if clean.all() else _projective(form, gen, X, codes, ends, ~clean, p1)
     )
-    # a path lost in projective coordinates too (a singular end at infinity, as the isotropic points
-    # of revolute (cos, sin) pairs) whose affine norm grew like a power of 1/(1 - t) went to infinity
-    growing = codes[~clean] == GROWING
-    diverged += int(np.count_nonzero(lost & growing))
-    failed = int(np.count_nonzero(lost & ~growing))
     X = canonical(form, np.concatenate([X[clean], far]))
     roots = X[_distinct(X)]
     # the real roots: refined on the real system, kept when every closure entry vanishes and the

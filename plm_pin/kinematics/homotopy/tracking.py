@@ -31,6 +31,8 @@ from ...tolerances import (
     HOMOTOPY_DIVERGED_NORM,
     HOMOTOPY_MIN_STEP,
     HOMOTOPY_PREDICTOR_RTOL,
+    HOMOTOPY_ROOT_RTOL,
+    HOMOTOPY_SINGULAR_COND,
 )
 from .straight_line import Program, system, workspace
 
@@ -357,20 +359,26 @@ def condition_number(A: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def ends_at(X: np.ndarray, p: np.ndarray, b: np.ndarray, program: Program) -> tuple[np.ndarray, np.ndarray]:
-    """The square system at every row of ``X`` (N, n): F (N, n) and the condition number of F_x (N,).
+def clean_ends(
+    X: np.ndarray, codes: np.ndarray, p: np.ndarray, b: np.ndarray, program: Program
+) -> np.ndarray:
+    """Which rows of ``X`` (N, n) end their paths cleanly, in one compiled call: shape (N,).
 
-    In one compiled call; the condition number is :func:`condition_number`'s.
+    A clean end reached t = 1 (its code is :data:`REACHED`) at a finite root: the square system
+    there is within :data:`~plm_pin.tolerances.HOMOTOPY_ROOT_RTOL` times 1 + its largest entry of
+    zero, and F_x's :func:`condition_number` is at most
+    :data:`~plm_pin.tolerances.HOMOTOPY_SINGULAR_COND`.
     """
     N, n = X.shape
     ws = workspace(n, p.shape[0], program)
-    Fs = np.empty((N, n), dtype=np.complex128)
-    conds = np.empty(N)
+    clean = np.zeros(N, dtype=np.bool_)
     for k in range(N):
+        if codes[k] != REACHED or not np.all(np.isfinite(X[k])):
+            continue
         F, J = system(X[k], p, b, ws, program)
-        Fs[k] = F
-        conds[k] = condition_number(np.ascontiguousarray(J[:, :n]))
-    return Fs, conds
+        if np.abs(F).max() <= HOMOTOPY_ROOT_RTOL * (1.0 + np.abs(X[k]).max()):
+            clean[k] = condition_number(np.ascontiguousarray(J[:, :n])) <= HOMOTOPY_SINGULAR_COND
+    return clean
 
 
 @njit(cache=True)
