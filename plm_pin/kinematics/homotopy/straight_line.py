@@ -190,21 +190,10 @@ def straight_line(form: PolynomialForm) -> Program:
     n, m = form.n, form.n_params
     tape = _Tape(n, m)
     plain = _plain(evaluation)
-    ws = plain["workspace"](
-        n,
-        m,
-        form.parent,
-        form.kind,
-        form.offset,
-        form.axis,
-        form.placement,
-        form.fixed,
-        form.frame_joint,
-        form.closure_kind,
-        form.closure_frames,
-        form.n_entries,
+    ws = tuple(  # the generic evaluation's buffers, its complex ones holding Python numbers and values
+        a.astype(object) if isinstance(a, np.ndarray) and a.dtype == np.complex128 else a
+        for a in evaluation._new_workspace(form)
     )
-    ws = tuple(a.astype(object) if isinstance(a, np.ndarray) and a.dtype == np.complex128 else a for a in ws)
 
     def inputs(first: int, count: int) -> np.ndarray:
         out = np.empty(count, dtype=object)
