@@ -31,7 +31,8 @@ theorem holds for each), but how many steps the paths take depends on it several
 test 3-RPR, 464 to 1,109 steps over 12 targets). So :data:`START_CANDIDATES` random parameters
 are tried besides :math:`p_0`, each with the solutions carried to it by parameter homotopy (kept
 only when every path arrives at its own regular root), and the one whose paths to
-:data:`START_TARGETS` actuator vectors about the reference take the fewest steps is stored.
+:data:`START_TARGETS` actuator vectors about the reference end cleanly most often, then take the
+fewest steps, is stored.
 
 What it proves: the count is a *lower bound* on the generic number of solutions (monodromy
 cannot show that nothing is left); the stale loops make a miss unlikely, not impossible.
