@@ -264,9 +264,8 @@ def _cheapest_start(
     (counts, so the choice does not depend on the machine). A candidate counts only when every
     path to it arrives at its own regular root.
     """
-    from .solve import HANDOFF_GROWTH
     from .threads import over_threads
-    from .tracking import clean_ends, track_all
+    from .tracking import HANDOFF_GROWTH, clean_ends, track_all
 
     zero = np.zeros(form.n, dtype=np.complex128)
     spread = START_SPREAD * (np.abs(reference) + np.abs(reference).mean())

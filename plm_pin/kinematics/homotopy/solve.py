@@ -103,11 +103,6 @@ class HomotopySolve:
         return f"{self.roots} of {self.generic_count} roots reached: " + ", ".join(parts)
 
 
-HANDOFF_GROWTH = 1e3
-"""Growth of a path's norm (times 1 + its start's) at which the affine tracker stops and the path is
-tracked again in projective coordinates (a path to infinity costs the affine tracker 50 to 90
-steps before it gives up, 20 to 25 with this)."""
-
 _Prepared = tuple[PolynomialForm, GenericSolution]
 _FORMS: weakref.WeakKeyDictionary[Mechanism, _Prepared] = weakref.WeakKeyDictionary()
 
@@ -228,7 +223,7 @@ def solve_homotopy(mech: Mechanism, actuators: np.ndarray) -> HomotopySolve:
     from .certify import certify, parameter_intervals
     from .evaluation import entries_at
     from .threads import over_threads
-    from .tracking import clean_ends, real_newton, track_all
+    from .tracking import HANDOFF_GROWTH, clean_ends, real_newton, track_all
 
     form, gen = prepared(mech)
     values = np.asarray(actuators, dtype=float)

@@ -45,6 +45,10 @@ MAX_STEP = 0.2
 FINAL_NEWTON = 4
 CONTRACTION_SAFETY = 4.0
 """Safety factor on the last step's Newton contraction constant when predicting a correction from one."""
+HANDOFF_GROWTH = 1e3
+"""Growth of a path's norm (times 1 + its start's) at which a forward-kinematics call's affine
+tracking stops and the path is tracked again in projective coordinates (a path to infinity costs
+the affine tracker 50 to 90 steps before it gives up, 20 to 25 with this)."""
 ENDGAME_GROWTH = 2.0
 """Least growth of a path's norm per decade of 1 - t, over two decades, to call it diverging."""
 ENDGAME_EXPONENT = 0.25

@@ -13,9 +13,8 @@ import pytest
 from numba import config
 
 from plm_pin.kinematics.homotopy import prepared
-from plm_pin.kinematics.homotopy.solve import HANDOFF_GROWTH
 from plm_pin.kinematics.homotopy.threads import THREADS_MIN_PATHS, over_threads, path_threads
-from plm_pin.kinematics.homotopy.tracking import track_all
+from plm_pin.kinematics.homotopy.tracking import HANDOFF_GROWTH, track_all
 from tests.conftest import preset
 
 
