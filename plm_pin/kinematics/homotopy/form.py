@@ -23,7 +23,8 @@ EMPTY_PROGRAM: Program = (
     np.zeros((0, 0), dtype=np.int32),
     np.zeros(0, dtype=np.int32),
 )
-"""No program (a form being built): the system is then evaluated generically."""
+"""No program yet: a form being built, before :func:`.straight_line.straight_line` traces it (the
+trackers need the traced program)."""
 
 FIXED, REVOLUTE, PRISMATIC, SPHERICAL, FREE_FLYER, REVOLUTE_PARAM, PRISMATIC_PARAM = range(7)
 """Joint kinds: held fixed, revolute (cos, sin), prismatic, spherical and free-flyer (quaternion)

@@ -50,7 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...tolerances import HOMOTOPY_ROOT_RTOL, HOMOTOPY_SAME_ROOT_RTOL, HOMOTOPY_SINGULAR_COND
+from ...tolerances import HOMOTOPY_SAME_ROOT_RTOL
 from .form import PolynomialForm
 from .polynomial import SEED, NotPolynomial
 
@@ -105,22 +105,10 @@ def cache_folder() -> Path:
 def _regular(
     form: PolynomialForm, X: np.ndarray, codes: np.ndarray, p: np.ndarray, b: np.ndarray
 ) -> np.ndarray:
-    """Rows of ``X`` that ended at t = 1 on a finite, non-singular root."""
-    from .evaluation import evaluate
-    from .tracking import REACHED, condition_number
+    """Rows of ``X`` that ended at t = 1 on a finite, non-singular root (:func:`~.tracking.clean_ends`)."""
+    from .tracking import clean_ends
 
-    keep = []
-    for x, code in zip(X, codes, strict=True):
-        if code != REACHED or not np.all(np.isfinite(x)):
-            continue
-        F, Jx, _ = evaluate(form, x, p, b)
-        scale = 1.0 + np.abs(x).max()
-        if np.abs(F).max() > HOMOTOPY_ROOT_RTOL * scale:
-            continue
-        if condition_number(np.ascontiguousarray(Jx)) > HOMOTOPY_SINGULAR_COND:
-            continue
-        keep.append(x)
-    return np.array(keep).reshape(-1, form.n)
+    return X[clean_ends(X, codes, p, b, form.program)].reshape(-1, form.n)
 
 
 def canonical(form: PolynomialForm, X: np.ndarray) -> np.ndarray:
