@@ -65,6 +65,9 @@ class KernelArrays(NamedTuple):
         nv: velocity size.
         lower: lower position limits of the model, shape (nq,).
         upper: upper position limits, shape (nq,).
+        lu_order, lu_row_ptr, lu_rows, lu_col_ptr, lu_cols: the :class:`Elimination`
+            of the closure and task rows' structural pattern (which columns move their frames),
+            for the square solves.
     """
 
     parents: np.ndarray
@@ -95,6 +98,75 @@ class KernelArrays(NamedTuple):
     nv: int
     lower: np.ndarray
     upper: np.ndarray
+    lu_order: np.ndarray
+    lu_row_ptr: np.ndarray
+    lu_rows: np.ndarray
+    lu_col_ptr: np.ndarray
+    lu_cols: np.ndarray
+
+
+class Elimination(NamedTuple):
+    """The symbolic LU of a pattern (rows, n): the column order, each step's candidate rows and later columns.
+
+    Attributes:
+        order: the columns in elimination order, shape (n,).
+        row_ptr: step ``j``'s candidate rows are ``rows[row_ptr[j]:row_ptr[j + 1]]``, shape (n + 1,).
+        rows: the candidate rows of every step, one after the other.
+        col_ptr: step ``j``'s later columns are ``cols[col_ptr[j]:col_ptr[j + 1]]``, shape (n + 1,).
+        cols: the later columns the candidates may touch, of every step.
+    """
+
+    order: np.ndarray
+    row_ptr: np.ndarray
+    rows: np.ndarray
+    col_ptr: np.ndarray
+    cols: np.ndarray
+
+
+def elimination(pattern: np.ndarray) -> Elimination:
+    """The :class:`Elimination` of a structural pattern (rows, n) of booleans: where an entry may be nonzero.
+
+    Columns are eliminated fewest nonzero rows first (stable: ties keep their order).
+    """
+    pattern = np.asarray(pattern, dtype=bool)
+    n = pattern.shape[1]
+    order = np.argsort(np.count_nonzero(pattern, axis=0), kind="stable")
+    P = pattern[:, order].copy()
+    row_ptr, rows, col_ptr, cols = [0], [], [0], []
+    for j in range(n):
+        candidates = np.flatnonzero(P[:, j])
+        later = np.flatnonzero(P[candidates, j + 1 :].any(axis=0)) + j + 1
+        P[np.ix_(candidates, later)] = True  # each candidate may take the pivot row's pattern
+        rows += candidates.tolist()
+        cols += order[later].tolist()
+        row_ptr.append(len(rows))
+        col_ptr.append(len(cols))
+    return Elimination(*(np.array(a, dtype=np.int64) for a in (order, row_ptr, rows, col_ptr, cols)))
+
+
+_LU_FIELDS = ("lu_order", "lu_row_ptr", "lu_rows", "lu_col_ptr", "lu_cols")
+_NO_ELIMINATION = Elimination(*[np.zeros(0, dtype=np.int64)] * len(_LU_FIELDS))
+"""The placeholder of a kernel's elimination until its pattern is read (:func:`build_arrays`)."""
+
+
+def jacobian_pattern(arrays: KernelArrays) -> np.ndarray:
+    """Where the Jacobian of the closure and task rows may be nonzero, shape (m + n_task, nv).
+
+    A closure row depends on the columns supporting either of its frames, a frame task's on
+    those supporting the task frame, a joint task's on its joint's column: a structural
+    pattern, true at every configuration.
+    """
+    m, nv = arrays.m, arrays.nv
+    stops = [*arrays.c_row[1:].tolist(), m]  # the closures' rows follow one another
+    rows = [
+        arrays.support[a] | arrays.support[b]
+        for a, b, start, stop in zip(arrays.c_a, arrays.c_b, arrays.c_row, stops, strict=True)
+        for _ in range(start, stop)
+    ]
+    if arrays.t_kind == 1:
+        rows += [arrays.support[arrays.t_frame]] * arrays.t_rows.size
+    rows += [np.arange(nv) == v for v in arrays.t_jv.tolist()]
+    return np.array(rows, dtype=bool).reshape(-1, nv)
 
 
 HEADER = 8
@@ -103,6 +175,7 @@ HEADER = 8
 INT_FIELDS = (
     "parents", "kinds", "idx_q", "idx_v", "f_joint", "support", "c_kind", "c_a", "c_b", "c_row",
     "t_rows", "t_jq", "t_jkind", "t_jv",
+    "lu_order", "lu_row_ptr", "lu_rows", "lu_col_ptr", "lu_cols",
 )  # fmt: skip
 """The integer arrays, in their packed order (``support`` as 0 and 1)."""
 
@@ -201,7 +274,7 @@ def build_arrays(model: pin.Model, closures: tuple[Closure, ...], task: Task | N
         t_jq = _ints([model.idx_qs[j] for j in task.joint_ids])
         t_jkind = _ints([int(kinds[j]) for j in task.joint_ids])
         t_jv = _ints(list(task.v_indices))
-    return KernelArrays(
+    arrays = KernelArrays(
         _ints(list(model.parents)),
         kinds,
         place_R,
@@ -230,4 +303,6 @@ def build_arrays(model: pin.Model, closures: tuple[Closure, ...], task: Task | N
         nv,
         np.array(model.lowerPositionLimit, dtype=float),
         np.array(model.upperPositionLimit, dtype=float),
+        *_NO_ELIMINATION,
     )
+    return arrays._replace(**dict(zip(_LU_FIELDS, elimination(jacobian_pattern(arrays)), strict=True)))

@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from .arrays import HEADER, INT_FIELDS, KernelArrays
+from .linear import Elimination, lu_factor, lu_solve
 
 # joint kinds (see plm_pin.kernels.model)
 REVOLUTE, PRISMATIC, REVOLUTE_UNBOUNDED, SPHERICAL, FREE_FLYER, PLANAR, UNIVERSAL = 1, 2, 3, 4, 5, 6, 7
@@ -71,7 +72,18 @@ def unpack(ints: np.ndarray, floats: np.ndarray) -> KernelArrays:
         nv,
         floats[ints[g + 8] : ints[g + 9]],
         floats[ints[g + 9] : ints[g + 10]],
+        ints[ints[o + 14] : ints[o + 15]],
+        ints[ints[o + 15] : ints[o + 16]],
+        ints[ints[o + 16] : ints[o + 17]],
+        ints[ints[o + 17] : ints[o + 18]],
+        ints[ints[o + 18] : ints[o + 19]],
     )
+
+
+@njit(cache=True)
+def elimination_of(k: KernelArrays) -> Elimination:
+    """The kernel's :class:`~.linear.Elimination` (its five arrays)."""
+    return Elimination(k.lu_order, k.lu_row_ptr, k.lu_rows, k.lu_col_ptr, k.lu_cols)
 
 
 # 3 x 3 matrices are 9-tuples of floats (row-major) and vectors 3-tuples: no arrays, no views.
@@ -1020,6 +1032,54 @@ def assemble(
 
 
 @njit(cache=True)
+def _gauss_newton_step(
+    A: np.ndarray,
+    r: np.ndarray,
+    e: Elimination,
+    F: np.ndarray,
+    N: np.ndarray,
+    b: np.ndarray,
+    x: np.ndarray,
+    pivots: np.ndarray,
+    step: np.ndarray,
+) -> bool:
+    """The Gauss-Newton step :math:`(A^T A)^{-1} A^T r` into ``x`` (nv, 1); False if singular.
+
+    Where ``A`` (n, nv) has as many nonzero rows as columns (its exactly zero rows are a planar loop's
+    out-of-plane closure rows), the step is :math:`A^{-1} r` on those rows, solved by the LU
+    of :mod:`.linear` on the kernel's pattern ``e``; else by the Cholesky factor of the normal
+    equations. ``F`` (n, nv), ``N`` (nv, nv), ``b`` (n, 1), ``pivots`` (nv,) and ``step``
+    (n,) are scratch.
+    """
+    n, nv = A.shape
+    live = 0
+    for i in range(n):
+        for c in range(nv):
+            if A[i, c] != 0.0:
+                live += 1
+                break
+    if live == nv:
+        if not lu_factor(A, e, F, pivots, step):
+            return False
+        for i in range(n):
+            b[i, 0] = r[i]
+        lu_solve(F, e, pivots, step, b, x)
+        return True
+    for a_ in range(nv):
+        s = 0.0
+        for i in range(n):
+            s += A[i, a_] * r[i]
+        x[a_, 0] = s
+        for c in range(a_ + 1):
+            s = 0.0
+            for i in range(n):
+                s += A[i, a_] * A[i, c]
+            N[a_, c] = s
+            N[c, a_] = s
+    return _cholesky_solve(N, x[:, 0])
+
+
+@njit(cache=True)
 def _newton_batch(
     k: KernelArrays,
     Q: np.ndarray,
@@ -1037,10 +1097,11 @@ def _newton_batch(
     Each start's quaternions and (cos, sin) pairs are first put back to unit norm (:func:`normalize`).
 
     Every iteration takes a fresh Jacobian; a pose fails when its residual does not fall
-    below ``stall`` times the previous one, when the normal matrix is not positive definite,
-    or after ``max_iterations``; no polishing step. Where a pose converges, ``ok`` is True,
-    ``A_out`` holds the inverse-kinematics Jacobian (closure rows, then the task frame's
-    world-aligned twist rows) and ``R_out`` the world rotation of every joint.
+    below ``stall`` times the previous one, when its step's matrix is singular
+    (:func:`_gauss_newton_step`), or after ``max_iterations``; no polishing step. Where a
+    pose converges, ``ok`` is True, ``A_out`` holds the inverse-kinematics Jacobian (closure
+    rows, then the task frame's world-aligned twist rows) and ``R_out`` the world rotation of
+    every joint.
 
     Args:
         k: the kernel's arrays (a frame task).
@@ -1057,7 +1118,10 @@ def _newton_batch(
     """
     nj, nv, nf, m = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1), k.m
     n = m + X.shape[1]
-    A, r, N, b, J = np.empty((n, nv)), np.empty(n), np.empty((nv, nv)), np.empty(nv), np.empty((6, nv))
+    A, r, N, J = np.empty((n, nv)), np.empty(n), np.empty((nv, nv)), np.empty((6, nv))
+    F, b, x, step = np.empty((n, nv)), np.empty((n, 1)), np.empty((nv, 1)), np.empty(nv)
+    pivots, rows_step = np.empty(nv, dtype=np.int64), np.empty(n, dtype=np.int64)
+    e = elimination_of(k)
     oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
     Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
     q_next = np.empty(Q.shape[1])
@@ -1083,22 +1147,11 @@ def _newton_batch(
                 break
             if math.isnan(err) or not err < stall * err_prev or iteration == max_iterations:
                 break
-            for a_ in range(nv):
-                s = 0.0
-                for i in range(n):
-                    s += A[i, a_] * r[i]
-                b[a_] = s
-                for c in range(a_ + 1):
-                    s = 0.0
-                    for i in range(n):
-                        s += A[i, a_] * A[i, c]
-                    N[a_, c] = s
-                    N[c, a_] = s
-            if not _cholesky_solve(N, b):
+            if not _gauss_newton_step(A, r, e, F, N, b, x, pivots, rows_step):
                 break
             for c in range(nv):
-                b[c] = -b[c]
-            integrate(k, q, b, q_next)
+                step[c] = -x[c, 0]
+            integrate(k, q, step, q_next)
             q[:] = q_next
             err_prev = err
 

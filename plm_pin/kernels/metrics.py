@@ -26,6 +26,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .linear import Elimination, dense_elimination, lu_factor, lu_solve
+
 METRIC_NAMES = ("manipulability", "condition_number", "constraint_margin", "inverse_margin", "direct_margin")
 """The columns of :func:`square_metrics`' output, in order."""
 
@@ -192,34 +194,23 @@ def _tridiagonal_eigenvalues(G: np.ndarray, n: int, d: np.ndarray, e: np.ndarray
 
 
 @njit(cache=True)
-def _lu_solve(M: np.ndarray, B: np.ndarray) -> bool:
-    """Solve ``M X = B`` in place (``B`` becomes ``X``; ``M`` its LU); False on a zero pivot."""
-    n, r = M.shape[0], B.shape[1]
-    for j in range(n):
-        p, best = j, abs(M[j, j])
-        for i in range(j + 1, n):
-            if abs(M[i, j]) > best:
-                p, best = i, abs(M[i, j])
-        if not best > 0.0:
-            return False
-        if p != j:
-            for c in range(n):
-                M[j, c], M[p, c] = M[p, c], M[j, c]
-            for c in range(r):
-                B[j, c], B[p, c] = B[p, c], B[j, c]
-        for i in range(j + 1, n):
-            f = M[i, j] / M[j, j]
-            M[i, j] = f
-            for c in range(j + 1, n):
-                M[i, c] -= f * M[j, c]
-            for c in range(r):
-                B[i, c] -= f * B[j, c]
-    for c in range(r):
-        for i in range(n - 1, -1, -1):
-            s = B[i, c]
-            for t in range(i + 1, n):
-                s -= M[i, t] * B[t, c]
-            B[i, c] = s / M[i, i]
+def _solve(
+    M: np.ndarray,
+    e: Elimination,
+    F: np.ndarray,
+    pivots: np.ndarray,
+    step: np.ndarray,
+    B: np.ndarray,
+    X: np.ndarray,
+) -> bool:
+    """Solve ``M X = B`` (``M`` with as many nonzero rows as columns) on the pattern ``e``; False if singular.
+
+    ``B`` is overwritten; ``F`` (>= rows, n), ``pivots`` (n,) and ``step`` (>= rows,) are
+    scratch (:func:`.linear.lu_factor`).
+    """
+    if not lu_factor(M, e, F, pivots, step):
+        return False
+    lu_solve(F, e, pivots, step, B, X)
     return True
 
 
@@ -273,6 +264,7 @@ def square_metrics(
     m: int,
     actuated_v: np.ndarray,
     mobility: int,
+    e: Elimination,
     wanted: np.ndarray,
     factor_rcond: float,
     gram_rtol: float,
@@ -296,6 +288,8 @@ def square_metrics(
         m: closure rows.
         actuated_v: velocity indices of the actuators, shape (n_act,).
         mobility: DOF (= k).
+        e: the structural pattern of ``A[p]`` (:class:`.linear.Elimination`; the square
+            solves' cost, not their values, depends on it).
         wanted: which metrics to compute, one flag per :data:`METRIC_NAMES` entry, shape (5,).
         factor_rcond: smallest accepted ratio of the velocity map's QR diagonal.
         gram_rtol: smallest accepted ratio of squared singular values (the Gram's accuracy).
@@ -318,6 +312,9 @@ def square_metrics(
     C = np.empty((na, k))
     CT = np.empty((na, k))
     big = max(n, nv)
+    F, RHS = np.empty((big, nv)), np.empty((big, k))
+    pivots, step = np.empty(nv, dtype=np.int64), np.empty(big, dtype=np.int64)
+    dense_v, dense_k = dense_elimination(nv, nv), dense_elimination(k, k)
     G = np.empty((big, big))
     work = np.empty(big)
     s_ce, s_c, s_phi, s_t, s_x = np.empty(big), np.empty(big), np.empty(big), np.empty(big), np.empty(big)
@@ -340,12 +337,11 @@ def square_metrics(
             live[m + j] = A[p, m_all + j]
         Ap = live[: m + k]
         if w_basis:
-            square = m + k == nv
-            if square:  # A S = [0; I]
-                M[:, :] = Ap
-                S[:, :] = 0.0
+            if m + k == nv:  # A S = [0; I], on A's nonzero rows
+                RHS[:, :] = 0.0
                 for j in range(k):
-                    S[m + j, j] = 1.0
+                    RHS[m_all + j, j] = 1.0
+                solved = _solve(A[p], e, F, pivots, step, RHS, S)
             else:  # A^T A S = J_x^T
                 for a in range(nv):
                     for b in range(a + 1):
@@ -355,8 +351,9 @@ def square_metrics(
                         M[a, b] = s
                         M[b, a] = s
                     for j in range(k):
-                        S[a, j] = Ap[m + j, a]
-            if not _lu_solve(M, S) or not _finite(S):
+                        RHS[a, j] = Ap[m + j, a]
+                solved = _solve(M, dense_v, F, pivots, step, RHS, S)
+            if not solved or not _finite(S):
                 continue
             for j in range(k):  # Gram-Schmidt, twice
                 for c in range(nv):
@@ -385,8 +382,8 @@ def square_metrics(
                     for c in range(nv):
                         s += Ap[m + a, c] * N[c, b]
                     T[a, b] = s
-                    T_inv[a, b] = 1.0 if a == b else 0.0
-            if not _lu_solve(T, T_inv):
+                    RHS[a, b] = 1.0 if a == b else 0.0
+            if not _solve(T, dense_k, F, pivots, step, RHS[:k], T_inv):
                 continue
             if w_inverse:
                 _gram_eigenvalues(T_inv, G, work, s_t)

@@ -25,7 +25,7 @@ from ..core.legs import Leg
 from ..core.task import FrameTask, Task, TaskTarget
 from ..tolerances import ASSEMBLY_RCOND, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL, ROUND_OFF
 from ..warnings import KernelFallbackWarning
-from .arrays import KernelArrays, build_arrays, kernel_frames, pack, unsupported_joints
+from .arrays import Elimination, KernelArrays, build_arrays, kernel_frames, pack, unsupported_joints
 
 if TYPE_CHECKING:
     from ..core.mechanism import Mechanism
@@ -77,6 +77,12 @@ class Kernel:
             angles[list(task.angular)] = x[len(task.linear) :]
             return x, pin.rpy.rpyToMatrix(angles)
         return x, _EYE
+
+    @property
+    def elimination(self) -> Elimination:
+        """The symbolic LU of the closure and task rows' Jacobian (:func:`.arrays.elimination`)."""
+        a = self.arrays
+        return Elimination(a.lu_order, a.lu_row_ptr, a.lu_rows, a.lu_col_ptr, a.lu_cols)
 
     def placements(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """World rotations and translations of every joint (nj, 3, 3), (nj, 3) and kernel frame (nf, ...)."""
@@ -411,6 +417,7 @@ class Kernel:
             self.arrays.m,
             np.asarray(actuated_v, dtype=np.int64),
             mobility,
+            self.elimination,
             np.array([name in names for name in metrics.METRIC_NAMES]),
             FACTOR_RCOND,
             GRAM_RTOL,

@@ -467,7 +467,7 @@ def _metrics_for(ev: IKEvaluator, names: tuple[str, ...], kin: BatchKinematics |
         if not names:
             return {}
         if ev.task.size == ev.mobility and ev.m:
-            if ev.kernel is not None and arrow is None:  # with the arrow, numpy's block solve is cheaper
+            if ev.kernel is not None:
                 return compiled_square_task_metrics(ev.kernel, A, ev.m, ev.actuated_v, ev.mobility, names)
             return square_task_metrics(A, ev.m, ev.actuated_v, ev.mobility, arrow, names)
         return batch_metrics(A[:, : ev.m], A[:, ev.m :], ev.actuated_v, ev.mobility, names=names)

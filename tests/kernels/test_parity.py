@@ -20,7 +20,8 @@ from plm_pin.core.task import TaskTarget, compile_task
 from plm_pin.description.sidecar import ClosureSpec
 from plm_pin.exceptions import ClosureNotSatisfied
 from plm_pin.kernels import Kernel, kernel_of, kernels_enabled
-from plm_pin.kernels.arrays import JOINT_KINDS, unsupported_joints
+from plm_pin.kernels.arrays import JOINT_KINDS, jacobian_pattern, unsupported_joints
+from plm_pin.kernels.linear import lu_factor, lu_solve
 from plm_pin.kinematics import forward_kinematics, inverse_kinematics
 from plm_pin.models import preset_names
 from plm_pin.warnings import KernelFallbackWarning
@@ -66,6 +67,24 @@ def _check_rows(kernel: Kernel, model, closures, q, target) -> None:
     r_pin, J_pin = _pinocchio_rows(model, closures, q, target)
     np.testing.assert_allclose(r, r_pin, atol=TOL)
     np.testing.assert_allclose(J, J_pin, atol=TOL)
+    _check_square_solve(kernel, J_pin, r_pin)
+
+
+def _check_square_solve(kernel: Kernel, J: np.ndarray, r: np.ndarray) -> None:
+    """The kernel's pattern holds every nonzero of Pinocchio's Jacobian, and its LU solves as LAPACK does."""
+    pattern = jacobian_pattern(kernel.arrays)
+    assert pattern.shape == J.shape
+    assert not J[~pattern].any()
+    live = J.any(axis=1)
+    if live.sum() != J.shape[1] or np.linalg.cond(J[live]) > 1e8:
+        return
+    F, X = np.empty(J.shape), np.empty((J.shape[1], 1))
+    pivots, step = np.empty(J.shape[1], np.int64), np.empty(J.shape[0], np.int64)
+    assert lu_factor(J, kernel.elimination, F, pivots, step)
+    lu_solve(F, kernel.elimination, pivots, step, r[:, None].copy(), X)
+    np.testing.assert_allclose(
+        X[:, 0], np.linalg.solve(J[live], r[live]), rtol=1e-9, atol=1e-9 * np.abs(X).max()
+    )
 
 
 @pytest.mark.parametrize("name", [*preset_names(), *CORPUS])
