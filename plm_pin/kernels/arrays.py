@@ -157,7 +157,7 @@ def jacobian_pattern(arrays: KernelArrays) -> np.ndarray:
     pattern, true at every configuration.
     """
     m, nv = arrays.m, arrays.nv
-    stops = [*arrays.c_row[1:].tolist(), m]  # the closures' rows follow one another
+    stops = [*arrays.c_row[1:].tolist(), m][: arrays.c_row.size]  # the closures' rows follow one another
     rows = [
         arrays.support[a] | arrays.support[b]
         for a, b, start, stop in zip(arrays.c_a, arrays.c_b, arrays.c_row, stops, strict=True)
