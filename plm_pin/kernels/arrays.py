@@ -131,14 +131,22 @@ def elimination(pattern: np.ndarray) -> Elimination:
     pattern = np.asarray(pattern, dtype=bool)
     n = pattern.shape[1]
     order = np.argsort(np.count_nonzero(pattern, axis=0), kind="stable")
-    P = pattern[:, order].copy()
+    # each row's pattern as a bit set over the elimination steps (bit t: column order[t])
+    masks = [sum(1 << t for t in np.flatnonzero(row).tolist()) for row in pattern[:, order]]
     row_ptr, rows, col_ptr, cols = [0], [], [0], []
     for j in range(n):
-        candidates = np.flatnonzero(P[:, j])
-        later = np.flatnonzero(P[candidates, j + 1 :].any(axis=0)) + j + 1
-        P[np.ix_(candidates, later)] = True  # each candidate may take the pivot row's pattern
-        rows += candidates.tolist()
-        cols += order[later].tolist()
+        candidates = [i for i, mask in enumerate(masks) if mask >> j & 1]
+        later = 0
+        for i in candidates:
+            later |= masks[i]
+        later = later >> (j + 1) << (j + 1)
+        for i in candidates:  # each candidate may take the pivot row's pattern
+            masks[i] |= later
+        rows += candidates
+        while later:
+            t = (later & -later).bit_length() - 1
+            cols.append(int(order[t]))
+            later &= later - 1
         row_ptr.append(len(rows))
         col_ptr.append(len(cols))
     return Elimination(*(np.array(a, dtype=np.int64) for a in (order, row_ptr, rows, col_ptr, cols)))
