@@ -274,6 +274,13 @@ def square_metrics(
 ) -> None:
     r"""The map metrics of each stacked Jacobian ``A[p] = [J_phi; J_x]`` (B, m + k, nv), k = ``mobility``.
 
+    Where ``A[p]`` is square (on its nonzero rows) and neither margin of :math:`C` or
+    :math:`T` is asked for, :math:`J_{ce} = S_a` itself: :math:`J_x S = I` makes
+    :math:`T^{-1} = R` and :math:`C T^{-1} = N_a R`. Its pose is accepted when
+    :math:`1 / (|S|_F |J_x|_F) >` ``factor_rcond``, which bounds the condition number of
+    :math:`S` (:math:`\sigma_{min}(S) \ge 1 / \sigma_{max}(J_x)`) and so implies both tests of
+    the basis route (a pose between the two goes to the SVD path, with the same values).
+
     Only the stages the ``wanted`` metrics need run: the velocity map and its basis for all but
     the constraint margin, :math:`T^{-1}` for :math:`J_{ce}` and the inverse margin, the Gram
     eigenvalues of :math:`C T^{-1}` for the manipulability and condition number, of
@@ -303,6 +310,7 @@ def square_metrics(
     w_phi, w_inverse, w_direct = wanted[2], wanted[3], wanted[4]
     w_t = w_ce or w_inverse  # T^-1
     w_basis = w_t or w_direct  # the velocity map and its basis N
+    direct = w_ce and not (w_inverse or w_direct)  # J_ce read from the velocity map where A is square
     M = np.empty((nv, nv))
     S = np.empty((nv, k))
     N = np.empty((nv, k))
@@ -336,6 +344,7 @@ def square_metrics(
         for j in range(k):
             live[m + j] = A[p, m_all + j]
         Ap = live[: m + k]
+        shortcut = direct and m + k == nv
         if w_basis:
             if m + k == nv:  # A S = [0; I], on A's nonzero rows
                 RHS[:, :] = 0.0
@@ -355,6 +364,15 @@ def square_metrics(
                 solved = _solve(M, dense_v, F, pivots, step, RHS, S)
             if not solved or not _finite(S):
                 continue
+        if shortcut:
+            # J_x S = I exactly (A square), so J_ce = C T^-1 = N_a R = S_a, with no basis; and
+            # cond(S) <= |S| |J_x|: a pose passing this test passes the basis' and T's tests
+            if not 1.0 / (_frobenius(S) * _frobenius(Ap[m:])) > factor_rcond:
+                continue
+            for a in range(na):
+                for b in range(k):
+                    CT[a, b] = S[actuated_v[a], b]
+        elif w_basis:
             for j in range(k):  # Gram-Schmidt, twice
                 for c in range(nv):
                     N[c, j] = S[c, j]
@@ -375,7 +393,7 @@ def square_metrics(
             if not d.min() > factor_rcond * d.max():
                 continue
         inverse = 0.0
-        if w_t:
+        if w_t and not shortcut:
             for a in range(k):
                 for b in range(k):
                     s = 0.0
@@ -400,12 +418,13 @@ def square_metrics(
                     C[a, b] = N[actuated_v[a], b]
         n_ce = n_c = 0
         if w_ce:
-            for a in range(na):
-                for b in range(k):
-                    s = 0.0
-                    for c in range(k):
-                        s += C[a, c] * T_inv[c, b]
-                    CT[a, b] = s
+            if not shortcut:
+                for a in range(na):
+                    for b in range(k):
+                        s = 0.0
+                        for c in range(k):
+                            s += C[a, c] * T_inv[c, b]
+                        CT[a, b] = s
             n_ce = _gram_eigenvalues(CT, G, work, s_ce)
             if not s_ce[n_ce - 1] > gram_rtol * s_ce[0]:
                 continue
