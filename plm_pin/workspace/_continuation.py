@@ -883,9 +883,12 @@ def solve_poses(
     ev = IKEvaluator.from_mechanism(mech)
     flat = np.ascontiguousarray(poses.reshape(-1, k))
     in_ik = ev.modes_in_ik  # the batched modes read leg blocks of the IK Jacobian only
-    kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if len(shape) == 2 and in_ik else None
+    compiled = _batch_kernel(ev) is not None
+    # the numpy batch engine where the kernels do not serve
+    numpy_rows = len(shape) == 2 and in_ik and not compiled
+    kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task) if numpy_rows else None
     # walked by rows: two-axis grids, and on the kernels lines too (as grids of one row)
-    rows = kin is not None or (_batch_kernel(ev) is not None and len(shape) <= 2)
+    rows = kin is not None or (compiled and len(shape) <= 2)
     state = GridState.empty(ev, (1, *shape) if rows and len(shape) == 1 else shape, flat)
     scale = np.ptp(flat, axis=0)
     guess = start_configuration(mech, guess)

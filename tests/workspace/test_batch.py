@@ -258,7 +258,9 @@ def test_compiled_row_walk_equals_the_numpy_walk(monkeypatch, name, axes, values
     walk = _continuation._walk_rows
 
     def both(ev, kin, state, metrics, i0, target, tol):
+        assert kin is None  # the kernels serve: no numpy engine built
         plain = copy.deepcopy(state)
+        kin = BatchKinematics.from_parts(ev.model, ev.closures, ev.task)
         walk(dataclasses.replace(ev, kernel=None), kin, plain, metrics, i0, target, tol)
         walk(ev, kin, state, metrics, i0, target, tol)
         walks.append((plain, copy.deepcopy(state)))
