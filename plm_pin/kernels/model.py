@@ -23,7 +23,15 @@ from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
 from ..core.closures import Closure
 from ..core.legs import Leg
 from ..core.task import FrameTask, Task, TaskTarget
-from ..tolerances import ASSEMBLY_RCOND, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL, ROUND_OFF
+from ..tolerances import (
+    ASSEMBLY_RCOND,
+    FACTOR_RCOND,
+    GRAM_RTOL,
+    INVERSE_RTOL,
+    LEG_SINGULAR_RTOL,
+    LOG3_SERIES_ANGLE,
+    ROUND_OFF,
+)
 from ..warnings import KernelFallbackWarning
 from .arrays import Elimination, KernelArrays, build_arrays, kernel_frames, pack, unsupported_joints
 
@@ -98,6 +106,25 @@ class Kernel:
         r, A = np.empty(n), np.empty((n, self.arrays.nv))
         _compiled().rows(self.ints, self.floats, np.asarray(q, float), x, R, target is not None, r, A)
         return r, A
+
+    def dynamics(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+        r"""Joint-space dynamics terms at ``(q, v)`` (:mod:`.dynamics`).
+
+        Args:
+            q: configuration, shape (nq,).
+            v: joint velocities [m/s, rad/s], shape (nv,).
+
+        Returns:
+            The mass matrix with the armature on its diagonal (nv, nv), the nonlinear effects
+            ``rnea(q, v, 0)`` (nv,) [N, N m], the potential energy [J] and the closure drift
+            :math:`\dot J_\phi v` (m,).
+        """
+        nv, m = self.arrays.nv, self.arrays.m
+        M, h, gamma = np.empty((nv, nv)), np.empty(nv), np.empty(m)
+        potential = _dynamics().terms(
+            self.ints, self.floats, np.asarray(q, float), np.asarray(v, float), LOG3_SERIES_ANGLE, M, h, gamma
+        )
+        return M, h, float(potential), gamma
 
     def integrate(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Pinocchio's ``integrate``: ``q`` moved by the tangent vector ``v``."""
@@ -462,6 +489,16 @@ def _float_copy(q: np.ndarray) -> np.ndarray:
 _NO_TARGET = np.zeros(0)
 _EYE = np.eye(3)
 _COMPILED: list[ModuleType] = []
+_DYNAMICS: list[ModuleType] = []
+
+
+def _dynamics() -> ModuleType:
+    """The compiled dynamics module (imports numba; compiled on first call, cached on disk)."""
+    if not _DYNAMICS:
+        from . import dynamics
+
+        _DYNAMICS.append(dynamics)
+    return _DYNAMICS[0]
 
 
 def _compiled() -> ModuleType:
