@@ -371,7 +371,14 @@ def terms(
     ints: np.ndarray, floats: np.ndarray, q: np.ndarray, v: np.ndarray, series_angle: float,
     M: np.ndarray, nle: np.ndarray, gamma: np.ndarray,
 ) -> float:  # fmt: skip
-    """Mass matrix ``M`` (nv, nv), nonlinear effects ``nle`` (nv,), drift ``gamma`` (m,); returns the potential."""
+    """The dynamics terms at ``(q, v)`` on the packed arrays (``series_angle``: :func:`drift`'s).
+
+    Writes the mass matrix into ``M`` (nv, nv), the nonlinear effects into ``nle`` (nv,) and the
+    closure drift into ``gamma`` (m,).
+
+    Returns:
+        The potential energy [J].
+    """
     k = unpack(ints, floats)
     nj, nf, nv = k.parents.shape[0], max(k.f_joint.shape[0], 1), k.nv
     oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))

@@ -30,6 +30,7 @@ from ..tolerances import (
     INVERSE_RTOL,
     LEG_SINGULAR_RTOL,
     LOG3_SERIES_ANGLE,
+    RANK_RTOL,
     ROUND_OFF,
 )
 from ..warnings import KernelFallbackWarning
@@ -125,6 +126,41 @@ class Kernel:
             self.ints, self.floats, np.asarray(q, float), np.asarray(v, float), LOG3_SERIES_ANGLE, M, h, gamma
         )
         return M, h, float(potential), gamma
+
+    def samples(
+        self,
+        states: np.ndarray,
+        origin: np.ndarray,
+        tau: np.ndarray,
+        rank: int,
+        tol: float,
+        velocity_tol: float,
+        out: tuple[np.ndarray, ...],
+    ) -> int:
+        r"""Project and evaluate simulation states in turn (:func:`.dynamics.samples`) up to one it cannot.
+
+        Args:
+            states: chart coordinates at ``origin`` (the configuration itself for a vector-space
+                model) and velocities of each state, shape (n, 2 nv).
+            origin: the chart's configuration, shape (nq,).
+            tau: applied generalized forces [N, N m], shape (nv,).
+            rank: independent closure rows, :math:`n_v - \text{mobility}`.
+            tol: closure distance above which the configuration is projected [m, rad].
+            velocity_tol: closure rate above which the velocity is projected [m/s, rad/s].
+            out: the buffers receiving row by row the configurations (n, nq), velocities (n, nv),
+                accelerations (n, nv), closure forces (n, m), closure distances after and before
+                the projection (n,), energies (n,), potential energies (n,) and task poses (n, n_task).
+
+        Returns:
+            The number of states done; the next one needs the Python path (a constraint
+            singularity, a projection needing more than one step, a non-finite value).
+        """
+        nv = self.arrays.nv
+        done, _ = _dynamics().samples(
+            self.ints, self.floats, states, origin, origin.size == nv, tau, rank, tol, velocity_tol,
+            RANK_RTOL, LOG3_SERIES_ANGLE, *out,
+        )  # fmt: skip
+        return int(done)
 
     def integrate(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Pinocchio's ``integrate``: ``q`` moved by the tangent vector ``v``."""
