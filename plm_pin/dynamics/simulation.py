@@ -59,7 +59,13 @@ taken (:meth:`~plm_pin.dynamics._constrained.ClosedChainDynamics.stage_rates`), 
 reaches the crossing shortened so that the crossing falls a quarter step from every stage.
 
 Accelerations, closure forces, energy and task pose are computed once per sample, when it is
-recorded, with the SVD of the closure Jacobian its projection computed there.
+recorded, with the SVD of the closure Jacobian its projection computed there. In the adaptive
+run, the samples of a DOP853 step are projected and recorded by one compiled call
+(:meth:`plm_pin.kernels.Kernel.samples`: the same projection, KKT solve, energy and pose, to
+round-off) for a mechanism with closures and a kernel under constant actuator forces without a
+wrench; a sample at a constraint singularity, one whose configuration one Gauss-Newton step does
+not close, or a non-finite one takes this module's Python path, so its checks and errors are
+unchanged.
 """
 
 from __future__ import annotations

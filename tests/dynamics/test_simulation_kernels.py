@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from plm_pin.dynamics.simulation import simulate
-from plm_pin.kernels import SWITCH, kernel_of
+from plm_pin.kernels import SWITCH, Kernel, kernel_of
 from tests.conftest import preset
 
 ROUND_OFF_RTOL = 1e-12
@@ -62,3 +62,19 @@ def test_force_law_and_wrench_runs_take_the_python_path(monkeypatch):
         _, slow, fast = _runs("fourbar", 0.2, monkeypatch, **kwargs)
         for field in ("q", "v", "a", "lam", "energy"):
             np.testing.assert_array_equal(getattr(fast, field), getattr(slow, field))
+
+
+def test_samples_handed_back_take_the_python_path(monkeypatch):
+    """Every other sample handed back to the Python path (as at a constraint singularity): the same run."""
+    compiled = Kernel.samples
+
+    def one_at_a_time(self, states, *args):  # the first state only: the next one is handed back
+        return compiled(self, states[:1], *args)
+
+    mech, slow, _ = _runs("fourbar", 0.3, monkeypatch)
+    monkeypatch.setattr(Kernel, "samples", one_at_a_time)
+    mixed = simulate(mech, mech.q_ref, duration=0.3, dt=1e-3)
+    assert (len(mixed), mixed.steps) == (len(slow), slow.steps)
+    for field in ("q", "v", "a", "lam", "residual", "closure_drift", "energy", "x"):
+        a, b = getattr(mixed, field), getattr(slow, field)
+        np.testing.assert_allclose(a, b, rtol=0.0, atol=ROUND_OFF_RTOL * max(1.0, float(np.max(np.abs(b)))))
