@@ -59,7 +59,13 @@ taken (:meth:`~plm_pin.dynamics._constrained.ClosedChainDynamics.stage_rates`), 
 reaches the crossing shortened so that the crossing falls a quarter step from every stage.
 
 Accelerations, closure forces, energy and task pose are computed once per sample, when it is
-recorded, with the SVD of the closure Jacobian its projection computed there.
+recorded, with the SVD of the closure Jacobian its projection computed there. In the adaptive
+run, the samples of a DOP853 step are projected and recorded by one compiled call
+(:meth:`plm_pin.kernels.Kernel.samples`: the same projection, KKT solve, energy and pose, to
+round-off) for a mechanism with closures and a kernel under constant actuator forces without a
+wrench; a sample at a constraint singularity, one whose configuration one Gauss-Newton step does
+not close, or a non-finite one takes this module's Python path, so its checks and errors are
+unchanged.
 """
 
 from __future__ import annotations
@@ -78,6 +84,7 @@ from .._arguments import as_vector, optional_name, physical_effort, positive, re
 from .._linalg import lu_solve
 from ..core.mechanism import Mechanism
 from ..exceptions import ClosureNotSatisfied, InvalidInput, PlmError, SimulationFailed, SingularConfiguration
+from ..kernels import Kernel, kernel_of
 from ..results import Result, unit
 from ..statics.balance import JointLoad, load_on_frame
 from ..tolerances import (
@@ -115,6 +122,9 @@ _CHART_SPAN = 0.5
 
 ForceLaw = Callable[[float, np.ndarray, np.ndarray], ArrayLike]
 """Actuator forces as a function of time [s], configuration and velocity."""
+
+_NO_POSE = np.empty((0, 0))
+"""The task pose buffer of a sample kernel without a task."""
 
 
 @dataclass(frozen=True)
@@ -243,6 +253,21 @@ class _Run:
         self.energy = np.empty(n)
         task = mech.task_compiled
         self.x = None if task is None else np.empty((n, task.size))
+        self.kernel = self._sample_kernel()
+        self.potential = np.empty(n)  # potential energy of each sample [J], for the energy guard
+
+    def _sample_kernel(self) -> Kernel | None:
+        """The kernel that records the dense samples of the adaptive run in one compiled call, or None.
+
+        It serves mechanisms with closures under constant actuator forces and no wrench, whose
+        kernel holds the task (:meth:`_samples`).
+        """
+        if not self.mech.closures or self.tau_constant is None or self.dyn.load is not None:
+            return None
+        kernel = kernel_of(self.mech)
+        if kernel is None or kernel.n_task != (0 if self.x is None else self.x.shape[1]):
+            return None
+        return kernel
 
     # ------------------------------------------------------------- forces
     def _joint_forces(self, f: np.ndarray) -> np.ndarray:
@@ -387,11 +412,7 @@ class _Run:
                     if times[k] <= solver.t:
                         stop = int(np.searchsorted(times, solver.t, side="right"))  # samples k..stop-1
                         dense = np.ascontiguousarray(solver.dense_output()(times[k:stop]).T)  # one pass
-                        for yk in dense:
-                            qk = yk[:nv] if euclidean else pin.integrate(model, origin, yk[:nv])
-                            p = self.project(qk, yk[nv:], solver.h_abs or max_step)
-                            self.record(k, p.q, p.v, max(drift, p.before), p.after, p.rows, p.jacobian)
-                            k, drift = k + 1, 0.0
+                        k, drift = self._samples(k, dense, origin, solver.h_abs or max_step, drift)
                     t = solver.t
                     q = y[:nv] if euclidean else pin.integrate(model, origin, y[:nv])
                     v = y[nv:]
@@ -412,6 +433,48 @@ class _Run:
                 t, k, q, v, drift = self._bridge(
                     last, k, self.q[k - 1], self.v[k - 1], max(t, last) + BRIDGE_STEPS * h, h
                 )
+
+    def _samples(
+        self, k: int, dense: np.ndarray, origin: np.ndarray, h: float, drift: float
+    ) -> tuple[int, float]:
+        """Record samples ``k``... from the dense-output states ``dense`` (n, 2 nv) of a step of ``h`` [s].
+
+        Each state is projected (:meth:`project`) and recorded (:meth:`record`); with a sample
+        kernel, all in compiled calls (:meth:`plm_pin.kernels.Kernel.samples`, the same
+        projection, KKT solve, energy and pose) but those it hands back: a constraint
+        singularity, a projection needing more than one Gauss-Newton step, a non-finite value,
+        which take the Python path, so that its checks and errors are unchanged. ``drift``:
+        the closure distance reached before the first sample [m, rad].
+
+        Returns:
+            The next sample index and the drift to carry to it.
+        """
+        nv, model, kernel, i, n = self.mech.nv, self.model, self.kernel, 0, dense.shape[0]
+        while i < n:
+            if kernel is not None:
+                assert self.tau_constant is not None
+                x = self.x[k:] if self.x is not None else _NO_POSE
+                out = (self.q[k:], self.v[k:], self.a[k:], self.lam[k:], self.residual[k:], self.drift[k:])
+                done = kernel.samples(
+                    dense[i:], origin, self.tau_constant, self.dyn.rank, self.closure_tol,
+                    self.closure_tol / h,
+                    (*out, self.energy[k:], self.potential[k:], x),
+                )  # fmt: skip
+                for _ in range(done):
+                    self.drift[k] = max(drift, float(self.drift[k]))
+                    if self.passive:
+                        self._guard_energy(k, float(self.potential[k]))
+                    self.done = k + 1
+                    k, drift = k + 1, 0.0
+                i += done
+                if i == n:
+                    break
+            yk = dense[i]
+            qk = yk[:nv] if self.euclidean else pin.integrate(model, origin, yk[:nv])
+            p = self.project(qk, yk[nv:], h)
+            self.record(k, p.q, p.v, max(drift, p.before), p.after, p.rows, p.jacobian)
+            k, drift, i = k + 1, 0.0, i + 1
+        return k, drift
 
     def _bridge(
         self, t: float, k: int, q: np.ndarray, v: np.ndarray, end: float, h: float
@@ -510,13 +573,13 @@ class _Run:
             self.x[k] = task.pose_from_data(self.data)
         self.energy[k] = self.dyn.energy(q, v)
         if self.passive:
-            self._guard_energy(k)
+            self._guard_energy(k, float(self.data.potential_energy))
         self.done = k + 1
 
-    def _guard_energy(self, k: int) -> None:
-        """Stop when the energy of sample ``k`` strays from the initial energy past ENERGY_RTOL."""
+    def _guard_energy(self, k: int, potential: float) -> None:
+        """Stop when the energy of sample ``k`` (potential ``potential`` [J]) strays past ENERGY_RTOL."""
         e = float(self.energy[k])
-        self.peak_kinetic = max(self.peak_kinetic, e - float(self.data.potential_energy))
+        self.peak_kinetic = max(self.peak_kinetic, e - potential)
         allowed = ENERGY_RTOL * self.peak_kinetic + ENERGY_ROUND_OFF_RTOL * max(
             1.0, abs(float(self.energy[0]))
         )

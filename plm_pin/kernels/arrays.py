@@ -68,6 +68,12 @@ class KernelArrays(NamedTuple):
         lu_order, lu_row_ptr, lu_rows, lu_col_ptr, lu_cols: the :class:`Elimination`
             of the closure and task rows' structural pattern (which columns move their frames),
             for the square solves.
+        mass: mass of the body on each joint [kg] (0 for the universe), shape (nj,).
+        lever: its centre of mass in the joint frame [m], shape (nj, 3).
+        rot_inertia: its rotational inertia about the centre of mass in the joint frame [kg m^2],
+            shape (nj, 3, 3).
+        armature: the model's armature (reflected rotor inertia) of each velocity column, shape (nv,).
+        gravity: the model's gravity as a spatial motion (linear [m/s^2], then angular), shape (6,).
     """
 
     parents: np.ndarray
@@ -103,6 +109,11 @@ class KernelArrays(NamedTuple):
     lu_rows: np.ndarray
     lu_col_ptr: np.ndarray
     lu_cols: np.ndarray
+    mass: np.ndarray
+    lever: np.ndarray
+    rot_inertia: np.ndarray
+    armature: np.ndarray
+    gravity: np.ndarray
 
 
 class Elimination(NamedTuple):
@@ -187,7 +198,10 @@ INT_FIELDS = (
 )  # fmt: skip
 """The integer arrays, in their packed order (``support`` as 0 and 1)."""
 
-FLOAT_FIELDS = ("place_R", "place_p", "axis", "axis2", "f_R", "f_p", "c_axis", "c_E", "lower", "upper")
+FLOAT_FIELDS = (
+    "place_R", "place_p", "axis", "axis2", "f_R", "f_p", "c_axis", "c_E", "lower", "upper",
+    "mass", "lever", "rot_inertia", "armature", "gravity",
+)  # fmt: skip
 """The float arrays, in their packed order."""
 
 
@@ -312,5 +326,13 @@ def build_arrays(model: pin.Model, closures: tuple[Closure, ...], task: Task | N
         np.array(model.lowerPositionLimit, dtype=float),
         np.array(model.upperPositionLimit, dtype=float),
         *_NO_ELIMINATION,
+        np.array([model.inertias[j].mass for j in range(nj)], dtype=float),
+        np.array([model.inertias[j].lever for j in range(nj)], dtype=float).reshape(nj, 3),
+        np.array([model.inertias[j].inertia for j in range(nj)], dtype=float).reshape(nj, 3, 3),
+        np.array(model.armature, dtype=float).reshape(nv),
+        np.array(model.gravity.vector, dtype=float),
     )
-    return arrays._replace(**dict(zip(_LU_FIELDS, elimination(jacobian_pattern(arrays)), strict=True)))
+    e = elimination(jacobian_pattern(arrays))
+    return arrays._replace(
+        lu_order=e.order, lu_row_ptr=e.row_ptr, lu_rows=e.rows, lu_col_ptr=e.col_ptr, lu_cols=e.cols
+    )

@@ -77,6 +77,11 @@ def unpack(ints: np.ndarray, floats: np.ndarray) -> KernelArrays:
         ints[ints[o + 16] : ints[o + 17]],
         ints[ints[o + 17] : ints[o + 18]],
         ints[ints[o + 18] : ints[o + 19]],
+        floats[ints[g + 10] : ints[g + 11]],
+        floats[ints[g + 11] : ints[g + 12]].reshape((nj, 3)),
+        floats[ints[g + 12] : ints[g + 13]].reshape((nj, 3, 3)),
+        floats[ints[g + 13] : ints[g + 14]],
+        floats[ints[g + 14] : ints[g + 15]],
     )
 
 

@@ -23,7 +23,16 @@ from ..core.assembly import CHORD_RATIO, NEWTON_MAX_ITERATIONS, STALL_RATIO
 from ..core.closures import Closure
 from ..core.legs import Leg
 from ..core.task import FrameTask, Task, TaskTarget
-from ..tolerances import ASSEMBLY_RCOND, FACTOR_RCOND, GRAM_RTOL, INVERSE_RTOL, LEG_SINGULAR_RTOL, ROUND_OFF
+from ..tolerances import (
+    ASSEMBLY_RCOND,
+    FACTOR_RCOND,
+    GRAM_RTOL,
+    INVERSE_RTOL,
+    LEG_SINGULAR_RTOL,
+    LOG3_SERIES_ANGLE,
+    RANK_RTOL,
+    ROUND_OFF,
+)
 from ..warnings import KernelFallbackWarning
 from .arrays import (
     Elimination,
@@ -123,6 +132,60 @@ class Kernel:
         r, A = np.empty(n), np.empty((n, self.arrays.nv))
         _compiled().rows(self.ints, self.floats, np.asarray(q, float), x, R, target is not None, r, A)
         return r, A
+
+    def dynamics(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+        r"""Joint-space dynamics terms at ``(q, v)`` (:mod:`.dynamics`).
+
+        Args:
+            q: configuration, shape (nq,).
+            v: joint velocities [m/s, rad/s], shape (nv,).
+
+        Returns:
+            The mass matrix with the armature on its diagonal (nv, nv), the nonlinear effects
+            ``rnea(q, v, 0)`` (nv,) [N, N m], the potential energy [J] and the closure drift
+            :math:`\dot J_\phi v` (m,).
+        """
+        nv, m = self.arrays.nv, self.arrays.m
+        M, h, gamma = np.empty((nv, nv)), np.empty(nv), np.empty(m)
+        potential = _dynamics().terms(
+            self.ints, self.floats, np.asarray(q, float), np.asarray(v, float), LOG3_SERIES_ANGLE, M, h, gamma
+        )
+        return M, h, float(potential), gamma
+
+    def samples(
+        self,
+        states: np.ndarray,
+        origin: np.ndarray,
+        tau: np.ndarray,
+        rank: int,
+        tol: float,
+        velocity_tol: float,
+        out: tuple[np.ndarray, ...],
+    ) -> int:
+        r"""Project and evaluate simulation states in turn (:func:`.dynamics.samples`) up to one it cannot.
+
+        Args:
+            states: chart coordinates at ``origin`` (the configuration itself for a vector-space
+                model) and velocities of each state, shape (n, 2 nv).
+            origin: the chart's configuration, shape (nq,).
+            tau: applied generalized forces [N, N m], shape (nv,).
+            rank: independent closure rows, :math:`n_v - \text{mobility}`.
+            tol: closure distance above which the configuration is projected [m, rad].
+            velocity_tol: closure rate above which the velocity is projected [m/s, rad/s].
+            out: the buffers receiving row by row the configurations (n, nq), velocities (n, nv),
+                accelerations (n, nv), closure forces (n, m), closure distances after and before
+                the projection (n,), energies (n,), potential energies (n,) and task poses (n, n_task).
+
+        Returns:
+            The number of states done; the next one needs the Python path (a constraint
+            singularity, a projection needing more than one step, a non-finite value).
+        """
+        nv = self.arrays.nv
+        done, _ = _dynamics().samples(
+            self.ints, self.floats, states, origin, origin.size == nv, tau, rank, tol, velocity_tol,
+            RANK_RTOL, LOG3_SERIES_ANGLE, *out,
+        )  # fmt: skip
+        return int(done)
 
     def integrate(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Pinocchio's ``integrate``: ``q`` moved by the tangent vector ``v``."""
@@ -488,6 +551,16 @@ def _float_copy(q: np.ndarray) -> np.ndarray:
 _NO_TARGET = np.zeros(0)
 _EYE = np.eye(3)
 _COMPILED: list[ModuleType] = []
+_DYNAMICS: list[ModuleType] = []
+
+
+def _dynamics() -> ModuleType:
+    """The compiled dynamics module (imports numba; compiled on first call, cached on disk)."""
+    if not _DYNAMICS:
+        from . import dynamics
+
+        _DYNAMICS.append(dynamics)
+    return _DYNAMICS[0]
 
 
 def _compiled() -> ModuleType:
