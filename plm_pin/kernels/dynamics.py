@@ -27,7 +27,7 @@ in (the joint's child, or the parent for a universal joint's first axis). Then
 
 :func:`sample` puts these together for one simulation sample (projection, accelerations,
 closure forces, energy, task pose) as :class:`plm_pin.dynamics._constrained.ClosedChainDynamics`
-does from Python. numba is imported only here and in :mod:`.compiled`.
+does from Python. numba is imported only by the kernel modules.
 """
 
 from __future__ import annotations
@@ -424,6 +424,12 @@ def _finite(x: np.ndarray) -> bool:
 
 
 @njit(cache=True)
+def _rank_lost(s: np.ndarray, rank: int, rank_rtol: float) -> bool:
+    """Whether the ``rank``-th singular value of ``s`` (descending) is lost: a constraint singularity."""
+    return rank > 0 and s[rank - 1] <= rank_rtol * max(s[0], 1.0)
+
+
+@njit(cache=True)
 def samples(
     ints: np.ndarray, floats: np.ndarray, Y: np.ndarray, origin: np.ndarray, euclidean: bool,
     tau: np.ndarray, rank: int, tol: float, velocity_tol: float, rank_rtol: float, series_angle: float,
@@ -473,7 +479,7 @@ def samples(
         moved = d_before > tol
         if moved:
             U, s, Vt = np.linalg.svd(J, full_matrices=False)
-            if rank and s[rank - 1] <= rank_rtol * max(s[0], 1.0):
+            if _rank_lost(s, rank, rank_rtol):
                 return i, SINGULAR
             for c in range(nv):
                 dq[c] = 0.0
@@ -493,8 +499,9 @@ def samples(
             if d_after > tol:
                 return i, OFF_MANIFOLD
         U, s, Vt = np.linalg.svd(J, full_matrices=False)
-        if rank and s[rank - 1] <= rank_rtol * max(s[0], 1.0):
+        if _rank_lost(s, rank, rank_rtol):
             return i, SINGULAR
+        Vt = np.ascontiguousarray(Vt)  # (LAPACK's layout) for the product below
         body_inertias(k, oR, op, bm, bh, bI)
         mass_matrix(k, Sw, Sv, bm, bh, bI, cm, ch, cI, M)
         K[:nv, :nv] = M
@@ -502,20 +509,10 @@ def samples(
             for c in range(nv):
                 K[c, nv + e] = -Vt[e, c]
                 K[nv + e, c] = Vt[e, c]
-        rate = 0.0
-        for row in range(m):
-            x = 0.0
-            for c in range(nv):
-                x += J[row, c] * v[c]
-            rate = max(rate, abs(x))
+        rate = np.max(np.abs(J @ v)) if m else 0.0  # the largest closure rate
         if moved or rate > velocity_tol:  # min |v+ - v|_M on W v+ = 0
-            for c in range(nv):
-                rhs[c] = 0.0
-            for e in range(rank):
-                x = 0.0
-                for c in range(nv):
-                    x += Vt[e, c] * v[c]
-                rhs[nv + e] = -x
+            rhs[:nv] = 0.0
+            rhs[nv : nv + rank] = -(Vt[:rank] @ v)
             sol = np.linalg.solve(K, rhs)
             for c in range(nv):
                 v[c] += sol[c]

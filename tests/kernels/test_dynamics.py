@@ -11,10 +11,9 @@ import pinocchio as pin
 import pytest
 
 from plm_pin.core import closures as C
-from plm_pin.description.sidecar import ClosureSpec
 from plm_pin.kernels import Kernel, kernel_of
 from plm_pin.models import preset_names
-from tests.kernels.test_parity import CORPUS, _every_joint_model, _mechanism
+from tests.kernels.test_parity import CORPUS, EVERY_CLOSURE, _every_joint_model, _mechanism
 
 TOL = 1e-12
 
@@ -56,13 +55,7 @@ def test_dynamics_terms_on_every_joint_and_closure_type(rng):
     model = _every_joint_model()
     model.armature = rng.uniform(0.0, 1.0, model.nv)
     model.gravity = pin.Motion(np.array([1.0, -2.0, -9.0, 0.0, 0.0, 0.0]))
-    specs = [
-        ClosureSpec("p", ("f10", "f4"), "point"),
-        ClosureSpec("r", ("f2", "f9"), "revolute", (0.0, 0.6, 0.8)),
-        ClosureSpec("w", ("f5", "f8"), "weld"),
-        ClosureSpec("t", ("f1", "f7"), "twist", (0.0, 0.0, 1.0)),
-    ]
-    closures = C.compile_closures(model, specs)
+    closures = C.compile_closures(model, EVERY_CLOSURE)
     kernel = Kernel.build(model, closures, None)
     for _ in range(10):
         q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))

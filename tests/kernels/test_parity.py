@@ -211,16 +211,19 @@ def _every_joint_model() -> pin.Model:
     return model
 
 
+EVERY_CLOSURE = [
+    ClosureSpec("p", ("f10", "f4"), "point"),
+    ClosureSpec("r", ("f2", "f9"), "revolute", (0.0, 0.6, 0.8)),
+    ClosureSpec("w", ("f5", "f8"), "weld"),
+    ClosureSpec("t", ("f1", "f7"), "twist", (0.0, 0.0, 1.0)),
+]
+"""One closure of every type between frames of :func:`_every_joint_model`."""
+
+
 @pytest.mark.parametrize("dofs", [("x", "y", "z", "rx", "ry", "rz"), ("x", "y", "rz"), ("z", "ry", "rx"), ()])
 def test_every_joint_and_closure_type(dofs, rng):
     model = _every_joint_model()
-    specs = [
-        ClosureSpec("p", ("f10", "f4"), "point"),
-        ClosureSpec("r", ("f2", "f9"), "revolute", (0.0, 0.6, 0.8)),
-        ClosureSpec("w", ("f5", "f8"), "weld"),
-        ClosureSpec("t", ("f1", "f7"), "twist", (0.0, 0.0, 1.0)),
-    ]
-    closures = C.compile_closures(model, specs)
+    closures = C.compile_closures(model, EVERY_CLOSURE)
     task = compile_task(model, "f6", dofs) if dofs else None
     kernel = Kernel.build(model, closures, task)
     data = model.createData()
