@@ -830,7 +830,6 @@ def newton(
     ints: np.ndarray,
     floats: np.ndarray,
     free: np.ndarray,
-    e: Elimination,
     x: np.ndarray,
     R_star: np.ndarray,
     with_task: bool,
@@ -849,11 +848,7 @@ def newton(
 
     ``q`` holds the start; on success it holds the solution, ``r`` its residual ``[phi; task]``,
     ``pose`` its task coordinates (:func:`task_pose`) and ``info`` (2,) the largest absolute
-    residual and 1.0 if ``q`` is within the model's position limits (else 0.0). Where the rows
-    have as many nonzero ones as there are free columns, each factor is the LU of :mod:`.linear`
-    on ``e`` (the pattern of the rows and free columns: the step :math:`A^{-1} r`, the Gauss-Newton
-    step of a square system); else the Cholesky factor of the normal equations. Chord steps reuse
-    either.
+    residual and 1.0 if ``q`` is within the model's position limits (else 0.0).
     """
     k = unpack(ints, floats)
     nj, nv, nf = k.parents.shape[0], k.nv, max(k.f_joint.shape[0], 1)
@@ -862,9 +857,6 @@ def newton(
     Af = np.empty((n, nfree))
     N = np.empty((nfree, nfree))
     b = np.empty(nfree)
-    F, B, X = np.empty((n, nfree)), np.empty((n, 1)), np.empty((nfree, 1))
-    pivots, rows_step = np.empty(nfree, dtype=np.int64), np.empty(n, dtype=np.int64)
-    square = False
     step = np.zeros(nv)
     oR, op, fR, fp = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nf, 3, 3)), np.empty((nf, 3))
     Sw, Sv = np.empty((nv, 3)), np.empty((nv, 3))
@@ -905,43 +897,28 @@ def newton(
             if refresh and not jac:
                 jac = again = True
                 continue
-        if jac:  # this q's Jacobian: a fresh factor
+        if jac:  # this q's Jacobian: a fresh normal matrix
             jac, again, refresh, factorised = False, False, True, True
-            live = 0
             for i in range(n):
-                nonzero = False
                 for c in range(nfree):
                     Af[i, c] = A[i, free[c]]
-                    nonzero = nonzero or Af[i, c] != 0.0
-                live += nonzero
-            square = live == nfree  # A^-1 r by the LU on the pattern, else the normal equations
-            if not square:
-                for a_ in range(nfree):
-                    for c in range(a_ + 1):
-                        s = 0.0
-                        for i in range(n):
-                            s += Af[i, a_] * Af[i, c]
-                        N[a_, c] = s
-                        N[c, a_] = s
-        if square:
-            if refresh and not lu_factor(Af, e, F, pivots, rows_step):
-                return -1
+            for a_ in range(nfree):
+                for c in range(a_ + 1):
+                    s = 0.0
+                    for i in range(n):
+                        s += Af[i, a_] * Af[i, c]
+                    N[a_, c] = s
+                    N[c, a_] = s
+        for c in range(nfree):
+            s = 0.0
             for i in range(n):
-                B[i, 0] = r[i]
-            lu_solve(F, e, pivots, rows_step, B, X)
-            for c in range(nfree):
-                b[c] = X[c, 0]
+                s += Af[i, c] * r[i]
+            b[c] = s
+        if refresh:
+            if not _cholesky_solve(N, b):
+                return -1
         else:
-            for c in range(nfree):
-                s = 0.0
-                for i in range(n):
-                    s += Af[i, c] * r[i]
-                b[c] = s
-            if refresh:
-                if not _cholesky_solve(N, b):
-                    return -1
-            else:
-                _cholesky_back(N, b)
+            _cholesky_back(N, b)
         for c in range(nfree):
             step[free[c]] = -b[c]
         fresh = refresh

@@ -34,16 +34,7 @@ from ..tolerances import (
     ROUND_OFF,
 )
 from ..warnings import KernelFallbackWarning
-from .arrays import (
-    Elimination,
-    KernelArrays,
-    build_arrays,
-    elimination,
-    jacobian_pattern,
-    kernel_frames,
-    pack,
-    unsupported_joints,
-)
+from .arrays import Elimination, KernelArrays, build_arrays, kernel_frames, pack, unsupported_joints
 
 if TYPE_CHECKING:
     from ..core.mechanism import Mechanism
@@ -73,7 +64,6 @@ class Kernel:
         # a frame task (kind 1) holding all three angles: its targets come with their rotation
         self._rotation_target = arrays.t_kind == 1 and int(np.count_nonzero(arrays.t_rows >= 3)) == 3
         self._legs: tuple[Sequence[Leg], tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
-        self._eliminations: dict[tuple[bytes | None, bool], Elimination] = {}
 
     @classmethod
     def build(cls, model: pin.Model, closures: tuple[Closure, ...], task: Task | None) -> Kernel:
@@ -102,21 +92,6 @@ class Kernel:
         """The symbolic LU of the closure and task rows' Jacobian (:func:`.arrays.elimination`)."""
         a = self.arrays
         return Elimination(a.lu_order, a.lu_row_ptr, a.lu_rows, a.lu_col_ptr, a.lu_cols)
-
-    def _elimination_of(self, free: np.ndarray | None, with_task: bool) -> Elimination:
-        """The symbolic LU of the closure rows (with the task's: ``with_task``) on the ``free`` columns.
-
-        ``free`` None: every column. Kept per column set: a mechanism's IK and FK ask for the same few.
-        """
-        if free is None and with_task:
-            return self.elimination
-        key = (None if free is None else free.tobytes(), with_task)
-        hit = self._eliminations.get(key)
-        if hit is None:
-            pattern = jacobian_pattern(self.arrays)
-            rows = pattern if with_task else pattern[: self.arrays.m]
-            hit = self._eliminations[key] = elimination(rows if free is None else rows[:, free])
-        return hit
 
     def placements(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """World rotations and translations of every joint (nj, 3, 3), (nj, 3) and kernel frame (nf, ...)."""
@@ -310,7 +285,6 @@ class Kernel:
             self.ints,
             self.floats,
             self._all if free is None else free,
-            self._elimination_of(free, task_rows is not None),
             x,
             R,
             task_rows is not None,
