@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -10,6 +12,9 @@ from plm_pin.core.task import TaskTarget
 from plm_pin.kernels import kernel_of
 from plm_pin.kernels.metrics import METRIC_NAMES
 from plm_pin.kinematics import inverse_kinematics, task_pose
+from plm_pin.kinematics.jacobians import ik_jacobian
+from plm_pin.tolerances import GRAM_RTOL
+from plm_pin.workspace import workspace_map
 from plm_pin.workspace._batch import compiled_square_task_metrics
 from plm_pin.workspace.manipulability import batch_metrics
 from tests.conftest import preset
@@ -107,3 +112,25 @@ def test_tridiagonal_eigenvalues_on_special_matrices(rng):
         G, d, e = P.copy(), np.empty(7), np.empty(7)
         assert _tridiagonal_eigenvalues(G, 7, d, e)
         np.testing.assert_allclose(np.sort(d), want, rtol=0.0, atol=50 * 7 * eps * np.abs(want).max())
+
+
+def test_the_shortcut_near_singularities_equals_the_svd_metrics():
+    """J_ce read off the velocity map (manipulability, condition number alone) over a 3D3M map to its edge.
+
+    As the basis route (tests/workspace/test_batch.py), to 1e-11 of the SVD values: poses past
+    the Gram's accuracy, or whose velocity map is ill-conditioned, take the SVD path.
+    """
+    mech = preset("harada2011_3d3m")
+    values = (np.linspace(-0.16, 0.16, 30), np.linspace(0.0, 0.14, 25))
+    result = workspace_map(mech, ("x", "y"), values, (0.0, 0.08, math.radians(-20.0)), workers=1)
+    A = np.stack([ik_jacobian(mech, q) for q in result.q[result.reachable]])
+    m, act = mech.n_closure_rows, mech.actuated_v_indices
+    names = ("manipulability", "condition_number")
+    kernel = kernel_of(mech)
+    fast = compiled_square_task_metrics(kernel, A, m, act, mech.mobility, names)
+    svd = batch_metrics(A[:, :m], A[:, m:], act, mech.mobility, names=names)
+    assert svd["condition_number"].max() > 1.0 / math.sqrt(GRAM_RTOL)  # some poses take the SVD path
+    _, good = kernel.map_metrics(A, act, mech.mobility, names)
+    assert good.any() and not good.all()
+    for name, value in svd.items():
+        np.testing.assert_allclose(fast[name], value, rtol=1e-11, atol=0.0, err_msg=name)
