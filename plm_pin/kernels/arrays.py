@@ -163,8 +163,7 @@ def elimination(pattern: np.ndarray) -> Elimination:
     return Elimination(*(np.array(a, dtype=np.int64) for a in (order, row_ptr, rows, col_ptr, cols)))
 
 
-_LU_FIELDS = ("lu_order", "lu_row_ptr", "lu_rows", "lu_col_ptr", "lu_cols")
-_NO_ELIMINATION = Elimination(*[np.zeros(0, dtype=np.int64)] * len(_LU_FIELDS))
+_NO_ELIMINATION = Elimination(*[np.zeros(0, dtype=np.int64)] * len(Elimination._fields))
 """The placeholder of a kernel's elimination until its pattern is read (:func:`build_arrays`)."""
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from .arrays import HEADER, INT_FIELDS, KernelArrays
-from .linear import Elimination, lu_factor, lu_solve
+from .linear import Elimination, solve
 
 # joint kinds (see plm_pin.kernels.model)
 REVOLUTE, PRISMATIC, REVOLUTE_UNBOUNDED, SPHERICAL, FREE_FLYER, PLANAR, UNIVERSAL = 1, 2, 3, 4, 5, 6, 7
@@ -1064,12 +1064,9 @@ def _gauss_newton_step(
                 live += 1
                 break
     if live == nv:
-        if not lu_factor(A, e, F, pivots, step):
-            return False
         for i in range(n):
             b[i, 0] = r[i]
-        lu_solve(F, e, pivots, step, b, x)
-        return True
+        return solve(A, e, F, pivots, step, b, x)
     for a_ in range(nv):
         s = 0.0
         for i in range(n):

@@ -107,3 +107,24 @@ def lu_solve(
             for u in range(e.col_ptr[j], e.col_ptr[j + 1]):
                 s -= F[p, e.cols[u]] * X[e.cols[u], c]
             X[cj, c] = s / F[p, cj]
+
+
+@njit(cache=True)
+def solve(
+    M: np.ndarray,
+    e: Elimination,
+    F: np.ndarray,
+    pivots: np.ndarray,
+    step: np.ndarray,
+    B: np.ndarray,
+    X: np.ndarray,
+) -> bool:
+    """Solve ``M X = B`` (``M`` with as many nonzero rows as columns) on the pattern ``e``; False if singular.
+
+    :func:`lu_factor` then :func:`lu_solve`: ``B`` is overwritten; ``F`` (>= rows, n),
+    ``pivots`` (n,) and ``step`` (>= rows,) are scratch.
+    """
+    if not lu_factor(M, e, F, pivots, step):
+        return False
+    lu_solve(F, e, pivots, step, B, X)
+    return True

@@ -26,7 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .linear import Elimination, dense_elimination, lu_factor, lu_solve
+from .linear import Elimination, dense_elimination, solve
 
 METRIC_NAMES = ("manipulability", "condition_number", "constraint_margin", "inverse_margin", "direct_margin")
 """The columns of :func:`square_metrics`' output, in order."""
@@ -194,27 +194,6 @@ def _tridiagonal_eigenvalues(G: np.ndarray, n: int, d: np.ndarray, e: np.ndarray
 
 
 @njit(cache=True)
-def _solve(
-    M: np.ndarray,
-    e: Elimination,
-    F: np.ndarray,
-    pivots: np.ndarray,
-    step: np.ndarray,
-    B: np.ndarray,
-    X: np.ndarray,
-) -> bool:
-    """Solve ``M X = B`` (``M`` with as many nonzero rows as columns) on the pattern ``e``; False if singular.
-
-    ``B`` is overwritten; ``F`` (>= rows, n), ``pivots`` (n,) and ``step`` (>= rows,) are
-    scratch (:func:`.linear.lu_factor`).
-    """
-    if not lu_factor(M, e, F, pivots, step):
-        return False
-    lu_solve(F, e, pivots, step, B, X)
-    return True
-
-
-@njit(cache=True)
 def _finite(X: np.ndarray) -> bool:
     """Whether every entry of ``X`` (2-D) is finite, without the temporary of ``np.isfinite``."""
     for i in range(X.shape[0]):
@@ -350,7 +329,7 @@ def square_metrics(
                 RHS[:, :] = 0.0
                 for j in range(k):
                     RHS[m_all + j, j] = 1.0
-                solved = _solve(A[p], e, F, pivots, step, RHS, S)
+                solved = solve(A[p], e, F, pivots, step, RHS, S)
             else:  # A^T A S = J_x^T
                 for a in range(nv):
                     for b in range(a + 1):
@@ -361,7 +340,7 @@ def square_metrics(
                         M[b, a] = s
                     for j in range(k):
                         RHS[a, j] = Ap[m + j, a]
-                solved = _solve(M, dense_v, F, pivots, step, RHS, S)
+                solved = solve(M, dense_v, F, pivots, step, RHS, S)
             if not solved or not _finite(S):
                 continue
         if shortcut:
@@ -401,7 +380,7 @@ def square_metrics(
                         s += Ap[m + a, c] * N[c, b]
                     T[a, b] = s
                     RHS[a, b] = 1.0 if a == b else 0.0
-            if not _solve(T, dense_k, F, pivots, step, RHS[:k], T_inv):
+            if not solve(T, dense_k, F, pivots, step, RHS[:k], T_inv):
                 continue
             if w_inverse:
                 _gram_eigenvalues(T_inv, G, work, s_t)
