@@ -6,6 +6,8 @@ import functools
 import math
 import os
 import shutil
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -200,6 +202,33 @@ def report_all(tmp_path_factory) -> ReportAll:
         # one process: the recording sees the studies run here (--jobs 2 is checked in test_cli)
         invoked = CliRunner().invoke(cli.app, ["report", "all", "--out", str(out), "--jobs", "1"])
     return ReportAll(out, invoked.exit_code, invoked.output, results)
+
+
+KERNEL_PARTS = (("homotopy",), ("kinematics", "dynamics"))
+"""The parts of ``tests/compile_kernels.py``, one process each: about 75 s of compile each on a cold cache."""
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist starts its workers (its hook is trylast)
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """Under pytest-xdist, compile the numba kernels once into their disk cache before the workers start.
+
+    Otherwise, on a cold cache (a fresh clone, CI), each worker compiles the same kernels. A part
+    that fails is said and left to the workers: its kernels compile where the tests call them.
+    """
+    if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(session.config.option, "numprocesses", None):
+        return
+    script = Path(__file__).with_name("compile_kernels.py")
+    runs = [
+        subprocess.Popen(
+            [sys.executable, str(script), *parts], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+        )
+        for parts in KERNEL_PARTS
+    ]
+    for parts, run in zip(KERNEL_PARTS, runs, strict=True):
+        _, err = run.communicate()
+        if run.returncode:
+            lines = err.decode(errors="replace").strip().splitlines()[-1:]
+            print(f"tests/compile_kernels.py {' '.join(parts)} failed ({lines}): the workers compile them")
 
 
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups

@@ -136,7 +136,7 @@ def _pfma2(lo: float, hi: float, y: float, blo: float, bhi: float) -> tuple[floa
     return _dn(lo + _dn(min(p, q))), _up(hi + _up(max(p, q)))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a] B[b]`` for stacks of interval 4 x 4 matrices, shape (., 4, 4, 2).
 
@@ -157,7 +157,7 @@ def _mm_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: i
         out[o, i, 2, 0], out[o, i, 2, 1], out[o, i, 3, 0], out[o, i, 3, 1] = l2, h2, l3, h3
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mm_point_left(P: np.ndarray, p: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
     """``out[o] = P[p] B[b]`` for a stack ``P`` of exact (float) 4 x 4 matrices, as :func:`_mm_into`."""
     for i in range(4):
@@ -174,7 +174,7 @@ def _mm_point_left(P: np.ndarray, p: int, B: np.ndarray, b: int, out: np.ndarray
         out[o, i, 2, 0], out[o, i, 2, 1], out[o, i, 3, 0], out[o, i, 3, 1] = l2, h2, l3, h3
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mm_point_right(A: np.ndarray, a: int, P: np.ndarray, p: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a] P[p]`` for a stack ``P`` of exact (float) 4 x 4 matrices, as :func:`_mm_into`."""
     for i in range(4):
@@ -191,7 +191,7 @@ def _mm_point_right(A: np.ndarray, a: int, P: np.ndarray, p: int, out: np.ndarra
         out[o, i, 2, 0], out[o, i, 2, 1], out[o, i, 3, 0], out[o, i, 3, 1] = l2, h2, l3, h3
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _mv_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: int) -> None:
     """``out[o, :, 3] = A[a] B[b, :, 3]``: the last column alone (a point carried by a transform)."""
     l0, h0, l1, h1, l2, h2, l3, h3 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -207,7 +207,7 @@ def _mv_into(A: np.ndarray, a: int, B: np.ndarray, b: int, out: np.ndarray, o: i
     out[o, 2, 3, 0], out[o, 2, 3, 1], out[o, 3, 3, 0], out[o, 3, 3, 1] = l2, h2, l3, h3
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _local(
     kind: int,
     axis: np.ndarray,
@@ -781,7 +781,7 @@ def _axis_product(E: np.ndarray, r: int, closure_axis: np.ndarray, c: int) -> tu
     return lo, hi
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _copy_into(A: np.ndarray, a: int, out: np.ndarray, o: int) -> None:
     """``out[o] = A[a]`` for stacks of interval 4 x 4 matrices."""
     for i in range(4):

@@ -156,7 +156,7 @@ def path_norm(v: np.ndarray) -> float:
     return np.sqrt(acc)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def corrected(nd: float, last: float, omega: float, small: float) -> bool:
     """Whether the corrector has converged after a correction of norm ``nd`` (``last``: the one before).
 
@@ -169,7 +169,7 @@ def corrected(nd: float, last: float, omega: float, small: float) -> bool:
     return nd <= small or next_one <= small
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def next_step(h: float, first: float, size: float) -> float:
     """The step after an accepted step ``h`` whose first correction (the predictor's error) was ``first``.
 
