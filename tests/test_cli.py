@@ -5,9 +5,12 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import multiprocessing
+import os
 import re
 import subprocess
 import sys
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -329,6 +332,17 @@ def test_report_studies_in_two_processes_write_what_one_process_writes(tmp_path)
     there = json.loads((root / "enferadi2017" / "results.json").read_text())
     assert there["agreement"] == json.loads(json.dumps(here.to_dict()))["agreement"]
     assert there["sections"] == json.loads(json.dumps(here.to_dict()))["sections"]
+
+
+def test_report_processes_run_blas_and_numba_on_one_thread_each(monkeypatch):
+    """Processes spawned for the reports read one BLAS and numba thread; the parent's settings come back."""
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "4")
+    monkeypatch.delenv("NUMBA_NUM_THREADS", raising=False)
+    spawn = multiprocessing.get_context("spawn")
+    with cli._one_thread_each(), ProcessPoolExecutor(1, mp_context=spawn) as pool:
+        seen = {name: pool.submit(os.getenv, name).result() for name in cli.ONE_THREAD}
+    assert seen == dict.fromkeys(cli.ONE_THREAD, "1")
+    assert (os.getenv("OPENBLAS_NUM_THREADS"), os.getenv("NUMBA_NUM_THREADS")) == ("4", None)
 
 
 def test_report_processes_start_the_longest_studies_first(tmp_path):
