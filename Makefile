@@ -19,7 +19,9 @@ setup: $(STAMP)
 
 # The tests run on 2 pytest-xdist workers (CI has 2 cores), each with one BLAS thread: more threads
 # only fight over the cores on the small matrices here. tests/conftest.py groups the tests so that
-# `report all` and each module fixture (docs build, wheel venv) run once, the longest first.
+# `report all` and each module fixture (docs build, wheel venv) run once, the longest first, and
+# first compiles the numba kernels once, in two processes (tests/compile_kernels.py), so that the
+# workers load them from the disk cache rather than each compile them (a fresh clone: 621 -> 487 s).
 PYTEST := OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -n 2
 
 test: $(STAMP) system-packages
