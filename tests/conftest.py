@@ -205,7 +205,7 @@ def report_all(tmp_path_factory) -> ReportAll:
 
 
 KERNEL_PARTS = (("homotopy",), ("kinematics", "dynamics"))
-"""The parts of ``tests/compile_kernels.py``, one process each: about 75 s of compile each on a cold cache."""
+"""The parts of ``tests/compile_kernels.py``, one process each (on a cold cache: about 75 s and 100 s)."""
 
 
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist starts its workers (its hook is trylast)
