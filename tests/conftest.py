@@ -227,8 +227,8 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     for parts, run in zip(KERNEL_PARTS, runs, strict=True):
         _, err = run.communicate()
         if run.returncode:
-            lines = err.decode(errors="replace").strip().splitlines()[-1:]
-            print(f"tests/compile_kernels.py {' '.join(parts)} failed ({lines}): the workers compile them")
+            last = (err.decode(errors="replace").strip().splitlines() or ["no message"])[-1]
+            print(f"tests/compile_kernels.py {' '.join(parts)} failed ({last}): the workers compile them")
 
 
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist reads the groups
